@@ -1,0 +1,852 @@
+"""Load a cablecheck scene (TOML) into validated, SI-unit records.
+
+`load_scene` reads the file, `parse_scene` checks a dict as `tomllib` returns
+it. Every problem is a `SceneError` naming the file, the key path (for example
+``cables[1].radius``, 0-based indices) and the problem; nothing else escapes.
+
+Conventions of the records:
+
+- Lengths are in metres (MuJoCo simulates in SI); `Scene.scale` is metres per
+  scene unit so that reports can convert back. Angles stay in degrees
+  (`euler`, MuJoCo's default intrinsic x-y-z sequence). Young's modulus (Pa),
+  density (kg/m^3) and times (s) are unchanged.
+- `check.spacing` and `check.attach_zone` are multiples of the cable radius;
+  `check.clearance` is in metres.
+- Joint keyframe values stay as written (degrees for hinges, scene units for
+  slides): only the builder knows the joint type's unit, it multiplies slide
+  values by `Scene.scale`.
+- Positions of parts, clips and cable ends are in the frame of the body they
+  ride on; `via`, `points` and `CableDef.route` are world coordinates at t = 0.
+  "At t = 0" means every `[[bodies]]` body at its `[[bodies]]` pose and the
+  mjcf model (if any) at its `qpos0`, the pose MuJoCo compiles it in.
+
+The mjcf model is compiled once here (to know its bodies, joints and the
+pose of its bodies at qpos0); meshes are loaded with trimesh to check they
+exist, load, and (for keepout parts) are closed. The builder loads both again.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+import trimesh
+
+UNITS = {"m": 1.0, "mm": 0.001}
+"""Scene units and their size in metres."""
+
+SHAPE_SIZES = {"box": 3, "sphere": 1, "cylinder": 2, "capsule": 2, "ellipsoid": 3,
+               "plane": 0, "mesh": 0}
+"""Number of `size` entries per part shape (MuJoCo's convention; 0: no size)."""
+
+INTERACTIONS = ("cable-structure", "cable-cable", "self", "part-part")
+"""Names allowed in `effects.contact`."""
+
+METHODS = ("points", "exact")
+"""Values allowed in `check.method`."""
+
+DEFAULT_CLEARANCE = 0.005
+"""`check.clearance` when absent: 5 mm, in metres, whatever the scene units."""
+
+DEFAULT_YOUNG = 5.0e7
+"""Cable bending modulus when absent, Pa.
+
+A PVC-jacketed wire or small harness bends like a rod of effective modulus
+10-100 MPa: plasticised PVC is 10-50 MPa, and stranded copper adds little in
+bending because its strands slide. Measured harness bending stiffness EI of
+about 0.02 N m^2 at 10 mm diameter (I = pi r^4 / 4 = 4.9e-10 m^4) gives
+E = 4e7 Pa; we round to 5e7."""
+
+DEFAULT_DENSITY = 1500.0
+"""Cable density when absent, kg/m^3: PVC (~1400) with some copper and air."""
+
+ROUTE_TOLERANCE = 1e-9
+"""Relative tolerance by which `length` may fall short of its route."""
+
+DEGENERATE = 1e-6
+"""A route segment shorter than this many cable radii has zero length."""
+
+_TOP_KEYS = ("scene", "effects", "check", "bodies", "parts", "cables", "motion")
+_SCENE_KEYS = ("name", "units", "duration", "timestep", "settle", "mjcf")
+_EFFECTS_KEYS = ("dynamics", "gravity", "contact")
+_CHECK_KEYS = ("method", "spacing", "clearance", "every", "validate", "attach_zone")
+_BODY_KEYS = ("name", "pos", "euler")
+_PART_KEYS = ("name", "body", "shape", "size", "pos", "euler", "file", "scale", "keepout")
+_CABLE_KEYS = ("name", "radius", "start", "end", "via", "length", "points", "clips",
+               "segments", "young", "density", "min_bend_radius")
+_ANCHOR_KEYS = ("body", "pos")
+_MOTION_KEYS = ("body", "joint", "keys")
+_BODY_KEY_KEYS = ("t", "pos", "euler")
+_JOINT_KEY_KEYS = ("t", "value")
+_REQUIRED = object()
+_ZERO3 = (0.0, 0.0, 0.0)
+
+
+class SceneError(Exception):
+    """A scene file that cannot be used.
+
+    Attributes:
+      file: the scene file (as given to `load_scene` / `parse_scene`).
+      key: where in the file: a key path such as ``cables[1].radius`` (0-based
+        indices), ``line 3, column 5`` for TOML syntax, ``(file)`` for I/O.
+      problem: what is wrong, in words.
+    """
+
+    def __init__(self, file: Path, key: str, problem: str):
+        super().__init__(f"{file}: {key}: {problem}")
+        self.file = file
+        self.key = key
+        self.problem = problem
+
+
+@dataclass(frozen=True)
+class Effects:
+    """What the simulation includes.
+
+    Attributes:
+      dynamics: step the simulation; False checks the cables as routed.
+      gravity: apply gravity.
+      contact: interactions that push back physically, a subset of
+        `INTERACTIONS`; the others are detected and compared, never resolved.
+    """
+
+    dynamics: bool = True
+    gravity: bool = True
+    contact: frozenset[str] = frozenset()
+
+
+@dataclass(frozen=True)
+class CheckSettings:
+    """How interference is checked.
+
+    Attributes:
+      method: "points" (discrete points) or "exact" (segment distances).
+      spacing: discrete-point spacing, a multiple of the cable radius.
+      clearance: soft-interference distance, metres.
+      every: check every Nth step (>= 1).
+      validate: compare with MuJoCo's contacts at each checked step.
+      attach_zone: arc length next to an end or clip, in cable radii, where
+        touching the body it rides on is expected.
+    """
+
+    method: str = "points"
+    spacing: float = 2.0
+    clearance: float = DEFAULT_CLEARANCE
+    every: int = 1
+    validate: bool = True
+    attach_zone: float = 5.0
+
+
+@dataclass(frozen=True)
+class BodyDef:
+    """A rigid body moved by script (`[[bodies]]`).
+
+    Attributes:
+      name: unique body name (not "world", not an mjcf body).
+      pos: (3,) world position at t = 0, metres.
+      euler: (3,) world orientation at t = 0, degrees (intrinsic x, y, z).
+    """
+
+    name: str
+    pos: tuple[float, float, float] = _ZERO3
+    euler: tuple[float, float, float] = _ZERO3
+
+
+@dataclass(frozen=True)
+class PartDef:
+    """A structure part (`[[parts]]`).
+
+    Attributes:
+      name: unique name; "/" separates assembly levels.
+      body: "world", a `[[bodies]]` name or a body of the mjcf model.
+      shape: one of `SHAPE_SIZES`.
+      size: MuJoCo size in metres (half-extents, radius, half-length); ()
+        for plane and mesh.
+      pos: (3,) position in the body's frame, metres.
+      euler: (3,) orientation in the body's frame, degrees.
+      file: absolute mesh path for shape "mesh", else None.
+      mesh_scale: multiplies the mesh file's coordinates into metres
+        (the scene's `scale` times `Scene.scale`); 1.0 when not a mesh.
+      keepout: a clearance zone: detected, never collides.
+    """
+
+    name: str
+    body: str
+    shape: str
+    size: tuple[float, ...]
+    pos: tuple[float, float, float] = _ZERO3
+    euler: tuple[float, float, float] = _ZERO3
+    file: Path | None = None
+    mesh_scale: float = 1.0
+    keepout: bool = False
+
+
+@dataclass(frozen=True)
+class Anchor:
+    """A point of a cable held by a body (start, end or clip).
+
+    Attributes:
+      body: "world", a `[[bodies]]` name or a body of the mjcf model.
+      pos: (3,) position in that body's frame, metres.
+    """
+
+    body: str
+    pos: tuple[float, float, float] = _ZERO3
+
+
+@dataclass(frozen=True, eq=False)
+class CableDef:
+    """A flexible cable (`[[cables]]`). Compared by identity (it holds arrays).
+
+    Attributes:
+      name: unique cable name (not also a part name).
+      radius: metres.
+      start: clamped end. With `points` its pos is points[0] in its body frame.
+      end: the other end. With `points` its pos is points[-1] in its body frame.
+      via: (k, 3) routing waypoints, world metres at t = 0; k may be 0.
+      points: (n, 3) routed centreline, world metres at t = 0, n >= 2; or None.
+      length: requested length in metres, never shorter than the route; None:
+        the route's length.
+      clips: anchors holding the cable along its route.
+      segments: number of MuJoCo elements, or None for the builder's choice.
+      young: bending modulus, Pa.
+      density: kg/m^3.
+      min_bend_radius: metres, or None for no bend check.
+      route: (m, 3) world polyline at t = 0, metres: start, via..., end, or
+        `points`. Filled by the loader; None only for hand-built records.
+    """
+
+    name: str
+    radius: float
+    start: Anchor
+    end: Anchor
+    via: np.ndarray
+    points: np.ndarray | None
+    length: float | None
+    clips: tuple[Anchor, ...]
+    segments: int | None
+    young: float = DEFAULT_YOUNG
+    density: float = DEFAULT_DENSITY
+    min_bend_radius: float | None = None
+    route: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class BodyKey:
+    """A keyframe of a script-driven body: its world pose at time t.
+
+    Attributes:
+      t: seconds after t = 0.
+      pos: (3,) world position, metres (the body's `[[bodies]]` pos if omitted).
+      euler: (3,) world orientation, degrees (the body's `[[bodies]]` euler if
+        omitted).
+    """
+
+    t: float
+    pos: tuple[float, float, float]
+    euler: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class JointKey:
+    """A keyframe of an mjcf joint.
+
+    Attributes:
+      t: seconds after t = 0.
+      value: as written: degrees for hinge joints, scene units for slide
+        joints (multiply by `Scene.scale` for metres).
+    """
+
+    t: float
+    value: float
+
+
+@dataclass(frozen=True)
+class MotionDef:
+    """Scripted motion of one body or one joint (`[[motion]]`).
+
+    Exactly one of `body` and `joint` is set.
+
+    Attributes:
+      body: a `[[bodies]]` name, or None.
+      joint: a hinge or slide joint of the mjcf model, or None.
+      keys: keyframes with strictly increasing t: BodyKey for a body,
+        JointKey for a joint.
+    """
+
+    body: str | None
+    joint: str | None
+    keys: tuple[BodyKey, ...] | tuple[JointKey, ...]
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """A validated scene. Compared by identity (its cables hold arrays).
+
+    Attributes:
+      path: the scene file as given.
+      name: scene name (used for output file names).
+      units: "m" or "mm", as written.
+      scale: metres per scene unit.
+      duration: seconds of scripted motion after t = 0 (0: rest state only).
+      timestep: simulation step, seconds.
+      settle: seconds simulated with motion frozen before t = 0.
+      mjcf: absolute path of the base MuJoCo model, or None.
+      effects: what the simulation includes.
+      check: how interference is checked.
+      bodies, parts, cables, motions: in file order.
+    """
+
+    path: Path
+    name: str
+    units: str
+    scale: float
+    duration: float
+    timestep: float
+    settle: float
+    mjcf: Path | None
+    effects: Effects
+    check: CheckSettings
+    bodies: tuple[BodyDef, ...]
+    parts: tuple[PartDef, ...]
+    cables: tuple[CableDef, ...]
+    motions: tuple[MotionDef, ...]
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a scene file; raise SceneError (only) when it is bad."""
+    path = Path(path)
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except OSError as e:
+        raise SceneError(path, "(file)", f"cannot read: {e.strerror or e}") from None
+    except UnicodeDecodeError as e:
+        raise SceneError(path, "(file)",
+                         f"not UTF-8 text (byte {e.start}: {e.reason})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        message = str(e)
+        where = re.search(r"\s*\(at (line \d+, column \d+)\)$", message)
+        if where:
+            raise SceneError(path, where.group(1),
+                             f"invalid TOML: {message[:where.start()]}") from None
+        raise SceneError(path, "(syntax)", f"invalid TOML: {message}") from None
+    return parse_scene(data, path)
+
+
+def parse_scene(data: dict, path: Path) -> Scene:
+    """Validate a scene given as the dict `tomllib` returns for the file `path`.
+
+    Relative file names (mjcf, meshes) are resolved against `path`'s folder.
+    Raises SceneError (only) for the first problem found.
+    """
+    return _Parser(Path(path)).scene(data)
+
+
+def euler_matrix(euler_deg) -> np.ndarray:
+    """(3, 3) rotation of MuJoCo's default euler sequence (intrinsic x, y, z), degrees."""
+    a, b, c = np.radians(np.asarray(euler_deg, float))
+    ca, sa, cb, sb, cc, sc = np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(c), np.sin(c)
+    rx = np.array([[1, 0, 0], [0, ca, -sa], [0, sa, ca]])
+    ry = np.array([[cb, 0, sb], [0, 1, 0], [-sb, 0, cb]])
+    rz = np.array([[cc, -sc, 0], [sc, cc, 0], [0, 0, 1]])
+    return rx @ ry @ rz
+
+
+def _describe(value: Any) -> str:
+    """A value's TOML type and (short) text, for error messages."""
+    kinds = {bool: "a boolean", int: "an integer", float: "a float", str: "a string",
+             list: "an array", dict: "a table"}
+    kind = next((k for t, k in kinds.items() if type(value) is t), type(value).__name__)
+    text = repr(value)
+    return f"{kind} ({text if len(text) <= 40 else text[:37] + '...'})"
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+@dataclass(frozen=True)
+class _MjcfInfo:
+    """What the loader needs of the base mjcf model."""
+
+    bodies: dict[str, tuple[np.ndarray, np.ndarray]]   # name -> (xpos (3,), xmat (3, 3)) at qpos0
+    joints: dict[str, int]                               # name -> mjtJoint
+
+
+class _Parser:
+    """Validates one scene dict; holds the file for error messages."""
+
+    def __init__(self, file: Path):
+        self.file = file
+        self.folder = file.parent
+        self.scale = 1.0
+        self.mjcf: _MjcfInfo | None = None
+        self.frames: dict[str, tuple[np.ndarray, np.ndarray]] = {}   # name -> (pos, rot) at t = 0
+        self.body_index: dict[str, str] = {}   # [[bodies]] name -> its key path
+
+    # -- generic readers ---------------------------------------------------
+
+    def error(self, key: str, problem: str) -> SceneError:
+        return SceneError(self.file, key, problem)
+
+    def table(self, value: Any, where: str, allowed: tuple[str, ...],
+              required: tuple[str, ...] = ()) -> dict:
+        """Check that `value` is a table with only `allowed` keys and all `required` ones."""
+        if not isinstance(value, dict):
+            raise self.error(where, f"expected a table, got {_describe(value)}")
+        for key in value:
+            if key not in allowed:
+                close = difflib.get_close_matches(key, allowed, n=1, cutoff=0.6)
+                hint = (f"did you mean '{close[0]}'?" if close
+                        else "valid keys: " + ", ".join(allowed))
+                raise self.error(_join(where, key), f"unknown key ({hint})")
+        for key in required:
+            if key not in value:
+                raise self.error(_join(where, key), "missing (required)")
+        return value
+
+    def tables(self, value: Any, where: str) -> list:
+        """An array of tables (`[[where]]`)."""
+        if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+            raise self.error(where, f"expected an array of tables ([[{where}]]), "
+                                    f"got {_describe(value)}")
+        return value
+
+    def number(self, value: Any, where: str, *, positive: bool = False,
+               nonnegative: bool = False) -> float:
+        if not _is_number(value):
+            raise self.error(where, f"expected a number, got {_describe(value)}")
+        value = float(value)
+        if not math.isfinite(value):
+            raise self.error(where, f"must be a finite number, got {value}")
+        if positive and value <= 0:
+            raise self.error(where, f"must be positive, got {_g(value)}")
+        if nonnegative and value < 0:
+            raise self.error(where, f"must not be negative, got {_g(value)}")
+        return value
+
+    def integer(self, value: Any, where: str, minimum: int) -> int:
+        if not isinstance(value, int) or isinstance(value, bool):
+            raise self.error(where, f"expected an integer, got {_describe(value)}")
+        if value < minimum:
+            raise self.error(where, f"must be at least {minimum}, got {value}")
+        return value
+
+    def boolean(self, value: Any, where: str) -> bool:
+        if not isinstance(value, bool):
+            raise self.error(where, f"expected true or false, got {_describe(value)}")
+        return value
+
+    def string(self, value: Any, where: str, choices: tuple[str, ...] | None = None) -> str:
+        if not isinstance(value, str):
+            raise self.error(where, f"expected a string, got {_describe(value)}")
+        if choices is not None and value not in choices:
+            raise self.error(where, f"must be one of {', '.join(map(repr, choices))}, "
+                                    f"got {value!r}")
+        return value
+
+    def name(self, value: Any, where: str) -> str:
+        value = self.string(value, where)
+        if not value.strip():
+            raise self.error(where, "must not be empty")
+        return value
+
+    def vector(self, value: Any, where: str, length: int = 3) -> tuple[float, ...]:
+        if not isinstance(value, list):
+            raise self.error(where, f"expected an array of {length} numbers, "
+                                    f"got {_describe(value)}")
+        if len(value) != length:
+            raise self.error(where, f"expected {length} numbers, got {len(value)}")
+        return tuple(self.number(v, f"{where}[{i}]") for i, v in enumerate(value))
+
+    def length(self, value: Any, where: str, **kw) -> float:
+        """A length in scene units, returned in metres."""
+        return self.number(value, where, **kw) * self.scale
+
+    def position(self, value: Any, where: str) -> tuple[float, float, float]:
+        """A (3,) position in scene units, returned in metres."""
+        return tuple(v * self.scale for v in self.vector(value, where))
+
+    def point_list(self, value: Any, where: str) -> np.ndarray:
+        """An array of 3-vectors in scene units, returned as a read-only (k, 3) in metres."""
+        if not isinstance(value, list):
+            raise self.error(where, f"expected an array of [x, y, z] points, "
+                                    f"got {_describe(value)}")
+        out = np.array([self.vector(v, f"{where}[{i}]") for i, v in enumerate(value)],
+                       float).reshape(-1, 3) * self.scale
+        out.setflags(write=False)
+        return out
+
+    def file_path(self, value: Any, where: str) -> Path:
+        """A path relative to the scene file, which must exist as a file."""
+        text = self.name(value, where)
+        path = (self.folder / text).resolve()
+        if not path.is_file():
+            raise self.error(where, f"file not found: {path}")
+        return path
+
+    # -- sections ---------------------------------------------------------
+
+    def scene(self, data: dict) -> Scene:
+        data = self.table(data, "(top level)", _TOP_KEYS, ("scene",))
+        head = self.table(data["scene"], "scene", _SCENE_KEYS, ("name", "units", "duration"))
+        name = self.name(head["name"], "scene.name")
+        if "/" in name or "\\" in name or name in (".", ".."):
+            raise self.error("scene.name", f"is used as a file name; it may not contain "
+                                           f"'/' or '\\' or be '.' or '..', got {name!r}")
+        units = self.string(head["units"], "scene.units", tuple(UNITS))
+        self.scale = UNITS[units]
+        duration = self.number(head["duration"], "scene.duration", nonnegative=True)
+        timestep = self.number(head.get("timestep", 0.002), "scene.timestep", positive=True)
+        settle = self.number(head.get("settle", 0.0), "scene.settle", nonnegative=True)
+        mjcf = None
+        if "mjcf" in head:
+            mjcf = self.file_path(head["mjcf"], "scene.mjcf")
+            self.mjcf = self.compile_mjcf(mjcf)
+            self.frames.update(self.mjcf.bodies)
+        self.frames["world"] = (np.zeros(3), np.eye(3))
+
+        effects = self.effects(data.get("effects", {}))
+        check = self.check(data.get("check", {}))
+        bodies = tuple(self.body(b, f"bodies[{i}]")
+                       for i, b in enumerate(self.tables(data.get("bodies", []), "bodies")))
+        parts = tuple(self.part(p, f"parts[{i}]")
+                      for i, p in enumerate(self.tables(data.get("parts", []), "parts")))
+        self.unique(parts, "parts", "part")
+        cables = tuple(self.cable(c, f"cables[{i}]")
+                       for i, c in enumerate(self.tables(data.get("cables", []), "cables")))
+        self.unique(cables, "cables", "cable")
+        part_names = {p.name for p in parts}
+        for i, cable in enumerate(cables):
+            if cable.name in part_names:
+                raise self.error(f"cables[{i}].name",
+                                 f"{cable.name!r} is also a part name; names must differ")
+        motions = tuple(self.motion(m, f"motion[{i}]", {b.name: b for b in bodies})
+                        for i, m in enumerate(self.tables(data.get("motion", []), "motion")))
+        driven: dict[str, int] = {}
+        for i, m in enumerate(motions):
+            target = f"body {m.body!r}" if m.body else f"joint {m.joint!r}"
+            if target in driven:
+                raise self.error(f"motion[{i}]", f"{target} is already driven by "
+                                                 f"motion[{driven[target]}]")
+            driven[target] = i
+        return Scene(path=self.file, name=name, units=units, scale=self.scale,
+                     duration=duration, timestep=timestep, settle=settle, mjcf=mjcf,
+                     effects=effects, check=check, bodies=bodies, parts=parts,
+                     cables=cables, motions=motions)
+
+    def compile_mjcf(self, path: Path) -> _MjcfInfo:
+        try:
+            model = mujoco.MjModel.from_xml_path(str(path))
+        except Exception as e:   # MuJoCo raises ValueError; any failure is the file's
+            message = " ".join(str(e).split())
+            raise self.error("scene.mjcf", f"MuJoCo cannot compile {path.name}: "
+                                           f"{message}") from None
+        data = mujoco.MjData(model)
+        mujoco.mj_kinematics(model, data)
+        bodies = {}
+        for i in range(model.nbody):
+            name = model.body(i).name
+            if name:
+                bodies[name] = (data.xpos[i].copy(), data.xmat[i].reshape(3, 3).copy())
+        joints = {model.joint(i).name: int(model.jnt_type[i])
+                  for i in range(model.njnt) if model.joint(i).name}
+        return _MjcfInfo(bodies=bodies, joints=joints)
+
+    def effects(self, value: Any) -> Effects:
+        t = self.table(value, "effects", _EFFECTS_KEYS)
+        contact = t.get("contact", [])
+        if not isinstance(contact, list):
+            raise self.error("effects.contact", f"expected an array of strings, "
+                                                f"got {_describe(contact)}")
+        names = frozenset(self.string(c, f"effects.contact[{i}]", INTERACTIONS)
+                          for i, c in enumerate(contact))
+        return Effects(dynamics=self.boolean(t.get("dynamics", True), "effects.dynamics"),
+                       gravity=self.boolean(t.get("gravity", True), "effects.gravity"),
+                       contact=names)
+
+    def check(self, value: Any) -> CheckSettings:
+        t = self.table(value, "check", _CHECK_KEYS)
+        clearance = (self.length(t["clearance"], "check.clearance", nonnegative=True)
+                     if "clearance" in t else DEFAULT_CLEARANCE)
+        return CheckSettings(
+            method=self.string(t.get("method", "points"), "check.method", METHODS),
+            spacing=self.number(t.get("spacing", 2.0), "check.spacing", positive=True),
+            clearance=clearance,
+            every=self.integer(t.get("every", 1), "check.every", 1),
+            validate=self.boolean(t.get("validate", True), "check.validate"),
+            attach_zone=self.number(t.get("attach_zone", 5.0), "check.attach_zone",
+                                    nonnegative=True))
+
+    def body(self, value: dict, where: str) -> BodyDef:
+        t = self.table(value, where, _BODY_KEYS, ("name",))
+        name = self.name(t["name"], f"{where}.name")
+        if name == "world":
+            raise self.error(f"{where}.name", "'world' is the fixed world frame; "
+                                              "choose another name")
+        if name in self.body_index:
+            raise self.error(f"{where}.name", f"duplicate body name {name!r} "
+                                              f"(also {self.body_index[name]})")
+        if name in self.frames:
+            raise self.error(f"{where}.name", f"{name!r} is already a body of the mjcf "
+                                              "model; choose another name")
+        self.body_index[name] = where
+        body = BodyDef(name=name, pos=self.position(t.get("pos", [0, 0, 0]), f"{where}.pos"),
+                       euler=self.vector(t.get("euler", [0, 0, 0]), f"{where}.euler"))
+        self.frames[name] = (np.asarray(body.pos), euler_matrix(body.euler))
+        return body
+
+    def body_ref(self, value: Any, where: str) -> str:
+        """A body a part or anchor rides on: world, a [[bodies]] body or an mjcf body."""
+        name = self.name(value, where)
+        if name not in self.frames:
+            known = sorted(self.frames)
+            close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+            hint = f"did you mean {close[0]!r}?" if close else "known: " + ", ".join(known)
+            raise self.error(where, f"no body named {name!r} in [[bodies]]"
+                                    f"{' or the mjcf model' if self.mjcf else ''} ({hint})")
+        return name
+
+    def part(self, value: dict, where: str) -> PartDef:
+        t = self.table(value, where, _PART_KEYS, ("name", "shape"))
+        name = self.name(t["name"], f"{where}.name")
+        if any(not level.strip() for level in name.split("/")):
+            raise self.error(f"{where}.name", f"empty assembly level in {name!r} "
+                                              "('/' separates non-empty levels)")
+        shape = self.string(t["shape"], f"{where}.shape", tuple(SHAPE_SIZES))
+        arity = SHAPE_SIZES[shape]
+        if arity == 0:
+            if "size" in t:
+                raise self.error(f"{where}.size", f"not used by shape {shape!r} "
+                                 + ("(infinite)" if shape == "plane" else "(see file, scale)"))
+            size = ()
+        else:
+            if "size" not in t:
+                raise self.error(f"{where}.size", f"missing (required for shape {shape!r})")
+            raw = t["size"]
+            if isinstance(raw, list) and len(raw) != arity:
+                raise self.error(f"{where}.size", f"shape {shape!r} takes {arity} "
+                                 f"number{'s' if arity > 1 else ''} ({_SIZE_HELP[shape]}), "
+                                 f"got {len(raw)}")
+            size = tuple(self.length(v, f"{where}.size[{i}]", positive=True)
+                         for i, v in enumerate(self.vector(raw, f"{where}.size", arity)))
+        for key in ("file", "scale"):
+            if key in t and shape != "mesh":
+                raise self.error(f"{where}.{key}", f"only for shape 'mesh', not {shape!r}")
+        keepout = self.boolean(t.get("keepout", False), f"{where}.keepout")
+        file, mesh_scale = None, 1.0
+        if shape == "mesh":
+            if "file" not in t:
+                raise self.error(f"{where}.file", "missing (required for shape 'mesh')")
+            file = self.file_path(t["file"], f"{where}.file")
+            mesh_scale = self.number(t.get("scale", 1.0), f"{where}.scale",
+                                     positive=True) * self.scale
+            self.check_mesh(file, f"{where}.file", closed=keepout)
+        return PartDef(name=name, body=self.body_ref(t.get("body", "world"), f"{where}.body"),
+                       shape=shape, size=size,
+                       pos=self.position(t.get("pos", [0, 0, 0]), f"{where}.pos"),
+                       euler=self.vector(t.get("euler", [0, 0, 0]), f"{where}.euler"),
+                       file=file, mesh_scale=mesh_scale, keepout=keepout)
+
+    def check_mesh(self, path: Path, where: str, closed: bool) -> None:
+        try:
+            mesh = trimesh.load(path, force="mesh")
+        except Exception as e:   # trimesh raises many types for unreadable files
+            raise self.error(where, f"trimesh cannot load {path.name}: "
+                                    f"{type(e).__name__}: {e}") from None
+        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+            raise self.error(where, f"{path.name} holds no triangles")
+        if closed and not mesh.is_watertight:
+            raise self.error(where, f"{path.name} is not a closed surface (keepout zones "
+                                    "need an inside); close its holes")
+
+    def anchor(self, value: Any, where: str, with_pos: bool = True) -> Anchor:
+        t = self.table(value, where, _ANCHOR_KEYS if with_pos else ("body",))
+        return Anchor(body=self.body_ref(t.get("body", "world"), f"{where}.body"),
+                      pos=self.position(t.get("pos", [0, 0, 0]), f"{where}.pos")
+                      if with_pos else _ZERO3)
+
+    def to_world(self, anchor: Anchor) -> np.ndarray:
+        """The anchor's world position at t = 0, metres."""
+        origin, rotation = self.frames[anchor.body]
+        return origin + rotation @ np.asarray(anchor.pos)
+
+    def from_world(self, body: str, point: np.ndarray) -> tuple[float, float, float]:
+        """A world point at t = 0 in the frame of `body`, metres."""
+        origin, rotation = self.frames[body]
+        return tuple(float(v) for v in rotation.T @ (point - origin))
+
+    def cable(self, value: dict, where: str) -> CableDef:
+        t = self.table(value, where, _CABLE_KEYS, ("name", "radius"))
+        name = self.name(t["name"], f"{where}.name")
+        radius = self.length(t["radius"], f"{where}.radius", positive=True)
+        if "points" in t:
+            if "via" in t:
+                raise self.error(f"{where}.via", "not allowed with 'points' (the points "
+                                                 "are the whole route)")
+            points = self.point_list(t["points"], f"{where}.points")
+            if len(points) < 2:
+                raise self.error(f"{where}.points", f"needs at least 2 points, "
+                                                    f"got {len(points)}")
+            route = points
+            ends = []
+            for key, point in (("start", points[0]), ("end", points[-1])):
+                if key in t and isinstance(t[key], dict) and "pos" in t[key]:
+                    raise self.error(f"{where}.{key}.pos",
+                                     f"not allowed with 'points': the {key} is "
+                                     f"points[{0 if key == 'start' else -1}] (give only body)")
+                anchor = self.anchor(t.get(key, {}), f"{where}.{key}", with_pos=False)
+                ends.append(Anchor(anchor.body, self.from_world(anchor.body, point)))
+            start, end = ends
+            via = np.zeros((0, 3))
+            via.setflags(write=False)
+            labels = [f"{where}.points[{i}]" for i in range(len(points))]
+        else:
+            for key in ("start", "end"):
+                if key not in t:
+                    raise self.error(f"{where}.{key}", "missing (required unless "
+                                                       "'points' gives the route)")
+            start = self.anchor(t["start"], f"{where}.start")
+            end = self.anchor(t["end"], f"{where}.end")
+            via = self.point_list(t.get("via", []), f"{where}.via")
+            points = None
+            route = np.vstack([self.to_world(start), via, self.to_world(end)])
+            route.setflags(write=False)
+            labels = ([f"{where}.start"] + [f"{where}.via[{i}]" for i in range(len(via))]
+                      + [f"{where}.end"])
+        steps = np.linalg.norm(np.diff(route, axis=0), axis=1)
+        short = np.flatnonzero(steps <= DEGENERATE * radius)
+        if len(short):
+            i = short[0]
+            raise self.error(labels[i + 1], f"coincides with the route point before it "
+                                            f"({labels[i].rsplit('.', 1)[-1]} at t = 0): "
+                                            "a zero-length route segment")
+        route_length = float(steps.sum())
+        length = None
+        if "length" in t:
+            length = self.length(t["length"], f"{where}.length", positive=True)
+            if length < route_length * (1 - ROUTE_TOLERANCE):
+                raise self.error(f"{where}.length",
+                                 f"{_g(length / self.scale)} is shorter than the route "
+                                 f"({_g(route_length / self.scale)} {self._units()} from start "
+                                 "through via to end at t = 0)")
+        clips = t.get("clips", [])
+        if not isinstance(clips, list):
+            raise self.error(f"{where}.clips", f"expected an array of tables, "
+                                               f"got {_describe(clips)}")
+        clips = tuple(self.anchor(c, f"{where}.clips[{i}]") for i, c in enumerate(clips))
+        segments = None
+        if "segments" in t:
+            segments = self.integer(t["segments"], f"{where}.segments", 2)
+            element = (length or route_length) / segments
+            if element <= radius:
+                most = max(1, math.ceil((length or route_length) / radius) - 1)
+                raise self.error(f"{where}.segments",
+                                 f"{segments} elements are {_g(element / self.scale)} "
+                                 f"{self._units()} long, not longer than the radius "
+                                 f"{_g(radius / self.scale)} as MuJoCo's flex needs; "
+                                 f"use at most {most}")
+        bend = (self.length(t["min_bend_radius"], f"{where}.min_bend_radius", positive=True)
+                if "min_bend_radius" in t else None)
+        return CableDef(
+            name=name, radius=radius, start=start, end=end, via=via, points=points,
+            length=length, clips=clips, segments=segments,
+            young=self.number(t.get("young", DEFAULT_YOUNG), f"{where}.young", positive=True),
+            density=self.number(t.get("density", DEFAULT_DENSITY), f"{where}.density",
+                                positive=True),
+            min_bend_radius=bend, route=route)
+
+    def motion(self, value: dict, where: str, bodies: dict[str, BodyDef]) -> MotionDef:
+        t = self.table(value, where, _MOTION_KEYS, ("keys",))
+        if ("body" in t) == ("joint" in t):
+            raise self.error(where, "give exactly one of 'body' (a [[bodies]] name) "
+                                    "and 'joint' (a joint of the mjcf model)")
+        keys_raw = t["keys"]
+        if not isinstance(keys_raw, list) or not all(isinstance(k, dict) for k in keys_raw):
+            raise self.error(f"{where}.keys", f"expected an array of tables "
+                                              f"({{ t = ..., ... }}), got {_describe(keys_raw)}")
+        if not keys_raw:
+            raise self.error(f"{where}.keys", "empty: give at least one keyframe")
+        body = joint = None
+        if "body" in t:
+            body = self.name(t["body"], f"{where}.body")
+            if body not in bodies:
+                if body == "world":
+                    problem = "the world frame cannot move"
+                elif self.mjcf and body in self.mjcf.bodies:
+                    problem = (f"{body!r} is a body of the mjcf model, which cannot be "
+                               "keyframed by pose; drive its joints (joint = ...)")
+                else:
+                    problem = f"no [[bodies]] entry named {body!r}"
+                raise self.error(f"{where}.body", problem)
+            home = bodies[body]
+            keys = tuple(self.body_key(k, f"{where}.keys[{i}]", home)
+                         for i, k in enumerate(keys_raw))
+        else:
+            joint = self.name(t["joint"], f"{where}.joint")
+            if self.mjcf is None:
+                raise self.error(f"{where}.joint", "no mjcf model in [scene]; joints "
+                                                   "come from it")
+            if joint not in self.mjcf.joints:
+                close = difflib.get_close_matches(joint, list(self.mjcf.joints), n=1)
+                hint = f" (did you mean {close[0]!r}?)" if close else ""
+                raise self.error(f"{where}.joint",
+                                 f"no joint named {joint!r} in the mjcf model{hint}")
+            kind = self.mjcf.joints[joint]
+            if kind not in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
+                raise self.error(f"{where}.joint", f"{joint!r} is a "
+                                 f"{mujoco.mjtJoint(kind).name[6:].lower()} joint; only hinge "
+                                 "and slide joints are driven by a value")
+            keys = tuple(self.joint_key(k, f"{where}.keys[{i}]")
+                         for i, k in enumerate(keys_raw))
+        for i in range(1, len(keys)):
+            if keys[i].t <= keys[i - 1].t:
+                raise self.error(f"{where}.keys[{i}].t",
+                                 f"times must increase strictly: {_g(keys[i].t)} after "
+                                 f"{_g(keys[i - 1].t)}")
+        return MotionDef(body=body, joint=joint, keys=keys)
+
+    def body_key(self, value: dict, where: str, home: BodyDef) -> BodyKey:
+        t = self.table(value, where, _BODY_KEY_KEYS, ("t",))
+        return BodyKey(t=self.number(t["t"], f"{where}.t", nonnegative=True),
+                       pos=self.position(t["pos"], f"{where}.pos") if "pos" in t else home.pos,
+                       euler=(self.vector(t["euler"], f"{where}.euler") if "euler" in t
+                              else home.euler))
+
+    def joint_key(self, value: dict, where: str) -> JointKey:
+        t = self.table(value, where, _JOINT_KEY_KEYS, ("t", "value"))
+        return JointKey(t=self.number(t["t"], f"{where}.t", nonnegative=True),
+                        value=self.number(t["value"], f"{where}.value"))
+
+    def unique(self, records: tuple, where: str, kind: str) -> None:
+        seen: dict[str, int] = {}
+        for i, record in enumerate(records):
+            if record.name in seen:
+                raise self.error(f"{where}[{i}].name", f"duplicate {kind} name "
+                                 f"{record.name!r} (also {where}[{seen[record.name]}])")
+            seen[record.name] = i
+
+    def _units(self) -> str:
+        return "m" if self.scale == 1.0 else "mm"
+
+
+_SIZE_HELP = {"box": "half-extents x, y, z", "sphere": "radius",
+              "cylinder": "radius, half-length", "capsule": "radius, half-length",
+              "ellipsoid": "semi-axes x, y, z"}
+
+
+def _join(where: str, key: str) -> str:
+    return key if where == "(top level)" else f"{where}.{key}"
+
+
+def _g(value: float) -> str:
+    return f"{value:.6g}"
