@@ -67,6 +67,9 @@ E = 4e7 Pa; we round to 5e7."""
 DEFAULT_DENSITY = 1500.0
 """Cable density when absent, kg/m^3: PVC (~1400) with some copper and air."""
 
+LARGEST = 1e15
+"""No number in a scene may exceed this magnitude (keeps squares and sums finite)."""
+
 ROUTE_TOLERANCE = 1e-9
 """Relative tolerance by which `length` may fall short of its route."""
 
@@ -425,9 +428,11 @@ class _Parser:
                nonnegative: bool = False) -> float:
         if not _is_number(value):
             raise self.error(where, f"expected a number, got {_describe(value)}")
-        value = float(value)
-        if not math.isfinite(value):
+        if isinstance(value, float) and not math.isfinite(value):
             raise self.error(where, f"must be a finite number, got {value}")
+        if abs(value) > LARGEST:
+            raise self.error(where, f"out of range: magnitude above {LARGEST:g}")
+        value = float(value)
         if positive and value <= 0:
             raise self.error(where, f"must be positive, got {_g(value)}")
         if nonnegative and value < 0:
@@ -525,11 +530,11 @@ class _Parser:
         cables = tuple(self.cable(c, f"cables[{i}]")
                        for i, c in enumerate(self.tables(data.get("cables", []), "cables")))
         self.unique(cables, "cables", "cable")
-        part_names = {p.name for p in parts}
+        part_index = {p.name: i for i, p in enumerate(parts)}
         for i, cable in enumerate(cables):
-            if cable.name in part_names:
-                raise self.error(f"cables[{i}].name",
-                                 f"{cable.name!r} is also a part name; names must differ")
+            if cable.name in part_index:
+                raise self.error(f"cables[{i}].name", f"{cable.name!r} is also the name of "
+                                 f"parts[{part_index[cable.name]}]; names must differ")
         motions = tuple(self.motion(m, f"motion[{i}]", {b.name: b for b in bodies})
                         for i, m in enumerate(self.tables(data.get("motion", []), "motion")))
         driven: dict[str, int] = {}
@@ -735,10 +740,12 @@ class _Parser:
         if "length" in t:
             length = self.length(t["length"], f"{where}.length", positive=True)
             if length < route_length * (1 - ROUTE_TOLERANCE):
+                along = ("along points" if points is not None
+                         else "from start through via to end")
                 raise self.error(f"{where}.length",
-                                 f"{_g(length / self.scale)} is shorter than the route "
-                                 f"({_g(route_length / self.scale)} {self._units()} from start "
-                                 "through via to end at t = 0)")
+                                 f"{_g(length / self.scale)} {self._units()} is shorter than "
+                                 f"the route ({_g(route_length / self.scale)} {self._units()} "
+                                 f"{along} at t = 0)")
         clips = t.get("clips", [])
         if not isinstance(clips, list):
             raise self.error(f"{where}.clips", f"expected an array of tables, "

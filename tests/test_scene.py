@@ -1,0 +1,634 @@
+"""Scene loading: valid scenes, unit conversion, and every class of bad input."""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+import trimesh
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from sim.scene import (DEFAULT_CLEARANCE, Anchor, BodyKey, JointKey, Scene, SceneError,
+                       euler_matrix, load_scene, parse_scene)
+
+ARM_XML = """
+<mujoco model="arm">
+  <worldbody>
+    <body name="upper" pos="0 0 0.5" euler="0 90 0">
+      <joint name="shoulder" type="ball"/>
+      <geom type="capsule" size="0.03 0.1"/>
+      <body name="forearm" pos="0 0 0.2">
+        <joint name="elbow" type="hinge" axis="0 1 0"/>
+        <geom type="capsule" size="0.025 0.1"/>
+        <body name="slider" pos="0 0 0.2">
+          <joint name="lift" type="slide"/>
+          <geom size="0.02"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+# The SPEC's example scene, verbatim apart from the commented-out lines.
+SPEC_EXAMPLE = """
+[scene]
+name = "drawer-harness"
+units = "m"            # "m" or "mm"
+duration = 3.0         # simulated seconds of scripted motion after t = 0
+timestep = 0.002       # optional
+settle = 1.0           # optional: seconds simulated with motion frozen before t = 0
+mjcf = "arm.xml"       # optional: an existing MuJoCo model (robot, fixture) to build on
+
+[effects]              # simulate only what the scene calls for
+dynamics = true        # false: no stepping; check the cables exactly as routed
+gravity = true
+contact = ["cable-structure"]   # interactions that push back physically, any of
+
+[check]
+method = "points"      # "points" (paper: discrete points) or "exact" (segment distances)
+spacing = 2.0          # discrete-point spacing as a multiple of the cable radius (paper: 2)
+clearance = 0.005      # soft interference: surface distance below this (default 5 mm in scene units)
+every = 1              # check every Nth step
+validate = true        # compare with MuJoCo's contacts at each checked step
+attach_zone = 5.0      # arc length, in cable radii, next to an end or clip where touching
+
+[[bodies]]             # rigid bodies moved by script; parts and cable ends ride on them
+name = "drawer"
+pos = [0, 0, 0]
+euler = [0, 0, 0]
+
+[[parts]]
+name = "cabinet/rail_left"     # "/" separates assembly levels
+body = "world"                 # "world", a [[bodies]] name or a body of the mjcf model
+shape = "box"                  # box | sphere | cylinder | capsule | ellipsoid | plane | mesh
+size = [0.3, 0.02, 0.02]
+pos = [0.4, 0.1, 0.3]
+euler = [0, 0, 0]
+# file = "meshes/bracket.stl"  # shape = "mesh": any format trimesh reads
+# scale = 0.001
+# keepout = true               # a clearance zone (e.g. bolt wrench space): detected, never collides
+
+[[cables]]
+name = "power"
+radius = 0.004
+start = { body = "world", pos = [0, 0, 0.6] }
+end = { body = "drawer", pos = [0.5, 0, 0.6] }
+via = [[0.25, 0.0, 0.5]]       # optional routing waypoints for the initial shape
+length = 0.7                   # optional; default: length of the route; never shorter
+# points = [[...], ...]        # alternative to start/via: the routed centreline itself
+clips = [ { body = "world", pos = [0.12, 0.0, 0.55] } ]   # optional clamps along the route
+segments = 40                  # optional: MuJoCo elements
+young = 1.0e8                  # bending modulus, Pa
+density = 1500                 # kg/m^3
+min_bend_radius = 0.04         # optional: report bends tighter than this
+
+[[motion]]                     # keyframes, interpolated in time; a body's keys are its world
+body = "drawer"                # pose (as in [[bodies]]); before the first key and after the
+                               # last one it holds that key's pose
+keys = [ { t = 0.0, pos = [0, 0, 0] },
+         { t = 2.0, pos = [0.3, 0, 0], euler = [0, 0, 0] } ]
+
+[[motion]]                     # a joint of the mjcf model, driven kinematically
+joint = "elbow"
+keys = [ { t = 0.0, value = 0.0 }, { t = 2.0, value = -90.0 } ]   # degrees, or scene units for slides
+"""
+
+# A scene in metres using every feature; tests mutate copies of it.
+BASE = {
+    "scene": {"name": "t", "units": "m", "duration": 1.0, "timestep": 0.001, "settle": 0.5,
+              "mjcf": "arm.xml"},
+    "effects": {"dynamics": True, "gravity": False, "contact": ["cable-structure", "self"]},
+    "check": {"method": "exact", "spacing": 1.0, "clearance": 0.002, "every": 2,
+              "validate": False, "attach_zone": 3.0},
+    "bodies": [{"name": "drawer", "pos": [1.0, 0.0, 0.0], "euler": [0.0, 0.0, 90.0]}],
+    "parts": [
+        {"name": "cab/rail", "shape": "box", "size": [0.3, 0.02, 0.02], "pos": [0.4, 0.1, 0.3],
+         "euler": [10.0, 0.0, 0.0]},
+        {"name": "ball", "body": "forearm", "shape": "sphere", "size": [0.05]},
+        {"name": "floor", "shape": "plane"},
+        {"name": "bracket", "body": "drawer", "shape": "mesh", "file": "box.stl",
+         "scale": 0.5, "keepout": True},
+    ],
+    "cables": [
+        {"name": "power", "radius": 0.004, "start": {"pos": [0.0, 0.0, 0.6]},
+         "end": {"body": "drawer", "pos": [0.5, 0.0, 0.6]}, "via": [[0.25, 0.0, 0.5]],
+         "length": 2.0, "clips": [{"body": "upper", "pos": [0.0, 0.0, 0.1]}],
+         "segments": 40, "young": 1e8, "density": 1200.0, "min_bend_radius": 0.04},
+        {"name": "signal", "radius": 0.002,
+         "points": [[0.0, 0.1, 0.0], [0.1, 0.1, 0.0], [0.2, 0.1, 0.05]],
+         "start": {"body": "drawer"}},
+    ],
+    "motion": [
+        {"body": "drawer", "keys": [{"t": 0.0, "pos": [1.0, 0.0, 0.0]},
+                                    {"t": 2.0, "pos": [1.3, 0.0, 0.0], "euler": [0.0, 0.0, 45.0]}]},
+        {"joint": "elbow", "keys": [{"t": 0.0, "value": 0.0}, {"t": 2.0, "value": -90.0}]},
+        {"joint": "lift", "keys": [{"t": 0.0, "value": 0.0}, {"t": 1.0, "value": 0.1}]},
+    ],
+}
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory) -> Path:
+    """A folder with the files BASE refers to, plus broken ones."""
+    d = tmp_path_factory.mktemp("scene")
+    (d / "arm.xml").write_text(ARM_XML)
+    trimesh.creation.box(extents=[0.1, 0.1, 0.1]).export(d / "box.stl")
+    open_box = trimesh.creation.box(extents=[0.1, 0.1, 0.1])
+    open_box.update_faces(np.arange(len(open_box.faces)) > 0)
+    open_box.export(d / "open.stl")
+    (d / "garbage.stl").write_bytes(b"solid nothing\nthis is not an stl\n")
+    (d / "broken.xml").write_text("<mujoco><worldbody><geom type='box'/></worldbody></mujoco>")
+    return d
+
+
+def parse(data: dict, folder: Path) -> Scene:
+    return parse_scene(data, folder / "scene.toml")
+
+
+def put(data: dict, path: str, value) -> dict:
+    """Set data[a][b][0]... for path 'a.b.0...'; returns data."""
+    *head, last = [int(k) if k.isdigit() else k for k in path.split(".")]
+    target = data
+    for key in head:
+        target = target[key]
+    target[last] = value
+    return data
+
+
+def drop(data: dict, path: str) -> dict:
+    *head, last = [int(k) if k.isdigit() else k for k in path.split(".")]
+    target = data
+    for key in head:
+        target = target[key]
+    del target[last]
+    return data
+
+
+# -- valid scenes ------------------------------------------------------------
+
+
+def test_minimal_scene_has_spec_defaults(tmp_path):
+    f = tmp_path / "min.toml"
+    f.write_text('[scene]\nname = "min"\nunits = "mm"\nduration = 0\n')
+    s = load_scene(f)
+    assert (s.name, s.units, s.scale, s.duration) == ("min", "mm", 0.001, 0.0)
+    assert (s.timestep, s.settle, s.mjcf) == (0.002, 0.0, None)
+    assert s.effects.dynamics and s.effects.gravity and s.effects.contact == frozenset()
+    assert s.check.method == "points" and s.check.spacing == 2.0 and s.check.every == 1
+    assert s.check.clearance == DEFAULT_CLEARANCE == 0.005   # 5 mm whatever the units
+    assert s.check.validate and s.check.attach_zone == 5.0
+    assert s.bodies == s.parts == s.cables == s.motions == ()
+
+
+def test_spec_example_loads(folder):
+    f = folder / "spec.toml"
+    f.write_text(SPEC_EXAMPLE)
+    s = load_scene(f)
+    assert s.name == "drawer-harness" and s.settle == 1.0 and s.mjcf == folder / "arm.xml"
+    assert s.effects.contact == {"cable-structure"}
+    (part,) = s.parts
+    assert part.name == "cabinet/rail_left" and part.size == (0.3, 0.02, 0.02)
+    (cable,) = s.cables
+    assert cable.start == Anchor("world", (0.0, 0.0, 0.6))
+    assert cable.end == Anchor("drawer", (0.5, 0.0, 0.6))
+    assert cable.via.shape == (1, 3) and cable.points is None and cable.length == 0.7
+    assert cable.clips == (Anchor("world", (0.12, 0.0, 0.55)),)
+    assert (cable.segments, cable.young, cable.density, cable.min_bend_radius) == (40, 1e8, 1500, 0.04)
+    np.testing.assert_allclose(cable.route, [[0, 0, 0.6], [0.25, 0, 0.5], [0.5, 0, 0.6]])
+    body, joint = s.motions
+    assert body.body == "drawer" and body.joint is None
+    assert body.keys == (BodyKey(0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)),
+                         BodyKey(2.0, (0.3, 0.0, 0.0), (0.0, 0.0, 0.0)))
+    assert joint.joint == "elbow" and joint.keys == (JointKey(0.0, 0.0), JointKey(2.0, -90.0))
+
+
+def test_base_scene_records(folder):
+    s = parse(copy.deepcopy(BASE), folder)
+    assert s.effects == s.effects.__class__(True, False, frozenset({"cable-structure", "self"}))
+    assert [p.shape for p in s.parts] == ["box", "sphere", "plane", "mesh"]
+    assert s.parts[2].size == () and s.parts[3].size == ()
+    assert s.parts[3].file == folder / "box.stl" and s.parts[3].file.is_absolute()
+    assert s.parts[3].mesh_scale == 0.5 and s.parts[3].keepout
+    power, signal = s.cables
+    assert signal.via.shape == (0, 3) and signal.length is None and signal.segments is None
+    assert signal.end == Anchor("world", (0.2, 0.1, 0.05))
+    # the drawer turns 90 degrees about z at (1, 0, 0): world (0, 0.1, 0) is (0.1, 1, 0) in it
+    np.testing.assert_allclose(signal.start.pos, [0.1, 1.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(power.route[-1], [1.0, 0.5, 0.6], atol=1e-12)
+    # a key without euler keeps the body's [[bodies]] orientation
+    assert s.motions[0].keys[0].euler == (0.0, 0.0, 90.0)
+    with pytest.raises(ValueError):
+        power.via[0, 0] = 1.0   # records are frozen, arrays too
+
+
+def test_euler_matches_mujoco():
+    xml = '<mujoco><worldbody><body euler="10 -25 130"><geom size=".1"/></body></worldbody></mujoco>'
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, d)
+    np.testing.assert_allclose(euler_matrix([10, -25, 130]), d.xmat[1].reshape(3, 3), atol=1e-12)
+
+
+def test_anchor_on_mjcf_body_uses_its_compiled_pose(folder):
+    data = copy.deepcopy(BASE)
+    put(data, "cables.1.start", {"body": "upper"})
+    s = parse(data, folder)
+    m = mujoco.MjModel.from_xml_path(str(folder / "arm.xml"))
+    d = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, d)
+    b = m.body("upper").id
+    world = d.xpos[b] + d.xmat[b].reshape(3, 3) @ np.asarray(s.cables[1].start.pos)
+    np.testing.assert_allclose(world, [0.0, 0.1, 0.0], atol=1e-12)
+
+
+def to_mm(data: dict) -> dict:
+    """The same scene written in millimetres."""
+    d = copy.deepcopy(data)
+    k = 1000.0
+    scale = lambda v: [scale(x) for x in v] if isinstance(v, list) else v * k  # noqa: E731
+    d["scene"]["units"] = "mm"
+    d["check"]["clearance"] *= k
+    for b in d["bodies"]:
+        b["pos"] = scale(b["pos"])
+    for p in d["parts"]:
+        for key in ("size", "pos", "scale"):   # mesh scale: file units -> scene units
+            if key in p:
+                p[key] = scale(p[key])
+    for c in d["cables"]:
+        for key in ("radius", "via", "length", "points", "min_bend_radius"):
+            if key in c:
+                c[key] = scale(c[key])
+        for a in [c.get("start", {}), c.get("end", {}), *c.get("clips", [])]:
+            if "pos" in a:
+                a["pos"] = scale(a["pos"])
+    for m in d["motion"]:
+        for key in m["keys"]:
+            if "pos" in key:
+                key["pos"] = scale(key["pos"])
+            if m.get("joint") == "lift":   # slide joint: scene units
+                key["value"] *= k
+    return d
+
+
+def assert_same(a, b, where="scene"):
+    """Records equal up to float rounding, recursively."""
+    if dataclasses.is_dataclass(a):
+        assert type(a) is type(b), where
+        for field in dataclasses.fields(a):
+            assert_same(getattr(a, field.name), getattr(b, field.name), f"{where}.{field.name}")
+    elif isinstance(a, (tuple, list, np.ndarray)) and not isinstance(a, str):
+        assert len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b)):
+            assert_same(x, y, f"{where}[{i}]")
+    elif isinstance(a, float):
+        assert math.isclose(a, b, rel_tol=1e-12, abs_tol=1e-15), f"{where}: {a} != {b}"
+    else:
+        assert a == b, where
+
+
+def test_mm_scene_equals_m_scene(folder):
+    m = parse(copy.deepcopy(BASE), folder)
+    mm = parse(to_mm(BASE), folder)
+    assert (m.units, m.scale, mm.units, mm.scale) == ("m", 1.0, "mm", 0.001)
+    lift_m, lift_mm = m.motions[2], mm.motions[2]
+    assert [k.value for k in lift_mm.keys] == [0.0, 100.0]   # raw, in scene units
+    assert_same(lift_m.keys[1].value * m.scale, lift_mm.keys[1].value * mm.scale)
+    same = lambda s: dataclasses.replace(s, units="", scale=0.0, motions=s.motions[:2])  # noqa: E731
+    assert_same(same(m), same(mm))
+
+
+def test_length_check_uses_bodies_pose_and_tolerance(folder):
+    data = copy.deepcopy(BASE)
+    route = parse(data, folder).cables[0].route
+    exact = float(np.linalg.norm(np.diff(route, axis=0), axis=1).sum())
+    put(data, "cables.0.length", exact * (1 - 1e-12))
+    assert parse(data, folder).cables[0].length == pytest.approx(exact)
+    put(data, "cables.0.length", exact * (1 - 1e-6))
+    with pytest.raises(SceneError, match="shorter than the route"):
+        parse(data, folder)
+
+
+# -- bad input ---------------------------------------------------------------
+
+
+def check_error(exc: pytest.ExceptionInfo, file: Path, key: str, fragment: str):
+    e = exc.value
+    assert (e.key, e.file) == (key, file), str(e)
+    assert fragment in e.problem, str(e)
+    assert str(e) == f"{file}: {key}: {e.problem}"
+
+
+def test_toml_syntax_error_names_line(tmp_path):
+    f = tmp_path / "bad.toml"
+    f.write_text('[scene]\nname = "x"\nunits = \n')
+    with pytest.raises(SceneError) as exc:
+        load_scene(f)
+    check_error(exc, f, "line 3, column 9", "invalid TOML")
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(SceneError) as exc:
+        load_scene(tmp_path / "nope.toml")
+    check_error(exc, tmp_path / "nope.toml", "(file)", "cannot read")
+
+
+def test_directory_is_not_a_scene(tmp_path):
+    with pytest.raises(SceneError) as exc:
+        load_scene(tmp_path)
+    check_error(exc, tmp_path, "(file)", "cannot read")
+
+
+def test_not_utf8(tmp_path):
+    f = tmp_path / "latin.toml"
+    f.write_bytes('[scene]\nname = "caf\u00e9"\n'.encode("latin-1"))
+    with pytest.raises(SceneError) as exc:
+        load_scene(f)
+    check_error(exc, f, "(file)", "not UTF-8")
+
+
+def nested_scene_dict_wrong(d):
+    d["bodies"] = {"name": "drawer"}
+    return d
+
+
+BAD = [
+    # missing required keys
+    ("no scene", lambda d: drop(d, "scene"), "scene", "missing"),
+    ("no name", lambda d: drop(d, "scene.name"), "scene.name", "missing"),
+    ("no units", lambda d: drop(d, "scene.units"), "scene.units", "missing"),
+    ("no duration", lambda d: drop(d, "scene.duration"), "scene.duration", "missing"),
+    ("no radius", lambda d: drop(d, "cables.1.radius"), "cables[1].radius", "missing"),
+    ("no shape", lambda d: drop(d, "parts.0.shape"), "parts[0].shape", "missing"),
+    ("no size", lambda d: drop(d, "parts.0.size"), "parts[0].size", "required for shape 'box'"),
+    ("no mesh file", lambda d: drop(d, "parts.3.file"), "parts[3].file", "required for shape 'mesh'"),
+    ("no start", lambda d: drop(d, "cables.0.start"), "cables[0].start", "missing"),
+    ("no end", lambda d: drop(d, "cables.0.end"), "cables[0].end", "missing"),
+    ("no keys", lambda d: drop(d, "motion.0.keys"), "motion[0].keys", "missing"),
+    ("no key t", lambda d: drop(d, "motion.1.keys.1.t"), "motion[1].keys[1].t", "missing"),
+    ("no key value", lambda d: drop(d, "motion.1.keys.0.value"), "motion[1].keys[0].value",
+     "missing"),
+    ("no body name", lambda d: drop(d, "bodies.0.name"), "bodies[0].name", "missing"),
+    # unknown keys, with a suggestion
+    ("unknown top", lambda d: put(d, "cable", []), "cable", "did you mean 'cables'?"),
+    ("unknown scene", lambda d: put(d, "scene.unit", "m"), "scene.unit", "did you mean 'units'?"),
+    ("unknown cable", lambda d: put(d, "cables.0.raduis", 1), "cables[0].raduis",
+     "did you mean 'radius'?"),
+    ("unknown anchor", lambda d: put(d, "cables.0.start.bdy", "x"), "cables[0].start.bdy",
+     "did you mean 'body'?"),
+    ("unknown check", lambda d: put(d, "check.spacng", 1), "check.spacng",
+     "did you mean 'spacing'?"),
+    ("unknown effects", lambda d: put(d, "effects.colour", 1), "effects.colour", "valid keys:"),
+    ("unknown part", lambda d: put(d, "parts.0.sise", [1]), "parts[0].sise", "'size'"),
+    ("unknown key key", lambda d: put(d, "motion.1.keys.0.vlaue", 1), "motion[1].keys[0].vlaue",
+     "'value'"),
+    ("value on body key", lambda d: put(d, "motion.0.keys.0.value", 1),
+     "motion[0].keys[0].value", "unknown key"),
+    ("unknown body", lambda d: put(d, "bodies.0.mass", 1), "bodies[0].mass", "unknown key"),
+    ("unknown motion", lambda d: put(d, "motion.0.speed", 1), "motion[0].speed", "unknown key"),
+    ("unknown clip", lambda d: put(d, "cables.0.clips.0.euler", [0, 0, 0]),
+     "cables[0].clips[0].euler", "unknown key"),
+    # wrong types
+    ("radius string", lambda d: put(d, "cables.0.radius", "4"), "cables[0].radius",
+     "expected a number, got a string"),
+    ("radius bool", lambda d: put(d, "cables.0.radius", True), "cables[0].radius",
+     "expected a number, got a boolean"),
+    ("pos arity", lambda d: put(d, "bodies.0.pos", [1, 2]), "bodies[0].pos", "expected 3 numbers"),
+    ("pos not array", lambda d: put(d, "parts.0.pos", 1.0), "parts[0].pos", "expected an array"),
+    ("pos entry", lambda d: put(d, "cables.0.start.pos", [0, "a", 0]), "cables[0].start.pos[1]",
+     "expected a number"),
+    ("euler bool", lambda d: put(d, "parts.0.euler", [0, False, 0]), "parts[0].euler[1]",
+     "boolean"),
+    ("dynamics int", lambda d: put(d, "effects.dynamics", 1), "effects.dynamics",
+     "expected true or false"),
+    ("validate str", lambda d: put(d, "check.validate", "yes"), "check.validate",
+     "expected true or false"),
+    ("keepout str", lambda d: put(d, "parts.3.keepout", "true"), "parts[3].keepout",
+     "expected true or false"),
+    ("every float", lambda d: put(d, "check.every", 2.0), "check.every", "expected an integer"),
+    ("segments float", lambda d: put(d, "cables.0.segments", 40.0), "cables[0].segments",
+     "expected an integer"),
+    ("name int", lambda d: put(d, "scene.name", 3), "scene.name", "expected a string"),
+    ("contact string", lambda d: put(d, "effects.contact", "self"), "effects.contact",
+     "expected an array of strings"),
+    ("bodies table", nested_scene_dict_wrong, "bodies", "[[bodies]]"),
+    ("scene array", lambda d: put(d, "scene", [1]), "scene", "expected a table"),
+    ("start not table", lambda d: put(d, "cables.0.start", [0, 0, 0]), "cables[0].start",
+     "expected a table"),
+    ("via flat", lambda d: put(d, "cables.0.via", [0.1, 0.2, 0.3]), "cables[0].via[0]",
+     "expected an array of 3 numbers"),
+    ("clips table", lambda d: put(d, "cables.0.clips", {"body": "world"}), "cables[0].clips",
+     "expected an array"),
+    ("keys table", lambda d: put(d, "motion.0.keys", {"t": 0}), "motion[0].keys",
+     "expected an array of tables"),
+    ("mesh path int", lambda d: put(d, "parts.3.file", 1), "parts[3].file", "expected a string"),
+    # NaN and infinity
+    ("radius nan", lambda d: put(d, "cables.0.radius", math.nan), "cables[0].radius", "finite"),
+    ("pos inf", lambda d: put(d, "bodies.0.pos", [0, math.inf, 0]), "bodies[0].pos[1]", "finite"),
+    ("duration inf", lambda d: put(d, "scene.duration", math.inf), "scene.duration", "finite"),
+    ("key t nan", lambda d: put(d, "motion.0.keys.1.t", math.nan), "motion[0].keys[1].t",
+     "finite"),
+    ("value -inf", lambda d: put(d, "motion.1.keys.1.value", -math.inf),
+     "motion[1].keys[1].value", "finite"),
+    ("points nan", lambda d: put(d, "cables.1.points.1", [0, math.nan, 0]),
+     "cables[1].points[1][1]", "finite"),
+    ("huge integer", lambda d: put(d, "bodies.0.pos", [0, 10**400, 0]), "bodies[0].pos[1]",
+     "out of range"),
+    ("huge float", lambda d: put(d, "cables.0.via.0", [1e300, 0, 0]), "cables[0].via[0][0]",
+     "out of range"),
+    # ranges
+    ("radius zero", lambda d: put(d, "cables.0.radius", 0), "cables[0].radius", "positive"),
+    ("radius negative", lambda d: put(d, "cables.1.radius", -0.001), "cables[1].radius",
+     "positive"),
+    ("length zero", lambda d: put(d, "cables.0.length", 0.0), "cables[0].length", "positive"),
+    ("duration negative", lambda d: put(d, "scene.duration", -1), "scene.duration",
+     "not be negative"),
+    ("settle negative", lambda d: put(d, "scene.settle", -0.1), "scene.settle", "not be negative"),
+    ("timestep zero", lambda d: put(d, "scene.timestep", 0), "scene.timestep", "positive"),
+    ("size zero", lambda d: put(d, "parts.0.size.1", 0), "parts[0].size[1]", "positive"),
+    ("size negative", lambda d: put(d, "parts.1.size.0", -0.05), "parts[1].size[0]", "positive"),
+    ("mesh scale zero", lambda d: put(d, "parts.3.scale", 0), "parts[3].scale", "positive"),
+    ("young zero", lambda d: put(d, "cables.0.young", 0), "cables[0].young", "positive"),
+    ("density negative", lambda d: put(d, "cables.0.density", -1), "cables[0].density",
+     "positive"),
+    ("bend radius zero", lambda d: put(d, "cables.0.min_bend_radius", 0),
+     "cables[0].min_bend_radius", "positive"),
+    ("spacing zero", lambda d: put(d, "check.spacing", 0), "check.spacing", "positive"),
+    ("clearance negative", lambda d: put(d, "check.clearance", -0.001), "check.clearance",
+     "not be negative"),
+    ("attach zone negative", lambda d: put(d, "check.attach_zone", -1), "check.attach_zone",
+     "not be negative"),
+    ("every zero", lambda d: put(d, "check.every", 0), "check.every", "at least 1"),
+    ("segments one", lambda d: put(d, "cables.0.segments", 1), "cables[0].segments",
+     "at least 2"),
+    ("segments too many", lambda d: put(d, "cables.0.segments", 1000), "cables[0].segments",
+     "not longer than the radius"),
+    ("key t negative", lambda d: put(d, "motion.0.keys.0.t", -1.0), "motion[0].keys[0].t",
+     "not be negative"),
+    # shapes and sizes
+    ("box two sizes", lambda d: put(d, "parts.0.size", [1, 2]), "parts[0].size",
+     "shape 'box' takes 3 numbers"),
+    ("sphere three sizes", lambda d: put(d, "parts.1.size", [1, 2, 3]), "parts[1].size",
+     "takes 1 number (radius)"),
+    ("plane with size", lambda d: put(d, "parts.2.size", [1, 1, 0.1]), "parts[2].size",
+     "not used by shape 'plane'"),
+    ("mesh with size", lambda d: put(d, "parts.3.size", [1]), "parts[3].size",
+     "not used by shape 'mesh'"),
+    ("file on box", lambda d: put(d, "parts.0.file", "box.stl"), "parts[0].file",
+     "only for shape 'mesh'"),
+    ("scale on sphere", lambda d: put(d, "parts.1.scale", 2.0), "parts[1].scale",
+     "only for shape 'mesh'"),
+    ("unknown shape", lambda d: put(d, "parts.0.shape", "cone"), "parts[0].shape",
+     "must be one of"),
+    # enumerations
+    ("units cm", lambda d: put(d, "scene.units", "cm"), "scene.units", "must be one of 'm', 'mm'"),
+    ("method fast", lambda d: put(d, "check.method", "fast"), "check.method",
+     "'points', 'exact'"),
+    ("contact name", lambda d: put(d, "effects.contact", ["self", "cable-part"]),
+     "effects.contact[1]", "got 'cable-part'"),
+    # routes
+    ("too short", lambda d: put(d, "cables.0.length", 1.0), "cables[0].length",
+     "shorter than the route"),
+    ("points too short", lambda d: put(d, "cables.1.length", 0.2), "cables[1].length",
+     "0.2 m is shorter than the route (0.211803 m along points"),
+    ("one point", lambda d: put(d, "cables.1.points", [[0, 0, 0]]), "cables[1].points",
+     "at least 2 points"),
+    ("via with points", lambda d: put(d, "cables.1.via", [[0, 0, 0]]), "cables[1].via",
+     "not allowed with 'points'"),
+    ("start pos with points", lambda d: put(d, "cables.1.start.pos", [0, 0, 0]),
+     "cables[1].start.pos", "not allowed with 'points'"),
+    ("repeated point", lambda d: put(d, "cables.1.points.2", [0.1, 0.1, 0.0]),
+     "cables[1].points[2]", "zero-length route segment"),
+    ("via on start", lambda d: put(d, "cables.0.via", [[0, 0, 0.6]]), "cables[0].via[0]",
+     "zero-length route segment"),
+    ("end on via", lambda d: put(d, "cables.0.via", [[1.0, 0.5, 0.6]]), "cables[0].end",
+     "zero-length route segment"),
+    # names
+    ("part body", lambda d: put(d, "parts.0.body", "drawr"), "parts[0].body",
+     "did you mean 'drawer'?"),
+    ("start body", lambda d: put(d, "cables.0.start.body", "nowhere"), "cables[0].start.body",
+     "no body named 'nowhere'"),
+    ("end body", lambda d: put(d, "cables.0.end.body", "nowhere"), "cables[0].end.body",
+     "no body named"),
+    ("clip body", lambda d: put(d, "cables.0.clips.0.body", "uper"), "cables[0].clips[0].body",
+     "did you mean 'upper'?"),
+    ("motion body unknown", lambda d: put(d, "motion.0.body", "door"), "motion[0].body",
+     "no [[bodies]] entry named 'door'"),
+    ("motion body mjcf", lambda d: put(d, "motion.0.body", "forearm"), "motion[0].body",
+     "cannot be keyframed by pose"),
+    ("motion body world", lambda d: put(d, "motion.0.body", "world"), "motion[0].body",
+     "cannot move"),
+    ("motion joint unknown", lambda d: put(d, "motion.1.joint", "elbw"), "motion[1].joint",
+     "did you mean 'elbow'?"),
+    ("motion joint ball", lambda d: put(d, "motion.1.joint", "shoulder"), "motion[1].joint",
+     "ball joint"),
+    ("motion joint no mjcf", lambda d: drop(d, "scene.mjcf") and drop(d, "parts.1")
+     and put(d, "cables.0.clips", []), "motion[1].joint", "no mjcf model"),
+    ("motion both", lambda d: put(d, "motion.0.joint", "elbow"), "motion[0]", "exactly one"),
+    ("motion neither", lambda d: drop(d, "motion.1.joint"), "motion[1]", "exactly one"),
+    ("motion twice", lambda d: put(d, "motion.2.joint", "elbow"), "motion[2]",
+     "already driven by motion[1]"),
+    ("empty name", lambda d: put(d, "cables.0.name", " "), "cables[0].name", "empty"),
+    ("empty level", lambda d: put(d, "parts.0.name", "cab//rail"), "parts[0].name",
+     "empty assembly level"),
+    ("leading slash", lambda d: put(d, "parts.0.name", "/rail"), "parts[0].name",
+     "empty assembly level"),
+    ("scene name path", lambda d: put(d, "scene.name", "a/b"), "scene.name", "file name"),
+    ("body named world", lambda d: put(d, "bodies.0.name", "world"), "bodies[0].name",
+     "fixed world frame"),
+    ("body named as mjcf", lambda d: put(d, "bodies.0.name", "upper"), "bodies[0].name",
+     "body of the mjcf model"),
+    ("duplicate body", lambda d: d["bodies"].append({"name": "drawer"}) or d, "bodies[1].name",
+     "duplicate body name 'drawer' (also bodies[0])"),
+    ("duplicate part", lambda d: put(d, "parts.2.name", "ball"), "parts[2].name",
+     "duplicate part name 'ball' (also parts[1])"),
+    ("duplicate cable", lambda d: put(d, "cables.1.name", "power"), "cables[1].name",
+     "duplicate cable name"),
+    ("cable named as part", lambda d: put(d, "cables.1.name", "floor"), "cables[1].name",
+     "also the name of parts[2]"),
+    # keyframes
+    ("keys empty", lambda d: put(d, "motion.0.keys", []), "motion[0].keys", "empty"),
+    ("keys equal t", lambda d: put(d, "motion.1.keys.1.t", 0.0), "motion[1].keys[1].t",
+     "increase strictly"),
+    ("keys decreasing", lambda d: put(d, "motion.0.keys.0.t", 3.0), "motion[0].keys[1].t",
+     "increase strictly"),
+    # files
+    ("mesh missing", lambda d: put(d, "parts.3.file", "nope.stl"), "parts[3].file",
+     "file not found"),
+    ("mesh garbage", lambda d: put(d, "parts.3.file", "garbage.stl"), "parts[3].file",
+     "garbage.stl"),
+    ("mesh unknown format", lambda d: put(d, "parts.3.file", "arm.xml"), "parts[3].file",
+     "trimesh cannot load arm.xml"),
+    ("keepout open mesh", lambda d: put(d, "parts.3.file", "open.stl"), "parts[3].file",
+     "not a closed surface"),
+    ("mjcf missing", lambda d: put(d, "scene.mjcf", "robot.xml"), "scene.mjcf", "file not found"),
+    ("mjcf broken", lambda d: put(d, "scene.mjcf", "broken.xml"), "scene.mjcf",
+     "size 0 must be positive"),
+]
+
+
+@pytest.mark.parametrize("mutate, key, fragment", [b[1:] for b in BAD], ids=[b[0] for b in BAD])
+def test_bad_input(folder, mutate, key, fragment):
+    data = mutate(copy.deepcopy(BASE))
+    with pytest.raises(SceneError) as exc:
+        parse(data, folder)
+    check_error(exc, folder / "scene.toml", key, fragment)
+
+
+def test_open_mesh_allowed_when_not_keepout(folder):
+    data = put(copy.deepcopy(BASE), "parts.3.file", "open.stl")
+    put(data, "parts.3.keepout", False)
+    assert parse(data, folder).parts[3].file.name == "open.stl"
+
+
+def test_bad_input_from_file_names_file_and_key(folder):
+    f = folder / "radius.toml"
+    f.write_text(SPEC_EXAMPLE.replace("radius = 0.004", "radius = -4"))
+    with pytest.raises(SceneError) as exc:
+        load_scene(f)
+    assert str(exc.value) == f"{f}: cables[0].radius: must be positive, got -4"
+
+
+# -- never a traceback ---------------------------------------------------------
+
+def _paths(value, prefix=""):
+    """Every key path inside BASE, as 'a.b.0' strings."""
+    items = (value.items() if isinstance(value, dict)
+             else enumerate(value) if isinstance(value, list) else ())
+    for k, v in items:
+        path = f"{prefix}{k}"
+        yield path
+        yield from _paths(v, path + ".")
+
+
+PATHS = sorted(_paths(BASE))
+JUNK = st.recursive(
+    st.none() | st.booleans() | st.integers(-10**30, 10**30)
+    | st.floats(allow_nan=True, allow_infinity=True) | st.text(max_size=8),
+    lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner,
+                                                                max_size=3),
+    max_leaves=8)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(edits=st.lists(st.tuples(st.sampled_from(PATHS), JUNK | st.just(KeyError)), max_size=3))
+def test_any_edit_gives_a_scene_or_a_scene_error(folder, edits):
+    data = copy.deepcopy(BASE)
+    for path, value in edits:
+        try:
+            if value is KeyError:
+                drop(data, path)
+            else:
+                put(data, path, value)
+        except (KeyError, IndexError, TypeError):
+            pass   # an earlier edit removed or replaced the container
+    try:
+        parse(data, folder)
+    except SceneError as e:
+        assert e.key and e.problem
