@@ -17,8 +17,11 @@ Conventions of the records:
   values by `Scene.scale`.
 - Positions of parts, clips and cable ends are in the frame of the body they
   ride on; `via`, `points` and `CableDef.route` are world coordinates at t = 0.
-  "At t = 0" means every `[[bodies]]` body at its `[[bodies]]` pose and the
-  mjcf model (if any) at its `qpos0`, the pose MuJoCo compiles it in.
+  "At t = 0" is the pose the motion script gives: a keyframed body at its
+  first key's pose (before the first key a body holds it), any other
+  `[[bodies]]` body at its `[[bodies]]` pose, and the mjcf model at `qpos0`
+  with each keyframed joint at its first key's value. `Scene.start_frames`
+  holds these frames, so the builder need not work them out again.
 
 The mjcf model is compiled once here (to know its bodies, joints and the
 pose of its bodies at qpos0); meshes are loaded with trimesh to check they
@@ -31,9 +34,10 @@ import difflib
 import math
 import re
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from types import MappingProxyType
+from typing import Any, Mapping
 
 import mujoco
 import numpy as np
@@ -305,6 +309,9 @@ class Scene:
       effects: what the simulation includes.
       check: how interference is checked.
       bodies, parts, cables, motions: in file order.
+      start_frames: world frame of every body at t = 0 (see the module
+        docstring), name -> (origin (3,) metres, rotation (3, 3)), for
+        "world", each `[[bodies]]` body and each named mjcf body. Read-only.
     """
 
     path: Path
@@ -321,6 +328,8 @@ class Scene:
     parts: tuple[PartDef, ...]
     cables: tuple[CableDef, ...]
     motions: tuple[MotionDef, ...]
+    start_frames: Mapping[str, tuple[np.ndarray, np.ndarray]] = field(
+        default_factory=lambda: MappingProxyType({}))
 
 
 def load_scene(path: str | Path) -> Scene:
@@ -381,8 +390,9 @@ def _is_number(value: Any) -> bool:
 class _MjcfInfo:
     """What the loader needs of the base mjcf model."""
 
-    bodies: dict[str, tuple[np.ndarray, np.ndarray]]   # name -> (xpos (3,), xmat (3, 3)) at qpos0
-    joints: dict[str, int]                               # name -> mjtJoint
+    model: mujoco.MjModel
+    bodies: dict[str, int]   # name -> body id
+    joints: dict[str, int]   # name -> joint id
 
 
 class _Parser:
@@ -393,7 +403,8 @@ class _Parser:
         self.folder = file.parent
         self.scale = 1.0
         self.mjcf: _MjcfInfo | None = None
-        self.frames: dict[str, tuple[np.ndarray, np.ndarray]] = {}   # name -> (pos, rot) at t = 0
+        # body name -> (origin, rotation) at t = 0; mjcf bodies are None until motions are read
+        self.frames: dict[str, tuple[np.ndarray, np.ndarray] | None] = {}
         self.body_index: dict[str, str] = {}   # [[bodies]] name -> its key path
 
     # -- generic readers ---------------------------------------------------
@@ -517,8 +528,8 @@ class _Parser:
         if "mjcf" in head:
             mjcf = self.file_path(head["mjcf"], "scene.mjcf")
             self.mjcf = self.compile_mjcf(mjcf)
-            self.frames.update(self.mjcf.bodies)
-        self.frames["world"] = (np.zeros(3), np.eye(3))
+            self.frames.update(dict.fromkeys(self.mjcf.bodies))   # names now, frames below
+        self.frames["world"] = _frame(np.zeros(3), np.eye(3))
 
         effects = self.effects(data.get("effects", {}))
         check = self.check(data.get("check", {}))
@@ -527,14 +538,6 @@ class _Parser:
         parts = tuple(self.part(p, f"parts[{i}]")
                       for i, p in enumerate(self.tables(data.get("parts", []), "parts")))
         self.unique(parts, "parts", "part")
-        cables = tuple(self.cable(c, f"cables[{i}]")
-                       for i, c in enumerate(self.tables(data.get("cables", []), "cables")))
-        self.unique(cables, "cables", "cable")
-        part_index = {p.name: i for i, p in enumerate(parts)}
-        for i, cable in enumerate(cables):
-            if cable.name in part_index:
-                raise self.error(f"cables[{i}].name", f"{cable.name!r} is also the name of "
-                                 f"parts[{part_index[cable.name]}]; names must differ")
         motions = tuple(self.motion(m, f"motion[{i}]", {b.name: b for b in bodies})
                         for i, m in enumerate(self.tables(data.get("motion", []), "motion")))
         driven: dict[str, int] = {}
@@ -544,10 +547,23 @@ class _Parser:
                 raise self.error(f"motion[{i}]", f"{target} is already driven by "
                                                  f"motion[{driven[target]}]")
             driven[target] = i
+            if m.body is not None:
+                self.frames[m.body] = _frame(m.keys[0].pos, euler_matrix(m.keys[0].euler))
+        if self.mjcf is not None:
+            self.frames.update(self.mjcf_frames(motions))
+        cables = tuple(self.cable(c, f"cables[{i}]")
+                       for i, c in enumerate(self.tables(data.get("cables", []), "cables")))
+        self.unique(cables, "cables", "cable")
+        part_index = {p.name: i for i, p in enumerate(parts)}
+        for i, cable in enumerate(cables):
+            if cable.name in part_index:
+                raise self.error(f"cables[{i}].name", f"{cable.name!r} is also the name of "
+                                 f"parts[{part_index[cable.name]}]; names must differ")
         return Scene(path=self.file, name=name, units=units, scale=self.scale,
                      duration=duration, timestep=timestep, settle=settle, mjcf=mjcf,
                      effects=effects, check=check, bodies=bodies, parts=parts,
-                     cables=cables, motions=motions)
+                     cables=cables, motions=motions,
+                     start_frames=MappingProxyType(dict(self.frames)))
 
     def compile_mjcf(self, path: Path) -> _MjcfInfo:
         try:
@@ -556,16 +572,23 @@ class _Parser:
             message = " ".join(str(e).split())
             raise self.error("scene.mjcf", f"MuJoCo cannot compile {path.name}: "
                                            f"{message}") from None
+        bodies = {model.body(i).name: i for i in range(model.nbody) if model.body(i).name}
+        joints = {model.joint(i).name: i for i in range(model.njnt) if model.joint(i).name}
+        return _MjcfInfo(model=model, bodies=bodies, joints=joints)
+
+    def mjcf_frames(self, motions: tuple[MotionDef, ...]) -> dict:
+        """World frames of the mjcf bodies at t = 0: qpos0, keyframed joints at their first key."""
+        model = self.mjcf.model
         data = mujoco.MjData(model)
+        for m in motions:
+            if m.joint is not None:
+                j = self.mjcf.joints[m.joint]
+                hinge = int(model.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_HINGE)
+                data.qpos[model.jnt_qposadr[j]] = m.keys[0].value * (
+                    math.pi / 180 if hinge else self.scale)
         mujoco.mj_kinematics(model, data)
-        bodies = {}
-        for i in range(model.nbody):
-            name = model.body(i).name
-            if name:
-                bodies[name] = (data.xpos[i].copy(), data.xmat[i].reshape(3, 3).copy())
-        joints = {model.joint(i).name: int(model.jnt_type[i])
-                  for i in range(model.njnt) if model.joint(i).name}
-        return _MjcfInfo(bodies=bodies, joints=joints)
+        return {name: _frame(data.xpos[i], data.xmat[i].reshape(3, 3))
+                for name, i in self.mjcf.bodies.items()}
 
     def effects(self, value: Any) -> Effects:
         t = self.table(value, "effects", _EFFECTS_KEYS)
@@ -607,7 +630,7 @@ class _Parser:
         self.body_index[name] = where
         body = BodyDef(name=name, pos=self.position(t.get("pos", [0, 0, 0]), f"{where}.pos"),
                        euler=self.vector(t.get("euler", [0, 0, 0]), f"{where}.euler"))
-        self.frames[name] = (np.asarray(body.pos), euler_matrix(body.euler))
+        self.frames[name] = _frame(body.pos, euler_matrix(body.euler))
         return body
 
     def body_ref(self, value: Any, where: str) -> str:
@@ -808,8 +831,8 @@ class _Parser:
                 hint = f" (did you mean {close[0]!r}?)" if close else ""
                 raise self.error(f"{where}.joint",
                                  f"no joint named {joint!r} in the mjcf model{hint}")
-            kind = self.mjcf.joints[joint]
-            if kind not in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
+            kind = int(self.mjcf.model.jnt_type[self.mjcf.joints[joint]])
+            if kind not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
                 raise self.error(f"{where}.joint", f"{joint!r} is a "
                                  f"{mujoco.mjtJoint(kind).name[6:].lower()} joint; only hinge "
                                  "and slide joints are driven by a value")
@@ -849,6 +872,14 @@ class _Parser:
 _SIZE_HELP = {"box": "half-extents x, y, z", "sphere": "radius",
               "cylinder": "radius, half-length", "capsule": "radius, half-length",
               "ellipsoid": "semi-axes x, y, z"}
+
+
+def _frame(origin, rotation) -> tuple[np.ndarray, np.ndarray]:
+    """A read-only (origin (3,), rotation (3, 3)) pair."""
+    origin, rotation = np.array(origin, float), np.array(rotation, float)
+    origin.setflags(write=False)
+    rotation.setflags(write=False)
+    return origin, rotation
 
 
 def _join(where: str, key: str) -> str:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+from collections.abc import Mapping
 from pathlib import Path
 
 import mujoco
@@ -129,7 +130,7 @@ BASE = {
         {"body": "drawer", "keys": [{"t": 0.0, "pos": [1.0, 0.0, 0.0]},
                                     {"t": 2.0, "pos": [1.3, 0.0, 0.0], "euler": [0.0, 0.0, 45.0]}]},
         {"joint": "elbow", "keys": [{"t": 0.0, "value": 0.0}, {"t": 2.0, "value": -90.0}]},
-        {"joint": "lift", "keys": [{"t": 0.0, "value": 0.0}, {"t": 1.0, "value": 0.1}]},
+        {"joint": "lift", "keys": [{"t": 0.0, "value": 0.02}, {"t": 1.0, "value": 0.1}]},
     ],
 }
 
@@ -248,6 +249,35 @@ def test_anchor_on_mjcf_body_uses_its_compiled_pose(folder):
     np.testing.assert_allclose(world, [0.0, 0.1, 0.0], atol=1e-12)
 
 
+def test_t0_frames_follow_the_first_keys(folder):
+    """At t = 0 a keyframed body is at its first key (it holds it until then), and
+    keyframed mjcf joints are at their first key's value."""
+    data = copy.deepcopy(BASE)
+    put(data, "bodies.0.pos", [0.0, 0.0, 0.0])
+    put(data, "motion.0.keys.0", {"t": 0.5, "pos": [2.0, 0.0, 0.0]})   # euler from [[bodies]]
+    put(data, "motion.1.keys.0.value", -30.0)
+    put(data, "motion.2.keys.0.value", 0.05)
+    put(data, "cables.0.end", {"body": "slider", "pos": [0.0, 0.01, 0.0]})
+    put(data, "cables.0.length", 5.0)
+    put(data, "cables.1.end", {"body": "drawer"})
+    s = parse(data, folder)
+    origin, rotation = s.start_frames["drawer"]
+    np.testing.assert_allclose(origin, [2.0, 0.0, 0.0])
+    np.testing.assert_allclose(rotation, euler_matrix([0, 0, 90]), atol=1e-15)
+    # the cable with points ends at (0.2, 0.1, 0.05): in the drawer frame at t = 0
+    np.testing.assert_allclose(rotation @ s.cables[1].end.pos + origin, [0.2, 0.1, 0.05])
+    m = mujoco.MjModel.from_xml_path(str(folder / "arm.xml"))
+    d = mujoco.MjData(m)
+    d.qpos[m.jnt_qposadr[m.joint("elbow").id]] = np.radians(-30.0)
+    d.qpos[m.jnt_qposadr[m.joint("lift").id]] = 0.05
+    mujoco.mj_kinematics(m, d)
+    b = m.body("slider").id
+    np.testing.assert_allclose(s.start_frames["slider"][0], d.xpos[b], atol=1e-12)
+    np.testing.assert_allclose(s.cables[0].route[-1],
+                               d.xpos[b] + d.xmat[b].reshape(3, 3) @ [0.0, 0.01, 0.0], atol=1e-12)
+    assert {"world", "drawer", "upper", "forearm", "slider"} <= set(s.start_frames)
+
+
 def to_mm(data: dict) -> dict:
     """The same scene written in millimetres."""
     d = copy.deepcopy(data)
@@ -283,6 +313,10 @@ def assert_same(a, b, where="scene"):
         assert type(a) is type(b), where
         for field in dataclasses.fields(a):
             assert_same(getattr(a, field.name), getattr(b, field.name), f"{where}.{field.name}")
+    elif isinstance(a, Mapping):
+        assert sorted(a) == sorted(b), where
+        for key in a:
+            assert_same(a[key], b[key], f"{where}[{key!r}]")
     elif isinstance(a, (tuple, list, np.ndarray)) and not isinstance(a, str):
         assert len(a) == len(b), where
         for i, (x, y) in enumerate(zip(a, b)):
@@ -298,7 +332,7 @@ def test_mm_scene_equals_m_scene(folder):
     mm = parse(to_mm(BASE), folder)
     assert (m.units, m.scale, mm.units, mm.scale) == ("m", 1.0, "mm", 0.001)
     lift_m, lift_mm = m.motions[2], mm.motions[2]
-    assert [k.value for k in lift_mm.keys] == [0.0, 100.0]   # raw, in scene units
+    assert [k.value for k in lift_mm.keys] == [20.0, 100.0]   # raw, in scene units
     assert_same(lift_m.keys[1].value * m.scale, lift_mm.keys[1].value * mm.scale)
     same = lambda s: dataclasses.replace(s, units="", scale=0.0, motions=s.motions[:2])  # noqa: E731
     assert_same(same(m), same(mm))
