@@ -1,0 +1,559 @@
+"""Build MuJoCo models from a validated scene.
+
+Why MjSpec: a scene may start from a user's own MJCF (a robot arm, a
+fixture) whose relative mesh paths, defaults and names must survive intact.
+`MjSpec.from_file` loads it exactly as MuJoCo would; scene bodies, parts and
+meshes are then added through the spec API, and the cables, which only the
+`flexcomp` macro can generate (twist bodies, pinning, the edge equality), are
+written as one small MJCF string and attached into the spec. Sites and
+`connect` equalities that tie cable vertices to moving bodies are added last,
+once the vertex bodies exist.
+
+Two models come out of one scene:
+- the simulation model, in which only the interactions listed in
+  `effects.contact` collide (contype/conaffinity bits, below), with small
+  margins, so nothing the scene did not ask for pushes back;
+- the detection model, with the same bodies and degrees of freedom (so the
+  simulation's qpos can be copied into it) but every interaction enabled and
+  margins set from the clearance. It is never stepped: `mj_kinematics` +
+  `mj_collision` on the simulated positions give MuJoCo's own view of every
+  pair the checker may report, exact (a large contact `gap` in the simulation
+  model would make MuJoCo's general convex collider inexact, see SPEC).
+
+Cables are 1D flexcomp rods built straight (their rest shape, since a rod
+keeps as rest curvature whatever bend its qpos0 has) along the tangent of
+the route's first element and then put into the routed shape through qpos,
+so bending energy is stored where a real cable would have it.
+
+This module does not step, move or read the simulation; see `loop`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import IntFlag
+
+import mujoco
+import numpy as np
+import trimesh
+
+from sim.route import initial_shape, polyline_length
+from sim.scene import CableDef, Scene, SceneError, euler_matrix
+
+CABLE_PREFIX = "cables/"
+"""Prefix of every element the cables add to the model (bodies, flexes)."""
+
+DRAG_RATE = 5.0
+"""Velocity damping rate of cable vertices, 1/s (time constant 0.2 s).
+
+A numerical drag, not air: it settles the cable and keeps it quasi-static
+while its ends move, as a harness behaves at the speeds mechanisms move.
+MuJoCo forbids joint damping on flex vertex bodies, so the drag comes from the
+medium viscosity (`VISCOSITY`) acting on each vertex's inertia box, whose side
+is chosen per cable to give this rate (MuJoCo: f = -6 pi mu r_eq v with r_eq
+half the box side)."""
+
+VISCOSITY = 1.0
+"""Medium viscosity in the simulation model, Pa s (see `DRAG_RATE`)."""
+
+BASE_ARMATURE = 100.0
+"""Armature added to the base model's joints, which are driven kinematically:
+the cable's reaction barely moves them within the one step before the script
+sets them again."""
+
+SIM_MARGIN_FRACTION = 0.25
+"""Contact margin in the simulation model, as a fraction of the thinnest cable radius."""
+
+
+class Bits(IntFlag):
+    """contype/conaffinity bits: a pair collides when (type1 & aff2) | (type2 & aff1)."""
+
+    CABLE = 1       # cable contype; part conaffinity when cable-structure is on
+    CABLE_CABLE = 2  # cable conaffinity and contype when cable-cable is on
+    PART = 4        # part contype and conaffinity when part-part is on
+
+
+@dataclass(frozen=True)
+class Attachment:
+    """A cable vertex held by a body.
+
+    Attributes:
+      kind: "start", "end" or "clip".
+      body: the scene's body name ("world", a [[bodies]] or mjcf body).
+      vertex: index of the held vertex along the cable (0 = start).
+      s: arc length of that vertex along the cable at rest, metres.
+    """
+
+    kind: str
+    body: str
+    vertex: int
+    s: float
+
+
+@dataclass(frozen=True, eq=False)
+class CableModel:
+    """A cable as built.
+
+    Attributes:
+      name: the scene's cable name.
+      radius: metres.
+      flex_id: index of its flex in the model.
+      vert_adr: first index of its vertices in `mjData.flexvert_xpos`.
+      count: number of vertices (elements + 1).
+      length: rest length, metres.
+      element_length: rest length of one element, metres.
+      routed: (count, 3) routed shape at t = 0 (before settling), metres.
+      qpos_adr: (count, 3) qpos addresses of each vertex's x, y, z slides,
+        -1 for pinned vertices.
+      attachments: vertices held by bodies.
+      min_bend_radius: metres or None.
+    """
+
+    name: str
+    radius: float
+    flex_id: int
+    vert_adr: int
+    count: int
+    length: float
+    element_length: float
+    routed: np.ndarray
+    qpos_adr: np.ndarray
+    attachments: tuple[Attachment, ...]
+    min_bend_radius: float | None
+
+
+@dataclass(frozen=True, eq=False)
+class PartModel:
+    """A structure part as built: one MuJoCo geom.
+
+    Attributes:
+      name: scene part name, or for a geom of the mjcf model its body name
+        (plus "/" and the geom's name or index when the body has several).
+      geom_id: the geom's id (same in both models).
+      body: scene body name the part rides on.
+      shape: "box", "sphere", "cylinder", "capsule", "ellipsoid", "plane" or "mesh".
+      size: MuJoCo size (half-extents, radius, half-length), metres.
+      vertices: (V, 3) mesh vertices in the geom frame (MuJoCo recentres
+        meshes; these are MuJoCo's own), or None.
+      faces: (F, 3) mesh faces, or None.
+      keepout: a clearance zone, never colliding.
+    """
+
+    name: str
+    geom_id: int
+    body: str
+    shape: str
+    size: np.ndarray
+    vertices: np.ndarray | None
+    faces: np.ndarray | None
+    keepout: bool
+
+
+@dataclass(frozen=True)
+class JointDrive:
+    """A base-model joint held or driven kinematically.
+
+    Attributes:
+      name: joint name.
+      type: mjtJoint value.
+      qpos_adr, dof_adr: addresses in qpos and qvel.
+      scale: multiplies keyframe values into MuJoCo units (radians for a
+        hinge, metres for a slide).
+    """
+
+    name: str
+    type: int
+    qpos_adr: int
+    dof_adr: int
+    scale: float
+
+
+@dataclass(eq=False)
+class Built:
+    """Everything the run loop needs about the compiled models.
+
+    Attributes:
+      scene: the scene.
+      model: simulation model.
+      detect: detection model (same dofs), or None when not requested.
+      cables, parts: in scene order (parts: scene parts, then mjcf geoms).
+      mocap: scene body name -> mocap id.
+      body_ids: scene body name -> body id ("world" is 0).
+      base_qpos_adr, base_dof_adr: qpos / dof addresses of the base model's
+        joints (all driven kinematically).
+      joints: joint name -> JointDrive for the base model's hinge and slide joints.
+      qpos0: qpos of the routed state at t = 0.
+    """
+
+    scene: Scene
+    model: mujoco.MjModel
+    detect: mujoco.MjModel | None
+    cables: list[CableModel]
+    parts: list[PartModel]
+    mocap: dict[str, int]
+    body_ids: dict[str, int]
+    base_qpos_adr: np.ndarray
+    base_dof_adr: np.ndarray
+    joints: dict[str, JointDrive]
+    qpos0: np.ndarray
+    geom_part: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    """geom id -> index into `parts`, -1 for geoms that are not parts."""
+
+
+def default_segments(length: float, radius: float) -> int:
+    """Elements for a cable: about 25 mm each, at least 4 radii, 8 to 80 elements.
+
+    Elements longer than 2 r keep MuJoCo's self-collision from touching
+    elements two apart along a straight cable (SPEC); 80 bounds the cost of
+    long cables (the flex costs about 0.2 ms per step at 40 points)."""
+    target = max(0.025, 4.0 * radius)
+    return int(np.clip(round(length / target), 8, 80))
+
+
+def _quat(euler_deg) -> np.ndarray:
+    q = np.zeros(4)
+    mujoco.mju_mat2Quat(q, euler_matrix(euler_deg).ravel())
+    return q
+
+
+def _base_spec(scene: Scene) -> mujoco.MjSpec:
+    if scene.mjcf is None:
+        return mujoco.MjSpec()
+    try:
+        return mujoco.MjSpec.from_file(str(scene.mjcf))
+    except Exception as e:  # MuJoCo raises ValueError with its parser message
+        raise SceneError(scene.path, "scene.mjcf", f"MuJoCo cannot load {scene.mjcf}: {e}") from None
+
+
+def _set_options(spec: mujoco.MjSpec, scene: Scene) -> None:
+    opt = spec.option
+    opt.timestep = scene.timestep
+    opt.integrator = mujoco.mjtIntegrator.mjINT_DISCRETE  # rod elasticity needs it (SPEC)
+    opt.solver = mujoco.mjtSolver.mjSOL_NEWTON
+    opt.tolerance = 1e-8
+    opt.iterations = max(opt.iterations, 100)
+    opt.gravity = [0.0, 0.0, -9.81] if scene.effects.gravity else [0.0, 0.0, 0.0]
+    opt.viscosity = VISCOSITY
+    opt.density = 0.0
+    # Unused features stay off: no actuators are driven, no sensors are read.
+    opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)
+    opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+    spec.compiler.autolimits = True
+
+
+def _part_bits(scene: Scene, detect: bool, keepout: bool) -> tuple[int, int]:
+    contact = scene.effects.contact
+    if detect:
+        return int(Bits.PART), int(Bits.CABLE | Bits.PART)
+    if keepout:
+        return 0, 0
+    contype = int(Bits.PART) if "part-part" in contact else 0
+    conaff = (int(Bits.CABLE) if "cable-structure" in contact else 0) | contype
+    return contype, conaff
+
+
+def _cable_bits(scene: Scene, detect: bool) -> tuple[int, int]:
+    if detect or "cable-cable" in scene.effects.contact:
+        return int(Bits.CABLE | Bits.CABLE_CABLE), int(Bits.CABLE_CABLE)
+    return int(Bits.CABLE), 0
+
+
+def _fmt(values) -> str:
+    return " ".join(repr(float(v)) for v in np.ravel(values))
+
+
+@dataclass
+class _CablePlan:
+    cable: CableDef
+    routed: np.ndarray    # (n, 3) routed shape at t = 0
+    straight: np.ndarray  # (n, 3) rest shape: straight along the first element
+    holds: list[tuple[str, str, int, np.ndarray]]  # (kind, body, vertex, local pos on body)
+    pinned_to_world: bool
+
+
+class _Frames:
+    """World pose of every body at t = 0: [[bodies]] (or their first motion key),
+    the world, and the mjcf model's bodies at qpos0."""
+
+    def __init__(self, scene: Scene):
+        self.poses = {"world": (np.zeros(3), np.eye(3))}
+        for b in scene.bodies:
+            self.poses[b.name] = (np.asarray(b.pos, float), euler_matrix(b.euler))
+        for m in scene.motions:
+            if m.body is not None:
+                key = m.keys[0]  # before the first key the body holds its pose
+                self.poses[m.body] = (np.asarray(key.pos, float), euler_matrix(key.euler))
+        if scene.mjcf is not None:
+            base = mujoco.MjSpec.from_file(str(scene.mjcf)).compile()
+            data = mujoco.MjData(base)
+            mujoco.mj_kinematics(base, data)
+            for i in range(1, base.nbody):
+                name = base.body(i).name
+                if name and name not in self.poses:
+                    self.poses[name] = (data.xpos[i].copy(), data.xmat[i].reshape(3, 3).copy())
+
+    def to_world(self, body: str, pos) -> np.ndarray:
+        p, r = self.poses[body]
+        return p + r @ np.asarray(pos, float)
+
+    def to_local(self, body: str, point) -> np.ndarray:
+        p, r = self.poses[body]
+        return r.T @ (np.asarray(point, float) - p)
+
+
+def _closest_arc(route: np.ndarray, point: np.ndarray) -> tuple[int, float]:
+    """(segment index, arc length) of the point of `route` closest to `point`."""
+    a, b = route[:-1], route[1:]
+    ab = b - a
+    denom = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+    t = np.clip(np.einsum("ij,ij->i", point - a, ab) / denom, 0.0, 1.0)
+    dist = np.linalg.norm(a + t[:, None] * ab - point, axis=1)
+    k = int(np.argmin(dist))
+    seglen = np.sqrt(denom)
+    return k, float(seglen[:k].sum() + t[k] * seglen[k])
+
+
+def _plan_cable(cable: CableDef, frames: _Frames) -> _CablePlan:
+    """Routed shape through start, clips and end, with the cable's length.
+
+    The route is split at the clips (each clip is inserted where the route
+    passes closest to it) and every span gets a share of the cable's length
+    and elements in proportion to its route length, so clips sit exactly on
+    vertices and each span droops on its own."""
+    route = np.asarray(cable.route if cable.route is not None else cable.points, float).copy()
+    route[0] = frames.to_world(cable.start.body, cable.start.pos)
+    route[-1] = frames.to_world(cable.end.body, cable.end.pos)
+    clips = []
+    for clip in cable.clips:
+        point = frames.to_world(clip.body, clip.pos)
+        k, s = _closest_arc(route, point)
+        clips.append((s, k, point, clip))
+    clips.sort(key=lambda c: c[0])
+    # Insert clip points (from the last, so earlier segment indices stay valid).
+    for s, k, point, clip in sorted(clips, key=lambda c: (c[1], c[0]), reverse=True):
+        route = np.insert(route, k + 1, point, axis=0)
+    keep = np.concatenate([[True], np.linalg.norm(np.diff(route, axis=0), axis=1) > 0])
+    route = route[keep]
+    total = polyline_length(route)
+    length = max(cable.length if cable.length is not None else total, total)
+    elements = cable.segments or default_segments(length, cable.radius)
+    cuts = [0] + [int(np.argmin(np.linalg.norm(route - c[2], axis=1))) for c in clips] + [len(route) - 1]
+    spans = [route[a:b + 1] for a, b in zip(cuts[:-1], cuts[1:])]
+    span_len = np.array([polyline_length(sp) for sp in spans])
+    counts = np.maximum(np.round(elements * span_len / span_len.sum()).astype(int), 2)
+    pieces = [initial_shape(sp, length * sl / total, int(cnt) + 1)
+              for sp, sl, cnt in zip(spans, span_len, counts)]
+    routed = np.concatenate([pieces[0]] + [p[1:] for p in pieces[1:]])
+    clip_vertices = np.cumsum(counts)[:-1]
+    seg = np.linalg.norm(np.diff(routed, axis=0), axis=1)
+    tangent = (routed[1] - routed[0]) / seg[0]
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    straight = routed[0] + s[:, None] * tangent[None, :]
+    n = len(routed)
+    pinned = cable.start.body == "world"
+    holds = []
+    if not pinned:
+        holds += [("start", cable.start.body, 0), ("start", cable.start.body, 1)]
+    holds += [("end", cable.end.body, n - 2), ("end", cable.end.body, n - 1)]
+    holds += [("clip", c[3].body, int(v)) for c, v in zip(clips, clip_vertices)]
+    holds = [(kind, body, v, frames.to_local(body, routed[v])) for kind, body, v in holds]
+    return _CablePlan(cable, routed, straight, holds, pinned)
+
+
+def _cables_xml(plans: list[_CablePlan], scene: Scene, detect: bool, margin: float) -> str:
+    contype, conaff = _cable_bits(scene, detect)
+    selfcollide = "auto" if (detect or "self" in scene.effects.contact) else "none"
+    contact_solref = max(0.004, 2.0 * scene.timestep)
+    parts = []
+    for plan in plans:
+        c = plan.cable
+        n = len(plan.straight)
+        mass = c.density * np.pi * c.radius ** 2 * float(np.linalg.norm(np.diff(plan.straight, axis=0), axis=1).sum())
+        vertex_mass = mass / n
+        inertiabox = DRAG_RATE * vertex_mass / (3.0 * np.pi * VISCOSITY)
+        pin = '<pin id="0 1"/>' if plan.pinned_to_world else ""
+        elements = " ".join(f"{i} {i + 1}" for i in range(n - 1))
+        parts.append(f"""
+  <flexcomp name="{c.name}" type="direct" dim="1" radius="{c.radius!r}" mass="{mass!r}"
+            inertiabox="{inertiabox!r}" point="{_fmt(plan.straight)}" element="{elements}">
+    {pin}
+    <edge equality="true" solref="{_edge_solref(scene)} 1" solimp="0.99 0.999 0.001 0.5 2"/>
+    <elasticity young="{c.young!r}"/>
+    <contact selfcollide="{selfcollide}" contype="{contype}" conaffinity="{conaff}"
+             margin="{margin!r}" condim="3" solref="{contact_solref!r} 1"/>
+  </flexcomp>""")
+    return "<mujoco><worldbody>" + "".join(parts) + "\n</worldbody></mujoco>"
+
+
+def _edge_solref(scene: Scene) -> float:
+    """Time constant of the edge-length equality, seconds.
+
+    MuJoCo's default (0.02 s) lets a 1 m cable hanging under gravity stretch by
+    over 1 %; measured with 40 elements: 0.004 s with solimp 0.99-0.999 keeps
+    it within 0.1 %, 0.002 s within 0.03 %. Two timesteps is the stiffest the
+    discrete-time constraint resolves stably."""
+    return max(2.0 * scene.timestep, 0.002)
+
+
+def build(scene: Scene, detect: bool = True) -> Built:
+    """Compile the simulation model (and, if `detect`, the detection model)."""
+    frames = _Frames(scene)
+    plans = [_plan_cable(c, frames) for c in scene.cables]
+    sim = _compile(scene, plans, detect=False)
+    det = _compile(scene, plans, detect=True) if detect else None
+    if det is not None and (det.nq != sim.nq or det.ngeom != sim.ngeom):
+        raise RuntimeError("detection and simulation models differ in structure")
+    return _finish(scene, sim, det, plans)
+
+
+def _compile(scene: Scene, plans: list[_CablePlan], detect: bool) -> mujoco.MjModel:
+    spec = _base_spec(scene)
+    _set_options(spec, scene)
+    for j in spec.joints:
+        j.armature = BASE_ARMATURE
+    for b in spec.bodies:
+        if b.name != "world":
+            b.gravcomp = 1.0
+
+    radii = [c.radius for c in scene.cables] or [1.0]
+    margin = scene.check.clearance if detect else SIM_MARGIN_FRACTION * min(radii)
+
+    # The base model's geoms are structure parts; their contact bits follow the scene.
+    for g in spec.geoms:
+        g.contype, g.conaffinity = _part_bits(scene, detect, keepout=False)
+        g.margin = margin
+
+    for body in scene.bodies:
+        spec.worldbody.add_body(name=body.name, mocap=True, pos=list(body.pos),
+                                quat=list(_quat(body.euler)))
+    for part in scene.parts:
+        parent = spec.worldbody if part.body == "world" else spec.body(part.body)
+        contype, conaff = _part_bits(scene, detect, part.keepout)
+        common = dict(name=part.name, pos=list(part.pos), quat=list(_quat(part.euler)),
+                      contype=contype, conaffinity=conaff, margin=margin,
+                      rgba=[0.9, 0.5, 0.1, 0.3] if part.keepout else [0.6, 0.6, 0.65, 1.0])
+        if part.shape == "mesh":
+            mesh = trimesh.load(str(part.file), force="mesh")
+            verts = np.asarray(mesh.vertices, float) * part.mesh_scale
+            spec.add_mesh(name=f"mesh:{part.name}", uservert=verts.ravel().tolist(),
+                          userface=np.asarray(mesh.faces, int).ravel().tolist())
+            parent.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"mesh:{part.name}", **common)
+        else:
+            size = list(part.size) + [0.0] * (3 - len(part.size))
+            gtype = getattr(mujoco.mjtGeom, f"mjGEOM_{part.shape.upper()}")
+            parent.add_geom(type=gtype, size=size, **common)
+
+    if plans:
+        child = mujoco.MjSpec.from_string(_cables_xml(plans, scene, detect, margin))
+        spec.worldbody.add_frame().attach_body(child.worldbody, CABLE_PREFIX, "")
+        for plan in plans:
+            _add_holds(spec, scene, plan)
+    try:
+        return spec.compile()
+    except Exception as e:  # MuJoCo's compiler raises ValueError with its message
+        raise SceneError(scene.path, "(model)", f"MuJoCo cannot compile the scene: {e}") from None
+
+
+def _add_holds(spec: mujoco.MjSpec, scene: Scene, plan: _CablePlan) -> None:
+    """Sites and connect equalities tying held vertices to their bodies.
+
+    Site-to-site connects hold wherever the bodies are at qpos0, which is the
+    straight rest shape, not the routed one; a site on the body at the vertex's
+    routed position is what the vertex must meet."""
+    c = plan.cable
+    solref = _edge_solref(scene)
+    for k, (kind, body, vertex, local) in enumerate(plan.holds):
+        vsite = f"{CABLE_PREFIX}{c.name}/{kind}{k}/vertex"
+        bsite = f"{CABLE_PREFIX}{c.name}/{kind}{k}/body"
+        spec.body(f"{CABLE_PREFIX}{c.name}_{vertex}").add_site(name=vsite)
+        target = spec.worldbody if body == "world" else spec.body(body)
+        target.add_site(name=bsite, pos=list(local))
+        eq = spec.add_equality(type=mujoco.mjtEq.mjEQ_CONNECT, objtype=mujoco.mjtObj.mjOBJ_SITE,
+                               name1=vsite, name2=bsite)
+        eq.solref = [solref, 1.0]
+        eq.solimp = [0.99, 0.999, 0.001, 0.5, 2.0]
+
+
+_SHAPES = {int(mujoco.mjtGeom.mjGEOM_PLANE): "plane", int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere",
+           int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule", int(mujoco.mjtGeom.mjGEOM_ELLIPSOID): "ellipsoid",
+           int(mujoco.mjtGeom.mjGEOM_CYLINDER): "cylinder", int(mujoco.mjtGeom.mjGEOM_BOX): "box",
+           int(mujoco.mjtGeom.mjGEOM_MESH): "mesh"}
+
+
+def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
+            plans: list[_CablePlan]) -> Built:
+    scene_parts = {p.name: p for p in scene.parts}
+    scene_bodies = {b.name for b in scene.bodies}
+    parts: list[PartModel] = []
+    geom_part = np.full(m.ngeom, -1, int)
+    # Name base-model geoms by body, adding the geom name (or index) when a body has several.
+    for g in range(m.ngeom):
+        gtype = int(m.geom_type[g])
+        if gtype not in _SHAPES:
+            continue  # heightfields and SDFs are not parts the checker knows
+        gname = m.geom(g).name
+        bid = int(m.geom_bodyid[g])
+        bname = m.body(bid).name or "world"
+        if gname in scene_parts:
+            sp = scene_parts[gname]
+            name, body, keepout = sp.name, sp.body, sp.keepout
+        else:
+            siblings = np.flatnonzero(m.geom_bodyid == bid)
+            name = bname if len(siblings) == 1 else f"{bname}/{gname or int(np.searchsorted(siblings, g))}"
+            body, keepout = bname, False
+        verts = faces = None
+        if gtype == int(mujoco.mjtGeom.mjGEOM_MESH):
+            mid = int(m.geom_dataid[g])
+            va, vn = int(m.mesh_vertadr[mid]), int(m.mesh_vertnum[mid])
+            fa, fn = int(m.mesh_faceadr[mid]), int(m.mesh_facenum[mid])
+            verts = m.mesh_vert[va:va + vn].astype(float).copy()
+            faces = m.mesh_face[fa:fa + fn].astype(int).copy()
+        geom_part[g] = len(parts)
+        parts.append(PartModel(name, g, body, _SHAPES[gtype], m.geom_size[g].copy(), verts, faces, keepout))
+
+    cables = []
+    qpos0 = m.qpos0.copy()
+    for plan in plans:
+        c = plan.cable
+        fid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_FLEX, f"{CABLE_PREFIX}{c.name}")
+        n = len(plan.routed)
+        qadr = np.full((n, 3), -1, int)
+        for v in range(n):
+            try:
+                bid = m.body(f"{CABLE_PREFIX}{c.name}_{v}").id
+            except KeyError:
+                continue  # pinned to the world
+            ja = int(m.body_jntadr[bid])
+            qadr[v] = m.jnt_qposadr[ja:ja + 3]
+            # The three slides run along the parent's (the world's) x, y, z axes.
+            qpos0[qadr[v]] += plan.routed[v] - plan.straight[v]
+        seg = np.linalg.norm(np.diff(plan.straight, axis=0), axis=1)
+        s = np.concatenate([[0.0], np.cumsum(seg)])
+        attachments = [Attachment("start", c.start.body, v, float(s[v])) for v in ((0, 1) if plan.pinned_to_world else ())]
+        attachments += [Attachment(kind, body, v, float(s[v])) for kind, body, v, _ in plan.holds]
+        cables.append(CableModel(c.name, c.radius, fid, int(m.flex_vertadr[fid]), n, float(s[-1]),
+                                 float(seg.mean()), plan.routed.copy(), qadr,
+                                 tuple(sorted(attachments, key=lambda a: a.vertex)), c.min_bend_radius))
+
+    mocap = {b: int(m.body_mocapid[m.body(b).id]) for b in scene_bodies}
+    body_ids = {"world": 0}
+    for i in range(1, m.nbody):
+        name = m.body(i).name
+        if name and not name.startswith(CABLE_PREFIX):
+            body_ids[name] = i
+    base_joints = [j for j in range(m.njnt) if not m.joint(j).name.startswith(CABLE_PREFIX)
+                   and not m.body(int(m.jnt_bodyid[j])).name.startswith(CABLE_PREFIX)]
+    qadr_list, dadr_list, joints = [], [], {}
+    nq_of = {int(mujoco.mjtJoint.mjJNT_FREE): 7, int(mujoco.mjtJoint.mjJNT_BALL): 4}
+    nv_of = {int(mujoco.mjtJoint.mjJNT_FREE): 6, int(mujoco.mjtJoint.mjJNT_BALL): 3}
+    for j in base_joints:
+        jt = int(m.jnt_type[j])
+        qa, da = int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
+        qadr_list += range(qa, qa + nq_of.get(jt, 1))
+        dadr_list += range(da, da + nv_of.get(jt, 1))
+        name = m.joint(j).name
+        if name and jt in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
+            scale = np.pi / 180.0 if jt == int(mujoco.mjtJoint.mjJNT_HINGE) else scene.scale
+            joints[name] = JointDrive(name, jt, qa, da, scale)
+    return Built(scene, m, det, cables, parts, mocap, body_ids,
+                 np.array(qadr_list, int), np.array(dadr_list, int), joints, qpos0, geom_part)

@@ -1,0 +1,134 @@
+"""The step loop: settle, then follow the script, yielding each step's state.
+
+`Simulation.steps()` yields a `StepState` for t = 0 (the settled rest state)
+and then for every step up to the scene's duration: the time, every cable's
+body centres in order from start to end, the world pose of every part, and,
+when asked for, MuJoCo's contacts from the detection model (every
+interaction enabled, margins from the clearance) fed the simulated positions.
+
+Simulate only what the scene calls for: with `effects.dynamics = false`
+nothing is stepped; the cables stay exactly as routed while scripted bodies
+move (forward kinematics only), so rigid parts can still be checked.
+
+This module does not check interference, log or report: it is the interface
+the checker and the recorder read from.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from sim.build import Built
+from sim.contacts import ContactReader, Contacts
+from sim.motion import Motion
+
+
+@dataclass(frozen=True, eq=False)
+class StepState:
+    """One step of the run.
+
+    Attributes:
+      step: index of the step after t = 0 (0 is the rest state).
+      t: time, seconds (0 at the end of settling).
+      cables: per cable, (n, 3) body centres from start to end, metres.
+      part_poses: (P, 4, 4) world pose of every part (geom frame), metres.
+      contacts: MuJoCo's contacts from the detection model, or None.
+      energy: (2,) potential and kinetic energy of the simulation, J.
+    """
+
+    step: int
+    t: float
+    cables: list[np.ndarray]
+    part_poses: np.ndarray
+    contacts: Contacts | None
+    energy: np.ndarray
+
+
+class Simulation:
+    """A built scene with its data, stepped by `steps()`."""
+
+    def __init__(self, built: Built):
+        self.built = built
+        self.model = built.model
+        self.data = mujoco.MjData(self.model)
+        self.model.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+        self.motion = Motion(built)
+        self.detect_data = mujoco.MjData(built.detect) if built.detect is not None else None
+        self.reader = ContactReader(built)
+        self._part_geoms = np.array([p.geom_id for p in built.parts], int)
+        self._verts = [np.arange(c.vert_adr, c.vert_adr + c.count) for c in built.cables]
+        scene = built.scene
+        self.timestep = scene.timestep
+        self.settle_steps = int(round(scene.settle / scene.timestep)) if scene.effects.dynamics else 0
+        self.total_steps = int(round(scene.duration / scene.timestep))
+
+    def reset(self) -> None:
+        """Routed shape, scripted targets at t = 0, no velocity."""
+        d = self.data
+        mujoco.mj_resetData(self.model, d)
+        d.qpos[:] = self.built.qpos0
+        self.motion.apply(d, 0.0)
+        mujoco.mj_forward(self.model, d)
+
+    def settle(self, progress=None) -> None:
+        """Simulate `settle` seconds with the script frozen at t = 0."""
+        for k in range(self.settle_steps):
+            self.motion.apply(self.data, 0.0)
+            mujoco.mj_step(self.model, self.data)
+            if progress is not None:
+                progress(k + 1)
+
+    def steps(self, contacts: bool = True, every: int = 1) -> Iterator[StepState]:
+        """Yield the rest state, then every `every`-th step until the duration.
+
+        `reset` and `settle` must have run. Steps that are not yielded are
+        still simulated."""
+        yield self.state(0, contacts)
+        dynamics = self.built.scene.effects.dynamics
+        for k in range(1, self.total_steps + 1):
+            t = k * self.timestep
+            self.motion.apply(self.data, t)
+            if dynamics:
+                mujoco.mj_step(self.model, self.data)
+            else:
+                mujoco.mj_kinematics(self.model, self.data)
+            if k % every == 0 or k == self.total_steps:
+                yield self.state(k, contacts)
+
+    def state(self, step: int, contacts: bool) -> StepState:
+        """The current state as a StepState (no stepping)."""
+        d = self.data
+        if not self.built.scene.effects.dynamics:
+            mujoco.mj_flex(self.model, d)
+        xpos = d.flexvert_xpos
+        cables = [xpos[idx].copy() for idx in self._verts]
+        poses = np.zeros((len(self._part_geoms), 4, 4))
+        poses[:, :3, :3] = d.geom_xmat[self._part_geoms].reshape(-1, 3, 3)
+        poses[:, :3, 3] = d.geom_xpos[self._part_geoms]
+        poses[:, 3, 3] = 1.0
+        found = self.detect(d) if (contacts and self.detect_data is not None) else None
+        return StepState(step, step * self.timestep, cables, poses, found, d.energy.copy())
+
+    def detect(self, d: mujoco.MjData) -> Contacts:
+        """MuJoCo's contacts for the positions in `d`, from the detection model."""
+        m2, d2 = self.built.detect, self.detect_data
+        d2.qpos[:] = d.qpos
+        d2.mocap_pos[:] = d.mocap_pos
+        d2.mocap_quat[:] = d.mocap_quat
+        mujoco.mj_kinematics(m2, d2)
+        mujoco.mj_comPos(m2, d2)
+        mujoco.mj_flex(m2, d2)
+        mujoco.mj_collision(m2, d2)
+        return self.reader.read(d2)
+
+    def warnings(self) -> dict[str, int]:
+        """MuJoCo warnings raised so far, by name, nonzero only."""
+        out = {}
+        for i, w in enumerate(self.data.warning):
+            if w.number:
+                out[mujoco.mjtWarning(i).name] = int(w.number)
+        return out
