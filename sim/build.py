@@ -272,33 +272,18 @@ class _CablePlan:
 
 
 class _Frames:
-    """World pose of every body at t = 0: [[bodies]] (or their first motion key),
-    the world, and the mjcf model's bodies at qpos0."""
+    """World pose of every body at t = 0, as the scene defines it (`Scene.start_frames`)."""
 
     def __init__(self, scene: Scene):
-        self.poses = {"world": (np.zeros(3), np.eye(3))}
-        for b in scene.bodies:
-            self.poses[b.name] = (np.asarray(b.pos, float), euler_matrix(b.euler))
-        for m in scene.motions:
-            if m.body is not None:
-                key = m.keys[0]  # before the first key the body holds its pose
-                self.poses[m.body] = (np.asarray(key.pos, float), euler_matrix(key.euler))
-        if scene.mjcf is not None:
-            base = mujoco.MjSpec.from_file(str(scene.mjcf)).compile()
-            data = mujoco.MjData(base)
-            mujoco.mj_kinematics(base, data)
-            for i in range(1, base.nbody):
-                name = base.body(i).name
-                if name and name not in self.poses:
-                    self.poses[name] = (data.xpos[i].copy(), data.xmat[i].reshape(3, 3).copy())
+        self.poses = scene.start_frames
 
     def to_world(self, body: str, pos) -> np.ndarray:
         p, r = self.poses[body]
-        return p + r @ np.asarray(pos, float)
+        return np.asarray(p, float) + np.asarray(r, float) @ np.asarray(pos, float)
 
     def to_local(self, body: str, point) -> np.ndarray:
         p, r = self.poses[body]
-        return r.T @ (np.asarray(point, float) - p)
+        return np.asarray(r, float).T @ (np.asarray(point, float) - np.asarray(p, float))
 
 
 def _closest_arc(route: np.ndarray, point: np.ndarray) -> tuple[int, float]:

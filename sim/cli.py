@@ -1,0 +1,187 @@
+"""The `cablecheck` command line.
+
+Subcommands:
+  run SCENE   simulate a scene, check it, write the report and the recording.
+
+Exit status: 0 when nothing reaches the `--fail-on` level, 1 when something
+does, 2 for bad input (the message names the file, the key and the
+problem; never a traceback), 130 when interrupted with Ctrl-C (the report,
+marked incomplete, and the recording are still written).
+
+This module parses arguments, shows progress and prints summaries; the work
+is done in `sim.run`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from sim.scene import SceneError, load_scene
+
+EXIT_OK, EXIT_FAIL, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+_DESCRIPTION = """\
+Physics-backed interference checking for flexible cables and rigid parts.
+A TOML scene describes parts, scripted bodies and cables; MuJoCo simulates the
+cables sagging and following their ends, and every checked step is measured.
+"""
+
+_RUN_EPILOG = """\
+outputs:
+  recording  recordings/<scene name>.rrd unless --record/--no-record; open it
+             with `rerun FILE`.
+  report     JSON beside the recording (same name, .json) unless --report.
+  Both are written atomically: an interrupted run (Ctrl-C) still leaves a
+  readable recording and a report with "complete": false.
+
+exit status:
+  0  nothing reached the --fail-on level    1  something did
+  2  bad input (file, key and problem are printed)    130  interrupted
+"""
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a positive number: {text!r}")
+    return value
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="cablecheck", description=_DESCRIPTION,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    run = sub.add_parser("run", help="simulate and check a scene",
+                         description="Simulate SCENE, check every step, write a report and a recording.",
+                         epilog=_RUN_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    run.add_argument("scene", metavar="SCENE", type=Path, help="scene file (TOML)")
+    run.add_argument("--report", type=Path, metavar="PATH",
+                     help="JSON report path (default: beside the recording, .json)")
+    rec = run.add_mutually_exclusive_group()
+    rec.add_argument("--record", type=Path, metavar="PATH",
+                     help="rerun recording path (default: recordings/<scene name>.rrd)")
+    rec.add_argument("--no-record", action="store_true", help="do not write a recording")
+    run.add_argument("--method", choices=("points", "exact"),
+                     help="override [check] method: discrete points (paper) or exact segment distances")
+    run.add_argument("--spacing", type=_positive_float, metavar="K",
+                     help="override [check] spacing: discrete-point spacing in cable radii (paper: 2)")
+    run.add_argument("--fail-on", choices=("hard", "soft", "never"), default="hard",
+                     help="exit 1 when interference of this severity or worse is found (default: hard)")
+    run.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    return parser
+
+
+class _ProgressBar:
+    """A one-line progress display on stderr, redrawn at most 10 times a second."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled
+        self.tty = sys.stderr.isatty()
+        self._last = 0.0
+        self._shown = False
+        self._last_pct = -1
+
+    def __call__(self, stage: str, done: float, total: float) -> None:
+        if not self.enabled or total <= 0:
+            return
+        frac = min(max(done / total, 0.0), 1.0)
+        now = time.monotonic()
+        if self.tty:
+            if now - self._last < 0.1 and frac < 1.0:
+                return
+            self._last = now
+            bar = "#" * int(30 * frac)
+            label = "settling " if stage == "settle" else "simulating"
+            sys.stderr.write(f"\r{label} [{bar:<30}] {100 * frac:5.1f}%")
+            sys.stderr.flush()
+            self._shown = True
+        else:
+            pct = int(frac * 4) * 25  # a line every quarter when not on a terminal
+            if stage == "run" and pct != self._last_pct:
+                self._last_pct = pct
+                sys.stderr.write(f"simulating: {pct}%\n")
+
+    def done(self) -> None:
+        if self._shown:
+            sys.stderr.write("\r" + " " * 60 + "\r")
+            sys.stderr.flush()
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from sim.run import RunOptions, run_scene  # MuJoCo and rerun load only when needed
+
+    scene = load_scene(args.scene)
+    record = None if args.no_record else (args.record or Path("recordings") / f"{scene.name}.rrd")
+    report = args.report or (record or Path("recordings") / scene.name).with_suffix(".json")
+    options = RunOptions(report=report, record=record, method=args.method, spacing=args.spacing)
+    bar = _ProgressBar(enabled=not args.quiet)
+    try:
+        result = run_scene(scene, options, progress=bar)
+    finally:
+        bar.done()
+    if not args.quiet:
+        _print_summary(result, report)
+    if not result["complete"]:
+        return EXIT_INTERRUPTED
+    return EXIT_FAIL if _fails(result, args.fail_on) else EXIT_OK
+
+
+def _fails(report: dict, level: str) -> bool:
+    summary = report.get("summary", {})
+    if level == "never":
+        return False
+    if level == "soft":
+        return summary.get("hard", 0) + summary.get("soft", 0) > 0
+    return summary.get("hard", 0) > 0
+
+
+def _print_summary(report: dict, report_path: Path) -> None:
+    units = report["units"]
+    s = report["settings"]
+    status = "complete" if report["complete"] else "INTERRUPTED (report marked incomplete)"
+    print(f"{report['scene']}: {status}, {s['steps']} steps to t = {s['t_end']:.3f} s, "
+          f"{s['checked_steps']} checked, method {s['method']}")
+    for c in report["cables"]:
+        bend = c["min_bend_radius"]
+        flags = [f for f, on in (("TAUT", c["taut"]), ("BEND", c["bend_violation"])) if on]
+        strain = c["max_strain"]
+        print(f"  cable {c['name']}: length {c['length']:.4g} {units}, max strain "
+              f"{100 * strain:.2f} %, min bend radius "
+              f"{'straight' if bend is None else f'{bend:.4g} {units}'}"
+              + (f"  [{', '.join(flags)}]" if flags else ""))
+    if report.get("warnings"):
+        print(f"  MuJoCo warnings: {report['warnings']}")
+    t = report["timing"]
+    print(f"  time {t['total_s']:.2f} s (simulation {t['sim_s']:.2f} s, checks {t['check_s']:.2f} s, "
+          f"recording {t['record_s']:.2f} s)")
+    print(f"  report: {report_path}")
+    if report.get("recording"):
+        print(f"  recording: {report['recording']}  (view: rerun {report['recording']})")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the `cablecheck` command; returns the exit status."""
+    args = _parser().parse_args(argv)
+    try:
+        if args.command == "run":
+            return _cmd_run(args)
+    except SceneError as e:
+        print(f"cablecheck: error: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except OSError as e:
+        print(f"cablecheck: error: {e.filename or ''}: {e.strerror or e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("cablecheck: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,179 @@
+"""The rerun recording of a run: parts, cables and checks on a `sim_time` timeline.
+
+Entity tree (mirrors the scene, in the scene's units, z up):
+- `world/parts/<assembly path>`: each part's shape, logged once as static in
+  its own frame; its pose is static for parts on the world and logged per
+  step for parts riding a moving body.
+- `world/cables/<name>`: the cable's centreline as a line strip of its true
+  radius, coloured by its worst state at that step (clear, soft, hard).
+- `world/interference/<type>/<a>/<b>`: a marker at the worst point of each
+  pair below the clearance; `world/mujoco_contacts`: MuJoCo's contact points.
+- `cables/<name>/strain`, `cables/<name>/min_bend_radius`,
+  `checks/<pair>/distance`, `checks/agreement`: time series.
+- `events`: one text entry per interference event at its start time.
+
+Geometry is logged in batches (one call per cable per step), never per point.
+The `.rrd` is written to a temporary file beside the target and moved into
+place when the recorder is closed, so an interrupted run still leaves a
+complete, readable recording and never a half-written one.
+
+This module does not decide what is interference; it logs what it is given.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+
+from sim.build import Built, PartModel
+
+CLEAR = (70, 160, 255)
+SOFT = (255, 190, 40)
+HARD = (230, 40, 40)
+STATE_COLOURS = {"clear": CLEAR, "soft": SOFT, "hard": HARD}
+PART_COLOUR = (160, 160, 170)
+KEEPOUT_COLOUR = (255, 140, 0, 90)
+
+
+def part_path(name: str) -> str:
+    """Entity path of a part: its assembly levels become tree levels."""
+    return "world/parts/" + "/".join(_escape(p) for p in name.split("/"))
+
+
+def _escape(level: str) -> str:
+    # rerun separates entity path levels with "/" and treats a few characters specially.
+    return "".join(c if (c.isalnum() or c in "-_.") else "_" for c in level) or "_"
+
+
+def pair_path(kind: str, a: str, b: str) -> str:
+    """Entity path of a checked pair."""
+    return f"{kind}/{_escape(a)}/{_escape(b)}"
+
+
+def _blueprint() -> rrb.Blueprint:
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Spatial3DView(name="Scene", origin="world"),
+            rrb.Vertical(
+                rrb.TimeSeriesView(name="Pair distances", origin="checks"),
+                rrb.TimeSeriesView(name="Cables", origin="cables"),
+                rrb.TextLogView(name="Events", origin="events"),
+            ),
+            column_shares=[3, 2],
+        ),
+        collapse_panels=False,
+    )
+
+
+class Recorder:
+    """Writes one run's recording to `path` (see the module docstring)."""
+
+    def __init__(self, built: Built, path: Path):
+        self.built = built
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
+        self.unit = built.scene.scale  # metres per scene unit
+        self.rec = rr.RecordingStream(application_id="cablecheck",
+                                      recording_id=f"{built.scene.name}")
+        self.rec.save(str(self.tmp), default_blueprint=_blueprint())
+        body_of_part = [p.body for p in built.parts]
+        moving = set(built.mocap) | {name for name in built.body_ids if name != "world"
+                                     and name not in built.mocap}
+        self.moving_parts = np.array([b in moving for b in body_of_part], bool)
+        self._closed = False
+
+    # -- static content ---------------------------------------------------
+    def log_static(self, part_poses: np.ndarray) -> None:
+        """Parts' shapes (and poses of parts that never move), once."""
+        rec = self.rec
+        rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        for k, part in enumerate(self.built.parts):
+            path = part_path(part.name)
+            rec.log(path, self._shape(part), static=True)
+            if not self.moving_parts[k]:
+                rec.log(path, self._transform(part_poses[k]), static=True)
+
+    def _shape(self, part: PartModel):
+        u = self.unit
+        colour = KEEPOUT_COLOUR if part.keepout else PART_COLOUR
+        size = np.asarray(part.size, float) / u
+        if part.shape == "box":
+            return rr.Boxes3D(half_sizes=[size], colors=[colour], fill_mode="solid")
+        if part.shape == "sphere":
+            return rr.Ellipsoids3D(half_sizes=[[size[0]] * 3], colors=[colour], fill_mode="solid")
+        if part.shape == "ellipsoid":
+            return rr.Ellipsoids3D(half_sizes=[size], colors=[colour], fill_mode="solid")
+        if part.shape == "capsule":
+            return rr.Capsules3D(lengths=[2 * size[1]], radii=[size[0]],
+                                 translations=[[0, 0, -size[1]]], colors=[colour])
+        if part.shape == "cylinder":
+            return rr.Cylinders3D(lengths=[2 * size[1]], radii=[size[0]], colors=[colour],
+                                  fill_mode="solid")
+        if part.shape == "plane":
+            extent = size[:2] if size[0] > 0 else np.array([1.0, 1.0]) / u
+            return rr.Boxes3D(half_sizes=[[extent[0], extent[1], 0.0]], colors=[colour])
+        return rr.Mesh3D(vertex_positions=part.vertices / u, triangle_indices=part.faces,
+                         albedo_factor=colour)
+
+    def _transform(self, pose: np.ndarray) -> rr.Transform3D:
+        return rr.Transform3D(translation=pose[:3, 3] / self.unit, mat3x3=pose[:3, :3])
+
+    # -- per step ---------------------------------------------------------
+    def log_step(self, t: float, cables: list[np.ndarray], part_poses: np.ndarray,
+                 cable_states: list[str] | None = None,
+                 strain: np.ndarray | None = None, bend: np.ndarray | None = None) -> None:
+        """One step: moving parts' poses, cables (coloured by state) and per-cable series."""
+        rec, u = self.rec, self.unit
+        rec.set_time("sim_time", duration=t)
+        for k in np.flatnonzero(self.moving_parts):
+            rec.log(part_path(self.built.parts[k].name), self._transform(part_poses[k]))
+        for i, (cable, pts) in enumerate(zip(self.built.cables, cables)):
+            state = cable_states[i] if cable_states else "clear"
+            rec.log(f"world/cables/{_escape(cable.name)}",
+                    rr.LineStrips3D([pts / u], radii=[cable.radius / u],
+                                    colors=[STATE_COLOURS[state]]))
+            if strain is not None:
+                rec.log(f"cables/{_escape(cable.name)}/strain", rr.Scalars(float(strain[i])))
+            if bend is not None and np.isfinite(bend[i]):
+                rec.log(f"cables/{_escape(cable.name)}/min_bend_radius", rr.Scalars(float(bend[i] / u)))
+
+    def log_markers(self, markers: dict[str, tuple[np.ndarray, str]]) -> None:
+        """Interference markers at worst points: entity path -> (point, state)."""
+        for path, (point, state) in markers.items():
+            self.rec.log(f"world/interference/{path}",
+                         rr.Points3D([np.asarray(point) / self.unit], radii=[-6.0],
+                                     colors=[STATE_COLOURS[state]]))
+
+    def clear_markers(self, paths) -> None:
+        """Remove markers of pairs that are clear again."""
+        for path in paths:
+            self.rec.log(f"world/interference/{path}", rr.Clear(recursive=False))
+
+    def log_contacts(self, points: np.ndarray) -> None:
+        """MuJoCo's contact points at this step."""
+        self.rec.log("world/mujoco_contacts",
+                     rr.Points3D(np.asarray(points).reshape(-1, 3) / self.unit, radii=[-3.0],
+                                 colors=[(40, 220, 120)]))
+
+    def log_scalar(self, path: str, value: float) -> None:
+        """A time series value at the current time."""
+        self.rec.log(path, rr.Scalars(float(value)))
+
+    def log_event(self, t: float, text: str, level: str) -> None:
+        """An event as a text log entry at time t."""
+        self.rec.set_time("sim_time", duration=t)
+        self.rec.log("events", rr.TextLog(text, level=level))
+
+    def close(self) -> None:
+        """Finish the file and move it into place (safe to call twice)."""
+        if self._closed:
+            return
+        self._closed = True
+        self.rec.flush()
+        self.rec.disconnect()
+        os.replace(self.tmp, self.path)
