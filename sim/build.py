@@ -9,6 +9,11 @@ written as one small MJCF string and attached into the spec. Sites and
 `connect` equalities that tie cable vertices to moving bodies are added last,
 once the vertex bodies exist.
 
+Scripted `[[bodies]]` are free bodies whose pose and velocity the script
+sets every step (see `Built.free`); the base model's joints are driven the
+same way. Both get a large armature so the cable's reaction barely moves
+them within a step.
+
 Two models come out of one scene:
 - the simulation model, in which only the interactions listed in
   `effects.contact` collide (contype/conaffinity bits, below), with small
@@ -177,7 +182,11 @@ class Built:
       model: simulation model.
       detect: detection model (same dofs), or None when not requested.
       cables, parts: in scene order (parts: scene parts, then mjcf geoms).
-      mocap: scene body name -> mocap id.
+      free: scene body name -> (qpos address, dof address) of its free joint.
+        Scripted bodies are free bodies driven kinematically (qpos and qvel
+        set every step), not mocap bodies: MuJoCo gives mocap bodies no
+        velocity, so a cable end held to one lags behind it by its speed
+        times the constraint's time constant (measured: 1 mm at 0.1 m/s).
       body_ids: scene body name -> body id ("world" is 0).
       base_qpos_adr, base_dof_adr: qpos / dof addresses of the base model's
         joints (all driven kinematically).
@@ -190,7 +199,7 @@ class Built:
     detect: mujoco.MjModel | None
     cables: list[CableModel]
     parts: list[PartModel]
-    mocap: dict[str, int]
+    free: dict[str, tuple[int, int]]
     body_ids: dict[str, int]
     base_qpos_adr: np.ndarray
     base_dof_adr: np.ndarray
@@ -409,8 +418,13 @@ def _compile(scene: Scene, plans: list[_CablePlan], detect: bool) -> mujoco.MjMo
         g.margin = margin
 
     for body in scene.bodies:
-        spec.worldbody.add_body(name=body.name, mocap=True, pos=list(body.pos),
-                                quat=list(_quat(body.euler)))
+        b = spec.worldbody.add_body(name=body.name, pos=list(body.pos),
+                                    quat=list(_quat(body.euler)), gravcomp=1.0)
+        b.add_freejoint(name=f"{body.name}/free").armature = BASE_ARMATURE
+        # a free body needs mass; parts on it carry none of their own here
+        b.explicitinertial = True
+        b.mass = 1.0
+        b.inertia = [1.0, 1.0, 1.0]
     for part in scene.parts:
         parent = spec.worldbody if part.body == "world" else spec.body(part.body)
         contype, conaff = _part_bits(scene, detect, part.keepout)
@@ -520,14 +534,18 @@ def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
                                  float(seg.mean()), plan.routed.copy(), qadr,
                                  tuple(sorted(attachments, key=lambda a: a.vertex)), c.min_bend_radius))
 
-    mocap = {b: int(m.body_mocapid[m.body(b).id]) for b in scene_bodies}
+    free = {}
+    for b in scene_bodies:
+        j = int(m.body_jntadr[m.body(b).id])
+        free[b] = (int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j]))
     body_ids = {"world": 0}
     for i in range(1, m.nbody):
         name = m.body(i).name
         if name and not name.startswith(CABLE_PREFIX):
             body_ids[name] = i
     base_joints = [j for j in range(m.njnt) if not m.joint(j).name.startswith(CABLE_PREFIX)
-                   and not m.body(int(m.jnt_bodyid[j])).name.startswith(CABLE_PREFIX)]
+                   and not m.body(int(m.jnt_bodyid[j])).name.startswith(CABLE_PREFIX)
+                   and m.body(int(m.jnt_bodyid[j])).name not in scene_bodies]
     qadr_list, dadr_list, joints = [], [], {}
     nq_of = {int(mujoco.mjtJoint.mjJNT_FREE): 7, int(mujoco.mjtJoint.mjJNT_BALL): 4}
     nv_of = {int(mujoco.mjtJoint.mjJNT_FREE): 6, int(mujoco.mjtJoint.mjJNT_BALL): 3}
@@ -540,5 +558,5 @@ def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
         if name and jt in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
             scale = np.pi / 180.0 if jt == int(mujoco.mjtJoint.mjJNT_HINGE) else scene.scale
             joints[name] = JointDrive(name, jt, qa, da, scale)
-    return Built(scene, m, det, cables, parts, mocap, body_ids,
+    return Built(scene, m, det, cables, parts, free, body_ids,
                  np.array(qadr_list, int), np.array(dadr_list, int), joints, qpos0, geom_part)

@@ -71,13 +71,13 @@ class Simulation:
         d = self.data
         mujoco.mj_resetData(self.model, d)
         d.qpos[:] = self.built.qpos0
-        self.motion.apply(d, 0.0)
+        self.motion.apply(d, 0.0, frozen=True)
         mujoco.mj_forward(self.model, d)
 
     def settle(self, progress=None) -> None:
         """Simulate `settle` seconds with the script frozen at t = 0."""
         for k in range(self.settle_steps):
-            self.motion.apply(self.data, 0.0)
+            self.motion.apply(self.data, 0.0, frozen=True)
             mujoco.mj_step(self.model, self.data)
             if progress is not None:
                 progress(k + 1)
@@ -117,8 +117,6 @@ class Simulation:
         """MuJoCo's contacts for the positions in `d`, from the detection model."""
         m2, d2 = self.built.detect, self.detect_data
         d2.qpos[:] = d.qpos
-        d2.mocap_pos[:] = d.mocap_pos
-        d2.mocap_quat[:] = d.mocap_quat
         mujoco.mj_kinematics(m2, d2)
         mujoco.mj_comPos(m2, d2)
         mujoco.mj_flex(m2, d2)

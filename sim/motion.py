@@ -1,7 +1,8 @@
 """Scripted motion: keyframes interpolated in time and applied to the model.
 
-Bodies (`[[bodies]]`, mocap in MuJoCo) follow their keys' world poses:
-position linearly, orientation by spherical linear interpolation. Joints of
+Bodies (`[[bodies]]`, free bodies in MuJoCo) follow their keys' world poses:
+position linearly, orientation by spherical linear interpolation, and get
+the matching linear and angular velocity. Joints of
 the base mjcf model follow their keys linearly, and every base joint, keyed
 or not, is driven kinematically: its qpos and qvel are set before each step
 (held at qpos0 when it has no keys), so the robot follows the script exactly
@@ -42,23 +43,32 @@ def slerp(q0: np.ndarray, q1: np.ndarray, u: float) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class BodyTrack:
-    """Keyframes of one mocap body. times (k,), pos (k, 3) metres, quat (k, 4)."""
+    """Keyframes of one scripted body. times (k,), pos (k, 3) metres, quat (k, 4)."""
 
-    mocap_id: int
+    qpos_adr: int
+    dof_adr: int
     times: np.ndarray
     pos: np.ndarray
     quat: np.ndarray
 
-    def at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """World position and quaternion at time t."""
+    def at(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """World position, quaternion, linear velocity (world) and angular
+        velocity (body frame, as MuJoCo's free joint) at time t."""
         i = int(np.searchsorted(self.times, t, side="right")) - 1
+        still = np.zeros(3)
         if i < 0:
-            return self.pos[0], self.quat[0]
+            return self.pos[0], self.quat[0], still, still
         if i >= len(self.times) - 1:
-            return self.pos[-1], self.quat[-1]
-        u = (t - self.times[i]) / (self.times[i + 1] - self.times[i])
-        return (self.pos[i] + u * (self.pos[i + 1] - self.pos[i]),
-                slerp(self.quat[i], self.quat[i + 1], u))
+            return self.pos[-1], self.quat[-1], still, still
+        dt = self.times[i + 1] - self.times[i]
+        u = (t - self.times[i]) / dt
+        q0, q1 = self.quat[i], self.quat[i + 1]
+        if np.dot(q0, q1) < 0.0:
+            q1 = -q1
+        omega = np.zeros(3)
+        mujoco.mju_subQuat(omega, q1, q0)  # q0 * exp(omega) = q1, in q0's frame
+        return (self.pos[i] + u * (self.pos[i + 1] - self.pos[i]), slerp(q0, q1, u),
+                (self.pos[i + 1] - self.pos[i]) / dt, omega / dt)
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,7 +102,7 @@ class Motion:
             if m.body is not None:
                 pos = np.array([k.pos for k in m.keys], float)
                 quat = np.array([_quat(euler_matrix(k.euler)) for k in m.keys])
-                self.bodies.append(BodyTrack(built.mocap[m.body], times, pos, quat))
+                self.bodies.append(BodyTrack(*built.free[m.body], times, pos, quat))
                 keyed.add(m.body)
             else:
                 drive = built.joints[m.joint]
@@ -100,21 +110,28 @@ class Motion:
                 self.joints.append(JointTrack(drive.qpos_adr, drive.dof_adr, times, values))
         for b in scene.bodies:
             if b.name not in keyed:
-                self.bodies.append(BodyTrack(built.mocap[b.name], np.zeros(1),
+                self.bodies.append(BodyTrack(*built.free[b.name], np.zeros(1),
                                              np.array([b.pos], float),
                                              np.array([_quat(euler_matrix(b.euler))])))
         self.base_qpos_adr = built.base_qpos_adr
         self.base_dof_adr = built.base_dof_adr
         self.base_qpos0 = built.model.qpos0[built.base_qpos_adr].copy()
 
-    def apply(self, data: mujoco.MjData, t: float) -> None:
-        """Put every scripted target at its time-t pose (and velocity for joints)."""
+    def apply(self, data: mujoco.MjData, t: float, frozen: bool = False) -> None:
+        """Put every scripted target at its time-t pose and velocity.
+
+        `frozen`: hold the pose with zero velocity (settling before t = 0)."""
         for track in self.bodies:
-            data.mocap_pos[track.mocap_id], data.mocap_quat[track.mocap_id] = track.at(t)
+            pos, quat, vel, omega = track.at(t)
+            data.qpos[track.qpos_adr:track.qpos_adr + 3] = pos
+            data.qpos[track.qpos_adr + 3:track.qpos_adr + 7] = quat
+            data.qvel[track.dof_adr:track.dof_adr + 3] = 0.0 if frozen else vel
+            data.qvel[track.dof_adr + 3:track.dof_adr + 6] = 0.0 if frozen else omega
         data.qpos[self.base_qpos_adr] = self.base_qpos0
         data.qvel[self.base_dof_adr] = 0.0
         for track in self.joints:
-            data.qpos[track.qpos_adr], data.qvel[track.dof_adr] = track.at(t)
+            data.qpos[track.qpos_adr], velocity = track.at(t)
+            data.qvel[track.dof_adr] = 0.0 if frozen else velocity
 
     @property
     def is_static(self) -> bool:

@@ -82,8 +82,7 @@ class Recorder:
                                       recording_id=f"{built.scene.name}")
         self.rec.save(str(self.tmp), default_blueprint=_blueprint())
         body_of_part = [p.body for p in built.parts]
-        moving = set(built.mocap) | {name for name in built.body_ids if name != "world"
-                                     and name not in built.mocap}
+        moving = {name for name in built.body_ids if name != "world"}
         self.moving_parts = np.array([b in moving for b in body_of_part], bool)
         self._closed = False
 

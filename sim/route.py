@@ -59,8 +59,9 @@ def initial_shape(route: np.ndarray, length: float, count: int,
 
     Method: densify the route; if it is shorter than `length`, add a droop
     h * sin(pi s / S) along the droop direction (a half sine over the route's
-    arc length s in [0, S]) and find h by Brent's method so the arc length
-    matches to 1e-9 relative; then resample evenly. Both ends stay where they
+    arc length s in [0, S]) and find h by Brent's method so that the
+    resampled polyline (the cable's elements) has the requested length to
+    1e-9 relative; then resample evenly. Both ends stay where they
     are. `length` shorter than the route is the caller's error (the scene
     loader rejects it); it is treated as the route's length.
     """
@@ -72,7 +73,8 @@ def initial_shape(route: np.ndarray, length: float, count: int,
         bump = np.sin(np.pi * s / total)[:, None] * _droop_direction(route, down)[None, :]
 
         def excess(h: float) -> float:
-            return polyline_length(dense + h * bump) - length
+            # measured on the resampled points: their chords are the cable's elements
+            return polyline_length(resample_even(dense + h * bump, count)) - length
 
         hi = length
         while excess(hi) < 0.0:

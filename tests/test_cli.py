@@ -1,0 +1,171 @@
+"""End-to-end tests of `cablecheck run`: outputs, exit codes, bad input, interruption."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from sim.cli import main
+from sim.run import RunOptions, run_scene
+from sim.scene import load_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+
+SMALL = """
+[scene]
+name = "small"
+units = "mm"
+duration = 0.2
+settle = 0.2
+
+[effects]
+contact = ["cable-structure"]
+
+[[bodies]]
+name = "slider"
+
+[[parts]]
+name = "frame/floor"
+shape = "box"
+size = [300, 100, 5]
+pos = [150, 0, -5]
+
+[[cables]]
+name = "lead"
+radius = 3.0
+start = { pos = [0, 0, 100] }
+end = { body = "slider", pos = [200, 0, 100] }
+length = 260.0
+segments = 12
+
+[[motion]]
+body = "slider"
+keys = [ { t = 0.0, pos = [0, 0, 0] }, { t = 0.2, pos = [20, 0, 0] } ]
+"""
+
+
+@pytest.fixture
+def small_scene(tmp_path: Path) -> Path:
+    path = tmp_path / "small.toml"
+    path.write_text(SMALL)
+    return path
+
+
+def test_run_writes_report_and_recording(small_scene: Path, tmp_path: Path, capsys):
+    record = tmp_path / "out" / "small.rrd"
+    code = main(["run", str(small_scene), "--record", str(record)])
+    assert code == 0
+    report = json.loads(record.with_suffix(".json").read_text())
+    for key in ("schema", "scene", "units", "complete", "mujoco", "settings", "cables", "timing"):
+        assert key in report
+    assert report["schema"] == "cablecheck.report/1"
+    assert report["complete"] is True and report["units"] == "mm"
+    assert report["settings"]["steps"] == 100
+    cable = report["cables"][0]
+    assert cable["name"] == "lead"
+    assert cable["length"] == pytest.approx(260.0, rel=1e-3)
+    assert len(cable["rest_points"]) == 13 and len(cable["final_points"]) == 13
+    # the end rides the slider: it moved 20 mm in x
+    assert cable["final_points"][-1][0] - cable["rest_points"][-1][0] == pytest.approx(20.0, abs=0.5)
+    assert cable["rest_points"][0] == pytest.approx([0, 0, 100], abs=1e-6)
+    assert abs(cable["max_strain"]) < 0.01
+    assert report["recording"] == str(record)
+    assert record.exists() and not list(record.parent.glob(".*.tmp"))
+    out = capsys.readouterr().out
+    assert "small: complete" in out and "cable lead" in out
+
+
+def test_no_record_writes_only_the_report(small_scene: Path, tmp_path: Path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", str(small_scene), "--no-record", "--quiet"]) == 0
+    assert (tmp_path / "recordings" / "small.json").exists()
+    assert not list((tmp_path / "recordings").glob("*.rrd"))
+
+
+@pytest.mark.parametrize("text, key", [
+    (SMALL.replace("radius = 3.0", "radius = -3.0"), "cables[0].radius"),
+    (SMALL.replace('units = "mm"', 'units = "inch"'), "scene.units"),
+    (SMALL.replace('body = "slider", pos', 'body = "sled", pos'), "cables[0].end.body"),
+    (SMALL + "\n[bogus]\nx = 1\n", "bogus"),
+])
+def test_bad_input_exits_2_naming_file_and_key(tmp_path: Path, text: str, key: str):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    proc = subprocess.run([sys.executable, "-m", "sim.cli", "run", str(path), "--no-record"],
+                          capture_output=True, text=True, cwd=tmp_path)
+    assert proc.returncode == 2
+    assert str(path) in proc.stderr and key in proc.stderr
+    assert "Traceback" not in proc.stderr + proc.stdout
+    assert not (tmp_path / "recordings").exists()
+
+
+def test_missing_scene_file_exits_2(tmp_path: Path, capsys):
+    assert main(["run", str(tmp_path / "nope.toml"), "--no-record"]) == 2
+    assert "nope.toml" in capsys.readouterr().err
+
+
+def test_bad_spacing_option_exits_2(small_scene: Path):
+    with pytest.raises(SystemExit) as e:
+        main(["run", str(small_scene), "--spacing", "-1"])
+    assert e.value.code == 2
+
+
+def test_interrupted_run_leaves_incomplete_report_and_readable_recording(small_scene: Path, tmp_path: Path):
+    scene = load_scene(small_scene)
+    record, report_path = tmp_path / "r.rrd", tmp_path / "r.json"
+    report_path.write_text('{"old": true}')  # an earlier report is replaced only by a complete file
+
+    def interrupt(stage, done, total):
+        if stage == "run" and done >= 30:
+            raise KeyboardInterrupt
+
+    report = run_scene(scene, RunOptions(report=report_path, record=record), progress=interrupt)
+    assert report["complete"] is False
+    written = json.loads(report_path.read_text())
+    assert written["complete"] is False and 30 <= written["settings"]["steps"] < 100
+    assert record.exists()
+    _assert_rrd_has(record, ["/world/cables/lead", "/world/parts/frame/floor"])
+
+
+def _rerun_cli() -> str | None:
+    exe = Path(sys.executable).with_name("rerun")
+    return str(exe) if exe.exists() else shutil.which("rerun")
+
+
+def _assert_rrd_has(path: Path, entities: list[str], timelines=("sim_time",)) -> None:
+    """Open the recording with rerun's own loader (`rerun rrd print`) and look for entities."""
+    exe = _rerun_cli()
+    assert exe, "the rerun command ships with rerun-sdk"
+    env = dict(os.environ, XDG_CONFIG_HOME=str(path.parent / ".xdg"))
+    subprocess.run([exe, "analytics", "disable"], env=env, capture_output=True)
+    verify = subprocess.run([exe, "rrd", "verify", str(path)], env=env, capture_output=True, text=True)
+    assert verify.returncode == 0, verify.stderr
+    printed = subprocess.run([exe, "rrd", "print", "-vv", str(path)], env=env,
+                             capture_output=True, text=True)
+    assert printed.returncode == 0, printed.stderr
+    for entity in entities:
+        assert entity in printed.stdout, f"{entity} missing from {path}"
+    for timeline in timelines:
+        assert timeline in printed.stdout
+
+
+def test_recording_holds_parts_cables_and_series(small_scene: Path, tmp_path: Path):
+    record = tmp_path / "small.rrd"
+    assert main(["run", str(small_scene), "--record", str(record), "--quiet"]) == 0
+    _assert_rrd_has(record, ["/world/cables/lead", "/world/parts/frame/floor",
+                             "/cables/lead/strain", "/cables/lead/min_bend_radius"])
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in (ROOT / "scenes").glob("*.toml")))
+def test_example_scenes_run(name: str, tmp_path: Path):
+    code = main(["run", str(ROOT / "scenes" / name), "--no-record", "--quiet",
+                 "--report", str(tmp_path / "r.json"), "--fail-on", "never"])
+    assert code == 0
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["complete"] and not report["warnings"]
