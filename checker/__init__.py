@@ -1,0 +1,1 @@
+"""cablecheck geometry."""
