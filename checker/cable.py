@@ -1,0 +1,203 @@
+"""Cable centrelines as dynamic discrete points: resampling, arc length, bends.
+
+The paper (seed 000) represents a cable by ordered points on its centreline at
+spacing ``l`` that move with the cable. Two constructions are offered:
+
+- :func:`resample` puts points at equal arc-length spacing (at most ``l``)
+  along the polyline, both ends included: the paper's construction.
+- :func:`densify` keeps every given point (the simulated body centres) and
+  splits each element longer than ``l`` into equal parts, so the polyline's
+  geometry is unchanged; this is what the checker uses (SPEC, "Algorithms").
+
+It also holds :func:`self_pair_excluded`, the single definition of which pairs
+of places on one cable are too close along the cable to count as self
+interference, shared with the simulation side's filtering of MuJoCo's self
+contacts, and :func:`bend_radius`.
+
+Deliberately not here: distances between cables or to parts
+(:mod:`checker.interference`), smoothing or splines (the points are the truth).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def arc_length(points: np.ndarray) -> np.ndarray:
+    """Cumulative arc length (n,) of a polyline (n, 3), starting at 0."""
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    return np.concatenate([[0.0], np.cumsum(seg)])
+
+
+def resample(points: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """Points at equal arc-length spacing along a polyline, both ends included.
+
+    The number of intervals is ``ceil(length / spacing)`` (at least one), so
+    the actual spacing is the largest value not above ``spacing`` that divides
+    the length evenly. Corners of the polyline between two new points are cut,
+    by at most ``spacing / 2`` times the sine of half the turning angle; use
+    :func:`densify` to keep them.
+
+    Args:
+        points: (n, 3) polyline, n >= 2; zero-length pieces are allowed.
+        spacing: target spacing l > 0.
+
+    Returns:
+        pts: (m, 3) resampled points, m >= 2.
+        s: (m,) their arc lengths.
+    """
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    if len(p) < 2:
+        raise ValueError("a polyline needs at least two points")
+    if not spacing > 0:
+        raise ValueError(f"spacing must be positive, got {spacing}")
+    s = arc_length(p)
+    total = s[-1]
+    n_int = max(1, int(np.ceil(total / spacing * (1.0 - 1e-12))))
+    s_new = total * np.arange(n_int + 1) / n_int
+    s_new[-1] = total
+    # Segment containing each new point; zero-length pieces are never chosen
+    # because searchsorted('right') skips repeated arc lengths.
+    k = np.clip(np.searchsorted(s, s_new, side="right") - 1, 0, len(p) - 2)
+    seg_len = s[k + 1] - s[k]
+    ok = seg_len > 0
+    u = np.where(ok, s_new - s[k], 0.0) / np.where(ok, seg_len, 1.0)
+    pts = p[k] + np.clip(u, 0.0, 1.0)[:, None] * (p[k + 1] - p[k])
+    pts[0], pts[-1] = p[0], p[-1]
+    return pts, s_new
+
+
+def densify_batch(
+    points: np.ndarray, offsets: np.ndarray, spacing: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`densify` for many polylines at once.
+
+    Args:
+        points: (N, 3) all polylines' points, concatenated.
+        offsets: (C + 1,) start of each polyline in ``points``; polyline c is
+            ``points[offsets[c]:offsets[c + 1]]`` with at least 2 points.
+        spacing: (C,) largest allowed element length per polyline.
+
+    Returns:
+        pts: (M, 3) densified points, concatenated.
+        s: (M,) arc length of each along its own polyline.
+        cable: (M,) polyline index of each point.
+        new_offsets: (C + 1,) start of each polyline in ``pts``.
+    """
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    offsets = np.asarray(offsets, dtype=np.int64)
+    n_c = len(offsets) - 1
+    cable_of_pt = np.repeat(np.arange(n_c), np.diff(offsets))
+    seg_len = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    # Element i joins point i to i+1 when both are on the same polyline.
+    valid = cable_of_pt[:-1] == cable_of_pt[1:]
+    lim = np.asarray(spacing, dtype=float)[cable_of_pt[:-1]]
+    pieces = np.where(valid, np.maximum(1, np.ceil(seg_len / lim * (1.0 - 1e-12))).astype(np.int64), 0)
+    # Each point emits itself, then pieces-1 interior points of its element.
+    emit = np.ones(len(p), dtype=np.int64)
+    emit[:-1] += np.maximum(pieces - 1, 0)
+    total = int(emit.sum())
+    src = np.repeat(np.arange(len(p)), emit)
+    first = np.cumsum(emit) - emit
+    j = np.arange(total) - first[src]  # 0 for the point itself, then 1..pieces-1
+    nxt = np.minimum(src + 1, len(p) - 1)
+    frac = j / np.maximum(np.r_[pieces, 1][src], 1)
+    pts = p[src] + frac[:, None] * (p[nxt] - p[src])
+    # Arc length per polyline: cumulative over valid elements, restarted.
+    step = np.where(valid, seg_len, 0.0)
+    cum = np.concatenate([[0.0], np.cumsum(step)])
+    s_pt = cum - cum[offsets[:-1]][cable_of_pt]
+    s = s_pt[src] + frac * np.r_[step, 0.0][src]
+    cable = cable_of_pt[src]
+    new_offsets = np.concatenate([[0], np.cumsum(np.bincount(cable, minlength=n_c))])
+    return pts, s, cable, new_offsets
+
+
+def densify(points: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """Keep every point; split elements longer than ``spacing`` evenly.
+
+    The polyline's shape is unchanged (no corner is cut) and no element of the
+    result is longer than ``spacing``. Zero-length elements stay as repeated
+    points.
+
+    Args:
+        points: (n, 3) polyline, n >= 2.
+        spacing: largest allowed element length l > 0.
+
+    Returns:
+        pts: (m, 3) with m >= n.
+        s: (m,) arc lengths.
+    """
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    if len(p) < 2:
+        raise ValueError("a polyline needs at least two points")
+    if not spacing > 0:
+        raise ValueError(f"spacing must be positive, got {spacing}")
+    pts, s, _, _ = densify_batch(p, np.array([0, len(p)]), np.array([float(spacing)]))
+    return pts, s
+
+
+def self_pair_excluded(s_a: np.ndarray, s_b: np.ndarray, radius: float | np.ndarray) -> np.ndarray:
+    """True where two places on one cable are too close along it to interfere.
+
+    Two places whose arc lengths differ by less than ``pi * radius`` are never
+    self interference. Neighbouring points or elements of a cable are always
+    within ``2r`` of each other (the paper's spacing is ``2r``, and a bent
+    cable brings them closer still), so they would always "interfere". Beyond
+    them, the tightest bend a cable can take without kinking has its
+    centreline radius equal to ``r`` (the inner surface then has radius 0);
+    on such a bend two places come within ``2r`` of each other only when
+    their arc lengths differ by less than ``pi * r``: at exactly ``pi * r``
+    (a half turn) the two legs of the U just touch, which is the first real
+    self contact. So ``|s_a - s_b| < pi r`` is excluded and everything at or
+    beyond it is checked. At the paper's spacing ``2r`` this excludes exactly
+    the adjacent points and keeps every point two or more places away.
+
+    Args:
+        s_a, s_b: arc lengths (broadcastable arrays), same units as radius.
+        radius: the cable's radius (scalar or broadcastable array).
+
+    Returns:
+        bool array of the broadcast shape.
+    """
+    return np.abs(np.asarray(s_a, dtype=float) - np.asarray(s_b, dtype=float)) < np.pi * np.asarray(radius, dtype=float)
+
+
+def bend_radius(points: np.ndarray) -> np.ndarray:
+    """Local bend radius at each point from its two neighbours, (n,).
+
+    At an interior point it is the circumradius of the triangle formed with its
+    neighbours, ``|c| / (2 sin phi)`` with ``c`` the chord between the
+    neighbours and ``phi`` the turning angle. When the cable turns by more than
+    a right angle within two elements (a kink), the circumradius would grow
+    again, so ``|c| / 2`` is used instead; it joins continuously at 90 degrees
+    and is 0 for a full fold-back. Straight runs and zero-length neighbours
+    give ``inf``, and so do the two ends (no neighbour on one side).
+
+    Args:
+        points: (n, 3) centreline points.
+
+    Returns:
+        (n,) bend radius, same units as the points.
+    """
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    out = np.full(len(p), np.inf)
+    if len(p) < 3:
+        return out
+    a = p[1:-1] - p[:-2]
+    b = p[2:] - p[1:-1]
+    c = p[2:] - p[:-2]
+    la = np.linalg.norm(a, axis=1)
+    lb = np.linalg.norm(b, axis=1)
+    lc = np.linalg.norm(c, axis=1)
+    cross = np.linalg.norm(np.cross(a, b), axis=1)
+    dot = np.einsum("ij,ij->i", a, b)
+    nonzero = (la > 0) & (lb > 0)
+    sin_phi = np.where(nonzero, cross, 0.0) / np.where(nonzero, la * lb, 1.0)
+    # Straight when the turning angle is below rounding noise.
+    bent = nonzero & (sin_phi > 1e-12)
+    r_circ = np.where(bent, lc, 1.0) / np.where(bent, 2.0 * sin_phi, 1.0)
+    r = np.where(dot >= 0.0, np.where(bent, r_circ, np.inf), 0.5 * lc)
+    out[1:-1] = np.where(nonzero, r, np.inf)
+    return out

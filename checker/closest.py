@@ -1,0 +1,214 @@
+"""Closest points between elementary primitives: points, segments, triangles.
+
+Every function takes whole batches of queries as arrays with one row per query
+and answers them with numpy arithmetic, no Python loop over rows. These are the
+building blocks of the shapes' signed distances and of the exact (capsule)
+method; they return distances, the closest points and the parameters along the
+segments, so that callers can report where and at which arc length.
+
+Degenerate input is part of the contract: zero-length segments, parallel
+segments, points exactly on a segment, zero-area triangles. None of these gives
+NaN, infinities or numpy warnings; the tolerances that decide "parallel" or
+"degenerate" are relative to the squared lengths involved, so results do not
+change when a whole scene is translated or rescaled.
+
+Deliberately not here: anything about shapes, poses, cables or interference;
+broad phases; signed distances (a triangle has no inside).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# Relative tolerance below which squared lengths or determinants count as zero.
+_REL_EPS = 1e-14
+
+
+def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Row-wise dot product of (n, 3) arrays -> (n,)."""
+    return np.einsum("ij,ij->i", u, v)
+
+
+def _safe_div(num: np.ndarray, den: np.ndarray) -> np.ndarray:
+    """num / den where den != 0, else 0 (no warnings)."""
+    ok = den != 0.0
+    return np.where(ok, num, 0.0) / np.where(ok, den, 1.0)
+
+
+def point_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Closest point on segments ``a b`` to points ``p``.
+
+    Projects ``p - a`` on ``b - a`` and clamps the parameter to [0, 1]. A
+    zero-length segment gives parameter 0 (its only point).
+
+    Args:
+        p, a, b: (n, 3) query points and segment ends.
+
+    Returns:
+        dist: (n,) Euclidean distance.
+        t: (n,) parameter of the closest point, ``c = a + t (b - a)``.
+        c: (n, 3) closest point on the segment.
+    """
+    d = b - a
+    dd = _dot(d, d)
+    t = np.clip(_safe_div(_dot(p - a, d), dd), 0.0, 1.0)
+    c = a + t[:, None] * d
+    return np.linalg.norm(p - c, axis=1), t, c
+
+
+def segment_segment(
+    p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Closest points between segments ``p0 p1`` and ``q0 q1``.
+
+    Minimises the convex quadratic ``|p(s) - q(t)|^2`` over the unit square
+    (Ericson, Real-Time Collision Detection, 5.1.9): the unconstrained
+    optimum for ``s`` is clamped, ``t`` follows from it and is clamped, and
+    ``s`` is recomputed when ``t`` was clamped. Parallel segments (determinant
+    below a relative tolerance) take ``s = 0`` first, which still yields a
+    closest pair. Zero-length segments reduce to point-segment queries.
+
+    Args:
+        p0, p1, q0, q1: (n, 3) segment ends.
+
+    Returns:
+        dist: (n,) distance between the segments.
+        s: (n,) parameter on the first segment.
+        t: (n,) parameter on the second segment.
+        cp: (n, 3) closest point on the first segment.
+        cq: (n, 3) closest point on the second segment.
+    """
+    d1 = p1 - p0
+    d2 = q1 - q0
+    r = p0 - q0
+    a = _dot(d1, d1)
+    e = _dot(d2, d2)
+    f = _dot(d2, r)
+    c = _dot(d1, r)
+    b = _dot(d1, d2)
+    scale = np.maximum(a, e)
+    deg1 = a <= _REL_EPS * scale
+    deg2 = e <= _REL_EPS * scale
+    denom = a * e - b * b
+    parallel = denom <= _REL_EPS * a * e
+    s = np.where(parallel, 0.0, np.clip(_safe_div(b * f - c * e, denom), 0.0, 1.0))
+    s = np.where(deg1, 0.0, s)
+    # t from s, then clamp and recompute s where t was clamped.
+    t_raw = _safe_div(b * s + f, e)
+    t = np.clip(t_raw, 0.0, 1.0)
+    s_lo = np.clip(_safe_div(-c, a), 0.0, 1.0)
+    s_hi = np.clip(_safe_div(b - c, a), 0.0, 1.0)
+    s = np.where(t_raw < 0.0, s_lo, np.where(t_raw > 1.0, s_hi, s))
+    s = np.where(deg1, 0.0, s)
+    # Degenerate second segment: t = 0, s from projecting q0 on the first.
+    t = np.where(deg2, 0.0, t)
+    s = np.where(deg2 & ~deg1, s_lo, s)
+    # Both degenerate: two points.
+    cp = p0 + s[:, None] * d1
+    cq = q0 + t[:, None] * d2
+    return np.linalg.norm(cp - cq, axis=1), s, t, cp, cq
+
+
+# Region codes of point_triangle: where on the triangle the closest point lies.
+REGION_FACE = 0
+REGION_EDGE_AB, REGION_EDGE_BC, REGION_EDGE_CA = 1, 2, 3
+REGION_VERT_A, REGION_VERT_B, REGION_VERT_C = 4, 5, 6
+
+
+def point_triangle(
+    p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Closest point on triangles ``a b c`` to points ``p``.
+
+    If the projection of ``p`` on the triangle's plane falls inside the
+    triangle (edge-side tests with the unnormalised normal), that projection is
+    the answer; otherwise the closest point lies on the boundary and is the
+    nearest of the three point-segment answers. Zero-area triangles have no
+    inside and are handled by their edges.
+
+    Args:
+        p, a, b, c: (n, 3) query points and triangle corners.
+
+    Returns:
+        dist: (n,) distance.
+        cl: (n, 3) closest point.
+        region: (n,) int, one of the ``REGION_*`` codes (face, edge or vertex),
+            used to pick the pseudonormal that decides inside / outside.
+    """
+    n = np.cross(b - a, c - a)
+    nn = _dot(n, n)
+    scale = np.maximum.reduce([_dot(b - a, b - a), _dot(c - b, c - b), _dot(a - c, a - c)])
+    flat = nn <= _REL_EPS * scale * scale
+    h = _safe_div(_dot(p - a, n), nn)
+    q = p - h[:, None] * n
+    inside = (
+        ~flat
+        & (_dot(np.cross(b - a, q - a), n) >= 0.0)
+        & (_dot(np.cross(c - b, q - b), n) >= 0.0)
+        & (_dot(np.cross(a - c, q - c), n) >= 0.0)
+    )
+    d_ab, t_ab, c_ab = point_segment(p, a, b)
+    d_bc, t_bc, c_bc = point_segment(p, b, c)
+    d_ca, t_ca, c_ca = point_segment(p, c, a)
+    ds = np.stack([d_ab, d_bc, d_ca], axis=1)
+    k = np.argmin(ds, axis=1)
+    rows = np.arange(len(p))
+    ts = np.stack([t_ab, t_bc, t_ca], axis=1)[rows, k]
+    cs = np.stack([c_ab, c_bc, c_ca], axis=1)[rows, k]
+    # Edge k runs from corner k to corner (k+1)%3; clamped ends are corners.
+    region = np.where(ts <= 0.0, REGION_VERT_A + k, np.where(ts >= 1.0, REGION_VERT_A + (k + 1) % 3, REGION_EDGE_AB + k))
+    cl = np.where(inside[:, None], q, cs)
+    dist = np.where(inside, np.linalg.norm(p - q, axis=1), ds[rows, k])
+    region = np.where(inside, REGION_FACE, region)
+    return dist, cl, region
+
+
+def segment_triangle(
+    p0: np.ndarray, p1: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Closest points between segments ``p0 p1`` and triangles ``a b c``.
+
+    A segment that pierces the triangle has distance 0 at the piercing point.
+    Otherwise the minimum is attained with an end of the segment against the
+    triangle, or with the segment against one of the triangle's edges (a
+    segment parallel to the face slides to one of these without changing the
+    distance), so the answer is the least of those five queries.
+
+    Args:
+        p0, p1: (n, 3) segment ends.
+        a, b, c: (n, 3) triangle corners.
+
+    Returns:
+        dist: (n,) distance.
+        t: (n,) parameter of the closest point on the segment.
+        crossing: (n,) bool, the segment pierces the triangle's interior or
+            boundary transversally.
+    """
+    d0, _, _ = point_triangle(p0, a, b, c)
+    d1, _, _ = point_triangle(p1, a, b, c)
+    e0, s0, _, _, _ = segment_segment(p0, p1, a, b)
+    e1, s1, _, _, _ = segment_segment(p0, p1, b, c)
+    e2, s2, _, _, _ = segment_segment(p0, p1, c, a)
+    ds = np.stack([d0, d1, e0, e1, e2], axis=1)
+    ts = np.stack([np.zeros_like(d0), np.ones_like(d1), s0, s1, s2], axis=1)
+    k = np.argmin(ds, axis=1)
+    rows = np.arange(len(p0))
+    dist = ds[rows, k]
+    t = ts[rows, k]
+    # Transversal piercing: ends on opposite sides of the plane, the crossing
+    # point inside the triangle.
+    n = np.cross(b - a, c - a)
+    h0 = _dot(p0 - a, n)
+    h1 = _dot(p1 - a, n)
+    opposite = (h0 * h1 <= 0.0) & (h0 != h1)
+    tc = np.clip(_safe_div(h0, h0 - h1), 0.0, 1.0)
+    q = p0 + tc[:, None] * (p1 - p0)
+    inside = (
+        opposite
+        & (_dot(np.cross(b - a, q - a), n) >= 0.0)
+        & (_dot(np.cross(c - b, q - b), n) >= 0.0)
+        & (_dot(np.cross(a - c, q - c), n) >= 0.0)
+    )
+    dist = np.where(inside, 0.0, dist)
+    t = np.where(inside, tc, t)
+    return dist, t, inside

@@ -1,0 +1,468 @@
+"""Interference of one scene state: self, cable-cable, cable-structure, keep-out.
+
+:func:`check_state` runs the paper's algorithms (seed 000) on all cables and
+parts of one instant and returns one :class:`~checker.records.Interference`
+per interfering pair.
+
+Method ``points`` (the paper): each cable's body centres are densified so no
+element is longer than ``spacing * r`` (:func:`checker.cable.densify_batch`).
+
+- Self: two points of one cable closer than ``2r`` interfere, unless
+  :func:`checker.cable.self_pair_excluded` says they are neighbours along the
+  cable; second pass, a point against the midpoint of every element it is not
+  a neighbour of.
+- Cable-cable: the least distance over all point pairs, against ``r1 + r2``.
+- Cable-structure and keep-out: a point's signed distance to the part's
+  surface (negative inside: containment comes for free), against ``r``.
+
+Method ``exact``: the same polylines are taken as chains of capsules. Element
+pairs use exact segment-segment distances, elements against parts the least
+signed distance along the segment (:mod:`checker.shapes`), so contact between
+two discrete points is never missed. For self pairs the exclusion rule is
+applied at the closest points' arc lengths.
+
+Broad phase: one k-d tree over all points (or element midpoints) of all
+cables gives the close pairs; each part's bounding sphere queries the same
+tree, and the candidates are cut to the part's inflated local box before any
+exact work. Narrow phases are batched per shape type (one call for all boxes,
+all cylinders, ...); meshes are done part by part with their own tree. Cost
+therefore grows with the number of close pairs, not with points x parts.
+
+Deliberately not done here: part-part interference (``PairType.PART_PART``,
+left to MuJoCo or a later sweep module), events over time and comparison with
+MuJoCo.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from checker.cable import arc_length, bend_radius, densify_batch, self_pair_excluded
+from checker.closest import segment_segment
+from checker.records import Interference, PairType, Severity, severity_of
+from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+from checker.shapes import (
+    ShapeType,
+    face_plane_distance,
+    face_plane_distance_batch,
+    segment_signed_distance,
+    segment_signed_distance_batch,
+    signed_distance,
+    signed_distance_batch,
+)
+
+_TYPE_ORDER = list(PairType)
+
+
+# ---------------------------------------------------------------------------
+# Discretisation
+
+
+class _Discrete:
+    """All cables' discrete points, concatenated (a plain bundle of arrays).
+
+    Attributes:
+        p: (M, 3) points.
+        s: (M,) arc length along the point's cable.
+        cable: (M,) cable index.
+        radius: (M,) the point's cable radius.
+        seg: (E,) index i of each element (p[i], p[i + 1]) within one cable.
+    """
+
+    def __init__(self, p, s, cable, radius):
+        self.p = p
+        self.s = s
+        self.cable = cable
+        self.radius = radius
+        self.seg = np.nonzero(cable[:-1] == cable[1:])[0]
+
+
+def _discretise(
+    cables: Sequence[CableState], config: CheckConfig, cuts: tuple[np.ndarray, np.ndarray]
+) -> _Discrete:
+    """Densify every cable; add points at the arc lengths ``cuts`` = (cable, s)."""
+    radii = np.array([c.radius for c in cables], dtype=float)
+    pts = np.concatenate([c.points for c in cables])
+    offsets = np.concatenate([[0], np.cumsum([len(c.points) for c in cables])])
+    p, s, cable, _ = densify_batch(pts, offsets, config.spacing * radii)
+    cut_c, cut_s = cuts
+    if len(cut_c):
+        p, s, cable = _insert_at_arc_length(p, s, cable, cut_c, cut_s)
+    return _Discrete(p, s, cable, radii[cable])
+
+
+def _insert_at_arc_length(p, s, cable, cut_c, cut_s):
+    """Insert points on the polylines at arc lengths ``cut_s`` of cables ``cut_c``.
+
+    Cuts outside a cable's length or on an existing point are dropped.
+    """
+    n_c = int(cable.max()) + 1
+    start = np.searchsorted(cable, np.arange(n_c))
+    stop = np.searchsorted(cable, np.arange(n_c), side="right")
+    length = s[stop - 1]
+    keep = (cut_c >= 0) & (cut_s > 0) & (cut_s < length[cut_c])
+    cut_c, cut_s = cut_c[keep], cut_s[keep]
+    # Find the element of each cut: order all points and cuts by (cable, s).
+    order = np.lexsort((np.r_[s, cut_s], np.r_[cable, cut_c]))
+    is_cut = order >= len(s)
+    # For each cut, the last original point before it in that order.
+    last_pt = np.maximum.accumulate(np.where(is_cut, -1, order))
+    k = last_pt[is_cut]
+    ci = order[is_cut] - len(s)
+    cs = cut_s[ci]
+    ds = s[k + 1] - s[k]
+    u = np.where(ds > 0, cs - s[k], 0.0) / np.where(ds > 0, ds, 1.0)
+    new_p = p[k] + u[:, None] * (p[k + 1] - p[k])
+    fresh = (cs > s[k]) & (cs < s[k + 1])
+    new_p, cs, new_c = new_p[fresh], cs[fresh], cut_c[ci][fresh]
+    allp = np.concatenate([p, new_p])
+    alls = np.concatenate([s, cs])
+    allc = np.concatenate([cable, new_c])
+    o = np.lexsort((alls, allc))
+    return allp[o], alls[o], allc[o]
+
+
+# ---------------------------------------------------------------------------
+# Reduction of candidate values to one record per pair
+
+
+class _Hits:
+    """Accumulates candidate values; reduces to the worst per (type, a, b)."""
+
+    def __init__(self):
+        self.parts: list[tuple] = []
+
+    def add(self, ptype: PairType, a, b, value, where, s, s_b=None):
+        if len(value) == 0:
+            return
+        n = len(value)
+        s_b = np.full(n, np.nan) if s_b is None else s_b
+        self.parts.append((np.full(n, _TYPE_ORDER.index(ptype)), a, b, value, where, s, s_b))
+
+    def reduce(self, clearance, cable_names, b_names_by_type) -> list[Interference]:
+        if not self.parts:
+            return []
+        t, a, b, v, w, s, sb = (np.concatenate(x) for x in zip(*self.parts))
+        keep = v < clearance
+        t, a, b, v, w, s, sb = t[keep], a[keep], b[keep], v[keep], w[keep], s[keep], sb[keep]
+        if len(v) == 0:
+            return []
+        o = np.lexsort((v, b, a, t))
+        t, a, b = t[o], a[o], b[o]
+        first = np.r_[True, (t[1:] != t[:-1]) | (a[1:] != a[:-1]) | (b[1:] != b[:-1])]
+        idx = o[first]
+        out = []
+        for i, k in zip(np.nonzero(first)[0], idx):
+            ptype = _TYPE_ORDER[t[i]]
+            d = float(v[k])
+            out.append(Interference(
+                type=ptype, a=cable_names[a[i]], b=b_names_by_type(ptype)[b[i]],
+                min_distance=d, severity=severity_of(d, clearance), where=w[k].copy(),
+                s=float(s[k]), s_b=None if np.isnan(sb[k]) else float(sb[k]),
+            ))
+        return out
+
+
+# ---------------------------------------------------------------------------
+# Cables against cables
+
+
+def _cable_pairs_points(dp: _Discrete, tree: cKDTree, clearance: float, hits: _Hits) -> None:
+    """Point-point pairs (self and cable-cable) and the self midpoint pass."""
+    p, s, cab, rad = dp.p, dp.s, dp.cable, dp.radius
+    seg_len = np.linalg.norm(p[dp.seg + 1] - p[dp.seg], axis=1)
+    lmax = float(seg_len.max()) if len(seg_len) else 0.0
+    reach = 2.0 * float(rad.max()) + clearance
+    pr = tree.query_pairs(reach + 0.5 * lmax, output_type="ndarray")
+    if len(pr) == 0:
+        return
+    i, j = pr[:, 0], pr[:, 1]
+    swap = i > j
+    i, j = np.where(swap, j, i), np.where(swap, i, j)
+    same = cab[i] == cab[j]
+    d = np.linalg.norm(p[i] - p[j], axis=1)
+    # Cable-cable.
+    o = ~same
+    hits.add(PairType.CABLE_CABLE, cab[i[o]], cab[j[o]], d[o] - rad[i[o]] - rad[j[o]], p[i[o]], s[i[o]], s[j[o]])
+    # Self, point-point.
+    si, sj = i[same], j[same]
+    ok = ~self_pair_excluded(s[si], s[sj], rad[si])
+    si, sj = si[ok], sj[ok]
+    hits.add(PairType.SELF, cab[si], cab[si], np.linalg.norm(p[si] - p[sj], axis=1) - 2 * rad[si], p[si], s[si], s[sj])
+    # Self, point against midpoints of the elements at the other point.
+    ii, jj = i[same], j[same]
+    q = np.concatenate([ii, ii, jj, jj])
+    e0 = np.concatenate([jj - 1, jj, ii - 1, ii])
+    valid = (e0 >= 0) & (e0 + 1 < len(p))
+    q, e0 = q[valid], e0[valid]
+    valid = (cab[e0] == cab[q]) & (cab[e0 + 1] == cab[q]) & (e0 != q) & (e0 + 1 != q)
+    q, e0 = q[valid], e0[valid]
+    m = 0.5 * (p[e0] + p[e0 + 1])
+    sm = 0.5 * (s[e0] + s[e0 + 1])
+    ok = ~self_pair_excluded(s[q], sm, rad[q])
+    q, m, sm = q[ok], m[ok], sm[ok]
+    hits.add(PairType.SELF, cab[q], cab[q], np.linalg.norm(p[q] - m, axis=1) - 2 * rad[q], p[q], s[q], sm)
+
+
+def _cable_pairs_exact(dp: _Discrete, tree: cKDTree, clearance: float, hits: _Hits) -> None:
+    """Element-element pairs (capsule chains), self and cable-cable."""
+    p, s, cab, rad, seg = dp.p, dp.s, dp.cable, dp.radius, dp.seg
+    if len(seg) == 0:
+        return
+    seg_len = np.linalg.norm(p[seg + 1] - p[seg], axis=1)
+    reach = 2.0 * float(rad.max()) + clearance + float(seg_len.max())
+    pr = tree.query_pairs(reach, output_type="ndarray")
+    if len(pr) == 0:
+        return
+    ea, eb = np.minimum(pr[:, 0], pr[:, 1]), np.maximum(pr[:, 0], pr[:, 1])
+    ia, ib = seg[ea], seg[eb]
+    d, ta, tb, ca, _ = segment_segment(p[ia], p[ia + 1], p[ib], p[ib + 1])
+    sa = s[ia] + ta * (s[ia + 1] - s[ia])
+    sb = s[ib] + tb * (s[ib + 1] - s[ib])
+    same = cab[ia] == cab[ib]
+    o = ~same
+    hits.add(PairType.CABLE_CABLE, cab[ia[o]], cab[ib[o]], d[o] - rad[ia[o]] - rad[ib[o]], ca[o], sa[o], sb[o])
+    o = same & ~self_pair_excluded(sa, sb, rad[ia])
+    hits.add(PairType.SELF, cab[ia[o]], cab[ia[o]], d[o] - 2 * rad[ia[o]], ca[o], sa[o], sb[o])
+
+
+# ---------------------------------------------------------------------------
+# Cables against parts
+
+
+class _PartTable:
+    """Parts as arrays: rotation (K,3,3), translation (K,3), sizes (K,3), bounds."""
+
+    def __init__(self, parts: Sequence[PartState]):
+        k = len(parts)
+        self.parts = parts
+        self.rot = np.array([pt.pose[:3, :3] for pt in parts]).reshape(k, 3, 3)
+        self.trans = np.array([pt.pose[:3, 3] for pt in parts]).reshape(k, 3)
+        self.size = np.zeros((k, 3))
+        for n, pt in enumerate(parts):
+            sz = pt.shape.size[:3]
+            self.size[n, : len(sz)] = sz
+        self.type = np.array([list(ShapeType).index(pt.shape.type) for pt in parts], dtype=np.int64)
+        lo_hi = [pt.shape.local_bounds() for pt in parts]
+        self.lo = np.array([b[0] for b in lo_hi]).reshape(k, 3)
+        self.hi = np.array([b[1] for b in lo_hi]).reshape(k, 3)
+        self.keepout = np.array([pt.keepout for pt in parts], dtype=bool)
+        self.is_plane = self.type == list(ShapeType).index(ShapeType.PLANE)
+
+    def to_local(self, k: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """World points x (n, 3) into the frames of parts k (n,)."""
+        return np.einsum("ni,nij->nj", x - self.trans[k], self.rot[k])
+
+    def to_world(self, k: np.ndarray, x: np.ndarray) -> np.ndarray:
+        return np.einsum("nij,nj->ni", self.rot[k], x) + self.trans[k]
+
+
+def _part_candidates(tab: _PartTable, tree: cKDTree, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """(item, part) pairs whose item lies within ``margin`` of the part's box.
+
+    Finite parts query the tree with their bounding sphere; planes take every
+    item. Returns item indices and part indices, both (n,).
+    """
+    items, parts = [], []
+    fin = np.nonzero(~tab.is_plane)[0]
+    if len(fin):
+        c_loc = 0.5 * (tab.lo[fin] + tab.hi[fin])
+        c_world = np.einsum("nij,nj->ni", tab.rot[fin], c_loc) + tab.trans[fin]
+        rad = 0.5 * np.linalg.norm(tab.hi[fin] - tab.lo[fin], axis=1) + margin
+        lists = tree.query_ball_point(c_world, rad, return_sorted=False)
+        cnt = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(fin))
+        total = int(cnt.sum())
+        items.append(np.fromiter((i for x in lists for i in x), dtype=np.int64, count=total))
+        parts.append(np.repeat(fin, cnt))
+    pl = np.nonzero(tab.is_plane)[0]
+    n_items = tree.n
+    if len(pl):
+        items.append(np.tile(np.arange(n_items), len(pl)))
+        parts.append(np.repeat(pl, n_items))
+    if not items:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return np.concatenate(items), np.concatenate(parts)
+
+
+def _excluded(cable: np.ndarray, part: np.ndarray, s: np.ndarray, excl: tuple) -> np.ndarray:
+    """True where (cable, part, arc length s) falls in an exclusion window."""
+    key_e, smin, smax, n_parts = excl
+    out = np.zeros(len(s), dtype=bool)
+    if len(key_e) == 0 or len(s) == 0:
+        return out
+    key = cable * n_parts + part
+    lo = np.searchsorted(key_e, key, side="left")
+    hi = np.searchsorted(key_e, key, side="right")
+    cnt = hi - lo
+    if cnt.sum() == 0:
+        return out
+    rows = np.repeat(np.arange(len(s)), cnt)
+    first = np.cumsum(cnt) - cnt
+    w = lo[rows] + np.arange(len(rows)) - first[rows]
+    inside = (s[rows] >= smin[w]) & (s[rows] <= smax[w])
+    return np.bincount(rows, weights=inside, minlength=len(s)) > 0
+
+
+def _structure_points(dp, tree, tab, config, excl, hits) -> None:
+    """Signed distance of every candidate point to its part, minus r."""
+    margin = float(dp.radius.max()) + config.clearance
+    it, pk = _part_candidates(tab, tree, margin)
+    if len(it) == 0:
+        return
+    loc = tab.to_local(pk, dp.p[it])
+    thr = (dp.radius[it] + config.clearance)[:, None]
+    box_ok = np.all((loc >= tab.lo[pk] - thr) & (loc <= tab.hi[pk] + thr), axis=1)
+    box_ok &= ~_excluded(dp.cable[it], pk, dp.s[it], excl)
+    it, pk, loc = it[box_ok], pk[box_ok], loc[box_ok]
+    d = np.full(len(it), np.inf)
+    types = list(ShapeType)
+    for code in np.unique(tab.type[pk]):
+        stype = types[code]
+        sel = np.nonzero(tab.type[pk] == code)[0]
+        if stype is ShapeType.MESH:
+            for k in np.unique(pk[sel]):
+                sk = sel[pk[sel] == k]
+                shape = tab.parts[k].shape
+                if config.face_plane:
+                    d[sk] = face_plane_distance(shape, loc[sk])
+                else:
+                    d[sk] = signed_distance(shape, loc[sk])[0]
+        elif config.face_plane:
+            d[sel] = face_plane_distance_batch(stype, tab.size[pk[sel]], loc[sel])
+        else:
+            d[sel] = signed_distance_batch(stype, tab.size[pk[sel]], loc[sel])[0]
+    _add_structure(hits, tab, dp.cable[it], pk, d - dp.radius[it], dp.p[it], dp.s[it])
+
+
+def _structure_exact(dp, tree, tab, config, excl, hits) -> None:
+    """Least signed distance along every candidate element to its part, minus r."""
+    p, s, seg = dp.p, dp.s, dp.seg
+    if len(seg) == 0:
+        return
+    seg_len = np.linalg.norm(p[seg + 1] - p[seg], axis=1)
+    margin = float(dp.radius.max()) + config.clearance + 0.5 * float(seg_len.max())
+    it, pk = _part_candidates(tab, tree, margin)
+    if len(it) == 0:
+        return
+    i0 = seg[it]
+    a = tab.to_local(pk, p[i0])
+    b = tab.to_local(pk, p[i0 + 1])
+    thr = (dp.radius[i0] + config.clearance)[:, None]
+    box_ok = np.all((np.maximum(a, b) >= tab.lo[pk] - thr) & (np.minimum(a, b) <= tab.hi[pk] + thr), axis=1)
+    # Cuts were inserted at the window ends, so an element is in a window
+    # exactly when its midpoint is.
+    box_ok &= ~_excluded(dp.cable[i0], pk, 0.5 * (s[i0] + s[i0 + 1]), excl)
+    it, pk, i0, a, b = it[box_ok], pk[box_ok], i0[box_ok], a[box_ok], b[box_ok]
+    d = np.full(len(it), np.inf)
+    t = np.zeros(len(it))
+    types = list(ShapeType)
+    for code in np.unique(tab.type[pk]):
+        stype = types[code]
+        sel = np.nonzero(tab.type[pk] == code)[0]
+        if stype is ShapeType.MESH:
+            for k in np.unique(pk[sel]):
+                sk = sel[pk[sel] == k]
+                d[sk], t[sk] = segment_signed_distance(tab.parts[k].shape, a[sk], b[sk])
+        else:
+            d[sel], t[sel] = segment_signed_distance_batch(stype, tab.size[pk[sel]], a[sel], b[sel])
+    where = p[i0] + t[:, None] * (p[i0 + 1] - p[i0])
+    s_at = s[i0] + t * (s[i0 + 1] - s[i0])
+    _add_structure(hits, tab, dp.cable[i0], pk, d - dp.radius[i0], where, s_at)
+
+
+def _add_structure(hits, tab, cable, part, value, where, s) -> None:
+    ko = tab.keepout[part]
+    hits.add(PairType.CABLE_STRUCTURE, cable[~ko], part[~ko], value[~ko], where[~ko], s[~ko])
+    hits.add(PairType.KEEPOUT, cable[ko], part[ko], value[ko], where[ko], s[ko])
+
+
+# ---------------------------------------------------------------------------
+# Single-cable checks
+
+
+def _single_cable(cables: Sequence[CableState], clearance: float, hits: _Hits) -> None:
+    """Bend radius below the limit and stretch beyond 1 %, per cable."""
+    for c, cab in enumerate(cables):
+        s = None
+        if cab.min_bend_radius is not None:
+            r = bend_radius(cab.points)
+            k = int(np.argmin(r))
+            if np.isfinite(r[k]):
+                s = arc_length(cab.points)
+                hits.add(PairType.BEND, np.array([c]), np.array([c]), np.array([r[k] - cab.min_bend_radius]),
+                         cab.points[k][None], np.array([s[k]]))
+        if cab.rest_length is not None:
+            s = arc_length(cab.points) if s is None else s
+            value = 0.01 * cab.rest_length - (s[-1] - cab.rest_length)
+            hits.add(PairType.TAUT, np.array([c]), np.array([c]), np.array([value]), cab.points[-1][None],
+                     np.array([s[-1]]))
+
+
+# ---------------------------------------------------------------------------
+
+
+def check_state(
+    cables: Sequence[CableState],
+    parts: Sequence[PartState],
+    config: CheckConfig = CheckConfig(),
+    exclusions: Sequence[Exclusion] = (),
+) -> list[Interference]:
+    """Check one scene state; one record per interfering (type, a, b) pair.
+
+    A pair interferes when its signed ``min_distance`` (SPEC "Report") is
+    below ``config.clearance``: hard below 0, soft from 0 up to the
+    clearance. Records are sorted worst first.
+
+    Args:
+        cables: the cables' centrelines.
+        parts: posed parts (keep-out parts give ``keepout`` records).
+        config: method, spacing, clearance.
+        exclusions: arc-length windows where a cable may touch a part.
+
+    Returns:
+        list of :class:`~checker.records.Interference`.
+    """
+    hits = _Hits()
+    cable_names = [c.name for c in cables]
+    part_names = [p.name for p in parts]
+    if len(set(cable_names)) != len(cable_names):
+        raise ValueError("cable names must be unique")
+    if cables:
+        cidx = {n: i for i, n in enumerate(cable_names)}
+        pidx = {n: i for i, n in enumerate(part_names)}
+        ex = [e for e in exclusions if e.cable in cidx and e.part in pidx]
+        ex_c = np.array([cidx[e.cable] for e in ex], dtype=np.int64)
+        ex_p = np.array([pidx[e.part] for e in ex], dtype=np.int64)
+        ex_lo = np.array([min(e.s_min, e.s_max) for e in ex], dtype=float)
+        ex_hi = np.array([max(e.s_min, e.s_max) for e in ex], dtype=float)
+        n_parts = max(len(parts), 1)
+        key = ex_c * n_parts + ex_p
+        o = np.argsort(key, kind="stable")
+        excl = (key[o], ex_lo[o], ex_hi[o], n_parts)
+        exact = config.method == "exact"
+        cuts = (np.r_[ex_c, ex_c], np.r_[ex_lo, ex_hi]) if exact else (np.zeros(0, np.int64), np.zeros(0))
+        dp = _discretise(cables, config, cuts)
+        if exact:
+            mids = 0.5 * (dp.p[dp.seg] + dp.p[dp.seg + 1])
+            tree = cKDTree(mids, balanced_tree=False, compact_nodes=False)
+            _cable_pairs_exact(dp, tree, config.clearance, hits)
+        else:
+            tree = cKDTree(dp.p, balanced_tree=False, compact_nodes=False)
+            _cable_pairs_points(dp, tree, config.clearance, hits)
+        if parts:
+            tab = _PartTable(parts)
+            if exact:
+                _structure_exact(dp, tree, tab, config, excl, hits)
+            else:
+                _structure_points(dp, tree, tab, config, excl, hits)
+        _single_cable(cables, config.clearance, hits)
+
+    def names(ptype: PairType) -> list[str]:
+        return part_names if ptype in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) else cable_names
+
+    out = hits.reduce(config.clearance, cable_names, names)
+    out.sort(key=lambda r: (r.min_distance, _TYPE_ORDER.index(r.type), r.a, r.b))
+    return out

@@ -1,0 +1,77 @@
+"""Interference records: what the checker reports for one scene state.
+
+One :class:`Interference` per (type, a, b) pair that came below the clearance,
+with the SPEC's signed distance (negative means overlap), its severity and the
+worst place along cable ``a``. The enums name the pair types and severities
+used throughout the report.
+
+Deliberately not here: events over time, MuJoCo comparison, JSON writing;
+those consume these records.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+
+
+class PairType(str, Enum):
+    """What kind of pair interferes; the values are the report's ``type``."""
+
+    SELF = "self"
+    CABLE_CABLE = "cable-cable"
+    CABLE_STRUCTURE = "cable-structure"
+    KEEPOUT = "keepout"
+    PART_PART = "part-part"
+    BEND = "bend"
+    TAUT = "taut"
+
+
+class Severity(str, Enum):
+    """``hard``: min_distance < 0; ``soft``: 0 <= min_distance < clearance."""
+
+    HARD = "hard"
+    SOFT = "soft"
+
+
+def severity_of(min_distance: float, clearance: float) -> Severity | None:
+    """Severity of a signed distance against the clearance, None when clear."""
+    if min_distance < 0.0:
+        return Severity.HARD
+    if min_distance < clearance:
+        return Severity.SOFT
+    return None
+
+
+@dataclass(frozen=True)
+class Interference:
+    """One interfering pair in one scene state.
+
+    Attributes:
+        type: the pair type.
+        a: cable name (the first of two cables in input order; for self, bend
+            and taut the only cable).
+        b: the other cable's or the part's name (``a`` again for self, bend,
+            taut).
+        min_distance: signed distance in scene units (SPEC "Report"): cable to
+            part, centreline distance to the surface minus r; cable to cable,
+            centreline distance minus r1 + r2; self, minus 2r; bend, bend
+            radius minus the limit; taut, the 1 % stretch allowance minus the
+            stretch.
+        severity: hard or soft.
+        where: (3,) world point on cable a's centreline at the worst place.
+        s: arc length along cable a at that point.
+        s_b: arc length on cable b at the worst place (self and cable-cable),
+            else None.
+    """
+
+    type: PairType
+    a: str
+    b: str
+    min_distance: float
+    severity: Severity
+    where: np.ndarray
+    s: float
+    s_b: float | None = None

@@ -1,0 +1,124 @@
+"""The checker's input: one scene state (cables and posed parts) and settings.
+
+These records are what the simulation side fills every checked step: cable
+centrelines as arrays of body centres, parts as shapes with 4x4 poses, the
+arc-length windows where touching a part is expected, and the check settings.
+Validation of values that would break the geometry (non-finite points, bad
+poses, non-positive radii) happens here, at construction, with a message naming
+the record.
+
+Deliberately not here: scene files, units, MuJoCo ids; the geometry itself
+(:mod:`checker.shapes`, :mod:`checker.interference`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from checker.shapes import Shape
+
+
+@dataclass(frozen=True, eq=False)
+class PartState:
+    """A rigid part at one instant.
+
+    Attributes:
+        name: part name ("/" separates assembly levels).
+        shape: its geometry in the part frame.
+        pose: (4, 4) homogeneous transform part -> world (rotation must be
+            orthonormal).
+        keepout: a clearance zone: reported as ``keepout``, never as
+            ``cable-structure``.
+    """
+
+    name: str
+    shape: Shape
+    pose: np.ndarray
+    keepout: bool = False
+
+    def __post_init__(self) -> None:
+        pose = np.asarray(self.pose, dtype=float)
+        if pose.shape != (4, 4) or not np.all(np.isfinite(pose)):
+            raise ValueError(f"part {self.name!r}: pose must be a finite 4x4 matrix")
+        rot = pose[:3, :3]
+        if not np.allclose(rot.T @ rot, np.eye(3), atol=1e-9):
+            raise ValueError(f"part {self.name!r}: pose rotation is not orthonormal")
+        object.__setattr__(self, "pose", pose)
+
+
+@dataclass(frozen=True, eq=False)
+class CableState:
+    """A cable's centreline at one instant.
+
+    Attributes:
+        name: cable name.
+        points: (n, 3) body centres from start to end, any spacing, n >= 2.
+        radius: cable radius (> 0).
+        min_bend_radius: optional bend limit; tighter bends are reported as
+            ``bend``.
+        rest_length: optional unstretched length; stretching beyond 1 % is
+            reported as ``taut``.
+    """
+
+    name: str
+    points: np.ndarray
+    radius: float
+    min_bend_radius: float | None = None
+    rest_length: float | None = None
+
+    def __post_init__(self) -> None:
+        pts = np.asarray(self.points, dtype=float)
+        if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) < 2:
+            raise ValueError(f"cable {self.name!r}: points must be (n, 3) with n >= 2, got {pts.shape}")
+        if not np.all(np.isfinite(pts)):
+            raise ValueError(f"cable {self.name!r}: points contain NaN or infinite values")
+        if not (np.isfinite(self.radius) and self.radius > 0):
+            raise ValueError(f"cable {self.name!r}: radius must be positive, got {self.radius}")
+        object.__setattr__(self, "points", pts)
+
+
+@dataclass(frozen=True)
+class Exclusion:
+    """An arc-length window on a cable where touching a part is expected.
+
+    Points (and, with method exact, centreline pieces) of ``cable`` whose arc
+    length lies in ``[s_min, s_max]`` are not checked against ``part``: the
+    attachment or clip zone.
+    """
+
+    cable: str
+    part: str
+    s_min: float
+    s_max: float
+
+
+@dataclass(frozen=True)
+class CheckConfig:
+    """Check settings.
+
+    Attributes:
+        method: "points" (the paper's discrete points) or "exact" (segment
+            distances: capsules against capsules and shapes).
+        spacing: largest discrete-point spacing as a multiple of each cable's
+            radius (2: the paper's ``2r`` within a cable; between two cables
+            the mean spacing is then ``r1 + r2``, the paper's value).
+        clearance: soft interference below this surface distance.
+        face_plane: measure cable-structure distance to boxes and meshes as
+            the paper's ``|BP . N|`` to the nearest face plane (benchmark
+            only: it raises false alarms near edges).
+    """
+
+    method: str = "points"
+    spacing: float = 2.0
+    clearance: float = 0.005
+    face_plane: bool = False
+
+    def __post_init__(self) -> None:
+        if self.method not in ("points", "exact"):
+            raise ValueError(f"method must be 'points' or 'exact', got {self.method!r}")
+        if not (np.isfinite(self.spacing) and self.spacing > 0):
+            raise ValueError(f"spacing must be positive, got {self.spacing}")
+        if not (np.isfinite(self.clearance) and self.clearance >= 0):
+            raise ValueError(f"clearance must be >= 0, got {self.clearance}")
