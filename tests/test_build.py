@@ -1,0 +1,144 @@
+"""Model building and the step loop: parts, cables, holds, contacts, units, dynamics off."""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from sim.build import build
+from sim.loop import Simulation
+from sim.scene import parse_scene
+
+
+def _scene(tmp_path: Path, **over) -> dict:
+    data = {
+        "scene": {"name": "t", "units": "m", "duration": 0.2, "settle": 0.3},
+        "effects": {"contact": ["cable-structure"]},
+        "bodies": [{"name": "slider"}],
+        "parts": [{"name": "frame/post", "shape": "box", "size": [0.02, 0.02, 0.2], "pos": [0.3, 0.0, 0.2]}],
+        "cables": [{"name": "c", "radius": 0.004, "start": {"pos": [0, 0, 0.5]},
+                    "end": {"body": "slider", "pos": [0.6, 0, 0.5]}, "length": 0.7, "segments": 20}],
+        "motion": [{"body": "slider", "keys": [{"t": 0, "pos": [0, 0, 0]}, {"t": 0.2, "pos": [0.02, 0, 0]}]}],
+    }
+    data.update(over)
+    return data
+
+
+def _run(data: dict, tmp_path: Path, contacts=True):
+    sim = Simulation(build(parse_scene(data, tmp_path / "s.toml")))
+    sim.reset()
+    sim.settle()
+    return sim, list(sim.steps(contacts=contacts))
+
+
+def test_cable_is_held_at_start_end_and_clip(tmp_path):
+    data = _scene(tmp_path)
+    data["cables"][0]["clips"] = [{"pos": [0.2, 0, 0.45]}]
+    sim, states = _run(data, tmp_path)
+    cable = sim.built.cables[0]
+    clip = [a for a in cable.attachments if a.kind == "clip"][0]
+    for state in states:
+        pts = state.cables[0]
+        assert np.allclose(pts[0], [0, 0, 0.5], atol=1e-9)
+        assert np.linalg.norm(pts[clip.vertex] - [0.2, 0, 0.45]) < 5e-4
+    end_target = np.array([0.62, 0, 0.5])
+    assert np.linalg.norm(states[-1].cables[0][-1] - end_target) < 5e-4
+    assert not sim.warnings()
+
+
+def test_contacts_are_mapped_to_names_with_signed_distance(tmp_path):
+    data = _scene(tmp_path)
+    # a post the cable crosses: the straight route passes through it
+    data["parts"][0] = {"name": "frame/post", "shape": "box", "size": [0.02, 0.02, 0.2], "pos": [0.3, 0, 0.45]}
+    data["cables"][0]["length"] = 0.6
+    data["effects"] = {"contact": []}  # detected, never resolved
+    data["scene"]["settle"] = 0.0
+    sim, states = _run(data, tmp_path)
+    found = states[0].contacts
+    post = found.b == "frame/post"
+    assert post.any()
+    assert set(found.kind[post]) == {"cable-structure"} and set(found.a[post]) == {"c"}
+    # the cable's centreline runs through the box: surface distance about -(0.02 + r) or less
+    assert found.dist[post].min() < -0.02
+    assert (found.elem_a[post] >= 0).all() and (found.elem_b[post] == -1).all()
+
+
+def test_mesh_part_matches_box_part(tmp_path):
+    box = trimesh.creation.box(extents=[0.04, 0.04, 0.4])
+    box.export(tmp_path / "post.stl")
+    a = _scene(tmp_path)
+    b = copy.deepcopy(a)
+    b["parts"][0] = {"name": "frame/post", "shape": "mesh", "file": "post.stl", "pos": [0.3, 0.0, 0.2]}
+    built_a = build(parse_scene(a, tmp_path / "s.toml"))
+    built_b = build(parse_scene(b, tmp_path / "s.toml"))
+    pa, pb = built_a.parts[0], built_b.parts[0]
+    assert pb.shape == "mesh" and pb.vertices.shape == (8, 3)
+    sa, sb = Simulation(built_a), Simulation(built_b)
+    sa.reset(), sb.reset()
+    ta, tb = sa.state(0, False).part_poses[0], sb.state(0, False).part_poses[0]
+    world_b = pb.vertices @ tb[:3, :3].T + tb[:3, 3]
+    assert np.allclose(np.sort(world_b, axis=0),
+                       np.sort(np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+                               * pa.size + ta[:3, 3], axis=0), atol=1e-6)  # MuJoCo stores mesh vertices as float32
+
+
+def test_points_cable_starts_exactly_on_its_points(tmp_path):
+    pts = [[0, 0, 0.5], [0.2, 0, 0.45], [0.4, 0, 0.45], [0.6, 0, 0.5]]
+    data = _scene(tmp_path)
+    data["cables"][0] = {"name": "c", "radius": 0.004, "points": pts, "end": {"body": "slider"}, "segments": 30}
+    built = build(parse_scene(data, tmp_path / "s.toml"))
+    routed = built.cables[0].routed
+    assert np.allclose(routed[[0, -1]], [pts[0], pts[-1]])
+    seg_len = np.linalg.norm(np.diff(routed, axis=0), axis=1).sum()
+    assert np.isclose(seg_len, np.linalg.norm(np.diff(p, axis=0), axis=1).sum(), rtol=1e-3)
+
+
+def test_dynamics_off_keeps_cable_as_routed_and_moves_parts(tmp_path):
+    data = _scene(tmp_path)
+    data["effects"] = {"dynamics": False}
+    data["parts"].append({"name": "slider/block", "body": "slider", "shape": "sphere", "size": [0.01],
+                          "pos": [0.7, 0, 0.5]})
+    sim, states = _run(data, tmp_path)
+    routed = sim.built.cables[0].routed
+    assert sim.settle_steps == 0 and sim.data.time == 0.0  # nothing was stepped
+    for s in states:
+        assert np.allclose(s.cables[0], routed)
+    block = [p.name for p in sim.built.parts].index("slider/block")
+    assert np.allclose(states[-1].part_poses[block][:3, 3], [0.72, 0, 0.5])
+
+
+def test_mm_scene_gives_the_same_physics_scaled(tmp_path):
+    m = _scene(tmp_path)
+    mm = copy.deepcopy(m)
+    mm["scene"]["units"] = "mm"
+    scale = lambda v: [x * 1000 for x in v]  # noqa: E731
+    mm["parts"][0]["size"] = scale(m["parts"][0]["size"])
+    mm["parts"][0]["pos"] = scale(m["parts"][0]["pos"])
+    c = mm["cables"][0]
+    c["radius"], c["length"] = 4.0, 700.0
+    c["start"]["pos"], c["end"]["pos"] = scale(c["start"]["pos"]), scale(c["end"]["pos"])
+    mm["motion"][0]["keys"][1]["pos"] = [20.0, 0, 0]
+    _, sm = _run(m, tmp_path, contacts=False)
+    _, smm = _run(mm, tmp_path, contacts=False)
+    for a, b in zip(sm, smm):
+        assert np.allclose(a.cables[0], b.cables[0], atol=1e-9)
+
+
+def test_only_listed_interactions_push_back(tmp_path):
+    data = _scene(tmp_path)
+    # a shelf below the sagging cable rises through it during the motion
+    data["bodies"].append({"name": "lift"})
+    data["parts"][0] = {"name": "lift/shelf", "body": "lift", "shape": "box",
+                        "size": [0.1, 0.2, 0.01], "pos": [0.3, 0, 0.2]}
+    data["motion"].append({"body": "lift", "keys": [{"t": 0, "pos": [0, 0, 0]}, {"t": 0.2, "pos": [0, 0, 0.2]}]})
+    resolved, _ = _run(data, tmp_path, contacts=False)
+    data["effects"] = {"contact": []}
+    ghost, _ = _run(data, tmp_path, contacts=False)
+    top = 0.4 + 0.01  # the shelf's top face at the end
+    over = lambda sim: sim.data.flexvert_xpos[np.abs(sim.data.flexvert_xpos[:, 0] - 0.3) < 0.05, 2]  # noqa: E731
+    assert over(resolved).min() > top + 0.004 - 2e-3  # lifted: lies on the shelf
+    assert over(ghost).min() < top - 0.05  # passed through: never pushed
