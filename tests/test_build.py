@@ -94,6 +94,7 @@ def test_points_cable_starts_exactly_on_its_points(tmp_path):
     routed = built.cables[0].routed
     assert np.allclose(routed[[0, -1]], [pts[0], pts[-1]])
     seg_len = np.linalg.norm(np.diff(routed, axis=0), axis=1).sum()
+    p = np.asarray(pts, float)
     assert np.isclose(seg_len, np.linalg.norm(np.diff(p, axis=0), axis=1).sum(), rtol=1e-3)
 
 
