@@ -94,6 +94,11 @@ def densify_batch(
     valid = cable_of_pt[:-1] == cable_of_pt[1:]
     lim = np.asarray(spacing, dtype=float)[cable_of_pt[:-1]]
     pieces = np.where(valid, np.maximum(1, np.ceil(seg_len / lim * (1.0 - 1e-12))).astype(np.int64), 0)
+    step = np.where(valid, seg_len, 0.0)
+    cum = np.concatenate([[0.0], np.cumsum(step)])
+    s_pt = cum - cum[offsets[:-1]][cable_of_pt]
+    if np.all(pieces <= 1):  # nothing to split
+        return p.copy(), s_pt, cable_of_pt, offsets.copy()
     # Each point emits itself, then pieces-1 interior points of its element.
     emit = np.ones(len(p), dtype=np.int64)
     emit[:-1] += np.maximum(pieces - 1, 0)
@@ -104,10 +109,6 @@ def densify_batch(
     nxt = np.minimum(src + 1, len(p) - 1)
     frac = j / np.maximum(np.r_[pieces, 1][src], 1)
     pts = p[src] + frac[:, None] * (p[nxt] - p[src])
-    # Arc length per polyline: cumulative over valid elements, restarted.
-    step = np.where(valid, seg_len, 0.0)
-    cum = np.concatenate([[0.0], np.cumsum(step)])
-    s_pt = cum - cum[offsets[:-1]][cable_of_pt]
     s = s_pt[src] + frac * np.r_[step, 0.0][src]
     cable = cable_of_pt[src]
     new_offsets = np.concatenate([[0], np.cumsum(np.bincount(cable, minlength=n_c))])

@@ -8,9 +8,12 @@ segments, so that callers can report where and at which arc length.
 
 Degenerate input is part of the contract: zero-length segments, parallel
 segments, points exactly on a segment, zero-area triangles. None of these gives
-NaN, infinities or numpy warnings; the tolerances that decide "parallel" or
-"degenerate" are relative to the squared lengths involved, so results do not
-change when a whole scene is translated or rescaled.
+NaN, infinities or numpy warnings; the tolerance that decides "parallel" is
+relative to the squared lengths involved, so results do not
+change when a whole scene is translated or rescaled. Only exactly zero-length
+segments and zero-area triangles take the degenerate branches: nearly
+degenerate ones go through the general formulas, whose clamped answers remain
+actual points of the primitives.
 
 Deliberately not here: anything about shapes, poses, cables or interference;
 broad phases; signed distances (a triangle has no inside).
@@ -86,9 +89,10 @@ def segment_segment(
     f = _dot(d2, r)
     c = _dot(d1, r)
     b = _dot(d1, d2)
-    scale = np.maximum(a, e)
-    deg1 = a <= _REL_EPS * scale
-    deg2 = e <= _REL_EPS * scale
+    # Only exactly zero-length segments are points; tiny ones go through the
+    # general formulas, whose clamped answers are still points on the segments.
+    deg1 = a == 0.0
+    deg2 = e == 0.0
     denom = a * e - b * b
     parallel = denom <= _REL_EPS * a * e
     s = np.where(parallel, 0.0, np.clip(_safe_div(b * f - c * e, denom), 0.0, 1.0))
@@ -137,8 +141,7 @@ def point_triangle(
     """
     n = np.cross(b - a, c - a)
     nn = _dot(n, n)
-    scale = np.maximum.reduce([_dot(b - a, b - a), _dot(c - b, c - b), _dot(a - c, a - c)])
-    flat = nn <= _REL_EPS * scale * scale
+    flat = nn == 0.0
     h = _safe_div(_dot(p - a, n), nn)
     q = p - h[:, None] * n
     inside = (

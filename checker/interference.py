@@ -171,31 +171,40 @@ class _Hits:
 
 
 def _cable_pairs_points(dp: _Discrete, tree: cKDTree, clearance: float, hits: _Hits) -> None:
-    """Point-point pairs (self and cable-cable) and the self midpoint pass."""
+    """Point-point pairs (self and cable-cable) and the self midpoint pass.
+
+    One pair query at ``2 r_max + clearance + l_max / 2`` covers both passes:
+    a point within ``2r + clearance`` of an element's midpoint is within that
+    reach of both of the element's ends. Pairs are cut by distance before any
+    further work, since most are neighbours along one cable.
+    """
     p, s, cab, rad = dp.p, dp.s, dp.cable, dp.radius
     seg_len = np.linalg.norm(p[dp.seg + 1] - p[dp.seg], axis=1)
     lmax = float(seg_len.max()) if len(seg_len) else 0.0
-    reach = 2.0 * float(rad.max()) + clearance
-    pr = tree.query_pairs(reach + 0.5 * lmax, output_type="ndarray")
+    rmax = float(rad.max())
+    pr = tree.query_pairs(2.0 * rmax + clearance + 0.5 * lmax, output_type="ndarray")
     if len(pr) == 0:
         return
-    i, j = pr[:, 0], pr[:, 1]
-    swap = i > j
-    i, j = np.where(swap, j, i), np.where(swap, i, j)
-    same = cab[i] == cab[j]
+    i, j = pr[:, 0], pr[:, 1]  # i < j, so cable[i] <= cable[j]
     d = np.linalg.norm(p[i] - p[j], axis=1)
+    same = cab[i] == cab[j]
     # Cable-cable.
-    o = ~same
-    hits.add(PairType.CABLE_CABLE, cab[i[o]], cab[j[o]], d[o] - rad[i[o]] - rad[j[o]], p[i[o]], s[i[o]], s[j[o]])
-    # Self, point-point.
-    si, sj = i[same], j[same]
+    o = np.nonzero(~same & (d < 2.0 * rmax + clearance))[0]
+    if len(o):
+        io, jo = i[o], j[o]
+        hits.add(PairType.CABLE_CABLE, cab[io], cab[jo], d[o] - rad[io] - rad[jo], p[io], s[io], s[jo])
+    # Self: only pairs far enough apart along the cable for the midpoint of
+    # an element at one of them to be checkable.
+    o = np.nonzero(same & (d < 2.0 * rad[i] + clearance + 0.5 * lmax))[0]
+    o = o[~self_pair_excluded(s[i[o]], s[j[o]], rad[i[o]] - 0.5 * lmax / np.pi)]
+    if len(o) == 0:
+        return
+    si, sj, ds = i[o], j[o], d[o]
     ok = ~self_pair_excluded(s[si], s[sj], rad[si])
-    si, sj = si[ok], sj[ok]
-    hits.add(PairType.SELF, cab[si], cab[si], np.linalg.norm(p[si] - p[sj], axis=1) - 2 * rad[si], p[si], s[si], s[sj])
-    # Self, point against midpoints of the elements at the other point.
-    ii, jj = i[same], j[same]
-    q = np.concatenate([ii, ii, jj, jj])
-    e0 = np.concatenate([jj - 1, jj, ii - 1, ii])
+    hits.add(PairType.SELF, cab[si[ok]], cab[si[ok]], ds[ok] - 2 * rad[si[ok]], p[si[ok]], s[si[ok]], s[sj[ok]])
+    # Second pass: each point against the midpoints of the elements at the other.
+    q = np.concatenate([si, si, sj, sj])
+    e0 = np.concatenate([sj - 1, sj, si - 1, si])
     valid = (e0 >= 0) & (e0 + 1 < len(p))
     q, e0 = q[valid], e0[valid]
     valid = (cab[e0] == cab[q]) & (cab[e0 + 1] == cab[q]) & (e0 != q) & (e0 + 1 != q)

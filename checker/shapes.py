@@ -315,17 +315,21 @@ def _sd_plane(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return p[:, 2].copy(), cl
 
 
-def _sd_ellipsoid(e: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _sd_ellipsoid(e: np.ndarray, p: np.ndarray, t0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Signed distance to ellipsoids with radii ``e`` (m, 3).
 
     The closest point is ``x_i = e_i^2 y_i / (t + e_i^2)`` where ``t`` is the
     root of ``F(t) = sum (e_i y_i / (t + e_i^2))^2 - 1`` above ``-min e_i^2``
     (Eberly, "Distance from a point to an ellipse, an ellipsoid, or a
     hyperellipsoid"), solved in the first octant by Newton steps kept inside a
-    shrinking bracket (bisection when a step leaves it) until the bracket is
-    below 1e-15 of its scale. The component along the smallest radius is taken
-    from the surface equation when ``t`` sits at the pole (points inside on the
-    plane of the two larger radii), which is the degenerate case.
+    shrinking bracket (bisection when a step leaves it) until the step is below
+    1e-14 of the problem's squared scale. ``F`` is convex and decreasing, so
+    from the bracket's lower end Newton converges monotonically; ``t0`` (a
+    previous root for a nearby point) warm-starts it. The component along the
+    smallest radius is taken from the surface equation near the pole (points
+    inside, near the plane of the two larger radii: the degenerate case).
+
+    Returns (d (m,), closest (m, 3), t (m,)).
     """
     sgn = np.where(p >= 0.0, 1.0, -1.0)
     y = np.abs(p)
@@ -337,31 +341,29 @@ def _sd_ellipsoid(e: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     ey = es * ys
     lo = np.maximum(np.max(ey - e2, axis=1), -emin2)
     hi = np.maximum(-emin2 + np.linalg.norm(ey, axis=1), lo)
-    scale = np.maximum(e2[:, 0], np.max(ey, axis=1))
-    t = lo.copy()
-
-    def F(tt):
-        den = tt[:, None] + e2
-        ok = den > 0
-        r = np.where(ok, ey, 0.0) / np.where(ok, den, 1.0)
-        f = np.sum(r * r, axis=1) - 1.0
-        df = -2.0 * np.sum(np.where(ok, r * r, 0.0) / np.where(ok, den, 1.0), axis=1)
-        # At the pole with y_min > 0 the function is +inf.
-        f = np.where(np.any(~ok & (ey > 0), axis=1), np.inf, f)
-        return f, df
-
+    tol = 1e-14 * np.maximum(e2[:, 0], np.max(ey, axis=1))
+    t = lo.copy() if t0 is None else np.clip(t0, lo, hi)
+    act = np.nonzero(hi - lo > tol)[0]
     for _ in range(200):
-        f, df = F(t)
-        lo = np.where(f > 0, t, lo)
-        hi = np.where(f <= 0, t, hi)
-        step_ok = np.isfinite(f) & (df < 0)
-        tn = np.where(step_ok, t - np.where(step_ok, f, 0.0) / np.where(step_ok, df, -1.0), 0.5 * (lo + hi))
-        bad = (tn <= lo) | (tn >= hi)
-        tn = np.where(bad, 0.5 * (lo + hi), tn)
-        done = (hi - lo) <= 1e-15 * scale
-        t = np.where(done, t, tn)
-        if np.all(done):
+        if len(act) == 0:
             break
+        ta, e2a, eya = t[act], e2[act], ey[act]
+        den = ta[:, None] + e2a
+        ok = den > 0
+        r = np.where(ok, eya, 0.0) / np.where(ok, den, 1.0)
+        f = np.sum(r * r, axis=1) - 1.0
+        df = -2.0 * np.sum(r * r / np.where(ok, den, 1.0), axis=1)
+        # At the pole with y_min > 0, F is +inf.
+        pole = np.any(~ok & (eya > 0), axis=1)
+        lo_a = np.where((f > 0) | pole, ta, lo[act])
+        hi_a = np.where((f <= 0) & ~pole, ta, hi[act])
+        step_ok = ~pole & (df < 0)
+        tn = ta - np.where(step_ok, f, 0.0) / np.where(step_ok, df, -1.0)
+        mid = 0.5 * (lo_a + hi_a)
+        tn = np.where(~step_ok | (tn < lo_a) | (tn > hi_a), mid, tn)
+        conv = (np.abs(tn - ta) <= tol[act]) | (hi_a - lo_a <= tol[act])
+        t[act], lo[act], hi[act] = tn, lo_a, hi_a
+        act = act[~conv]
     den = t[:, None] + e2
     ok = den > 0.0
     x = np.where(ok, e2 * ys, 0.0) / np.where(ok, den, 1.0)
@@ -374,7 +376,7 @@ def _sd_ellipsoid(e: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     cl = np.take_along_axis(x, inv, axis=1) * sgn
     d = np.linalg.norm(p - cl, axis=1)
     inside = np.sum((p / e) ** 2, axis=1) < 1.0
-    return np.where(inside, -d, d), cl
+    return np.where(inside, -d, d), cl, t
 
 
 def _mesh_nearest(m: MeshData, p: np.ndarray, k: int = 8) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -481,7 +483,7 @@ def signed_distance_batch(stype: ShapeType, size: np.ndarray, points: np.ndarray
     if stype is ShapeType.CYLINDER:
         return _sd_cylinder(s[:, 0], s[:, 1], p)
     if stype is ShapeType.ELLIPSOID:
-        return _sd_ellipsoid(s[:, :3], p)
+        return _sd_ellipsoid(s[:, :3], p)[:2]
     if stype is ShapeType.PLANE:
         return _sd_plane(p)
     raise ValueError(f"signed_distance_batch does not take {stype}")
@@ -598,9 +600,16 @@ def segment_signed_distance_batch(
         lower_b = b[:, 2] < a[:, 2]
         return np.minimum(a[:, 2], b[:, 2]), np.where(lower_b, 1.0, 0.0)
     ab = b - a
+    if stype is ShapeType.ELLIPSOID:
+        # Warm-start each solve from the previous one (nearby point).
+        lam = [None]
 
-    def f(t):
-        return signed_distance_batch(stype, s, a + t[:, None] * ab)[0]
+        def f(t):
+            d, _, lam[0] = _sd_ellipsoid(s[:, :3], a + t[:, None] * ab, lam[0])
+            return d
+    else:
+        def f(t):
+            return signed_distance_batch(stype, s, a + t[:, None] * ab)[0]
 
     return _golden_min(f, n)
 

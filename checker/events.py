@@ -1,0 +1,142 @@
+"""Interference over time: events (intervals below the clearance) and worst pairs.
+
+`EventTracker.update` takes each checked step's interference records and
+keeps, per (type, a, b) pair, the interval it has stayed below the
+clearance. An event is a maximal such interval; its severity is the worst it
+reached, its `phase` is static when it contains t = 0 (the settled rest state
+before motion) and dynamic otherwise.
+
+Flicker: a pair grazing the clearance can drop out for a step or two as the
+cable vibrates. An open event is closed only after the pair has been clear
+for `hold` seconds (by default three checked steps); a return within that
+time continues the same event, and the event's `t_end` is the last time the
+pair was below the clearance, so no clear time is counted as interference.
+
+`pairs` keeps every pair that came below the clearance with its worst
+distance and when. This module does not check geometry or know MuJoCo: it
+takes records and times.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from checker.records import Interference, PairType, Severity
+
+PairKey = tuple[str, str, str]
+"""(type, a, b) of a pair."""
+
+
+@dataclass(frozen=True)
+class Event:
+    """A maximal interval in which a pair stayed below the clearance.
+
+    Attributes:
+      type, a, b: the pair (type value as in the report).
+      severity: worst severity reached.
+      phase: "static" when the interval contains t = 0, else "dynamic".
+      t_start, t_end: first and last checked time below the clearance, s.
+      t_worst: time of the smallest distance, s.
+      min_distance: smallest signed distance (units of the records).
+      where: (3,) worst point on cable a.
+      s: arc length along cable a at the worst point.
+    """
+
+    type: str
+    a: str
+    b: str
+    severity: str
+    phase: str
+    t_start: float
+    t_end: float
+    t_worst: float
+    min_distance: float
+    where: np.ndarray
+    s: float
+
+
+@dataclass(frozen=True)
+class PairWorst:
+    """A pair's worst moment over the whole run."""
+
+    type: str
+    a: str
+    b: str
+    min_distance: float
+    t: float
+    where: np.ndarray
+
+
+@dataclass
+class _Open:
+    t_start: float
+    t_last: float
+    worst: Interference
+    t_worst: float
+    hard: bool = False
+
+
+@dataclass
+class EventTracker:
+    """Builds events from per-step records (see the module docstring).
+
+    Attributes:
+      hold: seconds a pair must stay clear before its event closes.
+    """
+
+    hold: float
+    events: list[Event] = field(default_factory=list)
+    pairs: dict[PairKey, PairWorst] = field(default_factory=dict)
+    _open: dict[PairKey, _Open] = field(default_factory=dict)
+
+    @staticmethod
+    def key(record: Interference) -> PairKey:
+        return (PairType(record.type).value, record.a, record.b)
+
+    def update(self, t: float, records: Iterable[Interference]) -> tuple[list[PairKey], list[Event]]:
+        """Take the records of the step at time t; return (pairs that started
+        an event, events that closed)."""
+        started: list[PairKey] = []
+        seen = set()
+        for r in records:
+            k = self.key(r)
+            seen.add(k)
+            hard = Severity(r.severity) == Severity.HARD
+            ev = self._open.get(k)
+            if ev is None:
+                ev = self._open[k] = _Open(t, t, r, t, hard)
+                started.append(k)
+            else:
+                ev.t_last = t
+                ev.hard |= hard
+                if r.min_distance < ev.worst.min_distance:
+                    ev.worst, ev.t_worst = r, t
+            best = self.pairs.get(k)
+            if best is None or r.min_distance < best.min_distance:
+                self.pairs[k] = PairWorst(k[0], r.a, r.b, float(r.min_distance), t, np.asarray(r.where))
+        closed = [self._close(k) for k, ev in list(self._open.items())
+                  if k not in seen and t - ev.t_last >= self.hold - 1e-12]
+        return started, closed
+
+    def _close(self, k: PairKey) -> Event:
+        ev = self._open.pop(k)
+        w = ev.worst
+        event = Event(k[0], w.a, w.b, Severity.HARD.value if ev.hard else Severity.SOFT.value,
+                      "static" if ev.t_start <= 0.0 else "dynamic", ev.t_start, ev.t_last,
+                      ev.t_worst, float(w.min_distance), np.asarray(w.where), float(w.s))
+        self.events.append(event)
+        return event
+
+    def finish(self) -> list[Event]:
+        """Close every open event (end of run); return all events by start time."""
+        for k in list(self._open):
+            self._close(k)
+        self.events.sort(key=lambda e: (e.t_start, e.type, e.a, e.b))
+        return self.events
+
+    def open_pairs(self) -> list[PairKey]:
+        """Pairs with an event still open."""
+        return list(self._open)

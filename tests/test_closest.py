@@ -1,0 +1,130 @@
+"""Closest points between segments and triangles against independent references."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from checker.closest import point_segment, point_triangle, segment_segment, segment_triangle
+
+pytestmark = pytest.mark.filterwarnings("error")
+
+coord = st.floats(-10, 10, allow_nan=False, width=64)
+vec = arrays(np.float64, 3, elements=coord)
+
+
+def _pt_seg_ref(p, a, b):
+    """Point-segment distance by the normal equation, written independently."""
+    d = b - a
+    L2 = d @ d
+    if L2 == 0:
+        return np.linalg.norm(p - a)
+    t = min(1.0, max(0.0, (p - a) @ d / L2))
+    return np.linalg.norm(a + t * d - p)
+
+
+def _seg_seg_ref(p0, p1, q0, q1):
+    """Minimum of the convex quadratic over the unit square: interior
+    stationary point if it lies inside, else the best of the four edges."""
+    cands = [_pt_seg_ref(p0, q0, q1), _pt_seg_ref(p1, q0, q1), _pt_seg_ref(q0, p0, p1), _pt_seg_ref(q1, p0, p1)]
+    d1, d2, r = p1 - p0, q1 - q0, p0 - q0
+    A = np.array([[d1 @ d1, -d1 @ d2], [-d1 @ d2, d2 @ d2]])
+    if abs(np.linalg.det(A)) > 1e-12 * (d1 @ d1) * (d2 @ d2) and (d1 @ d1) > 0 and (d2 @ d2) > 0:
+        s, t = np.linalg.solve(A, [-d1 @ r, d2 @ r])
+        if 0 <= s <= 1 and 0 <= t <= 1:
+            cands.append(np.linalg.norm(p0 + s * d1 - q0 - t * d2))
+    return min(cands)
+
+
+@settings(max_examples=300, deadline=None)
+@given(vec, vec, vec, vec)
+def test_segment_segment_matches_reference(p0, p1, q0, q1):
+    d, s, t, cp, cq = segment_segment(p0[None], p1[None], q0[None], q1[None])
+    ref = _seg_seg_ref(p0, p1, q0, q1)
+    scale = 1 + np.max(np.abs([p0, p1, q0, q1]))
+    assert abs(d[0] - ref) <= 1e-9 * scale
+    assert 0 <= s[0] <= 1 and 0 <= t[0] <= 1
+    assert np.allclose(cp[0], p0 + s[0] * (p1 - p0)) and np.allclose(cq[0], q0 + t[0] * (q1 - q0))
+
+
+def test_segment_segment_degenerate_cases():
+    z = np.zeros(3)
+    x = np.array([1.0, 0, 0])
+    y = np.array([0, 1.0, 0])
+    cases = [
+        (z, x, z + y, x + y, 1.0),  # parallel, overlapping
+        (z, x, 2 * x + y, 3 * x + y, np.hypot(1, 1)),  # parallel, disjoint
+        (z, z, y, y, 1.0),  # two points
+        (z, z, -x + y, x + y, 1.0),  # point and segment
+        (-x, x, -y, y, 0.0),  # crossing
+        (z, x, z, x, 0.0),  # identical
+        (z, x, x, z, 0.0),  # reversed
+    ]
+    for p0, p1, q0, q1, ref in cases:
+        d = segment_segment(p0[None], p1[None], q0[None], q1[None])[0]
+        assert np.isfinite(d).all() and abs(d[0] - ref) < 1e-15
+
+
+def test_segment_segment_far_from_origin_and_scaled():
+    rng = np.random.default_rng(3)
+    P = rng.normal(size=(200, 4, 3))
+    d0 = segment_segment(*(P[:, k] for k in range(4)))[0]
+    d1 = segment_segment(*(P[:, k] + 1e4 for k in range(4)))[0]
+    d2 = segment_segment(*(P[:, k] * 1000 for k in range(4)))[0]
+    assert np.allclose(d0, d1, rtol=0, atol=1e-9)
+    assert np.allclose(d0 * 1000, d2, rtol=1e-12, atol=1e-9)
+
+
+def _pt_tri_ref(p, a, b, c):
+    """Interior stationary point of the barycentric quadratic, else the edges."""
+    e0, e1 = b - a, c - a
+    G = np.array([[e0 @ e0, e0 @ e1], [e0 @ e1, e1 @ e1]])
+    cands = [_pt_seg_ref(p, a, b), _pt_seg_ref(p, b, c), _pt_seg_ref(p, c, a)]
+    if abs(np.linalg.det(G)) > 1e-12 * G[0, 0] * G[1, 1]:
+        u, v = np.linalg.solve(G, [(p - a) @ e0, (p - a) @ e1])
+        if u >= 0 and v >= 0 and u + v <= 1:
+            cands.append(np.linalg.norm(a + u * e0 + v * e1 - p))
+    return min(cands)
+
+
+@settings(max_examples=300, deadline=None)
+@given(vec, vec, vec, vec)
+def test_point_triangle_matches_reference(p, a, b, c):
+    d, cl, region = point_triangle(p[None], a[None], b[None], c[None])
+    ref = _pt_tri_ref(p, a, b, c)
+    scale = 1 + np.max(np.abs([p, a, b, c]))
+    assert abs(d[0] - ref) <= 1e-9 * scale
+    assert abs(np.linalg.norm(cl[0] - p) - d[0]) <= 1e-9 * scale
+    assert 0 <= region[0] <= 6
+
+
+def test_point_triangle_on_face_edge_and_corner():
+    a, b, c = np.array([0.0, 0, 0]), np.array([1.0, 0, 0]), np.array([0.0, 1, 0])
+    P = np.array([[0.25, 0.25, 0.0], [0.5, 0.0, 0.0], [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.25, 0.25, 2.0]])
+    n = len(P)
+    d, cl, region = point_triangle(P, np.tile(a, (n, 1)), np.tile(b, (n, 1)), np.tile(c, (n, 1)))
+    assert np.allclose(d, [0, 0, 0, 0, 0, 2])
+    assert region[-1] == 0
+
+
+@settings(max_examples=200, deadline=None)
+@given(vec, vec, vec, vec, vec)
+def test_segment_triangle_matches_sampling_bound(p0, p1, a, b, c):
+    d, t, crossing = segment_triangle(p0[None], p1[None], a[None], b[None], c[None])
+    ts = np.linspace(0, 1, 201)
+    pts = p0 + ts[:, None] * (p1 - p0)
+    n = len(ts)
+    ds = point_triangle(pts, np.tile(a, (n, 1)), np.tile(b, (n, 1)), np.tile(c, (n, 1)))[0]
+    scale = 1 + np.max(np.abs([p0, p1, a, b, c]))
+    # Exact value is a lower bound of sampled values, and within the sampling
+    # step's Lipschitz bound of their minimum.
+    assert d[0] <= ds.min() + 1e-9 * scale
+    assert d[0] >= ds.min() - np.linalg.norm(p1 - p0) / 200 - 1e-9 * scale
+    at_t = point_triangle((p0 + t[0] * (p1 - p0))[None], a[None], b[None], c[None])[0][0]
+    assert abs(at_t - d[0]) <= 1e-7 * scale
+
+
+def test_point_segment_zero_length():
+    d, t, c = point_segment(np.array([[1.0, 1, 1]]), np.zeros((1, 3)), np.zeros((1, 3)))
+    assert d[0] == pytest.approx(np.sqrt(3)) and t[0] == 0
