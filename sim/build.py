@@ -385,8 +385,8 @@ def _edge_solref(scene: Scene) -> float:
 
     MuJoCo's default (0.02 s) lets a 1 m cable hanging under gravity stretch by
     over 1 %; measured with 40 elements: 0.004 s with solimp 0.99-0.999 keeps
-    it within 0.1 %, 0.002 s within 0.03 % (see `_edge_solimp`). Two timesteps is the stiffest the
-    discrete-time constraint resolves stably."""
+    it within 0.1 %, 0.002 s within 0.03 % (see `_edge_solimp`). Two
+    timesteps is the stiffest the discrete-time constraint resolves stably."""
     return max(2.0 * scene.timestep, 0.002)
 
 
@@ -405,7 +405,17 @@ def _edge_solimp(plan: _CablePlan) -> str:
     tests/test_stability.py). So d falls from 0.999 to 0.95 between 0 and
     4 % edge strain (power 6: flat near 0), bounding the tension of an
     overstretched cable: it then rests at the strain its ends force, reported
-    as taut. MuJoCo's width is a length, hence per cable."""
+    as taut. MuJoCo's width is a length, hence per cable.
+
+    Limits (measured, tests/test_stability.py): past the yield the tension
+    falls as the strain grows, so the stretch of an overstretched cable
+    gathers in the edges next to its held ends (ends 10 % past the length:
+    11 edges at 41 %, the rest at 0.8 %); the cable's total strain, which is
+    what is reported, is right, its distribution is not. And a rod whose
+    bending load compresses its edges past the yield collapses further: a
+    200 GPa, 3 mm steel rod bowed between ends 0.5 m apart with 0.6 m of
+    length shortens by 9-27 % (4-6 % with d = 0.99-0.999); such a rod needs
+    a smaller timestep."""
     seg = np.linalg.norm(np.diff(plan.straight, axis=0), axis=1)
     return f"0.999 0.95 {0.04 * float(seg.mean())!r} 0.5 6"
 
