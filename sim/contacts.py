@@ -14,38 +14,20 @@ validation compare that.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import mujoco
 import numpy as np
 
+from checker.validation import SimContacts
 from sim.build import Built
 
 
-@dataclass(frozen=True, eq=False)
-class Contacts:
-    """MuJoCo contacts of one step, as parallel arrays of length n.
+Contacts = SimContacts
+"""MuJoCo contacts of one step as parallel arrays: `checker.validation.SimContacts`.
 
-    Attributes:
-      kind: (n,) "cable-structure", "keepout", "cable-cable", "self" or "part-part".
-      a, b: (n,) names. For cable-structure and keepout, a is the cable and b
-        the part; for cable-cable the two cables; for self both are the cable;
-        for part-part both are parts.
-      elem_a, elem_b: (n,) element index along cable a / b, -1 for a part.
-      dist: (n,) signed surface distance, metres (negative: penetration).
-      pos: (n, 3) contact point, world metres.
-    """
-
-    kind: np.ndarray
-    a: np.ndarray
-    b: np.ndarray
-    elem_a: np.ndarray
-    elem_b: np.ndarray
-    dist: np.ndarray
-    pos: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.dist)
+kind: "cable-structure", "keepout", "cable-cable", "self" or "part-part";
+a, b: names (for contacts with a cable, a is the cable); elem_a, elem_b:
+element index along cable a / b, -1 for a part; dist: signed surface
+distance, metres; pos: (n, 3) contact points, world metres."""
 
 
 class ContactReader:

@@ -20,11 +20,17 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from checker.curve import bend_radius
+from checker.cable import arc_length, bend_radius
+from checker.events import EventTracker
+from checker.interference import check_state
+from checker.records import PairType, Severity
 from checker.report import SCHEMA, write_report
+from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+from checker.shapes import Shape, ShapeType, mesh_shape
+from checker.validation import Validation, simulator_pairs
 from sim.build import Built, build
 from sim.loop import Simulation
-from sim.record import Recorder
+from sim.record import Recorder, pair_path
 from sim.scene import Scene
 
 TAUT_STRAIN = 0.01
@@ -64,15 +70,56 @@ class _Timer:
         self._t = now
 
 
-def _min_bend(points: np.ndarray) -> float:
-    radii = bend_radius(points)
-    return float(np.min(radii)) if len(radii) else float("inf")
+def _shapes(built: Built) -> list[Shape]:
+    """The checker's shape of every part, built once (meshes get their trees here)."""
+    out = []
+    for p in built.parts:
+        if p.shape == "mesh":
+            out.append(mesh_shape(p.vertices, p.faces))
+        else:
+            out.append(Shape(ShapeType(p.shape), p.size))
+    return out
+
+
+def attachment_exclusions(built: Built) -> list[Exclusion]:
+    """Arc-length windows where a cable touching a part is expected.
+
+    Around every held vertex (start, end, clip), `check.attach_zone` cable
+    radii either side, against every part riding the same body."""
+    zone = built.scene.check.attach_zone
+    parts_on: dict[str, list[str]] = {}
+    for p in built.parts:
+        parts_on.setdefault(p.body, []).append(p.name)
+    out = []
+    for c in built.cables:
+        for att in c.attachments:
+            for part in parts_on.get(att.body, ()):
+                out.append(Exclusion(c.name, part, att.s - zone * c.radius, att.s + zone * c.radius))
+    return sorted(set(out), key=lambda e: (e.cable, e.part, e.s_min))
+
+
+def _cable_states(built: Built, points: list[np.ndarray]) -> list[CableState]:
+    return [CableState(c.name, p, c.radius, c.min_bend_radius, c.length)
+            for c, p in zip(built.cables, points)]
+
+
+def _worst_by_cable(records, names: list[str]) -> list[str]:
+    """"hard", "soft" or "clear" per cable from the step's records."""
+    rank = {"clear": 0, "soft": 1, "hard": 2}
+    state = dict.fromkeys(names, "clear")
+    for r in records:
+        sev = Severity(r.severity).value
+        for name in {r.a, r.b}:
+            if name in state and rank[sev] > rank[state[name]]:
+                state[name] = sev
+    return [state[n] for n in names]
 
 
 def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = None) -> dict:
     """Run `scene`; write the report (and recording); return the report dict."""
     start = time.perf_counter()
-    built = build(scene, detect=scene.check.validate)
+    validate = scene.check.validate
+    built = build(scene, detect=validate)
     sim = Simulation(built)
     sim.reset()
     if progress:
@@ -81,8 +128,17 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                (lambda k: progress("settle", k, sim.settle_steps) if k % 50 == 0 else None))
     recorder = Recorder(built, options.record) if options.record else None
     timer = _Timer()
-    cables = built.cables
-    n = len(cables)
+    config = CheckConfig(method=options.method or scene.check.method,
+                         spacing=options.spacing or scene.check.spacing,
+                         clearance=scene.check.clearance)
+    shapes = _shapes(built)
+    exclusions = attachment_exclusions(built)
+    names = [c.name for c in built.cables]
+    every = scene.check.every
+    tracker = EventTracker(hold=3 * every * scene.timestep)
+    validation = Validation(scene.check.clearance, config.method,
+                            frozenset(p.name for p in built.parts if p.shape == "mesh"))
+    n = len(built.cables)
     max_strain = np.full(n, -np.inf)
     min_bend = np.full(n, np.inf)
     rest_points: list[np.ndarray] = []
@@ -90,21 +146,33 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     steps = checked = 0
     t_last = 0.0
     complete = False
+    markers: set[str] = set()
     try:
-        for state in sim.steps(contacts=False, every=scene.check.every):
+        for state in sim.steps(contacts=validate, every=every):
             timer.lap("sim")
             if state.step == 0:
                 rest_points = state.cables
                 if recorder:
                     recorder.log_static(state.part_poses)
-            strain = np.array([np.linalg.norm(np.diff(p, axis=0), axis=1).sum() / c.length - 1.0
-                               for p, c in zip(state.cables, cables)])
-            bend = np.array([_min_bend(p) for p in state.cables])
+            cables = _cable_states(built, state.cables)
+            parts = [PartState(p.name, sh, pose, p.keepout)
+                     for p, sh, pose in zip(built.parts, shapes, state.part_poses)]
+            records = check_state(cables, parts, config, exclusions)
+            strain = np.array([arc_length(c.points)[-1] / c.rest_length - 1.0 for c in cables])
+            bend = np.array([np.min(bend_radius(c.points)) for c in cables])
             max_strain = np.maximum(max_strain, strain)
             min_bend = np.minimum(min_bend, bend)
+            started, closed = tracker.update(state.t, records)
             timer.lap("check")
+            agreement = None
+            if validate:
+                seen = simulator_pairs(state.contacts, {c.name: (c.points, c.radius) for c in cables},
+                                       exclusions)
+                agreement = validation.compare(state.t, records, seen)
+                timer.lap("validate")
             if recorder:
-                recorder.log_step(state.t, state.cables, state.part_poses, strain=strain, bend=bend)
+                _record_step(recorder, state, records, names, strain, bend, agreement,
+                             started, closed, tracker, markers, scene.scale)
                 timer.lap("record")
             final_points = state.cables
             steps, t_last = state.step, state.t
@@ -115,22 +183,48 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     except KeyboardInterrupt:
         complete = False
     finally:
+        events = tracker.finish()
         if recorder:
             recorder.close()
             timer.lap("record")
     total = time.perf_counter() - start
-    report = _report(scene, built, options, complete, steps, checked, t_last,
-                     max_strain, min_bend, rest_points, final_points, timer, total, sim)
+    report = _report(scene, built, config, complete, steps, checked, t_last, max_strain, min_bend,
+                     rest_points, final_points, timer, total, sim, events, tracker, validation, options)
     write_report(report, options.report)
     return report
 
 
-def _report(scene: Scene, built: Built, options: RunOptions, complete: bool, steps: int,
+def _record_step(recorder: Recorder, state, records, names, strain, bend, agreement,
+                 started, closed, tracker: EventTracker, markers: set[str], unit: float) -> None:
+    recorder.log_step(state.t, state.cables, state.part_poses, _worst_by_cable(records, names),
+                      strain=strain, bend=bend)
+    now = {}
+    for r in records:
+        path = pair_path(PairType(r.type).value, r.a, r.b)
+        now[path] = (r.where, Severity(r.severity).value)
+        recorder.log_scalar(f"checks/{path}/distance", r.min_distance / unit)
+    recorder.log_markers(now)
+    recorder.clear_markers(markers - set(now))
+    markers.clear()
+    markers.update(now)
+    if state.contacts is not None:
+        recorder.log_contacts(state.contacts.pos)
+    if agreement is not None:
+        recorder.log_scalar("checks/agreement", agreement)
+    for key in started:
+        worst = tracker.pairs[key]
+        recorder.log_event(state.t, f"{key[0]} {key[1]} / {key[2]} starts (distance "
+                           f"{worst.min_distance / unit:.4g})", "WARN")
+    for ev in closed:
+        recorder.log_event(ev.t_end, f"{ev.type} {ev.a} / {ev.b} ends: {ev.severity}, worst "
+                           f"{ev.min_distance / unit:.4g} at t = {ev.t_worst:.3f} s", "INFO")
+
+
+def _report(scene: Scene, built: Built, config: CheckConfig, complete: bool, steps: int,
             checked: int, t_last: float, max_strain, min_bend, rest_points, final_points,
-            timer: _Timer, total: float, sim: Simulation) -> dict:
+            timer: _Timer, total: float, sim: Simulation, events, tracker: EventTracker,
+            validation: Validation, options: RunOptions) -> dict:
     u = scene.scale
-    method = options.method or scene.check.method
-    spacing = options.spacing or scene.check.spacing
     radii = [c.radius for c in built.cables]
     cables = []
     for i, c in enumerate(built.cables):
@@ -147,18 +241,33 @@ def _report(scene: Scene, built: Built, options: RunOptions, complete: bool, ste
             "final_points": (np.asarray(final_points[i]) / u) if final_points else [],
         })
     check_steps = max(checked, 1)
-    return {
+    event_rows = [{
+        "type": e.type, "a": e.a, "b": e.b, "severity": e.severity, "phase": e.phase,
+        "t_start": e.t_start, "t_end": e.t_end, "t_worst": e.t_worst,
+        "min_distance": e.min_distance / u, "where": np.asarray(e.where) / u, "s": e.s / u,
+    } for e in events]
+    pair_rows = [{"type": p.type, "a": p.a, "b": p.b, "min_distance": p.min_distance / u, "t": p.t}
+                 for p in sorted(tracker.pairs.values(), key=lambda p: (p.min_distance, p.type, p.a, p.b))]
+    summary = {
+        "hard": sum(e.severity == "hard" for e in events),
+        "soft": sum(e.severity == "soft" for e in events),
+        "static": sum(e.phase == "static" for e in events),
+        "dynamic": sum(e.phase == "dynamic" for e in events),
+    }
+    report = {
         "schema": SCHEMA,
         "scene": scene.name,
         "units": scene.units,
         "complete": complete,
         "mujoco": mujoco.__version__,
         "settings": {
-            "method": method,
+            "method": config.method,
             # discrete-point spacing in scene units for the thinnest cable
-            "spacing": (spacing * min(radii) / u) if radii else None,
-            "spacing_radii": spacing,
+            "spacing": (config.spacing * min(radii) / u) if radii else None,
+            "spacing_radii": config.spacing,
             "clearance": scene.check.clearance / u,
+            "attach_zone_radii": scene.check.attach_zone,
+            "event_hold_s": tracker.hold,
             "timestep": scene.timestep,
             "settle": scene.settle,
             "duration": scene.duration,
@@ -169,6 +278,24 @@ def _report(scene: Scene, built: Built, options: RunOptions, complete: bool, ste
             "checked_steps": checked,
             "t_end": t_last,
         },
+        "summary": summary,
+        "events": event_rows,
+        "pairs": pair_rows,
+    }
+    if scene.check.validate:
+        v = validation
+        report["validation"] = {
+            "compared_steps": v.compared_steps, "pair_steps": v.pair_steps, "agree": v.agree,
+            "checker_only": v.checker_only, "mujoco_only": v.mujoco_only,
+            "severity_differs": v.severity_differs, "agreement": v.agreement,
+            "max_distance_error": v.max_distance_error / u,
+            "reasons": dict(v.reasons),
+            "disagreements": [{"t": d.t, "type": d.type, "a": d.a, "b": d.b,
+                               "checker": None if d.checker is None else d.checker / u,
+                               "mujoco": None if d.mujoco is None else d.mujoco / u,
+                               "reason": d.reason} for d in v.disagreements],
+        }
+    report.update({
         "cables": cables,
         "warnings": sim.warnings(),
         "timing": {
@@ -178,7 +305,10 @@ def _report(scene: Scene, built: Built, options: RunOptions, complete: bool, ste
             "validate_s": timer.total["validate"],
             "record_s": timer.total["record"],
             "check_ms_per_step": 1e3 * timer.total["check"] / check_steps,
+            "validate_ms_per_step": 1e3 * timer.total["validate"] / check_steps,
+            "record_ms_per_step": 1e3 * timer.total["record"] / check_steps,
             "sim_ms_per_step": 1e3 * timer.total["sim"] / max(steps, 1),
         },
         "recording": str(options.record) if options.record else None,
-    }
+    })
+    return report
