@@ -4,7 +4,9 @@ At each checked step both sides are reduced to one signed distance per pair
 (type, a, b) below the clearance, and every pair either side saw is classed
 hard (< 0), soft (< clearance) or clear by each side, exactly as events are.
 Simulator contacts are first filtered with the checker's own rules: contacts
-inside an attachment window (`Exclusion`) are expected, and self contacts
+of elements inside an attachment window (`Exclusion`, aligned to elements by
+the caller so both sides leave out the same piece of cable) are expected, and
+self contacts
 between places closer along the cable than `self_pair_excluded` allows are
 near neighbours, not interference. The position of a contact along a cable
 is found by projecting the contact point onto its element.
@@ -90,10 +92,17 @@ def simulator_pairs(contacts: SimContacts, cables: dict[str, tuple[np.ndarray, f
     kind, a, b = contacts.kind[idx], contacts.a[idx], contacts.b[idx]
     s_a = np.zeros(len(idx))
     s_b = np.zeros(len(idx))
+    elem_lo = np.zeros(len(idx))  # arc length span of each contact's element on cable a
+    elem_hi = np.zeros(len(idx))
+    elem_len = np.zeros(len(idx))
     for name in np.unique(a):  # per cable, vectorised over its contacts
         pts, _ = cables[name]
         on_a = a == name
         s_a[on_a] = contact_arc_length(pts, contacts.elem_a[idx][on_a], contacts.pos[idx][on_a])
+        s_pts = arc_length(pts)
+        e = np.clip(contacts.elem_a[idx][on_a], 0, len(pts) - 2)
+        elem_lo[on_a], elem_hi[on_a] = s_pts[e], s_pts[e + 1]
+        elem_len[on_a] = s_pts[e + 1] - s_pts[e]
         on_b = (b == name) & (contacts.elem_b[idx] >= 0)
         if on_b.any():
             s_b[on_b] = contact_arc_length(pts, contacts.elem_b[idx][on_b], contacts.pos[idx][on_b])
@@ -102,9 +111,13 @@ def simulator_pairs(contacts: SimContacts, cables: dict[str, tuple[np.ndarray, f
     if self_rows.any():
         radius = np.array([cables[n][1] for n in a[self_rows]])
         drop[self_rows] = self_pair_excluded(s_a[self_rows], s_b[self_rows], radius)
+    # A simulator contact stands for its whole element: drop it when the element
+    # lies in the window (windows are aligned to elements by the caller; a
+    # quarter element absorbs the cable's stretch since rest).
+    slack = 0.25 * elem_len
     for e in exclusions:
         lo, hi = min(e.s_min, e.s_max), max(e.s_min, e.s_max)
-        drop |= (a == e.cable) & (b == e.part) & (s_a >= lo) & (s_a <= hi) & \
+        drop |= (a == e.cable) & (b == e.part) & (elem_lo >= lo - slack) & (elem_hi <= hi + slack) & \
             np.isin(kind, (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value))
     out: dict[tuple[str, str, str], tuple[float, np.ndarray]] = {}
     dist, pos = contacts.dist[idx], contacts.pos[idx]

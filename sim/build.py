@@ -112,6 +112,7 @@ class CableModel:
         -1 for pinned vertices.
       attachments: vertices held by bodies.
       min_bend_radius: metres or None.
+      rest_s: (count,) arc length of each vertex along the rest shape, metres.
     """
 
     name: str
@@ -125,6 +126,7 @@ class CableModel:
     qpos_adr: np.ndarray
     attachments: tuple[Attachment, ...]
     min_bend_radius: float | None
+    rest_s: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
@@ -563,7 +565,7 @@ def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
         attachments += [Attachment(kind, body, v, float(s[v])) for kind, body, v, _ in plan.holds]
         cables.append(CableModel(c.name, c.radius, fid, int(m.flex_vertadr[fid]), n, float(s[-1]),
                                  float(seg.mean()), plan.routed.copy(), qadr,
-                                 tuple(sorted(attachments, key=lambda a: a.vertex)), c.min_bend_radius))
+                                 tuple(sorted(attachments, key=lambda a: a.vertex)), c.min_bend_radius, s))
 
     free = {}
     for b in scene_bodies:

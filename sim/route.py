@@ -53,19 +53,8 @@ def _droop_direction(route: np.ndarray, down: np.ndarray) -> np.ndarray:
     return d / np.linalg.norm(d)
 
 
-def initial_shape(route: np.ndarray, length: float, count: int,
-                  down: np.ndarray = np.array([0.0, 0.0, -1.0])) -> np.ndarray:
-    """(count, 3) points, evenly spaced, of a shape of arc length `length` along `route`.
-
-    Method: densify the route; if it is shorter than `length`, add a droop
-    h * sin(pi s / S) along the droop direction (a half sine over the route's
-    arc length s in [0, S]) and find h by Brent's method so that the
-    resampled polyline (the cable's elements) has the requested length to
-    1e-9 relative; then resample evenly. Both ends stay where they
-    are. `length` shorter than the route is the caller's error (the scene
-    loader rejects it); it is treated as the route's length.
-    """
-    route = np.asarray(route, dtype=float)
+def _droop(route: np.ndarray, length: float, count: int, down: np.ndarray) -> np.ndarray:
+    """`count` evenly spaced points of `route` drooped to arc length `length`."""
     dense = resample_even(route, _DENSE)
     s = arc_lengths(dense)
     total = s[-1]
@@ -82,3 +71,41 @@ def initial_shape(route: np.ndarray, length: float, count: int,
         h = brentq(excess, 0.0, hi, xtol=1e-12 * length, rtol=1e-12)
         dense = dense + h * bump
     return resample_even(dense, count)
+
+
+def _allocate(weights: np.ndarray, total: int, least: int) -> np.ndarray:
+    """Integers >= least, summing to `total`, proportional to weights (largest remainder)."""
+    spare = total - least * len(weights)
+    share = weights / weights.sum() * spare
+    out = np.floor(share).astype(int)
+    out[np.argsort(share - out)[::-1][: spare - out.sum()]] += 1
+    return out + least
+
+
+def initial_shape(route: np.ndarray, length: float, count: int,
+                  down: np.ndarray = np.array([0.0, 0.0, -1.0])) -> np.ndarray:
+    """(count, 3) points along `route` whose polyline has arc length `length`.
+
+    Method: every waypoint of the route stays where it is, and every straight
+    run between waypoints gets the same share of slack (length / route length)
+    and of the elements (at least two each, in proportion to its length). A
+    run with slack droops as a half sine h * sin(pi s / S) towards `down`
+    (sideways for a vertical run), h found by Brent's method so that its
+    resampled points (the cable's elements) have the run's length to 1e-9
+    relative. Drooping run by run keeps every waypoint on the cable; a droop
+    over a route with corners could shorten a run instead of lengthening it.
+    Routes with more runs than pairs of elements (a dense `points` route) are
+    drooped as a whole. Both ends stay where they are. `length` shorter than
+    the route is the caller's error (the scene loader rejects it) and is
+    treated as the route's length.
+    """
+    route = np.asarray(route, dtype=float)
+    runs = np.linalg.norm(np.diff(route, axis=0), axis=1)
+    elements = count - 1
+    if len(runs) == 1 or elements < 2 * len(runs):
+        return _droop(route, length, count, down)
+    ratio = max(length / runs.sum(), 1.0)
+    counts = _allocate(runs, elements, 2)
+    pieces = [_droop(route[i:i + 2], runs[i] * ratio, int(counts[i]) + 1, down)
+              for i in range(len(runs))]
+    return np.concatenate([pieces[0]] + [p[1:] for p in pieces[1:]])

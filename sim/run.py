@@ -85,7 +85,9 @@ def attachment_exclusions(built: Built) -> list[Exclusion]:
     """Arc-length windows where a cable touching a part is expected.
 
     Around every held vertex (start, end, clip), `check.attach_zone` cable
-    radii either side, against every part riding the same body."""
+    radii either side, widened to whole elements (so that MuJoCo's contacts,
+    one per element, can be filtered by the same window), against every part
+    riding the same body."""
     zone = built.scene.check.attach_zone
     parts_on: dict[str, list[str]] = {}
     for p in built.parts:
@@ -94,7 +96,10 @@ def attachment_exclusions(built: Built) -> list[Exclusion]:
     for c in built.cables:
         for att in c.attachments:
             for part in parts_on.get(att.body, ()):
-                out.append(Exclusion(c.name, part, att.s - zone * c.radius, att.s + zone * c.radius))
+                lo = c.rest_s[np.searchsorted(c.rest_s, att.s - zone * c.radius, side="right") - 1] \
+                    if att.s - zone * c.radius > 0 else 0.0
+                hi = c.rest_s[min(np.searchsorted(c.rest_s, att.s + zone * c.radius), c.count - 1)]
+                out.append(Exclusion(c.name, part, float(lo), float(hi)))
     return sorted(set(out), key=lambda e: (e.cable, e.part, e.s_min))
 
 
