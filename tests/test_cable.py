@@ -1,0 +1,80 @@
+"""Cable discretisation, arc length, bend radius and the self-pair rule."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from checker.cable import arc_length, bend_radius, densify, densify_batch, resample, self_pair_excluded
+
+pytestmark = pytest.mark.filterwarnings("error")
+
+polyline = arrays(np.float64, st.tuples(st.integers(2, 12), st.just(3)), elements=st.floats(-5, 5, allow_subnormal=False))
+
+
+@settings(max_examples=150, deadline=None)
+@given(polyline, st.floats(0.05, 3.0))
+def test_resample_spacing_ends_and_on_polyline(p, l):
+    pts, s = resample(p, l)
+    total = arc_length(p)[-1]
+    assert np.allclose(pts[0], p[0]) and np.allclose(pts[-1], p[-1])
+    assert s[0] == 0 and s[-1] == pytest.approx(total)
+    gaps = np.diff(s)
+    assert np.all(gaps <= l * (1 + 1e-9)) and np.allclose(gaps, gaps[0])
+    # Chords are never longer than the arc between the points.
+    assert np.all(np.linalg.norm(np.diff(pts, axis=0), axis=1) <= gaps + 1e-9)
+
+
+@settings(max_examples=150, deadline=None)
+@given(polyline, st.floats(0.05, 3.0))
+def test_densify_keeps_vertices_and_length(p, l):
+    pts, s = densify(p, l)
+    steps = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    assert np.all(steps <= l * (1 + 1e-9))
+    assert s[-1] == pytest.approx(arc_length(p)[-1], rel=1e-12, abs=1e-12)
+    assert np.allclose(np.diff(s), steps, atol=1e-9)
+    # Every original point is still there, in order.
+    hit = [np.nonzero(np.all(pts == q, axis=1))[0] for q in p]
+    assert all(len(h) for h in hit)
+
+
+def test_densify_batch_restarts_arc_length_per_cable():
+    a = np.array([[0.0, 0, 0], [1.0, 0, 0]])
+    b = np.array([[5.0, 0, 0], [5.0, 2.0, 0]])
+    pts, s, cab, off = densify_batch(np.concatenate([a, b]), np.array([0, 2, 4]), np.array([0.5, 1.0]))
+    assert np.array_equal(cab, [0, 0, 0, 1, 1, 1]) and np.array_equal(off, [0, 3, 6])
+    assert np.allclose(s, [0, 0.5, 1.0, 0, 1.0, 2.0])
+
+
+def test_zero_length_cable():
+    pts, s = resample(np.zeros((3, 3)), 0.1)
+    assert len(pts) == 2 and np.all(s == 0)
+    pts, s = densify(np.zeros((3, 3)), 0.1)
+    assert len(pts) == 3 and np.all(s == 0)
+
+
+def test_bend_radius_of_a_circle_and_of_straight_and_folded_runs():
+    R = 0.3
+    th = np.linspace(0, np.pi, 40)
+    circle = np.stack([R * np.cos(th), R * np.sin(th), 0 * th], axis=1)
+    r = bend_radius(circle)
+    assert np.isinf(r[0]) and np.isinf(r[-1])
+    assert np.allclose(r[1:-1], R, rtol=1e-9)
+    straight = np.stack([np.linspace(0, 1, 5), np.zeros(5), np.zeros(5)], axis=1)
+    assert np.all(np.isinf(bend_radius(straight)))
+    folded = np.array([[0.0, 0, 0], [1.0, 0, 0], [0.0, 0, 0]])
+    assert bend_radius(folded)[1] == 0.0
+    repeated = np.array([[0.0, 0, 0], [0.0, 0, 0], [1.0, 0, 0]])
+    assert np.isinf(bend_radius(repeated)[1])
+    # Scale: mm gives 1000x.
+    assert np.allclose(bend_radius(circle * 1000)[1:-1], 1000 * R, rtol=1e-9)
+
+
+def test_self_pair_rule_at_pi_r():
+    r = 0.004
+    s = np.array([0.0, 2 * r, 3 * r, np.pi * r * (1 - 1e-9), np.pi * r, 4 * r])
+    assert list(self_pair_excluded(0.0, s, r)) == [True, True, True, True, False, False]
+    # The paper's spacing 2r: adjacent points excluded, two apart checked.
+    k = np.arange(5)
+    assert list(self_pair_excluded(0.0, 2 * r * k, r)) == [True, True, False, False, False]
