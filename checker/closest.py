@@ -8,8 +8,8 @@ segments, so that callers can report where and at which arc length.
 
 Degenerate input is part of the contract: zero-length segments, parallel
 segments, points exactly on a segment, zero-area triangles. None of these gives
-NaN, infinities or numpy warnings; the tolerance that decides "parallel" is
-relative to the squared lengths involved, so results do not
+NaN, infinities or numpy warnings; the tolerance that decides "nearly
+parallel" is relative to the squared lengths involved, so results do not
 change when a whole scene is translated or rescaled. Only exactly zero-length
 segments and zero-area triangles take the degenerate branches: nearly
 degenerate ones go through the general formulas, whose clamped answers remain
@@ -23,8 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
-# Relative tolerance below which squared lengths or determinants count as zero.
-_REL_EPS = 1e-14
+# Below this relative determinant (sin^2 of the angle) two segments count as
+# nearly parallel and their end-against-segment answers are tried too.
+_NEAR_PARALLEL = 1e-6
 
 
 def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -67,9 +68,10 @@ def segment_segment(
     Minimises the convex quadratic ``|p(s) - q(t)|^2`` over the unit square
     (Ericson, Real-Time Collision Detection, 5.1.9): the unconstrained
     optimum for ``s`` is clamped, ``t`` follows from it and is clamped, and
-    ``s`` is recomputed when ``t`` was clamped. Parallel segments (determinant
-    below a relative tolerance) take ``s = 0`` first, which still yields a
-    closest pair. Zero-length segments reduce to point-segment queries.
+    ``s`` is recomputed when ``t`` was clamped. Parallel segments take
+    ``s = 0`` first; nearly parallel ones (sin^2 of the angle below 1e-6)
+    also try each end against the other segment, since cancellation spoils
+    the formula there. Zero-length segments reduce to point-segment queries.
 
     Args:
         p0, p1, q0, q1: (n, 3) segment ends.
@@ -94,7 +96,7 @@ def segment_segment(
     deg1 = a == 0.0
     deg2 = e == 0.0
     denom = a * e - b * b
-    parallel = denom <= _REL_EPS * a * e
+    parallel = denom <= 0.0
     s = np.where(parallel, 0.0, np.clip(_safe_div(b * f - c * e, denom), 0.0, 1.0))
     s = np.where(deg1, 0.0, s)
     # t from s, then clamp and recompute s where t was clamped.
@@ -107,10 +109,29 @@ def segment_segment(
     # Degenerate second segment: t = 0, s from projecting q0 on the first.
     t = np.where(deg2, 0.0, t)
     s = np.where(deg2 & ~deg1, s_lo, s)
-    # Both degenerate: two points.
     cp = p0 + s[:, None] * d1
     cq = q0 + t[:, None] * d2
-    return np.linalg.norm(cp - cq, axis=1), s, t, cp, cq
+    dist = np.linalg.norm(cp - cq, axis=1)
+    # Nearly parallel pairs: the formula above loses precision to
+    # cancellation; an end of one segment against the other is then (nearly)
+    # optimal, so take the best of the four such answers as well.
+    near = np.nonzero(~deg1 & ~deg2 & (denom <= _NEAR_PARALLEL * a * e))[0]
+    if len(near):
+        P0, P1, Q0, Q1 = p0[near], p1[near], q0[near], q1[near]
+        cands = [point_segment(P0, Q0, Q1), point_segment(P1, Q0, Q1), point_segment(Q0, P0, P1), point_segment(Q1, P0, P1)]
+        ds = np.stack([x[0] for x in cands], axis=1)
+        k = np.argmin(ds, axis=1)
+        rows = np.arange(len(near))
+        better = ds[rows, k] < dist[near]
+        u = np.stack([x[1] for x in cands], axis=1)[rows, k]
+        s_new = np.select([k == 0, k == 1], [0.0, 1.0], u)
+        t_new = np.select([k == 0, k == 1, k == 2], [u, u, 0.0], 1.0)
+        idx = near[better]
+        s[idx], t[idx] = s_new[better], t_new[better]
+        cp[idx] = p0[idx] + s[idx, None] * d1[idx]
+        cq[idx] = q0[idx] + t[idx, None] * d2[idx]
+        dist[idx] = ds[rows, k][better]
+    return dist, s, t, cp, cq
 
 
 # Region codes of point_triangle: where on the triangle the closest point lies.
@@ -203,7 +224,8 @@ def segment_triangle(
     n = np.cross(b - a, c - a)
     h0 = _dot(p0 - a, n)
     h1 = _dot(p1 - a, n)
-    opposite = (h0 * h1 <= 0.0) & (h0 != h1)
+    # Signs, not the product, which underflows for tiny triangles.
+    opposite = (np.sign(h0) * np.sign(h1) <= 0.0) & (h0 != h1) & (_dot(n, n) > 0.0)
     tc = np.clip(_safe_div(h0, h0 - h1), 0.0, 1.0)
     q = p0 + tc[:, None] * (p1 - p0)
     inside = (

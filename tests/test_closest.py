@@ -10,7 +10,7 @@ from checker.closest import point_segment, point_triangle, segment_segment, segm
 
 pytestmark = pytest.mark.filterwarnings("error")
 
-coord = st.floats(-10, 10, allow_nan=False, width=64)
+coord = st.floats(-10, 10, allow_nan=False, allow_subnormal=False, width=64)
 vec = arrays(np.float64, 3, elements=coord)
 
 
