@@ -315,6 +315,25 @@ def _excluded(cable: np.ndarray, part: np.ndarray, s: np.ndarray, excl: tuple) -
     return np.bincount(rows, weights=inside, minlength=len(s)) > 0
 
 
+def _point_distances(tab: _PartTable, pk: np.ndarray, loc: np.ndarray, face_plane: bool) -> np.ndarray:
+    """Signed distance (n,) of local points ``loc`` to parts ``pk``, batched by type."""
+    d = np.full(len(pk), np.inf)
+    types = list(ShapeType)
+    for code in np.unique(tab.type[pk]):
+        stype = types[code]
+        sel = np.nonzero(tab.type[pk] == code)[0]
+        if stype is ShapeType.MESH:
+            for k in np.unique(pk[sel]):
+                sk = sel[pk[sel] == k]
+                shape = tab.parts[k].shape
+                d[sk] = face_plane_distance(shape, loc[sk]) if face_plane else signed_distance(shape, loc[sk])[0]
+        elif face_plane:
+            d[sel] = face_plane_distance_batch(stype, tab.size[pk[sel]], loc[sel])
+        else:
+            d[sel] = signed_distance_batch(stype, tab.size[pk[sel]], loc[sel])[0]
+    return d
+
+
 def _structure_points(dp, tree, tab, config, excl, hits) -> None:
     """Signed distance of every candidate point to its part, minus r."""
     margin = float(dp.radius.max()) + config.clearance
@@ -326,23 +345,7 @@ def _structure_points(dp, tree, tab, config, excl, hits) -> None:
     box_ok = np.all((loc >= tab.lo[pk] - thr) & (loc <= tab.hi[pk] + thr), axis=1)
     box_ok &= ~_excluded(dp.cable[it], pk, dp.s[it], excl)
     it, pk, loc = it[box_ok], pk[box_ok], loc[box_ok]
-    d = np.full(len(it), np.inf)
-    types = list(ShapeType)
-    for code in np.unique(tab.type[pk]):
-        stype = types[code]
-        sel = np.nonzero(tab.type[pk] == code)[0]
-        if stype is ShapeType.MESH:
-            for k in np.unique(pk[sel]):
-                sk = sel[pk[sel] == k]
-                shape = tab.parts[k].shape
-                if config.face_plane:
-                    d[sk] = face_plane_distance(shape, loc[sk])
-                else:
-                    d[sk] = signed_distance(shape, loc[sk])[0]
-        elif config.face_plane:
-            d[sel] = face_plane_distance_batch(stype, tab.size[pk[sel]], loc[sel])
-        else:
-            d[sel] = signed_distance_batch(stype, tab.size[pk[sel]], loc[sel])[0]
+    d = _point_distances(tab, pk, loc, config.face_plane)
     _add_structure(hits, tab, dp.cable[it], pk, d - dp.radius[it], dp.p[it], dp.s[it])
 
 
@@ -365,6 +368,11 @@ def _structure_exact(dp, tree, tab, config, excl, hits) -> None:
     # exactly when its midpoint is.
     box_ok &= ~_excluded(dp.cable[i0], pk, 0.5 * (s[i0] + s[i0 + 1]), excl)
     it, pk, i0, a, b = it[box_ok], pk[box_ok], i0[box_ok], a[box_ok], b[box_ok]
+    # Signed distance is 1-Lipschitz: the midpoint's distance minus the half
+    # length bounds the segment's from below, so far segments skip the search.
+    mid = _point_distances(tab, pk, 0.5 * (a + b), face_plane=False)
+    near = mid - 0.5 * np.linalg.norm(b - a, axis=1) - dp.radius[i0] < config.clearance
+    it, pk, i0, a, b = it[near], pk[near], i0[near], a[near], b[near]
     d = np.full(len(it), np.inf)
     t = np.zeros(len(it))
     types = list(ShapeType)
