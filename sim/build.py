@@ -107,7 +107,7 @@ class CableModel:
       count: number of vertices (elements + 1).
       length: rest length, metres.
       element_length: rest length of one element, metres.
-      routed: (count, 3) routed shape at t = 0 (before settling), metres.
+      routed: (count, 3) routed shape at t = 0 (before settling), scene world, metres.
       qpos_adr: (count, 3) qpos addresses of each vertex's x, y, z slides,
         -1 for pinned vertices.
       attachments: vertices held by bodies.
@@ -210,6 +210,9 @@ class Built:
     qpos0: np.ndarray
     geom_part: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     """geom id -> index into `parts`, -1 for geoms that are not parts."""
+    origin: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    """Scene-world position of the model's origin (see `scene_origin`):
+    model coordinates + origin = scene world coordinates."""
 
 
 def default_segments(length: float, radius: float) -> int:
@@ -283,19 +286,42 @@ class _CablePlan:
     pinned_to_world: bool
 
 
-class _Frames:
-    """World pose of every body at t = 0, as the scene defines it (`Scene.start_frames`)."""
+def scene_origin(scene: Scene) -> np.ndarray:
+    """Where the model's origin sits in the scene's world, metres.
 
-    def __init__(self, scene: Scene):
+    MuJoCo is given coordinates relative to this point (the mean of the
+    cables' routes, else of the parts' and bodies' positions), so a scene
+    placed far from its world origin (plant coordinates, CAD assemblies at
+    1e4 mm) simulates with the same rounding as one near it: measured on a
+    cable settling against a box 2.2e4 m out, the unshifted model ended 45 mm
+    away from the same scene at the origin. Everything read back out is
+    shifted back."""
+    points = [np.asarray(c.route, float) for c in scene.cables if c.route is not None]
+    if not points:
+        points = [np.asarray([p.pos for p in scene.parts if p.body == "world"], float).reshape(-1, 3),
+                  np.asarray([b.pos for b in scene.bodies], float).reshape(-1, 3)]
+    stacked = np.concatenate(points) if points else np.zeros((0, 3))
+    return stacked.mean(axis=0) if len(stacked) else np.zeros(3)
+
+
+class _Frames:
+    """Pose of every body at t = 0 (`Scene.start_frames`), in model coordinates
+    (the scene's world less `origin`)."""
+
+    def __init__(self, scene: Scene, origin: np.ndarray):
         self.poses = scene.start_frames
+        self.origin = origin
 
     def to_world(self, body: str, pos) -> np.ndarray:
         p, r = self.poses[body]
-        return np.asarray(p, float) + np.asarray(r, float) @ np.asarray(pos, float)
+        return np.asarray(p, float) - self.origin + np.asarray(r, float) @ np.asarray(pos, float)
 
     def to_local(self, body: str, point) -> np.ndarray:
+        """A model-coordinate point in the frame of `body` as built in the model."""
+        if body == "world":  # the model's world frame is the model origin itself
+            return np.asarray(point, float)
         p, r = self.poses[body]
-        return np.asarray(r, float).T @ (np.asarray(point, float) - np.asarray(p, float))
+        return np.asarray(r, float).T @ (np.asarray(point, float) + self.origin - np.asarray(p, float))
 
 
 def _closest_arc(route: np.ndarray, point: np.ndarray) -> tuple[int, float]:
@@ -317,7 +343,7 @@ def _plan_cable(cable: CableDef, frames: _Frames) -> _CablePlan:
     passes closest to it) and every span gets a share of the cable's length
     and elements in proportion to its route length, so clips sit exactly on
     vertices and each span droops on its own."""
-    route = np.asarray(cable.route if cable.route is not None else cable.points, float).copy()
+    route = np.asarray(cable.route if cable.route is not None else cable.points, float) - frames.origin
     route[0] = frames.to_world(cable.start.body, cable.start.pos)
     route[-1] = frames.to_world(cable.end.body, cable.end.pos)
     clips = []
@@ -424,18 +450,24 @@ def _edge_solimp(plan: _CablePlan) -> str:
 
 def build(scene: Scene, detect: bool = True) -> Built:
     """Compile the simulation model (and, if `detect`, the detection model)."""
-    frames = _Frames(scene)
+    origin = scene_origin(scene)
+    frames = _Frames(scene, origin)
     plans = [_plan_cable(c, frames) for c in scene.cables]
-    sim = _compile(scene, plans, detect=False)
-    det = _compile(scene, plans, detect=True) if detect else None
+    sim = _compile(scene, plans, detect=False, origin=origin)
+    det = _compile(scene, plans, detect=True, origin=origin) if detect else None
     if det is not None and (det.nq != sim.nq or det.ngeom != sim.ngeom):
         raise RuntimeError("detection and simulation models differ in structure")
-    return _finish(scene, sim, det, plans)
+    return _finish(scene, sim, det, plans, origin)
 
 
-def _compile(scene: Scene, plans: list[_CablePlan], detect: bool) -> mujoco.MjModel:
+def _compile(scene: Scene, plans: list[_CablePlan], detect: bool, origin: np.ndarray) -> mujoco.MjModel:
     spec = _base_spec(scene)
     _set_options(spec, scene)
+    # Model coordinates are the scene's world less `origin` (see scene_origin).
+    for child in spec.worldbody.bodies:
+        child.pos = list(np.asarray(child.pos, float) - origin)
+    for g in spec.worldbody.geoms:
+        g.pos = list(np.asarray(g.pos, float) - origin)
     for j in spec.joints:
         j.armature = BASE_ARMATURE
     for b in spec.bodies:
@@ -451,7 +483,7 @@ def _compile(scene: Scene, plans: list[_CablePlan], detect: bool) -> mujoco.MjMo
         g.margin = margin
 
     for body in scene.bodies:
-        b = spec.worldbody.add_body(name=body.name, pos=list(body.pos),
+        b = spec.worldbody.add_body(name=body.name, pos=list(np.asarray(body.pos, float) - origin),
                                     quat=list(_quat(body.euler)), gravcomp=1.0)
         b.add_freejoint(name=f"{body.name}/free").armature = BASE_ARMATURE
         # a free body needs mass; parts on it carry none of their own here
@@ -461,7 +493,8 @@ def _compile(scene: Scene, plans: list[_CablePlan], detect: bool) -> mujoco.MjMo
     for part in scene.parts:
         parent = spec.worldbody if part.body == "world" else spec.body(part.body)
         contype, conaff = _part_bits(scene, detect, part.keepout)
-        common = dict(name=part.name, pos=list(part.pos), quat=list(_quat(part.euler)),
+        pos = np.asarray(part.pos, float) - (origin if part.body == "world" else 0.0)
+        common = dict(name=part.name, pos=list(pos), quat=list(_quat(part.euler)),
                       contype=contype, conaffinity=conaff, margin=margin,
                       rgba=[0.9, 0.5, 0.1, 0.3] if part.keepout else [0.6, 0.6, 0.65, 1.0])
         if part.shape == "mesh":
@@ -513,7 +546,7 @@ _SHAPES = {int(mujoco.mjtGeom.mjGEOM_PLANE): "plane", int(mujoco.mjtGeom.mjGEOM_
 
 
 def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
-            plans: list[_CablePlan]) -> Built:
+            plans: list[_CablePlan], origin: np.ndarray) -> Built:
     scene_parts = {p.name: p for p in scene.parts}
     scene_bodies = {b.name for b in scene.bodies}
     parts: list[PartModel] = []
@@ -564,7 +597,7 @@ def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
         attachments = [Attachment("start", c.start.body, v, float(s[v])) for v in ((0, 1) if plan.pinned_to_world else ())]
         attachments += [Attachment(kind, body, v, float(s[v])) for kind, body, v, _ in plan.holds]
         cables.append(CableModel(c.name, c.radius, fid, int(m.flex_vertadr[fid]), n, float(s[-1]),
-                                 float(seg.mean()), plan.routed.copy(), qadr,
+                                 float(seg.mean()), plan.routed + origin, qadr,
                                  tuple(sorted(attachments, key=lambda a: a.vertex)), c.min_bend_radius, s))
 
     free = {}
@@ -592,4 +625,4 @@ def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
             scale = np.pi / 180.0 if jt == int(mujoco.mjtJoint.mjJNT_HINGE) else scene.scale
             joints[name] = JointDrive(name, jt, qa, da, scale)
     return Built(scene, m, det, cables, parts, free, body_ids,
-                 np.array(qadr_list, int), np.array(dadr_list, int), joints, qpos0, geom_part)
+                 np.array(qadr_list, int), np.array(dadr_list, int), joints, qpos0, geom_part, origin)

@@ -44,15 +44,16 @@ class ContactReader:
             self.geom_name[p.geom_id] = p.name
             self.geom_keepout[p.geom_id] = p.keepout
 
-    def read(self, data: mujoco.MjData) -> Contacts:
-        """All contacts of `data` (after mj_collision) with names."""
+    def read(self, data: mujoco.MjData, origin: np.ndarray) -> Contacts:
+        """All contacts of `data` (after mj_collision) with names; contact
+        points are moved from model coordinates to the scene world by `origin`."""
         n = int(data.ncon)
         con = data.contact
         geom = np.asarray(con.geom[:n], int).reshape(n, 2)
         flex = np.asarray(con.flex[:n], int).reshape(n, 2)
         elem = np.asarray(con.elem[:n], int).reshape(n, 2)
         dist = np.asarray(con.dist[:n], float).copy()
-        pos = np.asarray(con.pos[:n], float).reshape(n, 3).copy()
+        pos = np.asarray(con.pos[:n], float).reshape(n, 3) + origin
         # Put the flex side first so a is always the cable.
         swap = (flex[:, 0] < 0) & (flex[:, 1] >= 0)
         for arr in (geom, flex, elem):

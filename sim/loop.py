@@ -34,8 +34,8 @@ class StepState:
     Attributes:
       step: index of the step after t = 0 (0 is the rest state).
       t: time, seconds (0 at the end of settling).
-      cables: per cable, (n, 3) body centres from start to end, metres.
-      part_poses: (P, 4, 4) world pose of every part (geom frame), metres.
+      cables: per cable, (n, 3) body centres from start to end, scene world, metres.
+      part_poses: (P, 4, 4) scene-world pose of every part (geom frame), metres.
       contacts: MuJoCo's contacts from the detection model, or None.
       energy: (2,) potential and kinetic energy of the simulation, J.
     """
@@ -104,11 +104,12 @@ class Simulation:
         d = self.data
         if not self.built.scene.effects.dynamics:
             mujoco.mj_flex(self.model, d)
+        origin = self.built.origin  # model coordinates + origin = scene world
         xpos = d.flexvert_xpos
-        cables = [xpos[idx].copy() for idx in self._verts]
+        cables = [xpos[idx] + origin for idx in self._verts]
         poses = np.zeros((len(self._part_geoms), 4, 4))
         poses[:, :3, :3] = d.geom_xmat[self._part_geoms].reshape(-1, 3, 3)
-        poses[:, :3, 3] = d.geom_xpos[self._part_geoms]
+        poses[:, :3, 3] = d.geom_xpos[self._part_geoms] + origin
         poses[:, 3, 3] = 1.0
         found = self.detect(d) if (contacts and self.detect_data is not None) else None
         return StepState(step, step * self.timestep, cables, poses, found, d.energy.copy())
@@ -121,7 +122,7 @@ class Simulation:
         mujoco.mj_comPos(m2, d2)
         mujoco.mj_flex(m2, d2)
         mujoco.mj_collision(m2, d2)
-        return self.reader.read(d2)
+        return self.reader.read(d2, self.built.origin)
 
     def warnings(self) -> dict[str, int]:
         """MuJoCo warnings raised so far, by name, nonzero only."""

@@ -100,7 +100,7 @@ class Motion:
         for m in scene.motions:
             times = np.array([k.t for k in m.keys], float)
             if m.body is not None:
-                pos = np.array([k.pos for k in m.keys], float)
+                pos = np.array([k.pos for k in m.keys], float) - built.origin
                 quat = np.array([_quat(euler_matrix(k.euler)) for k in m.keys])
                 self.bodies.append(BodyTrack(*built.free[m.body], times, pos, quat))
                 keyed.add(m.body)
@@ -111,7 +111,7 @@ class Motion:
         for b in scene.bodies:
             if b.name not in keyed:
                 self.bodies.append(BodyTrack(*built.free[b.name], np.zeros(1),
-                                             np.array([b.pos], float),
+                                             np.array([b.pos], float) - built.origin,
                                              np.array([_quat(euler_matrix(b.euler))])))
         self.base_qpos_adr = built.base_qpos_adr
         self.base_dof_adr = built.base_dof_adr
