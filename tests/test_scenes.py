@@ -1,0 +1,137 @@
+"""The example scenes show each kind of interference on purpose; their reports say so.
+
+Every scene in `EXPECTED` is run with both checker methods and its events are
+compared with what the scene's header comment promises: the exact set of
+(type, a, b) pairs (so nothing unexpected appears), each pair's severity,
+phase and a window for its start (and, where it matters, its end and place).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sim.run import RunOptions, run_scene
+from sim.scene import load_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENES = ROOT / "scenes"
+
+# scene file -> {(type, a, b): (severity, phase, (t_start min, max), extra checks)}
+EXPECTED = {
+    "bracket_static.toml": {
+        ("cable-structure", "sensor", "frame/l_bracket"): ("hard", "static", (0.0, 0.0)),
+    },
+    "drawer_pinch.toml": {
+        ("cable-structure", "loop", "drawer/back"): ("hard", "dynamic", (0.85, 1.0)),
+    },
+    "crossing.toml": {
+        ("cable-cable", "power", "signal"): ("hard", "static", (0.0, 0.0)),
+    },
+    "coil_self.toml": {
+        ("self", "lead", "lead"): ("hard", "static", (0.0, 0.0)),
+    },
+    "keepout_bolt.toml": {
+        ("keepout", "lead", "plate/bolt_wrench_space"): ("hard", "dynamic", (0.15, 0.4)),
+    },
+    "bend_tight.toml": {
+        ("bend", "hose", "hose"): ("hard", "dynamic", (0.2, 0.5)),
+    },
+    "taut_pull.toml": {
+        ("taut", "lead", "lead"): ("hard", "dynamic", (0.1, 0.4)),
+    },
+}
+
+_reports: dict[tuple[str, str], dict] = {}
+
+
+def _report(name: str, method: str, tmp_path_factory) -> dict:
+    """Run a scene once per method (shared by the tests below)."""
+    key = (name, method)
+    if key not in _reports:
+        out = tmp_path_factory.mktemp("scenes") / f"{Path(name).stem}-{method}.json"
+        _reports[key] = run_scene(load_scene(SCENES / name),
+                                  RunOptions(report=out, record=None, method=method))
+    return _reports[key]
+
+
+def _events(report: dict) -> dict:
+    return {(e["type"], e["a"], e["b"]): e for e in report["events"]}
+
+
+def test_every_kind_is_shown_and_one_scene_uses_a_mesh():
+    kinds = {k[0] for expected in EXPECTED.values() for k in expected}
+    assert kinds >= {"cable-structure", "cable-cable", "self", "keepout", "bend", "taut"}
+    phases = {v[1] for expected in EXPECTED.values() for v in expected.values()}
+    assert phases == {"static", "dynamic"}
+    meshes = [p for name in EXPECTED for p in load_scene(SCENES / name).parts if p.shape == "mesh"]
+    assert meshes and meshes[0].file.is_relative_to(SCENES / "meshes")
+
+
+@pytest.mark.parametrize("method", ["points", "exact"])
+@pytest.mark.parametrize("name", sorted(EXPECTED))
+def test_scene_events(name: str, method: str, tmp_path_factory):
+    report = _report(name, method, tmp_path_factory)
+    assert report["complete"] and not report["warnings"]
+    assert report["settings"]["method"] == method
+    events = _events(report)
+    expected = EXPECTED[name]
+    # exactly the promised pairs, one event each: nothing unexpected
+    assert set(events) == set(expected), report["events"]
+    assert len(report["events"]) == len(expected)
+    duration = report["settings"]["duration"]
+    for key, (severity, phase, (lo, hi)) in expected.items():
+        e = events[key]
+        assert e["severity"] == severity and e["phase"] == phase, e
+        assert lo - 1e-9 <= e["t_start"] <= hi + 1e-9, e
+        assert e["t_start"] <= e["t_worst"] <= e["t_end"] <= duration + 1e-9
+        assert (e["min_distance"] < 0) == (severity == "hard")
+        if phase == "static":
+            # present at rest and never resolved: the whole run is one event
+            assert e["t_end"] == pytest.approx(duration)
+        else:
+            assert e["t_start"] > 0
+    if all(phase == "dynamic" for _, phase, _ in expected.values()):
+        assert not [e for e in report["events"] if e["t_start"] <= 0.0]
+    summary = report["summary"]
+    assert summary["hard"] + summary["soft"] == len(expected)
+    assert summary["static"] == sum(v[1] == "static" for v in expected.values())
+
+
+@pytest.mark.parametrize("method", ["points", "exact"])
+def test_where_the_interference_is(method: str, tmp_path_factory):
+    """Worst points sit where the scenes put the interference (mm)."""
+    bracket = _events(_report("bracket_static.toml", method, tmp_path_factory))
+    e = bracket[("cable-structure", "sensor", "frame/l_bracket")]
+    assert e["where"][0] == pytest.approx(0.0, abs=3.0)      # in the 4 mm flange at x = -2..2
+    assert e["min_distance"] == pytest.approx(-5.0, abs=0.2)  # centre of the flange: -(2 + r)
+    crossing = _events(_report("crossing.toml", method, tmp_path_factory))
+    e = crossing[("cable-cable", "power", "signal")]
+    assert np.allclose(e["where"][:2], [0.0, 0.0], atol=8.0)
+    coil = _events(_report("coil_self.toml", method, tmp_path_factory))
+    e = coil[("self", "lead", "lead")]
+    assert abs(e["where"][0]) < 10.0 and e["min_distance"] < -4.0
+    keepout = _events(_report("keepout_bolt.toml", method, tmp_path_factory))
+    e = keepout[("keepout", "lead", "plate/bolt_wrench_space")]
+    assert 0.85 <= e["t_end"] <= 1.15
+    assert np.hypot(e["where"][0], e["where"][1]) < 20.0 and 9.0 < e["where"][2] < 89.0
+
+
+def test_cable_flags_match_the_events(tmp_path_factory):
+    bend = _report("bend_tight.toml", "points", tmp_path_factory)["cables"][0]
+    assert bend["bend_violation"] and bend["min_bend_radius"] < 40.0
+    taut = _report("taut_pull.toml", "points", tmp_path_factory)["cables"][0]
+    assert taut["taut"] and taut["max_strain"] > 0.01
+    # the other scenes neither bend too tightly nor pull taut
+    for name in ("crossing.toml", "coil_self.toml", "keepout_bolt.toml", "drawer_pinch.toml"):
+        for cable in _report(name, "points", tmp_path_factory)["cables"]:
+            assert not cable["taut"] and not cable["bend_violation"], (name, cable["name"])
+
+
+@pytest.mark.parametrize("name", ["crossing.toml", "coil_self.toml", "bracket_static.toml"])
+def test_static_scenes_agree_with_mujoco(name: str, tmp_path_factory):
+    """Nothing moves: MuJoCo's contacts class every (step, pair) as the checker does."""
+    v = _report(name, "exact", tmp_path_factory)["validation"]
+    assert v["pair_steps"] > 0 and v["agreement"] == 1.0
