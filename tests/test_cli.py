@@ -162,6 +162,25 @@ def test_recording_holds_parts_cables_and_series(small_scene: Path, tmp_path: Pa
                              "/cables/lead/strain", "/cables/lead/min_bend_radius"])
 
 
+def test_recording_of_an_interfering_scene_holds_checks_and_events(tmp_path: Path):
+    """scenes/drawer_pinch.toml: the drawer's back panel sweeps through a cable loop."""
+    record = tmp_path / "pinch.rrd"
+    assert main(["run", str(ROOT / "scenes" / "drawer_pinch.toml"), "--record", str(record),
+                 "--quiet", "--fail-on", "never"]) == 0
+    report = json.loads(record.with_suffix(".json").read_text())
+    assert [(e["type"], e["a"], e["b"]) for e in report["events"]] == \
+        [("cable-structure", "loop", "drawer/back")]
+    _assert_rrd_has(record, [
+        "/world/interference/cable-structure/loop/drawer_back",   # marker at the worst point
+        "/checks/cable-structure/loop/drawer_back/distance",      # per-pair distance series
+        "/checks/agreement",                                       # per-step agreement series
+        "/world/mujoco_contacts",                                  # MuJoCo's contact points
+        "/events",                                                 # event log entries
+        "/world/parts/drawer/back", "/world/cables/loop",
+        "TextLog",
+    ])
+
+
 @pytest.mark.parametrize("name", sorted(p.name for p in (ROOT / "scenes").glob("*.toml")))
 def test_example_scenes_run(name: str, tmp_path: Path):
     code = main(["run", str(ROOT / "scenes" / name), "--no-record", "--quiet",
