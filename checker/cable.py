@@ -139,30 +139,39 @@ def densify(points: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]
     return pts, s
 
 
-def self_pair_excluded(s_a: np.ndarray, s_b: np.ndarray, radius: float | np.ndarray) -> np.ndarray:
+def self_pair_excluded(s_a: np.ndarray, s_b: np.ndarray, radius: float | np.ndarray,
+                       clearance: float = 0.0) -> np.ndarray:
     """True where two places on one cable are too close along it to interfere.
 
-    Two places whose arc lengths differ by less than ``pi * radius`` are never
-    self interference. Neighbouring points or elements of a cable are always
-    within ``2r`` of each other (the paper's spacing is ``2r``, and a bent
-    cable brings them closer still), so they would always "interfere". Beyond
-    them, the tightest bend a cable can take without kinking has its
-    centreline radius equal to ``r`` (the inner surface then has radius 0);
-    on such a bend two places come within ``2r`` of each other only when
-    their arc lengths differ by less than ``pi * r``: at exactly ``pi * r``
-    (a half turn) the two legs of the U just touch, which is the first real
-    self contact. So ``|s_a - s_b| < pi r`` is excluded and everything at or
-    beyond it is checked. At the paper's spacing ``2r`` this excludes exactly
-    the adjacent points and keeps every point two or more places away.
+    Two places whose arc lengths differ by less than ``pi * radius +
+    clearance`` are never self interference. Neighbouring points or elements
+    of a cable are always within ``2r`` of each other (the paper's spacing is
+    ``2r``, and a bent cable brings them closer still), so they would always
+    "interfere". Beyond them, the tightest bend a cable can take without
+    kinking has its centreline radius equal to ``r`` (the inner surface then
+    has radius 0); on such a bend two places come within ``2r`` of each other
+    only when their arc lengths differ by less than ``pi * r``: at exactly
+    ``pi * r`` (a half turn) the two legs of the U just touch, which is the
+    first real self contact. Soft interference reaches ``clearance`` further:
+    on a straight cable two places ``ds`` apart along it are ``ds - 2r`` apart
+    as surfaces, which is below the clearance whenever ``ds < 2r +
+    clearance``, so the window grows by the clearance too (otherwise every
+    straight cable with a clearance above ``(pi - 2) r`` would be in soft
+    self interference). A U bent that tight still reads hard from there on,
+    its legs lying together. At the paper's spacing ``2r`` and no clearance
+    this excludes exactly the adjacent points and keeps every point two or
+    more places away.
 
     Args:
         s_a, s_b: arc lengths (broadcastable arrays), same units as radius.
         radius: the cable's radius (scalar or broadcastable array).
+        clearance: the soft-interference distance, same units.
 
     Returns:
         bool array of the broadcast shape.
     """
-    return np.abs(np.asarray(s_a, dtype=float) - np.asarray(s_b, dtype=float)) < np.pi * np.asarray(radius, dtype=float)
+    reach = np.pi * np.asarray(radius, dtype=float) + clearance
+    return np.abs(np.asarray(s_a, dtype=float) - np.asarray(s_b, dtype=float)) < reach
 
 
 def bend_radius(points: np.ndarray) -> np.ndarray:

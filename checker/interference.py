@@ -196,11 +196,11 @@ def _cable_pairs_points(dp: _Discrete, tree: cKDTree, clearance: float, hits: _H
     # Self: only pairs far enough apart along the cable for the midpoint of
     # an element at one of them to be checkable.
     o = np.nonzero(same & (d < 2.0 * rad[i] + clearance + 0.5 * lmax))[0]
-    o = o[~self_pair_excluded(s[i[o]], s[j[o]], rad[i[o]] - 0.5 * lmax / np.pi)]
+    o = o[~self_pair_excluded(s[i[o]], s[j[o]], rad[i[o]] - 0.5 * lmax / np.pi, clearance)]
     if len(o) == 0:
         return
     si, sj, ds = i[o], j[o], d[o]
-    ok = ~self_pair_excluded(s[si], s[sj], rad[si])
+    ok = ~self_pair_excluded(s[si], s[sj], rad[si], clearance)
     hits.add(PairType.SELF, cab[si[ok]], cab[si[ok]], ds[ok] - 2 * rad[si[ok]], p[si[ok]], s[si[ok]], s[sj[ok]])
     # Second pass: each point against the midpoints of the elements at the other.
     q = np.concatenate([si, si, sj, sj])
@@ -211,7 +211,7 @@ def _cable_pairs_points(dp: _Discrete, tree: cKDTree, clearance: float, hits: _H
     q, e0 = q[valid], e0[valid]
     m = 0.5 * (p[e0] + p[e0 + 1])
     sm = 0.5 * (s[e0] + s[e0 + 1])
-    ok = ~self_pair_excluded(s[q], sm, rad[q])
+    ok = ~self_pair_excluded(s[q], sm, rad[q], clearance)
     q, m, sm = q[ok], m[ok], sm[ok]
     hits.add(PairType.SELF, cab[q], cab[q], np.linalg.norm(p[q] - m, axis=1) - 2 * rad[q], p[q], s[q], sm)
 
@@ -234,7 +234,7 @@ def _cable_pairs_exact(dp: _Discrete, tree: cKDTree, clearance: float, hits: _Hi
     same = cab[ia] == cab[ib]
     o = ~same
     hits.add(PairType.CABLE_CABLE, cab[ia[o]], cab[ib[o]], d[o] - rad[ia[o]] - rad[ib[o]], ca[o], sa[o], sb[o])
-    o = same & ~self_pair_excluded(sa, sb, rad[ia])
+    o = same & ~self_pair_excluded(sa, sb, rad[ia], clearance)
     hits.add(PairType.SELF, cab[ia[o]], cab[ia[o]], d[o] - 2 * rad[ia[o]], ca[o], sa[o], sb[o])
 
 
@@ -414,6 +414,10 @@ def _single_cable(cables: Sequence[CableState], clearance: float, hits: _Hits) -
         if cab.rest_length is not None:
             s = arc_length(cab.points) if s is None else s
             value = 0.01 * cab.rest_length - (s[-1] - cab.rest_length)
+            # Taut is a stretch beyond 1 %, hard only: a length clearance has no
+            # meaning for a stretch (a 0.3 m cable's whole 1 % is 3 mm).
+            if value >= 0.0:
+                continue
             hits.add(PairType.TAUT, np.array([c]), np.array([c]), np.array([value]), cab.points[-1][None],
                      np.array([s[-1]]))
 

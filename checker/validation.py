@@ -81,10 +81,12 @@ def contact_arc_length(points: np.ndarray, elem: np.ndarray, pos: np.ndarray) ->
 
 
 def simulator_pairs(contacts: SimContacts, cables: dict[str, tuple[np.ndarray, float]],
-                    exclusions: Sequence[Exclusion]) -> dict[tuple[str, str, str], tuple[float, np.ndarray]]:
+                    exclusions: Sequence[Exclusion],
+                    clearance: float) -> dict[tuple[str, str, str], tuple[float, np.ndarray]]:
     """Least distance and its contact point per pair, after the checker's filters.
 
-    `cables`: name -> (points (n, 3), radius) at this step."""
+    `cables`: name -> (points (n, 3), radius) at this step; `clearance` as
+    the checker's (it widens the self-exclusion window)."""
     keep = np.isin(contacts.kind, COMPARED_TYPES)
     idx = np.flatnonzero(keep)
     if len(idx) == 0:
@@ -110,7 +112,7 @@ def simulator_pairs(contacts: SimContacts, cables: dict[str, tuple[np.ndarray, f
     self_rows = kind == PairType.SELF.value
     if self_rows.any():
         radius = np.array([cables[n][1] for n in a[self_rows]])
-        drop[self_rows] = self_pair_excluded(s_a[self_rows], s_b[self_rows], radius)
+        drop[self_rows] = self_pair_excluded(s_a[self_rows], s_b[self_rows], radius, clearance)
     # A simulator contact stands for its whole element: drop it when the element
     # lies in the window (windows are aligned to elements by the caller; a
     # quarter element absorbs the cable's stretch since rest).

@@ -90,20 +90,24 @@ class Simulation:
         yield self.state(0, contacts)
         dynamics = self.built.scene.effects.dynamics
         for k in range(1, self.total_steps + 1):
-            t = k * self.timestep
-            self.motion.apply(self.data, t)
             if dynamics:
+                # Targets at their pose and velocity at the step's start; the
+                # step carries them (and the cable) to time k * dt.
+                self.motion.apply(self.data, (k - 1) * self.timestep)
                 mujoco.mj_step(self.model, self.data)
             else:
-                mujoco.mj_kinematics(self.model, self.data)
+                self.motion.apply(self.data, k * self.timestep)
             if k % every == 0 or k == self.total_steps:
                 yield self.state(k, contacts)
 
     def state(self, step: int, contacts: bool) -> StepState:
         """The current state as a StepState (no stepping)."""
         d = self.data
-        if not self.built.scene.effects.dynamics:
-            mujoco.mj_flex(self.model, d)
+        # mj_step leaves positions (xpos, flexvert_xpos) from the start of the
+        # step and qpos at its end: recompute them from qpos so the checker,
+        # the detection model and the recording all see the same instant.
+        mujoco.mj_kinematics(self.model, d)
+        mujoco.mj_flex(self.model, d)
         origin = self.built.origin  # model coordinates + origin = scene world
         xpos = d.flexvert_xpos
         cables = [xpos[idx] + origin for idx in self._verts]

@@ -172,7 +172,7 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
             agreement = None
             if validate:
                 seen = simulator_pairs(state.contacts, {c.name: (c.points, c.radius) for c in cables},
-                                       exclusions)
+                                       exclusions, config.clearance)
                 agreement = validation.compare(state.t, records, seen)
                 timer.lap("validate")
             if recorder:

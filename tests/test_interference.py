@@ -68,13 +68,13 @@ def brute_points(cables, parts, cfg, exclusions=()):
         r = ca.radius
         for i in range(len(pa)):
             for j in range(i + 1, len(pa)):
-                if not self_pair_excluded(sa[i], sa[j], r):
+                if not self_pair_excluded(sa[i], sa[j], r, cfg.clearance):
                     put((PairType.SELF, ca.name, ca.name), np.linalg.norm(pa[i] - pa[j]) - 2 * r)
             for e in range(len(pa) - 1):
                 if i in (e, e + 1):
                     continue
                 sm = 0.5 * (sa[e] + sa[e + 1])
-                if not self_pair_excluded(sa[i], sm, r):
+                if not self_pair_excluded(sa[i], sm, r, cfg.clearance):
                     put((PairType.SELF, ca.name, ca.name), np.linalg.norm(pa[i] - 0.5 * (pa[e] + pa[e + 1])) - 2 * r)
         for b in range(a + 1, len(cables)):
             cb = cables[b]
@@ -109,7 +109,7 @@ def brute_exact(cables, parts, cfg):
                 d, s, t, _, _ = segment_segment(pa[i][None], pa[i + 1][None], pa[j][None], pa[j + 1][None])
                 s_i = sa[i] + s[0] * (sa[i + 1] - sa[i])
                 s_j = sa[j] + t[0] * (sa[j + 1] - sa[j])
-                if not self_pair_excluded(s_i, s_j, r):
+                if not self_pair_excluded(s_i, s_j, r, cfg.clearance):
                     put((PairType.SELF, ca.name, ca.name), d[0] - 2 * r)
         for b in range(a + 1, len(cables)):
             cb = cables[b]

@@ -40,7 +40,7 @@ EXPECTED = {
         ("bend", "hose", "hose"): ("hard", "dynamic", (0.2, 0.5)),
     },
     "taut_pull.toml": {
-        ("taut", "lead", "lead"): ("hard", "dynamic", (0.1, 0.4)),
+        ("taut", "lead", "lead"): ("hard", "dynamic", (0.3, 0.6)),  # stretch passes 1 % at about 0.41 s
     },
 }
 
