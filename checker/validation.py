@@ -155,12 +155,16 @@ class Validation:
       mesh_parts: names of parts that are meshes (the simulator collides
         their convex hulls).
       keep: how many disagreements to keep in detail.
+      unit, unit_name: distances in reasons are written divided by `unit`
+        and followed by `unit_name` (the report's units).
     """
 
     clearance: float
     method: str
     mesh_parts: frozenset[str] = frozenset()
     keep: int = 50
+    unit: float = 1.0
+    unit_name: str = ""
     compared_steps: int = 0
     pair_steps: int = 0
     agree: int = 0
@@ -217,7 +221,7 @@ class Validation:
             what = "crossing" if kind in (PairType.SELF.value, PairType.CABLE_CABLE.value) else "contact"
             return f"between points: the {what} falls between discrete points (method points)"
         if dc is not None and dm is not None and abs(dc - dm) <= 0.02 * max(c, 1e-12):
-            return (f"at a boundary: distances agree within {abs(dc - dm):.3g} but straddle "
+            return (f"at a boundary: distances agree within {self._len(abs(dc - dm))} but straddle "
                     f"{'0' if min(dc, dm) < 0 <= max(dc, dm) else 'the clearance'}")
         if dm is None and dc is not None and dc >= 0:
             return "no simulator contact: MuJoCo generated no contact for this soft pair within its margin"
@@ -225,7 +229,10 @@ class Validation:
             return "no simulator contact: MuJoCo generated no contact for this overlapping pair"
         if dc is None:
             return "checker clear: the checker found this pair clear of the clearance"
-        return f"distance differs: checker {dc:.6g}, MuJoCo {dm:.6g}"
+        return f"distance differs: checker {self._len(dc)}, MuJoCo {self._len(dm)}"
+
+    def _len(self, value: float) -> str:
+        return f"{value / self.unit:.4g}{' ' + self.unit_name if self.unit_name else ''}"
 
     @property
     def agreement(self) -> float:

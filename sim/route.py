@@ -74,38 +74,49 @@ def _droop(route: np.ndarray, length: float, count: int, down: np.ndarray) -> np
 
 
 def _allocate(weights: np.ndarray, total: int, least: int) -> np.ndarray:
-    """Integers >= least, summing to `total`, proportional to weights (largest remainder)."""
-    spare = total - least * len(weights)
-    share = weights / weights.sum() * spare
-    out = np.floor(share).astype(int)
-    out[np.argsort(share - out)[::-1][: spare - out.sum()]] += 1
-    return out + least
+    """Integers >= least summing to `total`, as near as possible to proportional to weights."""
+    share = weights / weights.sum() * total
+    out = np.maximum(np.floor(share).astype(int), least)
+    while out.sum() < total:  # give to the runs furthest below their share
+        out[np.argmax(share - out)] += 1
+    while out.sum() > total:  # take from the runs furthest above it, never below `least`
+        over = np.where(out > least, out - share, -np.inf)
+        out[np.argmax(over)] -= 1
+    return out
 
 
 def initial_shape(route: np.ndarray, length: float, count: int,
                   down: np.ndarray = np.array([0.0, 0.0, -1.0])) -> np.ndarray:
     """(count, 3) points along `route` whose polyline has arc length `length`.
 
-    Method: every waypoint of the route stays where it is, and every straight
-    run between waypoints gets the same share of slack (length / route length)
-    and of the elements (at least two each, in proportion to its length). A
-    run with slack droops as a half sine h * sin(pi s / S) towards `down`
-    (sideways for a vertical run), h found by Brent's method so that its
-    resampled points (the cable's elements) have the run's length to 1e-9
-    relative. Drooping run by run keeps every waypoint on the cable; a droop
-    over a route with corners could shorten a run instead of lengthening it.
-    Routes with more runs than pairs of elements (a dense `points` route) are
-    drooped as a whole. Both ends stay where they are. `length` shorter than
-    the route is the caller's error (the scene loader rejects it) and is
-    treated as the route's length.
+    Method: with no slack the points are spaced evenly along the route. With
+    slack, every waypoint of the route stays where it is: the elements are
+    shared among the straight runs between waypoints in proportion to their
+    lengths (so elements come out nearly equal), and every run given two or
+    more elements droops by the same ratio of extra length, as a half sine
+    h * sin(pi s / S) towards `down` (sideways for a vertical run), h found by
+    Brent's method so that its resampled points (the cable's elements) have
+    the run's length to 1e-9 relative. Runs given a single element stay
+    straight and the others take their share of slack. Drooping run by run
+    keeps every waypoint on the cable; a droop over a route with corners
+    could shorten a run instead of lengthening it. If no run can droop (a
+    dense `points` route), the route droops as a whole. Both ends stay where
+    they are. `length` shorter than the route is the caller's error (the
+    scene loader rejects it) and is treated as the route's length.
     """
     route = np.asarray(route, dtype=float)
     runs = np.linalg.norm(np.diff(route, axis=0), axis=1)
+    total = runs.sum()
     elements = count - 1
-    if len(runs) == 1 or elements < 2 * len(runs):
+    if length <= total * (1.0 + 1e-9) or len(runs) == 1:
         return _droop(route, length, count, down)
-    ratio = max(length / runs.sum(), 1.0)
-    counts = _allocate(runs, elements, 2)
-    pieces = [_droop(route[i:i + 2], runs[i] * ratio, int(counts[i]) + 1, down)
+    if elements < len(runs):
+        return _droop(route, length, count, down)
+    counts = _allocate(runs, elements, 1)
+    bends = counts >= 2
+    if not bends.any():
+        return _droop(route, length, count, down)
+    ratio = (length - runs[~bends].sum()) / runs[bends].sum()
+    pieces = [_droop(route[i:i + 2], runs[i] * (ratio if bends[i] else 1.0), int(counts[i]) + 1, down)
               for i in range(len(runs))]
     return np.concatenate([pieces[0]] + [p[1:] for p in pieces[1:]])

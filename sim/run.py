@@ -142,7 +142,8 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     every = scene.check.every
     tracker = EventTracker(hold=3 * every * scene.timestep)
     validation = Validation(scene.check.clearance, config.method,
-                            frozenset(p.name for p in built.parts if p.shape == "mesh"))
+                            frozenset(p.name for p in built.parts if p.shape == "mesh"),
+                            unit=scene.scale, unit_name=scene.units)
     n = len(built.cables)
     max_strain = np.full(n, -np.inf)
     min_bend = np.full(n, np.inf)

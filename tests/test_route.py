@@ -49,3 +49,22 @@ def test_resample_even_keeps_ends_and_spacing():
     route = np.array([[0.0, 0, 0], [1.0, 0, 0], [1.0, 1.0, 0]])
     pts = resample_even(route, 5)
     assert np.allclose(pts, [[0, 0, 0], [0.5, 0, 0], [1, 0, 0], [1, 0.5, 0], [1, 1, 0]])
+
+
+def test_uneven_dense_route_gets_nearly_equal_elements():
+    # a long lead-in, then many short runs (a `points` route), with slack
+    lead = [[-0.11, 0, 0]]
+    coil = [[0.02 * np.cos(a), 0.0, 0.02 * np.sin(a)] for a in np.linspace(0, 2 * np.pi, 18)]
+    route = np.array(lead + coil)
+    length = polyline_length(route) * 1.02
+    pts = initial_shape(route, length, 37)
+    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    assert np.isclose(seg.sum(), length, rtol=1e-6)
+    assert seg.max() / seg.min() < 2.5
+
+
+def test_route_without_slack_is_resampled_evenly():
+    route = np.array([[0.0, 0, 0], [0.3, 0, 0], [0.6, 0.03, 0]])
+    pts = initial_shape(route, polyline_length(route), 61)
+    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    assert np.allclose(seg, seg.mean(), rtol=1e-3)  # an element across the corner is a chord
