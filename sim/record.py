@@ -8,8 +8,10 @@ Entity tree (mirrors the scene, in the scene's units, z up):
   radius, coloured by its worst state at that step (clear, soft, hard).
 - `world/interference/<type>/<a>/<b>`: a marker at the worst point of each
   pair below the clearance; `world/mujoco_contacts`: MuJoCo's contact points.
-- `cables/<name>/strain`, `cables/<name>/min_bend_radius`,
-  `checks/<pair>/distance`, `checks/agreement`: time series.
+- `cables/strain/<name>` (percent), `cables/bend_radius/<name>` (scene
+  units), `checks/<type>/<a>/<b>/distance` (scene units) and
+  `validation/agreement` (fraction of pairs classed alike by the checker
+  and MuJoCo): time series, one view each, since their scales differ.
 - `events`: one text entry per interference event at its start time.
 
 Geometry is logged in batches (one call per cable per step), never per point.
@@ -59,9 +61,14 @@ def _blueprint() -> rrb.Blueprint:
         rrb.Horizontal(
             rrb.Spatial3DView(name="Scene", origin="world"),
             rrb.Vertical(
-                rrb.TimeSeriesView(name="Pair distances", origin="checks"),
-                rrb.TimeSeriesView(name="Cables", origin="cables"),
+                rrb.TimeSeriesView(name="Pair distances (scene units)", origin="checks"),
+                rrb.Horizontal(
+                    rrb.TimeSeriesView(name="Strain (%)", origin="cables/strain"),
+                    rrb.TimeSeriesView(name="Min bend radius (scene units)", origin="cables/bend_radius"),
+                ),
+                rrb.TimeSeriesView(name="Agreement with MuJoCo", origin="validation"),
                 rrb.TextLogView(name="Events", origin="events"),
+                row_shares=[3, 2, 1, 2],
             ),
             column_shares=[3, 2],
         ),
@@ -85,6 +92,7 @@ class Recorder:
         moving = {name for name in built.body_ids if name != "world"}
         self.moving_parts = np.array([b in moving for b in body_of_part], bool)
         self._closed = False
+        self._labelled: set[str] = set()
 
     # -- static content ---------------------------------------------------
     def log_static(self, part_poses: np.ndarray) -> None:
@@ -137,9 +145,9 @@ class Recorder:
                     rr.LineStrips3D([pts / u], radii=[cable.radius / u],
                                     colors=[STATE_COLOURS[state]]))
             if strain is not None:
-                rec.log(f"cables/{_escape(cable.name)}/strain", rr.Scalars(float(strain[i])))
+                rec.log(f"cables/strain/{_escape(cable.name)}", rr.Scalars(100.0 * float(strain[i])))
             if bend is not None and np.isfinite(bend[i]):
-                rec.log(f"cables/{_escape(cable.name)}/min_bend_radius", rr.Scalars(float(bend[i] / u)))
+                rec.log(f"cables/bend_radius/{_escape(cable.name)}", rr.Scalars(float(bend[i] / u)))
 
     def log_markers(self, markers: dict[str, tuple[np.ndarray, str]]) -> None:
         """Interference markers at worst points: entity path -> (point, state)."""
@@ -159,8 +167,12 @@ class Recorder:
                      rr.Points3D(np.asarray(points).reshape(-1, 3) / self.unit, radii=[-3.0],
                                  colors=[(40, 220, 120)]))
 
-    def log_scalar(self, path: str, value: float) -> None:
-        """A time series value at the current time."""
+    def log_scalar(self, path: str, value: float, label: str | None = None) -> None:
+        """A time series value at the current time; `label` names the series
+        in plot legends (set once per path)."""
+        if label is not None and path not in self._labelled:
+            self._labelled.add(path)
+            self.rec.log(path, rr.SeriesLines(names=[label]), static=True)
         self.rec.log(path, rr.Scalars(float(value)))
 
     def log_event(self, t: float, text: str, level: str) -> None:

@@ -215,7 +215,8 @@ def _record_step(recorder: Recorder, state, records, names, strain, bend, agreem
     for r in records:
         path = pair_path(PairType(r.type).value, r.a, r.b)
         now[path] = (r.where, Severity(r.severity).value)
-        recorder.log_scalar(f"checks/{path}/distance", r.min_distance / unit)
+        recorder.log_scalar(f"checks/{path}/distance", r.min_distance / unit,
+                            label=f"{PairType(r.type).value}: {r.a} / {r.b}")
     recorder.log_markers(now)
     recorder.clear_markers(markers - set(now))
     markers.clear()
@@ -223,7 +224,7 @@ def _record_step(recorder: Recorder, state, records, names, strain, bend, agreem
     if state.contacts is not None:
         recorder.log_contacts(state.contacts.pos)
     if agreement is not None:
-        recorder.log_scalar("checks/agreement", agreement)
+        recorder.log_scalar("validation/agreement", agreement)
     for key in started:
         worst = tracker.pairs[key]
         recorder.log_event(state.t, f"{key[0]} {key[1]} / {key[2]} starts (distance "

@@ -159,7 +159,7 @@ def test_recording_holds_parts_cables_and_series(small_scene: Path, tmp_path: Pa
     record = tmp_path / "small.rrd"
     assert main(["run", str(small_scene), "--record", str(record), "--quiet"]) == 0
     _assert_rrd_has(record, ["/world/cables/lead", "/world/parts/frame/floor",
-                             "/cables/lead/strain", "/cables/lead/min_bend_radius"])
+                             "/cables/strain/lead", "/cables/bend_radius/lead"])
 
 
 def test_recording_of_an_interfering_scene_holds_checks_and_events(tmp_path: Path):
@@ -173,7 +173,7 @@ def test_recording_of_an_interfering_scene_holds_checks_and_events(tmp_path: Pat
     _assert_rrd_has(record, [
         "/world/interference/cable-structure/loop/drawer_back",   # marker at the worst point
         "/checks/cable-structure/loop/drawer_back/distance",      # per-pair distance series
-        "/checks/agreement",                                       # per-step agreement series
+        "/validation/agreement",                                       # per-step agreement series
         "/world/mujoco_contacts",                                  # MuJoCo's contact points
         "/events",                                                 # event log entries
         "/world/parts/drawer/back", "/world/cables/loop",
