@@ -1,0 +1,277 @@
+"""Bounding-volume hierarchy for rigid parts: assembly boxes, part OBBs, triangle trees.
+
+Three levels, as in the seeds (001: AABB in part frames, OBB in the assembly
+frame, separating-axis tests; 004: assembly boxes, then part boxes, then
+triangles):
+
+- :class:`TriangleForest`: one axis-aligned box tree per part over its
+  triangles, in the part's own frame, built once (median split on the longest
+  axis, ``LEAF_SIZE`` triangles per leaf) and stored flat for all parts
+  together, so that one vectorised traversal answers many box queries against
+  many parts at once (:meth:`TriangleForest.query`). Poses never change it.
+- Oriented boxes: a part's box in its frame placed by its pose is an OBB in
+  the assembly (world) frame; :func:`obb_overlap` is the 15-axis separating
+  axis test (3 + 3 face normals, 9 edge cross products) for whole arrays of
+  box pairs.
+- :func:`assembly_boxes`: world AABBs of every assembly path prefix
+  ("frame", "frame/left", ...), from the parts' world AABBs, and
+  :func:`prefix_hits`, which tells for each part whether every assembly it
+  belongs to passed a test.
+
+Touching boxes count as overlapping (closed boxes), so a contact exactly on a
+box face is never pruned. Nothing here knows about triangles' contents, contacts
+or distances.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+LEAF_SIZE = 8
+"""Triangles per leaf of a part's tree."""
+
+
+@dataclass(frozen=True, eq=False)
+class TriangleForest:
+    """Box trees over the triangles of many parts, stored flat.
+
+    Attributes:
+        node_lo, node_hi: (N, 3) node boxes in their part's frame.
+        left, right: (N,) child node indices, -1 for leaves.
+        first, count: (N,) a leaf's range in ``order``.
+        order: (T,) triangle indices (global, see ``tri_part``) in leaf order.
+        root: (P,) root node of each part, -1 for a part without triangles.
+        tri_part: (T,) the part of each triangle.
+    """
+
+    node_lo: np.ndarray
+    node_hi: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+    first: np.ndarray
+    count: np.ndarray
+    order: np.ndarray
+    root: np.ndarray
+    tri_part: np.ndarray
+
+    @staticmethod
+    def build(tri_lo: np.ndarray, tri_hi: np.ndarray, tri_part: np.ndarray, parts: int) -> "TriangleForest":
+        """Build the trees from per-triangle boxes (T, 3) grouped by part.
+
+        ``tri_part`` must be sorted (each part's triangles contiguous)."""
+        lo_n: list[np.ndarray] = []
+        hi_n: list[np.ndarray] = []
+        left: list[int] = []
+        right: list[int] = []
+        first: list[int] = []
+        count: list[int] = []
+        order: list[np.ndarray] = []
+        placed = 0
+        centre = 0.5 * (tri_lo + tri_hi)
+        starts = np.searchsorted(tri_part, np.arange(parts + 1))
+        root = np.full(parts, -1, np.int64)
+
+        def node(idx: np.ndarray) -> int:
+            nonlocal placed
+            k = len(left)
+            lo_n.append(tri_lo[idx].min(axis=0))
+            hi_n.append(tri_hi[idx].max(axis=0))
+            left.append(-1)
+            right.append(-1)
+            first.append(-1)
+            count.append(0)
+            if len(idx) <= LEAF_SIZE:
+                first[k], count[k] = placed, len(idx)
+                order.append(idx)
+                placed += len(idx)
+                return k
+            c = centre[idx]
+            axis = int(np.argmax(c.max(axis=0) - c.min(axis=0)))
+            half = len(idx) // 2
+            split = np.argpartition(c[:, axis], half)
+            left[k] = node(idx[split[:half]])
+            right[k] = node(idx[split[half:]])
+            return k
+
+        for p in range(parts):
+            idx = np.arange(starts[p], starts[p + 1])
+            if len(idx):
+                root[p] = node(idx)
+        i64 = np.int64
+        return TriangleForest(
+            node_lo=np.array(lo_n).reshape(-1, 3), node_hi=np.array(hi_n).reshape(-1, 3),
+            left=np.array(left, i64), right=np.array(right, i64),
+            first=np.array(first, i64), count=np.array(count, i64),
+            order=np.concatenate(order) if order else np.zeros(0, i64),
+            root=root, tri_part=np.asarray(tri_part, i64))
+
+    def query(self, part: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Triangles whose boxes meet query boxes, one query per row.
+
+        Breadth-first, one numpy pass per tree level over every live
+        (query, node) pair.
+
+        Args:
+            part: (Q,) part of each query.
+            lo, hi: (Q, 3) query boxes in that part's frame.
+
+        Returns:
+            query, triangle: (K,) matching query rows and global triangle indices.
+        """
+        q = np.arange(len(part))
+        n = self.root[part]
+        keep = n >= 0
+        q, n = q[keep], n[keep]
+        out_q: list[np.ndarray] = []
+        out_t: list[np.ndarray] = []
+        while len(q):
+            hit = np.all((self.node_lo[n] <= hi[q]) & (lo[q] <= self.node_hi[n]), axis=1)
+            q, n = q[hit], n[hit]
+            leaf = self.left[n] < 0
+            if leaf.any():
+                lq, ln = q[leaf], n[leaf]
+                cnt = self.count[ln]
+                rows = np.repeat(lq, cnt)
+                offs = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+                out_q.append(rows)
+                out_t.append(self.order[np.repeat(self.first[ln], cnt) + offs])
+            inner = ~leaf
+            q = np.concatenate([q[inner], q[inner]])
+            n = np.concatenate([self.left[n[inner]], self.right[n[inner]]])
+        if not out_q:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        return np.concatenate(out_q), np.concatenate(out_t)
+
+
+def box_corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(n, 8, 3) corners of boxes (n, 3)."""
+    bits = np.array([[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], float)
+    return lo[:, None, :] + bits[None] * (hi - lo)[:, None, :]
+
+
+def transformed_aabb(lo: np.ndarray, hi: np.ndarray, rot: np.ndarray, shift: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """AABB of boxes (n, 3) after ``x -> rot x + shift`` (rot (n, 3, 3), shift (n, 3)).
+
+    Uses centre and the absolute rotation (Arvo), exact for the rotated box."""
+    c = 0.5 * (lo + hi)
+    h = 0.5 * (hi - lo)
+    cw = np.einsum("nij,nj->ni", rot, c) + shift
+    hw = np.einsum("nij,nj->ni", np.abs(rot), h)
+    return cw - hw, cw + hw
+
+
+def obb_overlap(c1: np.ndarray, r1: np.ndarray, h1: np.ndarray,
+                c2: np.ndarray, r2: np.ndarray, h2: np.ndarray) -> np.ndarray:
+    """15-axis separating-axis test for pairs of oriented boxes.
+
+    Box k has centre ``c`` (n, 3), axes as the columns of ``r`` (n, 3, 3) and
+    half extents ``h`` (n, 3). The boxes are disjoint when their projections
+    on one of the 15 axes (each box's 3 axes, 9 cross products) are separated
+    by more than a rounding allowance; touching boxes overlap. Cross products
+    of nearly parallel edges are kept small by adding ``1e-12`` to the
+    absolute rotation (Gottschalk's guard), which can only widen projections.
+
+    Returns:
+        (n,) bool, True when the boxes may overlap.
+    """
+    rot = np.einsum("nji,njk->nik", r1, r2)          # r2's axes in r1's frame
+    t = np.einsum("nji,nj->ni", r1, c2 - c1)          # centre offset in r1's frame
+    scale = np.abs(c1).max(axis=1) + np.abs(c2).max(axis=1) + h1.max(axis=1) + h2.max(axis=1)
+    slack = 1e-12 * scale
+    ar = np.abs(rot) + 1e-12
+    sep = np.zeros(len(c1), bool)
+    # axes of box 1
+    ra = h1
+    rb = np.einsum("nij,nj->ni", ar, h2)
+    sep |= np.any(np.abs(t) > ra + rb + slack[:, None], axis=1)
+    # axes of box 2
+    ra = np.einsum("nji,nj->ni", ar, h1)
+    tb = np.einsum("nji,nj->ni", rot, t)
+    sep |= np.any(np.abs(tb) > ra + h2 + slack[:, None], axis=1)
+    # cross products A_i x B_j
+    for i in range(3):
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        for j in range(3):
+            j1, j2 = (j + 1) % 3, (j + 2) % 3
+            ra = h1[:, i1] * ar[:, i2, j] + h1[:, i2] * ar[:, i1, j]
+            rb = h2[:, j1] * ar[:, i, j2] + h2[:, j2] * ar[:, i, j1]
+            tt = np.abs(t[:, i2] * rot[:, i1, j] - t[:, i1] * rot[:, i2, j])
+            sep |= tt > ra + rb + slack
+    return ~sep
+
+
+def aabb_pairs(lo: np.ndarray, hi: np.ndarray, margin: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """All pairs i < j of boxes (n, 3) that overlap after growing each by ``margin``.
+
+    Sort and sweep on x (vectorised: each box's candidates are the boxes
+    starting within its x range), then y and z are tested.
+    """
+    n = len(lo)
+    if n < 2:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    lo = lo - margin
+    hi = hi + margin
+    order = np.argsort(lo[:, 0], kind="stable")
+    slo = lo[order, 0]
+    end = np.searchsorted(slo, hi[order, 0], side="right")
+    cnt = np.maximum(end - np.arange(n) - 1, 0)
+    a = np.repeat(np.arange(n), cnt)
+    b = a + 1 + (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt))
+    i, j = order[a], order[b]
+    ok = np.all((lo[i, 1:] <= hi[j, 1:]) & (lo[j, 1:] <= hi[i, 1:]), axis=1)
+    i, j = i[ok], j[ok]
+    return np.minimum(i, j), np.maximum(i, j)
+
+
+@dataclass(frozen=True)
+class Assemblies:
+    """Assembly path prefixes of a set of parts.
+
+    Attributes:
+        names: (A,) every proper prefix of a part name ("a", "a/b" for "a/b/c").
+        member: (P, D) assembly index of each part at each depth, -1 past its depth.
+    """
+
+    names: tuple[str, ...]
+    member: np.ndarray
+
+    @staticmethod
+    def of(part_names: list[str]) -> "Assemblies":
+        """The assemblies of parts named by "/"-separated paths."""
+        index: dict[str, int] = {}
+        rows = []
+        for name in part_names:
+            levels = name.split("/")[:-1]
+            row = []
+            for d in range(len(levels)):
+                key = "/".join(levels[:d + 1])
+                row.append(index.setdefault(key, len(index)))
+            rows.append(row)
+        depth = max((len(r) for r in rows), default=0)
+        member = np.full((len(part_names), depth), -1, np.int64)
+        for i, r in enumerate(rows):
+            member[i, :len(r)] = r
+        return Assemblies(tuple(index), member)
+
+
+def assembly_boxes(asm: Assemblies, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World AABBs (A, 3) of each assembly from its parts' AABBs (P, 3)."""
+    a_lo = np.full((len(asm.names), 3), np.inf)
+    a_hi = np.full((len(asm.names), 3), -np.inf)
+    for d in range(asm.member.shape[1]):
+        m = asm.member[:, d]
+        ok = m >= 0
+        np.minimum.at(a_lo, m[ok], lo[ok])
+        np.maximum.at(a_hi, m[ok], hi[ok])
+    return a_lo, a_hi
+
+
+def prefix_hits(asm: Assemblies, hit: np.ndarray) -> np.ndarray:
+    """(P,) True for parts all of whose assemblies have ``hit`` (A,) True."""
+    ok = np.ones(len(asm.member), bool)
+    for d in range(asm.member.shape[1]):
+        m = asm.member[:, d]
+        ok &= (m < 0) | hit[np.maximum(m, 0)]
+    return ok

@@ -1,0 +1,212 @@
+"""Rigid parts prepared once for sweeps and part-part checks, and placed per pose set.
+
+:class:`PartSet` holds, for every part, its triangle surface in its own frame
+(:mod:`checker.tessellate`), outward normals and edge pseudonormals per
+triangle, containment probes, its box in its frame and one
+:class:`~checker.bvh.TriangleForest` over all parts' triangles. It is built
+once; a new set of poses only needs :meth:`PartSet.place`, which computes the
+oriented boxes in the assembly (world) frame, their world AABBs and the
+assembly boxes. Queries reuse both.
+
+Containment probes: every vertex, and every triangle's centroid moved inward
+along its normal by ``PROBE_DEPTH`` of the part's size. A probe strictly
+inside another part (its signed distance below ``-EPS`` of the size) means the
+two overlap; coincident parts and parts inside parts are found this way
+without a crossing of surfaces. Parts sharing a face from opposite sides put
+no probe inside each other, so they only touch.
+
+Not here: the contact tests themselves (:mod:`checker.sweep`,
+:mod:`checker.parts`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from checker.bvh import Assemblies, TriangleForest, assembly_boxes, transformed_aabb
+from checker.shapes import Shape
+from checker.tessellate import part_surface
+
+PROBE_DEPTH = 1e-7
+"""Inward offset of the centroid probes, relative to the part's box diagonal:
+overlaps thinner than this count as touching."""
+
+
+@dataclass(frozen=True, eq=False)
+class Placement:
+    """Parts placed by one set of poses.
+
+    Attributes:
+        rot: (P, 3, 3) part-to-world rotations.
+        pos: (P, 3) part origins in the world.
+        centre: (P, 3) OBB centres in the world.
+        lo, hi: (P, 3) world AABBs of the OBBs (infinite for planes).
+        asm_lo, asm_hi: (A, 3) world AABBs of the assemblies.
+    """
+
+    rot: np.ndarray
+    pos: np.ndarray
+    centre: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    asm_lo: np.ndarray
+    asm_hi: np.ndarray
+
+    def world(self, part: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """Points (n, ..., 3) of parts ``part`` (n,) from their frames to the world."""
+        r = self.rot[part]
+        shape = points.shape
+        p = points.reshape(len(part), -1, 3)
+        return (np.einsum("nij,nkj->nki", r, p) + self.pos[part][:, None, :]).reshape(shape)
+
+    def local(self, part: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """World points (n, ..., 3) into the frames of parts ``part`` (n,)."""
+        r = self.rot[part]
+        shape = points.shape
+        p = points.reshape(len(part), -1, 3) - self.pos[part][:, None, :]
+        return np.einsum("nji,nkj->nki", r, p).reshape(shape)
+
+
+@dataclass(frozen=True, eq=False)
+class PartSet:
+    """Parts' surfaces, trees and probes in their own frames; built once.
+
+    Attributes:
+        names: part names ("/"-separated assembly paths).
+        groups: the rigid body each part rides on (parts of one group never
+            move relative to each other).
+        keepout: (P,) bool, keep-out zones.
+        closed: (P,) bool, inside and outside are defined.
+        plane: (P,) bool, the part is the half-space local z < 0.
+        error: (P,) tessellation error bound (0 for boxes and meshes).
+        shapes: the exact shapes (containment uses their signed distances).
+        tris: (T, 3, 3) triangles in their part's frame, grouped by part.
+        tri_part: (T,) part of each triangle.
+        normals: (T, 3) unit outward normals.
+        edge_normals: (T, 3, 3) pseudonormal of edge k (corner k to k + 1).
+        vertices: (V, 3) all parts' vertices; vert_part (V,) their part.
+        probes: (Q, 3) containment probes; probe_part (Q,) their part.
+        lo, hi: (P, 3) boxes in the part frames.
+        forest: triangle trees.
+        assemblies: the assembly prefixes of ``names``.
+        warnings: human-readable notes (open meshes).
+    """
+
+    names: tuple[str, ...]
+    groups: tuple[str, ...]
+    keepout: np.ndarray
+    closed: np.ndarray
+    plane: np.ndarray
+    error: np.ndarray
+    shapes: tuple[Shape, ...]
+    tris: np.ndarray
+    tri_part: np.ndarray
+    normals: np.ndarray
+    edge_normals: np.ndarray
+    vertices: np.ndarray
+    vert_part: np.ndarray
+    probes: np.ndarray
+    probe_part: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    forest: TriangleForest
+    assemblies: Assemblies
+    warnings: tuple[str, ...]
+
+    @staticmethod
+    def build(names: list[str], shapes: list[Shape], groups: list[str] | None = None,
+              keepout: list[bool] | None = None, tolerance: float = 2.5e-4) -> "PartSet":
+        """Tessellate, index and probe every part.
+
+        Args:
+            names, shapes: one per part.
+            groups: rigid body per part (default: every part its own).
+            keepout: keep-out flag per part (default: none).
+            tolerance: tessellation tolerance of curved primitives (shape units).
+        """
+        n = len(names)
+        groups = list(groups) if groups is not None else list(names)
+        keepout = np.array(keepout if keepout is not None else [False] * n, bool)
+        tris, tri_part, normals, edge_n, verts, vpart, probes, ppart = [], [], [], [], [], [], [], []
+        closed = np.ones(n, bool)
+        plane = np.zeros(n, bool)
+        error = np.zeros(n)
+        lo = np.zeros((n, 3))
+        hi = np.zeros((n, 3))
+        warnings = []
+        for i, sh in enumerate(shapes):
+            surf = part_surface(sh, tolerance)
+            closed[i], plane[i], error[i] = surf.closed, surf.plane, surf.error
+            if surf.plane:
+                lo[i], hi[i] = -np.inf, np.inf
+                continue
+            if not surf.closed:
+                warnings.append(f"part {names[i]!r}: open or non-manifold mesh, inside and outside "
+                                "cannot be decided; only its surface is checked (crossings and "
+                                "distances), not containment")
+            v, f = surf.vertices, surf.faces
+            t = v[f]
+            nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+            ln = np.linalg.norm(nrm, axis=1)
+            nrm = nrm / np.where(ln > 0, ln, 1.0)[:, None]
+            lo[i], hi[i] = v.min(axis=0), v.max(axis=0)
+            tris.append(t)
+            tri_part.append(np.full(len(f), i))
+            normals.append(nrm)
+            edge_n.append(_edge_pseudonormals(f, nrm, len(v)))
+            verts.append(v)
+            vpart.append(np.full(len(v), i))
+            depth = PROBE_DEPTH * float(np.linalg.norm(hi[i] - lo[i]))
+            probes.append(np.concatenate([v, t.mean(axis=1) - depth * nrm]))
+            ppart.append(np.full(len(v) + len(f), i))
+
+        def cat(x, shape, dtype=float):
+            return np.concatenate(x) if x else np.zeros(shape, dtype)
+
+        tri_part_a = cat(tri_part, (0,), np.int64)
+        tris_a = cat(tris, (0, 3, 3))
+        forest = TriangleForest.build(tris_a.min(axis=1), tris_a.max(axis=1), tri_part_a, n)
+        return PartSet(tuple(names), tuple(groups), keepout, closed, plane, error, tuple(shapes),
+                       tris_a, tri_part_a, cat(normals, (0, 3)), cat(edge_n, (0, 3, 3)),
+                       cat(verts, (0, 3)), cat(vpart, (0,), np.int64),
+                       cat(probes, (0, 3)), cat(ppart, (0,), np.int64),
+                       lo, hi, forest, Assemblies.of(list(names)), tuple(warnings))
+
+    def place(self, poses: np.ndarray) -> Placement:
+        """World boxes of every part for poses (P, 4, 4)."""
+        poses = np.asarray(poses, float)
+        rot, pos = poses[:, :3, :3], poses[:, :3, 3]
+        fin = ~self.plane
+        lo = np.full((len(self.names), 3), -np.inf)
+        hi = np.full((len(self.names), 3), np.inf)
+        centre = pos.copy()
+        if fin.any():
+            lo[fin], hi[fin] = transformed_aabb(self.lo[fin], self.hi[fin], rot[fin], pos[fin])
+            c = 0.5 * (self.lo[fin] + self.hi[fin])
+            centre[fin] = np.einsum("nij,nj->ni", rot[fin], c) + pos[fin]
+        # planes are left out of the assembly boxes (they would make them infinite)
+        a_lo, a_hi = assembly_boxes(self.assemblies, np.where(fin[:, None], lo, np.inf),
+                                    np.where(fin[:, None], hi, -np.inf))
+        return Placement(rot, pos, centre, lo, hi, a_lo, a_hi)
+
+    def half(self) -> np.ndarray:
+        """(P, 3) half extents of the parts' boxes (0 for planes)."""
+        return np.where(self.plane[:, None], 0.0, 0.5 * (self.hi - self.lo))
+
+    def select(self, prefix: str) -> np.ndarray:
+        """(P,) bool: parts named ``prefix`` or inside the assembly ``prefix``."""
+        p = prefix.rstrip("/")
+        return np.array([n == p or n.startswith(p + "/") for n in self.names], bool)
+
+
+def _edge_pseudonormals(faces: np.ndarray, normals: np.ndarray, nverts: int) -> np.ndarray:
+    """(F, 3, 3): for edge k of each face, the sum of the normals of the faces on it."""
+    a = faces
+    b = np.roll(faces, -1, axis=1)
+    key = (np.minimum(a, b) * nverts + np.maximum(a, b)).ravel()
+    _, inv = np.unique(key, return_inverse=True)
+    acc = np.zeros((inv.max() + 1, 3))
+    np.add.at(acc, inv, np.repeat(normals, 3, axis=0))
+    return acc[inv].reshape(len(faces), 3, 3)
