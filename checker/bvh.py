@@ -44,6 +44,7 @@ class TriangleForest:
         order: (T,) triangle indices (global, see ``tri_part``) in leaf order.
         root: (P,) root node of each part, -1 for a part without triangles.
         tri_part: (T,) the part of each triangle.
+        tri_lo, tri_hi: (T, 3) each triangle's box in its part's frame.
     """
 
     node_lo: np.ndarray
@@ -55,6 +56,8 @@ class TriangleForest:
     order: np.ndarray
     root: np.ndarray
     tri_part: np.ndarray
+    tri_lo: np.ndarray
+    tri_hi: np.ndarray
 
     @staticmethod
     def build(tri_lo: np.ndarray, tri_hi: np.ndarray, tri_part: np.ndarray, parts: int) -> "TriangleForest":
@@ -105,13 +108,14 @@ class TriangleForest:
             left=np.array(left, i64), right=np.array(right, i64),
             first=np.array(first, i64), count=np.array(count, i64),
             order=np.concatenate(order) if order else np.zeros(0, i64),
-            root=root, tri_part=np.asarray(tri_part, i64))
+            root=root, tri_part=np.asarray(tri_part, i64), tri_lo=tri_lo, tri_hi=tri_hi)
 
     def query(self, part: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Triangles whose boxes meet query boxes, one query per row.
 
         Breadth-first, one numpy pass per tree level over every live
-        (query, node) pair.
+        (query, node) pair; the triangles of the leaves reached are then
+        tested box against box.
 
         Args:
             part: (Q,) part of each query.
@@ -142,7 +146,9 @@ class TriangleForest:
             n = np.concatenate([self.left[n[inner]], self.right[n[inner]]])
         if not out_q:
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        return np.concatenate(out_q), np.concatenate(out_t)
+        rq, rt = np.concatenate(out_q), np.concatenate(out_t)
+        ok = np.all((self.tri_lo[rt] <= hi[rq]) & (lo[rq] <= self.tri_hi[rt]), axis=1)
+        return rq[ok], rt[ok]
 
 
 def box_corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:

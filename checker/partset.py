@@ -10,7 +10,7 @@ assembly boxes. Queries reuse both.
 
 Containment probes: every vertex, and every triangle's centroid moved inward
 along its normal by ``PROBE_DEPTH`` of the part's size. A probe strictly
-inside another part (its signed distance below ``-EPS`` of the size) means the
+inside another part (its signed distance below ``-TOUCH`` of the size) means the
 two overlap; coincident parts and parts inside parts are found this way
 without a crossing of surfaces. Parts sharing a face from opposite sides put
 no probe inside each other, so they only touch.
@@ -29,9 +29,14 @@ from checker.bvh import Assemblies, TriangleForest, assembly_boxes, transformed_
 from checker.shapes import Shape
 from checker.tessellate import part_surface
 
-PROBE_DEPTH = 1e-7
-"""Inward offset of the centroid probes, relative to the part's box diagonal:
-overlaps thinner than this count as touching."""
+TOUCH = 1e-6
+"""Touching tolerance, relative to a part's box diagonal: surfaces closer than
+this count as touching, overlaps thinner than this are not overlaps. MuJoCo
+stores mesh vertices as float32 (about 1e-7 relative), so parts meshed to sit
+flush on each other touch rather than overlap."""
+
+PROBE_DEPTH = 10 * TOUCH
+"""Inward offset of the centroid probes, relative to the part's box diagonal."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,14 +63,14 @@ class Placement:
         """Points (n, ..., 3) of parts ``part`` (n,) from their frames to the world."""
         r = self.rot[part]
         shape = points.shape
-        p = points.reshape(len(part), -1, 3)
+        p = points.reshape(len(part), int(np.prod(shape[1:-1], dtype=np.int64)), 3)
         return (np.einsum("nij,nkj->nki", r, p) + self.pos[part][:, None, :]).reshape(shape)
 
     def local(self, part: np.ndarray, points: np.ndarray) -> np.ndarray:
         """World points (n, ..., 3) into the frames of parts ``part`` (n,)."""
         r = self.rot[part]
         shape = points.shape
-        p = points.reshape(len(part), -1, 3) - self.pos[part][:, None, :]
+        p = points.reshape(len(part), int(np.prod(shape[1:-1], dtype=np.int64)), 3) - self.pos[part][:, None, :]
         return np.einsum("nji,nkj->nki", r, p).reshape(shape)
 
 
@@ -89,6 +94,7 @@ class PartSet:
         vertices: (V, 3) all parts' vertices; vert_part (V,) their part.
         probes: (Q, 3) containment probes; probe_part (Q,) their part.
         lo, hi: (P, 3) boxes in the part frames.
+        size: (P,) box diagonals (0 for planes).
         forest: triangle trees.
         assemblies: the assembly prefixes of ``names``.
         warnings: human-readable notes (open meshes).
@@ -111,6 +117,7 @@ class PartSet:
     probe_part: np.ndarray
     lo: np.ndarray
     hi: np.ndarray
+    size: np.ndarray
     forest: TriangleForest
     assemblies: Assemblies
     warnings: tuple[str, ...]
@@ -172,7 +179,7 @@ class PartSet:
                        tris_a, tri_part_a, cat(normals, (0, 3)), cat(edge_n, (0, 3, 3)),
                        cat(verts, (0, 3)), cat(vpart, (0,), np.int64),
                        cat(probes, (0, 3)), cat(ppart, (0,), np.int64),
-                       lo, hi, forest, Assemblies.of(list(names)), tuple(warnings))
+                       lo, hi, np.where(plane, 0.0, np.linalg.norm(hi - lo, axis=1)), forest, Assemblies.of(list(names)), tuple(warnings))
 
     def place(self, poses: np.ndarray) -> Placement:
         """World boxes of every part for poses (P, 4, 4)."""
@@ -190,6 +197,10 @@ class PartSet:
         a_lo, a_hi = assembly_boxes(self.assemblies, np.where(fin[:, None], lo, np.inf),
                                     np.where(fin[:, None], hi, -np.inf))
         return Placement(rot, pos, centre, lo, hi, a_lo, a_hi)
+
+    def touch(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Touching tolerance (absolute) of part pairs ``a``, ``b`` (n,)."""
+        return TOUCH * np.maximum(self.size[a], self.size[b])
 
     def half(self) -> np.ndarray:
         """(P, 3) half extents of the parts' boxes (0 for planes)."""

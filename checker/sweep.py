@@ -46,14 +46,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.bvh import box_corners, obb_overlap, prefix_hits, transformed_aabb
-from checker.partset import Placement, PartSet
+from checker.partset import TOUCH, Placement, PartSet
 from checker.shapes import signed_distance
 from checker.tritri import EPS, edge_edge_contact, triangles_cross, vertex_face_contact
 
 _ROUNDS = 16
 """Most candidate contacts tried per part before the earliest is reported unverified."""
 
-STEP = 1e-5
+STEP = 1e-4
 """Default verification step, relative to the moving parts' box diagonal."""
 
 _ANGLE = 1e-12
@@ -179,8 +179,10 @@ def sweep(parts: PartSet, placed: Placement, moving: np.ndarray, direction: np.n
     m_part = parts.tri_part[ms]
     # 4a. start overlap: crossing surfaces, then containment probes
     over = np.zeros(len(parts.names), bool)
-    cross = triangles_cross(m_world, f_world)
-    over[f_part[cross]] = True
+    now = np.all((m_world.min(axis=1) <= f_world.max(axis=1)) & (f_world.min(axis=1) <= m_world.max(axis=1)),
+                 axis=1)
+    cross = triangles_cross(m_world[now], f_world[now], parts.touch(m_part[now], f_part[now]))
+    over[f_part[now][cross]] = True
     start_lo, start_hi = placed.lo[mv].min(axis=0), placed.hi[mv].max(axis=0)
     near = cand[~over[cand]]
     near = near[np.all((placed.lo[near] <= start_hi) & (start_lo <= placed.hi[near]), axis=1)]
@@ -190,7 +192,16 @@ def sweep(parts: PartSet, placed: Placement, moving: np.ndarray, direction: np.n
     where = np.zeros((len(parts.names), 3))
     by = np.full(len(parts.names), -1)
     if len(ms):
-        t, p, pr = _contacts(parts, placed, d, distance, m_world, f_world, ms, st[fixed], m_part, f_part)
+        # only a fixed face meeting the motion head-on (D . n < 0) and a moving
+        # face leading it (D . n > 0) can hold a first contact: every corner
+        # and edge that meets first lies on such a pair of faces
+        dn_f = np.einsum("nij,nj->ni", placed.rot[f_part], parts.normals[st[fixed]]) @ d
+        dn_m = np.einsum("nij,nj->ni", placed.rot[m_part], parts.normals[ms]) @ d
+        lead = ((dn_f < -_ANGLE) | ~parts.closed[f_part]) & ((dn_m > _ANGLE) | ~parts.closed[m_part])
+        sel = np.flatnonzero(lead)
+        t, p, pr = _contacts(parts, placed, d, distance, m_world[sel], f_world[sel], ms[sel],
+                             st[fixed][sel], m_part[sel], f_part[sel])
+        pr = sel[pr]
         _verify(parts, placed, mv, d, m_world, f_world, f_part, m_part, t, p, pr,
                 _step(parts, mv, step, m_world), t_best, where, by)
     _planes(parts, placed, d, distance, mv, stat, t_best, where, by, over)
@@ -218,21 +229,30 @@ def _contacts(parts: PartSet, placed: Placement, d: np.ndarray, h: float, m_worl
     into_f = np.where(f_closed, dn_f < -_ANGLE, np.abs(dn_f) > _ANGLE)
     into_m = np.where(m_closed, dn_m > _ANGLE, np.abs(dn_m) > _ANGLE)
     ts, pts, pair = [], [], []
-    zero = np.zeros(n)
-    for k in range(3):
-        # moving corner k against the fixed face
-        t = vertex_face_contact(m_world[:, k], f_world, d, zero, h)
-        t = np.where(into_f, t, np.inf)
-        ts.append(t), pts.append(m_world[:, k] + np.minimum(t, h)[:, None] * d), pair.append(np.arange(n))
-        # fixed corner k against the moving face (moving towards it)
-        t = vertex_face_contact(f_world[:, k], m_world, -d, zero, h)
-        t = np.where(into_m, t, np.inf)
-        ts.append(t), pts.append(f_world[:, k]), pair.append(np.arange(n))
-    # edges: 3 x 3 per pair
-    i = np.repeat(np.arange(3), 3)
-    j = np.tile(np.arange(3), 3)
+    # corners against faces, only where the face meets the motion head-on
+    r = np.flatnonzero(into_f)
+    zero = np.zeros(len(r))
+    for k in range(3):     # moving corner k against the fixed face
+        t = vertex_face_contact(m_world[r, k], f_world[r], d, zero, h)
+        ts.append(t), pts.append(m_world[r, k] + np.minimum(t, h)[:, None] * d), pair.append(r)
+    r = np.flatnonzero(into_m)
+    zero = np.zeros(len(r))
+    for k in range(3):     # fixed corner k against the moving face (moving towards it)
+        t = vertex_face_contact(f_world[r, k], m_world[r], -d, zero, h)
+        ts.append(t), pts.append(f_world[r, k]), pair.append(r)
+    # edges: 3 x 3 per pair, only pairs forming a face of the Minkowski difference
     rows = np.repeat(np.arange(n), 9)
-    ii, jj = np.tile(i, n), np.tile(j, n)
+    ii = np.tile(np.repeat(np.arange(3), 3), n)
+    jj = np.tile(np.tile(np.arange(3), 3), n)
+    a1n = m_n[rows]
+    a2n = np.einsum("nij,nj->ni", placed.rot[m_part[rows]], parts.edge_normals[m_tri[rows], ii]) - a1n
+    b1n = f_n[rows]
+    b2n = np.einsum("nij,nj->ni", placed.rot[f_part[rows]], parts.edge_normals[f_tri[rows], jj]) - b1n
+    keep = _minkowski_face(a1n, a2n, -b1n, -b2n)
+    # open edges (one face) and open meshes: no arc to test, keep them
+    keep |= (np.abs(a2n).sum(axis=1) == 0) | (np.abs(b2n).sum(axis=1) == 0)
+    keep |= ~(f_closed[rows] & m_closed[rows])
+    rows, ii, jj = rows[keep], ii[keep], jj[keep]
     a0, a1 = m_world[rows, ii], m_world[rows, (ii + 1) % 3]
     b0, b1 = f_world[rows, jj], f_world[rows, (jj + 1) % 3]
     t, p = edge_edge_contact(a0, a1, b0, b1, d, h)
@@ -249,6 +269,25 @@ def _contacts(parts: PartSet, placed: Placement, d: np.ndarray, h: float, m_worl
     pr = np.concatenate(pair)
     fin = np.isfinite(t_all)
     return t_all[fin], p_all[fin], pr[fin]
+
+
+def _minkowski_face(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """(n,) bool: the Gauss arcs (a, b) and (c, d) of two edges cross (Gregorius 2013).
+
+    a, b: normals of the faces on the moving part's edge; c, d: the negated
+    normals on the fixed part's edge. Only such edge pairs can meet first
+    along any direction: an edge-edge contact's normal lies on both arcs.
+    Arcs that only touch at an end point count as crossing."""
+    bxa = np.cross(b, a)
+    dxc = np.cross(d, c)
+    cba = np.einsum("ni,ni->n", c, bxa)
+    dba = np.einsum("ni,ni->n", d, bxa)
+    adc = np.einsum("ni,ni->n", a, dxc)
+    bdc = np.einsum("ni,ni->n", b, dxc)
+    # closed comparisons: arcs meeting at an end (parallel faces, face-face
+    # contact along an edge) count, so no first contact is lost
+    tol = 1e-12
+    return (cba * dba <= tol) & (adc * bdc <= tol) & (cba * bdc >= -tol)
 
 
 def _verify(parts: PartSet, placed: Placement, moving_parts: np.ndarray, d: np.ndarray, m_world: np.ndarray, f_world: np.ndarray,
@@ -281,7 +320,7 @@ def _verify(parts: PartSet, placed: Placement, moving_parts: np.ndarray, d: np.n
         cnt = hi - lo
         rows = pair_order[np.repeat(lo, cnt) + np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)]
         shifted = m_world[rows] + (travel[f_part[rows]])[:, None, None] * d
-        crossing = triangles_cross(shifted, f_world[rows])
+        crossing = triangles_cross(shifted, f_world[rows], parts.touch(m_part[rows], f_part[rows]))
         ok = np.zeros(len(parts.names), bool)
         ok[f_part[rows][crossing]] = True
         for q in fp[~ok[fp]]:     # coincident faces never cross: probes decide
@@ -325,7 +364,7 @@ def _planes(parts: PartSet, placed: Placement, d: np.ndarray, h: float, mv: np.n
     for p in planes:     # a handful of planes per scene at most
         nrm = placed.rot[p][:, 2]
         z = (vw - placed.pos[p]) @ nrm
-        if np.any(z < -EPS * scale):
+        if np.any(z < -TOUCH * float(parts.size[mv].max())):
             over[p] = True
             continue
         dn = float(nrm @ d)
@@ -363,7 +402,7 @@ def probes_inside(parts: PartSet, placed: Placement, a: int, b: int,
     if shift is not None:
         world = world + shift
     pts = placed.local(np.full(1, b), world)[0]
-    scale = float(np.abs(parts.hi[b] - parts.lo[b]).max())
+    tol = float(parts.touch(np.array([a]), np.array([b]))[0])
     if not parts.plane[b]:
         inbox = np.all((pts >= parts.lo[b]) & (pts <= parts.hi[b]), axis=1)
         pts = pts[inbox]
@@ -371,4 +410,4 @@ def probes_inside(parts: PartSet, placed: Placement, a: int, b: int,
         return None
     sd, _ = signed_distance(parts.shapes[b], pts)
     worst = float(sd.min())
-    return worst if worst < -EPS * max(scale, 1e-300) else None
+    return worst if worst < -tol else None

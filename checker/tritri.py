@@ -41,6 +41,8 @@ def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
 def _scale(*arrays: np.ndarray) -> np.ndarray:
     """(n,) largest coordinate magnitude over the given (n, k, 3) or (n, 3) arrays, at least 1e-300."""
     m = np.zeros(len(arrays[0]))
+    if not len(m):
+        return m
     for a in arrays:
         m = np.maximum(m, np.abs(a.reshape(len(a), -1)).max(axis=1))
     return np.maximum(m, 1e-300)
@@ -68,15 +70,18 @@ def _interval(tri: np.ndarray, d: np.ndarray, line: np.ndarray) -> tuple[np.ndar
     return np.minimum(x1, x2), np.maximum(x1, x2)
 
 
-def triangles_cross(t1: np.ndarray, t2: np.ndarray) -> np.ndarray:
+def triangles_cross(t1: np.ndarray, t2: np.ndarray, tol: np.ndarray | float | None = None) -> np.ndarray:
     """(n,) True where triangles t1[i] and t2[i] (each (n, 3, 3)) cross properly.
 
-    See the module docstring for the rule; zero-area triangles never cross."""
+    See the module docstring for the rule; zero-area triangles never cross.
+    ``tol``: absolute touching tolerance (scalar or (n,)); default ``EPS`` of
+    the coordinates' magnitude. Corners within ``tol`` of the other plane
+    count as on it, and the cut intervals must overlap by more than ``tol``."""
     n = len(t1)
     if n == 0:
         return np.zeros(0, bool)
     scale = _scale(t1, t2)
-    tol = EPS * scale
+    tol = EPS * scale if tol is None else np.maximum(np.broadcast_to(tol, (n,)), EPS * scale)
     n1 = np.cross(t1[:, 1] - t1[:, 0], t1[:, 2] - t1[:, 0])
     n2 = np.cross(t2[:, 1] - t2[:, 0], t2[:, 2] - t2[:, 0])
     l1 = np.linalg.norm(n1, axis=1)

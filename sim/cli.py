@@ -2,6 +2,7 @@
 
 Subcommands:
   run SCENE   simulate a scene, check it, write the report and the recording.
+  sweep SCENE move one part (or assembly) along a line; list the parts it hits.
 
 Exit status: 0 when nothing reaches the `--fail-on` level, 1 when something
 does, 2 for bad input (the message names the file, the key and the
@@ -74,7 +75,50 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--fail-on", choices=("hard", "soft", "never"), default="hard",
                      help="exit 1 when interference of this severity or worse is found (default: hard)")
     run.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    run.add_argument("--only", metavar="PATH",
+                     help="check part-part interference of this assembly path against the rest only")
+    sw = sub.add_parser("sweep", help="translational sweep: which parts a moving part hits",
+                        description="Move --part (a part or assembly path) from its t = 0 pose along "
+                                    "--direction by --distance (scene units); list every part it hits "
+                                    "with the travel at first contact, and the parts it overlaps at the "
+                                    "start. Exit status: 0 nothing hit or overlapping, 1 something is, "
+                                    "2 bad input.")
+    sw.add_argument("scene", metavar="SCENE", type=Path, help="scene file (TOML)")
+    sw.add_argument("--part", required=True, metavar="NAME", help="part name or assembly path prefix")
+    sw.add_argument("--direction", required=True, metavar="X,Y,Z", type=_direction,
+                    help="direction of travel in scene axes (any length, not zero)")
+    sw.add_argument("--distance", required=True, metavar="H", type=_nonnegative_float,
+                    help="travel in scene units")
+    sw.add_argument("--report", type=Path, metavar="PATH",
+                    help="JSON report path (default: recordings/<scene name>-sweep.json)")
+    sw.add_argument("--precision", type=_positive_float, metavar="P",
+                    help="precision in scene units (default 0.5 mm)")
+    sw.add_argument("--only", metavar="PATH", help="test only the parts of this assembly path")
+    sw.add_argument("--quiet", action="store_true", help="print nothing but errors")
     return parser
+
+
+def _nonnegative_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (value >= 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a non-negative number: {text!r}")
+    return value
+
+
+def _direction(text: str) -> tuple[float, float, float]:
+    parts = text.split(",")
+    try:
+        values = tuple(float(p) for p in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y,Z numbers, got {text!r}") from None
+    if len(values) != 3 or not all(abs(v) < float("inf") for v in values):
+        raise argparse.ArgumentTypeError(f"expected three finite numbers X,Y,Z, got {text!r}")
+    if not any(values):
+        raise argparse.ArgumentTypeError(f"must not be the zero vector, got {text!r}")
+    return values  # type: ignore[return-value]
 
 
 class _ProgressBar:
@@ -119,7 +163,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     scene = load_scene(args.scene)
     record = None if args.no_record else (args.record or Path("recordings") / f"{scene.name}.rrd")
     report = args.report or (record or Path("recordings") / scene.name).with_suffix(".json")
-    options = RunOptions(report=report, record=record, method=args.method, spacing=args.spacing)
+    options = RunOptions(report=report, record=record, method=args.method, spacing=args.spacing,
+                         only=args.only)
     bar = _ProgressBar(enabled=not args.quiet)
     try:
         result = run_scene(scene, options, progress=bar)
@@ -130,6 +175,39 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if not result["complete"]:
         return EXIT_INTERRUPTED
     return EXIT_FAIL if _fails(result, args.fail_on) else EXIT_OK
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from sim.sweep import SweepOptions, sweep_scene  # MuJoCo loads only when needed
+
+    scene = load_scene(args.scene)
+    report = args.report or Path("recordings") / f"{scene.name}-sweep.json"
+    options = SweepOptions(part=args.part, direction=args.direction, distance=args.distance,
+                           precision=args.precision, only=args.only, report=report)
+    result = sweep_scene(scene, options)
+    if not args.quiet:
+        _print_sweep(result, report)
+    return EXIT_FAIL if (result["hits"] or result["overlapping"]) else EXIT_OK
+
+
+def _print_sweep(r: dict, path: Path) -> None:
+    u = r["units"]
+    d = ", ".join(f"{x:.4g}" for x in r["direction"])
+    print(f"{r['scene']}: sweep {r['part']!r} along ({d}) by {r['distance']:g} {u} "
+          f"(precision {r['precision']:.3g} {u})")
+    if r["hits"]:
+        width = max(len(h["part"]) for h in r["hits"])
+        print(f"  {'part':<{width}}  {'distance':>12}  where")
+        for h in r["hits"]:
+            w = ", ".join(f"{x:.4g}" for x in h["where"])
+            print(f"  {h['part']:<{width}}  {h['distance']:>12.6g}  ({w})")
+    else:
+        print("  no part hit")
+    if r["overlapping"]:
+        print(f"  overlapping at the start: {', '.join(r['overlapping'])}")
+    for w in r["warnings"]:
+        print(f"  warning: {w}")
+    print(f"  report: {path}")
 
 
 def _fails(report: dict, level: str) -> bool:
@@ -171,8 +249,16 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "run":
             return _cmd_run(args)
+        if args.command == "sweep":
+            return _cmd_sweep(args)
     except SceneError as e:
         print(f"cablecheck: error: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except ValueError as e:
+        from sim.sweep import SweepInputError
+        if not isinstance(e, SweepInputError):
+            raise
+        print(f"cablecheck: error: {args.scene}: {e.option}: {e.problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except OSError as e:
         print(f"cablecheck: error: {e.filename or ''}: {e.strerror or e}", file=sys.stderr)

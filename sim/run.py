@@ -23,6 +23,7 @@ import numpy as np
 from checker.cable import arc_length, bend_radius
 from checker.events import EventTracker
 from checker.interference import check_state
+from checker.parts import PartChecker
 from checker.records import PairType, Severity
 from checker.report import SCHEMA, write_report
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
@@ -32,6 +33,7 @@ from sim.build import Built, build
 from sim.loop import Simulation
 from sim.record import Recorder, pair_path
 from sim.scene import Scene
+from sim.sweep import DEFAULT_PRECISION_M, part_set, selection
 
 TAUT_STRAIN = 0.01
 """Stretch beyond which a cable is reported taut (SPEC: 1 %)."""
@@ -48,12 +50,16 @@ class RunOptions:
       report: report path.
       record: recording path, or None for no recording.
       method, spacing: override the scene's `[check]` values when not None.
+      only: check part-part (and part keep-out) interference of this assembly
+        path against the rest only; None checks every pair. Cable checks are
+        unchanged.
     """
 
     report: Path
     record: Path | None
     method: str | None = None
     spacing: float | None = None
+    only: str | None = None
 
 
 Progress = Callable[[str, float, float], None]
@@ -82,6 +88,30 @@ def _shapes(built: Built) -> list[Shape]:
         else:
             out.append(Shape(ShapeType(p.shape), p.size))
     return out
+
+
+def part_pairs_skipped(built: Built) -> np.ndarray:
+    """(P, P) bool: part pairs the part-part check leaves out, as MuJoCo does.
+
+    - parts of a child body and of its parent body (other than the world
+      body itself) when a joint joins them: arm links overlap at their joints
+      by design;
+    - two geoms of the base mjcf model in the same rigid (weld) group: the
+      model author's layout, never colliding in MuJoCo either.
+    Scene `[[parts]]` on one body are checked against each other (once, at
+    t = 0)."""
+    m = built.model
+    scene_names = {p.name for p in built.scene.parts}
+    body = np.array([int(m.geom_bodyid[p.geom_id]) for p in built.parts], np.int64)
+    weld = m.body_weldid[body]
+    parent = m.body_parentid[body]
+    base = np.array([p.name not in scene_names for p in built.parts], bool)
+    jointed = (m.body_weldid[np.arange(m.nbody)] == np.arange(m.nbody))   # top of a weld group
+    child_of = (parent[:, None] == body[None, :]) & (parent[:, None] != 0) & jointed[body][:, None]
+    skip = child_of | child_of.T
+    skip |= (weld[:, None] == weld[None, :]) & base[:, None] & base[None, :]
+    np.fill_diagonal(skip, True)
+    return skip
 
 
 def attachment_exclusions(built: Built) -> list[Exclusion]:
@@ -140,6 +170,10 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                          spacing=options.spacing or scene.check.spacing,
                          clearance=scene.check.clearance)
     shapes = _shapes(built)
+    # Rigid parts against each other: prepared once, same-body pairs checked once.
+    rigid = part_set(built, tolerance=DEFAULT_PRECISION_M, shapes=shapes)
+    focus = selection(rigid, options.only, "--only") if options.only is not None else None
+    part_checker = PartChecker(rigid, scene.check.clearance, focus, part_pairs_skipped(built))
     exclusions = attachment_exclusions(built)
     names = [c.name for c in built.cables]
     every = scene.check.every
@@ -169,7 +203,8 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
             cables = _cable_states(built, state.cables)
             parts = [PartState(p.name, sh, pose, p.keepout)
                      for p, sh, pose in zip(built.parts, shapes, state.part_poses)]
-            records = check_state(cables, parts, config, exclusions)
+            cable_records = check_state(cables, parts, config, exclusions)
+            records = cable_records + part_checker.check(state.part_poses)
             strain = np.array([arc_length(c.points)[-1] / c.rest_length - 1.0 for c in cables])
             bend = np.array([np.min(bend_radius(c.points)) for c in cables])
             max_strain = np.maximum(max_strain, strain)
@@ -180,7 +215,7 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
             if validate:
                 seen = simulator_pairs(state.contacts, {c.name: (c.points, c.radius) for c in cables},
                                        exclusions, config.clearance)
-                agreement = validation.compare(state.t, records, seen)
+                agreement = validation.compare(state.t, cable_records, seen)
                 timer.lap("validate")
             if recorder and (checked % record_stride == 0 or started or closed
                              or state.step == sim.total_steps):

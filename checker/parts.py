@@ -1,0 +1,222 @@
+"""Part-part and keep-out interference between rigid parts (seeds 002 and 004).
+
+:func:`check_parts` finds every pair of parts that overlaps (hard) or comes
+within the clearance (soft) for one set of poses; :class:`PartChecker` runs it
+step after step, checking pairs on one rigid body once (they cannot change)
+and replaying that answer at every later step.
+
+Layered filtering, as in 004: assembly boxes (when a ``focus`` assembly is
+checked against the rest), world boxes of parts (sort and sweep), the 15-axis
+test of their oriented boxes grown by the clearance, the triangle trees
+(each part's tree queried with the other's box, then each candidate triangle
+queried against the other part's tree), and only then exact triangle tests.
+
+Per pair, in this order:
+
+- surfaces crossing properly (:func:`checker.tritri.triangles_cross`) or a
+  containment probe of one part strictly inside the other (a part inside
+  another, coincident parts; 002's containment) -> overlap, hard. The
+  reported ``min_distance`` is minus the deepest probe's depth (a lower
+  bound on the penetration); when surfaces cross with no probe inside, it is
+  minus the touching tolerance (``checker.partset.TOUCH`` of the pair's size);
+- else the least triangle-triangle distance, when above the touching
+  tolerance and below the clearance -> soft.
+- Touching (shared faces, shared edges, a corner on a face, parts meshed
+  flush against each other, within the touching tolerance) is contact, not
+  interference: mating parts of an assembly touch by design, so no record.
+
+Infinite planes are tested against the other part's vertices (exact for
+boxes and meshes). A pair involving a keep-out zone is of type ``keepout``
+with ``a`` the entering part and ``b`` the zone (two zones: in input order);
+other pairs are ``part-part`` with ``a`` before ``b`` in input order. ``where``
+is the deepest probe, the crossing or the midpoint of the closest points,
+world coordinates; ``s`` is 0 (parts have no arc length).
+
+Not here: cables (:mod:`checker.interference`), time and events.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from checker.bvh import aabb_pairs, obb_overlap, prefix_hits, transformed_aabb
+from checker.partset import Placement, PartSet
+from checker.records import Interference, PairType, severity_of
+from checker.sweep import probes_inside
+from checker.tritri import EPS, triangle_distance, triangles_cross
+
+
+def candidate_pairs(parts: PartSet, placed: Placement, clearance: float,
+                    focus: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs (i < j) of non-plane parts whose boxes come within ``clearance``.
+
+    With ``focus`` ((P,) bool), only pairs of one focus part and one other,
+    after pruning the others by assembly boxes against the focus's box."""
+    fin = ~parts.plane
+    idx = np.flatnonzero(fin)
+    if focus is not None:
+        focus = np.asarray(focus, bool)
+        f = focus & fin
+        if not f.any():
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        lo = placed.lo[f].min(axis=0) - clearance
+        hi = placed.hi[f].max(axis=0) + clearance
+        asm_hit = np.all((placed.asm_lo <= hi) & (lo <= placed.asm_hi), axis=1)
+        keep = fin & (focus | prefix_hits(parts.assemblies, asm_hit))
+        idx = np.flatnonzero(keep)
+    a, b = aabb_pairs(placed.lo[idx], placed.hi[idx], 0.5 * clearance)
+    i, j = idx[a], idx[b]
+    i, j = np.minimum(i, j), np.maximum(i, j)
+    if focus is not None:
+        one = focus[i] != focus[j]
+        i, j = i[one], j[one]
+    if len(i):
+        half = parts.half() + 0.5 * clearance
+        ok = obb_overlap(placed.centre[i], placed.rot[i], half[i], placed.centre[j], placed.rot[j], half[j])
+        i, j = i[ok], j[ok]
+    return i, j
+
+
+def _triangle_pairs(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray,
+                    clearance: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Triangle pairs (tri of i, tri of j, pair row) whose boxes come within ``clearance``."""
+    g = 0.5 * clearance
+    # j's grown box in i's frame
+    rel = np.einsum("nji,njk->nik", placed.rot[i], placed.rot[j])
+    shift = np.einsum("nji,nj->ni", placed.rot[i], placed.pos[j] - placed.pos[i])
+    q_lo, q_hi = transformed_aabb(parts.lo[j] - g, parts.hi[j] + g, rel, shift)
+    row, ti = parts.forest.query(i, q_lo - g, q_hi + g)
+    # each candidate triangle of i, grown, in j's frame
+    tw = placed.world(i[row], parts.tris[ti])
+    t_lo, t_hi = tw.min(axis=1) - clearance, tw.max(axis=1) + clearance
+    # a world AABB in j's frame: transform its centre and half extents
+    c = 0.5 * (t_lo + t_hi)
+    h = 0.5 * (t_hi - t_lo)
+    rj = placed.rot[j[row]]
+    cl = placed.local(j[row], c[:, None, :])[:, 0]
+    hl = np.einsum("nji,nj->ni", np.abs(rj), h)
+    r2, tj = parts.forest.query(j[row], cl - hl, cl + hl)
+    return ti[r2], tj, row[r2]
+
+
+def check_parts(parts: PartSet, placed: Placement, clearance: float,
+                focus: np.ndarray | None = None,
+                pair_mask=None) -> list[Interference]:
+    """Interference between parts at one set of poses.
+
+    Args:
+        parts, placed: prepared parts and their poses.
+        clearance: soft distance (same units), >= 0.
+        focus: (P,) bool: check only these parts against the others.
+        pair_mask: optional function (i, j) -> (n,) bool choosing which
+            candidate pairs to test (e.g. only parts on different bodies).
+    """
+    i, j = candidate_pairs(parts, placed, clearance, focus)
+    if pair_mask is not None and len(i):
+        keep = pair_mask(i, j)
+        i, j = i[keep], j[keep]
+    out: list[Interference] = []
+    n = len(i)
+    if n:
+        dist = np.full(n, np.inf)
+        where = np.zeros((n, 3))
+        crossing = np.zeros(n, bool)
+        ti, tj, row = _triangle_pairs(parts, placed, i, j, clearance)
+        if len(row):
+            a = placed.world(i[row], parts.tris[ti])
+            b = placed.world(j[row], parts.tris[tj])
+            cr = triangles_cross(a, b, parts.touch(i[row], j[row]))
+            crossing[row[cr]] = True
+            where[row[cr]] = 0.5 * (a[cr].mean(axis=1) + b[cr].mean(axis=1))
+            rest = ~cr & ~crossing[row]
+            d, p, q = triangle_distance(a[rest], b[rest])
+            r = row[rest]
+            order = np.lexsort((d, r))
+            first = order[np.r_[True, r[order][1:] != r[order][:-1]]] if len(order) else order
+            dist[r[first]] = d[first]
+            mid = 0.5 * (p[first] + q[first])
+            where[r[first]] = np.where(crossing[r[first]][:, None], where[r[first]], mid)
+        for k in range(n):     # per candidate pair: records and containment probes
+            a_, b_ = int(i[k]), int(j[k])
+            deep = [x for x in (probes_inside(parts, placed, a_, b_),
+                                probes_inside(parts, placed, b_, a_)) if x is not None]
+            touch = float(parts.touch(i[k:k + 1], j[k:k + 1])[0])
+            if deep or crossing[k]:
+                depth = min(deep) if deep else -touch
+                out.append(_record(parts, a_, b_, depth, where[k], clearance))
+            elif touch < dist[k] < clearance:
+                out.append(_record(parts, a_, b_, float(dist[k]), where[k], clearance))
+    out.extend(_plane_records(parts, placed, clearance, focus, pair_mask))
+    return [r for r in out if r is not None]
+
+
+def _record(parts: PartSet, a: int, b: int, d: float, where: np.ndarray, clearance: float) -> Interference | None:
+    sev = severity_of(d, clearance)
+    if sev is None:
+        return None
+    if parts.keepout[a] or parts.keepout[b]:
+        if parts.keepout[a] and not parts.keepout[b]:
+            a, b = b, a
+        kind = PairType.KEEPOUT
+    else:
+        kind = PairType.PART_PART
+    return Interference(kind, parts.names[a], parts.names[b], float(d), sev, np.asarray(where, float).copy(), 0.0)
+
+
+def _plane_records(parts: PartSet, placed: Placement, clearance: float, focus, pair_mask) -> list:
+    planes = np.flatnonzero(parts.plane)
+    out = []
+    if not len(planes):
+        return out
+    vw = placed.world(parts.vert_part, parts.vertices[:, None, :])[:, 0]
+    for p in planes:     # a handful of planes per scene at most
+        z = (vw - placed.pos[p]) @ placed.rot[p][:, 2]
+        order = np.lexsort((z, parts.vert_part))
+        vp = parts.vert_part[order]
+        first = order[np.r_[True, vp[1:] != vp[:-1]]] if len(order) else order
+        for v in first:
+            q = int(parts.vert_part[v])
+            if focus is not None and bool(focus[p]) == bool(focus[q]):
+                continue
+            a_, b_ = min(p, q), max(p, q)
+            if pair_mask is not None and not pair_mask(np.array([a_]), np.array([b_]))[0]:
+                continue
+            touch = float(parts.touch(np.array([q]), np.array([q]))[0])
+            if abs(z[v]) > touch:
+                out.append(_record(parts, a_, b_, float(z[v]), vw[v], clearance))
+    return out
+
+
+class PartChecker:
+    """Part-part checks step after step, reusing what cannot change.
+
+    The first :meth:`check` tests every pair; pairs of parts on the same
+    rigid body (``PartSet.groups``) are answered then and replayed at every
+    later step without being tested again. The prepared parts (trees,
+    probes) are reused throughout.
+    """
+
+    def __init__(self, parts: PartSet, clearance: float, focus: np.ndarray | None = None,
+                 skip: np.ndarray | None = None):
+        """``skip``: (P, P) bool, pairs never checked (e.g. parts of a parent
+        and a child body joined by a joint: MuJoCo skips those too, links of
+        an arm overlap at their joints by design)."""
+        self.parts = parts
+        self.clearance = clearance
+        self.focus = focus
+        g = {name: k for k, name in enumerate(dict.fromkeys(parts.groups))}
+        self._group = np.array([g[x] for x in parts.groups], np.int64)
+        n = len(parts.names)
+        self._skip = np.zeros((n, n), bool) if skip is None else np.asarray(skip, bool)
+        self._static: list[Interference] | None = None
+
+    def check(self, poses: np.ndarray) -> list[Interference]:
+        """Records for poses (P, 4, 4)."""
+        placed = self.parts.place(poses)
+        grp, skip = self._group, self._skip
+        if self._static is None:
+            self._static = check_parts(self.parts, placed, self.clearance, self.focus,
+                                       lambda i, j: (grp[i] == grp[j]) & ~skip[i, j])
+        moving = check_parts(self.parts, placed, self.clearance, self.focus,
+                             lambda i, j: (grp[i] != grp[j]) & ~skip[i, j])
+        return list(self._static) + moving

@@ -1,0 +1,80 @@
+"""Bounding-volume hierarchy: tree queries, OBB separating axes and box pairs against brute force."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from checker.bvh import Assemblies, TriangleForest, aabb_pairs, box_corners, obb_overlap, prefix_hits
+
+
+def _rot(rng):
+    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+    return q * np.sign(np.diag(r))
+
+
+def _obb_brute(c1, r1, h1, c2, r2, h2) -> bool:
+    """Separated iff some of the 15 axes separates the projected corners (with rounding slack)."""
+    k1 = box_corners(-h1[None], h1[None])[0] @ r1.T + c1
+    k2 = box_corners(-h2[None], h2[None])[0] @ r2.T + c2
+    axes = list(r1.T) + list(r2.T) + [np.cross(a, b) for a in r1.T for b in r2.T]
+    for ax in axes:
+        n = np.linalg.norm(ax)
+        if n < 1e-9:
+            continue
+        p1, p2 = k1 @ (ax / n), k2 @ (ax / n)
+        if p1.max() < p2.min() - 1e-9 or p2.max() < p1.min() - 1e-9:
+            return False
+    return True
+
+
+@settings(max_examples=150)
+@given(st.integers(0, 10**6))
+def test_obb_overlap_matches_corner_projection(seed):
+    rng = np.random.default_rng(seed)
+    c1, c2 = rng.uniform(-2, 2, 3), rng.uniform(-2, 2, 3)
+    r1, r2 = _rot(rng), _rot(rng)
+    h1, h2 = rng.uniform(0.1, 1.5, 3), rng.uniform(0.1, 1.5, 3)
+    got = obb_overlap(c1[None], r1[None], h1[None], c2[None], r2[None], h2[None])[0]
+    assert got == _obb_brute(c1, r1, h1, c2, r2, h2)
+
+
+def test_touching_boxes_overlap():
+    eye = np.eye(3)[None]
+    h = np.ones((1, 3))
+    assert obb_overlap(np.zeros((1, 3)), eye, h, np.array([[2.0, 0, 0]]), eye, h)[0]
+    assert not obb_overlap(np.zeros((1, 3)), eye, h, np.array([[2.001, 0, 0]]), eye, h)[0]
+
+
+def test_forest_query_matches_brute_force():
+    rng = np.random.default_rng(3)
+    lo = rng.uniform(-10, 10, (500, 3))
+    hi = lo + rng.uniform(0, 1, (500, 3))
+    part = np.repeat(np.arange(5), 100)
+    forest = TriangleForest.build(lo, hi, part, 5)
+    q_lo = rng.uniform(-10, 10, (40, 3))
+    q_hi = q_lo + rng.uniform(0, 4, (40, 3))
+    q_part = rng.integers(0, 5, 40)
+    qi, ti = forest.query(q_part, q_lo, q_hi)
+    got = set(zip(qi.tolist(), ti.tolist()))
+    want = {(q, t) for q in range(40) for t in range(500)
+            if part[t] == q_part[q] and np.all(lo[t] <= q_hi[q]) and np.all(q_lo[q] <= hi[t])}
+    assert got == want
+
+
+def test_aabb_pairs_matches_brute_force():
+    rng = np.random.default_rng(5)
+    lo = rng.uniform(0, 20, (200, 3))
+    hi = lo + rng.uniform(0, 2, (200, 3))
+    i, j = aabb_pairs(lo, hi, 0.25)
+    got = set(zip(i.tolist(), j.tolist()))
+    want = {(a, b) for a in range(200) for b in range(a + 1, 200)
+            if np.all(lo[a] - 0.25 <= hi[b] + 0.25) and np.all(lo[b] - 0.25 <= hi[a] + 0.25)}
+    assert got == want
+
+
+def test_assemblies_and_prefix_hits():
+    asm = Assemblies.of(["frame/left/rail", "frame/right/rail", "bolt"])
+    assert asm.names == ("frame", "frame/left", "frame/right")
+    hit = np.array([True, False, True])
+    assert prefix_hits(asm, hit).tolist() == [False, True, True]
