@@ -21,12 +21,20 @@ signed distance along the segment (:mod:`checker.shapes`), so contact between
 two discrete points is never missed. For self pairs the exclusion rule is
 applied at the closest points' arc lengths.
 
-Broad phase: one k-d tree over all points (or element midpoints) of all
-cables gives the close pairs; each part's bounding sphere queries the same
-tree, and the candidates are cut to the part's inflated local box before any
-exact work. Narrow phases are batched per shape type (one call for all boxes,
-all cylinders, ...); meshes are done part by part with their own tree. Cost
-therefore grows with the number of close pairs, not with points x parts.
+Broad phase. Cable against cable: places within a few points of each other
+along one cable (the near field) are compared by shifting the arrays against
+themselves, after an arc-length test that drops what the self rule excludes
+anyway; everything else (other cables, loops of the same cable) comes from a
+k-d tree over chunks of a few consecutive points or elements with bounding
+spheres. Element pairs are further cut by lower bounds on their distance before
+the exact segment distance. Cable against parts: one k-d tree over all points
+(or element midpoints) of all cables; each part's bounding sphere queries it,
+and the candidates are cut to the part's inflated local box before any exact
+work. Narrow phases are batched per shape type (one call for all boxes, all
+cylinders, ...); meshes are done part by part with their own tree. Cost
+therefore grows with the number of close pairs, not with points x parts. Of
+several candidates with the same value, the one at the smallest arc lengths is
+reported, so the answer does not depend on the broad phase's order.
 
 Deliberately not done here: part-part interference (``PairType.PART_PART``,
 left to MuJoCo or a later sweep module), events over time and comparison with
@@ -150,7 +158,9 @@ class _Hits:
         t, a, b, v, w, s, sb = t[keep], a[keep], b[keep], v[keep], w[keep], s[keep], sb[keep]
         if len(v) == 0:
             return []
-        o = np.lexsort((v, b, a, t))
+        # Ties in value go to the smallest arc lengths, so the answer does
+        # not depend on the order the broad phase found the candidates in.
+        o = np.lexsort((np.nan_to_num(sb, nan=-np.inf), s, v, b, a, t))
         t, a, b = t[o], a[o], b[o]
         first = np.r_[True, (t[1:] != t[:-1]) | (a[1:] != a[:-1]) | (b[1:] != b[:-1])]
         idx = o[first]
@@ -168,74 +178,260 @@ class _Hits:
 
 # ---------------------------------------------------------------------------
 # Cables against cables
+#
+# Pairs along one cable within a few places of each other (the near field)
+# are taken by shifting the point arrays against themselves, one offset at a
+# time; everything farther apart (other cables, and loops of the same cable)
+# comes from a k-d tree over chunks of _CHUNK consecutive items, each with a
+# bounding sphere. A plain tree over the points would mostly return each
+# point's own neighbours along its cable, all of which the self rule then
+# drops. Both halves keep only candidates that can be below the clearance and
+# compute their values exactly as a direct pair loop would.
+
+_CHUNK = 4
+_NEAR = 2 * _CHUNK - 1  # offsets along a cable covered by the near field
+_SLACK = 1e-9  # relative margin of the pruning bounds against rounding
 
 
-def _cable_pairs_points(dp: _Discrete, tree: cKDTree, clearance: float, hits: _Hits) -> None:
+def _exclusion_reach(rad: np.ndarray, clearance: float) -> np.ndarray:
+    """Arc-length separation below which :func:`self_pair_excluded` drops a pair.
+
+    Used only for pruning, so it may err low, never high.
+    """
+    return np.pi * rad + clearance
+
+
+class _Chunks:
+    """Runs of up to ``_CHUNK`` consecutive items of one cable with bounding spheres.
+
+    Item ``i`` (an index into the points) stands for the piece from ``p[i]``
+    to ``p[i + 1]`` when the next point is on the same cable (a point and the
+    element after it, or an element), else for ``p[i]`` alone.
+
+    Attributes:
+        idx: (C, _CHUNK) item indices, -1 padded.
+        cable: (C,) cable of each chunk; chunk ids are consecutive along a cable.
+        centre, radius: bounding spheres.
+    """
+
+    def __init__(self, p, cable, has_next, items):
+        ic = cable[items]
+        n = len(items)
+        # Position of each item along its cable's run of items.
+        new_cable = np.r_[True, ic[1:] != ic[:-1]]
+        run_start = np.nonzero(new_cable)[0]
+        local = np.arange(n) - np.repeat(run_start, np.diff(np.r_[run_start, n]))
+        slot = local % _CHUNK
+        first = slot == 0
+        cid = np.cumsum(first) - 1
+        starts = np.nonzero(first)[0]
+        self.idx = np.full((len(starts), _CHUNK), -1, dtype=np.int64)
+        self.idx[cid, slot] = items
+        self.cable = ic[starts]
+        a = p[items].T
+        b = p[np.where(has_next[items], items + 1, items)].T
+        cnt = np.diff(np.r_[starts, n])
+        centre = np.add.reduceat(a + b, starts, axis=1) / (2.0 * cnt)
+        c = centre[:, cid]
+        da, db = a - c, b - c
+        da *= da
+        db *= db
+        r2 = np.maximum(da[0] + da[1] + da[2], db[0] + db[1] + db[2])
+        self.centre = np.ascontiguousarray(centre.T)
+        self.radius = np.sqrt(np.maximum.reduceat(r2, starts))
+
+    def pairs(self, reach: float) -> tuple[np.ndarray, np.ndarray]:
+        """Chunk pairs (A < B) whose spheres come within ``reach``, except
+        chunks of one cable that are the same or adjacent (the near field)."""
+        if len(self.radius) < 2:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        rmax = float(self.radius.max())
+        tree = cKDTree(self.centre, balanced_tree=False, compact_nodes=False)
+        pr = tree.query_pairs((reach + 2.0 * rmax) * (1 + _SLACK), output_type="ndarray")
+        if len(pr) == 0:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        a, b = np.minimum(pr[:, 0], pr[:, 1]), np.maximum(pr[:, 0], pr[:, 1])
+        d2 = np.sum((self.centre[a] - self.centre[b]) ** 2, axis=1)
+        lim = (reach + self.radius[a] + self.radius[b]) * (1 + _SLACK)
+        keep = (d2 < lim * lim) & ~((self.cable[a] == self.cable[b]) & (b - a <= 1))
+        return a[keep], b[keep]
+
+    def expand(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """All item pairs (i in chunk a, j in chunk b), flattened, padding dropped."""
+        i = np.repeat(self.idx[a], _CHUNK, axis=1).ravel()
+        j = np.tile(self.idx[b], (1, _CHUNK)).ravel()
+        ok = (i >= 0) & (j >= 0)
+        return i[ok], j[ok]
+
+
+def _within(x: np.ndarray, y: np.ndarray, lim: np.ndarray) -> np.ndarray:
+    """|x - y| < lim for rows of (n, 3) arrays, with a margin (pruning only)."""
+    t = x - y
+    lim = lim * (1 + _SLACK)
+    return np.einsum("ij,ij->i", t, t) < lim * lim
+
+
+def _within_t(x: np.ndarray, y: np.ndarray, lim: np.ndarray) -> np.ndarray:
+    """:func:`_within` for coordinate-major (3, n) arrays (contiguous slices)."""
+    t = x - y
+    t *= t
+    lim = lim * (1 + _SLACK)
+    return t[0] + t[1] + t[2] < lim * lim
+
+
+def _cable_pairs_points(dp: _Discrete, clearance: float, hits: _Hits) -> None:
     """Point-point pairs (self and cable-cable) and the self midpoint pass.
 
-    One pair query at ``2 r_max + clearance + l_max / 2`` covers both passes:
-    a point within ``2r + clearance`` of an element's midpoint is within that
-    reach of both of the element's ends. Pairs are cut by distance before any
-    further work, since most are neighbours along one cable.
+    Candidates: cable-cable point pairs within ``r1 + r2 + clearance``; self
+    point pairs within ``2r + clearance``; a point against the midpoint of an
+    element not touching it within ``2r + clearance``. Self candidates the
+    rule of :func:`~checker.cable.self_pair_excluded` drops are dropped.
     """
     p, s, cab, rad = dp.p, dp.s, dp.cable, dp.radius
-    seg_len = np.linalg.norm(p[dp.seg + 1] - p[dp.seg], axis=1)
-    lmax = float(seg_len.max()) if len(seg_len) else 0.0
-    rmax = float(rad.max())
-    pr = tree.query_pairs(2.0 * rmax + clearance + 0.5 * lmax, output_type="ndarray")
-    if len(pr) == 0:
-        return
-    i, j = pr[:, 0], pr[:, 1]  # i < j, so cable[i] <= cable[j]
-    d = np.linalg.norm(p[i] - p[j], axis=1)
-    same = cab[i] == cab[j]
-    # Cable-cable.
-    o = np.nonzero(~same & (d < 2.0 * rmax + clearance))[0]
-    if len(o):
-        io, jo = i[o], j[o]
-        hits.add(PairType.CABLE_CABLE, cab[io], cab[jo], d[o] - rad[io] - rad[jo], p[io], s[io], s[jo])
-    # Self: only pairs far enough apart along the cable for the midpoint of
-    # an element at one of them to be checkable.
-    o = np.nonzero(same & (d < 2.0 * rad[i] + clearance + 0.5 * lmax))[0]
-    o = o[~self_pair_excluded(s[i[o]], s[j[o]], rad[i[o]] - 0.5 * lmax / np.pi, clearance)]
-    if len(o) == 0:
-        return
-    si, sj, ds = i[o], j[o], d[o]
-    ok = ~self_pair_excluded(s[si], s[sj], rad[si], clearance)
-    hits.add(PairType.SELF, cab[si[ok]], cab[si[ok]], ds[ok] - 2 * rad[si[ok]], p[si[ok]], s[si[ok]], s[sj[ok]])
-    # Second pass: each point against the midpoints of the elements at the other.
-    q = np.concatenate([si, si, sj, sj])
-    e0 = np.concatenate([sj - 1, sj, si - 1, si])
-    valid = (e0 >= 0) & (e0 + 1 < len(p))
-    q, e0 = q[valid], e0[valid]
-    valid = (cab[e0] == cab[q]) & (cab[e0 + 1] == cab[q]) & (e0 != q) & (e0 + 1 != q)
-    q, e0 = q[valid], e0[valid]
-    m = 0.5 * (p[e0] + p[e0 + 1])
-    sm = 0.5 * (s[e0] + s[e0 + 1])
-    ok = ~self_pair_excluded(s[q], sm, rad[q], clearance)
-    q, m, sm = q[ok], m[ok], sm[ok]
-    hits.add(PairType.SELF, cab[q], cab[q], np.linalg.norm(p[q] - m, axis=1) - 2 * rad[q], p[q], s[q], sm)
+    n = len(p)
+    has_next = np.r_[cab[:-1] == cab[1:], False]
+    mid = 0.5 * (p[:-1] + p[1:])
+    lim_self = 2.0 * rad + clearance
+    e0 = np.zeros(0, np.int64)
+    fi, fj, sq, se = [e0], [e0], [e0], [e0]  # self first pass (i < j); second pass (point q, element e)
+    # Near field: offsets 1.._NEAR along one cable.
+    # Pairs nearer along the cable than the self rule's reach are dropped
+    # before their distance is computed (with a margin against rounding).
+    reach = _exclusion_reach(rad, clearance)
+    reach = reach - _SLACK * (reach + np.abs(s))
+    pt, mt = np.ascontiguousarray(p.T), np.ascontiguousarray(mid.T)
+    sm = 0.5 * (s[:-1] + s[1:])
+    for k in range(1, min(_NEAR, n - 1) + 1):
+        ok = (cab[:-k] == cab[k:]) & (s[k:] - s[:-k] > reach[:-k])
+        if ok.any():
+            i = np.nonzero(ok & _within_t(pt[:, :-k], pt[:, k:], lim_self[:-k]))[0]
+            fi.append(i)
+            fj.append(i + k)
+        if k + 1 < n:  # element e = q + k, its far end q + k + 1 on q's cable
+            m = n - k - 1
+            ok = (cab[:m] == cab[k + 1:]) & (sm[k:] - s[:m] > reach[:m])
+            if ok.any():
+                q = np.nonzero(ok & _within_t(pt[:, :m], mt[:, k:], lim_self[:m]))[0]
+                sq.append(q)
+                se.append(q + k)
+        if k >= 2:  # element e = q - k
+            ok = (cab[k:] == cab[:-k]) & (s[k:] - sm[: n - k] > reach[k:])
+            if not ok.any():
+                continue
+            q = np.nonzero(ok & _within_t(pt[:, k:], mt[:, : n - k], lim_self[k:]))[0] + k
+            sq.append(q)
+            se.append(q - k)
+    # Far field: chunk pairs.
+    ch = _Chunks(p, cab, has_next, np.arange(n))
+    ca, cb = ch.pairs(2.0 * float(rad.max()) + clearance)
+    ci, cj = np.zeros(0, np.int64), np.zeros(0, np.int64)
+    if len(ca):
+        same = ch.cable[ca] == ch.cable[cb]
+        i, j = ch.expand(ca[~same], cb[~same])
+        ok = _within(p[i], p[j], rad[i] + rad[j] + clearance)
+        ci, cj = np.minimum(i[ok], j[ok]), np.maximum(i[ok], j[ok])
+        i, j = ch.expand(ca[same], cb[same])
+        far = np.abs(i - j) > _NEAR
+        i, j = i[far], j[far]
+        ok = _within(p[i], p[j], lim_self[i])
+        fi.append(np.minimum(i[ok], j[ok]))
+        fj.append(np.maximum(i[ok], j[ok]))
+        for q, e in ((i, j), (j, i)):
+            ok = has_next[e] & _within(p[q], mid[np.minimum(e, n - 2)], lim_self[q])
+            sq.append(q[ok])
+            se.append(e[ok])
+    if len(ci):
+        d = np.linalg.norm(p[ci] - p[cj], axis=1)
+        v = d - rad[ci] - rad[cj]
+        o = v < clearance
+        ci, cj = ci[o], cj[o]
+        hits.add(PairType.CABLE_CABLE, cab[ci], cab[cj], v[o], p[ci], s[ci], s[cj])
+    si, sj = np.concatenate(fi), np.concatenate(fj)
+    if len(si):
+        v = np.linalg.norm(p[si] - p[sj], axis=1) - 2 * rad[si]
+        o = (v < clearance) & ~self_pair_excluded(s[si], s[sj], rad[si], clearance)
+        si, sj = si[o], sj[o]
+        hits.add(PairType.SELF, cab[si], cab[si], v[o], p[si], s[si], s[sj])
+    q, e0 = np.concatenate(sq), np.concatenate(se)
+    if len(q):
+        m = 0.5 * (p[e0] + p[e0 + 1])
+        sm = 0.5 * (s[e0] + s[e0 + 1])
+        v = np.linalg.norm(p[q] - m, axis=1) - 2 * rad[q]
+        o = (v < clearance) & ~self_pair_excluded(s[q], sm, rad[q], clearance)
+        q = q[o]
+        hits.add(PairType.SELF, cab[q], cab[q], v[o], p[q], s[q], sm[o])
 
 
-def _cable_pairs_exact(dp: _Discrete, tree: cKDTree, clearance: float, hits: _Hits) -> None:
-    """Element-element pairs (capsule chains), self and cable-cable."""
+def _cable_pairs_exact(dp: _Discrete, clearance: float, hits: _Hits) -> None:
+    """Element-element pairs (capsule chains), self and cable-cable.
+
+    Element pairs are pruned by lower bounds on their distance before the
+    exact segment-segment distance: the midpoints' distance minus the half
+    lengths; along one cable also the chord between the pair's outer ends
+    minus the arc length between them, plus the arc-length separation the
+    self rule requires (closest points nearer along the cable are excluded).
+    """
     p, s, cab, rad, seg = dp.p, dp.s, dp.cable, dp.radius, dp.seg
     if len(seg) == 0:
         return
-    seg_len = np.linalg.norm(p[seg + 1] - p[seg], axis=1)
-    reach = 2.0 * float(rad.max()) + clearance + float(seg_len.max())
-    pr = tree.query_pairs(reach, output_type="ndarray")
-    if len(pr) == 0:
+    n = len(p)
+    has_next = np.r_[cab[:-1] == cab[1:], False]
+    mid = 0.5 * (p[:-1] + p[1:])
+    half = 0.5 * (s[1:] - s[:-1])  # half element lengths (arc = chord per element)
+    lim_self = 2.0 * rad + clearance
+    reach = _exclusion_reach(rad, clearance)
+
+    def self_ok(e, f):
+        """Element pairs e < f of one cable that may hold a self hit."""
+        lim = lim_self[e] + half[e] + half[f]
+        arc = s[f + 1] - s[e]
+        tol = _SLACK * (np.abs(s[f + 1]) + reach[e] + lim_self[e])
+        bound = lim_self[e] + arc - reach[e] + tol
+        return ((arc > reach[e] - tol) & (bound > 0) & _within(mid[e], mid[f], lim)
+                & _within(p[e], p[f + 1], np.maximum(bound, 0.0)))
+
+    ea, eb = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
+    pt = np.ascontiguousarray(p.T)
+    for k in range(1, min(_NEAR, n - 2) + 1):
+        # Elements e and e + k: the cheap arc-length test and the chord bound
+        # on whole slices, the rest on the few survivors.
+        m = n - k - 1
+        arc = s[k + 1:] - s[:m]
+        tol = _SLACK * (np.abs(s[k + 1:]) + reach[:m] + lim_self[:m])
+        bound = lim_self[:m] + arc - reach[:m] + tol
+        ok = (cab[:m] == cab[k + 1:]) & (arc > reach[:m] - tol) & (bound > 0)
+        if not ok.any():
+            continue
+        e = np.nonzero(ok & _within_t(pt[:, :m], pt[:, k + 1:], np.maximum(bound, 0.0)))[0]
+        e = e[self_ok(e, e + k)]
+        ea.append(e)
+        eb.append(e + k)
+    ch = _Chunks(p, cab, has_next, seg)
+    ca, cb = ch.pairs(2.0 * float(rad.max()) + clearance)
+    if len(ca):
+        same = ch.cable[ca] == ch.cable[cb]
+        i, j = ch.expand(ca[~same], cb[~same])
+        ok = _within(mid[i], mid[j], rad[i] + rad[j] + clearance + half[i] + half[j])
+        ea.append(np.minimum(i[ok], j[ok]))
+        eb.append(np.maximum(i[ok], j[ok]))
+        i, j = ch.expand(ca[same], cb[same])
+        i, j = np.minimum(i, j), np.maximum(i, j)
+        o = j - i > _NEAR
+        i, j = i[o], j[o]
+        o = self_ok(i, j)
+        ea.append(i[o])
+        eb.append(j[o])
+    ia, ib = np.concatenate(ea), np.concatenate(eb)
+    if len(ia) == 0:
         return
-    ea, eb = np.minimum(pr[:, 0], pr[:, 1]), np.maximum(pr[:, 0], pr[:, 1])
-    ia, ib = seg[ea], seg[eb]
-    d, ta, tb, ca, _ = segment_segment(p[ia], p[ia + 1], p[ib], p[ib + 1])
+    d, ta, tb, ca_, _ = segment_segment(p[ia], p[ia + 1], p[ib], p[ib + 1])
     sa = s[ia] + ta * (s[ia + 1] - s[ia])
     sb = s[ib] + tb * (s[ib + 1] - s[ib])
     same = cab[ia] == cab[ib]
     o = ~same
-    hits.add(PairType.CABLE_CABLE, cab[ia[o]], cab[ib[o]], d[o] - rad[ia[o]] - rad[ib[o]], ca[o], sa[o], sb[o])
+    hits.add(PairType.CABLE_CABLE, cab[ia[o]], cab[ib[o]], d[o] - rad[ia[o]] - rad[ib[o]], ca_[o], sa[o], sb[o])
     o = same & ~self_pair_excluded(sa, sb, rad[ia], clearance)
-    hits.add(PairType.SELF, cab[ia[o]], cab[ia[o]], d[o] - 2 * rad[ia[o]], ca[o], sa[o], sb[o])
+    hits.add(PairType.SELF, cab[ia[o]], cab[ia[o]], d[o] - 2 * rad[ia[o]], ca_[o], sa[o], sb[o])
 
 
 # ---------------------------------------------------------------------------
@@ -469,10 +665,10 @@ def check_state(
         if exact:
             mids = 0.5 * (dp.p[dp.seg] + dp.p[dp.seg + 1])
             tree = cKDTree(mids, balanced_tree=False, compact_nodes=False)
-            _cable_pairs_exact(dp, tree, config.clearance, hits)
+            _cable_pairs_exact(dp, config.clearance, hits)
         else:
             tree = cKDTree(dp.p, balanced_tree=False, compact_nodes=False)
-            _cable_pairs_points(dp, tree, config.clearance, hits)
+            _cable_pairs_points(dp, config.clearance, hits)
         if parts:
             tab = _PartTable(parts)
             if exact:
