@@ -31,8 +31,9 @@ the exact segment distance. Cable against parts: one k-d tree over all points
 (or element midpoints) of all cables; each part's bounding sphere queries it,
 and the candidates are cut to the part's inflated local box before any exact
 work. Narrow phases are batched per shape type (one call for all boxes, all
-cylinders, ...); meshes are done part by part with their own tree. Cost
-therefore grows with the number of close pairs, not with points x parts. Of
+cylinders, ...); meshes per mesh, with the parts sharing one mesh in one call
+through the mesh's own tree. Cost therefore grows with the number of close
+pairs, not with points x parts. Of
 several candidates with the same value, the one at the smallest arc lengths is
 reported, so the answer does not depend on the broad phase's order.
 
@@ -455,6 +456,14 @@ class _PartTable:
         self.lo = np.array([b[0] for b in lo_hi]).reshape(k, 3)
         self.hi = np.array([b[1] for b in lo_hi]).reshape(k, 3)
         self.keepout = np.array([pt.keepout for pt in parts], dtype=bool)
+        # Parts sharing one mesh are answered in one call: group id per part.
+        groups: dict[int, int] = {}
+        self.mesh_group = np.array([groups.setdefault(id(pt.shape.mesh), len(groups)) if pt.shape.mesh is not None
+                                    else -1 for pt in parts], dtype=np.int64).reshape(k)
+        self.mesh_shapes = [None] * len(groups)
+        for pt in parts:
+            if pt.shape.mesh is not None:
+                self.mesh_shapes[groups[id(pt.shape.mesh)]] = pt.shape
         self.is_plane = self.type == list(ShapeType).index(ShapeType.PLANE)
 
     def to_local(self, k: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -519,9 +528,10 @@ def _point_distances(tab: _PartTable, pk: np.ndarray, loc: np.ndarray, face_plan
         stype = types[code]
         sel = np.nonzero(tab.type[pk] == code)[0]
         if stype is ShapeType.MESH:
-            for k in np.unique(pk[sel]):
-                sk = sel[pk[sel] == k]
-                shape = tab.parts[k].shape
+            grp = tab.mesh_group[pk[sel]]
+            for g in np.unique(grp):
+                sk = sel[grp == g]
+                shape = tab.mesh_shapes[g]
                 d[sk] = face_plane_distance(shape, loc[sk]) if face_plane else signed_distance(shape, loc[sk])[0]
         elif face_plane:
             d[sel] = face_plane_distance_batch(stype, tab.size[pk[sel]], loc[sel])
@@ -576,9 +586,10 @@ def _structure_exact(dp, tree, tab, config, excl, hits) -> None:
         stype = types[code]
         sel = np.nonzero(tab.type[pk] == code)[0]
         if stype is ShapeType.MESH:
-            for k in np.unique(pk[sel]):
-                sk = sel[pk[sel] == k]
-                d[sk], t[sk] = segment_signed_distance(tab.parts[k].shape, a[sk], b[sk])
+            grp = tab.mesh_group[pk[sel]]
+            for g in np.unique(grp):
+                sk = sel[grp == g]
+                d[sk], t[sk] = segment_signed_distance(tab.mesh_shapes[g], a[sk], b[sk])
         else:
             d[sel], t[sel] = segment_signed_distance_batch(stype, tab.size[pk[sel]], a[sel], b[sel])
     where = p[i0] + t[:, None] * (p[i0 + 1] - p[i0])
