@@ -7,7 +7,7 @@ physics, read scene files or write reports.
 """
 
 from checker.cable import arc_length, bend_radius, densify, resample, self_pair_excluded
-from checker.interference import check_state
+from checker.interference import Checker, check_state
 from checker.records import Interference, PairType, Severity, severity_of
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from checker.shapes import (
@@ -20,7 +20,7 @@ from checker.shapes import (
 )
 
 __all__ = [
-    "CableState", "CheckConfig", "Exclusion", "Interference", "PairType", "PartState", "Severity",
+    "CableState", "CheckConfig", "Checker", "Exclusion", "Interference", "PairType", "PartState", "Severity",
     "Shape", "ShapeType", "arc_length", "bend_radius", "check_state", "densify", "face_plane_distance",
     "mesh_shape", "resample", "segment_signed_distance", "self_pair_excluded", "severity_of", "signed_distance",
 ]

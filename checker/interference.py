@@ -2,7 +2,9 @@
 
 :func:`check_state` runs the paper's algorithms (seed 000) on all cables and
 parts of one instant and returns one :class:`~checker.records.Interference`
-per interfering pair.
+per interfering pair. :class:`Checker` does the same step after step for one
+set of parts, preparing what depends only on the parts once; each call then
+takes the cables and the parts' poses.
 
 Method ``points`` (the paper): each cable's body centres are densified so no
 element is longer than ``spacing * r`` (:func:`checker.cable.densify_batch`).
@@ -21,21 +23,22 @@ signed distance along the segment (:mod:`checker.shapes`), so contact between
 two discrete points is never missed. For self pairs the exclusion rule is
 applied at the closest points' arc lengths.
 
-Broad phase. Cable against cable: places within a few points of each other
+Broad phase. The points (or elements) of every cable are cut into chunks of
+a few consecutive ones, each with a bounding sphere, and one k-d tree is built
+over the chunks. Cable against cable: places within a few points of each other
 along one cable (the near field) are compared by shifting the arrays against
 themselves, after an arc-length test that drops what the self rule excludes
-anyway; everything else (other cables, loops of the same cable) comes from a
-k-d tree over chunks of a few consecutive points or elements with bounding
-spheres. Element pairs are further cut by lower bounds on their distance before
-the exact segment distance. Cable against parts: one k-d tree over all points
-(or element midpoints) of all cables; each part's bounding sphere queries it,
-and the candidates are cut to the part's inflated local box before any exact
-work. Narrow phases are batched per shape type (one call for all boxes, all
+anyway; everything else (other cables, loops of the same cable) comes from
+chunk pairs of the tree. Element pairs are further cut by lower bounds on
+their distance before the exact segment distance. Cable against parts: every
+part's bounding sphere meets the chunk tree in one call; the items of the
+chunks met are cut to the part's inflated local box before any exact work.
+Narrow phases are batched per shape type (one call for all boxes, all
 cylinders, ...); meshes per mesh, with the parts sharing one mesh in one call
 through the mesh's own tree. Cost therefore grows with the number of close
-pairs, not with points x parts. Of
-several candidates with the same value, the one at the smallest arc lengths is
-reported, so the answer does not depend on the broad phase's order.
+pairs, not with points x parts. Of several candidates with the same value,
+the one at the smallest arc lengths is reported, so the answer does not
+depend on the broad phase's order.
 
 Deliberately not done here: part-part interference (``PairType.PART_PART``,
 left to MuJoCo or a later sweep module), events over time and comparison with
@@ -44,6 +47,7 @@ MuJoCo.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 
 import numpy as np
@@ -240,6 +244,8 @@ class _Chunks:
         r2 = np.maximum(da[0] + da[1] + da[2], db[0] + db[1] + db[2])
         self.centre = np.ascontiguousarray(centre.T)
         self.radius = np.sqrt(np.maximum.reduceat(r2, starts))
+        self.n_items = n
+        self.tree = cKDTree(self.centre, balanced_tree=False, compact_nodes=False)
 
     def pairs(self, reach: float) -> tuple[np.ndarray, np.ndarray]:
         """Chunk pairs (A < B) whose spheres come within ``reach``, except
@@ -247,8 +253,7 @@ class _Chunks:
         if len(self.radius) < 2:
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
         rmax = float(self.radius.max())
-        tree = cKDTree(self.centre, balanced_tree=False, compact_nodes=False)
-        pr = tree.query_pairs((reach + 2.0 * rmax) * (1 + _SLACK), output_type="ndarray")
+        pr = self.tree.query_pairs((reach + 2.0 * rmax) * (1 + _SLACK), output_type="ndarray")
         if len(pr) == 0:
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
         a, b = np.minimum(pr[:, 0], pr[:, 1]), np.maximum(pr[:, 0], pr[:, 1])
@@ -280,7 +285,7 @@ def _within_t(x: np.ndarray, y: np.ndarray, lim: np.ndarray) -> np.ndarray:
     return t[0] + t[1] + t[2] < lim * lim
 
 
-def _cable_pairs_points(dp: _Discrete, clearance: float, hits: _Hits) -> None:
+def _cable_pairs_points(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hits) -> None:
     """Point-point pairs (self and cable-cable) and the self midpoint pass.
 
     Candidates: cable-cable point pairs within ``r1 + r2 + clearance``; self
@@ -323,7 +328,6 @@ def _cable_pairs_points(dp: _Discrete, clearance: float, hits: _Hits) -> None:
             sq.append(q)
             se.append(q - k)
     # Far field: chunk pairs.
-    ch = _Chunks(p, cab, has_next, np.arange(n))
     ca, cb = ch.pairs(2.0 * float(rad.max()) + clearance)
     ci, cj = np.zeros(0, np.int64), np.zeros(0, np.int64)
     if len(ca):
@@ -363,7 +367,7 @@ def _cable_pairs_points(dp: _Discrete, clearance: float, hits: _Hits) -> None:
         hits.add(PairType.SELF, cab[q], cab[q], v[o], p[q], s[q], sm[o])
 
 
-def _cable_pairs_exact(dp: _Discrete, clearance: float, hits: _Hits) -> None:
+def _cable_pairs_exact(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hits) -> None:
     """Element-element pairs (capsule chains), self and cable-cable.
 
     Element pairs are pruned by lower bounds on their distance before the
@@ -407,7 +411,6 @@ def _cable_pairs_exact(dp: _Discrete, clearance: float, hits: _Hits) -> None:
         e = e[self_ok(e, e + k)]
         ea.append(e)
         eb.append(e + k)
-    ch = _Chunks(p, cab, has_next, seg)
     ca, cb = ch.pairs(2.0 * float(rad.max()) + clearance)
     if len(ca):
         same = ch.cable[ca] == ch.cable[cb]
@@ -440,13 +443,14 @@ def _cable_pairs_exact(dp: _Discrete, clearance: float, hits: _Hits) -> None:
 
 
 class _PartTable:
-    """Parts as arrays: rotation (K,3,3), translation (K,3), sizes (K,3), bounds."""
+    """Parts as arrays: what does not change between calls (shapes, bounds,
+    keep-out flags) is built once; :meth:`posed` adds rotations and
+    translations for one call."""
 
     def __init__(self, parts: Sequence[PartState]):
         k = len(parts)
         self.parts = parts
-        self.rot = np.array([pt.pose[:3, :3] for pt in parts]).reshape(k, 3, 3)
-        self.trans = np.array([pt.pose[:3, 3] for pt in parts]).reshape(k, 3)
+        self.names = [pt.name for pt in parts]
         self.size = np.zeros((k, 3))
         for n, pt in enumerate(parts):
             sz = pt.shape.size[:3]
@@ -465,6 +469,23 @@ class _PartTable:
             if pt.shape.mesh is not None:
                 self.mesh_shapes[groups[id(pt.shape.mesh)]] = pt.shape
         self.is_plane = self.type == list(ShapeType).index(ShapeType.PLANE)
+        # Bounding spheres of the finite parts, in their own frames.
+        self.finite = np.nonzero(~self.is_plane)[0]
+        self.planes = np.nonzero(self.is_plane)[0]
+        fin = self.finite
+        self.c_loc = 0.5 * (self.lo[fin] + self.hi[fin])
+        self.half_diag = 0.5 * np.linalg.norm(self.hi[fin] - self.lo[fin], axis=1)
+        self.rot = np.array([pt.pose[:3, :3] for pt in parts]).reshape(k, 3, 3)
+        self.trans = np.array([pt.pose[:3, 3] for pt in parts]).reshape(k, 3)
+
+    def posed(self, poses: np.ndarray | None) -> "_PartTable":
+        """This table with poses (K, 4, 4) (None: the parts' own poses)."""
+        if poses is None:
+            return self
+        out = copy.copy(self)
+        out.rot = np.ascontiguousarray(poses[:, :3, :3])
+        out.trans = np.ascontiguousarray(poses[:, :3, 3])
+        return out
 
     def to_local(self, k: np.ndarray, x: np.ndarray) -> np.ndarray:
         """World points x (n, 3) into the frames of parts k (n,)."""
@@ -474,28 +495,34 @@ class _PartTable:
         return np.einsum("nij,nj->ni", self.rot[k], x) + self.trans[k]
 
 
-def _part_candidates(tab: _PartTable, tree: cKDTree, margin: float) -> tuple[np.ndarray, np.ndarray]:
-    """(item, part) pairs whose item lies within ``margin`` of the part's box.
+def _part_candidates(tab: _PartTable, ch: _Chunks, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """(item, part) pairs where the item may lie within ``margin`` of the part.
 
-    Finite parts query the tree with their bounding sphere; planes take every
-    item. Returns item indices and part indices, both (n,).
+    Each finite part's bounding sphere, grown by ``margin``, is met with the
+    chunks' bounding spheres through the chunk tree (one call for all parts);
+    the items of every chunk met are candidates. Planes take every item.
+    Returns item indices (into the points) and part indices, both (n,).
     """
     items, parts = [], []
-    fin = np.nonzero(~tab.is_plane)[0]
-    if len(fin):
-        c_loc = 0.5 * (tab.lo[fin] + tab.hi[fin])
-        c_world = np.einsum("nij,nj->ni", tab.rot[fin], c_loc) + tab.trans[fin]
-        rad = 0.5 * np.linalg.norm(tab.hi[fin] - tab.lo[fin], axis=1) + margin
-        lists = tree.query_ball_point(c_world, rad, return_sorted=False)
-        cnt = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(fin))
-        total = int(cnt.sum())
-        items.append(np.fromiter((i for x in lists for i in x), dtype=np.int64, count=total))
-        parts.append(np.repeat(fin, cnt))
-    pl = np.nonzero(tab.is_plane)[0]
-    n_items = tree.n
-    if len(pl):
-        items.append(np.tile(np.arange(n_items), len(pl)))
-        parts.append(np.repeat(pl, n_items))
+    fin = tab.finite
+    if len(fin) and len(ch.radius):
+        c_world = np.einsum("nij,nj->ni", tab.rot[fin], tab.c_loc) + tab.trans[fin]
+        rad = tab.half_diag + margin
+        reach = (float(rad.max()) + float(ch.radius.max())) * (1 + _SLACK)
+        ptree = cKDTree(c_world, balanced_tree=False, compact_nodes=False)
+        m = ch.tree.sparse_distance_matrix(ptree, reach, output_type="ndarray")
+        c, k, dist = m["i"], m["j"], m["v"]
+        ok = dist < (rad[k] + ch.radius[c]) * (1 + _SLACK)
+        c, k = c[ok], k[ok]
+        it = ch.idx[c].ravel()
+        pk = np.repeat(fin[k], _CHUNK)
+        ok = it >= 0
+        items.append(it[ok])
+        parts.append(pk[ok])
+    if len(tab.planes):
+        every = ch.idx[ch.idx >= 0]
+        items.append(np.tile(every, len(tab.planes)))
+        parts.append(np.repeat(tab.planes, len(every)))
     if not items:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
     return np.concatenate(items), np.concatenate(parts)
@@ -540,10 +567,10 @@ def _point_distances(tab: _PartTable, pk: np.ndarray, loc: np.ndarray, face_plan
     return d
 
 
-def _structure_points(dp, tree, tab, config, excl, hits) -> None:
+def _structure_points(dp, ch, tab, config, excl, hits) -> None:
     """Signed distance of every candidate point to its part, minus r."""
     margin = float(dp.radius.max()) + config.clearance
-    it, pk = _part_candidates(tab, tree, margin)
+    it, pk = _part_candidates(tab, ch, margin)
     if len(it) == 0:
         return
     loc = tab.to_local(pk, dp.p[it])
@@ -555,17 +582,17 @@ def _structure_points(dp, tree, tab, config, excl, hits) -> None:
     _add_structure(hits, tab, dp.cable[it], pk, d - dp.radius[it], dp.p[it], dp.s[it])
 
 
-def _structure_exact(dp, tree, tab, config, excl, hits) -> None:
+def _structure_exact(dp, ch, tab, config, excl, hits) -> None:
     """Least signed distance along every candidate element to its part, minus r."""
     p, s, seg = dp.p, dp.s, dp.seg
     if len(seg) == 0:
         return
-    seg_len = np.linalg.norm(p[seg + 1] - p[seg], axis=1)
-    margin = float(dp.radius.max()) + config.clearance + 0.5 * float(seg_len.max())
-    it, pk = _part_candidates(tab, tree, margin)
+    # Chunk spheres hold whole elements: the margin needs no half length.
+    margin = float(dp.radius.max()) + config.clearance
+    i0, pk = _part_candidates(tab, ch, margin)
+    it = i0
     if len(it) == 0:
         return
-    i0 = seg[it]
     a = tab.to_local(pk, p[i0])
     b = tab.to_local(pk, p[i0 + 1])
     thr = (dp.radius[i0] + config.clearance)[:, None]
@@ -632,6 +659,97 @@ def _single_cable(cables: Sequence[CableState], clearance: float, hits: _Hits) -
 # ---------------------------------------------------------------------------
 
 
+class Checker:
+    """A reusable checker for one set of parts: :func:`check_state` step after step.
+
+    What depends only on the parts (their shapes, bounds, keep-out flags,
+    mesh grouping) is prepared once; each :meth:`check` takes the cables and
+    the parts' poses of one instant. ``Checker(parts, config).check(cables,
+    None, exclusions)`` is exactly ``check_state(cables, parts, config,
+    exclusions)``.
+
+    Args:
+        parts: the parts (names, shapes, keep-out flags; their poses are the
+            default for :meth:`check`).
+        config: method, spacing, clearance.
+    """
+
+    def __init__(self, parts: Sequence[PartState], config: CheckConfig = CheckConfig()):
+        self.parts = list(parts)
+        self.config = config
+        self._tab = _PartTable(self.parts) if self.parts else None
+        self._pidx = {p.name: i for i, p in enumerate(self.parts)}
+
+    def check(
+        self,
+        cables: Sequence[CableState],
+        poses: np.ndarray | Sequence[np.ndarray] | None = None,
+        exclusions: Sequence[Exclusion] = (),
+    ) -> list[Interference]:
+        """Check one scene state; see :func:`check_state`.
+
+        Args:
+            cables: the cables' centrelines.
+            poses: (K, 4, 4) part -> world transforms in the order of the
+                parts, or None for the parts' own poses. Rotations must be
+                orthonormal (as :class:`~checker.scene_state.PartState`
+                requires).
+            exclusions: arc-length windows where a cable may touch a part.
+        """
+        config = self.config
+        parts = self.parts
+        tab = None
+        if self._tab is not None:
+            if poses is not None:
+                poses = np.asarray(poses, dtype=float).reshape(-1, 4, 4)
+                if len(poses) != len(parts) or not np.all(np.isfinite(poses)):
+                    raise ValueError(f"poses must be {len(parts)} finite 4x4 matrices")
+                rot = poses[:, :3, :3]
+                if not np.allclose(np.einsum("kji,kjl->kil", rot, rot), np.eye(3), atol=1e-9):
+                    raise ValueError("a pose rotation is not orthonormal")
+            tab = self._tab.posed(poses)
+        hits = _Hits()
+        cable_names = [c.name for c in cables]
+        part_names = [p.name for p in parts]
+        if len(set(cable_names)) != len(cable_names):
+            raise ValueError("cable names must be unique")
+        if cables:
+            cidx = {n: i for i, n in enumerate(cable_names)}
+            pidx = self._pidx
+            ex = [e for e in exclusions if e.cable in cidx and e.part in pidx]
+            ex_c = np.array([cidx[e.cable] for e in ex], dtype=np.int64)
+            ex_p = np.array([pidx[e.part] for e in ex], dtype=np.int64)
+            ex_lo = np.array([min(e.s_min, e.s_max) for e in ex], dtype=float)
+            ex_hi = np.array([max(e.s_min, e.s_max) for e in ex], dtype=float)
+            n_parts = max(len(parts), 1)
+            key = ex_c * n_parts + ex_p
+            o = np.argsort(key, kind="stable")
+            excl = (key[o], ex_lo[o], ex_hi[o], n_parts)
+            exact = config.method == "exact"
+            cuts = (np.r_[ex_c, ex_c], np.r_[ex_lo, ex_hi]) if exact else (np.zeros(0, np.int64), np.zeros(0))
+            dp = _discretise(cables, config, cuts)
+            has_next = np.r_[dp.cable[:-1] == dp.cable[1:], False]
+            if exact:
+                ch = _Chunks(dp.p, dp.cable, has_next, dp.seg)
+                _cable_pairs_exact(dp, ch, config.clearance, hits)
+            else:
+                ch = _Chunks(dp.p, dp.cable, has_next, np.arange(len(dp.p)))
+                _cable_pairs_points(dp, ch, config.clearance, hits)
+            if tab is not None:
+                if exact:
+                    _structure_exact(dp, ch, tab, config, excl, hits)
+                else:
+                    _structure_points(dp, ch, tab, config, excl, hits)
+            _single_cable(cables, config.clearance, hits)
+
+        def names(ptype: PairType) -> list[str]:
+            return part_names if ptype in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) else cable_names
+
+        out = hits.reduce(config.clearance, cable_names, names)
+        out.sort(key=lambda r: (r.min_distance, _TYPE_ORDER.index(r.type), r.a, r.b))
+        return out
+
+
 def check_state(
     cables: Sequence[CableState],
     parts: Sequence[PartState],
@@ -642,7 +760,8 @@ def check_state(
 
     A pair interferes when its signed ``min_distance`` (SPEC "Report") is
     below ``config.clearance``: hard below 0, soft from 0 up to the
-    clearance. Records are sorted worst first.
+    clearance. Records are sorted worst first. To check many states of the
+    same parts, :class:`Checker` prepares the parts once.
 
     Args:
         cables: the cables' centrelines.
@@ -653,44 +772,4 @@ def check_state(
     Returns:
         list of :class:`~checker.records.Interference`.
     """
-    hits = _Hits()
-    cable_names = [c.name for c in cables]
-    part_names = [p.name for p in parts]
-    if len(set(cable_names)) != len(cable_names):
-        raise ValueError("cable names must be unique")
-    if cables:
-        cidx = {n: i for i, n in enumerate(cable_names)}
-        pidx = {n: i for i, n in enumerate(part_names)}
-        ex = [e for e in exclusions if e.cable in cidx and e.part in pidx]
-        ex_c = np.array([cidx[e.cable] for e in ex], dtype=np.int64)
-        ex_p = np.array([pidx[e.part] for e in ex], dtype=np.int64)
-        ex_lo = np.array([min(e.s_min, e.s_max) for e in ex], dtype=float)
-        ex_hi = np.array([max(e.s_min, e.s_max) for e in ex], dtype=float)
-        n_parts = max(len(parts), 1)
-        key = ex_c * n_parts + ex_p
-        o = np.argsort(key, kind="stable")
-        excl = (key[o], ex_lo[o], ex_hi[o], n_parts)
-        exact = config.method == "exact"
-        cuts = (np.r_[ex_c, ex_c], np.r_[ex_lo, ex_hi]) if exact else (np.zeros(0, np.int64), np.zeros(0))
-        dp = _discretise(cables, config, cuts)
-        if exact:
-            mids = 0.5 * (dp.p[dp.seg] + dp.p[dp.seg + 1])
-            tree = cKDTree(mids, balanced_tree=False, compact_nodes=False)
-            _cable_pairs_exact(dp, config.clearance, hits)
-        else:
-            tree = cKDTree(dp.p, balanced_tree=False, compact_nodes=False)
-            _cable_pairs_points(dp, config.clearance, hits)
-        if parts:
-            tab = _PartTable(parts)
-            if exact:
-                _structure_exact(dp, tree, tab, config, excl, hits)
-            else:
-                _structure_points(dp, tree, tab, config, excl, hits)
-        _single_cable(cables, config.clearance, hits)
-
-    def names(ptype: PairType) -> list[str]:
-        return part_names if ptype in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) else cable_names
-
-    out = hits.reduce(config.clearance, cable_names, names)
-    out.sort(key=lambda r: (r.min_distance, _TYPE_ORDER.index(r.type), r.a, r.b))
-    return out
+    return Checker(parts, config).check(cables, None, exclusions)

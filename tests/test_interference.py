@@ -310,3 +310,41 @@ def test_face_plane_option_raises_false_alarm_near_an_edge():
     fp = check_state([cab], [box], CheckConfig(clearance=0.0, face_plane=True))
     # (the top and bottom face planes, crossed by the run, alarm even more)
     assert len(fp) == 1 and fp[0].min_distance <= 0.0035 - r + 1e-12
+
+
+@pytest.mark.parametrize("method", ["points", "exact"])
+def test_checker_reused_across_poses_matches_check_state(method):
+    """A Checker built once gives check_state's records for every set of poses."""
+    from checker.interference import Checker
+
+    rng = np.random.default_rng(11)
+    r = 0.004
+    t = np.linspace(0, 1, 60)
+    cables = [CableState(f"c{k}", np.c_[t * 0.3, 0.02 * k + 0.01 * np.sin(9 * t + k), 0.05 + 0.0 * t], r)
+              for k in range(4)]
+    shapes = [Shape(ShapeType.BOX, [0.02, 0.01, 0.03]), Shape(ShapeType.ELLIPSOID, [0.02, 0.015, 0.01]),
+              Shape(ShapeType.CYLINDER, [0.01, 0.03]), Shape(ShapeType.PLANE, [0.0])]
+    cfg = CheckConfig(method=method)
+    parts0 = [PartState(f"p{k}", sh, np.eye(4), keepout=k == 1) for k, sh in enumerate(shapes)]
+    checker = Checker(parts0, cfg)
+    ex = [Exclusion("c0", "p0", 0.0, 0.05)]
+    for _ in range(5):
+        poses = []
+        for k in range(len(shapes)):
+            q, rr = np.linalg.qr(rng.normal(size=(3, 3)))
+            q = q * np.sign(np.diag(rr))
+            if np.linalg.det(q) < 0:
+                q[:, 0] *= -1
+            pose = np.eye(4)
+            pose[:3, :3] = q
+            pose[:3, 3] = rng.uniform([0, -0.02, 0.0], [0.3, 0.08, 0.08])
+            poses.append(pose)
+        parts = [PartState(p.name, p.shape, pose, p.keepout) for p, pose in zip(parts0, poses)]
+        want = check_state(cables, parts, cfg, ex)
+        got = checker.check(cables, np.array(poses), ex)
+        assert [(x.type, x.a, x.b, x.min_distance, x.s) for x in got] == \
+            [(x.type, x.a, x.b, x.min_distance, x.s) for x in want]
+    assert [(x.type, x.min_distance, x.s) for x in checker.check(cables, None, ex)] == \
+        [(x.type, x.min_distance, x.s) for x in check_state(cables, parts0, cfg, ex)]
+    with pytest.raises(ValueError):
+        checker.check(cables, np.zeros((len(shapes), 4, 4)), ex)
