@@ -64,7 +64,7 @@ from checker.shapes import (
     segment_signed_distance,
     segment_signed_distance_batch,
     signed_distance,
-    signed_distance_batch,
+    signed_distance_value_batch,
 )
 
 _TYPE_ORDER = list(PairType)
@@ -233,8 +233,14 @@ class _Chunks:
         self.idx = np.full((len(starts), _CHUNK), -1, dtype=np.int64)
         self.idx[cid, slot] = items
         self.cable = ic[starts]
-        a = p[items].T
-        b = p[np.where(has_next[items], items + 1, items)].T
+        pt = p.T
+        if n == len(p):  # every point: no gather
+            a = np.ascontiguousarray(pt)
+            b = np.concatenate([a[:, 1:], a[:, -1:]], axis=1)
+            b = np.where(has_next, b, a)
+        else:
+            a = pt[:, items]
+            b = pt[:, np.where(has_next[items], items + 1, items)]
         cnt = np.diff(np.r_[starts, n])
         centre = np.add.reduceat(a + b, starts, axis=1) / (2.0 * cnt)
         c = centre[:, cid]
@@ -563,7 +569,7 @@ def _point_distances(tab: _PartTable, pk: np.ndarray, loc: np.ndarray, face_plan
         elif face_plane:
             d[sel] = face_plane_distance_batch(stype, tab.size[pk[sel]], loc[sel])
         else:
-            d[sel] = signed_distance_batch(stype, tab.size[pk[sel]], loc[sel])[0]
+            d[sel] = signed_distance_value_batch(stype, tab.size[pk[sel]], loc[sel])
     return d
 
 

@@ -253,11 +253,16 @@ def _unit_or(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:
 _EX = np.array([1.0, 0.0, 0.0])
 
 
-def _sd_box(h: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _sd_box_value(h: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Signed distance to boxes without the closest point: (d, q, inside)."""
     q = np.abs(p) - h
     outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
     inside = np.max(q, axis=1)
-    d = np.where(inside > 0.0, outside, inside)
+    return np.where(inside > 0.0, outside, inside), q, inside
+
+
+def _sd_box(h: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    d, q, inside = _sd_box_value(h, p)
     # Closest point: clamp outside; inside, move to the nearest face.
     cl = np.clip(p, -h, h)
     k = np.argmax(q, axis=1)
@@ -293,13 +298,18 @@ def _sd_capsule(rad: np.ndarray, half: np.ndarray, p: np.ndarray) -> tuple[np.nd
     return n - rad, axis + rad[:, None] * _unit_or(off, _EX)
 
 
-def _sd_cylinder(rad: np.ndarray, half: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _sd_cylinder_value(rad: np.ndarray, half: np.ndarray, p: np.ndarray) -> tuple:
+    """Signed distance to cylinders without the closest point: (d, rho, dr, dz, inside)."""
     rho = np.hypot(p[:, 0], p[:, 1])
     dr = rho - rad
     dz = np.abs(p[:, 2]) - half
     inside = np.maximum(dr, dz)
     outside = np.hypot(np.maximum(dr, 0.0), np.maximum(dz, 0.0))
-    d = np.where(inside > 0.0, outside, inside)
+    return np.where(inside > 0.0, outside, inside), rho, dr, dz, inside
+
+
+def _sd_cylinder(rad: np.ndarray, half: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    d, rho, dr, dz, inside = _sd_cylinder_value(rad, half, p)
     ok = rho > 0
     ux = np.where(ok, p[:, 0], 1.0) / np.where(ok, rho, 1.0)
     uy = np.where(ok, p[:, 1], 0.0) / np.where(ok, rho, 1.0)
@@ -492,6 +502,18 @@ def signed_distance_batch(stype: ShapeType, size: np.ndarray, points: np.ndarray
     raise ValueError(f"signed_distance_batch does not take {stype}")
 
 
+def signed_distance_value_batch(stype: ShapeType, size: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The distance (n,) of :func:`signed_distance_batch` alone (boxes and
+    cylinders skip their closest points; the values are the same)."""
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    s = np.asarray(size, dtype=float).reshape(len(p), -1)
+    if stype is ShapeType.BOX:
+        return _sd_box_value(s[:, :3], p)[0]
+    if stype is ShapeType.CYLINDER:
+        return _sd_cylinder_value(s[:, 0], s[:, 1], p)[0]
+    return signed_distance_batch(stype, s, p)[0]
+
+
 def signed_distance(shape: Shape, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance from points to a shape's surface, negative inside.
 
@@ -681,7 +703,7 @@ def segment_signed_distance_batch(
         return _derivative_min(fg, n)
     else:
         def f(t):
-            return signed_distance_batch(stype, s, a + t[:, None] * ab)[0]
+            return signed_distance_value_batch(stype, s, a + t[:, None] * ab)
 
     return _golden_min(f, n)
 
