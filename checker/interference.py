@@ -291,6 +291,27 @@ def _within_t(x: np.ndarray, y: np.ndarray, lim: np.ndarray) -> np.ndarray:
     return t[0] + t[1] + t[2] < lim * lim
 
 
+def _near_windows(p, s, cab, reach, lim) -> np.ndarray:
+    """Points that start a window of ``_NEAR + 1`` elements which may hold a self hit.
+
+    In a window from point i to point j (``_NEAR + 1`` places on, or the
+    cable's end) two places x, y of the polyline are at least as far apart
+    as the chord of the window minus the arc length outside them:
+    ``|x - y| >= |p_j - p_i| - (s_j - s_i) + |s_x - s_y|``. A self hit needs
+    ``|s_x - s_y| >= reach`` (the self rule) and ``|x - y| < lim``, so a
+    window whose arc exceeds its chord by no more than ``reach - lim`` holds
+    none. Every near-field pair (first pass, or a point against an element's
+    midpoint) lies in the window starting at its lower index.
+    """
+    n = len(p)
+    last = np.searchsorted(cab, cab, side="right") - 1
+    j = np.minimum(np.arange(n) + _NEAR + 1, last)
+    chord = p[j] - p
+    chord = np.sqrt(np.einsum("ij,ij->i", chord, chord))
+    slack = _SLACK * (np.abs(s[j]) + reach + lim)
+    return np.nonzero((s[j] - s) - chord > reach - lim - slack)[0]
+
+
 def _cable_pairs_points(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hits) -> None:
     """Point-point pairs (self and cable-cable) and the self midpoint pass.
 
@@ -306,33 +327,32 @@ def _cable_pairs_points(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hit
     lim_self = 2.0 * rad + clearance
     e0 = np.zeros(0, np.int64)
     fi, fj, sq, se = [e0], [e0], [e0], [e0]  # self first pass (i < j); second pass (point q, element e)
-    # Near field: offsets 1.._NEAR along one cable.
-    # Pairs nearer along the cable than the self rule's reach are dropped
-    # before their distance is computed (with a margin against rounding).
+    # Near field: offsets 1.._NEAR along one cable, from the window starts
+    # that can hold a hit at all (see _near_windows).
     reach = _exclusion_reach(rad, clearance)
-    reach = reach - _SLACK * (reach + np.abs(s))
-    pt, mt = np.ascontiguousarray(p.T), np.ascontiguousarray(mid.T)
-    sm = 0.5 * (s[:-1] + s[1:])
-    for k in range(1, min(_NEAR, n - 1) + 1):
-        ok = (cab[:-k] == cab[k:]) & (s[k:] - s[:-k] > reach[:-k])
-        if ok.any():
-            i = np.nonzero(ok & _within_t(pt[:, :-k], pt[:, k:], lim_self[:-k]))[0]
-            fi.append(i)
-            fj.append(i + k)
-        if k + 1 < n:  # element e = q + k, its far end q + k + 1 on q's cable
-            m = n - k - 1
-            ok = (cab[:m] == cab[k + 1:]) & (sm[k:] - s[:m] > reach[:m])
-            if ok.any():
-                q = np.nonzero(ok & _within_t(pt[:, :m], mt[:, k:], lim_self[:m]))[0]
-                sq.append(q)
-                se.append(q + k)
-        if k >= 2:  # element e = q - k
-            ok = (cab[k:] == cab[:-k]) & (s[k:] - sm[: n - k] > reach[k:])
-            if not ok.any():
-                continue
-            q = np.nonzero(ok & _within_t(pt[:, k:], mt[:, : n - k], lim_self[k:]))[0] + k
-            sq.append(q)
-            se.append(q - k)
+    start = _near_windows(p, s, cab, reach, lim_self)
+    if len(start):
+        k = np.tile(np.arange(1, _NEAR + 1), len(start))
+        a = np.repeat(start, _NEAR)
+        b = a + k
+        ok = b < n
+        a, b, k = a[ok], b[ok], k[ok]
+        ok = cab[b] == cab[a]
+        a, b, k = a[ok], b[ok], k[ok]
+        tol = _SLACK * (reach[a] + np.abs(s[b]))
+        # First pass (a, b); second pass a against element b (when b + 1 is
+        # on the cable) and b against element a (two or more places apart).
+        o = (s[b] - s[a] > reach[a] - tol) & _within(p[a], p[b], lim_self[a])
+        fi.append(a[o])
+        fj.append(b[o])
+        e_ok = has_next[b]
+        eb = np.minimum(b, n - 2)
+        o = e_ok & (0.5 * (s[eb] + s[eb + 1]) - s[a] > reach[a] - tol) & _within(p[a], mid[eb], lim_self[a])
+        sq.append(a[o])
+        se.append(b[o])
+        o = (k >= 2) & (s[b] - 0.5 * (s[a] + s[a + 1]) > reach[b] - tol) & _within(p[b], mid[a], lim_self[b])
+        sq.append(b[o])
+        se.append(a[o])
     # Far field: chunk pairs.
     ca, cb = ch.pairs(2.0 * float(rad.max()) + clearance)
     ci, cj = np.zeros(0, np.int64), np.zeros(0, np.int64)
