@@ -304,12 +304,22 @@ def _near_windows(p, s, cab, reach, lim) -> np.ndarray:
     midpoint) lies in the window starting at its lower index.
     """
     n = len(p)
-    last = np.searchsorted(cab, cab, side="right") - 1
-    j = np.minimum(np.arange(n) + _NEAR + 1, last)
-    chord = p[j] - p
-    chord = np.sqrt(np.einsum("ij,ij->i", chord, chord))
+    w = _NEAR + 1
+    if n <= w:
+        return np.arange(n)
+    # Windows reaching past their cable's end end there instead.
+    j = np.arange(w, n + w)
+    j[n - w:] = n - 1
+    cut = np.nonzero(cab[j] != cab)[0]
+    j[cut] = np.searchsorted(cab, cab[cut], side="right") - 1
+    d = np.empty_like(p)
+    d[: n - w] = p[w:] - p[: n - w]
+    d[cut] = p[j[cut]] - p[cut]
+    d[n - w:] = p[j[n - w:]] - p[n - w:]
+    chord = np.sqrt(np.einsum("ij,ij->i", d, d))
+    arc = s[j] - s
     slack = _SLACK * (np.abs(s[j]) + reach + lim)
-    return np.nonzero((s[j] - s) - chord > reach - lim - slack)[0]
+    return np.nonzero(arc - chord > reach - lim - slack)[0]
 
 
 def _cable_pairs_points(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hits) -> None:
@@ -525,8 +535,8 @@ def _part_candidates(tab: _PartTable, ch: _Chunks, margin: float) -> tuple[np.nd
     """(item, part) pairs where the item may lie within ``margin`` of the part.
 
     Each finite part's bounding sphere, grown by ``margin``, is met with the
-    chunks' bounding spheres through the chunk tree (one call for all parts);
-    the items of every chunk met are candidates. Planes take every item.
+    chunks' bounding spheres through the chunk tree; the items of every chunk
+    met are candidates. Planes take every item.
     Returns item indices (into the points) and part indices, both (n,).
     """
     items, parts = [], []
@@ -534,11 +544,13 @@ def _part_candidates(tab: _PartTable, ch: _Chunks, margin: float) -> tuple[np.nd
     if len(fin) and len(ch.radius):
         c_world = np.einsum("nij,nj->ni", tab.rot[fin], tab.c_loc) + tab.trans[fin]
         rad = tab.half_diag + margin
-        reach = (float(rad.max()) + float(ch.radius.max())) * (1 + _SLACK)
-        ptree = cKDTree(c_world, balanced_tree=False, compact_nodes=False)
-        m = ch.tree.sparse_distance_matrix(ptree, reach, output_type="ndarray")
-        c, k, dist = m["i"], m["j"], m["v"]
-        ok = dist < (rad[k] + ch.radius[c]) * (1 + _SLACK)
+        lists = ch.tree.query_ball_point(c_world, (rad + float(ch.radius.max())) * (1 + _SLACK),
+                                         return_sorted=False)
+        cnt = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(fin))
+        c = np.fromiter((i for x in lists for i in x), dtype=np.int64, count=int(cnt.sum()))
+        k = np.repeat(np.arange(len(fin)), cnt)
+        lim = (rad[k] + ch.radius[c]) * (1 + _SLACK)
+        ok = _within(ch.centre[c], c_world[k], lim)
         c, k = c[ok], k[ok]
         it = ch.idx[c].ravel()
         pk = np.repeat(fin[k], _CHUNK)
