@@ -22,11 +22,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from checker.closest import cross, row_norm
+
 
 def arc_length(points: np.ndarray) -> np.ndarray:
     """Cumulative arc length (n,) of a polyline (n, 3), starting at 0."""
     p = np.asarray(points, dtype=float).reshape(-1, 3)
-    seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    seg = row_norm(np.diff(p, axis=0))
     return np.concatenate([[0.0], np.cumsum(seg)])
 
 
@@ -89,7 +91,7 @@ def densify_batch(
     offsets = np.asarray(offsets, dtype=np.int64)
     n_c = len(offsets) - 1
     cable_of_pt = np.repeat(np.arange(n_c), np.diff(offsets))
-    seg_len = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    seg_len = row_norm(np.diff(p, axis=0))
     # Element i joins point i to i+1 when both are on the same polyline.
     valid = cable_of_pt[:-1] == cable_of_pt[1:]
     lim = np.asarray(spacing, dtype=float)[cable_of_pt[:-1]]
@@ -198,13 +200,13 @@ def bend_radius(points: np.ndarray) -> np.ndarray:
     a = p[1:-1] - p[:-2]
     b = p[2:] - p[1:-1]
     c = p[2:] - p[:-2]
-    la = np.linalg.norm(a, axis=1)
-    lb = np.linalg.norm(b, axis=1)
-    lc = np.linalg.norm(c, axis=1)
-    cross = np.linalg.norm(np.cross(a, b), axis=1)
+    la = row_norm(a)
+    lb = row_norm(b)
+    lc = row_norm(c)
+    area = row_norm(cross(a, b))
     dot = np.einsum("ij,ij->i", a, b)
     nonzero = (la > 0) & (lb > 0)
-    sin_phi = np.where(nonzero, cross, 0.0) / np.where(nonzero, la * lb, 1.0)
+    sin_phi = np.where(nonzero, area, 0.0) / np.where(nonzero, la * lb, 1.0)
     # Straight when the turning angle is below rounding noise.
     bent = nonzero & (sin_phi > 1e-12)
     r_circ = np.where(bent, lc, 1.0) / np.where(bent, 2.0 * sin_phi, 1.0)

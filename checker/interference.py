@@ -54,7 +54,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from checker.cable import arc_length, bend_radius, densify_batch, self_pair_excluded
-from checker.closest import segment_segment
+from checker.closest import row_norm, segment_segment
 from checker.records import Interference, PairType, Severity, severity_of
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from checker.shapes import (
@@ -382,14 +382,14 @@ def _cable_pairs_points(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hit
             sq.append(q[ok])
             se.append(e[ok])
     if len(ci):
-        d = np.linalg.norm(p[ci] - p[cj], axis=1)
+        d = row_norm(p[ci] - p[cj])
         v = d - rad[ci] - rad[cj]
         o = v < clearance
         ci, cj = ci[o], cj[o]
         hits.add(PairType.CABLE_CABLE, cab[ci], cab[cj], v[o], p[ci], s[ci], s[cj])
     si, sj = np.concatenate(fi), np.concatenate(fj)
     if len(si):
-        v = np.linalg.norm(p[si] - p[sj], axis=1) - 2 * rad[si]
+        v = row_norm(p[si] - p[sj]) - 2 * rad[si]
         o = (v < clearance) & ~self_pair_excluded(s[si], s[sj], rad[si], clearance)
         si, sj = si[o], sj[o]
         hits.add(PairType.SELF, cab[si], cab[si], v[o], p[si], s[si], s[sj])
@@ -397,7 +397,7 @@ def _cable_pairs_points(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hit
     if len(q):
         m = 0.5 * (p[e0] + p[e0 + 1])
         sm = 0.5 * (s[e0] + s[e0 + 1])
-        v = np.linalg.norm(p[q] - m, axis=1) - 2 * rad[q]
+        v = row_norm(p[q] - m) - 2 * rad[q]
         o = (v < clearance) & ~self_pair_excluded(s[q], sm, rad[q], clearance)
         q = q[o]
         hits.add(PairType.SELF, cab[q], cab[q], v[o], p[q], s[q], sm[o])
@@ -510,7 +510,7 @@ class _PartTable:
         self.planes = np.nonzero(self.is_plane)[0]
         fin = self.finite
         self.c_loc = 0.5 * (self.lo[fin] + self.hi[fin])
-        self.half_diag = 0.5 * np.linalg.norm(self.hi[fin] - self.lo[fin], axis=1)
+        self.half_diag = 0.5 * row_norm(self.hi[fin] - self.lo[fin])
         self.rot = np.array([pt.pose[:3, :3] for pt in parts]).reshape(k, 3, 3)
         self.trans = np.array([pt.pose[:3, 3] for pt in parts]).reshape(k, 3)
 
@@ -642,7 +642,7 @@ def _structure_exact(dp, ch, tab, config, excl, hits) -> None:
     # Signed distance is 1-Lipschitz: the midpoint's distance minus the half
     # length bounds the segment's from below, so far segments skip the search.
     mid = _point_distances(tab, pk, 0.5 * (a + b), face_plane=False)
-    near = mid - 0.5 * np.linalg.norm(b - a, axis=1) - dp.radius[i0] < config.clearance
+    near = mid - 0.5 * row_norm(b - a) - dp.radius[i0] < config.clearance
     it, pk, i0, a, b = it[near], pk[near], i0[near], a[near], b[near]
     d = np.full(len(it), np.inf)
     t = np.zeros(len(it))

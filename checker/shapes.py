@@ -46,8 +46,10 @@ from checker.closest import (
     REGION_EDGE_AB,
     REGION_FACE,
     REGION_VERT_A,
+    cross,
     point_segment,
     point_triangle,
+    row_norm,
     segment_segment,
     segment_triangle,
 )
@@ -127,8 +129,8 @@ class MeshData:
         v = np.ascontiguousarray(tm.vertices, dtype=float)
         f = np.ascontiguousarray(tm.faces, dtype=np.int64)
         a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
-        n = np.cross(b - a, c - a)
-        nlen = np.linalg.norm(n, axis=1)
+        n = cross(b - a, c - a)
+        nlen = row_norm(n)
         fn = n / np.where(nlen > 0, nlen, 1.0)[:, None]
         # Edge pseudonormals: sum of the normals of the faces on each edge.
         e_lo = np.minimum(f, np.roll(f, -1, axis=1)).ravel()
@@ -245,7 +247,7 @@ def mesh_shape(vertices: np.ndarray, faces: np.ndarray) -> Shape:
 
 def _unit_or(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:
     """Rows of v normalised; rows of zero length take ``fallback`` (3,)."""
-    n = np.linalg.norm(v, axis=1)
+    n = row_norm(v)
     ok = n > 0
     return np.where(ok[:, None], v / np.where(ok, n, 1.0)[:, None], fallback)
 
@@ -256,7 +258,7 @@ _EX = np.array([1.0, 0.0, 0.0])
 def _sd_box_value(h: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Signed distance to boxes without the closest point: (d, q, inside)."""
     q = np.abs(p) - h
-    outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
+    outside = row_norm(np.maximum(q, 0.0))
     inside = np.max(q, axis=1)
     return np.where(inside > 0.0, outside, inside), q, inside
 
@@ -285,7 +287,7 @@ def _sd_box_face_plane(h: np.ndarray, p: np.ndarray) -> np.ndarray:
 
 
 def _sd_sphere(rad: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    n = np.linalg.norm(p, axis=1)
+    n = row_norm(p)
     return n - rad, rad[:, None] * _unit_or(p, _EX)
 
 
@@ -294,7 +296,7 @@ def _sd_capsule(rad: np.ndarray, half: np.ndarray, p: np.ndarray) -> tuple[np.nd
     axis = np.zeros_like(p)
     axis[:, 2] = z
     off = p - axis
-    n = np.linalg.norm(off, axis=1)
+    n = row_norm(off)
     return n - rad, axis + rad[:, None] * _unit_or(off, _EX)
 
 
@@ -353,7 +355,7 @@ def _sd_ellipsoid(e: np.ndarray, p: np.ndarray, t0: np.ndarray | None = None) ->
     emin2 = e2[:, 2]
     ey = es * ys
     lo = np.maximum(np.max(ey - e2, axis=1), -emin2)
-    hi = np.maximum(-emin2 + np.linalg.norm(ey, axis=1), lo)
+    hi = np.maximum(-emin2 + row_norm(ey), lo)
     tol = 1e-14 * np.maximum(e2[:, 0], np.max(ey, axis=1))
     t = lo.copy() if t0 is None else np.clip(t0, lo, hi)
     act = np.nonzero(hi - lo > tol)[0]
@@ -387,7 +389,7 @@ def _sd_ellipsoid(e: np.ndarray, p: np.ndarray, t0: np.ndarray | None = None) ->
     x[:, 2] = np.where(use_eq, es[:, 2] * np.sqrt(np.maximum(rest, 0.0)), x[:, 2])
     inv = np.argsort(order, axis=1)
     cl = np.take_along_axis(x, inv, axis=1) * sgn
-    d = np.linalg.norm(p - cl, axis=1)
+    d = row_norm(p - cl)
     inside = np.sum((p / e) ** 2, axis=1) < 1.0
     return np.where(inside, -d, d), cl, t
 
@@ -697,7 +699,7 @@ def segment_signed_distance_batch(
             d, cl, lam[rows] = _sd_ellipsoid(er, a[rows] + t[:, None] * ab[rows],
                                              None if np.isnan(prev).any() else prev)
             nrm = cl / (er * er)
-            g = np.einsum("ij,ij->i", nrm, ab[rows]) / np.linalg.norm(nrm, axis=1)
+            g = np.einsum("ij,ij->i", nrm, ab[rows]) / row_norm(nrm)
             return d, g
 
         return _derivative_min(fg, n)
@@ -719,7 +721,7 @@ def _mesh_segment_unsigned(m: MeshData, a: np.ndarray, b: np.ndarray,
     nf = len(m.faces)
     k = min(k, nf)
     mid = 0.5 * (a + b)
-    half = 0.5 * np.linalg.norm(b - a, axis=1)
+    half = 0.5 * row_norm(b - a)
     dk, idx = m.tree.query(mid, k=k)
     dk = dk.reshape(n, k)
     fi = idx.reshape(n, k).ravel()
