@@ -219,7 +219,7 @@ class _Chunks:
         centre, radius: bounding spheres.
     """
 
-    def __init__(self, p, cable, has_next, items):
+    def __init__(self, p, s, cable, has_next, items):
         ic = cable[items]
         n = len(items)
         # Position of each item along its cable's run of items.
@@ -233,23 +233,14 @@ class _Chunks:
         self.idx = np.full((len(starts), _CHUNK), -1, dtype=np.int64)
         self.idx[cid, slot] = items
         self.cable = ic[starts]
-        pt = p.T
-        if n == len(p):  # every point: no gather
-            a = np.ascontiguousarray(pt)
-            b = np.concatenate([a[:, 1:], a[:, -1:]], axis=1)
-            b = np.where(has_next, b, a)
-        else:
-            a = pt[:, items]
-            b = pt[:, np.where(has_next[items], items + 1, items)]
-        cnt = np.diff(np.r_[starts, n])
-        centre = np.add.reduceat(a + b, starts, axis=1) / (2.0 * cnt)
-        c = centre[:, cid]
-        da, db = a - c, b - c
-        da *= da
-        db *= db
-        r2 = np.maximum(da[0] + da[1] + da[2], db[0] + db[1] + db[2])
-        self.centre = np.ascontiguousarray(centre.T)
-        self.radius = np.sqrt(np.maximum.reduceat(r2, starts))
+        # A chunk's pieces form a polyline from a to b of arc length L; every
+        # point x of it lies within L / 2 of the chord's midpoint, since
+        # |x - a| + |x - b| <= L.
+        a = items[starts]
+        last = items[np.r_[starts[1:], n] - 1]
+        b = np.where(has_next[last], last + 1, last)
+        self.centre = 0.5 * (p[a] + p[b])
+        self.radius = 0.5 * (s[b] - s[a])
         self.n_items = n
         self.tree = cKDTree(self.centre, balanced_tree=False, compact_nodes=False)
 
@@ -768,10 +759,10 @@ class Checker:
             dp = _discretise(cables, config, cuts)
             has_next = np.r_[dp.cable[:-1] == dp.cable[1:], False]
             if exact:
-                ch = _Chunks(dp.p, dp.cable, has_next, dp.seg)
+                ch = _Chunks(dp.p, dp.s, dp.cable, has_next, dp.seg)
                 _cable_pairs_exact(dp, ch, config.clearance, hits)
             else:
-                ch = _Chunks(dp.p, dp.cable, has_next, np.arange(len(dp.p)))
+                ch = _Chunks(dp.p, dp.s, dp.cable, has_next, np.arange(len(dp.p)))
                 _cable_pairs_points(dp, ch, config.clearance, hits)
             if tab is not None:
                 if exact:
