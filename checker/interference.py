@@ -68,6 +68,7 @@ from checker.shapes import (
 )
 
 _TYPE_ORDER = list(PairType)
+_TYPE_CODE = {t: n for n, t in enumerate(ShapeType)}
 
 
 # ---------------------------------------------------------------------------
@@ -482,10 +483,21 @@ class _PartTable:
         for n, pt in enumerate(parts):
             sz = pt.shape.size[:3]
             self.size[n, : len(sz)] = sz
-        self.type = np.array([list(ShapeType).index(pt.shape.type) for pt in parts], dtype=np.int64)
-        lo_hi = [pt.shape.local_bounds() for pt in parts]
-        self.lo = np.array([b[0] for b in lo_hi]).reshape(k, 3)
-        self.hi = np.array([b[1] for b in lo_hi]).reshape(k, 3)
+        self.type = np.array([_TYPE_CODE[pt.shape.type] for pt in parts], dtype=np.int64).reshape(k)
+        # Shape.local_bounds for all parts at once (the same arithmetic).
+        sz, t = self.size, self.type
+        half = sz.copy()
+        half[t == _TYPE_CODE[ShapeType.SPHERE]] = sz[t == _TYPE_CODE[ShapeType.SPHERE], :1]
+        for st, extra in ((ShapeType.CYLINDER, False), (ShapeType.CAPSULE, True)):
+            o = t == _TYPE_CODE[st]
+            half[o, 1] = sz[o, 0]
+            half[o, 2] = sz[o, 1] + sz[o, 0] if extra else sz[o, 1]
+        self.lo, self.hi = -half, half.copy()
+        o = t == _TYPE_CODE[ShapeType.PLANE]
+        self.lo[o] = -np.inf
+        self.hi[o] = [np.inf, np.inf, 0.0]
+        for n in np.nonzero(t == _TYPE_CODE[ShapeType.MESH])[0]:
+            self.lo[n], self.hi[n] = parts[n].shape.local_bounds()
         self.keepout = np.array([pt.keepout for pt in parts], dtype=bool)
         # Parts sharing one mesh are answered in one call: group id per part.
         groups: dict[int, int] = {}
@@ -495,7 +507,7 @@ class _PartTable:
         for pt in parts:
             if pt.shape.mesh is not None:
                 self.mesh_shapes[groups[id(pt.shape.mesh)]] = pt.shape
-        self.is_plane = self.type == list(ShapeType).index(ShapeType.PLANE)
+        self.is_plane = self.type == _TYPE_CODE[ShapeType.PLANE]
         # Bounding spheres of the finite parts, in their own frames.
         self.finite = np.nonzero(~self.is_plane)[0]
         self.planes = np.nonzero(self.is_plane)[0]
