@@ -62,7 +62,7 @@ from checker.shapes import (
     face_plane_distance,
     face_plane_distance_batch,
     segment_signed_distance,
-    segment_signed_distance_batch,
+    segment_signed_distance_mixed,
     signed_distance,
     signed_distance_value_batch,
 )
@@ -649,17 +649,17 @@ def _structure_exact(dp, ch, tab, config, excl, hits) -> None:
     it, pk, i0, a, b = it[near], pk[near], i0[near], a[near], b[near]
     d = np.full(len(it), np.inf)
     t = np.zeros(len(it))
-    types = list(ShapeType)
-    for code in np.unique(tab.type[pk]):
-        stype = types[code]
-        sel = np.nonzero(tab.type[pk] == code)[0]
-        if stype is ShapeType.MESH:
-            grp = tab.mesh_group[pk[sel]]
-            for g in np.unique(grp):
-                sk = sel[grp == g]
-                d[sk], t[sk] = segment_signed_distance(tab.mesh_shapes[g], a[sk], b[sk])
-        else:
-            d[sel], t[sel] = segment_signed_distance_batch(stype, tab.size[pk[sel]], a[sel], b[sel])
+    is_mesh = tab.type[pk] == _TYPE_CODE[ShapeType.MESH]
+    sel = np.nonzero(is_mesh)[0]
+    grp = tab.mesh_group[pk[sel]]
+    for g in np.unique(grp):
+        sk = sel[grp == g]
+        d[sk], t[sk] = segment_signed_distance(tab.mesh_shapes[g], a[sk], b[sk])
+    # All primitives in one call (box and cylinder share one line search).
+    sel = np.nonzero(~is_mesh)[0]
+    if len(sel):
+        d[sel], t[sel] = segment_signed_distance_mixed(
+            tab.type[pk[sel]], tab.size[pk[sel]], a[sel], b[sel])
     where = p[i0] + t[:, None] * (p[i0 + 1] - p[i0])
     s_at = s[i0] + t * (s[i0 + 1] - s[i0])
     _add_structure(hits, tab, dp.cable[i0], pk, d - dp.radius[i0], where, s_at)

@@ -710,6 +710,55 @@ def segment_signed_distance_batch(
     return _golden_min(f, n)
 
 
+_GOLDEN_TYPES = (ShapeType.BOX, ShapeType.CYLINDER)
+
+
+def segment_signed_distance_mixed(
+    types: np.ndarray, size: np.ndarray, a: np.ndarray, b: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`segment_signed_distance_batch` for rows of several primitive types.
+
+    ``types`` (n,) holds each row's type as its index in ``list(ShapeType)``
+    (not MESH). Rows whose type needs a line search (box, cylinder) share one
+    golden-section loop; the answers are those of
+    :func:`segment_signed_distance_batch` row for row.
+    """
+    a = np.asarray(a, dtype=float).reshape(-1, 3)
+    b = np.asarray(b, dtype=float).reshape(-1, 3)
+    n = len(a)
+    s = np.asarray(size, dtype=float).reshape(n, -1)
+    types = np.asarray(types, dtype=np.int64).reshape(n)
+    d = np.full(n, np.inf)
+    t = np.zeros(n)
+    golden = []
+    all_types = list(ShapeType)
+    for code in np.unique(types):
+        stype = all_types[code]
+        rows = np.nonzero(types == code)[0]
+        if stype in _GOLDEN_TYPES:
+            golden.append((stype, rows))
+        else:
+            d[rows], t[rows] = segment_signed_distance_batch(stype, s[rows], a[rows], b[rows])
+    if golden:
+        rows = np.concatenate([r for _, r in golden])
+        ga, gab = a[rows], b[rows] - a[rows]
+        parts = []
+        start = 0
+        for stype, r in golden:
+            parts.append((stype, slice(start, start + len(r)), s[r]))
+            start += len(r)
+
+        def f(u):
+            x = ga + u[:, None] * gab
+            out = np.empty(len(u))
+            for stype, sl, sz in parts:
+                out[sl] = signed_distance_value_batch(stype, sz, x[sl])
+            return out
+
+        d[rows], t[rows] = _golden_min(f, len(rows))
+    return d, t
+
+
 def _mesh_segment_unsigned(m: MeshData, a: np.ndarray, b: np.ndarray,
                            k: int = 8) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Exact unsigned distance from segments to a mesh, its parameter and face.
