@@ -170,14 +170,19 @@ class _Hits:
         t, a, b = t[o], a[o], b[o]
         first = np.r_[True, (t[1:] != t[:-1]) | (a[1:] != a[:-1]) | (b[1:] != b[:-1])]
         idx = o[first]
+        # One record per pair (a few hundred at most): plain Python values.
+        ts, as_, bs = t[first].tolist(), a[first].tolist(), b[first].tolist()
+        vs, ss, sbs = v[idx].tolist(), s[idx].tolist(), sb[idx].tolist()
+        ws = w[idx]
         out = []
-        for i, k in zip(np.nonzero(first)[0], idx):
-            ptype = _TYPE_ORDER[t[i]]
-            d = float(v[k])
+        for n, ptype_i in enumerate(ts):
+            ptype = _TYPE_ORDER[ptype_i]
+            d = vs[n]
+            sb_n = sbs[n]
             out.append(Interference(
-                type=ptype, a=cable_names[a[i]], b=b_names_by_type(ptype)[b[i]],
-                min_distance=d, severity=severity_of(d, clearance), where=w[k].copy(),
-                s=float(s[k]), s_b=None if np.isnan(sb[k]) else float(sb[k]),
+                type=ptype, a=cable_names[as_[n]], b=b_names_by_type(ptype)[bs[n]],
+                min_distance=d, severity=severity_of(d, clearance), where=ws[n],
+                s=ss[n], s_b=None if sb_n != sb_n else sb_n,
             ))
         return out
 
