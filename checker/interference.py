@@ -248,6 +248,7 @@ class _Chunks:
         self.centre = 0.5 * (p[a] + p[b])
         self.radius = 0.5 * (s[b] - s[a])
         self.n_items = n
+        self.has_next = has_next
         self.tree = cKDTree(self.centre, balanced_tree=False, compact_nodes=False)
 
     def pairs(self, reach: float) -> tuple[np.ndarray, np.ndarray]:
@@ -329,8 +330,11 @@ def _cable_pairs_points(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hit
     """
     p, s, cab, rad = dp.p, dp.s, dp.cable, dp.radius
     n = len(p)
-    has_next = np.r_[cab[:-1] == cab[1:], False]
-    mid = 0.5 * (p[:-1] + p[1:])
+    has_next = ch.has_next
+
+    def mid(e):  # midpoints of elements e (e + 1 on the same cable)
+        return 0.5 * (p[e] + p[e + 1])
+
     lim_self = 2.0 * rad + clearance
     e0 = np.zeros(0, np.int64)
     fi, fj, sq, se = [e0], [e0], [e0], [e0]  # self first pass (i < j); second pass (point q, element e)
@@ -354,10 +358,10 @@ def _cable_pairs_points(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hit
         fj.append(b[o])
         e_ok = has_next[b]
         eb = np.minimum(b, n - 2)
-        o = e_ok & (0.5 * (s[eb] + s[eb + 1]) - s[a] > reach[a] - tol) & _within(p[a], mid[eb], lim_self[a])
+        o = e_ok & (0.5 * (s[eb] + s[eb + 1]) - s[a] > reach[a] - tol) & _within(p[a], mid(eb), lim_self[a])
         sq.append(a[o])
         se.append(b[o])
-        o = (k >= 2) & (s[b] - 0.5 * (s[a] + s[a + 1]) > reach[b] - tol) & _within(p[b], mid[a], lim_self[b])
+        o = (k >= 2) & (s[b] - 0.5 * (s[a] + s[a + 1]) > reach[b] - tol) & _within(p[b], mid(a), lim_self[b])
         sq.append(b[o])
         se.append(a[o])
     # Far field: chunk pairs.
@@ -375,7 +379,7 @@ def _cable_pairs_points(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hit
         fi.append(np.minimum(i[ok], j[ok]))
         fj.append(np.maximum(i[ok], j[ok]))
         for q, e in ((i, j), (j, i)):
-            ok = has_next[e] & _within(p[q], mid[np.minimum(e, n - 2)], lim_self[q])
+            ok = has_next[e] & _within(p[q], mid(np.minimum(e, n - 2)), lim_self[q])
             sq.append(q[ok])
             se.append(e[ok])
     if len(ci):
@@ -392,7 +396,7 @@ def _cable_pairs_points(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hit
         hits.add(PairType.SELF, cab[si], cab[si], v[o], p[si], s[si], s[sj])
     q, e0 = np.concatenate(sq), np.concatenate(se)
     if len(q):
-        m = 0.5 * (p[e0] + p[e0 + 1])
+        m = mid(e0)
         sm = 0.5 * (s[e0] + s[e0 + 1])
         v = row_norm(p[q] - m) - 2 * rad[q]
         o = (v < clearance) & ~self_pair_excluded(s[q], sm, rad[q], clearance)
