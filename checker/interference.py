@@ -24,21 +24,24 @@ two discrete points is never missed. For self pairs the exclusion rule is
 applied at the closest points' arc lengths.
 
 Broad phase. The points (or elements) of every cable are cut into chunks of
-a few consecutive ones, each with a bounding sphere, and one k-d tree is built
-over the chunks. Cable against cable: places within a few points of each other
-along one cable (the near field) are compared by shifting the arrays against
-themselves, after an arc-length test that drops what the self rule excludes
-anyway; everything else (other cables, loops of the same cable) comes from
-chunk pairs of the tree. Element pairs are further cut by lower bounds on
-their distance before the exact segment distance. Cable against parts: every
-part's bounding sphere meets the chunk tree in one call; the items of the
-chunks met are cut to the part's inflated local box before any exact work.
-Narrow phases are batched per shape type (one call for all boxes, all
-cylinders, ...); meshes per mesh, with the parts sharing one mesh in one call
-through the mesh's own tree. Cost therefore grows with the number of close
-pairs, not with points x parts. Of several candidates with the same value,
-the one at the smallest arc lengths is reported, so the answer does not
-depend on the broad phase's order.
+a few consecutive ones, each with a bounding sphere (around the chord's
+midpoint, of half the arc length), and one k-d tree is built over pairs of
+consecutive chunks. Cable against cable: places within a few points of each
+other along one cable (the near field) never come from the tree; they are
+taken by index offset, after cuts that drop what cannot be a hit (the self
+rule's arc-length reach; with points, whole windows whose arc exceeds their
+chord too little to fold back within the hit distance; with elements, a
+chord-minus-arc bound per pair). Everything else (other cables, loops of the
+same cable) comes from chunk pairs found through the tree. Element pairs are
+further cut by lower bounds on their distance before the exact segment
+distance. Cable against parts: every part's bounding sphere meets the tree,
+then the chunks' spheres; the items of the chunks met are cut to the part's
+inflated local box before any exact work. Narrow phases are batched per shape
+type (all primitives' segment searches in one call); meshes per mesh, with the
+parts sharing one mesh in one call through the mesh's own tree. Cost therefore
+grows with the number of close pairs, not with points x parts. Of several
+candidates with the same value, the one at the smallest arc lengths is
+reported, so the answer does not depend on the broad phase's order.
 
 Deliberately not done here: part-part interference (``PairType.PART_PART``,
 left to MuJoCo or a later sweep module), events over time and comparison with
@@ -223,6 +226,10 @@ class _Chunks:
         idx: (C, _CHUNK) item indices, -1 padded.
         cable: (C,) cable of each chunk; chunk ids are consecutive along a cable.
         centre, radius: bounding spheres.
+        sub: (S, 2) the chunks of each super chunk (two consecutive chunks of
+            one cable), -1 padded; sup_centre, sup_radius: their spheres.
+        tree: k-d tree over the super chunks' centres.
+        has_next: (M,) point i + 1 is on point i's cable.
     """
 
     def __init__(self, p, s, cable, has_next, items):
@@ -249,21 +256,42 @@ class _Chunks:
         self.radius = 0.5 * (s[b] - s[a])
         self.n_items = n
         self.has_next = has_next
-        self.tree = cKDTree(self.centre, balanced_tree=False, compact_nodes=False)
+        # Pairs of consecutive chunks of one cable ("super chunks") hold the
+        # tree for chunk pairs: half as many spheres to pair up.
+        nc = len(starts)
+        new_sup = np.r_[True, self.cable[1:] != self.cable[:-1]]
+        run = np.nonzero(new_sup)[0]
+        local = np.arange(nc) - np.repeat(run, np.diff(np.r_[run, nc]))
+        first = local % 2 == 0
+        sid = np.cumsum(first) - 1
+        sup_start = np.nonzero(first)[0]
+        self.sub = np.full((len(sup_start), 2), -1, dtype=np.int64)
+        self.sub[sid, local % 2] = np.arange(nc)
+        sa = a[sup_start]
+        sb = b[np.r_[sup_start[1:], nc] - 1]
+        self.sup_centre = 0.5 * (p[sa] + p[sb])
+        self.sup_radius = 0.5 * (s[sb] - s[sa])
+        self.tree = cKDTree(self.sup_centre, balanced_tree=False, compact_nodes=False)
 
     def pairs(self, reach: float) -> tuple[np.ndarray, np.ndarray]:
         """Chunk pairs (A < B) whose spheres come within ``reach``, except
         chunks of one cable that are the same or adjacent (the near field)."""
-        if len(self.radius) < 2:
-            return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        rmax = float(self.radius.max())
+        none = np.zeros(0, np.int64), np.zeros(0, np.int64)
+        if len(self.sup_radius) < 2:
+            return none  # one super chunk: its two chunks are adjacent
+        # Super chunk pairs first (the two chunks of one are adjacent), then
+        # their chunks' 2 x 2 combinations against the chunks' own spheres.
+        rmax = float(self.sup_radius.max())
         pr = self.tree.query_pairs((reach + 2.0 * rmax) * (1 + _SLACK), output_type="ndarray")
         if len(pr) == 0:
-            return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        a, b = np.minimum(pr[:, 0], pr[:, 1]), np.maximum(pr[:, 0], pr[:, 1])
-        d2 = np.sum((self.centre[a] - self.centre[b]) ** 2, axis=1)
-        lim = (reach + self.radius[a] + self.radius[b]) * (1 + _SLACK)
-        keep = (d2 < lim * lim) & ~((self.cable[a] == self.cable[b]) & (b - a <= 1))
+            return none
+        a = np.repeat(self.sub[pr[:, 0]], 2, axis=1).ravel()
+        b = np.tile(self.sub[pr[:, 1]], (1, 2)).ravel()
+        ok = (a >= 0) & (b >= 0)
+        a, b = a[ok], b[ok]
+        a, b = np.minimum(a, b), np.maximum(a, b)
+        lim = reach + self.radius[a] + self.radius[b]
+        keep = _within(self.centre[a], self.centre[b], lim) & ~((self.cable[a] == self.cable[b]) & (b - a <= 1))
         return a[keep], b[keep]
 
     def expand(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -547,8 +575,8 @@ def _part_candidates(tab: _PartTable, ch: _Chunks, margin: float) -> tuple[np.nd
     """(item, part) pairs where the item may lie within ``margin`` of the part.
 
     Each finite part's bounding sphere, grown by ``margin``, is met with the
-    chunks' bounding spheres through the chunk tree; the items of every chunk
-    met are candidates. Planes take every item.
+    super chunks' spheres through their tree, then with their chunks'
+    spheres; the items of every chunk met are candidates. Planes take every item.
     Returns item indices (into the points) and part indices, both (n,).
     """
     items, parts = [], []
@@ -556,13 +584,15 @@ def _part_candidates(tab: _PartTable, ch: _Chunks, margin: float) -> tuple[np.nd
     if len(fin) and len(ch.radius):
         c_world = np.einsum("nij,nj->ni", tab.rot[fin], tab.c_loc) + tab.trans[fin]
         rad = tab.half_diag + margin
-        lists = ch.tree.query_ball_point(c_world, (rad + float(ch.radius.max())) * (1 + _SLACK),
+        lists = ch.tree.query_ball_point(c_world, (rad + float(ch.sup_radius.max())) * (1 + _SLACK),
                                          return_sorted=False)
         cnt = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(fin))
-        c = np.fromiter((i for x in lists for i in x), dtype=np.int64, count=int(cnt.sum()))
-        k = np.repeat(np.arange(len(fin)), cnt)
-        lim = (rad[k] + ch.radius[c]) * (1 + _SLACK)
-        ok = _within(ch.centre[c], c_world[k], lim)
+        sup = np.fromiter((i for x in lists for i in x), dtype=np.int64, count=int(cnt.sum()))
+        c = ch.sub[sup].ravel()
+        k = np.repeat(np.arange(len(fin)), 2 * cnt)
+        ok = c >= 0
+        c, k = c[ok], k[ok]
+        ok = _within(ch.centre[c], c_world[k], rad[k] + ch.radius[c])
         c, k = c[ok], k[ok]
         it = ch.idx[c].ravel()
         pk = np.repeat(fin[k], _CHUNK)
