@@ -40,8 +40,8 @@ from enum import IntFlag
 
 import mujoco
 import numpy as np
-import trimesh
 
+from sim.meshfile import node_mesh
 from sim.route import initial_shape, polyline_length
 from sim.scene import CableDef, Scene, SceneError, euler_matrix
 
@@ -498,7 +498,7 @@ def _compile(scene: Scene, plans: list[_CablePlan], detect: bool, origin: np.nda
                       contype=contype, conaffinity=conaff, margin=margin,
                       rgba=[0.9, 0.5, 0.1, 0.3] if part.keepout else [0.6, 0.6, 0.65, 1.0])
         if part.shape == "mesh":
-            mesh = trimesh.load(str(part.file), force="mesh")
+            mesh = node_mesh(part.file, part.node)
             verts = np.asarray(mesh.vertices, float) * part.mesh_scale
             spec.add_mesh(name=f"mesh:{part.name}", uservert=verts.ravel().tolist(),
                           userface=np.asarray(mesh.faces, int).ravel().tolist())

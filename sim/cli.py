@@ -86,7 +86,8 @@ def _parser() -> argparse.ArgumentParser:
     sw.add_argument("scene", metavar="SCENE", type=Path, help="scene file (TOML)")
     sw.add_argument("--part", required=True, metavar="NAME", help="part name or assembly path prefix")
     sw.add_argument("--direction", required=True, metavar="X,Y,Z", type=_direction,
-                    help="direction of travel in scene axes (any length, not zero)")
+                    help="direction of travel in scene axes (any length, not zero); "
+                         "write --direction=-1,0,0 when it starts with a minus sign")
     sw.add_argument("--distance", required=True, metavar="H", type=_nonnegative_float,
                     help="travel in scene units")
     sw.add_argument("--report", type=Path, metavar="PATH",
@@ -235,6 +236,8 @@ def _print_summary(report: dict, report_path: Path) -> None:
               + (f"  [{', '.join(flags)}]" if flags else ""))
     if report.get("warnings"):
         print(f"  MuJoCo warnings: {report['warnings']}")
+    for w in report.get("part_warnings", ()):
+        print(f"  warning: {w}")
     t = report["timing"]
     print(f"  time {t['total_s']:.2f} s (simulation {t['sim_s']:.2f} s, checks {t['check_s']:.2f} s, "
           f"recording {t['record_s']:.2f} s)")

@@ -238,6 +238,7 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     total = time.perf_counter() - start
     report = _report(scene, built, config, complete, steps, checked, t_last, max_strain, min_bend,
                      rest_points, final_points, timer, total, sim, events, tracker, validation, options)
+    report["part_warnings"] = list(rigid.warnings)
     write_report(report, options.report)
     return report
 

@@ -26,6 +26,8 @@ Conventions of the records:
 The mjcf model is compiled once here (to know its bodies, joints and the
 pose of its bodies at qpos0); meshes are loaded with trimesh to check they
 exist, load, and (for keepout parts) are closed. The builder loads both again.
+A mesh part whose file is glTF / GLB expands into one part per mesh node of
+the file, named ``<name>/<node path>`` (`sim.meshfile`).
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ import difflib
 import math
 import re
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping
@@ -42,6 +44,8 @@ from typing import Any, Mapping
 import mujoco
 import numpy as np
 import trimesh
+
+from sim.meshfile import MeshFileError, is_tree, mesh_nodes
 
 UNITS = {"m": 1.0, "mm": 0.001}
 """Scene units and their size in metres."""
@@ -182,6 +186,9 @@ class PartDef:
       mesh_scale: multiplies the mesh file's coordinates into metres
         (the scene's `scale` times `Scene.scale`); 1.0 when not a mesh.
       keepout: a clearance zone: detected, never collides.
+      node: for a part expanded from a glTF / GLB file, the mesh node's path
+        in the file's node tree (the part is named ``<entry name>/<node>``);
+        None otherwise.
     """
 
     name: str
@@ -193,6 +200,7 @@ class PartDef:
     file: Path | None = None
     mesh_scale: float = 1.0
     keepout: bool = False
+    node: str | None = None
 
 
 @dataclass(frozen=True)
@@ -535,8 +543,8 @@ class _Parser:
         check = self.check(data.get("check", {}))
         bodies = tuple(self.body(b, f"bodies[{i}]")
                        for i, b in enumerate(self.tables(data.get("bodies", []), "bodies")))
-        parts = tuple(self.part(p, f"parts[{i}]")
-                      for i, p in enumerate(self.tables(data.get("parts", []), "parts")))
+        parts = tuple(node for i, p in enumerate(self.tables(data.get("parts", []), "parts"))
+                      for node in self.expand_nodes(self.part(p, f"parts[{i}]"), f"parts[{i}]"))
         self.unique(parts, "parts", "part")
         motions = tuple(self.motion(m, f"motion[{i}]", {b.name: b for b in bodies})
                         for i, m in enumerate(self.tables(data.get("motion", []), "motion")))
@@ -687,15 +695,26 @@ class _Parser:
 
     def check_mesh(self, path: Path, where: str, closed: bool) -> None:
         try:
-            mesh = trimesh.load(path, force="mesh")
-        except Exception as e:   # trimesh raises many types for unreadable files
-            raise self.error(where, f"trimesh cannot load {path.name}: "
-                                    f"{type(e).__name__}: {e}") from None
-        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-            raise self.error(where, f"{path.name} holds no triangles")
-        if closed and not mesh.is_watertight:
-            raise self.error(where, f"{path.name} is not a closed surface (keepout zones "
-                                    "need an inside); close its holes")
+            nodes = mesh_nodes(path)
+        except MeshFileError as e:
+            raise self.error(where, str(e)) from None
+        for node in nodes:
+            mesh = trimesh.Trimesh(node.vertices, node.faces)
+            if closed and not mesh.is_watertight:
+                label = f"{path.name}" + (f" node {node.path!r}" if node.path else "")
+                raise self.error(where, f"{label} is not a closed surface (keepout zones "
+                                        "need an inside); close its holes")
+
+    def expand_nodes(self, part: PartDef, where: str) -> list[PartDef]:
+        """A glTF / GLB mesh part becomes one part per mesh node, named
+        ``<name>/<node path>``; any other part stays as it is."""
+        if part.shape != "mesh" or not is_tree(part.file):
+            return [part]
+        try:
+            nodes = mesh_nodes(part.file)
+        except MeshFileError as e:
+            raise self.error(f"{where}.file", str(e)) from None
+        return [replace(part, name=f"{part.name}/{n.path}", node=n.path) for n in nodes]
 
     def anchor(self, value: Any, where: str, with_pos: bool = True) -> Anchor:
         t = self.table(value, where, _ANCHOR_KEYS if with_pos else ("body",))

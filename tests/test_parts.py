@@ -1,0 +1,123 @@
+"""Part-part and keep-out interference: seed 002's boundary cases, containment, clearance, reuse."""
+
+import numpy as np
+import pytest
+import trimesh
+
+from checker.partset import PartSet
+from checker.parts import PartChecker, check_parts
+from checker.shapes import Shape, ShapeType, mesh_shape
+from checker.tessellate import part_surface
+
+
+def pose(x=0.0, y=0.0, z=0.0):
+    t = np.eye(4)
+    t[:3, 3] = [x, y, z]
+    return t
+
+
+def box(*h):
+    return Shape(ShapeType.BOX, list(h))
+
+
+def check(parts, poses, clearance=0.01, keepout=None, **kw):
+    ps = PartSet.build([n for n, _ in parts], [s for _, s in parts], keepout=keepout)
+    recs = check_parts(ps, ps.place(np.array(poses)), clearance, **kw)
+    return {(r.a, r.b): (r.type.value, r.severity.value, r.min_distance) for r in recs}
+
+
+CUBE = box(0.5, 0.5, 0.5)
+
+
+@pytest.mark.parametrize("other, why", [
+    (pose(1.0), "touching faces"),
+    (pose(1.0, 1.0), "shared edge"),
+    (pose(1.0, 1.0, 1.0), "shared corner"),
+    (pose(1.0, 0.3, 0.2), "faces partly on each other"),
+])
+def test_touching_is_contact_not_interference(other, why):
+    assert check([("a", CUBE), ("b", CUBE)], [pose(), other]) == {}, why
+
+
+def test_vertex_on_face_touches():
+    # a pyramid standing on its apex exactly on the cube's top face
+    tm = trimesh.Trimesh(vertices=[[0, 0, 0], [-0.3, -0.3, 1], [0.3, -0.3, 1], [0.3, 0.3, 1], [-0.3, 0.3, 1]],
+                         faces=[[0, 2, 1], [0, 3, 2], [0, 4, 3], [0, 1, 4], [1, 2, 3], [1, 3, 4]])
+    tm.fix_normals()
+    apex = mesh_shape(np.asarray(tm.vertices), np.asarray(tm.faces))
+    assert check([("a", CUBE), ("p", apex)], [pose(), pose(0.1, 0.1, 0.5)]) == {}
+    assert check([("a", CUBE), ("p", apex)], [pose(), pose(0.1, 0.1, 0.49)])[("a", "p")][1] == "hard"
+
+
+def test_overlap_depth_soft_gap_and_clear():
+    got = check([("a", CUBE), ("b", CUBE), ("c", CUBE), ("d", CUBE)],
+                [pose(), pose(0.9), pose(0, 1.004), pose(0, -1.5)], clearance=0.01)
+    assert got[("a", "b")][:2] == ("part-part", "hard")
+    # depth: the deepest probe (corners and centroids set in by 1e-5 of the size): -0.1 to 1e-4
+    assert got[("a", "b")][2] == pytest.approx(-0.1, abs=1e-4) and got[("a", "b")][2] < 0
+    assert got[("a", "c")][:2] == ("part-part", "soft")
+    assert got[("a", "c")][2] == pytest.approx(0.004)
+    assert ("a", "d") not in got and ("b", "c") in got
+
+
+def test_containment_counts_as_overlap():
+    got = check([("big", box(2, 2, 2)), ("small", box(0.1, 0.1, 0.1)), ("twin", box(2, 2, 2))],
+                [pose(), pose(0.5, 0.5, 0.5), pose()])
+    assert got[("big", "small")][:2] == ("part-part", "hard")
+    # minus the deepest probe's depth: small's corner (0.4, 0.4, 0.4) is 1.6 inside
+    assert got[("big", "small")][2] == pytest.approx(-1.6)
+    assert got[("big", "twin")][1] == "hard"          # coincident parts overlap
+
+
+def test_keepout_entered_by_a_part():
+    got = check([("bolt", box(0.1, 0.1, 0.5)), ("zone", box(0.3, 0.3, 0.3)), ("arm", CUBE)],
+                [pose(), pose(0, 0, 0.8), pose(0.5, 0, 1.3)], keepout=[False, True, False])
+    assert got[("arm", "zone")][:2] == ("keepout", "hard")
+    assert ("bolt", "zone") not in got     # the zone sits on the bolt head: touching only
+
+
+def test_open_mesh_warns_and_still_checks_its_surface():
+    tm = trimesh.creation.box(extents=[1, 1, 1])
+    tm.update_faces(np.arange(len(tm.faces)) != 0)      # one triangle missing
+    sheet = mesh_shape(np.asarray(tm.vertices), np.asarray(tm.faces))
+    ps = PartSet.build(["open", "b"], [sheet, CUBE])
+    assert ps.warnings and "inside and outside cannot be decided" in ps.warnings[0]
+    recs = check_parts(ps, ps.place(np.array([pose(), pose(0.7)])), 0.01)
+    assert [r.severity.value for r in recs] == ["hard"]       # surfaces cross
+    # inside an open mesh, no containment can be decided: no record
+    recs = check_parts(ps, ps.place(np.array([pose(), pose()])), 0.01)
+    assert recs == [] or all(r.severity.value == "hard" for r in recs)
+
+
+def test_planes_and_focus():
+    got = check([("floor", Shape(ShapeType.PLANE, [])), ("a", CUBE), ("sunk/b", CUBE), ("sunk/c", CUBE)],
+                [pose(), pose(0, 0, 0.5), pose(3, 0, 0.2), pose(3.5, 0, 0.2)])
+    assert ("floor", "a") not in got                  # resting on the floor: touching
+    assert got[("floor", "sunk/b")][2] == pytest.approx(-0.3)
+    ps = PartSet.build(["floor", "a", "sunk/b", "sunk/c"], [Shape(ShapeType.PLANE, []), CUBE, CUBE, CUBE])
+    recs = check_parts(ps, ps.place(np.array([pose(), pose(0, 0, 0.5), pose(3, 0, 0.2), pose(3.5, 0, 0.2)])),
+                       0.01, focus=ps.select("sunk/c"))
+    assert {(r.a, r.b) for r in recs} == {("floor", "sunk/c"), ("sunk/b", "sunk/c")}
+
+
+def test_checker_checks_same_body_pairs_once_and_replays_them():
+    ps = PartSet.build(["a", "b", "c"], [CUBE, CUBE, CUBE], groups=["body", "body", "other"])
+    pc = PartChecker(ps, 0.01)
+    first = pc.check(np.array([pose(), pose(0.9), pose(5)]))
+    assert {(r.a, r.b) for r in first} == {("a", "b")}
+    # b moved away in the poses, but a and b share a rigid body: the answer is replayed
+    later = pc.check(np.array([pose(), pose(0.9), pose(0.5)]))
+    assert {(r.a, r.b) for r in later} == {("a", "b"), ("a", "c"), ("b", "c")}
+
+
+def test_tessellation_error_bound_holds():
+    for shape in (Shape(ShapeType.SPHERE, [0.7]), Shape(ShapeType.CAPSULE, [0.3, 0.5]),
+                  Shape(ShapeType.CYLINDER, [0.4, 0.2]), Shape(ShapeType.ELLIPSOID, [0.5, 0.3, 0.2])):
+        surf = part_surface(shape, 2e-3)
+        assert surf.closed and 0 < surf.error <= 2e-3
+        tm = trimesh.Trimesh(surf.vertices, surf.faces)
+        pts, _ = trimesh.sample.sample_surface(tm, 4000, seed=1)
+        from checker.shapes import signed_distance
+        sd, _ = signed_distance(shape, pts)
+        assert np.all(sd <= 1e-12) and -sd.min() <= surf.error + 1e-12
+    assert part_surface(CUBE, 1e-3).error == 0.0
