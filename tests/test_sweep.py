@@ -140,3 +140,34 @@ def test_bad_arguments():
         sweep(ps, placed, ps.select("m"), np.array([1.0, 0, 0]), -1.0)
     with pytest.raises(ValueError, match="plane"):
         sweep(ps, placed, ps.select("f"), np.array([1.0, 0, 0]), 1.0)
+
+
+def _rot(rng):
+    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+    q = q * np.sign(np.diag(r))
+    return q if np.linalg.det(q) > 0 else -q
+
+
+@pytest.mark.parametrize("seed", range(25))
+def test_first_contact_separates_clear_from_overlap(seed):
+    """Random rotated boxes: just before the reported travel the parts are clear,
+    just after it they overlap (checked by the independent part-part test)."""
+    from checker.parts import check_parts
+
+    rng = np.random.default_rng(seed)
+    shapes = [box(*rng.uniform(0.2, 1.0, 3)), box(*rng.uniform(0.05, 1.0, 3))]
+    poses = np.array([pose(rot=_rot(rng)), pose(*rng.uniform(-0.6, 0.6, 3) + [4, 0, 0], rot=_rot(rng))])
+    ps = PartSet.build(["m", "a"], shapes)
+    d = np.array([1.0, 0, 0])
+    r = sweep(ps, ps.place(poses), ps.select("m"), d, 10.0)
+    if not r.hits:
+        assert r.overlapping == ()
+        return
+    t = r.hits[0].distance
+
+    def hard_at(travel):
+        moved = poses.copy()
+        moved[0, :3, 3] += travel * d
+        return any(x.severity.value == "hard" for x in check_parts(ps, ps.place(moved), 0.0))
+
+    assert not hard_at(t - 1e-6) and hard_at(t + 1e-3)
