@@ -28,16 +28,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import mujoco
 import numpy as np
 import pytest
-from scipy.optimize import brentq
 
 from sim.build import build
 from sim.loop import Simulation
+from sim.reference import CANTILEVER, CATENARY, cantilever_tip
+from sim.reference import catenary_sag as _catenary_sag
+from sim.reference import free_end as _free_end
 from sim.scene import parse_scene
-
-G = 9.81
 
 
 def _scene(name: str, cable: dict, settle: float, timestep: float = 0.002):
@@ -49,32 +48,6 @@ def _scene(name: str, cable: dict, settle: float, timestep: float = 0.002):
 
 def _length(points: np.ndarray) -> float:
     return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
-
-
-def _catenary_sag(span: float, length: float) -> float:
-    """Sag of a uniform chain of `length` hung between two points `span` apart at one height."""
-    a = brentq(lambda a: 2.0 * a * np.sinh(span / (2.0 * a)) - length, 1e-3 * span, 1e3 * span)
-    return float(a * (np.cosh(span / (2.0 * a)) - 1.0))
-
-
-def _free_end(built) -> None:
-    """Switch off the connect equalities that hold each cable's end vertices to their body."""
-    m = built.model
-    for c in built.cables:
-        ends = {int(m.flex_vertbodyid[c.vert_adr + a.vertex])
-                for a in c.attachments if a.kind == "end"}
-        assert ends, "the builder holds every cable end; expected end attachments"
-        for i in range(m.neq):
-            if m.eq_type[i] != mujoco.mjtEq.mjEQ_CONNECT:
-                continue
-            bodies = set()
-            for obj, oid in ((m.eq_objtype[i], m.eq_obj1id[i]), (m.eq_objtype[i], m.eq_obj2id[i])):
-                if obj == mujoco.mjtObj.mjOBJ_SITE:
-                    bodies.add(int(m.site_bodyid[oid]))
-                elif obj == mujoco.mjtObj.mjOBJ_BODY:
-                    bodies.add(int(oid))
-            if bodies & ends:
-                m.eq_active0[i] = 0
 
 
 def _settled(scene, free_end: bool = False):
@@ -90,8 +63,6 @@ def _settled(scene, free_end: bool = False):
 
 
 # -- catenary ---------------------------------------------------------------
-
-CATENARY = dict(span=0.8, length=1.0, height=1.0, radius=0.004, elements=40)
 
 
 def test_limp_cable_hangs_as_a_catenary():
@@ -127,8 +98,6 @@ def test_limp_cable_hangs_as_a_catenary():
 
 # -- cantilever -------------------------------------------------------------
 
-CANTILEVER = dict(length=0.2, radius=0.004, density=1500.0, young=4e8, height=1.0)
-
 
 def _cantilever(elements: int):
     p = CANTILEVER
@@ -139,10 +108,7 @@ def _cantilever(elements: int):
     built, sim, state = _settled(scene, free_end=True)
     points = state.cables[0]
     assert np.isfinite(points).all()
-    r, L, E = p["radius"], p["length"], p["young"]
-    w = p["density"] * G * np.pi * r ** 2
-    inertia = np.pi * r ** 4 / 4.0
-    reference = w * L ** 4 / (8.0 * E * inertia)
+    reference = cantilever_tip(p["length"], p["radius"], p["density"], p["young"])
     tip = p["height"] - points[-1, 2]
     return built, points, tip, reference
 
