@@ -37,6 +37,8 @@ Not here: cables (:mod:`checker.interference`), time and events.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from checker.bvh import aabb_pairs, obb_overlap, prefix_hits, transformed_aabb
@@ -192,7 +194,7 @@ class PartChecker:
 
     The first :meth:`check` tests every pair; pairs of parts on the same
     rigid body (``PartSet.groups``) are answered then and replayed at every
-    later step without being tested again. The prepared parts (trees,
+    later step without being tested again (their ``where`` follows the body). The prepared parts (trees,
     probes) are reused throughout.
     """
 
@@ -208,15 +210,20 @@ class PartChecker:
         self._group = np.array([g[x] for x in parts.groups], np.int64)
         n = len(parts.names)
         self._skip = np.zeros((n, n), bool) if skip is None else np.asarray(skip, bool)
-        self._static: list[Interference] | None = None
+        self._static: list[tuple[Interference, int, np.ndarray]] | None = None
 
     def check(self, poses: np.ndarray) -> list[Interference]:
         """Records for poses (P, 4, 4)."""
         placed = self.parts.place(poses)
         grp, skip = self._group, self._skip
         if self._static is None:
-            self._static = check_parts(self.parts, placed, self.clearance, self.focus,
-                                       lambda i, j: (grp[i] == grp[j]) & ~skip[i, j])
+            found = check_parts(self.parts, placed, self.clearance, self.focus,
+                                lambda i, j: (grp[i] == grp[j]) & ~skip[i, j])
+            # keep each place in part a's frame: the pair rides its body
+            index = {n: k for k, n in enumerate(self.parts.names)}
+            self._static = [(r, index[r.a], placed.local(np.array([index[r.a]]), r.where[None])[0])
+                            for r in found]
         moving = check_parts(self.parts, placed, self.clearance, self.focus,
                              lambda i, j: (grp[i] != grp[j]) & ~skip[i, j])
-        return list(self._static) + moving
+        static = [replace(r, where=placed.world(np.array([k]), local[None])[0]) for r, k, local in self._static]
+        return static + moving

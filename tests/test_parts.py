@@ -108,6 +108,11 @@ def test_checker_checks_same_body_pairs_once_and_replays_them():
     # b moved away in the poses, but a and b share a rigid body: the answer is replayed
     later = pc.check(np.array([pose(), pose(0.9), pose(0.5)]))
     assert {(r.a, r.b) for r in later} == {("a", "b"), ("a", "c"), ("b", "c")}
+    # the body moved as a whole: the replayed place moves with it
+    moved = pc.check(np.array([pose(0, 0, 10), pose(0.9, 0, 10), pose(5)]))
+    ab = [r for r in moved if (r.a, r.b) == ("a", "b")][0]
+    first_ab = [r for r in first if (r.a, r.b) == ("a", "b")][0]
+    assert np.allclose(ab.where, first_ab.where + [0, 0, 10])
 
 
 def test_tessellation_error_bound_holds():
