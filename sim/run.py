@@ -22,7 +22,7 @@ import numpy as np
 
 from checker.cable import arc_length, bend_radius
 from checker.events import EventTracker
-from checker.interference import check_state
+from checker.interference import Checker
 from checker.parts import PartChecker
 from checker.records import PairType, Severity
 from checker.report import SCHEMA, write_report
@@ -175,6 +175,9 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     focus = selection(rigid, options.only, "--only") if options.only is not None else None
     part_checker = PartChecker(rigid, scene.check.clearance, focus, part_pairs_skipped(built))
     exclusions = attachment_exclusions(built)
+    # Parts prepared once; each step passes their poses (identity until then).
+    checker = Checker([PartState(p.name, sh, np.eye(4), p.keepout) for p, sh in zip(built.parts, shapes)],
+                      config)
     names = [c.name for c in built.cables]
     every = scene.check.every
     tracker = EventTracker(hold=3 * every * scene.timestep)
@@ -201,9 +204,7 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                 if recorder:
                     recorder.log_static(state.part_poses)
             cables = _cable_states(built, state.cables)
-            parts = [PartState(p.name, sh, pose, p.keepout)
-                     for p, sh, pose in zip(built.parts, shapes, state.part_poses)]
-            cable_records = check_state(cables, parts, config, exclusions)
+            cable_records = checker.check(cables, state.part_poses, exclusions)
             records = cable_records + part_checker.check(state.part_poses)
             strain = np.array([arc_length(c.points)[-1] / c.rest_length - 1.0 for c in cables])
             bend = np.array([np.min(bend_radius(c.points)) for c in cables])
