@@ -3,6 +3,7 @@
 Subcommands:
   run SCENE   simulate a scene, check it, write the report and the recording.
   sweep SCENE move one part (or assembly) along a line; list the parts it hits.
+  bench       measure what accuracy costs in time (tables, CSV and a plot).
 
 Exit status: 0 when nothing reaches the `--fail-on` level, 1 when something
 does, 2 for bad input (the message names the file, the key and the
@@ -96,6 +97,14 @@ def _parser() -> argparse.ArgumentParser:
                     help="precision in scene units (default 0.5 mm)")
     sw.add_argument("--only", metavar="PATH", help="test only the parts of this assembly path")
     sw.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    bench = sub.add_parser("bench", help="what accuracy costs in time: tables, CSV and a plot",
+                           description="Measure discretisation accuracy, physics resolution, scale, "
+                                       "the checker beside python-fcl and MuJoCo's collision, and "
+                                       "per-step cost of the example scenes; print the tables and "
+                                       "write them as CSV plus bench.png into --out.")
+    bench.add_argument("--quick", action="store_true", help="fewer scenes and repeats (under a minute)")
+    bench.add_argument("--out", type=Path, default=Path("recordings/bench"), metavar="DIR",
+                       help="output folder (default: recordings/bench)")
     return parser
 
 
@@ -254,6 +263,11 @@ def main(argv: list[str] | None = None) -> int:
             return _cmd_run(args)
         if args.command == "sweep":
             return _cmd_sweep(args)
+        if args.command == "bench":
+            from sim.bench import run_bench  # MuJoCo and matplotlib load only when needed
+
+            run_bench(quick=args.quick, out=args.out)
+            return EXIT_OK
     except SceneError as e:
         print(f"cablecheck: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
