@@ -77,7 +77,8 @@ def _parser() -> argparse.ArgumentParser:
                      help="exit 1 when interference of this severity or worse is found (default: hard)")
     run.add_argument("--quiet", action="store_true", help="print nothing but errors")
     run.add_argument("--only", metavar="PATH",
-                     help="check part-part interference of this assembly path against the rest only")
+                     help="check only interference involving this assembly path (a part name or "
+                          "prefix): its parts against the rest, and cables against its parts")
     sw = sub.add_parser("sweep", help="translational sweep: which parts a moving part hits",
                         description="Move --part (a part or assembly path) from its t = 0 pose along "
                                     "--direction by --distance (scene units); list every part it hits "

@@ -50,9 +50,11 @@ class RunOptions:
       report: report path.
       record: recording path, or None for no recording.
       method, spacing: override the scene's `[check]` values when not None.
-      only: check part-part (and part keep-out) interference of this assembly
-        path against the rest only; None checks every pair. Cable checks are
-        unchanged.
+      only: check only interference involving the parts of this assembly
+        path (a part name or "/"-separated prefix): its parts against the
+        other parts, and cables against its parts (cable-structure and
+        keep-out). Checks that involve none of its parts (self, cable-cable,
+        bend, taut) are skipped. None checks everything.
     """
 
     report: Path
@@ -176,8 +178,11 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     part_checker = PartChecker(rigid, scene.check.clearance, focus, part_pairs_skipped(built))
     exclusions = attachment_exclusions(built)
     # Parts prepared once; each step passes their poses (identity until then).
-    checker = Checker([PartState(p.name, sh, np.eye(4), p.keepout) for p, sh in zip(built.parts, shapes)],
-                      config)
+    # With --only, cables are checked against that assembly's parts alone.
+    checked_parts = np.ones(len(built.parts), bool) if focus is None else np.asarray(focus, bool)
+    checker = Checker([PartState(p.name, sh, np.eye(4), p.keepout)
+                       for p, sh, keep in zip(built.parts, shapes, checked_parts) if keep], config)
+    focus_names = None if focus is None else {p.name for p, keep in zip(built.parts, checked_parts) if keep}
     names = [c.name for c in built.cables]
     every = scene.check.every
     tracker = EventTracker(hold=3 * every * scene.timestep)
@@ -204,7 +209,10 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                 if recorder:
                     recorder.log_static(state.part_poses)
             cables = _cable_states(built, state.cables)
-            cable_records = checker.check(cables, state.part_poses, exclusions)
+            cable_records = checker.check(cables, state.part_poses[checked_parts], exclusions)
+            if focus_names is not None:
+                cable_records = [r for r in cable_records if r.b in focus_names
+                                 and PairType(r.type) in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)]
             records = cable_records + part_checker.check(state.part_poses)
             strain = np.array([arc_length(c.points)[-1] / c.rest_length - 1.0 for c in cables])
             bend = np.array([np.min(bend_radius(c.points)) for c in cables])
@@ -216,6 +224,9 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
             if validate:
                 seen = simulator_pairs(state.contacts, {c.name: (c.points, c.radius) for c in cables},
                                        exclusions, config.clearance)
+                if focus_names is not None:
+                    seen = {k: v for k, v in seen.items() if k[2] in focus_names
+                            and k[0] in (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value)}
                 agreement = validation.compare(state.t, cable_records, seen)
                 timer.lap("validate")
             if recorder and (checked % record_stride == 0 or started or closed

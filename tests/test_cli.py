@@ -212,3 +212,25 @@ def test_ctrl_c_leaves_incomplete_report_and_readable_recording(tmp_path: Path):
     report = json.loads(record.with_suffix(".json").read_text())
     assert report["complete"] is False and report["settings"]["steps"] > 0
     _assert_rrd_has(record, ["/world/cables/lead"])
+
+
+def test_only_restricts_a_run_to_one_assembly(tmp_path: Path):
+    """--only PATH: the cable against that assembly's parts; nothing else is checked."""
+    def events(scene: str, *extra: str) -> set:
+        out = tmp_path / "r.json"
+        main(["run", str(ROOT / "scenes" / scene), "--no-record", "--quiet", "--fail-on", "never",
+              "--report", str(out), *extra])
+        report = json.loads(out.read_text())
+        assert report["validation"]["agreement"] >= 0.99
+        return {(e["type"], e["a"], e["b"]) for e in report["events"]}
+
+    assert events("keepout_bolt.toml", "--only", "plate") == {("keepout", "lead", "plate/bolt_wrench_space")}
+    assert events("keepout_bolt.toml", "--only", "plate/base") == set()
+    everything = events("arm.toml")
+    forearm = events("arm.toml", "--only", "forearm")
+    assert forearm and forearm == {e for e in everything if e[2] == "forearm"} != everything
+
+
+def test_only_unknown_assembly_exits_2(small_scene: Path, capsys):
+    assert main(["run", str(small_scene), "--no-record", "--only", "nope"]) == 2
+    assert "--only" in capsys.readouterr().err
