@@ -58,7 +58,7 @@ from scipy.spatial import cKDTree
 
 from checker.cable import arc_length, bend_radius, densify_batch, self_pair_excluded
 from checker.closest import row_norm, segment_segment
-from checker.records import Interference, PairType, Severity, severity_of
+from checker.records import Interference, PairType, severity_of
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from checker.shapes import (
     ShapeType,
@@ -117,7 +117,6 @@ def _insert_at_arc_length(p, s, cable, cut_c, cut_s):
     Cuts outside a cable's length or on an existing point are dropped.
     """
     n_c = int(cable.max()) + 1
-    start = np.searchsorted(cable, np.arange(n_c))
     stop = np.searchsorted(cable, np.arange(n_c), side="right")
     length = s[stop - 1]
     keep = (cut_c >= 0) & (cut_s > 0) & (cut_s < length[cut_c])
@@ -445,7 +444,6 @@ def _cable_pairs_exact(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hits
     if len(seg) == 0:
         return
     n = len(p)
-    has_next = np.r_[cab[:-1] == cab[1:], False]
     mid = 0.5 * (p[:-1] + p[1:])
     half = 0.5 * (s[1:] - s[:-1])  # half element lengths (arc = chord per element)
     lim_self = 2.0 * rad + clearance

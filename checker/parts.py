@@ -45,7 +45,7 @@ from checker.bvh import aabb_pairs, obb_overlap, prefix_hits, transformed_aabb
 from checker.partset import Placement, PartSet
 from checker.records import Interference, PairType, severity_of
 from checker.sweep import probes_inside
-from checker.tritri import EPS, triangle_distance, triangles_cross
+from checker.tritri import triangle_distance, triangles_cross
 
 
 def candidate_pairs(parts: PartSet, placed: Placement, clearance: float,

@@ -44,7 +44,6 @@ from scipy.spatial import cKDTree
 
 from checker.closest import (
     REGION_EDGE_AB,
-    REGION_FACE,
     REGION_VERT_A,
     cross,
     point_segment,

@@ -45,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.bvh import box_corners, obb_overlap, prefix_hits, transformed_aabb
+from checker.bvh import obb_overlap, prefix_hits, transformed_aabb
 from checker.partset import TOUCH, Placement, PartSet
 from checker.shapes import signed_distance
 from checker.tritri import EPS, edge_edge_contact, triangles_cross, vertex_face_contact
@@ -360,7 +360,6 @@ def _planes(parts: PartSet, placed: Placement, d: np.ndarray, h: float, mv: np.n
     sel = np.isin(parts.vert_part, mv)
     vp = parts.vert_part[sel]
     vw = placed.world(vp, parts.vertices[sel])
-    scale = np.abs(vw).max() + 1e-300
     for p in planes:     # a handful of planes per scene at most
         nrm = placed.rot[p][:, 2]
         z = (vw - placed.pos[p]) @ nrm

@@ -27,13 +27,12 @@ from checker.parts import PartChecker
 from checker.records import PairType, Severity
 from checker.report import SCHEMA, write_report
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
-from checker.shapes import Shape, ShapeType, mesh_shape
 from checker.validation import Validation, simulator_pairs
 from sim.build import Built, build
 from sim.loop import Simulation
 from sim.record import Recorder, pair_path
 from sim.scene import Scene
-from sim.sweep import DEFAULT_PRECISION_M, part_set, selection
+from sim.sweep import DEFAULT_PRECISION_M, part_set, part_shapes, selection
 
 TAUT_STRAIN = 0.01
 """Stretch beyond which a cable is reported taut (SPEC: 1 %)."""
@@ -79,17 +78,6 @@ class _Timer:
         now = time.perf_counter()
         self.total[stage] += now - self._t
         self._t = now
-
-
-def _shapes(built: Built) -> list[Shape]:
-    """The checker's shape of every part, built once (meshes get their trees here)."""
-    out = []
-    for p in built.parts:
-        if p.shape == "mesh":
-            out.append(mesh_shape(p.vertices, p.faces))
-        else:
-            out.append(Shape(ShapeType(p.shape), p.size))
-    return out
 
 
 def part_pairs_skipped(built: Built) -> np.ndarray:
@@ -171,7 +159,7 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     config = CheckConfig(method=options.method or scene.check.method,
                          spacing=options.spacing or scene.check.spacing,
                          clearance=scene.check.clearance)
-    shapes = _shapes(built)
+    shapes = part_shapes(built)
     # Rigid parts against each other: prepared once, same-body pairs checked once.
     rigid = part_set(built, tolerance=DEFAULT_PRECISION_M, shapes=shapes)
     focus = selection(rigid, options.only, "--only") if options.only is not None else None

@@ -1,7 +1,6 @@
 """Bounding-volume hierarchy: tree queries, OBB separating axes and box pairs against brute force."""
 
 import numpy as np
-import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
