@@ -241,9 +241,18 @@ def _print_summary(report: dict, report_path: Path) -> None:
         flags = [f for f, on in (("TAUT", c["taut"]), ("BEND", c["bend_violation"])) if on]
         strain = c["max_strain"]
         print(f"  cable {c['name']}: length {c['length']:.4g} {units}, max strain "
-              f"{100 * strain:.2f} %, min bend radius "
+              f"{round(100 * strain, 2) + 0.0:.2f} %, min bend radius "
               f"{'straight' if bend is None else f'{bend:.4g} {units}'}"
               + (f"  [{', '.join(flags)}]" if flags else ""))
+    _print_events(report)
+    v = report.get("validation")
+    if v and not v["pair_steps"]:
+        print(f"  MuJoCo cross-check: no cable pair came within the clearance on either side "
+              f"({v['compared_steps']} steps compared)")
+    elif v:
+        print(f"  MuJoCo cross-check: {100 * v['agreement']:.2f} % of {v['pair_steps']} (step, pair) "
+              f"classifications agree ({v['checker_only']} checker only, {v['mujoco_only']} MuJoCo only"
+              + (f", {v['severity_differs']} differ in severity" if v.get("severity_differs") else "") + ")")
     if report.get("warnings"):
         print(f"  MuJoCo warnings: {report['warnings']}")
     for w in report.get("part_warnings", ()):
@@ -254,6 +263,25 @@ def _print_summary(report: dict, report_path: Path) -> None:
     print(f"  report: {report_path}")
     if report.get("recording"):
         print(f"  recording: {report['recording']}  (view: rerun {report['recording']})")
+
+
+def _print_events(report: dict, most: int = 10) -> None:
+    """Events worst first, at most `most` of them."""
+    units = report["units"]
+    summary, events = report["summary"], report["events"]
+    if not events:
+        print("  no interference")
+        return
+    print(f"  {len(events)} interference event(s): {summary['hard']} hard, {summary['soft']} soft; "
+          f"{summary['static']} static, {summary['dynamic']} dynamic")
+    for e in sorted(events, key=lambda e: (e["severity"] != "hard", e["min_distance"]))[:most]:
+        pair = e["a"] if e["a"] == e["b"] else f"{e['a']} / {e['b']}"
+        where = ", ".join(f"{x:.4g}" for x in e["where"])
+        print(f"    {e['severity'].upper():4} {e['phase']:7} {e['type']:15} {pair}: "
+              f"t {e['t_start']:.3f}-{e['t_end']:.3f} s, worst {e['min_distance']:.4g} {units} "
+              f"at t {e['t_worst']:.3f} s, ({where}), s = {e['s']:.4g} {units}")
+    if len(events) > most:
+        print(f"    ... {len(events) - most} more in the report")
 
 
 def main(argv: list[str] | None = None) -> int:
