@@ -72,6 +72,9 @@ from checker.shapes import (
 
 _TYPE_ORDER = list(PairType)
 _TYPE_CODE = {t: n for n, t in enumerate(ShapeType)}
+_EYE3 = np.eye(3)
+_CABLE_PAIR_CODES = (_TYPE_ORDER.index(PairType.SELF), _TYPE_ORDER.index(PairType.CABLE_CABLE))
+_PART_CODES = (_TYPE_ORDER.index(PairType.CABLE_STRUCTURE), _TYPE_ORDER.index(PairType.KEEPOUT))
 
 
 # ---------------------------------------------------------------------------
@@ -150,13 +153,36 @@ class _Hits:
 
     def __init__(self):
         self.parts: list[tuple] = []
+        self.near: list[tuple] = []  # (type, b, value): every candidate, for the gaps
 
-    def add(self, ptype: PairType, a, b, value, where, s, s_b=None):
+    def add(self, ptype: PairType, a, b, value, where, s, s_b=None, record=None):
+        """Candidates; ``record`` (n,) bool marks those that may become records
+        (the others, e.g. just inside an exclusion, only bound the gaps)."""
         if len(value) == 0:
             return
+        code = _TYPE_ORDER.index(ptype)
+        self.near.append((code, b, value))
+        if record is not None:
+            a, b, value, where, s = a[record], b[record], value[record], where[record], s[record]
+            s_b = None if s_b is None else s_b[record]
+            if len(value) == 0:
+                return
         n = len(value)
         s_b = np.full(n, np.nan) if s_b is None else s_b
-        self.parts.append((np.full(n, _TYPE_ORDER.index(ptype)), a, b, value, where, s, s_b))
+        self.parts.append((np.full(n, code), a, b, value, where, s, s_b))
+
+    def gaps(self, clearance: float, horizon: float, n_parts: int) -> tuple[float, np.ndarray]:
+        """Smallest candidate value minus the clearance: over cable pairs (self
+        and cable-cable), and per part (cable-structure and keep-out), at most
+        ``horizon`` (candidates are found up to clearance + horizon)."""
+        cc = horizon
+        part = np.full(n_parts, horizon)
+        for code, b, value in self.near:
+            if code in _CABLE_PAIR_CODES:
+                cc = min(cc, float(value.min()) - clearance)
+            elif code in _PART_CODES:
+                np.minimum.at(part, b, value - clearance)
+        return cc, part
 
     def reduce(self, clearance, cable_names, b_names_by_type) -> list[Interference]:
         if not self.parts:
@@ -347,27 +373,35 @@ def _near_windows(p, s, cab, reach, lim) -> np.ndarray:
     return np.nonzero(arc - chord > reach - lim - slack)[0]
 
 
-def _cable_pairs_points(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hits) -> None:
+def _cable_pairs_points(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hits,
+                        limit: float | None = None, stretch: float = 0.0) -> None:
     """Point-point pairs (self and cable-cable) and the self midpoint pass.
 
     Candidates: cable-cable point pairs within ``r1 + r2 + clearance``; self
     point pairs within ``2r + clearance``; a point against the midpoint of an
     element not touching it within ``2r + clearance``. Self candidates the
     rule of :func:`~checker.cable.self_pair_excluded` drops are dropped.
+
+    With ``limit`` (>= clearance) candidates are found up to ``limit``
+    instead of the clearance, and self pairs up to ``stretch`` of arc length
+    inside the exclusion window are kept too; those only bound the gaps
+    (:meth:`_Hits.gaps`): records are still the pairs below the clearance
+    outside the window tied to the clearance.
     """
     p, s, cab, rad = dp.p, dp.s, dp.cable, dp.radius
+    limit = clearance if limit is None else limit
     n = len(p)
     has_next = ch.has_next
 
     def mid(e):  # midpoints of elements e (e + 1 on the same cable)
         return 0.5 * (p[e] + p[e + 1])
 
-    lim_self = 2.0 * rad + clearance
+    lim_self = 2.0 * rad + limit
     e0 = np.zeros(0, np.int64)
     fi, fj, sq, se = [e0], [e0], [e0], [e0]  # self first pass (i < j); second pass (point q, element e)
     # Near field: offsets 1.._NEAR along one cable, from the window starts
     # that can hold a hit at all (see _near_windows).
-    reach = _exclusion_reach(rad, clearance)
+    reach = _exclusion_reach(rad, clearance) - stretch
     start = _near_windows(p, s, cab, reach, lim_self)
     if len(start):
         k = np.tile(np.arange(1, _NEAR + 1), len(start))
@@ -392,12 +426,12 @@ def _cable_pairs_points(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hit
         sq.append(b[o])
         se.append(a[o])
     # Far field: chunk pairs.
-    ca, cb = ch.pairs(2.0 * float(rad.max()) + clearance)
+    ca, cb = ch.pairs(2.0 * float(rad.max()) + limit)
     ci, cj = np.zeros(0, np.int64), np.zeros(0, np.int64)
     if len(ca):
         same = ch.cable[ca] == ch.cable[cb]
         i, j = ch.expand(ca[~same], cb[~same])
-        ok = _within(p[i], p[j], rad[i] + rad[j] + clearance)
+        ok = _within(p[i], p[j], rad[i] + rad[j] + limit)
         ci, cj = np.minimum(i[ok], j[ok]), np.maximum(i[ok], j[ok])
         i, j = ch.expand(ca[same], cb[same])
         far = np.abs(i - j) > _NEAR
@@ -412,23 +446,25 @@ def _cable_pairs_points(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hit
     if len(ci):
         d = row_norm(p[ci] - p[cj])
         v = d - rad[ci] - rad[cj]
-        o = v < clearance
+        o = v < limit
         ci, cj = ci[o], cj[o]
         hits.add(PairType.CABLE_CABLE, cab[ci], cab[cj], v[o], p[ci], s[ci], s[cj])
     si, sj = np.concatenate(fi), np.concatenate(fj)
     if len(si):
         v = row_norm(p[si] - p[sj]) - 2 * rad[si]
-        o = (v < clearance) & ~self_pair_excluded(s[si], s[sj], rad[si], clearance)
+        o = (v < limit) & ~(np.abs(s[si] - s[sj]) < reach[si])
         si, sj = si[o], sj[o]
-        hits.add(PairType.SELF, cab[si], cab[si], v[o], p[si], s[si], s[sj])
+        rec = ~self_pair_excluded(s[si], s[sj], rad[si], clearance)
+        hits.add(PairType.SELF, cab[si], cab[si], v[o], p[si], s[si], s[sj], rec)
     q, e0 = np.concatenate(sq), np.concatenate(se)
     if len(q):
         m = mid(e0)
         sm = 0.5 * (s[e0] + s[e0 + 1])
         v = row_norm(p[q] - m) - 2 * rad[q]
-        o = (v < clearance) & ~self_pair_excluded(s[q], sm, rad[q], clearance)
+        o = (v < limit) & ~(np.abs(s[q] - sm) < reach[q])
         q = q[o]
-        hits.add(PairType.SELF, cab[q], cab[q], v[o], p[q], s[q], sm[o])
+        rec = ~self_pair_excluded(s[q], sm[o], rad[q], clearance)
+        hits.add(PairType.SELF, cab[q], cab[q], v[o], p[q], s[q], sm[o], rec)
 
 
 def _cable_pairs_exact(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hits) -> None:
@@ -645,19 +681,29 @@ def _point_distances(tab: _PartTable, pk: np.ndarray, loc: np.ndarray, face_plan
     return d
 
 
-def _structure_points(dp, ch, tab, config, excl, hits) -> None:
-    """Signed distance of every candidate point to its part, minus r."""
-    margin = float(dp.radius.max()) + config.clearance
+def _structure_points(dp, ch, tab, config, excl, hits, limit=None, excl_near=None) -> None:
+    """Signed distance of every candidate point to its part, minus r.
+
+    With ``limit`` (>= clearance), candidates up to ``limit``; with
+    ``excl_near`` (narrower windows), points inside ``excl`` but outside
+    ``excl_near`` are kept too: both only bound the gaps, never records."""
+    limit = config.clearance if limit is None else limit
+    margin = float(dp.radius.max()) + limit
     it, pk = _part_candidates(tab, ch, margin)
     if len(it) == 0:
         return
     loc = tab.to_local(pk, dp.p[it])
-    thr = (dp.radius[it] + config.clearance)[:, None]
+    thr = (dp.radius[it] + limit)[:, None]
     box_ok = np.all((loc >= tab.lo[pk] - thr) & (loc <= tab.hi[pk] + thr), axis=1)
-    box_ok &= ~_excluded(dp.cable[it], pk, dp.s[it], excl)
+    box_ok &= ~_excluded(dp.cable[it], pk, dp.s[it], excl if excl_near is None else excl_near)
     it, pk, loc = it[box_ok], pk[box_ok], loc[box_ok]
+    rec = None if excl_near is None else ~_excluded(dp.cable[it], pk, dp.s[it], excl)
     d = _point_distances(tab, pk, loc, config.face_plane)
-    _add_structure(hits, tab, dp.cable[it], pk, d - dp.radius[it], dp.p[it], dp.s[it])
+    v = d - dp.radius[it]
+    o = v < limit
+    it, pk, v = it[o], pk[o], v[o]
+    rec = None if rec is None else rec[o]
+    _add_structure(hits, tab, dp.cable[it], pk, v, dp.p[it], dp.s[it], rec)
 
 
 def _structure_exact(dp, ch, tab, config, excl, hits) -> None:
@@ -702,10 +748,10 @@ def _structure_exact(dp, ch, tab, config, excl, hits) -> None:
     _add_structure(hits, tab, dp.cable[i0], pk, d - dp.radius[i0], where, s_at)
 
 
-def _add_structure(hits, tab, cable, part, value, where, s) -> None:
+def _add_structure(hits, tab, cable, part, value, where, s, record=None) -> None:
     ko = tab.keepout[part]
-    hits.add(PairType.CABLE_STRUCTURE, cable[~ko], part[~ko], value[~ko], where[~ko], s[~ko])
-    hits.add(PairType.KEEPOUT, cable[ko], part[ko], value[ko], where[ko], s[ko])
+    for kind, o in ((PairType.CABLE_STRUCTURE, ~ko), (PairType.KEEPOUT, ko)):
+        hits.add(kind, cable[o], part[o], value[o], where[o], s[o], None, None if record is None else record[o])
 
 
 # ---------------------------------------------------------------------------
@@ -750,19 +796,62 @@ class Checker:
         parts: the parts (names, shapes, keep-out flags; their poses are the
             default for :meth:`check`).
         config: method, spacing, clearance.
+        horizon: with method ``points`` (not face-plane), candidates are also
+            evaluated up to ``clearance + horizon`` (and self pairs and
+            attachment windows up to ``stretch`` of arc length inside their
+            exclusion), only to leave in :attr:`gaps` how far every pair
+            stays from the clearance; the records do not change (severity
+            and the exclusion windows stay tied to the clearance). See
+            :mod:`checker.advance` for the use.
+        stretch: see ``horizon``.
+
+    Attributes:
+        gaps: after a :meth:`check` with a horizon, (cable, parts): the least
+            value minus the clearance over self and cable-cable candidates,
+            and per part (K,) over cable-structure and keep-out candidates,
+            each at most ``horizon``; None when not available (method
+            ``exact``, face-plane, or no horizon).
     """
 
-    def __init__(self, parts: Sequence[PartState], config: CheckConfig = CheckConfig()):
+    def __init__(self, parts: Sequence[PartState], config: CheckConfig = CheckConfig(),
+                 horizon: float = 0.0, stretch: float = 0.0):
         self.parts = list(parts)
         self.config = config
         self._tab = _PartTable(self.parts) if self.parts else None
         self._pidx = {p.name: i for i, p in enumerate(self.parts)}
+        self.horizon = float(horizon)
+        self.stretch = float(stretch)
+        self.gaps: tuple[float, np.ndarray] | None = None
+        self._excl_key = None
+
+    @property
+    def bounds_gaps(self) -> bool:
+        """True when :meth:`check` leaves :attr:`gaps` (points, not face-plane, horizon > 0)."""
+        return self.config.method == "points" and not self.config.face_plane and self.horizon > 0.0
+
+    def part_radius(self) -> np.ndarray:
+        """(K,) largest distance of any point of each part from its frame's
+        origin (inf for planes): a rotation by R moves it at most ||R - R0|| times this."""
+        if self._tab is None:
+            return np.zeros(0)
+        corner = np.maximum(np.abs(self._tab.lo), np.abs(self._tab.hi))
+        return np.sqrt(np.einsum("ij,ij->i", corner, corner))
+
+    def check_single(self, cables: Sequence[CableState]) -> list[Interference]:
+        """Only the single-cable records (bend, taut) of :meth:`check`, in its order."""
+        hits = _Hits()
+        _single_cable(cables, self.config.clearance, hits)
+        cable_names = [c.name for c in cables]
+        out = hits.reduce(self.config.clearance, cable_names, lambda ptype: cable_names)
+        out.sort(key=lambda r: (r.min_distance, _TYPE_ORDER.index(r.type), r.a, r.b))
+        return out
 
     def check(
         self,
         cables: Sequence[CableState],
         poses: np.ndarray | Sequence[np.ndarray] | None = None,
         exclusions: Sequence[Exclusion] = (),
+        horizon: float | None = None,
     ) -> list[Interference]:
         """Check one scene state; see :func:`check_state`.
 
@@ -773,8 +862,12 @@ class Checker:
                 orthonormal (as :class:`~checker.scene_state.PartState`
                 requires).
             exclusions: arc-length windows where a cable may touch a part.
+            horizon: this call's horizon instead of the checker's (0: no
+                gaps, the plain check).
         """
         config = self.config
+        horizon = self.horizon if horizon is None else float(horizon)
+        bounds = self.bounds_gaps and horizon > 0.0
         parts = self.parts
         tab = None
         if self._tab is not None:
@@ -783,7 +876,9 @@ class Checker:
                 if len(poses) != len(parts) or not np.all(np.isfinite(poses)):
                     raise ValueError(f"poses must be {len(parts)} finite 4x4 matrices")
                 rot = poses[:, :3, :3]
-                if not np.allclose(np.einsum("kji,kjl->kil", rot, rot), np.eye(3), atol=1e-9):
+                # np.allclose(R^T R, I, atol=1e-9) without its per-call overhead
+                err = np.abs(np.einsum("kji,kjl->kil", rot, rot) - _EYE3)
+                if not np.all(err <= 1e-9 + 1e-5 * _EYE3):
                     raise ValueError("a pose rotation is not orthonormal")
             tab = self._tab.posed(poses)
         hits = _Hits()
@@ -804,21 +899,30 @@ class Checker:
             o = np.argsort(key, kind="stable")
             excl = (key[o], ex_lo[o], ex_hi[o], n_parts)
             exact = config.method == "exact"
-            cuts = (np.r_[ex_c, ex_c], np.r_[ex_lo, ex_hi]) if exact else (np.zeros(0, np.int64), np.zeros(0))
+            cuts = (np.concatenate([ex_c, ex_c]), np.concatenate([ex_lo, ex_hi])) if exact \
+                else (np.zeros(0, np.int64), np.zeros(0))
             dp = _discretise(cables, config, cuts)
-            has_next = np.r_[dp.cable[:-1] == dp.cable[1:], False]
+            has_next = np.concatenate([dp.cable[:-1] == dp.cable[1:], [False]])
+            gaps = bounds
+            limit = config.clearance + (horizon if gaps else 0.0)
             if exact:
                 ch = _Chunks(dp.p, dp.s, dp.cable, has_next, dp.seg)
                 _cable_pairs_exact(dp, ch, config.clearance, hits)
             else:
                 ch = _Chunks(dp.p, dp.s, dp.cable, has_next, np.arange(len(dp.p)))
-                _cable_pairs_points(dp, ch, config.clearance, hits)
+                _cable_pairs_points(dp, ch, config.clearance, hits, limit, self.stretch if gaps else 0.0)
             if tab is not None:
                 if exact:
                     _structure_exact(dp, ch, tab, config, excl, hits)
                 else:
-                    _structure_points(dp, ch, tab, config, excl, hits)
+                    # windows narrowed by the stretch: points that may enter
+                    # or leave a window bound the gaps too
+                    near = (excl[0], excl[1] + self.stretch, excl[2] - self.stretch, excl[3]) if gaps else None
+                    _structure_points(dp, ch, tab, config, excl, hits, limit, near)
             _single_cable(cables, config.clearance, hits)
+            self.gaps = hits.gaps(config.clearance, horizon, len(parts)) if gaps else None
+        else:
+            self.gaps = (horizon, np.full(len(parts), horizon)) if bounds else None
 
         def names(ptype: PairType) -> list[str]:
             return part_names if ptype in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) else cable_names

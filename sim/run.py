@@ -20,6 +20,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from checker.advance import Advancement, part_pair_bounds
 from checker.cable import arc_length, bend_radius
 from checker.events import EventTracker
 from checker.interference import Checker
@@ -33,6 +34,8 @@ from sim.loop import Simulation
 from sim.record import Recorder, pair_path
 from sim.scene import Scene
 from sim.sweep import DEFAULT_PRECISION_M, part_set, part_shapes, selection
+
+_PAIRWISE = (PairType.SELF, PairType.CABLE_CABLE, PairType.CABLE_STRUCTURE, PairType.KEEPOUT)
 
 TAUT_STRAIN = 0.01
 """Stretch beyond which a cable is reported taut (SPEC: 1 %)."""
@@ -54,6 +57,10 @@ class RunOptions:
         other parts, and cables against its parts (cable-structure and
         keep-out). Checks that involve none of its parts (self, cable-cable,
         bend, taut) are skipped. None checks everything.
+      advance: skip the pairwise checks and the validation on steps where
+        no pair can have come within the clearance since the last full check
+        (:mod:`checker.advance`; the same events and pairs as checking every
+        step). False checks every step in full.
     """
 
     report: Path
@@ -61,6 +68,16 @@ class RunOptions:
     method: str | None = None
     spacing: float | None = None
     only: str | None = None
+    advance: bool = True
+
+
+ADVANCE_HORIZON_RADII = 2.0
+"""Conservative advancement: candidates are evaluated up to the clearance
+plus this many (largest) cable radii at a full check..."""
+
+ADVANCE_STRETCH_RADII = 0.25
+"""... and up to this many (smallest) cable radii of arc length inside the
+exclusion windows (the total change of element lengths a skipped step allows)."""
 
 
 Progress = Callable[[str, float, float], None]
@@ -168,8 +185,29 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     # Parts prepared once; each step passes their poses (identity until then).
     # With --only, cables are checked against that assembly's parts alone.
     checked_parts = np.ones(len(built.parts), bool) if focus is None else np.asarray(focus, bool)
+    radii = np.array([c.radius for c in built.cables], float)
+    horizon = ADVANCE_HORIZON_RADII * float(radii.max()) if (options.advance and len(radii)) else 0.0
+    stretch = ADVANCE_STRETCH_RADII * float(radii.min()) if len(radii) else 0.0
     checker = Checker([PartState(p.name, sh, np.eye(4), p.keepout)
-                       for p, sh, keep in zip(built.parts, shapes, checked_parts) if keep], config)
+                       for p, sh, keep in zip(built.parts, shapes, checked_parts) if keep], config,
+                      horizon=horizon, stretch=stretch)
+    advance = None
+    if checker.bounds_gaps:
+        offsets = np.concatenate([[0], np.cumsum([c.count for c in built.cables])])
+        corner = np.maximum(np.abs(rigid.lo), np.abs(rigid.hi))
+        rho = np.sqrt(np.einsum("ij,ij->i", corner, corner))     # inf for planes
+        rho[checked_parts] = np.maximum(rho[checked_parts], checker.part_radius())
+        advance = Advancement(offsets, config.spacing * radii, rho, config.clearance, stretch)
+        # part pairs that can move relative to each other (PartChecker's moving pairs)
+        gname = {g: k for k, g in enumerate(dict.fromkeys(rigid.groups))}
+        grp = np.array([gname[g] for g in rigid.groups], np.int64)
+        pi, pj = np.triu_indices(len(grp), 1)
+        keep = (grp[pi] != grp[pj]) & ~part_pairs_skipped(built)[pi, pj]
+        moving_pairs = (pi[keep], pj[keep])
+        part_index = {name: k for k, name in enumerate(rigid.names)}
+        gap_part = np.full(len(built.parts), np.inf)
+    static_parts = False  # same-body part records exist (replayed every step)
+    horizon_next = True
     focus_names = None if focus is None else {p.name for p, keep in zip(built.parts, checked_parts) if keep}
     names = [c.name for c in built.cables]
     every = scene.check.every
@@ -190,18 +228,42 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     # every step where an event starts or ends): a viewer needs no 500 Hz.
     record_stride = max(1, int(round(1.0 / (RECORD_RATE * every * scene.timestep))))
     try:
-        for state in sim.steps(contacts=validate, every=every):
+        for state in sim.steps(contacts=False, every=every):
             timer.lap("sim")
             if state.step == 0:
                 rest_points = state.cables
                 if recorder:
                     recorder.log_static(state.part_poses)
             cables = _cable_states(built, state.cables)
-            cable_records = checker.check(cables, state.part_poses[checked_parts], exclusions)
+            poses = state.part_poses
+            pts = np.concatenate(state.cables) if advance is not None else None
+            skip = advance is not None and advance.proven_clear(pts, poses)
+            if skip:
+                # no pair can be within the clearance: what a full check
+                # returns is the single-cable records and replayed same-body ones
+                cable_records = checker.check_single(cables)
+                part_records = part_checker.check(poses) if static_parts else []
+            else:
+                # The horizon costs candidates: only worth it when the last
+                # full check found no pair below the clearance (else no skip).
+                cable_records = checker.check(cables, poses[checked_parts], exclusions,
+                                              None if horizon_next else 0.0)
+                part_records = part_checker.check(poses)
+                if advance is not None:
+                    horizon_next = not any(r.type in _PAIRWISE for r in cable_records)
+                    if state.step == 0:
+                        static_parts = any(grp[part_index[r.a]] == grp[part_index[r.b]] for r in part_records)
+                    if checker.gaps is not None:
+                        gap_cable, gap_checked = checker.gaps
+                        gap_part[checked_parts] = gap_checked
+                        bound = part_pair_bounds(rigid, rigid.place(poses), *moving_pairs)
+                        advance.start(pts, poses, gap_cable, gap_part, moving_pairs, bound)
+                    else:
+                        advance.stop()
             if focus_names is not None:
                 cable_records = [r for r in cable_records if r.b in focus_names
                                  and PairType(r.type) in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)]
-            records = cable_records + part_checker.check(state.part_poses)
+            records = cable_records + part_records
             strain = np.array([arc_length(c.points)[-1] / c.rest_length - 1.0 for c in cables])
             bend = np.array([np.min(bend_radius(c.points)) for c in cables])
             max_strain = np.maximum(max_strain, strain)
@@ -209,8 +271,12 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
             started, closed = tracker.update(state.t, records)
             timer.lap("check")
             agreement = None
-            if validate:
-                seen = simulator_pairs(state.contacts, {c.name: (c.points, c.radius) for c in cables},
+            contacts = None
+            if validate and not skip:
+                # MuJoCo's detection (timed with the simulation, as before)
+                contacts = sim.detect(sim.data)
+                timer.lap("sim")
+                seen = simulator_pairs(contacts, {c.name: (c.points, c.radius) for c in cables},
                                        exclusions, config.clearance)
                 if focus_names is not None:
                     seen = {k: v for k, v in seen.items() if k[2] in focus_names
@@ -219,7 +285,7 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                 timer.lap("validate")
             if recorder and (checked % record_stride == 0 or started or closed
                              or state.step == sim.total_steps):
-                _record_step(recorder, state, records, names, strain, bend, agreement,
+                _record_step(recorder, state, contacts, records, names, strain, bend, agreement,
                              started, closed, tracker, markers, scene.scale)
                 timer.lap("record")
             final_points = state.cables
@@ -238,12 +304,15 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     total = time.perf_counter() - start
     report = _report(scene, built, config, complete, steps, checked, t_last, max_strain, min_bend,
                      rest_points, final_points, timer, total, sim, events, tracker, validation, options)
+    report["settings"]["advance"] = None if advance is None else {
+        "horizon": horizon / scene.scale, "stretch": stretch / scene.scale,
+        "full_checks": advance.full, "proven_clear_steps": advance.skipped}
     report["part_warnings"] = list(rigid.warnings)
     write_report(report, options.report)
     return report
 
 
-def _record_step(recorder: Recorder, state, records, names, strain, bend, agreement,
+def _record_step(recorder: Recorder, state, contacts, records, names, strain, bend, agreement,
                  started, closed, tracker: EventTracker, markers: set[str], unit: float) -> None:
     recorder.log_step(state.t, state.cables, state.part_poses, _worst_by_cable(records, names),
                       strain=strain, bend=bend)
@@ -257,8 +326,8 @@ def _record_step(recorder: Recorder, state, records, names, strain, bend, agreem
     recorder.clear_markers(markers - set(now))
     markers.clear()
     markers.update(now)
-    if state.contacts is not None:
-        recorder.log_contacts(state.contacts.pos)
+    if contacts is not None:
+        recorder.log_contacts(contacts.pos)
     if agreement is not None:
         recorder.log_scalar("validation/agreement", agreement)
     for key in started:
