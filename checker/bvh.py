@@ -17,6 +17,10 @@ triangles):
   ("frame", "frame/left", ...), from the parts' world AABBs, and
   :func:`prefix_hits`, which tells for each part whether every assembly it
   belongs to passed a test.
+- Box pairs: :func:`aabb_pairs`, one sort and sweep over all boxes, and
+  :func:`assembly_pairs`, the same pairs found by descending the assembly
+  tree (assemblies whose boxes do not overlap contribute no pairs), one
+  numpy pass per tree level.
 
 Touching boxes count as overlapping (closed boxes), so a contact exactly on a
 box face is never pruned. Nothing here knows about triangles' contents, contacts
@@ -281,3 +285,117 @@ def prefix_hits(asm: Assemblies, hit: np.ndarray) -> np.ndarray:
         m = asm.member[:, d]
         ok &= (m < 0) | hit[np.maximum(m, 0)]
     return ok
+
+
+def _grouped_range(g_pts: np.ndarray, x_pts: np.ndarray, g_q: np.ndarray, lo_q: np.ndarray,
+                   hi_q: np.ndarray, open_lo: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(query, point) index pairs: points of the query's group with x in [lo, hi] ((lo, hi] if ``open_lo``).
+
+    One sort for all groups: values are replaced by their dense ranks (ties
+    equal), so ``group * M + rank`` orders by group, then x, exactly."""
+    if not len(g_pts) or not len(g_q):
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    vals, rank = np.unique(np.concatenate([x_pts, lo_q, hi_q]), return_inverse=True)
+    m = len(vals) + 1
+    n, k = len(x_pts), len(lo_q)
+    rp, rlo, rhi = rank[:n], rank[n:n + k], rank[n + k:]
+    key = g_pts.astype(np.int64) * m + rp
+    order = np.argsort(key, kind="stable")
+    ks = key[order]
+    base = g_q.astype(np.int64) * m
+    start = np.searchsorted(ks, base + rlo, side="right" if open_lo else "left")
+    end = np.searchsorted(ks, base + rhi, side="right")
+    cnt = np.maximum(end - start, 0)
+    q = np.repeat(np.arange(k), cnt)
+    offs = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    return q, order[np.repeat(start, cnt) + offs]
+
+
+def assembly_pairs(asm: Assemblies, lo: np.ndarray, hi: np.ndarray, a_lo: np.ndarray, a_hi: np.ndarray,
+                   live: np.ndarray, margin: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs of :func:`aabb_pairs` among ``live`` parts, found through the assembly boxes.
+
+    A simultaneous descent of the assembly tree (nodes: assemblies and parts),
+    one numpy pass per level: the children of one node are paired by a sort
+    and sweep grouped by parent; two distinct nodes whose boxes (grown by
+    ``margin``) overlap pass their children on, paired side against side.
+    Two assemblies whose boxes do not overlap contribute no pairs, and nothing
+    below them is looked at. An assembly's box holds its parts' boxes, so
+    the pairs are exactly those of :func:`aabb_pairs` on the live parts (as
+    ``i < j``, in no particular order).
+
+    Args:
+        asm: the parts' assemblies.
+        lo, hi: (P, 3) parts' world boxes; a_lo, a_hi: (A, 3) the assemblies'.
+        live: (P,) bool, parts to pair (others, e.g. planes, are left out).
+        margin: growth of every box.
+    """
+    na, npart = len(asm.names), len(lo)
+    depth = (asm.member >= 0).sum(axis=1)
+    parent = np.full(na + npart, -2, np.int64)            # -2: not in the tree; -1: top level
+    for d in range(asm.member.shape[1]):                  # loop over assembly levels
+        m = asm.member[:, d]
+        ok = m >= 0
+        parent[m[ok]] = asm.member[ok, d - 1] if d else -1
+    pp = np.full(npart, -1, np.int64)
+    if asm.member.shape[1]:
+        pp = np.where(depth > 0, asm.member[np.arange(npart), np.maximum(depth - 1, 0)], -1)
+    parent[na:] = np.where(live, pp, -2)
+    node_lo = np.concatenate([a_lo, lo]) - margin
+    node_hi = np.concatenate([a_hi, hi]) + margin
+    # children of node key k (0: top level, 1 + a: assembly a) in ch[start[k]:start[k + 1]]
+    key = parent + 1
+    ch = np.flatnonzero(key >= 0)
+    ch = ch[np.argsort(key[ch], kind="stable")]
+    start = np.searchsorted(key[ch], np.arange(na + 2))
+
+    def expand(nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(row, child): the children of each node, a part standing for itself."""
+        is_asm = nodes < na
+        k = np.where(is_asm, nodes + 1, 0)
+        cnt = np.where(is_asm, start[np.minimum(k + 1, na + 1)] - start[k], 1)
+        row = np.repeat(np.arange(len(nodes)), cnt)
+        offs = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+        pos = np.repeat(start[k], cnt) + offs
+        child = np.where(np.repeat(is_asm, cnt), ch[np.minimum(pos, len(ch) - 1)] if len(ch) else 0,
+                         np.repeat(nodes, cnt))
+        return row, child
+
+    def overlap(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return np.all((node_lo[x] <= node_hi[y]) & (node_lo[y] <= node_hi[x]), axis=1)
+
+    out_i: list[np.ndarray] = []
+    out_j: list[np.ndarray] = []
+    selves = np.array([-1], np.int64)                      # nodes whose own children are still to pair
+    cross_a = cross_b = np.zeros(0, np.int64)              # distinct nodes with overlapping boxes
+    while len(selves) or len(cross_a):
+        # children of one node among themselves (grouped sort and sweep)
+        k = selves + 1
+        cnt = start[k + 1] - start[k]
+        grp = np.repeat(np.arange(len(selves)), cnt)
+        kids = ch[np.repeat(start[k], cnt) + np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)]
+        q, p = _grouped_range(grp, node_lo[kids, 0], grp, node_lo[kids, 0], node_hi[kids, 0], False)
+        a, b = kids[q], kids[p]
+        la, lb = node_lo[a, 0], node_lo[b, 0]
+        first = (lb > la) | ((lb == la) & (b > a))
+        a, b = a[first], b[first]
+        keep = overlap(a, b)
+        na_a, na_b = a[keep], b[keep]
+        # two overlapping nodes: children side against side
+        ra, ca = expand(cross_a)
+        rb, cb = expand(cross_b)
+        q1, p1 = _grouped_range(rb, node_lo[cb, 0], ra, node_lo[ca, 0], node_hi[ca, 0], False)
+        q2, p2 = _grouped_range(ra, node_lo[ca, 0], rb, node_lo[cb, 0], node_hi[cb, 0], True)
+        a = np.concatenate([ca[q1], ca[p2]])
+        b = np.concatenate([cb[p1], cb[q2]])
+        keep = overlap(a, b)
+        a = np.concatenate([na_a, a[keep]])
+        b = np.concatenate([na_b, b[keep]])
+        both = (a >= na) & (b >= na)
+        out_i.append(a[both] - na)
+        out_j.append(b[both] - na)
+        cross_a, cross_b = a[~both], b[~both]
+        selves = kids[kids < na]
+    i = np.concatenate(out_i) if out_i else np.zeros(0, np.int64)
+    j = np.concatenate(out_j) if out_j else np.zeros(0, np.int64)
+    return np.minimum(i, j), np.maximum(i, j)

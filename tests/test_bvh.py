@@ -77,3 +77,28 @@ def test_assemblies_and_prefix_hits():
     assert asm.names == ("frame", "frame/left", "frame/right")
     hit = np.array([True, False, True])
     assert prefix_hits(asm, hit).tolist() == [False, True, True]
+
+
+@settings(max_examples=200)
+@given(st.integers(0, 2**32 - 1))
+def test_assembly_pairs_equal_sort_and_sweep(seed):
+    from checker.bvh import assembly_boxes, assembly_pairs
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(0, 60))
+    names = ["/".join([f"a{rng.integers(0, 3)}" for _ in range(rng.integers(0, 4))] + [f"p{k}"])
+             for k in range(n)]
+    lo = rng.uniform(0, 10, (n, 3))
+    lo[::4, 0] = np.round(lo[::4, 0])          # ties and touching boxes
+    hi = lo + rng.uniform(0, 2, (n, 3))
+    hi[::3, 0] = np.round(hi[::3, 0] + 0.5)
+    hi[::5, 1] = lo[::5, 1]
+    live = rng.random(n) < 0.9
+    asm = Assemblies.of(names)
+    a_lo, a_hi = assembly_boxes(asm, lo, hi)
+    margin = float(rng.choice([0.0, 0.3]))
+    i, j = assembly_pairs(asm, lo, hi, a_lo, a_hi, live, margin)
+    idx = np.flatnonzero(live)
+    a, b = aabb_pairs(lo[idx], hi[idx], margin)
+    got = list(zip(i.tolist(), j.tolist()))
+    assert len(got) == len(set(got))
+    assert set(got) == set(zip(idx[a].tolist(), idx[b].tolist()))
