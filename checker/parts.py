@@ -3,11 +3,15 @@
 :func:`check_parts` finds every pair of parts that overlaps (hard) or comes
 within the clearance (soft) for one set of poses; :class:`PartChecker` runs it
 step after step, checking pairs on one rigid body once (they cannot change)
-and replaying that answer at every later step.
+and replaying that answer at every later step. ``assemblies=False`` pairs the
+part boxes by one sort and sweep instead, with the same records (to compare;
+``benchmarks/bench_parts.py`` times both).
 
-Layered filtering, as in 004: assembly boxes (when a ``focus`` assembly is
-checked against the rest), world boxes of parts (sort and sweep), the 15-axis
-test of their oriented boxes grown by the clearance, the triangle trees
+Layered filtering, as in 004: assembly boxes grown by the clearance (the
+parts' boxes are paired by descending the assembly tree, so two assemblies
+whose boxes do not overlap contribute no pairs; with a ``focus`` assembly,
+the others are first pruned against the focus's box), world boxes of parts,
+the 15-axis test of their oriented boxes grown by the clearance, the triangle trees
 (each part's tree queried with the other's box, then each candidate triangle
 queried against the other part's tree), and only then exact triangle tests.
 
@@ -41,7 +45,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from checker.bvh import aabb_pairs, obb_overlap, prefix_hits, transformed_aabb
+from checker.bvh import aabb_pairs, assembly_pairs, obb_overlap, prefix_hits, transformed_aabb
 from checker.partset import Placement, PartSet
 from checker.records import Interference, PairType, severity_of
 from checker.sweep import probes_inside
@@ -49,29 +53,45 @@ from checker.tritri import triangle_distance, triangles_cross
 
 
 def candidate_pairs(parts: PartSet, placed: Placement, clearance: float,
-                    focus: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Pairs (i < j) of non-plane parts whose boxes come within ``clearance``.
+                    focus: np.ndarray | None = None, pair_mask=None,
+                    assemblies: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs (i < j, sorted) of non-plane parts whose boxes come within ``clearance``.
 
-    With ``focus`` ((P,) bool), only pairs of one focus part and one other,
-    after pruning the others by assembly boxes against the focus's box."""
+    With ``assemblies``, the part boxes are paired through the assembly
+    boxes (:func:`checker.bvh.assembly_pairs`: assemblies whose boxes, grown
+    by the clearance, do not overlap contribute no pairs); without, by one
+    sort and sweep over all parts. Same pairs either way. With ``focus``
+    ((P,) bool), only pairs of one focus part and one other, after pruning the
+    others by assembly boxes against the focus's box. ``pair_mask`` (see
+    :func:`check_parts`) is applied before the oriented-box test."""
     fin = ~parts.plane
-    idx = np.flatnonzero(fin)
+    keep = fin
+    empty = np.zeros(0, np.int64), np.zeros(0, np.int64)
     if focus is not None:
         focus = np.asarray(focus, bool)
         f = focus & fin
         if not f.any():
-            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+            return empty
         lo = placed.lo[f].min(axis=0) - clearance
         hi = placed.hi[f].max(axis=0) + clearance
         asm_hit = np.all((placed.asm_lo <= hi) & (lo <= placed.asm_hi), axis=1)
         keep = fin & (focus | prefix_hits(parts.assemblies, asm_hit))
+    if assemblies:
+        i, j = assembly_pairs(parts.assemblies, placed.lo, placed.hi, placed.asm_lo, placed.asm_hi,
+                              keep, 0.5 * clearance)
+    else:
         idx = np.flatnonzero(keep)
-    a, b = aabb_pairs(placed.lo[idx], placed.hi[idx], 0.5 * clearance)
-    i, j = idx[a], idx[b]
+        a, b = aabb_pairs(placed.lo[idx], placed.hi[idx], 0.5 * clearance)
+        i, j = idx[a], idx[b]
     i, j = np.minimum(i, j), np.maximum(i, j)
+    order = np.lexsort((j, i))
+    i, j = i[order], j[order]
     if focus is not None:
         one = focus[i] != focus[j]
         i, j = i[one], j[one]
+    if pair_mask is not None and len(i):
+        ok = pair_mask(i, j)
+        i, j = i[ok], j[ok]
     if len(i):
         half = parts.half() + 0.5 * clearance
         ok = obb_overlap(placed.centre[i], placed.rot[i], half[i], placed.centre[j], placed.rot[j], half[j])
@@ -103,7 +123,7 @@ def _triangle_pairs(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndar
 
 def check_parts(parts: PartSet, placed: Placement, clearance: float,
                 focus: np.ndarray | None = None,
-                pair_mask=None) -> list[Interference]:
+                pair_mask=None, assemblies: bool = True) -> list[Interference]:
     """Interference between parts at one set of poses.
 
     Args:
@@ -112,11 +132,10 @@ def check_parts(parts: PartSet, placed: Placement, clearance: float,
         focus: (P,) bool: check only these parts against the others.
         pair_mask: optional function (i, j) -> (n,) bool choosing which
             candidate pairs to test (e.g. only parts on different bodies).
+        assemblies: prune by assembly boxes before part boxes (False: part
+            boxes only; the records are the same, for comparison).
     """
-    i, j = candidate_pairs(parts, placed, clearance, focus)
-    if pair_mask is not None and len(i):
-        keep = pair_mask(i, j)
-        i, j = i[keep], j[keep]
+    i, j = candidate_pairs(parts, placed, clearance, focus, pair_mask, assemblies)
     out: list[Interference] = []
     n = len(i)
     if n:
@@ -199,18 +218,20 @@ class PartChecker:
     """
 
     def __init__(self, parts: PartSet, clearance: float, focus: np.ndarray | None = None,
-                 skip: np.ndarray | None = None):
+                 skip: np.ndarray | None = None, assemblies: bool = True):
         """``skip``: (P, P) bool, pairs never checked (e.g. parts of a parent
         and a child body joined by a joint: MuJoCo skips those too, links of
-        an arm overlap at their joints by design)."""
+        an arm overlap at their joints by design). ``assemblies``: see
+        :func:`check_parts` (False only to compare)."""
         self.parts = parts
+        self.assemblies = assemblies
         self.clearance = clearance
         self.focus = focus
         g = {name: k for k, name in enumerate(dict.fromkeys(parts.groups))}
         self._group = np.array([g[x] for x in parts.groups], np.int64)
         n = len(parts.names)
         self._skip = np.zeros((n, n), bool) if skip is None else np.asarray(skip, bool)
-        self._static: list[tuple[Interference, int, np.ndarray]] | None = None
+        self._static: tuple[list[Interference], np.ndarray, np.ndarray] | None = None
 
     def check(self, poses: np.ndarray) -> list[Interference]:
         """Records for poses (P, 4, 4)."""
@@ -218,12 +239,15 @@ class PartChecker:
         grp, skip = self._group, self._skip
         if self._static is None:
             found = check_parts(self.parts, placed, self.clearance, self.focus,
-                                lambda i, j: (grp[i] == grp[j]) & ~skip[i, j])
+                                lambda i, j: (grp[i] == grp[j]) & ~skip[i, j], self.assemblies)
             # keep each place in part a's frame: the pair rides its body
             index = {n: k for k, n in enumerate(self.parts.names)}
-            self._static = [(r, index[r.a], placed.local(np.array([index[r.a]]), r.where[None])[0])
-                            for r in found]
+            ka = np.array([index[r.a] for r in found], np.int64)
+            wa = np.array([r.where for r in found], float).reshape(-1, 1, 3)
+            self._static = (found, ka, placed.local(ka, wa) if len(found) else wa)
         moving = check_parts(self.parts, placed, self.clearance, self.focus,
-                             lambda i, j: (grp[i] != grp[j]) & ~skip[i, j])
-        static = [replace(r, where=placed.world(np.array([k]), local[None])[0]) for r, k, local in self._static]
+                             lambda i, j: (grp[i] != grp[j]) & ~skip[i, j], self.assemblies)
+        found, ka, local = self._static
+        world = placed.world(ka, local)[:, 0] if len(found) else local[:, 0]
+        static = [replace(r, where=w) for r, w in zip(found, world)]
         return static + moving

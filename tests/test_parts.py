@@ -126,3 +126,56 @@ def test_tessellation_error_bound_holds():
         sd, _ = signed_distance(shape, pts)
         assert np.all(sd <= 1e-12) and -sd.min() <= surf.error + 1e-12
     assert part_surface(CUBE, 1e-3).error == 0.0
+
+
+def _nested_scene(seed):
+    """Random boxes, spheres and capsules in random nested assemblies (some flat, some deep)."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 30))
+    names, shapes, poses, groups = [], [], [], []
+    kinds = [ShapeType.BOX, ShapeType.SPHERE, ShapeType.CAPSULE]
+    for k in range(n):
+        depth = int(rng.integers(0, 4))
+        path = [f"a{rng.integers(0, 3)}" for _ in range(depth)]
+        names.append("/".join(path + [f"p{k}"]))
+        kind = kinds[rng.integers(0, 3)]
+        shapes.append(Shape(kind, list(rng.uniform(0.1, 0.4, 3))))
+        t = pose(*(rng.uniform(0, 4, 3) + 2.0 * (path[0] == "a1" if path else 0)))
+        q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+        q = q * np.sign(np.diag(r))
+        t[:3, :3] = q * np.sign(np.linalg.det(q))          # a proper rotation
+        if rng.random() < 0.3:
+            t[:3, :3] = np.eye(3)
+            t[:3, 3] = np.round(t[:3, 3] * 2) / 2       # flush faces: touching boxes
+        poses.append(t)
+        groups.append(f"g{rng.integers(0, 3)}")
+    if rng.random() < 0.3:
+        names.append("floor")
+        shapes.append(Shape(ShapeType.PLANE, []))
+        poses.append(pose(z=0.2))
+        groups.append("g0")
+    return names, shapes, np.array(poses), groups, rng
+
+
+def _records(recs):
+    return [(r.type.value, r.a, r.b, r.severity.value, r.min_distance, tuple(r.where)) for r in recs]
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_assembly_pruning_gives_identical_records(seed):
+    names, shapes, poses, groups, rng = _nested_scene(seed)
+    keepout = list(rng.random(len(names)) < 0.1)
+    ps = PartSet.build(names, shapes, groups=groups, keepout=keepout, tolerance=0.1)
+    clearance = float(rng.choice([0.0, 0.02, 0.1]))
+    placed = ps.place(poses)
+    focus = ps.select(names[0].split("/")[0]) if seed % 4 == 0 else None
+    with_asm = check_parts(ps, placed, clearance, focus)
+    assert _records(with_asm) == _records(check_parts(ps, placed, clearance, focus, assemblies=False))
+    # step after step, with the groups moving apart from each other
+    on = PartChecker(ps, clearance, focus, assemblies=True)
+    off = PartChecker(ps, clearance, focus, assemblies=False)
+    for step in range(3):
+        moved = poses.copy()
+        for g in range(3):
+            moved[np.array(groups) == f"g{g}", :3, 3] += step * rng.uniform(-0.5, 0.5, 3)
+        assert _records(on.check(moved)) == _records(off.check(moved))
