@@ -270,11 +270,16 @@ def assembly_boxes(asm: Assemblies, lo: np.ndarray, hi: np.ndarray) -> tuple[np.
     """World AABBs (A, 3) of each assembly from its parts' AABBs (P, 3)."""
     a_lo = np.full((len(asm.names), 3), np.inf)
     a_hi = np.full((len(asm.names), 3), -np.inf)
-    for d in range(asm.member.shape[1]):
+    for d in range(asm.member.shape[1]):     # loop over assembly levels
         m = asm.member[:, d]
-        ok = m >= 0
-        np.minimum.at(a_lo, m[ok], lo[ok])
-        np.maximum.at(a_hi, m[ok], hi[ok])
+        rows = np.flatnonzero(m >= 0)
+        rows = rows[np.argsort(m[rows], kind="stable")]
+        if not len(rows):
+            continue
+        ms = m[rows]
+        first = np.flatnonzero(np.r_[True, ms[1:] != ms[:-1]])
+        a_lo[ms[first]] = np.minimum.reduceat(lo[rows], first, axis=0)
+        a_hi[ms[first]] = np.maximum.reduceat(hi[rows], first, axis=0)
     return a_lo, a_hi
 
 
