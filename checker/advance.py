@@ -1,18 +1,27 @@
 """Conservative advancement: steps on which no pair can have come within the clearance.
 
 After a full check at step k0 the checker knows, up to a horizon H, how far
-every pair stays from the clearance (:attr:`checker.interference.Checker.gaps`
-and :func:`part_pair_bounds`). On a later step k, with
+every pair stays from the clearance (:attr:`checker.interference.Checker.gaps`,
+its ``part_candidates`` and :func:`part_pair_bounds`). On a later step k, with
 
-- ``dc``: the largest displacement of any cable body centre since k0,
+- ``d_i``: the displacement of cable body centre i since k0, ``dq_i = |d_i|``,
+- ``spread``: the diagonal of the bounding box of all ``d_i`` (at least
+  ``|d_a - d_b|`` for any two centres; ``min(spread, 2 max dq)`` is used),
+- ``u_i^k``: centre i in part k's own frame, ``R_k^T (x_i - t_k)``, and
+  ``rel[i, k] = |u_i^k(k) - u_i^k(k0)|`` its displacement relative to part k,
 - ``dp[k]``: a bound on how far any point of part k moved since k0, its
   translation plus ``||R - R0||_F`` times the part's bounding radius about
   its frame's origin (a plane that rotated: unbounded),
+- ``g[i, k]``: centre i's gap to part k: the smallest value minus the
+  clearance of part k's candidates on the elements next to centre i, H where
+  there is none (capped at H),
 
 no pair can have come within the clearance while
 
-- ``2 dc < gap_cable`` (self and cable-cable),
-- ``dc + dp[k] < gap_part[k]`` for every part k (cable-structure, keep-out),
+- ``spread < gap_cable`` (self and cable-cable),
+- ``dq_i < g[i, k]`` for every part k that did not move, and
+  ``min(rel[i, k], dq_i + dp[k]) < g[i, k]`` for every part k that moved
+  (cable-structure, keep-out),
 - ``dp[i] + dp[j] < bound[i, j] - clearance`` for every part pair that can
   move relative to the other (part-part, keep-out between parts),
 - every cable element splits into the same number of discrete points as at
@@ -20,23 +29,31 @@ no pair can have come within the clearance while
   total (summed over elements).
 
 Proof sketch. With the same number of pieces per element, every discrete
-point (and every element midpoint) is the same convex combination of the
-same two body centres as at k0, so it moved by at most ``dc``; a point of a
-rigid part moved by at most ``dp``. Every value checked is a distance
-between such points, or a point's distance to a rigid solid, minus fixed
-radii: a 1-Lipschitz function of the two places, so it dropped by at most the
-sum of their displacements (a point outside a solid with distance above the
-clearance stays outside, where the signed distance is the distance). At k0
-every candidate value below ``clearance + H`` was evaluated, so the smallest
-value minus the clearance (capped at H) is the gap. Exclusions are windows in
-arc length (self: ``|s_a - s_b| < pi r + clearance``; attachments: fixed
-windows), and an arc length moved by at most the total change of element
-lengths; the gaps at k0 therefore include candidates up to ``stretch``
-inside every window, so none that left a window since was unaccounted for.
-Part pairs: the least distance of their triangles is at least the
-separation of their oriented boxes on any box axis (or, for a plane, the
-box's lowest point above it), which :func:`part_pair_bounds` takes at k0.
-Rounding is absorbed by a margin of 1e-9 of the scene's extent.
+point (and every element midpoint, and every point of a piece) is the same
+convex combination of the same two body centres as at k0, in the world and
+in any part's frame alike (the maps are affine); so its displacement is the
+same combination of the two centres' displacements: at most the larger of
+their ``dq`` (or ``rel``), and the difference of two such displacements lies
+within the bounding box's diagonal. A point of a rigid part moved by at most
+``dp``. Every value checked is a distance between two cable points, or a
+point's distance to a rigid solid, minus fixed radii: a 1-Lipschitz function
+of the places, so it dropped by at most ``|d_a - d_b|`` (cable pairs), and
+by at most the point's displacement in the part's own frame, or the point's
+plus the part's displacement in the world (cable and part; a point outside a
+solid with distance above the clearance stays outside, where the signed
+distance is the distance). At k0 every candidate value below ``clearance +
+H`` was evaluated, and each part candidate is charged to every centre of the
+element holding its arc length (with a rounding margin: more centres only
+lower the gaps); a point with no candidate for part k was at least H past
+the clearance from it. Exclusions are windows in arc length (self: ``|s_a -
+s_b| < pi r + clearance``; attachments: fixed windows), and an arc length
+moved by at most the total change of element lengths; the gaps at k0
+therefore include candidates up to ``stretch`` inside every window, so none
+that left a window since was unaccounted for. Part pairs: the least distance
+of their triangles is at least the separation of their oriented boxes on any
+box axis (or, for a plane, the box's lowest point above it), which
+:func:`part_pair_bounds` takes at k0. Rounding is absorbed by a margin of
+1e-9 of the scene's extent.
 
 So on such a step the pairwise checks (and the simulator's detection used to
 validate them) can be skipped: their answer is "no pair below the
@@ -108,6 +125,9 @@ class Advancement:
         offsets = np.asarray(offsets, np.int64)
         cable_of_pt = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
         self._valid = cable_of_pt[:-1] == cable_of_pt[1:]
+        self._offsets = offsets
+        self._cable = cable_of_pt
+        self._first = offsets[:-1]
         self._lim = np.asarray(spacing, float)[cable_of_pt[:-1]]
         self._rho = np.asarray(part_radius, float)
         self.clearance = float(clearance)
@@ -118,15 +138,23 @@ class Advancement:
 
     def _elements(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         seg = row_norm(pts[1:] - pts[:-1])
+        self._seg_raw = seg
         # the same arithmetic as checker.cable.densify_batch
         pieces = np.where(self._valid, np.maximum(1, np.ceil(seg / self._lim * (1.0 - 1e-12))), 0)
         return np.where(self._valid, seg, 0.0), pieces
 
     def start(self, pts: np.ndarray, poses: np.ndarray, gap_cable: float, gap_part: np.ndarray,
-              pairs: tuple[np.ndarray, np.ndarray], pair_bound: np.ndarray) -> None:
+              pairs: tuple[np.ndarray, np.ndarray], pair_bound: np.ndarray,
+              candidates: tuple[np.ndarray, ...] | None = None, horizon: float = 0.0) -> None:
         """A full check ran at this state: cable body centres (N, 3) and part
         poses (P, 4, 4); the checker's gaps (cable, per part (P,), inf for
-        parts it does not check) and part pairs with their distance bounds."""
+        parts it does not check) and part pairs with their distance bounds.
+
+        ``candidates``: the checker's cable-structure and keep-out candidates
+        (cable, arc length, part index in ``poses``, value - clearance) found
+        up to ``horizon`` past the clearance; with them the part gaps are
+        kept per body centre (the smallest over the elements next to it,
+        ``horizon`` where there is none), else every centre gets the part's gap."""
         self.full += 1
         self._pts = np.array(pts, float)
         self._rot = np.array(poses[:, :3, :3], float)
@@ -135,11 +163,36 @@ class Advancement:
         scale = max(float(np.abs(self._pts).max(initial=0.0)), float(np.abs(self._pos).max(initial=0.0)))
         mu = 1e-9 * (1.0 + scale)
         self._g_cable = float(gap_cable) - mu
-        self._g_part = np.asarray(gap_part, float) - mu
+        gap_part = np.asarray(gap_part, float)
+        self._g_part = gap_part - mu
+        n, n_p = len(self._pts), len(gap_part)
+        if candidates is None:
+            g = np.broadcast_to(gap_part, (n, n_p)).copy()
+        else:
+            g = np.where(np.isfinite(gap_part), float(horizon), np.inf)[None, :].repeat(n, 0)
+            cab, s, part, value = candidates
+            if len(value):
+                # a candidate at arc length s lies on an element whose centres
+                # bracket s (at k0's arc lengths, as densify_batch computes them);
+                # widened by a rounding margin, more centres only lower the gaps
+                cum = np.concatenate([[0.0], np.cumsum(np.where(self._valid, self._seg_raw, 0.0))])
+                s_c = cum - cum[self._first][self._cable]
+                width = 2.0 * (float(s_c.max(initial=0.0)) + float(np.abs(s).max())) + 1.0
+                key_c = self._cable * width + s_c
+                key = cab * width + s
+                eps = 1e-9 * width * (1 + len(self._offsets))
+                lo = np.maximum(np.searchsorted(key_c, key - eps, "left") - 1, self._offsets[cab])
+                hi = np.minimum(np.searchsorted(key_c, key + eps, "right"), self._offsets[cab + 1] - 1)
+                count = hi - lo + 1
+                rows = np.repeat(lo, count) + (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count))
+                np.minimum.at(g, (rows, np.repeat(part, count)), np.repeat(value, count))
+                g = np.minimum(g, horizon)
+        self._g_pt = g - mu
+        self._g_static = {}
         self._pi, self._pj = pairs
         self._g_pair = np.asarray(pair_bound, float) - self.clearance - mu
         self._stretch = self.stretch - mu
-        self._ok = (self._g_cable > 0 and bool(np.all(self._g_part > 0))
+        self._ok = (self._g_cable > 0 and bool(np.all(self._g_pt > 0))
                     and bool(np.all(self._g_pair > 0)) and self.stretch > mu)
 
     def stop(self) -> None:
@@ -152,18 +205,46 @@ class Advancement:
         counts the step as skipped then."""
         if not self._ok or len(pts) != len(self._pts):
             return False
-        dc = float(row_norm(pts - self._pts).max(initial=0.0))
-        if not 2.0 * dc < self._g_cable:
+        move = pts - self._pts
+        dq = row_norm(move)
+        dc = float(dq.max(initial=0.0))
+        if len(move):
+            spread = np.ptp(move, axis=0)
+            dcc = min(2.0 * dc, float(np.sqrt(spread @ spread)))
+        else:
+            dcc = 0.0
+        if not dcc < self._g_cable:
             return False
         seg, pieces = self._elements(pts)
         if np.any(pieces != self._pieces) or not np.abs(seg - self._seg).sum() < self._stretch:
             return False
         if len(self._pos):
-            d_rot = poses[:, :3, :3] - self._rot
-            fro = np.sqrt(np.einsum("kij,kij->k", d_rot, d_rot))
-            dp = row_norm(poses[:, :3, 3] - self._pos) + np.where(fro > 0, fro * self._rho, 0.0)
-            if not (np.all(dc + dp < self._g_part)
-                    and np.all(dp[self._pi] + dp[self._pj] < self._g_pair)):
+            rot, pos = poses[:, :3, :3], poses[:, :3, 3]
+            moved = np.any(rot != self._rot, axis=(1, 2)) | np.any(pos != self._pos, axis=1)
+            key = moved.tobytes()
+            g_static = self._g_static.get(key)
+            if g_static is None:
+                g_static = self._g_static[key] = self._g_pt[:, ~moved].min(axis=1, initial=np.inf)
+            if not np.all(dq < g_static):
                 return False
+            if moved.any():
+                m = np.nonzero(moved)[0]
+                d_rot = rot[m] - self._rot[m]
+                fro = np.sqrt(np.einsum("kij,kij->k", d_rot, d_rot))
+                dp_m = row_norm(pos[m] - self._pos[m]) + np.where(fro > 0, fro * self._rho[m], 0.0)
+                # each centre in each moving part's own frame
+                u = np.einsum("kji,knj->kni", rot[m], pts[None] - pos[m][:, None])
+                u0 = np.einsum("kji,knj->kni", self._rot[m], self._pts[None] - self._pos[m][:, None])
+                du = u - u0
+                rel = np.sqrt((du[..., 0] * du[..., 0] + du[..., 1] * du[..., 1]) + du[..., 2] * du[..., 2])
+                bound = np.minimum(rel, dq[None, :] + dp_m[:, None])
+                if not np.all(bound < self._g_pt[:, m].T):
+                    return False
+                if len(self._pi):
+                    d_rot = rot - self._rot
+                    fro = np.sqrt(np.einsum("kij,kij->k", d_rot, d_rot))
+                    dp = row_norm(pos - self._pos) + np.where(fro > 0, fro * self._rho, 0.0)
+                    if not np.all(dp[self._pi] + dp[self._pj] < self._g_pair):
+                        return False
         self.skipped += 1
         return True

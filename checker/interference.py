@@ -153,7 +153,7 @@ class _Hits:
 
     def __init__(self):
         self.parts: list[tuple] = []
-        self.near: list[tuple] = []  # (type, b, value): every candidate, for the gaps
+        self.near: list[tuple] = []  # (type, a, b, value, s): every candidate, for the gaps
 
     def add(self, ptype: PairType, a, b, value, where, s, s_b=None, record=None):
         """Candidates; ``record`` (n,) bool marks those that may become records
@@ -161,7 +161,7 @@ class _Hits:
         if len(value) == 0:
             return
         code = _TYPE_ORDER.index(ptype)
-        self.near.append((code, b, value))
+        self.near.append((code, a, b, value, s))
         if record is not None:
             a, b, value, where, s = a[record], b[record], value[record], where[record], s[record]
             s_b = None if s_b is None else s_b[record]
@@ -177,12 +177,20 @@ class _Hits:
         ``horizon`` (candidates are found up to clearance + horizon)."""
         cc = horizon
         part = np.full(n_parts, horizon)
-        for code, b, value in self.near:
+        for code, _, b, value, _ in self.near:
             if code in _CABLE_PAIR_CODES:
                 cc = min(cc, float(value.min()) - clearance)
             elif code in _PART_CODES:
                 np.minimum.at(part, b, value - clearance)
         return cc, part
+
+    def part_candidates(self, clearance: float) -> tuple[np.ndarray, ...]:
+        """Every cable-structure and keep-out candidate: (cable, s, part,
+        value - clearance), for gaps per cable place (:mod:`checker.advance`)."""
+        rows = [(a, s, b, value - clearance) for code, a, b, value, s in self.near if code in _PART_CODES]
+        if not rows:
+            return np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64), np.zeros(0)
+        return tuple(np.concatenate(x) for x in zip(*rows))
 
     def reduce(self, clearance, cable_names, b_names_by_type) -> list[Interference]:
         if not self.parts:
@@ -811,6 +819,10 @@ class Checker:
             and per part (K,) over cable-structure and keep-out candidates,
             each at most ``horizon``; None when not available (method
             ``exact``, face-plane, or no horizon).
+        part_candidates: with :attr:`gaps`, every cable-structure and
+            keep-out candidate behind them: (cable, arc length s, part,
+            value - clearance) arrays; a point not among them is at least
+            ``horizon`` beyond the clearance from that part.
     """
 
     def __init__(self, parts: Sequence[PartState], config: CheckConfig = CheckConfig(),
@@ -822,6 +834,7 @@ class Checker:
         self.horizon = float(horizon)
         self.stretch = float(stretch)
         self.gaps: tuple[float, np.ndarray] | None = None
+        self.part_candidates: tuple[np.ndarray, ...] | None = None
         self._excl_key = None
 
     @property
@@ -921,8 +934,10 @@ class Checker:
                     _structure_points(dp, ch, tab, config, excl, hits, limit, near)
             _single_cable(cables, config.clearance, hits)
             self.gaps = hits.gaps(config.clearance, horizon, len(parts)) if gaps else None
+            self.part_candidates = hits.part_candidates(config.clearance) if gaps else None
         else:
             self.gaps = (horizon, np.full(len(parts), horizon)) if bounds else None
+            self.part_candidates = None
 
         def names(ptype: PairType) -> list[str]:
             return part_names if ptype in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) else cable_names

@@ -206,6 +206,7 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
         moving_pairs = (pi[keep], pj[keep])
         part_index = {name: k for k, name in enumerate(rigid.names)}
         gap_part = np.full(len(built.parts), np.inf)
+        checked_index = np.nonzero(checked_parts)[0]
     static_parts = False  # same-body part records exist (replayed every step)
     horizon_next = True
     focus_names = None if focus is None else {p.name for p, keep in zip(built.parts, checked_parts) if keep}
@@ -257,7 +258,9 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                         gap_cable, gap_checked = checker.gaps
                         gap_part[checked_parts] = gap_checked
                         bound = part_pair_bounds(rigid, rigid.place(poses), *moving_pairs)
-                        advance.start(pts, poses, gap_cable, gap_part, moving_pairs, bound)
+                        cab, s_c, part, value = checker.part_candidates
+                        advance.start(pts, poses, gap_cable, gap_part, moving_pairs, bound,
+                                      (cab, s_c, checked_index[part], value), horizon)
                     else:
                         advance.stop()
             if focus_names is not None:
