@@ -48,7 +48,7 @@ import numpy as np
 from checker.bvh import aabb_pairs, assembly_pairs, obb_overlap, prefix_hits, transformed_aabb
 from checker.partset import Placement, PartSet
 from checker.records import Interference, PairType, severity_of
-from checker.sweep import probes_inside
+from checker.sweep import probes_inside_batch
 from checker.tritri import triangle_distance, triangles_cross
 
 
@@ -157,16 +157,15 @@ def check_parts(parts: PartSet, placed: Placement, clearance: float,
             dist[r[first]] = d[first]
             mid = 0.5 * (p[first] + q[first])
             where[r[first]] = np.where(crossing[r[first]][:, None], where[r[first]], mid)
-        for k in range(n):     # per candidate pair: records and containment probes
-            a_, b_ = int(i[k]), int(j[k])
-            deep = [x for x in (probes_inside(parts, placed, a_, b_),
-                                probes_inside(parts, placed, b_, a_)) if x is not None]
-            touch = float(parts.touch(i[k:k + 1], j[k:k + 1])[0])
-            if deep or crossing[k]:
-                depth = min(deep) if deep else -touch
-                out.append(_record(parts, a_, b_, depth, where[k], clearance))
-            elif touch < dist[k] < clearance:
-                out.append(_record(parts, a_, b_, float(dist[k]), where[k], clearance))
+        # containment probes of every pair, both ways, in one batch
+        deep = probes_inside_batch(parts, placed, np.concatenate([i, j]), np.concatenate([j, i]))
+        deep = np.minimum(deep[:n], deep[n:])
+        inside = np.isfinite(deep)
+        touch = parts.touch(i, j)
+        hard = inside | crossing
+        value = np.where(hard, np.where(inside, deep, -touch), dist)
+        for k in np.flatnonzero(hard | ((touch < dist) & (dist < clearance))):     # records only
+            out.append(_record(parts, int(i[k]), int(j[k]), float(value[k]), where[k], clearance))
     out.extend(_plane_records(parts, placed, clearance, focus, pair_mask))
     return [r for r in out if r is not None]
 

@@ -22,11 +22,12 @@ Not here: the contact tests themselves (:mod:`checker.sweep`,
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from checker.bvh import Assemblies, TriangleForest, assembly_boxes, transformed_aabb
-from checker.shapes import Shape
+from checker.shapes import Shape, ShapeType
 from checker.tessellate import part_surface
 
 TOUCH = 1e-6
@@ -197,6 +198,29 @@ class PartSet:
         a_lo, a_hi = assembly_boxes(self.assemblies, np.where(fin[:, None], lo, np.inf),
                                     np.where(fin[:, None], hi, -np.inf))
         return Placement(rot, pos, centre, lo, hi, a_lo, a_hi)
+
+    @cached_property
+    def probe_start(self) -> np.ndarray:
+        """(P + 1,) part k's probes are ``probes[probe_start[k]:probe_start[k + 1]]``."""
+        return np.searchsorted(self.probe_part, np.arange(len(self.names) + 1))
+
+    @cached_property
+    def sd_groups(self) -> tuple[np.ndarray, tuple[tuple[ShapeType, Shape | None], ...], np.ndarray]:
+        """Parts grouped for batched signed distances: key (P,) into kinds, kinds
+        ((type, None) per primitive type, (MESH, a shape) per distinct mesh),
+        and sizes (P, 3) (zero-padded)."""
+        index: dict = {}
+        kinds = []
+        key = np.zeros(len(self.names), np.int64)
+        size = np.zeros((len(self.names), 3))
+        for k, sh in enumerate(self.shapes):
+            tag = ("mesh", id(sh.mesh)) if sh.mesh is not None else sh.type
+            if tag not in index:
+                index[tag] = len(kinds)
+                kinds.append((sh.type, sh if sh.mesh is not None else None))
+            key[k] = index[tag]
+            size[k, :min(3, len(sh.size))] = sh.size[:3]
+        return key, tuple(kinds), size
 
     def touch(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Touching tolerance (absolute) of part pairs ``a``, ``b`` (n,)."""

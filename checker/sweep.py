@@ -46,8 +46,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.bvh import obb_overlap, prefix_hits, transformed_aabb
-from checker.partset import TOUCH, Placement, PartSet
-from checker.shapes import signed_distance
+from checker.partset import PROBE_DEPTH, TOUCH, Placement, PartSet
+from checker.shapes import signed_distance, signed_distance_value_batch
 from checker.tritri import EPS, edge_edge_contact, triangles_cross, vertex_face_contact
 
 _ROUNDS = 16
@@ -323,11 +323,14 @@ def _verify(parts: PartSet, placed: Placement, moving_parts: np.ndarray, d: np.n
         crossing = triangles_cross(shifted, f_world[rows], parts.touch(m_part[rows], f_part[rows]))
         ok = np.zeros(len(parts.names), bool)
         ok[f_part[rows][crossing]] = True
-        for q in fp[~ok[fp]]:     # coincident faces never cross: probes decide
-            shift = travel[q] * d
-            ok[q] = any(probes_inside(parts, placed, int(m), int(q), shift) is not None
-                        or probes_inside(parts, placed, int(q), int(m), -shift) is not None
-                        for m in moving_parts)
+        q = fp[~ok[fp]]     # coincident faces never cross: probes decide
+        if len(q):
+            qq, mm = np.repeat(q, len(moving_parts)), np.tile(moving_parts, len(q))
+            shift = travel[qq][:, None] * d
+            n = len(qq)
+            deep = probes_inside_batch(parts, placed, np.concatenate([mm, qq]), np.concatenate([qq, mm]),
+                                       np.concatenate([shift, -shift]))
+            ok[qq[np.isfinite(deep[:n]) | np.isfinite(deep[n:])]] = True
         good = first[ok[fp]]
         t_best[part[good]] = t[good]
         where[part[good]] = p[good]
@@ -380,11 +383,62 @@ def _planes(parts: PartSet, placed: Placement, d: np.ndarray, h: float, mv: np.n
 def _contained(parts: PartSet, placed: Placement, mv: np.ndarray, cand: np.ndarray) -> np.ndarray:
     """(P,) bool: candidates holding a moving part's probe, or holding a probe inside a moving part."""
     out = np.zeros(len(parts.names), bool)
-    for c in cand:     # only candidates whose surfaces do not cross: few
-        for m in mv:
-            if probes_inside(parts, placed, m, c) or probes_inside(parts, placed, c, m):
-                out[c] = True
-                break
+    c, m = np.repeat(cand, len(mv)), np.tile(mv, len(cand))
+    # a probe lies in its part's box grown by PROBE_DEPTH of the size and counts
+    # only inside the other part's box: pairs whose world boxes (so grown) miss
+    # each other hold none
+    g = 2 * PROBE_DEPTH * np.maximum(parts.size[c], parts.size[m])
+    near = np.all((placed.lo[c] - g[:, None] <= placed.hi[m]) & (placed.lo[m] - g[:, None] <= placed.hi[c]), axis=1)
+    c, m = c[near], m[near]
+    n = len(c)
+    if n:
+        deep = probes_inside_batch(parts, placed, np.concatenate([m, c]), np.concatenate([c, m]))
+        out[c[np.isfinite(deep[:n]) | np.isfinite(deep[n:])]] = True
+    return out
+
+
+def probes_inside_batch(parts: PartSet, placed: Placement, a: np.ndarray, b: np.ndarray,
+                        shift: np.ndarray | None = None) -> np.ndarray:
+    """:func:`probes_inside` for many pairs at once: (n,), +inf where it gives None.
+
+    ``a``, ``b``: (n,) parts; ``shift``: (n, 3) translations of ``a``. All
+    probes of all pairs are placed in one array (with their pair's row),
+    transformed in one batched operation, and measured with one call per
+    primitive type and per distinct mesh of ``b``."""
+    a = np.asarray(a, np.int64)
+    b = np.asarray(b, np.int64)
+    out = np.full(len(a), np.inf)
+    rows = np.flatnonzero(parts.closed[b] & ~parts.plane[a])
+    if not len(rows):
+        return out
+    ps = parts.probe_start
+    first = ps[a[rows]]
+    cnt = ps[a[rows] + 1] - first
+    row = np.repeat(rows, cnt)                            # pair row of each probe
+    idx = np.repeat(first, cnt) + np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    pa, pb = a[row], b[row]
+    world = placed.world(pa, parts.probes[idx][:, None, :])
+    if shift is not None:
+        world = world + np.asarray(shift, float)[row][:, None, :]
+    pts = placed.local(pb, world)[:, 0]
+    inbox = np.all((pts >= parts.lo[pb]) & (pts <= parts.hi[pb]), axis=1) | parts.plane[pb]
+    row, pb, pts = row[inbox], pb[inbox], pts[inbox]
+    if not len(row):
+        return out
+    key, kinds, size = parts.sd_groups
+    kb = key[pb]
+    sd = np.empty(len(row))
+    for k in np.unique(kb):     # one call per primitive type or distinct mesh
+        sel = np.flatnonzero(kb == k)
+        stype, shape = kinds[k]
+        if shape is not None:
+            sd[sel] = signed_distance(shape, pts[sel])[0]
+        else:
+            sd[sel] = signed_distance_value_batch(stype, size[pb[sel]], pts[sel])
+    start = np.flatnonzero(np.r_[True, row[1:] != row[:-1]])   # rows are sorted
+    worst = np.minimum.reduceat(sd, start)
+    r = row[start]
+    out[r] = np.where(worst < -parts.touch(a[r], b[r]), worst, np.inf)
     return out
 
 

@@ -179,3 +179,38 @@ def test_assembly_pruning_gives_identical_records(seed):
         for g in range(3):
             moved[np.array(groups) == f"g{g}", :3, 3] += step * rng.uniform(-0.5, 0.5, 3)
         assert _records(on.check(moved)) == _records(off.check(moved))
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_batched_probes_equal_pair_by_pair(seed):
+    """probes_inside_batch (all pairs in one array, one call per shape type or
+    mesh) gives exactly probes_inside pair by pair; check_parts uses it."""
+    from checker.sweep import probes_inside, probes_inside_batch
+
+    rng = np.random.default_rng(seed)
+    ico = trimesh.creation.icosphere(1, 0.3)
+    cube = trimesh.creation.box((0.4, 0.3, 0.5))
+    meshes = [mesh_shape(ico.vertices, ico.faces), mesh_shape(cube.vertices, cube.faces),
+              mesh_shape(cube.vertices, cube.faces[:-2])]          # the last one open
+    kinds = [ShapeType.BOX, ShapeType.SPHERE, ShapeType.CAPSULE, ShapeType.CYLINDER, ShapeType.ELLIPSOID]
+    shapes, poses = [], []
+    for k in range(int(rng.integers(4, 12))):
+        c = int(rng.integers(0, 8))
+        shapes.append(Shape(kinds[c], list(rng.uniform(0.05, 0.5, 3))) if c < 5 else meshes[c - 5])
+        t = pose(*rng.uniform(0, 0.8, 3))
+        q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+        q = q * np.sign(np.diag(r))
+        t[:3, :3] = q * np.sign(np.linalg.det(q))          # a proper rotation
+        poses.append(poses[int(rng.integers(0, k))] if k and rng.random() < 0.2 else t)
+    shapes.append(Shape(ShapeType.PLANE, []))
+    poses.append(pose(z=0.3))
+    ps = PartSet.build([f"p{k}" for k in range(len(shapes))], shapes, tolerance=0.05)
+    placed = ps.place(np.array(poses))
+    a, b = (x.ravel() for x in np.meshgrid(np.arange(len(shapes)), np.arange(len(shapes))))
+    shift = rng.normal(scale=0.2, size=(len(a), 3)) * (rng.random(len(a)) < 0.5)[:, None]
+    for sh in (None, shift):
+        got = probes_inside_batch(ps, placed, a, b, sh)
+        want = [probes_inside(ps, placed, int(x), int(y), None if sh is None else sh[k])
+                for k, (x, y) in enumerate(zip(a, b))]
+        assert [None if np.isinf(g) else g for g in got.tolist()] == want
+        assert any(w is not None for w in want)

@@ -171,3 +171,27 @@ def test_first_contact_separates_clear_from_overlap(seed):
         return any(x.severity.value == "hard" for x in check_parts(ps, ps.place(moved), 0.0))
 
     assert not hard_at(t - 1e-6) and hard_at(t + 1e-3)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_contained_batch_equals_pair_by_pair(seed):
+    """_contained (all moving/candidate pairs in one batch, boxes pruned first)
+    marks exactly the parts the pair-by-pair probe test marks."""
+    from checker.sweep import _contained, probes_inside
+
+    rng = np.random.default_rng(seed)
+    ico = trimesh.creation.icosphere(1, 0.3)
+    kinds = [ShapeType.BOX, ShapeType.SPHERE, ShapeType.CAPSULE, ShapeType.CYLINDER, ShapeType.ELLIPSOID]
+    n = int(rng.integers(4, 14))
+    shapes = [Shape(kinds[c], list(rng.uniform(0.05, 0.5, 3))) if c < 5 else mesh_shape(ico.vertices, ico.faces)
+              for c in rng.integers(0, 6, n)]
+    poses = [pose(*rng.uniform(0, 1.0, 3), rot=_rot(rng)) for _ in range(n)]
+    names = [f"m/p{k}" if k < 3 else f"p{k}" for k in range(n)]
+    ps = PartSet.build(names, shapes, tolerance=0.05)
+    placed = ps.place(np.array(poses))
+    mv, cand = np.arange(3), np.arange(3, n)
+    want = np.zeros(n, bool)
+    for c in cand:
+        want[c] = any(probes_inside(ps, placed, m, c) is not None or probes_inside(ps, placed, c, m) is not None
+                      for m in mv)
+    assert np.array_equal(_contained(ps, placed, mv, cand), want)
