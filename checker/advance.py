@@ -189,6 +189,7 @@ class Advancement:
                 g = np.minimum(g, horizon)
         self._g_pt = g - mu
         self._g_static = {}
+        self._u0 = {}
         self._pi, self._pj = pairs
         self._g_pair = np.asarray(pair_bound, float) - self.clearance - mu
         self._stretch = self.stretch - mu
@@ -209,7 +210,7 @@ class Advancement:
         dq = row_norm(move)
         dc = float(dq.max(initial=0.0))
         if len(move):
-            spread = np.ptp(move, axis=0)
+            spread = move.max(axis=0) - move.min(axis=0)
             dcc = min(2.0 * dc, float(np.sqrt(spread @ spread)))
         else:
             dcc = 0.0
@@ -233,9 +234,11 @@ class Advancement:
                 fro = np.sqrt(np.einsum("kij,kij->k", d_rot, d_rot))
                 dp_m = row_norm(pos[m] - self._pos[m]) + np.where(fro > 0, fro * self._rho[m], 0.0)
                 # each centre in each moving part's own frame
-                u = np.einsum("kji,knj->kni", rot[m], pts[None] - pos[m][:, None])
-                u0 = np.einsum("kji,knj->kni", self._rot[m], self._pts[None] - self._pos[m][:, None])
-                du = u - u0
+                key_m = m.tobytes()
+                u0 = self._u0.get(key_m)
+                if u0 is None:
+                    u0 = self._u0[key_m] = (self._pts[None] - self._pos[m][:, None]) @ self._rot[m]
+                du = (pts[None] - pos[m][:, None]) @ rot[m] - u0   # rows R^T (x - t)
                 rel = np.sqrt((du[..., 0] * du[..., 0] + du[..., 1] * du[..., 1]) + du[..., 2] * du[..., 2])
                 bound = np.minimum(rel, dq[None, :] + dp_m[:, None])
                 if not np.all(bound < self._g_pt[:, m].T):

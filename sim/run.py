@@ -217,6 +217,10 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                             frozenset(p.name for p in built.parts if p.shape == "mesh"),
                             unit=scene.scale, unit_name=scene.units)
     n = len(built.cables)
+    rest_length = np.array([c.length for c in built.cables], float)
+    min_bend_radius = np.array([np.inf if c.min_bend_radius is None else c.min_bend_radius
+                                for c in built.cables], float)
+    has_bend_limit = np.isfinite(min_bend_radius)
     max_strain = np.full(n, -np.inf)
     min_bend = np.full(n, np.inf)
     rest_points: list[np.ndarray] = []
@@ -239,10 +243,17 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
             poses = state.part_poses
             pts = np.concatenate(state.cables) if advance is not None else None
             skip = advance is not None and advance.proven_clear(pts, poses)
+            lengths = np.array([arc_length(c.points)[-1] for c in cables])
+            bend = np.array([np.min(bend_radius(c.points)) for c in cables])
+            strain = lengths / rest_length - 1.0
             if skip:
                 # no pair can be within the clearance: what a full check
-                # returns is the single-cable records and replayed same-body ones
-                cable_records = checker.check_single(cables)
+                # returns is the single-cable records (none unless a bend is
+                # within the clearance of its limit or a cable is taut) and
+                # replayed same-body ones
+                single = bool(np.any((bend - min_bend_radius < config.clearance) & has_bend_limit)
+                              or np.any(0.01 * rest_length - (lengths - rest_length) < 0.0))
+                cable_records = checker.check_single(cables) if single else []
                 part_records = part_checker.check(poses) if static_parts else []
             else:
                 # The horizon costs candidates: only worth it when the last
@@ -267,8 +278,6 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                 cable_records = [r for r in cable_records if r.b in focus_names
                                  and PairType(r.type) in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)]
             records = cable_records + part_records
-            strain = np.array([arc_length(c.points)[-1] / c.rest_length - 1.0 for c in cables])
-            bend = np.array([np.min(bend_radius(c.points)) for c in cables])
             max_strain = np.maximum(max_strain, strain)
             min_bend = np.minimum(min_bend, bend)
             started, closed = tracker.update(state.t, records)
