@@ -30,6 +30,7 @@ or distances.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -265,6 +266,26 @@ class Assemblies:
             member[i, :len(r)] = r
         return Assemblies(tuple(index), member)
 
+    @cached_property
+    def tree(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The assembly tree of :func:`assembly_pairs`, built once: parent (A,)
+        of each assembly (-1: top level), parent (P,) of each part, and every
+        node (assemblies, then parts as A + p) ordered by parent (stably)."""
+        na, npart = len(self.names), len(self.member)
+        depth = (self.member >= 0).sum(axis=1)
+        parent = np.full(na, -2, np.int64)
+        for d in range(self.member.shape[1]):                 # loop over assembly levels
+            m = self.member[:, d]
+            ok = m >= 0
+            parent[m[ok]] = self.member[ok, d - 1] if d else -1
+        pp = np.full(npart, -1, np.int64)
+        if self.member.shape[1]:
+            pp = np.where(depth > 0, self.member[np.arange(npart), np.maximum(depth - 1, 0)], -1)
+        key = np.concatenate([parent, pp]) + 1
+        order = np.flatnonzero(key >= 0)
+        order = order[np.argsort(key[order], kind="stable")]
+        return parent, pp, order
+
 
 def assembly_boxes(asm: Assemblies, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """World AABBs (A, 3) of each assembly from its parts' AABBs (P, 3)."""
@@ -336,22 +357,13 @@ def assembly_pairs(asm: Assemblies, lo: np.ndarray, hi: np.ndarray, a_lo: np.nda
         margin: growth of every box.
     """
     na, npart = len(asm.names), len(lo)
-    depth = (asm.member >= 0).sum(axis=1)
-    parent = np.full(na + npart, -2, np.int64)            # -2: not in the tree; -1: top level
-    for d in range(asm.member.shape[1]):                  # loop over assembly levels
-        m = asm.member[:, d]
-        ok = m >= 0
-        parent[m[ok]] = asm.member[ok, d - 1] if d else -1
-    pp = np.full(npart, -1, np.int64)
-    if asm.member.shape[1]:
-        pp = np.where(depth > 0, asm.member[np.arange(npart), np.maximum(depth - 1, 0)], -1)
-    parent[na:] = np.where(live, pp, -2)
+    a_parent, pp, order = asm.tree
+    parent = np.concatenate([a_parent, np.where(live, pp, -2)])   # -2: not in the tree; -1: top level
     node_lo = np.concatenate([a_lo, lo]) - margin
     node_hi = np.concatenate([a_hi, hi]) + margin
     # children of node key k (0: top level, 1 + a: assembly a) in ch[start[k]:start[k + 1]]
     key = parent + 1
-    ch = np.flatnonzero(key >= 0)
-    ch = ch[np.argsort(key[ch], kind="stable")]
+    ch = order[key[order] >= 0]          # order: by parent, stably; dropping dead parts keeps it so
     start = np.searchsorted(key[ch], np.arange(na + 2))
 
     def expand(nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
