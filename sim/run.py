@@ -309,8 +309,14 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     except KeyboardInterrupt:
         complete = False
     finally:
+        still_open = set(tracker.open_pairs())
         events = tracker.finish()
         if recorder:
+            for ev in events:  # events running at the end get their entry too
+                if (ev.type, ev.a, ev.b) in still_open:
+                    recorder.log_event(ev.t_end, f"{ev.type} {ev.a} / {ev.b} still present at the end: "
+                                       f"{ev.severity}, worst {ev.min_distance / scene.scale:.4g} at "
+                                       f"t = {ev.t_worst:.3f} s", "INFO")
             recorder.close()
             timer.lap("record")
     total = time.perf_counter() - start
