@@ -356,7 +356,7 @@ def assembly_pairs(asm: Assemblies, lo: np.ndarray, hi: np.ndarray, a_lo: np.nda
         live: (P,) bool, parts to pair (others, e.g. planes, are left out).
         margin: growth of every box.
     """
-    na, npart = len(asm.names), len(lo)
+    na = len(asm.names)
     a_parent, pp, order = asm.tree
     parent = np.concatenate([a_parent, np.where(live, pp, -2)])   # -2: not in the tree; -1: top level
     node_lo = np.concatenate([a_lo, lo]) - margin
