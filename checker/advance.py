@@ -132,7 +132,8 @@ class Advancement:
         self._rho = np.asarray(part_radius, float)
         self.clearance = float(clearance)
         self.stretch = float(stretch)
-        self._ok = False
+        self._ok = self._pairs_ok = False
+        self.seg = None
         self.full = 0
         self.skipped = 0
 
@@ -188,66 +189,84 @@ class Advancement:
                 np.minimum.at(g, (rows, np.repeat(part, count)), np.repeat(value, count))
                 g = np.minimum(g, horizon)
         self._g_pt = g - mu
-        self._g_static = {}
-        self._u0 = {}
         self._pi, self._pj = pairs
         self._g_pair = np.asarray(pair_bound, float) - self.clearance - mu
         self._stretch = self.stretch - mu
+        # fused-pass data: per element (inf limit, 1 piece, weight 0 between
+        # cables), per part its pose and each centre in its frame (homogeneous)
+        self._lim_all = np.where(self._valid, self._lim, np.inf)
+        self._pieces_all = np.where(self._valid, self._pieces, 1.0)
+        self._validf = self._valid.astype(float)
+        self._poses = np.array(poses, float)
+        u0 = (self._pts[None] - self._pos[:, None]) @ self._rot                  # R^T (x - t)
+        self._u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
+        self._g_kn = np.ascontiguousarray(self._g_pt.T)
+        self._g2 = np.where(self._g_kn > 0, self._g_kn, 0.0) ** 2
+        self._pairs_ok = bool(np.all(self._g_pair > 0))
         self._ok = (self._g_cable > 0 and bool(np.all(self._g_pt > 0))
                     and bool(np.all(self._g_pair > 0)) and self.stretch > mu)
 
     def stop(self) -> None:
         """A full check ran without gaps: prove nothing until the next :meth:`start`."""
         self.full += 1
-        self._ok = False
+        self._ok = self._pairs_ok = False
 
     def proven_clear(self, pts: np.ndarray, poses: np.ndarray) -> bool:
         """True when no pair can be within the clearance (module docstring);
-        counts the step as skipped then."""
+        counts the step as skipped then. One fused pass of few numpy calls:
+        every part is handled alike (a part that did not move has ``rel``
+        equal to ``dq`` up to rounding, far below the margin). When the
+        element lengths were needed they are left in :attr:`seg`
+        (``row_norm(pts[1:] - pts[:-1])``, else None)."""
+        self.seg = None
         if not self._ok or len(pts) != len(self._pts):
             return False
         move = pts - self._pts
-        dq = row_norm(move)
-        dc = float(dq.max(initial=0.0))
+        dq = np.sqrt(np.einsum("ij,ij->i", move, move))
         if len(move):
             spread = move.max(axis=0) - move.min(axis=0)
-            dcc = min(2.0 * dc, float(np.sqrt(spread @ spread)))
+            dcc = min(2.0 * float(dq.max()), float(np.sqrt(spread @ spread)))
         else:
             dcc = 0.0
         if not dcc < self._g_cable:
             return False
-        seg, pieces = self._elements(pts)
-        if np.any(pieces != self._pieces) or not np.abs(seg - self._seg).sum() < self._stretch:
+        seg = self.seg = row_norm(pts[1:] - pts[:-1])
+        # pieces per element, the arithmetic of checker.cable.densify_batch
+        # (elements joining two cables: limit inf, 1 piece at k0 and now)
+        pieces = np.maximum(np.ceil(seg / self._lim_all * (1.0 - 1e-12)), 1.0)
+        if (pieces != self._pieces_all).any() or not np.abs(seg - self._seg_raw) @ self._validf < self._stretch:
             return False
-        if len(self._pos):
-            rot, pos = poses[:, :3, :3], poses[:, :3, 3]
-            moved = np.any(rot != self._rot, axis=(1, 2)) | np.any(pos != self._pos, axis=1)
-            key = moved.tobytes()
-            g_static = self._g_static.get(key)
-            if g_static is None:
-                g_static = self._g_static[key] = self._g_pt[:, ~moved].min(axis=1, initial=np.inf)
-            if not np.all(dq < g_static):
-                return False
-            if moved.any():
-                m = np.nonzero(moved)[0]
-                d_rot = rot[m] - self._rot[m]
-                fro = np.sqrt(np.einsum("kij,kij->k", d_rot, d_rot))
-                dp_m = row_norm(pos[m] - self._pos[m]) + np.where(fro > 0, fro * self._rho[m], 0.0)
-                # each centre in each moving part's own frame
-                key_m = m.tobytes()
-                u0 = self._u0.get(key_m)
-                if u0 is None:
-                    u0 = self._u0[key_m] = (self._pts[None] - self._pos[m][:, None]) @ self._rot[m]
-                du = (pts[None] - pos[m][:, None]) @ rot[m] - u0   # rows R^T (x - t)
-                rel = np.sqrt((du[..., 0] * du[..., 0] + du[..., 1] * du[..., 1]) + du[..., 2] * du[..., 2])
-                bound = np.minimum(rel, dq[None, :] + dp_m[:, None])
-                if not np.all(bound < self._g_pt[:, m].T):
-                    return False
-                if len(self._pi):
-                    d_rot = rot - self._rot
-                    fro = np.sqrt(np.einsum("kij,kij->k", d_rot, d_rot))
-                    dp = row_norm(pos - self._pos) + np.where(fro > 0, fro * self._rho, 0.0)
-                    if not np.all(dp[self._pi] + dp[self._pj] < self._g_pair):
-                        return False
+        if len(self._pos) and not self._parts_clear(pts, poses, dq):
+            return False
         self.skipped += 1
         return True
+
+    def _parts_clear(self, pts: np.ndarray, poses: np.ndarray, dq: np.ndarray) -> bool:
+        dp = self._part_moves(poses)
+        # every centre as it would be had it moved rigidly with part k
+        w = np.matmul(self._u0h, poses[:, :3, :].transpose(0, 2, 1))
+        w -= pts
+        rel2 = np.einsum("kni,kni->kn", w, w)
+        ok = (rel2 < self._g2) | ((dq + dp[:, None]) < self._g_kn)
+        if not ok.all():
+            return False
+        return not len(self._pi) or bool(np.all(dp[self._pi] + dp[self._pj] < self._g_pair))
+
+    def _part_moves(self, poses: np.ndarray) -> np.ndarray:
+        """dp (P,): how far any point of each part moved since the start."""
+        dpose = poses - self._poses
+        d_rot, d_pos = dpose[:, :3, :3], dpose[:, :3, 3]
+        fro = np.sqrt(np.einsum("kij,kij->k", d_rot, d_rot))
+        dp = np.sqrt(np.einsum("ki,ki->k", d_pos, d_pos))
+        dp += np.multiply(fro, self._rho, out=np.zeros_like(fro), where=fro > 0)   # plane turned: inf
+        return dp
+
+    def part_pairs_clear(self, poses: np.ndarray) -> bool:
+        """True when no moving part pair can be within the clearance (the
+        part-pair condition of the module docstring alone): the part-part
+        check's answer is then its same-body records only, even on a step
+        whose cable checks run in full."""
+        if not self._pairs_ok or len(poses) != len(self._poses):
+            return False
+        dp = self._part_moves(poses)
+        return not len(self._pi) or bool(np.all(dp[self._pi] + dp[self._pj] < self._g_pair))

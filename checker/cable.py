@@ -213,3 +213,67 @@ def bend_radius(points: np.ndarray) -> np.ndarray:
     r = np.where(dot >= 0.0, np.where(bent, r_circ, np.inf), 0.5 * lc)
     out[1:-1] = np.where(nonzero, r, np.inf)
     return out
+
+
+class CableMeasures:
+    """Length and smallest bend radius of every cable in one pass over the
+    concatenated body centres (the run loop's per-step measures).
+
+    The same floating-point operations per element and per point as
+    :func:`arc_length` and :func:`bend_radius` (so the same bits):
+    ``lengths[c] == arc_length(p_c)[-1]`` and ``min_bend[c] ==
+    np.min(bend_radius(p_c))``; ``tests/test_cable.py`` checks it.
+
+    Args:
+        offsets: (C + 1,) start of each cable in the concatenated points;
+            every cable has at least 2 points.
+    """
+
+    def __init__(self, offsets: np.ndarray):
+        offsets = np.asarray(offsets, np.int64)
+        counts = np.diff(offsets)
+        n = int(offsets[-1])
+        self._none = len(counts) == 0
+        if self._none:
+            return
+        self._starts = offsets[:-1]
+        # element e (points e, e+1) of the concatenation -> (cable, index in cable)
+        cable = np.repeat(np.arange(len(counts)), counts)
+        valid = cable[:-1] == cable[1:]
+        self._elem = np.nonzero(valid)[0]
+        self._flat = cable[:-1][valid] * (int(counts.max()) - 1) + (self._elem - offsets[:-1][cable[:-1][valid]])
+        self._pad = np.zeros((len(counts), int(counts.max()) - 1))
+        self._single = len(counts) == 1
+        # interior points (both neighbours on the same cable); the rest stay inf
+        self._interior = (valid[:-1] & valid[1:]) if n >= 3 else np.zeros(0, bool)
+        self._r = np.full(n, np.inf)
+
+    def __call__(self, pts: np.ndarray, seg: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(lengths (C,), smallest bend radius (C,)) of the concatenated
+        points (N, 3); ``seg``: ``row_norm(pts[1:] - pts[:-1])`` when known."""
+        if self._none:
+            return np.zeros(0), np.zeros(0)
+        d = pts[1:] - pts[:-1]
+        if seg is None:
+            seg = row_norm(d)
+        if self._single:
+            lengths = np.cumsum(seg)[-1:]
+        else:
+            pad = self._pad
+            pad.flat[self._flat] = seg[self._elem]
+            lengths = np.cumsum(pad, axis=1)[:, -1]   # trailing zeros add nothing
+        r = self._r
+        if len(self._interior):
+            a, b = d[:-1], d[1:]
+            la, lb = seg[:-1], seg[1:]
+            lc = row_norm(pts[2:] - pts[:-2])
+            area = row_norm(cross(a, b))
+            dot = np.einsum("ij,ij->i", a, b)
+            nonzero = (la > 0) & (lb > 0)
+            sin_phi = np.where(nonzero, area, 0.0) / np.where(nonzero, la * lb, 1.0)
+            bent = nonzero & (sin_phi > 1e-12)
+            r_circ = np.where(bent, lc, 1.0) / np.where(bent, 2.0 * sin_phi, 1.0)
+            rr = np.where(dot >= 0.0, np.where(bent, r_circ, np.inf), 0.5 * lc)
+            r[1:-1] = np.where(nonzero & self._interior, rr, np.inf)
+        bend = r.min(keepdims=True) if self._single else np.minimum.reduceat(r, self._starts)
+        return lengths, bend

@@ -21,7 +21,7 @@ import mujoco
 import numpy as np
 
 from checker.advance import Advancement, part_pair_bounds
-from checker.cable import arc_length, bend_radius
+from checker.cable import CableMeasures
 from checker.events import EventTracker
 from checker.interference import Checker
 from checker.parts import PartChecker
@@ -217,6 +217,7 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                             frozenset(p.name for p in built.parts if p.shape == "mesh"),
                             unit=scene.scale, unit_name=scene.units)
     n = len(built.cables)
+    measures = CableMeasures(np.concatenate([[0], np.cumsum([c.count for c in built.cables])]))
     rest_length = np.array([c.length for c in built.cables], float)
     min_bend_radius = np.array([np.inf if c.min_bend_radius is None else c.min_bend_radius
                                 for c in built.cables], float)
@@ -239,12 +240,10 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                 rest_points = state.cables
                 if recorder:
                     recorder.log_static(state.part_poses)
-            cables = _cable_states(built, state.cables)
             poses = state.part_poses
-            pts = np.concatenate(state.cables) if advance is not None else None
+            pts = np.concatenate(state.cables) if state.cables else np.zeros((0, 3))
             skip = advance is not None and advance.proven_clear(pts, poses)
-            lengths = np.array([arc_length(c.points)[-1] for c in cables])
-            bend = np.array([np.min(bend_radius(c.points)) for c in cables])
+            lengths, bend = measures(pts, advance.seg if skip else None)
             strain = lengths / rest_length - 1.0
             if skip:
                 # no pair can be within the clearance: what a full check
@@ -253,14 +252,19 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                 # replayed same-body ones
                 single = bool(np.any((bend - min_bend_radius < config.clearance) & has_bend_limit)
                               or np.any(0.01 * rest_length - (lengths - rest_length) < 0.0))
-                cable_records = checker.check_single(cables) if single else []
+                cable_records = checker.check_single(_cable_states(built, state.cables)) if single else []
                 part_records = part_checker.check(poses) if static_parts else []
             else:
+                cables = _cable_states(built, state.cables)
                 # The horizon costs candidates: only worth it when the last
                 # full check found no pair below the clearance (else no skip).
                 cable_records = checker.check(cables, poses[checked_parts], exclusions,
                                               None if horizon_next else 0.0)
-                part_records = part_checker.check(poses)
+                # moving part pairs still provably apart: only same-body records
+                if advance is not None and state.step > 0 and advance.part_pairs_clear(poses):
+                    part_records = part_checker.check(poses) if static_parts else []
+                else:
+                    part_records = part_checker.check(poses)
                 if advance is not None:
                     horizon_next = not any(r.type in _PAIRWISE for r in cable_records)
                     if state.step == 0:

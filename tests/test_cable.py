@@ -78,3 +78,23 @@ def test_self_pair_rule_at_pi_r():
     # The paper's spacing 2r: adjacent points excluded, two apart checked.
     k = np.arange(5)
     assert list(self_pair_excluded(0.0, 2 * r * k, r)) == [True, True, False, False, False]
+
+
+def test_cable_measures_match_arc_length_and_bend_radius():
+    """The run loop's fused pass gives the same bits as the per-cable functions."""
+    from checker.cable import CableMeasures, arc_length, bend_radius
+    rng = np.random.default_rng(0)
+    for trial in range(100):
+        counts = rng.integers(2, 30, rng.integers(1, 5))
+        off = np.concatenate([[0], np.cumsum(counts)])
+        pts = np.cumsum(rng.normal(size=(off[-1], 3)), 0)
+        if trial % 3 == 0:   # a zero-length element
+            k = int(rng.integers(1, len(pts)))
+            pts[k] = pts[k - 1]
+        if trial % 5 == 0:   # straight runs
+            pts[:, 1:] = 0.0
+        lengths, bend = CableMeasures(off)(pts)
+        for c in range(len(counts)):
+            p = pts[off[c]:off[c + 1]]
+            assert lengths[c] == arc_length(p)[-1]
+            assert bend[c] == np.min(bend_radius(p))
