@@ -199,10 +199,17 @@ def bend_radius(points: np.ndarray) -> np.ndarray:
         return out
     a = p[1:-1] - p[:-2]
     b = p[2:] - p[1:-1]
-    c = p[2:] - p[:-2]
-    la = row_norm(a)
-    lb = row_norm(b)
-    lc = row_norm(c)
+    r, nonzero = _turn_radius(a, b, row_norm(a), row_norm(b), row_norm(p[2:] - p[:-2]))
+    out[1:-1] = np.where(nonzero, r, np.inf)
+    return out
+
+
+def _turn_radius(a: np.ndarray, b: np.ndarray, la: np.ndarray, lb: np.ndarray,
+                 lc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Bend radius at interior points from their edges a, b (m, 3), the edges'
+    lengths la, lb and the chord length lc (m,) (see `bend_radius`); and
+    where both edges have length. The one formula behind `bend_radius` and
+    `CableMeasures`, so both round alike."""
     area = row_norm(cross(a, b))
     dot = np.einsum("ij,ij->i", a, b)
     nonzero = (la > 0) & (lb > 0)
@@ -210,9 +217,7 @@ def bend_radius(points: np.ndarray) -> np.ndarray:
     # Straight when the turning angle is below rounding noise.
     bent = nonzero & (sin_phi > 1e-12)
     r_circ = np.where(bent, lc, 1.0) / np.where(bent, 2.0 * sin_phi, 1.0)
-    r = np.where(dot >= 0.0, np.where(bent, r_circ, np.inf), 0.5 * lc)
-    out[1:-1] = np.where(nonzero, r, np.inf)
-    return out
+    return np.where(dot >= 0.0, np.where(bent, r_circ, np.inf), 0.5 * lc), nonzero
 
 
 class CableMeasures:
@@ -264,16 +269,7 @@ class CableMeasures:
             lengths = np.cumsum(pad, axis=1)[:, -1]   # trailing zeros add nothing
         r = self._r
         if len(self._interior):
-            a, b = d[:-1], d[1:]
-            la, lb = seg[:-1], seg[1:]
-            lc = row_norm(pts[2:] - pts[:-2])
-            area = row_norm(cross(a, b))
-            dot = np.einsum("ij,ij->i", a, b)
-            nonzero = (la > 0) & (lb > 0)
-            sin_phi = np.where(nonzero, area, 0.0) / np.where(nonzero, la * lb, 1.0)
-            bent = nonzero & (sin_phi > 1e-12)
-            r_circ = np.where(bent, lc, 1.0) / np.where(bent, 2.0 * sin_phi, 1.0)
-            rr = np.where(dot >= 0.0, np.where(bent, r_circ, np.inf), 0.5 * lc)
+            rr, nonzero = _turn_radius(d[:-1], d[1:], seg[:-1], seg[1:], row_norm(pts[2:] - pts[:-2]))
             r[1:-1] = np.where(nonzero & self._interior, rr, np.inf)
         bend = r.min(keepdims=True) if self._single else np.minimum.reduceat(r, self._starts)
         return lengths, bend
