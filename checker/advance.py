@@ -2,7 +2,7 @@
 
 After a full check at step k0 the checker knows, up to a horizon H, how far
 every pair stays from the clearance (:attr:`checker.interference.Checker.gaps`,
-its ``part_candidates`` and :func:`part_pair_bounds`). On a later step k, with
+its ``part_candidates`` and ``cable_candidates``, and :func:`part_pair_bounds`). On a later step k, with
 
 - ``d_i``: the displacement of cable body centre i since k0, ``dq_i = |d_i|``,
 - ``spread``: the diagonal of the bounding box of all ``d_i`` (at least
@@ -18,7 +18,22 @@ its ``part_candidates`` and :func:`part_pair_bounds`). On a later step k, with
 
 no pair can have come within the clearance while
 
-- ``spread < gap_cable`` (self and cable-cable),
+- self and cable-cable, either ``spread < gap_cable`` (the least gap over
+  all cable pairs), or, with the checker's cable candidates, all of
+
+  - ``|d_i - d_j| < g[i, j]`` for every pair of centres (i, j) such that a
+    candidate pair has one place on an element next to i and the other on
+    an element next to j; ``g[i, j]`` the least such candidate's value
+    minus the clearance,
+  - ``box(A, B) < max(H, L[A, B])`` for every pair of blocks A, B (A = B
+    included) of ``BLOCK`` consecutive elements (centres ``b K .. b K +
+    K``), where ``box(A, B)`` is the norm of the componentwise largest
+    ``|d_a - d_b|`` over the two blocks' bounding boxes of displacements, and
+    ``L[A, B]`` the distance at k0 between spheres enclosing the blocks'
+    centres, minus the largest radii of the two blocks and the clearance
+    (capped at ``FAR_HORIZONS * H``),
+  - ``min(spread, 2 max dq) < FAR_HORIZONS * H`` when some block pairs are
+    farther apart than that and left unlisted,
 - ``dq_i < g[i, k]`` for every part k that did not move, and
   ``min(rel[i, k], dq_i + dp[k]) < g[i, k]`` for every part k that moved
   (cable-structure, keep-out),
@@ -34,7 +49,22 @@ convex combination of the same two body centres as at k0, in the world and
 in any part's frame alike (the maps are affine); so its displacement is the
 same combination of the two centres' displacements: at most the larger of
 their ``dq`` (or ``rel``), and the difference of two such displacements lies
-within the bounding box's diagonal. A point of a rigid part moved by at most
+within the bounding box's diagonal. Cable pairs, per place: two places on
+elements (i, i + 1) and (j, j + 1) moved relative to each other by a convex combination of ``d_i - d_j``,
+``d_i - d_(j+1)``, ``d_(i+1) - d_j`` and ``d_(i+1) - d_(j+1)`` (the
+product of the two combinations' weights), so by at most the largest of
+their norms (a common translation cancels); each such centre pair carries
+the gap of every candidate charged to it (each side charged as the part
+candidates are, below). A checked pair of places that was no candidate was
+at least H past the clearance at k0 (or deeper than ``stretch`` inside its
+exclusion window, where it stays), and at least ``L[A, B]`` past it for
+blocks holding its elements (each place is in the convex hull of its
+block's centres, inside the enclosing sphere); its relative displacement
+lies in the difference of the two blocks' boxes of displacements, whose
+largest point is ``box(A, B)`` away from the origin, and below
+``min(spread, 2 max dq)`` for any two places. A block joining two cables
+only holds more centres: its box and sphere only grow. A point of a rigid
+part moved by at most
 ``dp``. Every value checked is a distance between two cable points, or a
 point's distance to a rigid solid, minus fixed radii: a 1-Lipschitz function
 of the places, so it dropped by at most ``|d_a - d_b|`` (cable pairs), and
@@ -68,6 +98,7 @@ This module holds only the bound; it takes arrays and knows no simulator.
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from checker.closest import row_norm
 from checker.partset import PartSet, Placement
@@ -118,10 +149,19 @@ class Advancement:
             origin (inf for planes).
         clearance: the clearance (part pairs' bounds are distances).
         stretch: total change of element lengths allowed (the checker's).
+        radius: (C,) cable radii; with them cable pairs far apart at a full
+            check get the blocks' distance as their gap (else the horizon).
     """
 
+    BLOCK = 4
+    """Elements per block of the far-pair bound."""
+
+    FAR_HORIZONS = 8.0
+    """Block pairs nearer than this many horizons are kept one by one; the
+    others share the whole displacement spread as their bound."""
+
     def __init__(self, offsets: np.ndarray, spacing: np.ndarray, part_radius: np.ndarray,
-                 clearance: float, stretch: float):
+                 clearance: float, stretch: float, radius: np.ndarray | None = None):
         offsets = np.asarray(offsets, np.int64)
         cable_of_pt = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
         self._valid = cable_of_pt[:-1] == cable_of_pt[1:]
@@ -130,6 +170,7 @@ class Advancement:
         self._first = offsets[:-1]
         self._lim = np.asarray(spacing, float)[cable_of_pt[:-1]]
         self._rho = np.asarray(part_radius, float)
+        self._rad = None if radius is None else np.asarray(radius, float)[cable_of_pt]
         self.clearance = float(clearance)
         self.stretch = float(stretch)
         self._ok = self._pairs_ok = False
@@ -146,7 +187,8 @@ class Advancement:
 
     def start(self, pts: np.ndarray, poses: np.ndarray, gap_cable: float, gap_part: np.ndarray,
               pairs: tuple[np.ndarray, np.ndarray], pair_bound: np.ndarray,
-              candidates: tuple[np.ndarray, ...] | None = None, horizon: float = 0.0) -> None:
+              candidates: tuple[np.ndarray, ...] | None = None, horizon: float = 0.0,
+              cable_candidates: tuple[np.ndarray, ...] | None = None) -> None:
         """A full check ran at this state: cable body centres (N, 3) and part
         poses (P, 4, 4); the checker's gaps (cable, per part (P,), inf for
         parts it does not check) and part pairs with their distance bounds.
@@ -155,7 +197,11 @@ class Advancement:
         (cable, arc length, part index in ``poses``, value - clearance) found
         up to ``horizon`` past the clearance; with them the part gaps are
         kept per body centre (the smallest over the elements next to it,
-        ``horizon`` where there is none), else every centre gets the part's gap."""
+        ``horizon`` where there is none), else every centre gets the part's gap.
+        ``cable_candidates``: the checker's self and cable-cable candidates
+        (cable a, s_a, cable b, s_b, value - clearance) found up to
+        ``horizon``; with them cable pairs are bounded per pair of body
+        centres and per pair of blocks, else all by ``gap_cable``."""
         self.full += 1
         self._pts = np.array(pts, float)
         self._rot = np.array(poses[:, :3, :3], float)
@@ -173,22 +219,19 @@ class Advancement:
             g = np.where(np.isfinite(gap_part), float(horizon), np.inf)[None, :].repeat(n, 0)
             cab, s, part, value = candidates
             if len(value):
-                # a candidate at arc length s lies on an element whose centres
-                # bracket s (at k0's arc lengths, as densify_batch computes them);
-                # widened by a rounding margin, more centres only lower the gaps
-                cum = np.concatenate([[0.0], np.cumsum(np.where(self._valid, self._seg_raw, 0.0))])
-                s_c = cum - cum[self._first][self._cable]
-                width = 2.0 * (float(s_c.max(initial=0.0)) + float(np.abs(s).max())) + 1.0
-                key_c = self._cable * width + s_c
-                key = cab * width + s
-                eps = 1e-9 * width * (1 + len(self._offsets))
-                lo = np.maximum(np.searchsorted(key_c, key - eps, "left") - 1, self._offsets[cab])
-                hi = np.minimum(np.searchsorted(key_c, key + eps, "right"), self._offsets[cab + 1] - 1)
+                lo, hi = self._bracket(cab, s)
                 count = hi - lo + 1
                 rows = np.repeat(lo, count) + (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count))
                 np.minimum.at(g, (rows, np.repeat(part, count)), np.repeat(value, count))
                 g = np.minimum(g, horizon)
         self._g_pt = g - mu
+        self._cable_pairs = cable_candidates is not None
+        if self._cable_pairs:
+            self._start_cable_pairs(cable_candidates, float(horizon), mu)
+            cable_ok = (bool(np.all(self._g_cc > 0)) and bool(np.all(self._g_blk > 0))
+                        and self._g_far > 0)
+        else:
+            cable_ok = self._g_cable > 0
         self._pi, self._pj = pairs
         self._g_pair = np.asarray(pair_bound, float) - self.clearance - mu
         self._stretch = self.stretch - mu
@@ -203,8 +246,106 @@ class Advancement:
         self._g_kn = np.ascontiguousarray(self._g_pt.T)
         self._g2 = np.where(self._g_kn > 0, self._g_kn, 0.0) ** 2
         self._pairs_ok = bool(np.all(self._g_pair > 0))
-        self._ok = (self._g_cable > 0 and bool(np.all(self._g_pt > 0))
+        self._ok = (cable_ok and bool(np.all(self._g_pt > 0))
                     and bool(np.all(self._g_pair > 0)) and self.stretch > mu)
+
+    def _bracket(self, cab: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """First and last body centre (n,) of the element(s) holding arc length
+        s on cable cab, at the start's arc lengths (as densify_batch computes
+        them); widened by a rounding margin (more centres only lower the gaps)."""
+        cum = np.concatenate([[0.0], np.cumsum(np.where(self._valid, self._seg_raw, 0.0))])
+        s_c = cum - cum[self._first][self._cable]
+        width = 2.0 * (float(s_c.max(initial=0.0)) + float(np.abs(s).max(initial=0.0))) + 1.0
+        key_c = self._cable * width + s_c
+        key = cab * width + s
+        eps = 1e-9 * width * (1 + len(self._offsets))
+        lo = np.maximum(np.searchsorted(key_c, key - eps, "left") - 1, self._offsets[cab])
+        hi = np.minimum(np.searchsorted(key_c, key + eps, "right"), self._offsets[cab + 1] - 1)
+        return lo, hi
+
+    def _start_cable_pairs(self, cand: tuple[np.ndarray, ...], horizon: float, mu: float) -> None:
+        """Gaps of cable pairs per pair of body centres (candidates) and per
+        pair of blocks (everything else): the module docstring's second list."""
+        n = len(self._pts)
+        ca, sa, cb, sb, value = (np.asarray(x) for x in cand)
+        ii = jj = np.zeros(0, np.int64)
+        gg = np.zeros(0)
+        if len(value) and n:
+            lo_a, hi_a = self._bracket(ca.astype(np.int64), sa)
+            lo_b, hi_b = self._bracket(cb.astype(np.int64), sb)
+            # every centre pair of the two brackets (at most 3 x 3 each)
+            k = np.arange(3)
+            i = lo_a[:, None, None] + k[None, :, None]
+            j = lo_b[:, None, None] + k[None, None, :]
+            ok = (i <= hi_a[:, None, None]) & (j <= hi_b[:, None, None])
+            i, j = np.broadcast_to(i, ok.shape)[ok], np.broadcast_to(j, ok.shape)[ok]
+            v = np.broadcast_to(value[:, None, None], ok.shape)[ok]
+            key = np.minimum(i, j) * n + np.maximum(i, j)
+            o = np.argsort(key, kind="stable")
+            key, v = key[o], v[o]
+            first = np.r_[True, key[1:] != key[:-1]]
+            start = np.nonzero(first)[0]
+            gg = np.minimum.reduceat(v, start) if len(start) else np.zeros(0)
+            key = key[first]
+            ii, jj = key // n, key % n
+            same = ii != jj                      # a centre against itself: no relative motion
+            ii, jj, gg = ii[same], jj[same], gg[same]
+        self._cc_i, self._cc_j = ii, jj
+        self._g_cc = np.minimum(gg, horizon) - mu
+        self._g_cc2 = np.where(self._g_cc > 0, self._g_cc, 0.0) ** 2
+        # blocks of BLOCK elements: centres [b K, b K + K] (overlapping by one)
+        kb = self.BLOCK
+        nb = max(1, -(-(n - 1) // kb)) if n else 0
+        self._blk_start = np.arange(nb) * kb
+        self._blk_last = np.minimum(self._blk_start + kb, max(n - 1, 0))
+        far = self.FAR_HORIZONS * horizon
+        if nb == 0:
+            self._bi = self._bj = np.zeros(0, np.int64)
+            self._g_blk = self._g_blk2 = np.zeros(0)
+            self._g_far = np.inf
+            return
+        lo = np.minimum.reduceat(self._pts, self._blk_start)
+        hi = np.maximum.reduceat(self._pts, self._blk_start)
+        lo = np.minimum(lo, self._pts[self._blk_last])
+        hi = np.maximum(hi, self._pts[self._blk_last])
+        centre = 0.5 * (lo + hi)
+        big = 0.5 * row_norm(hi - lo)               # encloses the block's centres, so its elements
+        if self._rad is not None:
+            rad = np.maximum(np.maximum.reduceat(self._rad, self._blk_start), self._rad[self._blk_last])
+            reach = big + rad
+            rmax = float(reach.max())
+            pairs = cKDTree(centre).query_pairs(2.0 * rmax + self.clearance + far, output_type="ndarray")
+            bi = np.concatenate([np.arange(nb), pairs[:, 0]]).astype(np.int64)
+            bj = np.concatenate([np.arange(nb), pairs[:, 1]]).astype(np.int64)
+            dist = row_norm(centre[bi] - centre[bj]) - reach[bi] - reach[bj] - self.clearance
+            g_blk = np.maximum(horizon, np.minimum(dist, far))
+            # block pairs not listed are farther than ``far`` past the clearance
+            self._g_far = (far if len(pairs) < nb * (nb - 1) // 2 else np.inf) - mu
+        else:
+            bi, bj = np.triu_indices(nb)
+            g_blk = np.full(len(bi), horizon)
+            self._g_far = np.inf
+        self._bi, self._bj = bi, bj
+        self._g_blk = g_blk - mu
+        self._g_blk2 = np.where(self._g_blk > 0, self._g_blk, 0.0) ** 2
+        self._g_min = min(float(self._g_cc.min(initial=np.inf)), float(self._g_blk.min(initial=np.inf)))
+
+    def _cable_pairs_clear(self, move: np.ndarray, dcc: float, diag: float) -> bool:
+        """The cable-pair conditions of the module docstring (second list):
+        ``dcc`` bounds every |d_a - d_b|, ``diag`` (the bounding box's
+        diagonal) also every block pair's box bound."""
+        if not dcc < self._g_far:
+            return False
+        if diag < self._g_min:                     # every relative motion is below every gap
+            return True
+        if len(self._cc_i):
+            d = move[self._cc_i] - move[self._cc_j]
+            if not bool(np.all(np.einsum("ij,ij->i", d, d) < self._g_cc2)):
+                return False
+        lo = np.minimum(np.minimum.reduceat(move, self._blk_start), move[self._blk_last])
+        hi = np.maximum(np.maximum.reduceat(move, self._blk_start), move[self._blk_last])
+        rel = np.maximum(np.abs(hi[self._bi] - lo[self._bj]), np.abs(lo[self._bi] - hi[self._bj]))
+        return bool(np.all(np.einsum("ij,ij->i", rel, rel) < self._g_blk2))
 
     def stop(self) -> None:
         """A full check ran without gaps: prove nothing until the next :meth:`start`."""
@@ -225,10 +366,11 @@ class Advancement:
         dq = np.sqrt(np.einsum("ij,ij->i", move, move))
         if len(move):
             spread = move.max(axis=0) - move.min(axis=0)
-            dcc = min(2.0 * float(dq.max()), float(np.sqrt(spread @ spread)))
+            diag = float(np.sqrt(spread @ spread))
+            dcc = min(2.0 * float(dq.max()), diag)
         else:
-            dcc = 0.0
-        if not dcc < self._g_cable:
+            diag = dcc = 0.0
+        if not (self._cable_pairs_clear(move, dcc, diag) if self._cable_pairs else dcc < self._g_cable):
             return False
         seg = self.seg = row_norm(pts[1:] - pts[:-1])
         # pieces per element, the arithmetic of checker.cable.densify_batch

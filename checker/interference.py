@@ -153,7 +153,7 @@ class _Hits:
 
     def __init__(self):
         self.parts: list[tuple] = []
-        self.near: list[tuple] = []  # (type, a, b, value, s): every candidate, for the gaps
+        self.near: list[tuple] = []  # (type, a, b, value, s, s_b): every candidate, for the gaps
 
     def add(self, ptype: PairType, a, b, value, where, s, s_b=None, record=None):
         """Candidates; ``record`` (n,) bool marks those that may become records
@@ -161,7 +161,7 @@ class _Hits:
         if len(value) == 0:
             return
         code = _TYPE_ORDER.index(ptype)
-        self.near.append((code, a, b, value, s))
+        self.near.append((code, a, b, value, s, s_b))
         if record is not None:
             a, b, value, where, s = a[record], b[record], value[record], where[record], s[record]
             s_b = None if s_b is None else s_b[record]
@@ -177,7 +177,7 @@ class _Hits:
         ``horizon`` (candidates are found up to clearance + horizon)."""
         cc = horizon
         part = np.full(n_parts, horizon)
-        for code, _, b, value, _ in self.near:
+        for code, _, b, value, _, _ in self.near:
             if code in _CABLE_PAIR_CODES:
                 cc = min(cc, float(value.min()) - clearance)
             elif code in _PART_CODES:
@@ -187,9 +187,19 @@ class _Hits:
     def part_candidates(self, clearance: float) -> tuple[np.ndarray, ...]:
         """Every cable-structure and keep-out candidate: (cable, s, part,
         value - clearance), for gaps per cable place (:mod:`checker.advance`)."""
-        rows = [(a, s, b, value - clearance) for code, a, b, value, s in self.near if code in _PART_CODES]
+        rows = [(a, s, b, value - clearance) for code, a, b, value, s, _ in self.near if code in _PART_CODES]
         if not rows:
             return np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64), np.zeros(0)
+        return tuple(np.concatenate(x) for x in zip(*rows))
+
+    def cable_candidates(self, clearance: float) -> tuple[np.ndarray, ...]:
+        """Every self and cable-cable candidate: (cable a, s_a, cable b, s_b,
+        value - clearance), for gaps per pair of cable places (:mod:`checker.advance`)."""
+        rows = [(a, s, b, s_b, value - clearance) for code, a, b, value, s, s_b in self.near
+                if code in _CABLE_PAIR_CODES]
+        if not rows:
+            z = np.zeros(0, np.int64)
+            return z, np.zeros(0), z, np.zeros(0), np.zeros(0)
         return tuple(np.concatenate(x) for x in zip(*rows))
 
     def reduce(self, clearance, cable_names, b_names_by_type) -> list[Interference]:
@@ -823,6 +833,10 @@ class Checker:
             keep-out candidate behind them: (cable, arc length s, part,
             value - clearance) arrays; a point not among them is at least
             ``horizon`` beyond the clearance from that part.
+        cable_candidates: with :attr:`gaps`, every self and cable-cable
+            candidate behind them: (cable a, s_a, cable b, s_b, value -
+            clearance) arrays; a checked pair of places not among them is at
+            least ``horizon`` beyond the clearance (or deep in its exclusion).
     """
 
     def __init__(self, parts: Sequence[PartState], config: CheckConfig = CheckConfig(),
@@ -835,6 +849,7 @@ class Checker:
         self.stretch = float(stretch)
         self.gaps: tuple[float, np.ndarray] | None = None
         self.part_candidates: tuple[np.ndarray, ...] | None = None
+        self.cable_candidates: tuple[np.ndarray, ...] | None = None
         self._excl_key = None
 
     @property
@@ -935,9 +950,10 @@ class Checker:
             _single_cable(cables, config.clearance, hits)
             self.gaps = hits.gaps(config.clearance, horizon, len(parts)) if gaps else None
             self.part_candidates = hits.part_candidates(config.clearance) if gaps else None
+            self.cable_candidates = hits.cable_candidates(config.clearance) if gaps else None
         else:
             self.gaps = (horizon, np.full(len(parts), horizon)) if bounds else None
-            self.part_candidates = None
+            self.part_candidates = self.cable_candidates = None
 
         def names(ptype: PairType) -> list[str]:
             return part_names if ptype in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) else cable_names

@@ -197,7 +197,7 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
         corner = np.maximum(np.abs(rigid.lo), np.abs(rigid.hi))
         rho = np.sqrt(np.einsum("ij,ij->i", corner, corner))     # inf for planes
         rho[checked_parts] = np.maximum(rho[checked_parts], checker.part_radius())
-        advance = Advancement(offsets, config.spacing * radii, rho, config.clearance, stretch)
+        advance = Advancement(offsets, config.spacing * radii, rho, config.clearance, stretch, radii)
         # part pairs that can move relative to each other (PartChecker's moving pairs)
         gname = {g: k for k, g in enumerate(dict.fromkeys(rigid.groups))}
         grp = np.array([gname[g] for g in rigid.groups], np.int64)
@@ -275,7 +275,8 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                         bound = part_pair_bounds(rigid, rigid.place(poses), *moving_pairs)
                         cab, s_c, part, value = checker.part_candidates
                         advance.start(pts, poses, gap_cable, gap_part, moving_pairs, bound,
-                                      (cab, s_c, checked_index[part], value), horizon)
+                                      (cab, s_c, checked_index[part], value), horizon,
+                                      checker.cable_candidates)
                     else:
                         advance.stop()
             if focus_names is not None:

@@ -147,3 +147,141 @@ keys = [ { t = 0.0, pos = [0, 0, 0] },
     assert _strip(fast["events"]) == _strip(full["events"])
     assert _strip(fast["pairs"]) == _strip(full["pairs"])
     assert fast["settings"]["advance"]["proven_clear_steps"] > 0
+
+
+# ---------------------------------------------------------------------------
+# Cable pairs bounded per pair of body centres and per pair of blocks
+
+from checker.interference import Checker                      # noqa: E402
+from checker.records import PairType                           # noqa: E402
+from checker.scene_state import CableState, CheckConfig        # noqa: E402
+
+_R, _CLEAR, _H, _STRETCH = 0.01, 0.005, 0.02, 0.0025
+_NO_PARTS = np.zeros((0, 4, 4))
+
+
+def _cable_adv(cables):
+    """A checker without parts and an Advancement started from its full check."""
+    config = CheckConfig(clearance=_CLEAR)
+    checker = Checker([], config, horizon=_H, stretch=_STRETCH)
+    states = [CableState(f"c{k}", c, _R) for k, c in enumerate(cables)]
+    records = checker.check(states)
+    assert not [r for r in records if r.type in (PairType.SELF, PairType.CABLE_CABLE)]
+    offsets = np.concatenate([[0], np.cumsum([len(c) for c in cables])])
+    radii = np.full(len(cables), _R)
+    adv = Advancement(offsets, config.spacing * radii, np.zeros(0), _CLEAR, _STRETCH, radii)
+    gap_cable, _ = checker.gaps
+    z = np.zeros(0, np.int64)
+    adv.start(np.concatenate(cables), _NO_PARTS, gap_cable, np.zeros(0), (z, z), np.zeros(0),
+              (z, np.zeros(0), z, np.zeros(0)), _H, checker.cable_candidates)
+    old = Advancement(offsets, config.spacing * radii, np.zeros(0), _CLEAR, _STRETCH, radii)
+    old.start(np.concatenate(cables), _NO_PARTS, gap_cable, np.zeros(0), (z, z), np.zeros(0),
+              (z, np.zeros(0), z, np.zeros(0)), _H)
+    return checker, adv, old, offsets
+
+
+def _pairwise(checker, pts, offsets):
+    cables = [CableState(f"c{k}", pts[a:b], _R) for k, (a, b) in enumerate(zip(offsets[:-1], offsets[1:]))]
+    return [r for r in checker.check(cables, horizon=0.0) if r.type in (PairType.SELF, PairType.CABLE_CABLE)]
+
+
+def _line(a, b, n):
+    return np.linspace(a, b, n)
+
+
+def _turn(pts, about, angle, axis=2):
+    """pts rotated by angle about the point ``about`` (axis z, or y with axis=1)."""
+    c, s = np.cos(angle), np.sin(angle)
+    rot = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]]) if axis == 2 else \
+        np.array([[c, 0, s], [0, 1.0, 0], [-s, 0, c]])
+    return (pts - about) @ rot.T + about
+
+
+def test_cable_end_dragged_far_while_no_pair_is_close():
+    """The drawer: one end fixed, the other swung many horizons away; the
+    whole cable's spread fails the old bound, the local one holds."""
+    pts = _line([0.0, 0, 0], [0.6, 0, 0], 41)               # 15 mm elements
+    checker, adv, old, offsets = _cable_adv([pts])
+    moved = _turn(pts, pts[0], 0.1, axis=1)                 # the end moves 60 mm = 3 horizons
+    assert not old.proven_clear(moved, _NO_PARTS)
+    assert adv.proven_clear(moved, _NO_PARTS)
+    assert not _pairwise(checker, moved, offsets)
+    # a kink: centres 20.. swing further, their neighbours move apart by more than H
+    kinked = moved.copy()
+    kinked[20:] = _turn(moved[20:], moved[20], 0.4, axis=1)
+    assert not adv.proven_clear(kinked, _NO_PARTS)
+
+
+def _hairpin(gap, leg=0.4):
+    """A cable folded onto itself: two legs along x ``gap`` apart (centre to
+    centre) joined by a half circle, about 10 mm elements; and the index of
+    the second leg's first centre."""
+    s = np.arange(0.0, leg, 0.01)
+    a = np.stack([s[::-1], np.zeros_like(s), np.zeros_like(s)], axis=1)
+    n = max(3, int(np.ceil(np.pi * gap / 2 / 0.01)) + 1)
+    t = np.linspace(-np.pi / 2, np.pi / 2, n)[1:-1]
+    arc = np.stack([-0.5 * gap * np.cos(t), 0.5 * gap + 0.5 * gap * np.sin(t), np.zeros_like(t)], axis=1)
+    b = np.stack([s, np.full_like(s, gap), np.zeros_like(s)], axis=1)
+    return np.concatenate([a, arc, b]), len(a) + len(arc)
+
+
+def test_cable_folding_onto_itself():
+    """The second leg of a hairpin turns about its first centre onto the
+    first leg: proven clear while the tip is far, never once it is close."""
+    pts, second = _hairpin(0.06)                             # legs 60 mm apart: 35 mm past the clearance
+    checker, adv, old, offsets = _cable_adv([pts])
+    proven = 0
+    angles = np.linspace(0.0, 0.15, 31)
+    for angle in angles:
+        moved = pts.copy()
+        moved[second:] = _turn(pts[second:], pts[second], -angle)
+        clear = adv.proven_clear(moved, _NO_PARTS)
+        proven += clear
+        if clear:                                            # sound: the full check agrees
+            assert not _pairwise(checker, moved, offsets)
+    assert 0 < proven < len(angles)
+    assert _pairwise(checker, moved, offsets)                # the tip reached the first leg
+    assert not adv.proven_clear(moved, _NO_PARTS)
+
+
+def test_two_cables_approaching():
+    a = _line([0.0, 0, 0], [0.5, 0, 0], 51)
+    b = _line([0.0, 0.05, 0], [0.5, 0.05, 0], 51)           # 30 mm past the clearance: no candidate
+    checker, adv, old, offsets = _cable_adv([a, b])
+    pts = np.concatenate([a, b])
+    assert adv.proven_clear(pts + [0.0, 0.3, 0.0], _NO_PARTS)   # both translate together
+    shift = np.zeros_like(pts)
+    shift[51:] = [0.0, 1.0, 0.0]
+    proven = 0
+    for gap in np.linspace(0.0, 0.035, 36):
+        moved = pts - gap * shift
+        if adv.proven_clear(moved, _NO_PARTS):
+            proven += 1
+            assert gap < _H and not _pairwise(checker, moved, offsets)
+    assert proven > 0
+    assert _pairwise(checker, pts - 0.035 * shift, offsets)
+    assert not adv.proven_clear(pts - 0.035 * shift, _NO_PARTS)
+
+
+def test_random_motions_are_sound():
+    """Random rigid motions of a hairpin (its second leg also turning about
+    its first centre) and a cable crossing above it: whenever the bound
+    proves a step clear, the full check finds no pair."""
+    hp, second = _hairpin(0.04)
+    cross = _line([0.2, -0.1, 0.03], [0.2, 0.2, 0.03], 31)   # 30 mm above: 10 mm past the clearance
+    checker, adv, old, offsets = _cable_adv([hp, cross])
+    rng = np.random.default_rng(6)
+    proven = found = 0
+    for _ in range(400):
+        scale = rng.choice([0.005, 0.01, 0.02, 0.04])
+        h = hp.copy()
+        h[second:] = _turn(h[second:], h[second], rng.normal() * scale * 2)
+        h = _turn(h, rng.normal(size=3) * 0.2, rng.normal() * scale) + rng.normal(size=3) * scale
+        c = _turn(cross, rng.normal(size=3) * 0.2, rng.normal() * scale, axis=1) + rng.normal(size=3) * scale
+        moved = np.concatenate([h, c])
+        hit = bool(_pairwise(checker, moved, offsets))
+        found += hit
+        if adv.proven_clear(moved, _NO_PARTS):
+            proven += 1
+            assert not hit
+    assert proven > 0 and found > 0
