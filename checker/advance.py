@@ -213,6 +213,8 @@ class Advancement:
         gap_part = np.asarray(gap_part, float)
         self._g_part = gap_part - mu
         n, n_p = len(self._pts), len(gap_part)
+        cum = np.concatenate([[0.0], np.cumsum(np.where(self._valid, self._seg_raw, 0.0))])
+        self._s_c = cum - cum[self._first][self._cable]           # arc length of each centre
         if candidates is None:
             g = np.broadcast_to(gap_part, (n, n_p)).copy()
         else:
@@ -253,8 +255,7 @@ class Advancement:
         """First and last body centre (n,) of the element(s) holding arc length
         s on cable cab, at the start's arc lengths (as densify_batch computes
         them); widened by a rounding margin (more centres only lower the gaps)."""
-        cum = np.concatenate([[0.0], np.cumsum(np.where(self._valid, self._seg_raw, 0.0))])
-        s_c = cum - cum[self._first][self._cable]
+        s_c = self._s_c
         width = 2.0 * (float(s_c.max(initial=0.0)) + float(np.abs(s).max(initial=0.0))) + 1.0
         key_c = self._cable * width + s_c
         key = cab * width + s
@@ -313,14 +314,19 @@ class Advancement:
         if self._rad is not None:
             rad = np.maximum(np.maximum.reduceat(self._rad, self._blk_start), self._rad[self._blk_last])
             reach = big + rad
-            rmax = float(reach.max())
-            pairs = cKDTree(centre).query_pairs(2.0 * rmax + self.clearance + far, output_type="ndarray")
-            bi = np.concatenate([np.arange(nb), pairs[:, 0]]).astype(np.int64)
-            bj = np.concatenate([np.arange(nb), pairs[:, 1]]).astype(np.int64)
+            if nb <= 64:                                # few blocks: every pair
+                bi, bj = np.triu_indices(nb)
+                listed = True
+            else:
+                rmax = float(reach.max())
+                pairs = cKDTree(centre).query_pairs(2.0 * rmax + self.clearance + far, output_type="ndarray")
+                bi = np.concatenate([np.arange(nb), pairs[:, 0]]).astype(np.int64)
+                bj = np.concatenate([np.arange(nb), pairs[:, 1]]).astype(np.int64)
+                listed = len(pairs) == nb * (nb - 1) // 2
             dist = row_norm(centre[bi] - centre[bj]) - reach[bi] - reach[bj] - self.clearance
             g_blk = np.maximum(horizon, np.minimum(dist, far))
             # block pairs not listed are farther than ``far`` past the clearance
-            self._g_far = (far if len(pairs) < nb * (nb - 1) // 2 else np.inf) - mu
+            self._g_far = (np.inf if listed else far) - mu
         else:
             bi, bj = np.triu_indices(nb)
             g_blk = np.full(len(bi), horizon)
