@@ -24,6 +24,14 @@ import numpy as np
 
 from checker.closest import cross, row_norm
 
+TAUT_STRAIN = 0.01
+"""Stretch beyond which a cable is taut (SPEC: 1 %)."""
+
+
+def taut_margin(length, rest_length):
+    """The 1 % stretch allowance minus the stretch: negative when taut (same units)."""
+    return TAUT_STRAIN * rest_length - (length - rest_length)
+
 
 def arc_length(points: np.ndarray) -> np.ndarray:
     """Cumulative arc length (n,) of a polyline (n, 3), starting at 0."""

@@ -56,7 +56,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
-from checker.cable import arc_length, bend_radius, densify_batch, self_pair_excluded
+from checker.cable import arc_length, bend_radius, densify_batch, self_pair_excluded, taut_margin
 from checker.closest import row_norm, segment_segment
 from checker.records import Interference, PairType, severity_of
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
@@ -789,7 +789,7 @@ def _single_cable(cables: Sequence[CableState], clearance: float, hits: _Hits) -
                          cab.points[k][None], np.array([s[k]]))
         if cab.rest_length is not None:
             s = arc_length(cab.points) if s is None else s
-            value = 0.01 * cab.rest_length - (s[-1] - cab.rest_length)
+            value = taut_margin(s[-1], cab.rest_length)
             # Taut is a stretch beyond 1 %, hard only: a length clearance has no
             # meaning for a stretch (a 0.3 m cable's whole 1 % is 3 mm).
             if value >= 0.0:

@@ -21,7 +21,7 @@ import mujoco
 import numpy as np
 
 from checker.advance import Advancement, part_pair_bounds
-from checker.cable import CableMeasures
+from checker.cable import TAUT_STRAIN, CableMeasures, taut_margin
 from checker.events import EventTracker
 from checker.interference import Checker
 from checker.parts import PartChecker
@@ -36,9 +36,6 @@ from sim.scene import Scene
 from sim.sweep import DEFAULT_PRECISION_M, part_set, part_shapes, selection
 
 _PAIRWISE = (PairType.SELF, PairType.CABLE_CABLE, PairType.CABLE_STRUCTURE, PairType.KEEPOUT)
-
-TAUT_STRAIN = 0.01
-"""Stretch beyond which a cable is reported taut (SPEC: 1 %)."""
 
 RECORD_RATE = 100.0
 """Recorded frames per simulated second (checks still run at every checked step)."""
@@ -180,11 +177,13 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     # Rigid parts against each other: prepared once, same-body pairs checked once.
     rigid = part_set(built, tolerance=DEFAULT_PRECISION_M, shapes=shapes)
     focus = selection(rigid, options.only, "--only") if options.only is not None else None
-    part_checker = PartChecker(rigid, scene.check.clearance, focus, part_pairs_skipped(built))
+    skipped_pairs = part_pairs_skipped(built)
+    part_checker = PartChecker(rigid, scene.check.clearance, focus, skipped_pairs)
     exclusions = attachment_exclusions(built)
     # Parts prepared once; each step passes their poses (identity until then).
     # With --only, cables are checked against that assembly's parts alone.
     checked_parts = np.ones(len(built.parts), bool) if focus is None else np.asarray(focus, bool)
+    offsets = np.concatenate([[0], np.cumsum([c.count for c in built.cables])])  # cable starts in pts
     radii = np.array([c.radius for c in built.cables], float)
     horizon = ADVANCE_HORIZON_RADII * float(radii.max()) if (options.advance and len(radii)) else 0.0
     stretch = ADVANCE_STRETCH_RADII * float(radii.min()) if len(radii) else 0.0
@@ -193,7 +192,6 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                       horizon=horizon, stretch=stretch)
     advance = None
     if checker.bounds_gaps:
-        offsets = np.concatenate([[0], np.cumsum([c.count for c in built.cables])])
         corner = np.maximum(np.abs(rigid.lo), np.abs(rigid.hi))
         rho = np.sqrt(np.einsum("ij,ij->i", corner, corner))     # inf for planes
         rho[checked_parts] = np.maximum(rho[checked_parts], checker.part_radius())
@@ -202,7 +200,7 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
         gname = {g: k for k, g in enumerate(dict.fromkeys(rigid.groups))}
         grp = np.array([gname[g] for g in rigid.groups], np.int64)
         pi, pj = np.triu_indices(len(grp), 1)
-        keep = (grp[pi] != grp[pj]) & ~part_pairs_skipped(built)[pi, pj]
+        keep = (grp[pi] != grp[pj]) & ~skipped_pairs[pi, pj]
         moving_pairs = (pi[keep], pj[keep])
         part_index = {name: k for k, name in enumerate(rigid.names)}
         gap_part = np.full(len(built.parts), np.inf)
@@ -217,7 +215,7 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                             frozenset(p.name for p in built.parts if p.shape == "mesh"),
                             unit=scene.scale, unit_name=scene.units)
     n = len(built.cables)
-    measures = CableMeasures(np.concatenate([[0], np.cumsum([c.count for c in built.cables])]))
+    measures = CableMeasures(offsets)
     rest_length = np.array([c.length for c in built.cables], float)
     min_bend_radius = np.array([np.inf if c.min_bend_radius is None else c.min_bend_radius
                                 for c in built.cables], float)
@@ -251,7 +249,7 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                 # within the clearance of its limit or a cable is taut) and
                 # replayed same-body ones
                 single = bool(np.any((bend - min_bend_radius < config.clearance) & has_bend_limit)
-                              or np.any(0.01 * rest_length - (lengths - rest_length) < 0.0))
+                              or np.any(taut_margin(lengths, rest_length) < 0.0))
                 cable_records = checker.check_single(_cable_states(built, state.cables)) if single else []
                 part_records = part_checker.check(poses) if static_parts else []
             else:
