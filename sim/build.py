@@ -41,7 +41,7 @@ from enum import IntFlag
 import mujoco
 import numpy as np
 
-from sim.meshfile import node_mesh
+from sim.meshfile import mesh_nodes
 from sim.route import initial_shape, polyline_length
 from sim.scene import CableDef, Scene, SceneError, euler_matrix
 
@@ -453,14 +453,32 @@ def build(scene: Scene, detect: bool = True) -> Built:
     origin = scene_origin(scene)
     frames = _Frames(scene, origin)
     plans = [_plan_cable(c, frames) for c in scene.cables]
-    sim = _compile(scene, plans, detect=False, origin=origin)
-    det = _compile(scene, plans, detect=True, origin=origin) if detect else None
+    meshes = _part_meshes(scene)
+    sim = _compile(scene, plans, meshes, detect=False, origin=origin)
+    det = _compile(scene, plans, meshes, detect=True, origin=origin) if detect else None
     if det is not None and (det.nq != sim.nq or det.ngeom != sim.ngeom):
         raise RuntimeError("detection and simulation models differ in structure")
     return _finish(scene, sim, det, plans, origin)
 
 
-def _compile(scene: Scene, plans: list[_CablePlan], detect: bool, origin: np.ndarray) -> mujoco.MjModel:
+def _part_meshes(scene: Scene) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Mesh part name -> (vertices in metres, faces), reading each file once
+    (a glTF file holds the meshes of several parts; both models use them)."""
+    files: dict = {}
+    out = {}
+    for part in scene.parts:
+        if part.shape != "mesh":
+            continue
+        if part.file not in files:
+            files[part.file] = {m.path: m for m in mesh_nodes(part.file)}
+        nodes = files[part.file]
+        mesh = nodes[part.node] if part.node is not None else next(iter(nodes.values()))
+        out[part.name] = (np.asarray(mesh.vertices, float) * part.mesh_scale, np.asarray(mesh.faces, int))
+    return out
+
+
+def _compile(scene: Scene, plans: list[_CablePlan], meshes: dict[str, tuple[np.ndarray, np.ndarray]],
+             detect: bool, origin: np.ndarray) -> mujoco.MjModel:
     spec = _base_spec(scene)
     _set_options(spec, scene)
     # Model coordinates are the scene's world less `origin` (see scene_origin).
@@ -498,10 +516,9 @@ def _compile(scene: Scene, plans: list[_CablePlan], detect: bool, origin: np.nda
                       contype=contype, conaffinity=conaff, margin=margin,
                       rgba=[0.9, 0.5, 0.1, 0.3] if part.keepout else [0.6, 0.6, 0.65, 1.0])
         if part.shape == "mesh":
-            mesh = node_mesh(part.file, part.node)
-            verts = np.asarray(mesh.vertices, float) * part.mesh_scale
+            verts, faces = meshes[part.name]
             spec.add_mesh(name=f"mesh:{part.name}", uservert=verts.ravel().tolist(),
-                          userface=np.asarray(mesh.faces, int).ravel().tolist())
+                          userface=faces.ravel().tolist())
             parent.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"mesh:{part.name}", **common)
         else:
             size = list(part.size) + [0.0] * (3 - len(part.size))

@@ -86,11 +86,3 @@ def mesh_nodes(path: Path) -> list[MeshNode]:
         dup = sorted({n for n in names if names.count(n) > 1})
         raise MeshFileError(f"{path.name}: several nodes share the path {dup[0]!r}; name them apart")
     return out
-
-
-def node_mesh(path: Path, node: str | None) -> MeshNode:
-    """The mesh of one node (``node`` None: the whole single-mesh file)."""
-    for m in mesh_nodes(path):
-        if node is None or m.path == node:
-            return m
-    raise MeshFileError(f"{Path(path).name} has no mesh node {node!r}")
