@@ -12,9 +12,12 @@ its ``part_candidates`` and ``cable_candidates``, and :func:`part_pair_bounds`).
 - ``dp[k]``: a bound on how far any point of part k moved since k0, its
   translation plus ``||R - R0||_F`` times the part's bounding radius about
   its frame's origin (a plane that rotated: unbounded),
-- ``g[i, k]``: centre i's gap to part k: the smallest value minus the
-  clearance of part k's candidates on the elements next to centre i, H where
-  there is none (capped at H),
+- ``g[i, k]``: centre i's gap to part k: the smallest, over the elements
+  next to centre i, of the value minus the clearance of part k's candidates
+  on the element, or where there is none the larger of H and the element's
+  floor ``F[e, k]``: at k0, the distance in part k's frame between the
+  element's bounding box and the part's box, minus the cable radius and the
+  clearance (a lower bound on every value of the element against part k),
 
 no pair can have come within the clearance while
 
@@ -75,7 +78,9 @@ distance is the distance). At k0 every candidate value below ``clearance +
 H`` was evaluated, and each part candidate is charged to every centre of the
 element holding its arc length (with a rounding margin: more centres only
 lower the gaps); a point with no candidate for part k was at least H past
-the clearance from it. Exclusions are windows in arc length (self: ``|s_a -
+the clearance from it, and at least ``F[e, k]`` past it, since the element
+lies in its box and the part in its own (a point outside the part's box is
+outside the part, at a distance no less than the boxes' separation). Exclusions are windows in arc length (self: ``|s_a -
 s_b| < pi r + clearance``; attachments: fixed windows), and an arc length
 moved by at most the total change of element lengths; the gaps at k0
 therefore include candidates up to ``stretch`` inside every window, so none
@@ -151,6 +156,10 @@ class Advancement:
         stretch: total change of element lengths allowed (the checker's).
         radius: (C,) cable radii; with them cable pairs far apart at a full
             check get the blocks' distance as their gap (else the horizon).
+        part_box: ((P, 3), (P, 3)) each part's bounds in its own frame
+            (infinite for a plane: lo -inf, hi (inf, inf, 0)); with them and
+            ``radius``, centres far from a part get the boxes' distance as
+            their gap to it (else the horizon).
     """
 
     BLOCK = 4
@@ -161,7 +170,8 @@ class Advancement:
     others share the whole displacement spread as their bound."""
 
     def __init__(self, offsets: np.ndarray, spacing: np.ndarray, part_radius: np.ndarray,
-                 clearance: float, stretch: float, radius: np.ndarray | None = None):
+                 clearance: float, stretch: float, radius: np.ndarray | None = None,
+                 part_box: tuple[np.ndarray, np.ndarray] | None = None):
         offsets = np.asarray(offsets, np.int64)
         cable_of_pt = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
         self._valid = cable_of_pt[:-1] == cable_of_pt[1:]
@@ -171,6 +181,8 @@ class Advancement:
         self._lim = np.asarray(spacing, float)[cable_of_pt[:-1]]
         self._rho = np.asarray(part_radius, float)
         self._rad = None if radius is None else np.asarray(radius, float)[cable_of_pt]
+        self._box = None if part_box is None or radius is None else \
+            (np.asarray(part_box[0], float)[:, None, :], np.asarray(part_box[1], float)[:, None, :])
         self.clearance = float(clearance)
         self.stretch = float(stretch)
         self._ok = self._pairs_ok = False
@@ -215,17 +227,20 @@ class Advancement:
         n, n_p = len(self._pts), len(gap_part)
         cum = np.concatenate([[0.0], np.cumsum(np.where(self._valid, self._seg_raw, 0.0))])
         self._s_c = cum - cum[self._first][self._cable]           # arc length of each centre
+        u0 = (self._pts[None] - self._pos[:, None]) @ self._rot                  # R^T (x - t)
         if candidates is None:
             g = np.broadcast_to(gap_part, (n, n_p)).copy()
         else:
-            g = np.where(np.isfinite(gap_part), float(horizon), np.inf)[None, :].repeat(n, 0)
+            base = np.full((n, n_p), float(horizon))
+            if self._box is not None and n > 1:
+                base = np.maximum(base, self._floor(u0).T)
+            g = np.where(np.isfinite(gap_part)[None, :], base, np.inf)
             cab, s, part, value = candidates
             if len(value):
                 lo, hi = self._bracket(cab, s)
                 count = hi - lo + 1
                 rows = np.repeat(lo, count) + (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count))
                 np.minimum.at(g, (rows, np.repeat(part, count)), np.repeat(value, count))
-                g = np.minimum(g, horizon)
         self._g_pt = g - mu
         self._cable_pairs = cable_candidates is not None
         if self._cable_pairs:
@@ -243,13 +258,26 @@ class Advancement:
         self._pieces_all = np.where(self._valid, self._pieces, 1.0)
         self._validf = self._valid.astype(float)
         self._poses = np.array(poses, float)
-        u0 = (self._pts[None] - self._pos[:, None]) @ self._rot                  # R^T (x - t)
         self._u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
         self._g_kn = np.ascontiguousarray(self._g_pt.T)
         self._g2 = np.where(self._g_kn > 0, self._g_kn, 0.0) ** 2
         self._pairs_ok = bool(np.all(self._g_pair > 0))
         self._ok = (cable_ok and bool(np.all(self._g_pt > 0))
                     and bool(np.all(self._g_pair > 0)) and self.stretch > mu)
+
+    def _floor(self, u0: np.ndarray) -> np.ndarray:
+        """(P, N): per centre and part, the least over the elements next to
+        the centre of ``F[e, k]`` (module docstring); u0 (P, N, 3) the
+        centres in the parts' frames."""
+        a, b = u0[:, :-1], u0[:, 1:]
+        box_lo, box_hi = self._box
+        sep = np.maximum(np.maximum(np.minimum(a, b) - box_hi, box_lo - np.maximum(a, b)), 0.0)
+        f = np.sqrt(np.einsum("kei,kei->ke", sep, sep)) - self._rad[:-1] - self.clearance
+        f = np.where(self._valid, f, np.inf)
+        out = np.full(u0.shape[:2], np.inf)
+        out[:, :-1] = f
+        out[:, 1:] = np.minimum(out[:, 1:], f)
+        return out
 
     def _bracket(self, cab: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """First and last body centre (n,) of the element(s) holding arc length

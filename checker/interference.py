@@ -857,12 +857,18 @@ class Checker:
         """True when :meth:`check` leaves :attr:`gaps` (points, not face-plane, horizon > 0)."""
         return self.config.method == "points" and not self.config.face_plane and self.horizon > 0.0
 
+    def part_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """((K, 3), (K, 3)): each part's axis-aligned bounds in its own frame
+        (a plane: lo -inf, hi (inf, inf, 0))."""
+        if self._tab is None:
+            return np.zeros((0, 3)), np.zeros((0, 3))
+        return self._tab.lo.copy(), self._tab.hi.copy()
+
     def part_radius(self) -> np.ndarray:
         """(K,) largest distance of any point of each part from its frame's
         origin (inf for planes): a rotation by R moves it at most ||R - R0|| times this."""
-        if self._tab is None:
-            return np.zeros(0)
-        corner = np.maximum(np.abs(self._tab.lo), np.abs(self._tab.hi))
+        lo, hi = self.part_bounds()
+        corner = np.maximum(np.abs(lo), np.abs(hi))
         return np.sqrt(np.einsum("ij,ij->i", corner, corner))
 
     def check_single(self, cables: Sequence[CableState]) -> list[Interference]:

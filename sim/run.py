@@ -195,7 +195,11 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
         corner = np.maximum(np.abs(rigid.lo), np.abs(rigid.hi))
         rho = np.sqrt(np.einsum("ij,ij->i", corner, corner))     # inf for planes
         rho[checked_parts] = np.maximum(rho[checked_parts], checker.part_radius())
-        advance = Advancement(offsets, config.spacing * radii, rho, config.clearance, stretch, radii)
+        box_lo = np.full((len(built.parts), 3), -np.inf)
+        box_hi = np.full((len(built.parts), 3), np.inf)
+        box_lo[checked_parts], box_hi[checked_parts] = checker.part_bounds()
+        advance = Advancement(offsets, config.spacing * radii, rho, config.clearance, stretch, radii,
+                              (box_lo, box_hi))
         # part pairs that can move relative to each other (PartChecker's moving pairs)
         gname = {g: k for k, g in enumerate(dict.fromkeys(rigid.groups))}
         grp = np.array([gname[g] for g in rigid.groups], np.int64)

@@ -105,6 +105,37 @@ def test_gaps_per_centre():
     assert not a.proven_clear(far, poses)
 
 
+def test_part_gap_floor_from_boxes():
+    """A centre with no candidate for a part gets the larger of the horizon
+    and its elements' distance from the part's box (minus radius and
+    clearance) as its gap: far centres may move further than the horizon,
+    and never past the box."""
+    pts = np.array([[0.0, 10, 0], [1, 10, 0], [2, 10, 0], [3, 10, 0]])   # 10 above the unit box's centre
+    poses = np.tile(np.eye(4), (1, 1, 1))
+    box = (np.array([[-0.5, -0.5, -0.5]]), np.array([[0.5, 0.5, 0.5]]))
+    none = (np.zeros(0, int), np.zeros(0, int))
+    kw = dict(candidates=(np.zeros(0, int), np.zeros(0), np.zeros(0, int), np.zeros(0)), horizon=1.0)
+    a = Advancement(np.array([0, 4]), np.array([5.0]), np.array([1.0]), 0.5, 1.0,
+                    np.array([0.1]), box)
+    a.start(pts, poses, 100.0, np.array([1.0]), none, np.zeros(0), **kw)
+    # centres 0 and 1: elements' boxes 9.5 from the part's box; gap 9.5 - 0.1 - 0.5 = 8.9
+    assert a.proven_clear(pts - [0.0, 8.8, 0.0], poses)
+    assert not a.proven_clear(pts - [0.0, 9.0, 0.0], poses)
+    # without the boxes every centre has the horizon (1)
+    b = Advancement(np.array([0, 4]), np.array([5.0]), np.array([1.0]), 0.5, 1.0, np.array([0.1]))
+    b.start(pts, poses, 100.0, np.array([1.0]), none, np.zeros(0), **kw)
+    assert b.proven_clear(pts - [0.0, 0.9, 0.0], poses)
+    assert not b.proven_clear(pts - [0.0, 1.1, 0.0], poses)
+    # a plane (half-space z < 0 in its frame) 10 below: gap 10 - 0.6
+    plane = (np.full((1, 3), -np.inf), np.array([[np.inf, np.inf, 0.0]]))
+    flat = pts[:, [0, 2, 1]]                                     # z = 10
+    c = Advancement(np.array([0, 4]), np.array([5.0]), np.array([np.inf]), 0.5, 1.0,
+                    np.array([0.1]), plane)
+    c.start(flat, poses, 100.0, np.array([1.0]), none, np.zeros(0), **kw)
+    assert c.proven_clear(flat - [0.0, 0.0, 9.3], poses)
+    assert not c.proven_clear(flat - [0.0, 0.0, 9.5], poses)
+
+
 def test_bound_stretch_and_gaps_at_or_below_zero():
     a, pts, poses = _adv()
     stretched = pts.copy()
