@@ -186,7 +186,6 @@ class Advancement:
         self.clearance = float(clearance)
         self.stretch = float(stretch)
         self._ok = self._pairs_ok = False
-        self.seg = None
         self.full = 0
         self.skipped = 0
 
@@ -364,22 +363,26 @@ class Advancement:
         self._g_blk2 = np.where(self._g_blk > 0, self._g_blk, 0.0) ** 2
         self._g_min = min(float(self._g_cc.min(initial=np.inf)), float(self._g_blk.min(initial=np.inf)))
 
-    def _cable_pairs_clear(self, move: np.ndarray, dcc: float, diag: float) -> bool:
-        """The cable-pair conditions of the module docstring (second list):
-        ``dcc`` bounds every |d_a - d_b|, ``diag`` (the bounding box's
-        diagonal) also every block pair's box bound."""
-        if not dcc < self._g_far:
-            return False
-        if diag < self._g_min:                     # every relative motion is below every gap
-            return True
+    def _cable_pairs_clear(self, move: np.ndarray, dcc: np.ndarray, diag: np.ndarray) -> np.ndarray:
+        """The cable-pair conditions of the module docstring (second list),
+        per state (S,) of ``move`` (S, N, 3): ``dcc`` (S,) bounds every
+        |d_a - d_b|, ``diag`` (S,) (the bounding box's diagonal) also every
+        block pair's box bound."""
+        ok = dcc < self._g_far
+        easy = diag < self._g_min                  # every relative motion is below every gap
+        if not (ok & ~easy).any():
+            return ok
+        pair_ok = np.ones(len(move), bool)
         if len(self._cc_i):
-            d = move[self._cc_i] - move[self._cc_j]
-            if not bool(np.all(np.einsum("ij,ij->i", d, d) < self._g_cc2)):
-                return False
-        lo = np.minimum(np.minimum.reduceat(move, self._blk_start), move[self._blk_last])
-        hi = np.maximum(np.maximum.reduceat(move, self._blk_start), move[self._blk_last])
-        rel = np.maximum(np.abs(hi[self._bi] - lo[self._bj]), np.abs(lo[self._bi] - hi[self._bj]))
-        return bool(np.all(np.einsum("ij,ij->i", rel, rel) < self._g_blk2))
+            d = move[:, self._cc_i] - move[:, self._cc_j]
+            pair_ok &= (np.einsum("smi,smi->sm", d, d) < self._g_cc2).all(axis=1)
+        if len(self._bi):
+            last = move[:, self._blk_last]
+            lo = np.minimum(np.minimum.reduceat(move, self._blk_start, axis=1), last)
+            hi = np.maximum(np.maximum.reduceat(move, self._blk_start, axis=1), last)
+            rel = np.maximum(np.abs(hi[:, self._bi] - lo[:, self._bj]), np.abs(lo[:, self._bi] - hi[:, self._bj]))
+            pair_ok &= (np.einsum("spi,spi->sp", rel, rel) < self._g_blk2).all(axis=1)
+        return ok & (easy | pair_ok)
 
     def stop(self) -> None:
         """A full check ran without gaps: prove nothing until the next :meth:`start`."""
@@ -387,53 +390,66 @@ class Advancement:
         self._ok = self._pairs_ok = False
 
     def proven_clear(self, pts: np.ndarray, poses: np.ndarray) -> bool:
-        """True when no pair can be within the clearance (module docstring);
-        counts the step as skipped then. One fused pass of few numpy calls:
-        every part is handled alike (a part that did not move has ``rel``
-        equal to ``dq`` up to rounding, far below the margin). When the
-        element lengths were needed they are left in :attr:`seg`
-        (``row_norm(pts[1:] - pts[:-1])``, else None)."""
-        self.seg = None
-        if not self._ok or len(pts) != len(self._pts):
-            return False
-        move = pts - self._pts
-        dq = np.sqrt(np.einsum("ij,ij->i", move, move))
-        if len(move):
-            spread = move.max(axis=0) - move.min(axis=0)
-            diag = float(np.sqrt(spread @ spread))
-            dcc = min(2.0 * float(dq.max()), diag)
-        else:
-            diag = dcc = 0.0
-        if not (self._cable_pairs_clear(move, dcc, diag) if self._cable_pairs else dcc < self._g_cable):
-            return False
-        seg = self.seg = row_norm(pts[1:] - pts[:-1])
-        # pieces per element, the arithmetic of checker.cable.densify_batch
-        # (elements joining two cables: limit inf, 1 piece at k0 and now)
-        pieces = np.maximum(np.ceil(seg / self._lim_all * (1.0 - 1e-12)), 1.0)
-        if (pieces != self._pieces_all).any() or not np.abs(seg - self._seg_raw) @ self._validf < self._stretch:
-            return False
-        if len(self._pos) and not self._parts_clear(pts, poses, dq):
-            return False
-        self.skipped += 1
-        return True
+        """True when no pair can be within the clearance at one state (body
+        centres (N, 3), part poses (P, 4, 4)); counts it as skipped then."""
+        return self.clear_run(np.asarray(pts)[None], np.asarray(poses)[None]) == 1
 
-    def _parts_clear(self, pts: np.ndarray, poses: np.ndarray, dq: np.ndarray) -> bool:
-        dp = self._part_moves(poses)
+    def clear_run(self, pts: np.ndarray, poses: np.ndarray) -> int:
+        """How many leading states of a run of consecutive states (body
+        centres (S, N, 3), part poses (S, P, 4, 4)) are proven clear (module
+        docstring); counts them as skipped.
+
+        Vectorised over the states: numpy's cost per call, not the arrays'
+        size, dominates for a cable's few dozen centres, so a batch of
+        states costs about what one does. Every part is handled alike (a
+        part that did not move has ``rel`` equal to ``dq`` up to rounding,
+        far below the margin). After each condition only the states up to
+        the first failure are carried on."""
+        if not self._ok or len(pts) == 0 or pts.shape[1] != len(self._pts):
+            return 0
+        move = pts - self._pts
+        dq = np.sqrt(np.einsum("sni,sni->sn", move, move))
+        if move.shape[1]:
+            spread = move.max(axis=1) - move.min(axis=1)
+            diag = np.sqrt(np.einsum("si,si->s", spread, spread))
+            dcc = np.minimum(2.0 * dq.max(axis=1), diag)
+        else:
+            diag = dcc = np.zeros(len(move))
+        ok = self._cable_pairs_clear(move, dcc, diag) if self._cable_pairs else dcc < self._g_cable
+        n = _leading(ok)
+        if n:
+            pts = pts[:n]
+            seg = row_norm(pts[:, 1:] - pts[:, :-1])
+            # pieces per element, the arithmetic of checker.cable.densify_batch
+            # (elements joining two cables: limit inf, 1 piece at k0 and now)
+            pieces = np.maximum(np.ceil(seg / self._lim_all * (1.0 - 1e-12)), 1.0)
+            ok = (pieces == self._pieces_all).all(axis=1) & \
+                (np.abs(seg - self._seg_raw) @ self._validf < self._stretch)
+            n = _leading(ok)
+        if n and len(self._pos):
+            n = _leading(self._parts_clear(pts[:n], poses[:n], dq[:n]))
+        self.skipped += n
+        return n
+
+    def _parts_clear(self, pts: np.ndarray, poses: np.ndarray, dq: np.ndarray) -> np.ndarray:
+        """Cable-structure, keep-out and part-pair conditions per state (S,)."""
+        dp = self._part_moves(poses)                                       # (S, P)
         # every centre as it would be had it moved rigidly with part k
-        w = np.matmul(self._u0h, poses[:, :3, :].transpose(0, 2, 1))
-        w -= pts
-        rel2 = np.einsum("kni,kni->kn", w, w)
-        ok = (rel2 < self._g2) | ((dq + dp[:, None]) < self._g_kn)
-        if not ok.all():
-            return False
-        return not len(self._pi) or bool(np.all(dp[self._pi] + dp[self._pj] < self._g_pair))
+        w = np.matmul(self._u0h, poses[:, :, :3, :].transpose(0, 1, 3, 2))    # (S, P, N, 3)
+        w -= pts[:, None]
+        rel2 = np.einsum("skni,skni->skn", w, w)
+        ok = ((rel2 < self._g2) | ((dq[:, None, :] + dp[:, :, None]) < self._g_kn)).all(axis=(1, 2))
+        if len(self._pi):
+            ok &= (dp[:, self._pi] + dp[:, self._pj] < self._g_pair).all(axis=1)
+        return ok
 
     def _part_moves(self, poses: np.ndarray) -> np.ndarray:
-        """dp (P,): how far any point of each part moved since the start."""
+        """dp (..., P): how far any point of each part moved since the start
+        (poses (..., P, 4, 4))."""
         dpose = poses - self._poses
-        d_rot, d_pos = dpose[:, :3, :3], dpose[:, :3, 3]
-        fro = np.sqrt(np.einsum("kij,kij->k", d_rot, d_rot))
-        dp = np.sqrt(np.einsum("ki,ki->k", d_pos, d_pos))
+        d_rot, d_pos = dpose[..., :3, :3], dpose[..., :3, 3]
+        fro = np.sqrt(np.einsum("...ij,...ij->...", d_rot, d_rot))
+        dp = np.sqrt(np.einsum("...i,...i->...", d_pos, d_pos))
         dp += np.multiply(fro, self._rho, out=np.zeros_like(fro), where=fro > 0)   # plane turned: inf
         return dp
 
@@ -446,3 +462,8 @@ class Advancement:
             return False
         dp = self._part_moves(poses)
         return not len(self._pi) or bool(np.all(dp[self._pi] + dp[self._pj] < self._g_pair))
+
+
+def _leading(ok: np.ndarray) -> int:
+    """Number of leading True values of a bool vector."""
+    return len(ok) if ok.all() else int(np.argmin(ok))

@@ -260,6 +260,23 @@ class CableMeasures:
         # interior points (both neighbours on the same cable); the rest stay inf
         self._interior = (valid[:-1] & valid[1:]) if n >= 3 else np.zeros(0, bool)
         self._r = np.full(n, np.inf)
+        self._offsets = offsets
+        self._tiled: dict[int, CableMeasures] = {}
+
+    def many(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(lengths (S, C), smallest bend radii (S, C)) of S states of the
+        concatenated points (S, N, 3), in one pass (the same bits as calling
+        this per state: every cable of every state is measured on its own)."""
+        s = len(pts)
+        if self._none:
+            return np.zeros((s, 0)), np.zeros((s, 0))
+        tiled = self._tiled.get(s)
+        if tiled is None:
+            n = int(self._offsets[-1])
+            starts = (self._offsets[:-1][None, :] + n * np.arange(s)[:, None]).ravel()
+            tiled = self._tiled[s] = CableMeasures(np.append(starts, s * n))
+        lengths, bend = tiled(np.asarray(pts, float).reshape(-1, 3))
+        return lengths.reshape(s, -1), bend.reshape(s, -1)
 
     def __call__(self, pts: np.ndarray, seg: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(lengths (C,), smallest bend radius (C,)) of the concatenated

@@ -34,13 +34,13 @@ _NEAR_PARALLEL = 1e-6
 
 
 def row_norm(v: np.ndarray) -> np.ndarray:
-    """Euclidean length of each row of (n, 3) ``v``.
+    """Euclidean length of each row of (..., 3) ``v``.
 
     The same floating-point operations, in the same order, as
-    ``np.linalg.norm(v, axis=1)`` (so the same bits), without the slow
+    ``np.linalg.norm(v, axis=-1)`` (so the same bits), without the slow
     reduction over a length-3 axis.
     """
-    x, y, z = v[:, 0], v[:, 1], v[:, 2]
+    x, y, z = v[..., 0], v[..., 1], v[..., 2]
     return np.sqrt((x * x + y * y) + z * z)
 
 

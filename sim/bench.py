@@ -377,8 +377,8 @@ def _mujoco_side(scene, repeat: int) -> dict:
     state = sim.state(0, contacts=False)
     shapes = part_shapes(built)
     parts = [PartState(p.name, sh, pose, p.keepout) for p, sh, pose in zip(built.parts, shapes, state.part_poses)]
-    from sim.run import _cable_states  # the run's own CableStates
-    cables = _cable_states(built, state.cables)
+    from sim.stepcheck import cable_states  # the run's own CableStates
+    cables = cable_states(built, state.cables)
     out = {"n_cables": len(cables), "n_points": sum(len(c.points) for c in cables), "n_parts": len(parts)}
     for method in ("points", "exact"):
         cfg = CheckConfig(method, scene.check.spacing, scene.check.clearance)

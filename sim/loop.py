@@ -38,6 +38,7 @@ class StepState:
       part_poses: (P, 4, 4) scene-world pose of every part (geom frame), metres.
       contacts: MuJoCo's contacts from the detection model, or None.
       energy: (2,) potential and kinetic energy of the simulation, J.
+      qpos: the simulation's generalized positions (for detecting later).
     """
 
     step: int
@@ -46,6 +47,7 @@ class StepState:
     part_poses: np.ndarray
     contacts: Contacts | None
     energy: np.ndarray
+    qpos: np.ndarray
 
 
 class Simulation:
@@ -116,12 +118,17 @@ class Simulation:
         poses[:, :3, 3] = d.geom_xpos[self._part_geoms] + origin
         poses[:, 3, 3] = 1.0
         found = self.detect(d) if (contacts and self.detect_data is not None) else None
-        return StepState(step, step * self.timestep, cables, poses, found, d.energy.copy())
+        return StepState(step, step * self.timestep, cables, poses, found, d.energy.copy(), d.qpos.copy())
 
     def detect(self, d: mujoco.MjData) -> Contacts:
         """MuJoCo's contacts for the positions in `d`, from the detection model."""
+        return self.detect_qpos(d.qpos)
+
+    def detect_qpos(self, qpos: np.ndarray) -> Contacts:
+        """MuJoCo's contacts for the generalized positions `qpos` (of the
+        simulation model), from the detection model."""
         m2, d2 = self.built.detect, self.detect_data
-        d2.qpos[:] = d.qpos
+        d2.qpos[:] = qpos
         mujoco.mj_kinematics(m2, d2)
         mujoco.mj_comPos(m2, d2)
         mujoco.mj_flex(m2, d2)

@@ -316,3 +316,43 @@ def test_random_motions_are_sound():
             proven += 1
             assert not hit
     assert proven > 0 and found > 0
+
+
+def test_clear_run_counts_the_leading_states_one_at_a_time_would():
+    """clear_run over a batch of states equals testing them in order, one at
+    a time, up to the first that is not proven clear (with a part moving)."""
+    from checker.scene_state import PartState
+    from checker.shapes import Shape, ShapeType
+    hp, _ = _hairpin(0.04)
+    config = CheckConfig(clearance=_CLEAR)
+    poses0 = np.eye(4)[None].copy()
+    poses0[0, :3, 3] = [0.0, 0.0, -0.05]                  # a slab 25 mm under the cable's surface
+    checker = Checker([PartState("slab", Shape(ShapeType.BOX, [1.0, 1.0, 0.015]), np.eye(4))],
+                      config, horizon=_H, stretch=_STRETCH)
+    checker.check([CableState("c0", hp, _R)], poses0)
+    offsets = np.array([0, len(hp)])
+    z = np.zeros(0, np.int64)
+
+    def fresh():
+        a = Advancement(offsets, config.spacing * np.array([_R]), np.array([1.5]), _CLEAR, _STRETCH,
+                        np.array([_R]), checker.part_bounds())
+        gap_cable, gap_part = checker.gaps
+        a.start(hp, poses0, gap_cable, gap_part, (z, z), np.zeros(0), checker.part_candidates, _H,
+                checker.cable_candidates)
+        return a
+
+    rng = np.random.default_rng(3)
+    counts = set()
+    for trial in range(40):
+        scale = rng.choice([0.001, 0.003, 0.01])
+        pts = hp[None] + np.cumsum(rng.normal(size=(12, 1, 3)) * scale, axis=0)
+        pts[:, 5:] += np.cumsum(rng.normal(size=(12, 1, 3)) * scale, axis=0)   # and bends
+        poses = np.repeat(poses0, 12, axis=0)[:, None].copy()
+        poses[:, 0, :3, 3] += np.cumsum(rng.normal(size=(12, 3)) * scale, axis=0)
+        one, batch = fresh(), fresh()
+        expect = 0
+        while expect < 12 and one.proven_clear(pts[expect], poses[expect]):
+            expect += 1
+        assert batch.clear_run(pts, poses) == expect == batch.skipped
+        counts.add(expect)
+    assert 0 in counts and 12 in counts and len(counts) > 2

@@ -98,3 +98,19 @@ def test_cable_measures_match_arc_length_and_bend_radius():
             p = pts[off[c]:off[c + 1]]
             assert lengths[c] == arc_length(p)[-1]
             assert bend[c] == np.min(bend_radius(p))
+
+
+def test_cable_measures_many_states_same_bits():
+    """Measuring S states at once equals measuring each state on its own."""
+    from checker.cable import CableMeasures
+    rng = np.random.default_rng(1)
+    for trial in range(30):
+        counts = rng.integers(2, 20, rng.integers(1, 4))
+        off = np.concatenate([[0], np.cumsum(counts)])
+        states = np.cumsum(rng.normal(size=(int(rng.integers(1, 9)), off[-1], 3)), 1)
+        m = CableMeasures(off)
+        lengths, bend = m.many(states)
+        assert lengths.shape == bend.shape == (len(states), len(counts))
+        for k, pts in enumerate(states):
+            one_l, one_b = m(pts)
+            assert np.array_equal(lengths[k], one_l) and np.array_equal(bend[k], one_b)

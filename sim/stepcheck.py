@@ -1,0 +1,283 @@
+"""The checks of a run, a batch of consecutive step states at a time.
+
+For every state: the cables' lengths and smallest bend radii, and the
+records a full check would return. States the skip rule proves clear
+(:mod:`checker.advance`) get only their single-cable records (bend, taut)
+and the replayed same-body part records; the others are checked in full and,
+when the scene validates, compared with MuJoCo's own contacts for the same
+positions.
+
+Why batches: a cable has a few dozen body centres, so numpy's cost per call,
+not the arrays' size, is what a step costs. The skip rule and the measures
+are evaluated for the whole batch in one vectorised pass; after a full
+check the states behind it are tested again against it. The answers are
+those of checking the states one at a time, in order.
+
+This module does not step the simulation, track events, record or report
+(see :mod:`sim.run`); it only needs the simulation to detect contacts.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from checker.advance import Advancement, part_pair_bounds
+from checker.cable import CableMeasures, taut_margin
+from checker.interference import Checker
+from checker.parts import PartChecker
+from checker.records import Interference, PairType
+from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+from checker.validation import Validation, simulator_pairs
+from sim.build import Built
+from sim.contacts import Contacts
+from sim.loop import StepState
+from sim.sweep import DEFAULT_PRECISION_M, part_set, part_shapes, selection
+
+_PAIRWISE = (PairType.SELF, PairType.CABLE_CABLE, PairType.CABLE_STRUCTURE, PairType.KEEPOUT)
+
+BATCH = 32
+"""Consecutive states checked together (a run's states arrive this many at a time)."""
+
+ADVANCE_HORIZON_RADII = 2.0
+"""Conservative advancement: candidates are evaluated up to the clearance
+plus this many (largest) cable radii at a full check..."""
+
+ADVANCE_STRETCH_RADII = 0.25
+"""... and up to this many (smallest) cable radii of arc length inside the
+exclusion windows (the total change of element lengths a skipped step allows)."""
+
+
+@dataclass
+class StepResult:
+    """What the checks found at one state.
+
+    Attributes:
+      records: every record of the step (cable and part records).
+      cable_records: the cable records alone (what validation compares).
+      strain: (C,) per cable, length over rest length minus 1.
+      bend: (C,) per cable, smallest bend radius, m.
+      full: the pairwise checks ran (False: proven clear).
+      contacts: MuJoCo's contacts at this state when it was validated.
+      agreement: the validation's agreement at this state, or None.
+    """
+
+    records: list[Interference]
+    cable_records: list[Interference]
+    strain: np.ndarray
+    bend: np.ndarray
+    full: bool
+    contacts: Contacts | None = None
+    agreement: float | None = None
+
+
+class StepChecks:
+    """Everything prepared once for checking a built scene's states.
+
+    Args:
+      built: the built scene.
+      config: method, spacing and clearance.
+      only: an assembly path for ``--only`` (see :class:`sim.run.RunOptions`), or None.
+      advance: use the skip rule.
+      detect: MuJoCo's contacts for a state's qpos, or None (no validation).
+      lap: lap(stage) ends a timed stage ("check", "sim", "validate").
+    """
+
+    def __init__(self, built: Built, config: CheckConfig, only: str | None, advance: bool,
+                 detect: Callable[[np.ndarray], Contacts] | None,
+                 lap: Callable[[str], None] = lambda stage: None):
+        scene = built.scene
+        self.built = built
+        self.config = config
+        self.detect = detect
+        self.lap = lap
+        shapes = part_shapes(built)
+        # Rigid parts against each other: prepared once, same-body pairs checked once.
+        self.rigid = rigid = part_set(built, tolerance=DEFAULT_PRECISION_M, shapes=shapes)
+        focus = selection(rigid, only, "--only") if only is not None else None
+        skipped_pairs = part_pairs_skipped(built)
+        self.part_checker = PartChecker(rigid, scene.check.clearance, focus, skipped_pairs)
+        self.exclusions = attachment_exclusions(built)
+        # With --only, cables are checked against that assembly's parts alone.
+        self.checked_parts = checked = (np.ones(len(built.parts), bool) if focus is None
+                                        else np.asarray(focus, bool))
+        self.focus_names = None if focus is None else {p.name for p, keep in zip(built.parts, checked) if keep}
+        offsets = np.concatenate([[0], np.cumsum([c.count for c in built.cables])])  # cable starts in pts
+        radii = np.array([c.radius for c in built.cables], float)
+        self.horizon = ADVANCE_HORIZON_RADII * float(radii.max()) if (advance and len(radii)) else 0.0
+        self.stretch = ADVANCE_STRETCH_RADII * float(radii.min()) if len(radii) else 0.0
+        # Parts prepared once; each state passes their poses.
+        self.checker = Checker([PartState(p.name, sh, np.eye(4), p.keepout)
+                                for p, sh, keep in zip(built.parts, shapes, checked) if keep], config,
+                               horizon=self.horizon, stretch=self.stretch)
+        self.advance: Advancement | None = None
+        if self.checker.bounds_gaps:
+            corner = np.maximum(np.abs(rigid.lo), np.abs(rigid.hi))
+            rho = np.sqrt(np.einsum("ij,ij->i", corner, corner))     # inf for planes
+            rho[checked] = np.maximum(rho[checked], self.checker.part_radius())
+            box_lo = np.full((len(built.parts), 3), -np.inf)
+            box_hi = np.full((len(built.parts), 3), np.inf)
+            box_lo[checked], box_hi[checked] = self.checker.part_bounds()
+            self.advance = Advancement(offsets, config.spacing * radii, rho, config.clearance,
+                                       self.stretch, radii, (box_lo, box_hi))
+            # part pairs that can move relative to each other (PartChecker's moving pairs)
+            gname = {g: k for k, g in enumerate(dict.fromkeys(rigid.groups))}
+            self._group = np.array([gname[g] for g in rigid.groups], np.int64)
+            pi, pj = np.triu_indices(len(self._group), 1)
+            keep = (self._group[pi] != self._group[pj]) & ~skipped_pairs[pi, pj]
+            self._moving_pairs = (pi[keep], pj[keep])
+            self._part_index = {name: k for k, name in enumerate(rigid.names)}
+            self._gap_part = np.full(len(built.parts), np.inf)
+            self._checked_index = np.nonzero(checked)[0]
+        self._static_parts = False   # same-body part records exist (replayed every step)
+        self._horizon_next = True
+        self.validation = Validation(scene.check.clearance, config.method,
+                                     frozenset(p.name for p in built.parts if p.shape == "mesh"),
+                                     unit=scene.scale, unit_name=scene.units)
+        self._measures = CableMeasures(offsets)
+        self._rest_length = np.array([c.length for c in built.cables], float)
+        limit = np.array([np.inf if c.min_bend_radius is None else c.min_bend_radius
+                          for c in built.cables], float)
+        self._bend_limit = limit
+        self._has_bend_limit = np.isfinite(limit)
+
+    def run(self, states: Sequence[StepState]) -> list[StepResult]:
+        """Check consecutive states (oldest first); one result per state, in order."""
+        if not states:
+            return []
+        pts = np.stack([np.concatenate(s.cables) if s.cables else np.zeros((0, 3)) for s in states])
+        poses = np.stack([s.part_poses for s in states])
+        lengths, bend = self._measures.many(pts)
+        strain = lengths / self._rest_length - 1.0
+        # a full check's single-cable records: none unless a bend is within
+        # the clearance of its limit or a cable is taut
+        single = (((bend - self._bend_limit < self.config.clearance) & self._has_bend_limit).any(axis=1)
+                  | (taut_margin(lengths, self._rest_length) < 0.0).any(axis=1))
+        out: list[StepResult] = []
+        j = 0
+        while j < len(states):
+            k = self.advance.clear_run(pts[j:], poses[j:]) if self.advance is not None else 0
+            for i in range(j, j + k):
+                out.append(self._proven_clear(states[i], bool(single[i]), strain[i], bend[i]))
+            j += k
+            if j < len(states):
+                out.append(self._full(states[j], pts[j], poses[j], strain[j], bend[j]))
+                j += 1
+        self.lap("check")
+        return out
+
+    def _proven_clear(self, state: StepState, single: bool, strain: np.ndarray,
+                      bend: np.ndarray) -> StepResult:
+        """No pair can be within the clearance: what a full check returns is
+        the single-cable records and the replayed same-body part records."""
+        cable_records = self.checker.check_single(self._cable_states(state)) if single else []
+        cable_records = self._focus(cable_records)
+        part_records = self.part_checker.check(state.part_poses) if self._static_parts else []
+        return StepResult(cable_records + part_records, cable_records, strain, bend, False)
+
+    def _full(self, state: StepState, pts: np.ndarray, poses: np.ndarray, strain: np.ndarray,
+              bend: np.ndarray) -> StepResult:
+        cables = self._cable_states(state)
+        adv = self.advance
+        # The horizon costs candidates: only worth it when the last full
+        # check found no pair below the clearance (else no skip).
+        cable_records = self.checker.check(cables, poses[self.checked_parts], self.exclusions,
+                                           None if self._horizon_next else 0.0)
+        # moving part pairs still provably apart: only same-body records
+        if adv is not None and state.step > 0 and adv.part_pairs_clear(poses):
+            part_records = self.part_checker.check(poses) if self._static_parts else []
+        else:
+            part_records = self.part_checker.check(poses)
+        if adv is not None:
+            self._horizon_next = not any(r.type in _PAIRWISE for r in cable_records)
+            if state.step == 0:
+                self._static_parts = any(self._group[self._part_index[r.a]] == self._group[self._part_index[r.b]]
+                                         for r in part_records)
+            if self.checker.gaps is not None:
+                gap_cable, gap_checked = self.checker.gaps
+                self._gap_part[self.checked_parts] = gap_checked
+                bound = part_pair_bounds(self.rigid, self.rigid.place(poses), *self._moving_pairs)
+                cab, s_c, part, value = self.checker.part_candidates
+                adv.start(pts, poses, gap_cable, self._gap_part, self._moving_pairs, bound,
+                          (cab, s_c, self._checked_index[part], value), self.horizon,
+                          self.checker.cable_candidates)
+            else:
+                adv.stop()
+        cable_records = self._focus(cable_records)
+        result = StepResult(cable_records + part_records, cable_records, strain, bend, True)
+        if self.detect is not None:
+            self.lap("check")
+            result.contacts = self.detect(state.qpos)   # timed with the simulation
+            self.lap("sim")
+            seen = simulator_pairs(result.contacts, {c.name: (c.points, c.radius) for c in cables},
+                                   self.exclusions, self.config.clearance)
+            if self.focus_names is not None:
+                seen = {k: v for k, v in seen.items() if k[2] in self.focus_names
+                        and k[0] in (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value)}
+            result.agreement = self.validation.compare(state.t, cable_records, seen)
+            self.lap("validate")
+        return result
+
+    def _focus(self, records: list[Interference]) -> list[Interference]:
+        """With --only: the records against the assembly's parts alone."""
+        if self.focus_names is None:
+            return records
+        return [r for r in records if r.b in self.focus_names
+                and PairType(r.type) in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)]
+
+    def _cable_states(self, state: StepState) -> list[CableState]:
+        return cable_states(self.built, state.cables)
+
+
+def cable_states(built: Built, points: list[np.ndarray]) -> list[CableState]:
+    """The checker's view of the cables at one state (body centres per cable)."""
+    return [CableState(c.name, p, c.radius, c.min_bend_radius, c.length)
+            for c, p in zip(built.cables, points)]
+
+
+def part_pairs_skipped(built: Built) -> np.ndarray:
+    """(P, P) bool: part pairs the part-part check leaves out, as MuJoCo does.
+
+    - parts of a child body and of its parent body (other than the world
+      body itself) when a joint joins them: arm links overlap at their joints
+      by design;
+    - two geoms of the base mjcf model in the same rigid (weld) group: the
+      model author's layout, never colliding in MuJoCo either.
+    Scene `[[parts]]` on one body are checked against each other (once, at
+    t = 0)."""
+    m = built.model
+    scene_names = {p.name for p in built.scene.parts}
+    body = np.array([int(m.geom_bodyid[p.geom_id]) for p in built.parts], np.int64)
+    weld = m.body_weldid[body]
+    parent = m.body_parentid[body]
+    base = np.array([p.name not in scene_names for p in built.parts], bool)
+    jointed = (m.body_weldid[np.arange(m.nbody)] == np.arange(m.nbody))   # top of a weld group
+    child_of = (parent[:, None] == body[None, :]) & (parent[:, None] != 0) & jointed[body][:, None]
+    skip = child_of | child_of.T
+    skip |= (weld[:, None] == weld[None, :]) & base[:, None] & base[None, :]
+    np.fill_diagonal(skip, True)
+    return skip
+
+
+def attachment_exclusions(built: Built) -> list[Exclusion]:
+    """Arc-length windows where a cable touching a part is expected.
+
+    Around every held vertex (start, end, clip), `check.attach_zone` cable
+    radii either side, widened to whole elements (so that MuJoCo's contacts,
+    one per element, can be filtered by the same window), against every part
+    riding the same body."""
+    zone = built.scene.check.attach_zone
+    parts_on: dict[str, list[str]] = {}
+    for p in built.parts:
+        parts_on.setdefault(p.body, []).append(p.name)
+    out = []
+    for c in built.cables:
+        for att in c.attachments:
+            for part in parts_on.get(att.body, ()):
+                lo = c.rest_s[np.searchsorted(c.rest_s, att.s - zone * c.radius, side="right") - 1] \
+                    if att.s - zone * c.radius > 0 else 0.0
+                hi = c.rest_s[min(np.searchsorted(c.rest_s, att.s + zone * c.radius), c.count - 1)]
+                out.append(Exclusion(c.name, part, float(lo), float(hi)))
+    return sorted(set(out), key=lambda e: (e.cable, e.part, e.s_min))
