@@ -24,17 +24,30 @@ no pair can have come within the clearance while
 - self and cable-cable, either ``spread < gap_cable`` (the least gap over
   all cable pairs), or, with the checker's cable candidates, all of
 
+  - for every near element pair (e, f) (one cable, ``e <= f < e + 2
+    BLOCK``), either the chord bound holds at step k: ``T < pi`` and
+    ``max(w, S) cos(T / 2) > 2 r + clearance``, with ``T`` the cable's
+    total turning at the centres e + 1 .. f (the sum of the angles between
+    consecutive elements), ``S`` the arc length from centre e + 1 to
+    centre f, ``w = pi r + clearance`` the self-exclusion window
+    (:func:`checker.cable.self_pair_excluded`) and r the cable's radius; or
+    the largest ``|d_a - d_b|`` over a in {e, e + 1} and b in {f, f + 1} is
+    below the pair's gap: the least value minus the clearance of the
+    candidates with both places on the pair (H when there is none, capped
+    at H),
   - ``|d_i - d_j| < g[i, j]`` for every pair of centres (i, j) such that a
-    candidate pair has one place on an element next to i and the other on
-    an element next to j; ``g[i, j]`` the least such candidate's value
-    minus the clearance,
-  - ``box(A, B) < max(H, L[A, B])`` for every pair of blocks A, B (A = B
-    included) of ``BLOCK`` consecutive elements (centres ``b K .. b K +
-    K``), where ``box(A, B)`` is the norm of the componentwise largest
-    ``|d_a - d_b|`` over the two blocks' bounding boxes of displacements, and
-    ``L[A, B]`` the distance at k0 between spheres enclosing the blocks'
-    centres, minus the largest radii of the two blocks and the clearance
-    (capped at ``FAR_HORIZONS * H``),
+    candidate pair that is no near pair's has one place on an element next
+    to i and the other on an element next to j; ``g[i, j]`` the least such
+    candidate's value minus the clearance,
+  - for every pair of blocks A, B of ``BLOCK`` consecutive elements
+    (centres ``b K .. b K + K``) other than a block with itself or the
+    next on one cable (their element pairs are all near pairs), either
+    ``box(A, B) < max(H, L[A, B])``, where ``box(A, B)`` is the norm of
+    the componentwise largest ``|d_a - d_b|`` over the two blocks'
+    bounding boxes of displacements, and ``L[A, B]`` the distance at k0
+    between spheres enclosing the blocks' centres, minus the largest radii
+    of the two blocks and the clearance (capped at ``FAR_HORIZONS * H``);
+    or the same distance at step k itself is above 0,
   - ``min(spread, 2 max dq) < FAR_HORIZONS * H`` when some block pairs are
     farther apart than that and left unlisted,
 - ``dq_i < g[i, k]`` for every part k that did not move, and
@@ -74,7 +87,17 @@ of the places, so it dropped by at most ``|d_a - d_b|`` (cable pairs), and
 by at most the point's displacement in the part's own frame, or the point's
 plus the part's displacement in the world (cable and part; a point outside a
 solid with distance above the clearance stays outside, where the signed
-distance is the distance). At k0 every candidate value below ``clearance +
+distance is the distance). Two conditions look at step k alone, with no reference to k0. Spheres:
+every place of a block lies in the convex hull of its centres, inside the
+sphere about their bounding box. Chord: let two places on elements e and f
+be checked at step k, so their arc lengths differ by at least ``w`` (and by
+at least ``S``). Along the polyline between them the unit tangent turns by
+at most ``T`` in total, so every tangent lies within the angle ``T / 2`` of
+the tangent halfway along that turning, m; the chord is the integral of
+the tangent over the arc, so its length is at least its component along
+m, at least the arc length times ``cos(T / 2)``, and the pair's distance
+minus ``2 r`` exceeds the clearance. (The turning angles are rounded up by
+1e-6 rad; ``arccos`` near 0 loses about 1e-8.) At k0 every candidate value below ``clearance +
 H`` was evaluated, and each part candidate is charged to every centre of the
 element holding its arc length (with a rounding margin: more centres only
 lower the gaps); a point with no candidate for part k was at least H past
@@ -296,11 +319,18 @@ class Advancement:
         pair of blocks (everything else): the module docstring's second list."""
         n = len(self._pts)
         ca, sa, cb, sb, value = (np.asarray(x) for x in cand)
+        ca, cb = ca.astype(np.int64), cb.astype(np.int64)
         ii = jj = np.zeros(0, np.int64)
         gg = np.zeros(0)
+        self._near = self._rad is not None and n > 1
+        if self._near:
+            self._start_near(horizon, mu)
         if len(value) and n:
-            lo_a, hi_a = self._bracket(ca.astype(np.int64), sa)
-            lo_b, hi_b = self._bracket(cb.astype(np.int64), sb)
+            lo_a, hi_a = self._bracket(ca, sa)
+            lo_b, hi_b = self._bracket(cb, sb)
+            if self._near:                       # near pairs carry their own candidates
+                far_c = ~self._charge_near(ca, lo_a, hi_a, cb, lo_b, hi_b, value)
+                lo_a, hi_a, lo_b, hi_b, value = lo_a[far_c], hi_a[far_c], lo_b[far_c], hi_b[far_c], value[far_c]
             # every centre pair of the two brackets (at most 3 x 3 each)
             k = np.arange(3)
             i = lo_a[:, None, None] + k[None, :, None]
@@ -311,13 +341,16 @@ class Advancement:
             key = np.minimum(i, j) * n + np.maximum(i, j)
             o = np.argsort(key, kind="stable")
             key, v = key[o], v[o]
-            first = np.r_[True, key[1:] != key[:-1]]
+            first = np.r_[len(key) > 0, key[1:] != key[:-1]][:len(key)]
             start = np.nonzero(first)[0]
             gg = np.minimum.reduceat(v, start) if len(start) else np.zeros(0)
             key = key[first]
             ii, jj = key // n, key % n
             same = ii != jj                      # a centre against itself: no relative motion
             ii, jj, gg = ii[same], jj[same], gg[same]
+        if self._near:
+            self._g_near = np.minimum(self._g_near, horizon) - mu
+            self._g_near2 = np.where(self._g_near > 0, self._g_near, 0.0) ** 2
         self._cc_i, self._cc_j = ii, jj
         self._g_cc = np.minimum(gg, horizon) - mu
         self._g_cc2 = np.where(self._g_cc > 0, self._g_cc, 0.0) ** 2
@@ -340,6 +373,7 @@ class Advancement:
         big = 0.5 * row_norm(hi - lo)               # encloses the block's centres, so its elements
         if self._rad is not None:
             rad = np.maximum(np.maximum.reduceat(self._rad, self._blk_start), self._rad[self._blk_last])
+            self._blk_rad = rad[:, None] + self.clearance / 2 + mu      # each block's share of a pair's
             reach = big + rad
             if nb <= 64:                                # few blocks: every pair
                 bi, bj = np.triu_indices(nb)
@@ -352,37 +386,121 @@ class Advancement:
                 listed = len(pairs) == nb * (nb - 1) // 2
             dist = row_norm(centre[bi] - centre[bj]) - reach[bi] - reach[bj] - self.clearance
             g_blk = np.maximum(horizon, np.minimum(dist, far))
+            # a block with itself or the next on one cable: its element pairs are near pairs
+            end = self._blk_last[np.maximum(bi, bj)]
+            near = (np.abs(bj - bi) <= 1) & (self._cable[self._blk_start[np.minimum(bi, bj)]] == self._cable[end])
+            bi, bj, g_blk = bi[~near], bj[~near], g_blk[~near]
             # block pairs not listed are farther than ``far`` past the clearance
             self._g_far = (np.inf if listed else far) - mu
         else:
             bi, bj = np.triu_indices(nb)
             g_blk = np.full(len(bi), horizon)
             self._g_far = np.inf
+            self._blk_rad = None
         self._bi, self._bj = bi, bj
         self._g_blk = g_blk - mu
         self._g_blk2 = np.where(self._g_blk > 0, self._g_blk, 0.0) ** 2
-        self._g_min = min(float(self._g_cc.min(initial=np.inf)), float(self._g_blk.min(initial=np.inf)))
+        self._g_min = min(float(self._g_cc.min(initial=np.inf)), float(self._g_blk.min(initial=np.inf)),
+                          float(self._g_near.min(initial=np.inf)) if self._near else np.inf)
 
-    def _cable_pairs_clear(self, move: np.ndarray, dcc: np.ndarray, diag: np.ndarray) -> np.ndarray:
+    def _start_near(self, horizon: float, mu: float) -> None:
+        """Near element pairs (e, f), e <= f <= e + 2 BLOCK - 1 on one cable,
+        their arc-length window, the distance their places must exceed, and
+        their gaps (the horizon until candidates are charged)."""
+        n, span = len(self._pts), 2 * self.BLOCK
+        e = np.repeat(np.arange(n - 1), span)
+        f = e + np.tile(np.arange(span), n - 1)
+        keep = f < n - 1
+        e, f = e[keep], f[keep]
+        keep = self._valid[e] & self._valid[f] & (self._cable[e] == self._cable[f])
+        self._ne, self._nf = e[keep], f[keep]
+        self._near_index = np.full((n - 1) * span, -1, np.int64)
+        self._near_index[self._ne * span + (self._nf - self._ne)] = np.arange(len(self._ne))
+        r = self._rad[self._ne]
+        self._near_window = np.pi * r + self.clearance - mu          # self_pair_excluded's window
+        self._near_need = 2.0 * r + self.clearance + mu
+        self._g_near = np.full(len(self._ne), float(horizon))
+        # the four centre pairs (e or e + 1, f or f + 1) of each near pair
+        self._near_a = np.concatenate([self._ne, self._ne, self._ne + 1, self._ne + 1])
+        self._near_b = np.concatenate([self._nf, self._nf + 1, self._nf, self._nf + 1])
+
+    def _charge_near(self, ca, lo_a, hi_a, cb, lo_b, hi_b, value) -> np.ndarray:
+        """Charge the candidates whose places lie on near element pairs to
+        those pairs' gaps; returns which candidates were (n,) bool."""
+        span = 2 * self.BLOCK
+        first, last = self._offsets[ca], self._offsets[ca + 1] - 2          # the cable's elements
+        ea0, ea1 = np.clip(lo_a, first, last), np.clip(np.maximum(hi_a - 1, lo_a), first, last)
+        first_b, last_b = self._offsets[cb], self._offsets[cb + 1] - 2
+        eb0, eb1 = np.clip(lo_b, first_b, last_b), np.clip(np.maximum(hi_b - 1, lo_b), first_b, last_b)
+        near = (ca == cb) & (np.maximum(ea1, eb1) - np.minimum(ea0, eb0) < span)
+        if near.any():
+            k = np.arange(3)
+            ea = ea0[near][:, None, None] + k[None, :, None]
+            eb = eb0[near][:, None, None] + k[None, None, :]
+            ok = (ea <= ea1[near][:, None, None]) & (eb <= eb1[near][:, None, None])
+            ea, eb = np.broadcast_to(ea, ok.shape)[ok], np.broadcast_to(eb, ok.shape)[ok]
+            v = np.broadcast_to(value[near][:, None, None], ok.shape)[ok]
+            e, f = np.minimum(ea, eb), np.maximum(ea, eb)
+            np.minimum.at(self._g_near, self._near_index[e * span + (f - e)], v)
+        return near
+
+    def _near_clear(self, move: np.ndarray, d: np.ndarray, seg: np.ndarray) -> np.ndarray:
+        """Near element pairs per state (S,): each either provably apart by
+        the chord bound at this state (module docstring) or within its gap
+        of relative motion since the start. d (N - 1, 3, S) the elements,
+        seg (N - 1, S) their lengths."""
+        s = move.shape[2]
+        # turning at each centre, rounded up (arccos loses ~1e-8 near 0); a
+        # zero-length element turns by pi (proves nothing)
+        den = seg[:-1] * seg[1:]
+        cos = np.divide(np.einsum("eis,eis->es", d[:-1], d[1:]), den, out=np.full(den.shape, -1.0),
+                        where=den > 0)
+        turn = np.zeros((len(move), s))
+        turn[1:-1] = np.arccos(np.clip(cos, -1.0, 1.0)) + 1e-6
+        turn = np.cumsum(turn, axis=0)
+        theta = turn[self._nf] - turn[self._ne]                           # (E, S)
+        arc = np.zeros((len(move), s))
+        arc[1:] = np.cumsum(seg, axis=0)
+        ds = np.maximum(arc[self._nf] - arc[self._ne + 1], self._near_window[:, None])
+        chord = (theta < np.pi) & (ds * np.cos(0.5 * np.minimum(theta, np.pi)) > self._near_need[:, None])
+        dd = move[self._near_a] - move[self._near_b]
+        rel2 = np.einsum("pis,pis->ps", dd, dd).reshape(4, len(self._ne), s).max(axis=0)
+        return (chord | (rel2 < self._g_near2[:, None])).all(axis=0)
+
+    def _cable_pairs_clear(self, x: np.ndarray, move: np.ndarray, dcc: np.ndarray, diag: np.ndarray,
+                           d: np.ndarray, seg: np.ndarray) -> np.ndarray:
         """The cable-pair conditions of the module docstring (second list),
-        per state (S,) of ``move`` (S, N, 3): ``dcc`` (S,) bounds every
+        per state (S,) of ``move`` (N, 3, S): ``dcc`` (S,) bounds every
         |d_a - d_b|, ``diag`` (S,) (the bounding box's diagonal) also every
-        block pair's box bound."""
+        block pair's box bound; x (N, 3, S) the centres, d and seg the
+        elements and their lengths."""
         ok = dcc < self._g_far
         easy = diag < self._g_min                  # every relative motion is below every gap
         if not (ok & ~easy).any():
             return ok
-        pair_ok = np.ones(len(move), bool)
+        pair_ok = self._near_clear(move, d, seg) if self._near else np.ones(len(ok), bool)
         if len(self._cc_i):
-            d = move[:, self._cc_i] - move[:, self._cc_j]
-            pair_ok &= (np.einsum("smi,smi->sm", d, d) < self._g_cc2).all(axis=1)
+            d = move[self._cc_i] - move[self._cc_j]
+            pair_ok &= (np.einsum("mis,mis->ms", d, d) < self._g_cc2[:, None]).all(axis=0)
         if len(self._bi):
-            last = move[:, self._blk_last]
-            lo = np.minimum(np.minimum.reduceat(move, self._blk_start, axis=1), last)
-            hi = np.maximum(np.maximum.reduceat(move, self._blk_start, axis=1), last)
-            rel = np.maximum(np.abs(hi[:, self._bi] - lo[:, self._bj]), np.abs(lo[:, self._bi] - hi[:, self._bj]))
-            pair_ok &= (np.einsum("spi,spi->sp", rel, rel) < self._g_blk2).all(axis=1)
+            box = self._block_boxes(move)
+            rel = np.maximum(np.abs(box[1][self._bi] - box[0][self._bj]), np.abs(box[0][self._bi] - box[1][self._bj]))
+            blk_ok = np.einsum("pis,pis->ps", rel, rel) < self._g_blk2[:, None]
+            if self._blk_rad is not None and not blk_ok.all():
+                # or apart now: spheres about the blocks' boxes of centres, at this state
+                lo, hi = self._block_boxes(x)
+                sphere = 0.5 * row_norm3(hi - lo) + self._blk_rad
+                centre = 0.5 * (lo + hi)
+                blk_ok |= row_norm3(centre[self._bi] - centre[self._bj]) > sphere[self._bi] + sphere[self._bj]
+            pair_ok &= blk_ok.all(axis=0)
         return ok & (easy | pair_ok)
+
+    def _block_boxes(self, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Componentwise least and largest of v (N, 3, S) over each block's
+        centres: ((B, 3, S), (B, 3, S))."""
+        last = v[self._blk_last]
+        return (np.minimum(np.minimum.reduceat(v, self._blk_start, axis=0), last),
+                np.maximum(np.maximum.reduceat(v, self._blk_start, axis=0), last))
 
     def stop(self) -> None:
         """A full check ran without gaps: prove nothing until the next :meth:`start`."""
@@ -401,46 +519,54 @@ class Advancement:
 
         Vectorised over the states: numpy's cost per call, not the arrays'
         size, dominates for a cable's few dozen centres, so a batch of
-        states costs about what one does. Every part is handled alike (a
-        part that did not move has ``rel`` equal to ``dq`` up to rounding,
-        far below the margin). After each condition only the states up to
-        the first failure are carried on."""
+        states costs about what one does. The states are laid out last
+        ((N, 3, S)): numpy reduces and gathers along a leading axis far
+        faster than along a short middle one. Every part is handled alike
+        (a part that did not move has ``rel`` equal to ``dq`` up to
+        rounding, far below the margin). After each condition only the
+        states up to the first failure are carried on."""
         if not self._ok or len(pts) == 0 or pts.shape[1] != len(self._pts):
             return 0
-        move = pts - self._pts
-        dq = np.sqrt(np.einsum("sni,sni->sn", move, move))
-        if move.shape[1]:
-            spread = move.max(axis=1) - move.min(axis=1)
-            diag = np.sqrt(np.einsum("si,si->s", spread, spread))
-            dcc = np.minimum(2.0 * dq.max(axis=1), diag)
+        x = np.ascontiguousarray(np.transpose(pts, (1, 2, 0)))           # (N, 3, S)
+        move = x - self._pts[:, :, None]
+        dq = row_norm3(move)                                              # (N, S)
+        if len(move):
+            spread = move.max(axis=0) - move.min(axis=0)                 # (3, S)
+            diag = np.sqrt(np.einsum("is,is->s", spread, spread))
+            dcc = np.minimum(2.0 * dq.max(axis=0), diag)
         else:
-            diag = dcc = np.zeros(len(move))
-        ok = self._cable_pairs_clear(move, dcc, diag) if self._cable_pairs else dcc < self._g_cable
+            diag = dcc = np.zeros(x.shape[2])
+        d = x[1:] - x[:-1]                                                # (N - 1, 3, S)
+        seg = row_norm3(d)
+        ok = self._cable_pairs_clear(x, move, dcc, diag, d, seg) if self._cable_pairs else dcc < self._g_cable
         n = _leading(ok)
         if n:
-            pts = pts[:n]
-            seg = row_norm(pts[:, 1:] - pts[:, :-1])
+            x, seg = x[:, :, :n], seg[:, :n]
             # pieces per element, the arithmetic of checker.cable.densify_batch
             # (elements joining two cables: limit inf, 1 piece at k0 and now)
-            pieces = np.maximum(np.ceil(seg / self._lim_all * (1.0 - 1e-12)), 1.0)
-            ok = (pieces == self._pieces_all).all(axis=1) & \
-                (np.abs(seg - self._seg_raw) @ self._validf < self._stretch)
+            pieces = np.maximum(np.ceil(seg / self._lim_all[:, None] * (1.0 - 1e-12)), 1.0)
+            ok = (pieces == self._pieces_all[:, None]).all(axis=0) & \
+                (self._validf @ np.abs(seg - self._seg_raw[:, None]) < self._stretch)
             n = _leading(ok)
         if n and len(self._pos):
-            n = _leading(self._parts_clear(pts[:n], poses[:n], dq[:n]))
+            n = _leading(self._parts_clear(x[:, :, :n], poses[:n], dq[:, :n]))
         self.skipped += n
         return n
 
-    def _parts_clear(self, pts: np.ndarray, poses: np.ndarray, dq: np.ndarray) -> np.ndarray:
-        """Cable-structure, keep-out and part-pair conditions per state (S,)."""
-        dp = self._part_moves(poses)                                       # (S, P)
-        # every centre as it would be had it moved rigidly with part k
-        w = np.matmul(self._u0h, poses[:, :, :3, :].transpose(0, 1, 3, 2))    # (S, P, N, 3)
-        w -= pts[:, None]
-        rel2 = np.einsum("skni,skni->skn", w, w)
-        ok = ((rel2 < self._g2) | ((dq[:, None, :] + dp[:, :, None]) < self._g_kn)).all(axis=(1, 2))
+    def _parts_clear(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray) -> np.ndarray:
+        """Cable-structure, keep-out and part-pair conditions per state (S,);
+        x (N, 3, S) the centres, dq (N, S) their displacements."""
+        s = x.shape[2]
+        dp = self._part_moves(poses).T                                    # (P, S)
+        # every centre as it would be had it moved rigidly with part k:
+        # u0h[k] (N, 4) times the poses' top rows (4, 3 S), one product per part
+        top = np.transpose(poses[:, :, :3, :], (1, 3, 2, 0)).reshape(len(dp), 4, 3 * s)
+        w = np.matmul(self._u0h, top).reshape(len(dp), len(x), 3, s)
+        w -= x
+        rel2 = np.einsum("knis,knis->kns", w, w)
+        ok = ((rel2 < self._g2[:, :, None]) | ((dq + dp[:, None, :]) < self._g_kn[:, :, None])).all(axis=(0, 1))
         if len(self._pi):
-            ok &= (dp[:, self._pi] + dp[:, self._pj] < self._g_pair).all(axis=1)
+            ok &= (dp[self._pi] + dp[self._pj] < self._g_pair[:, None]).all(axis=0)
         return ok
 
     def _part_moves(self, poses: np.ndarray) -> np.ndarray:
@@ -462,6 +588,13 @@ class Advancement:
             return False
         dp = self._part_moves(poses)
         return not len(self._pi) or bool(np.all(dp[self._pi] + dp[self._pj] < self._g_pair))
+
+
+def row_norm3(v: np.ndarray) -> np.ndarray:
+    """Euclidean length over axis 1 of (M, 3, S) ``v``: (M, S), the
+    arithmetic of :func:`checker.closest.row_norm` (so the same bits)."""
+    x, y, z = v[:, 0], v[:, 1], v[:, 2]
+    return np.sqrt((x * x + y * y) + z * z)
 
 
 def _leading(ok: np.ndarray) -> int:

@@ -237,10 +237,16 @@ def test_cable_end_dragged_far_while_no_pair_is_close():
     assert not old.proven_clear(moved, _NO_PARTS)
     assert adv.proven_clear(moved, _NO_PARTS)
     assert not _pairwise(checker, moved, offsets)
-    # a kink: centres 20.. swing further, their neighbours move apart by more than H
+    # a kink: centres 20.. swing further, their neighbours move apart by
+    # more than H; near element pairs stay apart by the chord bound, far
+    # block pairs by their spheres at this state
     kinked = moved.copy()
     kinked[20:] = _turn(moved[20:], moved[20], 0.4, axis=1)
-    assert not adv.proven_clear(kinked, _NO_PARTS)
+    assert adv.proven_clear(kinked, _NO_PARTS) and not _pairwise(checker, kinked, offsets)
+    # folded back onto itself: found by the full check, never proven clear
+    folded = moved.copy()
+    folded[20:] = _turn(moved[20:], moved[20], 2.5, axis=1)
+    assert _pairwise(checker, folded, offsets) and not adv.proven_clear(folded, _NO_PARTS)
 
 
 def _hairpin(gap, leg=0.4):
@@ -356,3 +362,57 @@ def test_clear_run_counts_the_leading_states_one_at_a_time_would():
         assert batch.clear_run(pts, poses) == expect == batch.skipped
         counts.add(expect)
     assert 0 in counts and 12 in counts and len(counts) > 2
+
+
+def _arc(length, curvature, n):
+    """n centres along a planar arc of the given length and curvature from the origin along x."""
+    s = np.linspace(0.0, length, n)
+    if curvature == 0:
+        return np.stack([s, np.zeros_like(s), np.zeros_like(s)], axis=1)
+    return np.stack([np.sin(curvature * s) / curvature, (1 - np.cos(curvature * s)) / curvature,
+                     np.zeros_like(s)], axis=1)
+
+
+def test_near_pairs_by_the_chord_bound():
+    """A cable curling up ever tighter until it closes on itself: neighbouring
+    blocks turn far more than the horizon relative to each other, yet their
+    element pairs are proven apart by the chord bound at each state, while
+    the curl is open; once the ends meet nothing is proven."""
+    length = 0.6
+    pts = _arc(length, 0.5, 41)                                # 15 mm elements, gently bent
+    checker, adv, old, offsets = _cable_adv([pts])
+    proven = old_proven = 0
+    for k in np.linspace(0.5, 1.15 * 2 * np.pi / length, 40):
+        moved = _arc(length, k, 41)
+        clear = adv.proven_clear(moved, _NO_PARTS)
+        hit = bool(_pairwise(checker, moved, offsets))
+        assert not (clear and hit)
+        proven += clear
+        if k < 2.5:                                             # half a turn over the cable, no contact
+            assert clear
+            old_proven += old.proven_clear(moved, _NO_PARTS)
+    assert old_proven < proven / 2                              # the whole-cable spread gives up early
+    assert hit and not clear
+
+
+def test_chord_bound_sound_on_random_kinks():
+    """Random local kinks (one centre pushed sideways, a stretch turned
+    about one of its centres): proven clear only when no self pair is found."""
+    pts = _arc(0.6, 2.0, 41)
+    checker, adv, _, offsets = _cable_adv([pts])
+    rng = np.random.default_rng(11)
+    proven = found = 0
+    for _ in range(300):
+        moved = pts.copy()
+        i = int(rng.integers(1, 40))
+        if rng.random() < 0.5:
+            moved[i] += rng.normal(size=3) * rng.choice([0.005, 0.02, 0.05])
+        else:
+            j = min(40, i + int(rng.integers(2, 12)))
+            moved[i:j + 1] = _turn(moved[i:j + 1], moved[i], rng.normal() * 2.0)
+        hit = bool(_pairwise(checker, moved, offsets))
+        found += hit
+        if adv.proven_clear(moved, _NO_PARTS):
+            proven += 1
+            assert not hit
+    assert proven > 0 and found > 0
