@@ -28,8 +28,9 @@ no pair can have come within the clearance while
     BLOCK``), either the chord bound holds at step k: ``T < pi`` and
     ``max(w, S) cos(T / 2) > 2 r + clearance``, with ``T`` the cable's
     total turning at the centres e + 1 .. f (the sum of the angles between
-    consecutive elements), ``S`` the arc length from centre e + 1 to
-    centre f, ``w = pi r + clearance`` the self-exclusion window
+    consecutive elements) at step k, ``S`` the arc length from centre e + 1
+    to centre f at k0 minus ``stretch`` (the arc length at k is no less
+    under the last condition), ``w = pi r + clearance`` the self-exclusion window
     (:func:`checker.cable.self_pair_excluded`) and r the cable's radius; or
     the largest ``|d_a - d_b|`` over a in {e, e + 1} and b in {f, f + 1} is
     below the pair's gap: the least value minus the clearance of the
@@ -87,7 +88,7 @@ of the places, so it dropped by at most ``|d_a - d_b|`` (cable pairs), and
 by at most the point's displacement in the part's own frame, or the point's
 plus the part's displacement in the world (cable and part; a point outside a
 solid with distance above the clearance stays outside, where the signed
-distance is the distance). Two conditions look at step k alone, with no reference to k0. Spheres:
+distance is the distance). Two conditions look at step k alone (the chord's ``S`` aside). Spheres:
 every place of a block lies in the convex hull of its centres, inside the
 sphere about their bounding box. Chord: let two places on elements e and f
 be checked at step k, so their arc lengths differ by at least ``w`` (and by
@@ -417,8 +418,14 @@ class Advancement:
         self._near_index = np.full((n - 1) * span, -1, np.int64)
         self._near_index[self._ne * span + (self._nf - self._ne)] = np.arange(len(self._ne))
         r = self._rad[self._ne]
-        self._near_window = np.pi * r + self.clearance - mu          # self_pair_excluded's window
-        self._near_need = 2.0 * r + self.clearance + mu
+        # the chord bound as a turning limit: places checked are at least
+        # max(w, S) apart along the cable, with S the arc length from centre
+        # e + 1 to f, which can shrink by at most ``stretch`` while skipping
+        arc = self._s_c
+        window = np.pi * r + self.clearance - mu                        # self_pair_excluded's window
+        ds = np.maximum(window, arc[self._nf] - arc[self._ne + 1] - self.stretch - mu)
+        ratio = (2.0 * r + self.clearance + mu) / ds
+        self._near_turn = np.where(ratio < 1.0, 2.0 * np.arccos(np.minimum(ratio, 1.0)) - 1e-9, -1.0)
         self._g_near = np.full(len(self._ne), float(horizon))
         # the four centre pairs (e or e + 1, f or f + 1) of each near pair
         self._near_a = np.concatenate([self._ne, self._ne, self._ne + 1, self._ne + 1])
@@ -458,14 +465,16 @@ class Advancement:
         turn = np.zeros((len(move), s))
         turn[1:-1] = np.arccos(np.clip(cos, -1.0, 1.0)) + 1e-6
         turn = np.cumsum(turn, axis=0)
-        theta = turn[self._nf] - turn[self._ne]                           # (E, S)
-        arc = np.zeros((len(move), s))
-        arc[1:] = np.cumsum(seg, axis=0)
-        ds = np.maximum(arc[self._nf] - arc[self._ne + 1], self._near_window[:, None])
-        chord = (theta < np.pi) & (ds * np.cos(0.5 * np.minimum(theta, np.pi)) > self._near_need[:, None])
-        dd = move[self._near_a] - move[self._near_b]
-        rel2 = np.einsum("pis,pis->ps", dd, dd).reshape(4, len(self._ne), s).max(axis=0)
-        return (chord | (rel2 < self._g_near2[:, None])).all(axis=0)
+        bad = turn[self._nf] - turn[self._ne] >= self._near_turn[:, None]     # (E, S)
+        rows = np.nonzero(bad.any(axis=1))[0]
+        if len(rows):                            # the relative motion only where the chord fails
+            m = len(self._ne)
+            a = (self._near_a.reshape(4, m)[:, rows]).ravel()
+            b = (self._near_b.reshape(4, m)[:, rows]).ravel()
+            dd = move[a] - move[b]
+            rel2 = np.einsum("pis,pis->ps", dd, dd).reshape(4, len(rows), s).max(axis=0)
+            bad[rows] &= rel2 >= self._g_near2[rows, None]
+        return ~bad.any(axis=0)
 
     def _cable_pairs_clear(self, x: np.ndarray, move: np.ndarray, dcc: np.ndarray, diag: np.ndarray,
                            d: np.ndarray, seg: np.ndarray) -> np.ndarray:
@@ -563,8 +572,10 @@ class Advancement:
         top = np.transpose(poses[:, :, :3, :], (1, 3, 2, 0)).reshape(len(dp), 4, 3 * s)
         w = np.matmul(self._u0h, top).reshape(len(dp), len(x), 3, s)
         w -= x
-        rel2 = np.einsum("knis,knis->kns", w, w)
-        ok = ((rel2 < self._g2[:, :, None]) | ((dq + dp[:, None, :]) < self._g_kn[:, :, None])).all(axis=(0, 1))
+        bad = np.einsum("knis,knis->kns", w, w) >= self._g2[:, :, None]
+        if bad.any():                            # or within the gap by the world displacements
+            bad &= (dq + dp[:, None, :]) >= self._g_kn[:, :, None]
+        ok = ~bad.reshape(-1, s).any(axis=0)
         if len(self._pi):
             ok &= (dp[self._pi] + dp[self._pj] < self._g_pair[:, None]).all(axis=0)
         return ok
