@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import math
+from pathlib import Path
 
 import pytest
 
@@ -26,7 +27,7 @@ TABLES = {
               "paper_cable_cable_s", "paper_cable_structure_s"],
     "example_scenes": ["scene", "steps", "mj_step_ms", "sim_ms", "check_ms", "validate_ms",
                        "check_plus_validate_ms", "record_ms", "cost_over_mj_step", "realtime_factor",
-                       "realtime_factor_total"],
+                       "realtime_factor_total", "full_checks", "proven_clear"],
     "targets": ["target", "measured", "met"],
 }
 
@@ -119,9 +120,12 @@ def test_scale_side_by_side_paper_and_examples(bench):
     assert all(int(r["cables"]) < 100 for r in paper if r["case"] == "simple")
 
     _, examples = tables["example_scenes"]
-    assert [r["scene"] for r in examples] == ["drawer", "arm"]
+    scenes = sorted(p.stem for p in (Path(__file__).resolve().parents[1] / "scenes").glob("*.toml"))
+    assert [r["scene"] for r in examples][:2] == ["drawer", "arm"]
+    assert sorted(r["scene"] for r in examples) == scenes
     for r in examples:
         assert int(r["steps"]) > 0
+        assert int(r["full_checks"]) >= 1 and int(r["full_checks"]) + int(r["proven_clear"]) <= int(r["steps"]) + 1
         assert _positive(r["mj_step_ms"]) and _positive(r["check_ms"]) and _positive(r["realtime_factor"])
 
     _, targets = tables["targets"]
