@@ -516,6 +516,18 @@ class Advancement:
         self.full += 1
         self._ok = self._pairs_ok = False
 
+    def start_pairs(self, poses: np.ndarray, pairs: tuple[np.ndarray, np.ndarray],
+                    pair_bound: np.ndarray) -> None:
+        """Restart the part-pair condition alone (:meth:`part_pairs_clear`)
+        at this state: after a full check whose cable checks left no gaps
+        (a pair inside the clearance), the part-part check can still be
+        proven clear on later full checks."""
+        self._poses = np.array(poses, float)
+        self._pi, self._pj = pairs
+        mu = 1e-9 * (1.0 + float(np.abs(self._poses[:, :3, 3]).max(initial=0.0)))
+        self._g_pair = np.asarray(pair_bound, float) - self.clearance - mu
+        self._pairs_ok = bool(np.all(self._g_pair > 0))
+
     def proven_clear(self, pts: np.ndarray, poses: np.ndarray) -> bool:
         """True when no pair can be within the clearance at one state (body
         centres (N, 3), part poses (P, 4, 4)); counts it as skipped then."""

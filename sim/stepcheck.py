@@ -195,16 +195,17 @@ class StepChecks:
             if state.step == 0:
                 self._static_parts = any(self._group[self._part_index[r.a]] == self._group[self._part_index[r.b]]
                                          for r in part_records)
+            bound = part_pair_bounds(self.rigid, self.rigid.place(poses), *self._moving_pairs)
             if self.checker.gaps is not None:
                 gap_cable, gap_checked = self.checker.gaps
                 self._gap_part[self.checked_parts] = gap_checked
-                bound = part_pair_bounds(self.rigid, self.rigid.place(poses), *self._moving_pairs)
                 cab, s_c, part, value = self.checker.part_candidates
                 adv.start(pts, poses, gap_cable, self._gap_part, self._moving_pairs, bound,
                           (cab, s_c, self._checked_index[part], value), self.horizon,
                           self.checker.cable_candidates)
             else:
                 adv.stop()
+                adv.start_pairs(poses, self._moving_pairs, bound)
         cable_records = self._focus(cable_records)
         result = StepResult(cable_records + part_records, cable_records, strain, bend, True)
         if self.detect is not None:
