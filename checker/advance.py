@@ -12,7 +12,9 @@ its ``part_candidates`` and ``cable_candidates``, and :func:`part_pair_bounds`).
 - ``dp[k]``: a bound on how far any point of part k moved since k0, its
   translation plus ``||R - R0||_F`` times the part's bounding radius about
   its frame's origin (a plane that rotated: unbounded),
-- ``g[i, k]``: centre i's gap to part k: the smallest, over the elements
+- ``g[i, k]``: centre i's gap to part k (inf when the pair of i's cable
+  and part k is *active*: evaluated directly at every step, as pairs inside
+  the clearance at k0 are by the run): the smallest, over the elements
   next to centre i, of the value minus the clearance of part k's candidates
   on the element, or where there is none the larger of H and the element's
   floor ``F[e, k]``: at k0, the distance in part k's frame between the
@@ -116,8 +118,9 @@ box axis (or, for a plane, the box's lowest point above it), which
 
 So on such a step the pairwise checks (and the simulator's detection used to
 validate them) can be skipped: their answer is "no pair below the
-clearance", exactly what a full check would return. Single-cable checks
-(bend, taut) still run every step. Method ``exact`` (closest points whose
+clearance" apart from the active pairs, exactly what a full check would
+return. Single-cable checks (bend, taut) and the active pairs are still
+evaluated every step, by the caller. Method ``exact`` (closest points whose
 exclusion can change discontinuously) and the face-plane distance never
 skip.
 
@@ -223,7 +226,8 @@ class Advancement:
     def start(self, pts: np.ndarray, poses: np.ndarray, gap_cable: float, gap_part: np.ndarray,
               pairs: tuple[np.ndarray, np.ndarray], pair_bound: np.ndarray,
               candidates: tuple[np.ndarray, ...] | None = None, horizon: float = 0.0,
-              cable_candidates: tuple[np.ndarray, ...] | None = None) -> None:
+              cable_candidates: tuple[np.ndarray, ...] | None = None,
+              active: tuple[np.ndarray, np.ndarray] | None = None) -> None:
         """A full check ran at this state: cable body centres (N, 3) and part
         poses (P, 4, 4); the checker's gaps (cable, per part (P,), inf for
         parts it does not check) and part pairs with their distance bounds.
@@ -236,7 +240,10 @@ class Advancement:
         ``cable_candidates``: the checker's self and cable-cable candidates
         (cable a, s_a, cable b, s_b, value - clearance) found up to
         ``horizon``; with them cable pairs are bounded per pair of body
-        centres and per pair of blocks, else all by ``gap_cable``."""
+        centres and per pair of blocks, else all by ``gap_cable``.
+        ``active``: (cable, part index in ``poses``) pairs left out of the
+        bound because the caller evaluates them itself at every step (pairs
+        inside the clearance at this state)."""
         self.full += 1
         self._pts = np.array(pts, float)
         self._rot = np.array(poses[:, :3, :3], float)
@@ -264,6 +271,9 @@ class Advancement:
                 count = hi - lo + 1
                 rows = np.repeat(lo, count) + (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count))
                 np.minimum.at(g, (rows, np.repeat(part, count)), np.repeat(value, count))
+        if active is not None:
+            for c, k in zip(*active):
+                g[self._offsets[c]:self._offsets[c + 1], k] = np.inf
         self._g_pt = g - mu
         self._cable_pairs = cable_candidates is not None
         if self._cable_pairs:

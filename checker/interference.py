@@ -886,6 +886,7 @@ class Checker:
         poses: np.ndarray | Sequence[np.ndarray] | None = None,
         exclusions: Sequence[Exclusion] = (),
         horizon: float | None = None,
+        structure_only: bool = False,
     ) -> list[Interference]:
         """Check one scene state; see :func:`check_state`.
 
@@ -898,10 +899,14 @@ class Checker:
             exclusions: arc-length windows where a cable may touch a part.
             horizon: this call's horizon instead of the checker's (0: no
                 gaps, the plain check).
+            structure_only: only cable-structure and keep-out records (no
+                self, cable-cable, bend or taut; no gaps). The cables are
+                discretised all together as always, so these records are
+                the full check's to the bit.
         """
         config = self.config
         horizon = self.horizon if horizon is None else float(horizon)
-        bounds = self.bounds_gaps and horizon > 0.0
+        bounds = self.bounds_gaps and horizon > 0.0 and not structure_only
         parts = self.parts
         tab = None
         if self._tab is not None:
@@ -941,10 +946,12 @@ class Checker:
             limit = config.clearance + (horizon if gaps else 0.0)
             if exact:
                 ch = _Chunks(dp.p, dp.s, dp.cable, has_next, dp.seg)
-                _cable_pairs_exact(dp, ch, config.clearance, hits)
+                if not structure_only:
+                    _cable_pairs_exact(dp, ch, config.clearance, hits)
             else:
                 ch = _Chunks(dp.p, dp.s, dp.cable, has_next, np.arange(len(dp.p)))
-                _cable_pairs_points(dp, ch, config.clearance, hits, limit, self.stretch if gaps else 0.0)
+                if not structure_only:
+                    _cable_pairs_points(dp, ch, config.clearance, hits, limit, self.stretch if gaps else 0.0)
             if tab is not None:
                 if exact:
                     _structure_exact(dp, ch, tab, config, excl, hits)
@@ -953,7 +960,8 @@ class Checker:
                     # or leave a window bound the gaps too
                     near = (excl[0], excl[1] + self.stretch, excl[2] - self.stretch, excl[3]) if gaps else None
                     _structure_points(dp, ch, tab, config, excl, hits, limit, near)
-            _single_cable(cables, config.clearance, hits)
+            if not structure_only:
+                _single_cable(cables, config.clearance, hits)
             self.gaps = hits.gaps(config.clearance, horizon, len(parts)) if gaps else None
             self.part_candidates = hits.part_candidates(config.clearance) if gaps else None
             self.cable_candidates = hits.cable_candidates(config.clearance) if gaps else None

@@ -2,9 +2,14 @@
 
 For every state: the cables' lengths and smallest bend radii, and the
 records a full check would return. States the skip rule proves clear
-(:mod:`checker.advance`) get only their single-cable records (bend, taut)
-and the replayed same-body part records; the others are checked in full and,
-when the scene validates, compared with MuJoCo's own contacts for the same
+(:mod:`checker.advance`) get only their single-cable records (bend, taut),
+the replayed same-body part records and the records of the *active* pairs:
+cable-structure and keep-out pairs that were inside (or within a tenth of
+the horizon of) the clearance at the last full check, which the skip rule
+leaves out and which are checked on their own (a cable lying on an arm
+link, or held in a part just inside its attachment window, would otherwise
+stop all skipping). The other states are checked in full and, when the
+scene validates, compared with MuJoCo's own contacts for the same
 positions.
 
 Why batches: a cable has a few dozen body centres, so numpy's cost per call,
@@ -36,7 +41,7 @@ from sim.contacts import Contacts
 from sim.loop import StepState
 from sim.sweep import DEFAULT_PRECISION_M, part_set, part_shapes, selection
 
-_PAIRWISE = (PairType.SELF, PairType.CABLE_CABLE, PairType.CABLE_STRUCTURE, PairType.KEEPOUT)
+_CABLE_PAIRS = (PairType.SELF, PairType.CABLE_CABLE)
 
 BATCH = 32
 """Consecutive states checked together (a run's states arrive this many at a time)."""
@@ -44,6 +49,11 @@ BATCH = 32
 ADVANCE_HORIZON_RADII = 2.0
 """Conservative advancement: candidates are evaluated up to the clearance
 plus this many (largest) cable radii at a full check..."""
+
+ACTIVE_HORIZONS = 0.1
+"""Cable-structure and keep-out pairs whose gap at a full check is below this
+many horizons are *active*: checked on their own at every state instead of
+bounding the skip (checker.advance)."""
 
 ADVANCE_STRETCH_RADII = 0.25
 """... and up to this many (smallest) cable radii of arc length inside the
@@ -133,6 +143,10 @@ class StepChecks:
             self._checked_index = np.nonzero(checked)[0]
         self._static_parts = False   # same-body part records exist (replayed every step)
         self._horizon_next = True
+        # cable-structure and keep-out pairs inside the clearance at the last
+        # full check: evaluated on their own at every state proven clear
+        self._active: tuple[int, ...] = ()
+        self._active_checkers: dict[tuple[int, ...], tuple[Checker, np.ndarray]] = {}
         self.validation = Validation(scene.check.clearance, config.method,
                                      frozenset(p.name for p in built.parts if p.shape == "mesh"),
                                      unit=scene.scale, unit_name=scene.units)
@@ -172,10 +186,26 @@ class StepChecks:
                       bend: np.ndarray) -> StepResult:
         """No pair can be within the clearance: what a full check returns is
         the single-cable records and the replayed same-body part records."""
-        cable_records = self.checker.check_single(self._cable_states(state)) if single else []
+        cables = self._cable_states(state) if (single or self._active) else []
+        cable_records = self.checker.check_single(cables) if single else []
+        if self._active:
+            sub, index = self._active_checker()
+            cable_records = sub.check(cables, state.part_poses[index], self.exclusions, 0.0,
+                                      structure_only=True) + cable_records
         cable_records = self._focus(cable_records)
         part_records = self.part_checker.check(state.part_poses) if self._static_parts else []
         return StepResult(cable_records + part_records, cable_records, strain, bend, False)
+
+    def _active_checker(self) -> tuple[Checker, np.ndarray]:
+        """A checker of the active pairs' parts alone, and their indices in the poses."""
+        got = self._active_checkers.get(self._active)
+        if got is None:
+            position = {name: j for j, name in enumerate(p.name for p in self.checker.parts)}
+            index = np.array(self._active, np.int64)
+            sub = Checker([self.checker.parts[position[self.built.parts[k].name]] for k in self._active],
+                          self.config)
+            got = self._active_checkers[self._active] = (sub, index)
+        return got
 
     def _full(self, state: StepState, pts: np.ndarray, poses: np.ndarray, strain: np.ndarray,
               bend: np.ndarray) -> StepResult:
@@ -191,7 +221,8 @@ class StepChecks:
         else:
             part_records = self.part_checker.check(poses)
         if adv is not None:
-            self._horizon_next = not any(r.type in _PAIRWISE for r in cable_records)
+            # only a self or cable-cable pair inside the clearance stops the skipping
+            self._horizon_next = not any(r.type in _CABLE_PAIRS for r in cable_records)
             if state.step == 0:
                 self._static_parts = any(self._group[self._part_index[r.a]] == self._group[self._part_index[r.b]]
                                          for r in part_records)
@@ -200,10 +231,18 @@ class StepChecks:
                 gap_cable, gap_checked = self.checker.gaps
                 self._gap_part[self.checked_parts] = gap_checked
                 cab, s_c, part, value = self.checker.part_candidates
+                part = self._checked_index[part]
+                # pairs within ACTIVE_HORIZONS of the clearance (records, and a
+                # cable held in a part just inside its attachment window) would
+                # stop the skipping at once: they are evaluated on their own
+                near = value < ACTIVE_HORIZONS * self.horizon
+                key = np.unique(cab[near] * len(self.built.parts) + part[near])
+                active = (key // len(self.built.parts), key % len(self.built.parts))
+                self._active = tuple(np.unique(active[1]).tolist())
                 adv.start(pts, poses, gap_cable, self._gap_part, self._moving_pairs, bound,
-                          (cab, s_c, self._checked_index[part], value), self.horizon,
-                          self.checker.cable_candidates)
+                          (cab, s_c, part, value), self.horizon, self.checker.cable_candidates, active)
             else:
+                self._active = ()
                 adv.stop()
                 adv.start_pairs(poses, self._moving_pairs, bound)
         cable_records = self._focus(cable_records)

@@ -348,3 +348,26 @@ def test_checker_reused_across_poses_matches_check_state(method):
         [(x.type, x.min_distance, x.s) for x in check_state(cables, parts0, cfg, ex)]
     with pytest.raises(ValueError):
         checker.check(cables, np.zeros((len(shapes), 4, 4)), ex)
+
+
+@pytest.mark.parametrize("method", ["points", "exact"])
+def test_structure_only_is_the_full_checks_structure_records(method):
+    """A checker of some of the parts, structure_only: exactly the full
+    check's cable-structure and keep-out records against those parts (the
+    run evaluates pairs inside the clearance this way on skipped steps)."""
+    from checker.interference import Checker
+    seen = 0
+    for seed in range(40):
+        cables, parts = random_scene(seed, n_cables=3, n_parts=5)
+        cfg = CheckConfig(method=method, clearance=0.01)
+        ex = [Exclusion(cables[0].name, parts[1].name, 0.0, 0.03)]
+        full = Checker(parts, cfg).check(cables, None, ex)
+        some = [parts[k] for k in (1, 3, len(parts) - 1)]
+        names = {p.name for p in some}
+        sub = Checker(some, cfg).check(cables, None, ex, 0.0, structure_only=True)
+        want = [r for r in full if r.type in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) and r.b in names]
+        assert [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in sub] == \
+            [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in want]
+        assert all(np.array_equal(a.where, b.where) for a, b in zip(sub, want))
+        seen += len(want)
+    assert seen > 10
