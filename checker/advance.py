@@ -132,6 +132,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from checker.cable import polyline_arc_lengths
 from checker.closest import row_norm
 from checker.partset import PartSet, Placement
 
@@ -255,8 +256,8 @@ class Advancement:
         gap_part = np.asarray(gap_part, float)
         self._g_part = gap_part - mu
         n, n_p = len(self._pts), len(gap_part)
-        cum = np.concatenate([[0.0], np.cumsum(np.where(self._valid, self._seg_raw, 0.0))])
-        self._s_c = cum - cum[self._first][self._cable]           # arc length of each centre
+        # arc length of each centre, as densify_batch computes it
+        self._s_c = polyline_arc_lengths(np.where(self._valid, self._seg_raw, 0.0), self._offsets)
         u0 = (self._pts[None] - self._pos[:, None]) @ self._rot                  # R^T (x - t)
         if candidates is None:
             g = np.broadcast_to(gap_part, (n, n_p)).copy()

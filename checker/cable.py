@@ -78,6 +78,28 @@ def resample(points: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray
     return pts, s_new
 
 
+def polyline_arc_lengths(step: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Arc length (N,) of every point along its own polyline.
+
+    ``step`` (N - 1,): the length of element i (points i, i + 1; anything
+    where the two are on different polylines); ``offsets`` (C + 1,) as for
+    :func:`densify_batch`. Each polyline's lengths are summed on their own,
+    so they do not depend on the polylines before it (the same bits as
+    :func:`arc_length`, whichever polylines are batched together).
+    """
+    offsets = np.asarray(offsets, dtype=np.int64)
+    counts = np.diff(offsets)
+    n = int(offsets[-1])
+    if n == 0:
+        return np.zeros(0)
+    cable = np.repeat(np.arange(len(counts)), counts)
+    pos = np.arange(n) - offsets[:-1][cable]
+    pad = np.zeros((len(counts), int(counts.max())))
+    later = pos > 0                       # element i - 1 leads to point i
+    pad[cable[later], pos[later]] = step[np.nonzero(later)[0] - 1]
+    return np.cumsum(pad, axis=1)[cable, pos]
+
+
 def densify_batch(
     points: np.ndarray, offsets: np.ndarray, spacing: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -105,8 +127,7 @@ def densify_batch(
     lim = np.asarray(spacing, dtype=float)[cable_of_pt[:-1]]
     pieces = np.where(valid, np.maximum(1, np.ceil(seg_len / lim * (1.0 - 1e-12))).astype(np.int64), 0)
     step = np.where(valid, seg_len, 0.0)
-    cum = np.concatenate([[0.0], np.cumsum(step)])
-    s_pt = cum - cum[offsets[:-1]][cable_of_pt]
+    s_pt = polyline_arc_lengths(step, offsets)
     if np.all(pieces <= 1):  # nothing to split
         return p.copy(), s_pt, cable_of_pt, offsets.copy()
     # Each point emits itself, then pieces-1 interior points of its element.
@@ -263,20 +284,23 @@ class CableMeasures:
         self._offsets = offsets
         self._tiled: dict[int, CableMeasures] = {}
 
-    def many(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def many(self, pts: np.ndarray, at_points: bool = False) -> tuple[np.ndarray, ...]:
         """(lengths (S, C), smallest bend radii (S, C)) of S states of the
         concatenated points (S, N, 3), in one pass (the same bits as calling
-        this per state: every cable of every state is measured on its own)."""
+        this per state: every cable of every state is measured on its own).
+        With ``at_points``, also the bend radius at every point (S, N), the
+        bits of :func:`bend_radius` per cable."""
         s = len(pts)
         if self._none:
-            return np.zeros((s, 0)), np.zeros((s, 0))
+            return (np.zeros((s, 0)), np.zeros((s, 0))) + ((np.zeros((s, 0)),) if at_points else ())
         tiled = self._tiled.get(s)
         if tiled is None:
             n = int(self._offsets[-1])
             starts = (self._offsets[:-1][None, :] + n * np.arange(s)[:, None]).ravel()
             tiled = self._tiled[s] = CableMeasures(np.append(starts, s * n))
         lengths, bend = tiled(np.asarray(pts, float).reshape(-1, 3))
-        return lengths.reshape(s, -1), bend.reshape(s, -1)
+        out = (lengths.reshape(s, -1), bend.reshape(s, -1))
+        return out + ((tiled._r.reshape(s, -1).copy(),) if at_points else ())
 
     def __call__(self, pts: np.ndarray, seg: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(lengths (C,), smallest bend radius (C,)) of the concatenated

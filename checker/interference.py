@@ -56,7 +56,8 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
-from checker.cable import arc_length, bend_radius, densify_batch, self_pair_excluded, taut_margin
+from checker.cable import (arc_length, bend_radius, densify_batch, polyline_arc_lengths,
+                           self_pair_excluded, taut_margin)
 from checker.closest import row_norm, segment_segment
 from checker.records import Interference, PairType, severity_of
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
@@ -798,6 +799,55 @@ def _single_cable(cables: Sequence[CableState], clearance: float, hits: _Hits) -
                      np.array([s[-1]]))
 
 
+def single_records_many(names: Sequence[str], pts: np.ndarray, offsets: np.ndarray,
+                        radius_at: np.ndarray, rest_length: np.ndarray, bend_limit: np.ndarray,
+                        clearance: float) -> list[list[Interference]]:
+    """:meth:`Checker.check_single`'s records for many states at once, to the bit.
+
+    Args:
+        names: the cables' names (C,).
+        pts: (S, N, 3) every state's body centres, cables concatenated.
+        offsets: (C + 1,) start of each cable in a state's centres.
+        radius_at: (S, N) the bend radius at every centre (:func:`bend_radius`'s
+            bits, as :meth:`CableMeasures.many` gives them).
+        rest_length: (C,) rest lengths.
+        bend_limit: (C,) smallest allowed bend radius, nan for none.
+    """
+    n_s, n = pts.shape[:2]
+    out: list[list[Interference]] = [[] for _ in range(n_s)]
+    n_c = len(names)
+    if n_s == 0 or n_c == 0:
+        return out
+    offsets = np.asarray(offsets, np.int64)
+    starts = (offsets[:-1][None] + n * np.arange(n_s)[:, None]).ravel()
+    flat = pts.reshape(-1, 3)
+    s = polyline_arc_lengths(row_norm(np.diff(flat, axis=0)), np.append(starts, n_s * n))
+    ends = np.append(starts[1:], n_s * n) - 1
+    cab = np.tile(np.arange(n_c), n_s)
+    state = np.repeat(np.arange(n_s), n_c)
+    # bend: the first place of the least radius per (state, cable), when finite
+    r = radius_at.ravel()
+    least = np.minimum.reduceat(r, starts)
+    counts = ends - starts + 1
+    at = np.flatnonzero(r == np.repeat(least, counts))
+    poly = np.searchsorted(starts, at, side="right") - 1
+    k = at[np.r_[True, poly[1:] != poly[:-1]]]
+    bend = np.isfinite(least) & ~np.isnan(bend_limit[cab])
+    value_b = least - bend_limit[cab]
+    value_t = taut_margin(s[ends], rest_length[cab])
+    rows = []
+    for i in np.flatnonzero(bend & (value_b < clearance)):
+        rows.append((state[i], PairType.BEND, cab[i], float(value_b[i]), flat[k[i]], float(s[k[i]])))
+    for i in np.flatnonzero(value_t < 0.0):
+        rows.append((state[i], PairType.TAUT, cab[i], float(value_t[i]), flat[ends[i]], float(s[ends[i]])))
+    for st_i, kind, c, d, where, s_i in rows:
+        out[st_i].append(Interference(type=kind, a=names[c], b=names[c], min_distance=d,
+                                      severity=severity_of(d, clearance), where=where, s=s_i, s_b=None))
+    for recs in out:
+        recs.sort(key=lambda r: (r.min_distance, _TYPE_ORDER.index(r.type), r.a, r.b))
+    return out
+
+
 # ---------------------------------------------------------------------------
 
 
@@ -871,6 +921,93 @@ class Checker:
         corner = np.maximum(np.abs(lo), np.abs(hi))
         return np.sqrt(np.einsum("ij,ij->i", corner, corner))
 
+    def _exclusion_table(self, cable_names: Sequence[str], exclusions: Sequence[Exclusion]) -> tuple:
+        """Exclusions as arrays: ((key, lo, hi, n_parts) sorted by key =
+        cable * n_parts + part, cable, lo, hi) for these cables and parts."""
+        cidx = {n: i for i, n in enumerate(cable_names)}
+        pidx = self._pidx
+        ex = [e for e in exclusions if e.cable in cidx and e.part in pidx]
+        ex_c = np.array([cidx[e.cable] for e in ex], dtype=np.int64)
+        ex_p = np.array([pidx[e.part] for e in ex], dtype=np.int64)
+        ex_lo = np.array([min(e.s_min, e.s_max) for e in ex], dtype=float)
+        ex_hi = np.array([max(e.s_min, e.s_max) for e in ex], dtype=float)
+        n_parts = max(len(self.parts), 1)
+        key = ex_c * n_parts + ex_p
+        o = np.argsort(key, kind="stable")
+        return (key[o], ex_lo[o], ex_hi[o], n_parts), ex_c, ex_lo, ex_hi
+
+    def structure_many(self, names: Sequence[str], radii: np.ndarray, pts: np.ndarray,
+                       offsets: np.ndarray, poses: np.ndarray, exclusions: Sequence[Exclusion],
+                       pairs: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
+        """The full check's cable-structure and keep-out records of the given
+        (cable, part) pairs at many states at once, to the bit (method
+        ``points``).
+
+        Args:
+            names, radii: the cables' names and radii (C,).
+            pts: (S, N, 3) every state's body centres, cables concatenated.
+            offsets: (C + 1,) start of each cable in a state's centres.
+            poses: (S, K, 4, 4) the parts' poses at every state.
+            exclusions: as for :meth:`check`.
+            pairs: (cable index, part index) arrays, the pairs to evaluate.
+
+        Returns:
+            per state, its records (worst first).
+        """
+        config = self.config
+        n_s, n = pts.shape[:2]
+        n_c, n_k = len(names), len(self.parts)
+        out: list[list[Interference]] = [[] for _ in range(n_s)]
+        pc, pk = (np.asarray(x, np.int64) for x in pairs)
+        if n_s == 0 or len(pc) == 0 or self._tab is None:
+            return out
+        radii = np.asarray(radii, float)
+        # every state's cables as polylines of their own (arc lengths per
+        # polyline: the bits of discretising each state alone)
+        starts = (np.asarray(offsets[:-1], np.int64)[None] + n * np.arange(n_s)[:, None]).ravel()
+        p, s, poly, _ = densify_batch(pts.reshape(-1, 3), np.append(starts, n_s * n),
+                                      np.tile(config.spacing * radii, n_s))
+        state, cab = poly // n_c, poly % n_c
+        # each point against every active part of its cable
+        o = np.argsort(pc, kind="stable")
+        pc, pk = pc[o], pk[o]
+        cnt = np.bincount(pc, minlength=n_c)
+        first = np.cumsum(cnt) - cnt
+        reps = cnt[cab]
+        it = np.repeat(np.arange(len(p)), reps)
+        j = np.arange(len(it)) - np.repeat(np.cumsum(reps) - reps, reps)
+        k = pk[first[cab[it]] + j]
+        q = state[it] * n_k + k
+        rot = np.ascontiguousarray(poses[:, :, :3, :3]).reshape(-1, 3, 3)
+        trans = np.ascontiguousarray(poses[:, :, :3, 3]).reshape(-1, 3)
+        tab = self._tab
+        loc = np.einsum("ni,nij->nj", p[it] - trans[q], rot[q])      # _PartTable.to_local's arithmetic
+        rad = radii[cab[it]]
+        thr = (rad + config.clearance)[:, None]
+        keep = np.all((loc >= tab.lo[k] - thr) & (loc <= tab.hi[k] + thr), axis=1)
+        excl = self._exclusion_table(names, exclusions)[0]
+        keep &= ~_excluded(cab[it], k, s[it], excl)
+        it, k, loc, rad = it[keep], k[keep], loc[keep], rad[keep]
+        v = _point_distances(tab, k, loc, config.face_plane) - rad
+        keep = v < config.clearance
+        it, k, v = it[keep], k[keep], v[keep]
+        if len(v) == 0:
+            return out
+        # the worst place per (state, cable, part); ties to the smallest arc length
+        o = np.lexsort((s[it], v, k, cab[it], state[it]))
+        it, k, v = it[o], k[o], v[o]
+        head = np.r_[True, (state[it][1:] != state[it][:-1]) | (cab[it][1:] != cab[it][:-1]) | (k[1:] != k[:-1])]
+        it, k = it[head], k[head]
+        rows = zip(state[it].tolist(), cab[it].tolist(), k.tolist(), v[head].tolist(), s[it].tolist(), p[it])
+        for st_i, c, part, d, s_i, where in rows:
+            kind = PairType.KEEPOUT if tab.keepout[part] else PairType.CABLE_STRUCTURE
+            out[st_i].append(Interference(type=kind, a=names[c], b=self.parts[part].name, min_distance=d,
+                                          severity=severity_of(d, config.clearance), where=where,
+                                          s=s_i, s_b=None))
+        for recs in out:
+            recs.sort(key=lambda r: (r.min_distance, _TYPE_ORDER.index(r.type), r.a, r.b))
+        return out
+
     def check_single(self, cables: Sequence[CableState]) -> list[Interference]:
         """Only the single-cable records (bend, taut) of :meth:`check`, in its order."""
         hits = _Hits()
@@ -926,17 +1063,7 @@ class Checker:
         if len(set(cable_names)) != len(cable_names):
             raise ValueError("cable names must be unique")
         if cables:
-            cidx = {n: i for i, n in enumerate(cable_names)}
-            pidx = self._pidx
-            ex = [e for e in exclusions if e.cable in cidx and e.part in pidx]
-            ex_c = np.array([cidx[e.cable] for e in ex], dtype=np.int64)
-            ex_p = np.array([pidx[e.part] for e in ex], dtype=np.int64)
-            ex_lo = np.array([min(e.s_min, e.s_max) for e in ex], dtype=float)
-            ex_hi = np.array([max(e.s_min, e.s_max) for e in ex], dtype=float)
-            n_parts = max(len(parts), 1)
-            key = ex_c * n_parts + ex_p
-            o = np.argsort(key, kind="stable")
-            excl = (key[o], ex_lo[o], ex_hi[o], n_parts)
+            excl, ex_c, ex_lo, ex_hi = self._exclusion_table(cable_names, exclusions)
             exact = config.method == "exact"
             cuts = (np.concatenate([ex_c, ex_c]), np.concatenate([ex_lo, ex_hi])) if exact \
                 else (np.zeros(0, np.int64), np.zeros(0))

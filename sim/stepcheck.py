@@ -31,7 +31,7 @@ import numpy as np
 
 from checker.advance import Advancement, part_pair_bounds
 from checker.cable import CableMeasures, taut_margin
-from checker.interference import Checker
+from checker.interference import Checker, single_records_many
 from checker.parts import PartChecker
 from checker.records import Interference, PairType
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
@@ -145,8 +145,10 @@ class StepChecks:
         self._horizon_next = True
         # cable-structure and keep-out pairs inside the clearance at the last
         # full check: evaluated on their own at every state proven clear
-        self._active: tuple[int, ...] = ()
-        self._active_checkers: dict[tuple[int, ...], tuple[Checker, np.ndarray]] = {}
+        self._active: tuple[np.ndarray, np.ndarray] = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        self._names = [c.name for c in built.cables]
+        self._offsets = offsets
+        self._radii = radii
         self.validation = Validation(scene.check.clearance, config.method,
                                      frozenset(p.name for p in built.parts if p.shape == "mesh"),
                                      unit=scene.scale, unit_name=scene.units)
@@ -155,6 +157,7 @@ class StepChecks:
         limit = np.array([np.inf if c.min_bend_radius is None else c.min_bend_radius
                           for c in built.cables], float)
         self._bend_limit = limit
+        self._bend_limit_nan = np.where(np.isfinite(limit), limit, np.nan)
         self._has_bend_limit = np.isfinite(limit)
 
     def run(self, states: Sequence[StepState]) -> list[StepResult]:
@@ -163,7 +166,7 @@ class StepChecks:
             return []
         pts = np.stack([np.concatenate(s.cables) if s.cables else np.zeros((0, 3)) for s in states])
         poses = np.stack([s.part_poses for s in states])
-        lengths, bend = self._measures.many(pts)
+        lengths, bend, radius_at = self._measures.many(pts, at_points=True)
         strain = lengths / self._rest_length - 1.0
         # a full check's single-cable records: none unless a bend is within
         # the clearance of its limit or a cable is taut
@@ -173,8 +176,10 @@ class StepChecks:
         j = 0
         while j < len(states):
             k = self.advance.clear_run(pts[j:], poses[j:]) if self.advance is not None else 0
-            for i in range(j, j + k):
-                out.append(self._proven_clear(states[i], bool(single[i]), strain[i], bend[i]))
+            if k:
+                part = slice(j, j + k)
+                out += self._proven_clear(states[part], pts[part], poses[part], single[part],
+                                          radius_at[part], strain[part], bend[part])
             j += k
             if j < len(states):
                 out.append(self._full(states[j], pts[j], poses[j], strain[j], bend[j]))
@@ -182,30 +187,32 @@ class StepChecks:
         self.lap("check")
         return out
 
-    def _proven_clear(self, state: StepState, single: bool, strain: np.ndarray,
-                      bend: np.ndarray) -> StepResult:
-        """No pair can be within the clearance: what a full check returns is
-        the single-cable records and the replayed same-body part records."""
-        cables = self._cable_states(state) if (single or self._active) else []
-        cable_records = self.checker.check_single(cables) if single else []
-        if self._active:
-            sub, index = self._active_checker()
-            cable_records = sub.check(cables, state.part_poses[index], self.exclusions, 0.0,
-                                      structure_only=True) + cable_records
-        cable_records = self._focus(cable_records)
-        part_records = self.part_checker.check(state.part_poses) if self._static_parts else []
-        return StepResult(cable_records + part_records, cable_records, strain, bend, False)
-
-    def _active_checker(self) -> tuple[Checker, np.ndarray]:
-        """A checker of the active pairs' parts alone, and their indices in the poses."""
-        got = self._active_checkers.get(self._active)
-        if got is None:
-            position = {name: j for j, name in enumerate(p.name for p in self.checker.parts)}
-            index = np.array(self._active, np.int64)
-            sub = Checker([self.checker.parts[position[self.built.parts[k].name]] for k in self._active],
-                          self.config)
-            got = self._active_checkers[self._active] = (sub, index)
-        return got
+    def _proven_clear(self, states: Sequence[StepState], pts: np.ndarray, poses: np.ndarray,
+                      single: np.ndarray, radius_at: np.ndarray, strain: np.ndarray,
+                      bend: np.ndarray) -> list[StepResult]:
+        """States proven clear since the last full check: what a full check
+        returns is the single-cable records, the active pairs' records and
+        the replayed same-body part records; the first two for all the
+        states at once."""
+        n = len(states)
+        names = self._names
+        records: list[list[Interference]] = [[] for _ in range(n)]
+        flagged = np.flatnonzero(single)
+        if len(flagged):
+            found = single_records_many(names, pts[flagged], self._offsets, radius_at[flagged],
+                                        self._rest_length, self._bend_limit_nan, self.config.clearance)
+            for i, recs in zip(flagged.tolist(), found):
+                records[i] = recs
+        if len(self._active[0]):
+            found = self.checker.structure_many(names, self._radii, pts, self._offsets,
+                                                poses[:, self.checked_parts], self.exclusions, self._active)
+            records = [a + b for a, b in zip(found, records)]
+        out = []
+        for state, recs, st, bd in zip(states, records, strain, bend):
+            cable_records = self._focus(recs)
+            part_records = self.part_checker.check(state.part_poses) if self._static_parts else []
+            out.append(StepResult(cable_records + part_records, cable_records, st, bd, False))
+        return out
 
     def _full(self, state: StepState, pts: np.ndarray, poses: np.ndarray, strain: np.ndarray,
               bend: np.ndarray) -> StepResult:
@@ -231,18 +238,18 @@ class StepChecks:
                 gap_cable, gap_checked = self.checker.gaps
                 self._gap_part[self.checked_parts] = gap_checked
                 cab, s_c, part, value = self.checker.part_candidates
-                part = self._checked_index[part]
                 # pairs within ACTIVE_HORIZONS of the clearance (records, and a
                 # cable held in a part just inside its attachment window) would
                 # stop the skipping at once: they are evaluated on their own
                 near = value < ACTIVE_HORIZONS * self.horizon
-                key = np.unique(cab[near] * len(self.built.parts) + part[near])
-                active = (key // len(self.built.parts), key % len(self.built.parts))
-                self._active = tuple(np.unique(active[1]).tolist())
+                n_k = max(len(self.checker.parts), 1)
+                key = np.unique(cab[near] * n_k + part[near])
+                self._active = (key // n_k, key % n_k)               # (cable, checker part)
+                part = self._checked_index[part]
                 adv.start(pts, poses, gap_cable, self._gap_part, self._moving_pairs, bound,
-                          (cab, s_c, part, value), self.horizon, self.checker.cable_candidates, active)
+                          (cab, s_c, part, value), self.horizon, self.checker.cable_candidates,
+                          (self._active[0], self._checked_index[self._active[1]]))
             else:
-                self._active = ()
                 adv.stop()
                 adv.start_pairs(poses, self._moving_pairs, bound)
         cable_records = self._focus(cable_records)

@@ -114,3 +114,15 @@ def test_cable_measures_many_states_same_bits():
         for k, pts in enumerate(states):
             one_l, one_b = m(pts)
             assert np.array_equal(lengths[k], one_l) and np.array_equal(bend[k], one_b)
+
+
+def test_arc_lengths_do_not_depend_on_the_polylines_batched_before():
+    """densify_batch's arc lengths are each polyline's own (arc_length's bits),
+    so checking many states at once gives the answers of checking each."""
+    rng = np.random.default_rng(5)
+    polys = [np.cumsum(rng.normal(size=(int(rng.integers(2, 12)), 3)) * 10 ** rng.uniform(-3, 3), 0)
+             for _ in range(8)]
+    off = np.concatenate([[0], np.cumsum([len(p) for p in polys])])
+    _, s, cab, new_off = densify_batch(np.concatenate(polys), off, np.full(len(polys), np.inf))
+    for c, p in enumerate(polys):
+        assert np.array_equal(s[new_off[c]:new_off[c + 1]], arc_length(p))

@@ -371,3 +371,65 @@ def test_structure_only_is_the_full_checks_structure_records(method):
         assert all(np.array_equal(a.where, b.where) for a, b in zip(sub, want))
         seen += len(want)
     assert seen > 10
+
+
+def test_structure_many_is_each_states_check():
+    """structure_many over a run of states: per state, exactly the records
+    check(structure_only=True) gives for those pairs (values, places, bits)."""
+    from checker.interference import Checker
+    seen = 0
+    for seed in range(25):
+        rng = np.random.default_rng(100 + seed)
+        cables, parts = random_scene(seed, n_cables=3, n_parts=5)
+        cfg = CheckConfig(clearance=0.01)
+        checker = Checker(parts, cfg)
+        ex = [Exclusion(cables[1].name, parts[2].name, 0.01, 0.05)]
+        n_s = int(rng.integers(1, 6))
+        moves = [[c.points + rng.normal(size=c.points.shape) * 0.01 for c in cables] for _ in range(n_s)]
+        poses = np.stack([[p.pose @ pose(rot(rng) if rng.random() < 0.5 else None, rng.normal(size=3) * 0.01)
+                           for p in parts] for _ in range(n_s)])
+        pc = rng.integers(0, 3, 4)
+        pk = rng.integers(0, len(parts), 4)
+        offsets = np.concatenate([[0], np.cumsum([len(c.points) for c in cables])])
+        got = checker.structure_many([c.name for c in cables], np.array([c.radius for c in cables]),
+                                     np.stack([np.concatenate(m) for m in moves]), offsets, poses, ex, (pc, pk))
+        wanted = {(cables[c].name, parts[k].name) for c, k in zip(pc, pk)}
+        for state, recs in zip(range(n_s), got):
+            states = [CableState(c.name, m, c.radius) for c, m in zip(cables, moves[state])]
+            full = checker.check(states, poses[state], ex, 0.0, structure_only=True)
+            want = [r for r in full if (r.a, r.b) in wanted]
+            assert [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in recs] == \
+                [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in want]
+            assert all(np.array_equal(a.where, b.where) for a, b in zip(recs, want))
+            seen += len(want)
+    assert seen > 10
+
+
+def test_single_records_many_is_each_states_check_single():
+    from checker.cable import CableMeasures
+    from checker.interference import Checker, single_records_many
+    rng = np.random.default_rng(8)
+    seen = set()
+    for trial in range(40):
+        counts = rng.integers(3, 12, rng.integers(1, 4))
+        offsets = np.concatenate([[0], np.cumsum(counts)])
+        n_s = int(rng.integers(1, 5))
+        pts = np.cumsum(rng.normal(size=(n_s, offsets[-1], 3)) * 0.01, axis=1)
+        if trial % 4 == 0:
+            pts[:, 2] = pts[:, 1]                        # a zero-length element
+        rest = np.array([float(np.sum(np.linalg.norm(np.diff(pts[0, a:b], axis=0), axis=1)))
+                         for a, b in zip(offsets[:-1], offsets[1:])]) * rng.uniform(0.97, 1.01, len(counts))
+        limit = np.where(rng.random(len(counts)) < 0.7, rng.uniform(0.001, 0.02, len(counts)), np.nan)
+        names = [f"c{k}" for k in range(len(counts))]
+        _, _, radius_at = CableMeasures(offsets).many(pts, at_points=True)
+        got = single_records_many(names, pts, offsets, radius_at, rest, limit, 0.005)
+        checker = Checker([], CheckConfig(clearance=0.005))
+        for state in range(n_s):
+            cables = [CableState(n, pts[state, a:b], 0.004, None if np.isnan(lim) else float(lim), float(rl))
+                      for n, a, b, lim, rl in zip(names, offsets[:-1], offsets[1:], limit, rest)]
+            want = checker.check_single(cables)
+            assert [(r.type, r.a, r.min_distance, r.s, r.severity) for r in got[state]] == \
+                [(r.type, r.a, r.min_distance, r.s, r.severity) for r in want]
+            assert all(np.array_equal(a.where, b.where) for a, b in zip(got[state], want))
+            seen |= {r.type for r in want}
+    assert seen == {PairType.BEND, PairType.TAUT}
