@@ -12,9 +12,10 @@ its ``part_candidates`` and ``cable_candidates``, and :func:`part_pair_bounds`).
 - ``dp[k]``: a bound on how far any point of part k moved since k0, its
   translation plus ``||R - R0||_F`` times the part's bounding radius about
   its frame's origin (a plane that rotated: unbounded),
-- ``g[i, k]``: centre i's gap to part k (inf when the pair of i's cable
-  and part k is *active*: evaluated directly at every step, as pairs inside
-  the clearance at k0 are by the run): the smallest, over the elements
+- ``g[i, k]``: centre i's gap to part k (inf when (i, k) is *active*: the
+  caller evaluates every discrete point of the elements next to i against
+  part k directly at every step, as the run does for places inside or
+  near the clearance at k0): the smallest, over the elements
   next to centre i, of the value minus the clearance of part k's candidates
   on the element, or where there is none the larger of H and the element's
   floor ``F[e, k]``: at k0, the distance in part k's frame between the
@@ -242,9 +243,12 @@ class Advancement:
         (cable a, s_a, cable b, s_b, value - clearance) found up to
         ``horizon``; with them cable pairs are bounded per pair of body
         centres and per pair of blocks, else all by ``gap_cable``.
-        ``active``: (cable, part index in ``poses``) pairs left out of the
-        bound because the caller evaluates them itself at every step (pairs
-        inside the clearance at this state)."""
+        ``active``: (cable, part index in ``poses``) pairs the caller
+        evaluates itself at every step (those inside or near the clearance
+        at this state) where they may come close: the cable's body centres
+        whose gap to the part is below ``FAR_HORIZONS * horizon`` are left
+        out of the bound against it and listed in :attr:`active` as
+        (centre, part) arrays; its farther centres still bound the step."""
         self.full += 1
         self._pts = np.array(pts, float)
         self._rot = np.array(poses[:, :3, :3], float)
@@ -272,9 +276,13 @@ class Advancement:
                 count = hi - lo + 1
                 rows = np.repeat(lo, count) + (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count))
                 np.minimum.at(g, (rows, np.repeat(part, count)), np.repeat(value, count))
-        if active is not None:
-            for c, k in zip(*active):
-                g[self._offsets[c]:self._offsets[c + 1], k] = np.inf
+        self.active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        if active is not None and len(active[0]):
+            a_cab, a_part = (np.asarray(x, np.int64) for x in active)
+            near = (self._cable[:, None] == a_cab[None, :]) & (g[:, a_part] < self.FAR_HORIZONS * horizon)
+            rows, j = np.nonzero(near)
+            self.active = (rows, a_part[j])
+            g[self.active] = np.inf
         self._g_pt = g - mu
         self._cable_pairs = cable_candidates is not None
         if self._cable_pairs:

@@ -101,8 +101,8 @@ def polyline_arc_lengths(step: np.ndarray, offsets: np.ndarray) -> np.ndarray:
 
 
 def densify_batch(
-    points: np.ndarray, offsets: np.ndarray, spacing: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    points: np.ndarray, offsets: np.ndarray, spacing: np.ndarray, source: bool = False
+) -> tuple[np.ndarray, ...]:
     """:func:`densify` for many polylines at once.
 
     Args:
@@ -116,6 +116,9 @@ def densify_batch(
         s: (M,) arc length of each along its own polyline.
         cable: (M,) polyline index of each point.
         new_offsets: (C + 1,) start of each polyline in ``pts``.
+        src, own: with ``source``, (M,) the input point each densified point
+            starts from (it lies on the element from ``src`` to ``src + 1``)
+            and (M,) bool, the point is that input point itself.
     """
     p = np.asarray(points, dtype=float).reshape(-1, 3)
     offsets = np.asarray(offsets, dtype=np.int64)
@@ -129,7 +132,8 @@ def densify_batch(
     step = np.where(valid, seg_len, 0.0)
     s_pt = polyline_arc_lengths(step, offsets)
     if np.all(pieces <= 1):  # nothing to split
-        return p.copy(), s_pt, cable_of_pt, offsets.copy()
+        out = (p.copy(), s_pt, cable_of_pt, offsets.copy())
+        return out + ((np.arange(len(p)), np.ones(len(p), bool)) if source else ())
     # Each point emits itself, then pieces-1 interior points of its element.
     emit = np.ones(len(p), dtype=np.int64)
     emit[:-1] += np.maximum(pieces - 1, 0)
@@ -143,7 +147,7 @@ def densify_batch(
     s = s_pt[src] + frac * np.r_[step, 0.0][src]
     cable = cable_of_pt[src]
     new_offsets = np.concatenate([[0], np.cumsum(np.bincount(cable, minlength=n_c))])
-    return pts, s, cable, new_offsets
+    return (pts, s, cable, new_offsets) + ((src, j == 0) if source else ())
 
 
 def densify(points: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]:

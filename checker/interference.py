@@ -938,10 +938,15 @@ class Checker:
 
     def structure_many(self, names: Sequence[str], radii: np.ndarray, pts: np.ndarray,
                        offsets: np.ndarray, poses: np.ndarray, exclusions: Sequence[Exclusion],
-                       pairs: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
-        """The full check's cable-structure and keep-out records of the given
-        (cable, part) pairs at many states at once, to the bit (method
-        ``points``).
+                       active: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
+        """The full check's cable-structure and keep-out records at many
+        states at once, from the discrete points next to given body centres
+        (method ``points``; to the bit).
+
+        Against part k only the points on elements next to an active
+        (centre, k) entry are evaluated: the centre itself and the points
+        inside its two elements. A record is the worst of those places (the
+        caller knows the others to be clear).
 
         Args:
             names, radii: the cables' names and radii (C,).
@@ -949,7 +954,7 @@ class Checker:
             offsets: (C + 1,) start of each cable in a state's centres.
             poses: (S, K, 4, 4) the parts' poses at every state.
             exclusions: as for :meth:`check`.
-            pairs: (cable index, part index) arrays, the pairs to evaluate.
+            active: (centre index in a state, part index) arrays.
 
         Returns:
             per state, its records (worst first).
@@ -958,25 +963,25 @@ class Checker:
         n_s, n = pts.shape[:2]
         n_c, n_k = len(names), len(self.parts)
         out: list[list[Interference]] = [[] for _ in range(n_s)]
-        pc, pk = (np.asarray(x, np.int64) for x in pairs)
-        if n_s == 0 or len(pc) == 0 or self._tab is None:
+        ci, pi = (np.asarray(x, np.int64) for x in active)
+        if n_s == 0 or len(ci) == 0 or self._tab is None:
             return out
         radii = np.asarray(radii, float)
         # every state's cables as polylines of their own (arc lengths per
         # polyline: the bits of discretising each state alone)
         starts = (np.asarray(offsets[:-1], np.int64)[None] + n * np.arange(n_s)[:, None]).ravel()
-        p, s, poly, _ = densify_batch(pts.reshape(-1, 3), np.append(starts, n_s * n),
-                                      np.tile(config.spacing * radii, n_s))
+        p, s, poly, _, src, own = densify_batch(pts.reshape(-1, 3), np.append(starts, n_s * n),
+                                                np.tile(config.spacing * radii, n_s), source=True)
         state, cab = poly // n_c, poly % n_c
-        # each point against every active part of its cable
-        o = np.argsort(pc, kind="stable")
-        pc, pk = pc[o], pk[o]
-        cnt = np.bincount(pc, minlength=n_c)
-        first = np.cumsum(cnt) - cnt
-        reps = cnt[cab]
-        it = np.repeat(np.arange(len(p)), reps)
-        j = np.arange(len(it)) - np.repeat(np.cumsum(reps) - reps, reps)
-        k = pk[first[cab[it]] + j]
+        # each point against the parts it is active for: its own centre's, or
+        # (inside an element) either end's
+        parts, row = np.unique(pi, return_inverse=True)
+        mark = np.zeros((len(parts), n + 1), bool)
+        mark[row, ci] = True
+        centre = src % n
+        need = mark[:, centre] | (~own & mark[:, centre + 1])
+        kk, it = np.nonzero(need)
+        k = parts[kk]
         q = state[it] * n_k + k
         rot = np.ascontiguousarray(poses[:, :, :3, :3]).reshape(-1, 3, 3)
         trans = np.ascontiguousarray(poses[:, :, :3, 3]).reshape(-1, 3)

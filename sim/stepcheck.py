@@ -141,6 +141,7 @@ class StepChecks:
             self._part_index = {name: k for k, name in enumerate(rigid.names)}
             self._gap_part = np.full(len(built.parts), np.inf)
             self._checked_index = np.nonzero(checked)[0]
+            self._checker_index = np.cumsum(checked) - 1          # built part -> checker part
         self._static_parts = False   # same-body part records exist (replayed every step)
         self._horizon_next = True
         # cable-structure and keep-out pairs inside the clearance at the last
@@ -240,15 +241,17 @@ class StepChecks:
                 cab, s_c, part, value = self.checker.part_candidates
                 # pairs within ACTIVE_HORIZONS of the clearance (records, and a
                 # cable held in a part just inside its attachment window) would
-                # stop the skipping at once: they are evaluated on their own
-                near = value < ACTIVE_HORIZONS * self.horizon
-                n_k = max(len(self.checker.parts), 1)
-                key = np.unique(cab[near] * n_k + part[near])
-                self._active = (key // n_k, key % n_k)               # (cable, checker part)
+                # stop the skipping at once: evaluated on their own wherever
+                # the cable comes near the part (so a contact may slide along)
                 part = self._checked_index[part]
+                near = value < ACTIVE_HORIZONS * self.horizon
+                n_k = max(len(self.built.parts), 1)
+                key = np.unique(cab[near] * n_k + part[near])
                 adv.start(pts, poses, gap_cable, self._gap_part, self._moving_pairs, bound,
                           (cab, s_c, part, value), self.horizon, self.checker.cable_candidates,
-                          (self._active[0], self._checked_index[self._active[1]]))
+                          (key // n_k, key % n_k))
+                centre, built_part = adv.active
+                self._active = (centre, self._checker_index[built_part])   # (centre, checker part)
             else:
                 adv.stop()
                 adv.start_pairs(poses, self._moving_pairs, bound)

@@ -139,20 +139,35 @@ def test_part_gap_floor_from_boxes():
     assert not c.proven_clear(flat - [0.0, 0.0, 9.5], poses)
 
 
-def test_active_pairs_leave_the_bound():
-    """A cable inside a part's clearance (a candidate below 0) proves nothing,
-    unless that (cable, part) pair is active (the run checks it itself at
-    every step): then only the other parts bound the cable."""
+def test_active_places_leave_the_bound():
+    """A place inside a part's clearance (a candidate below 0) proves
+    nothing, unless its (cable, part) pair is active (the run checks the
+    points near the part itself at every step): then the centres within
+    FAR_HORIZONS horizons of the part are free against it, and everything
+    else still bounds the step."""
     pts = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]])
     poses = np.tile(np.eye(4), (2, 1, 1))
-    cand = (np.array([0]), np.array([0.5]), np.array([0]), np.array([-0.2]))    # part 0: inside
+    cand = (np.array([0]), np.array([0.5]), np.array([0]), np.array([-0.2]))    # element 0 in part 0
     z = np.zeros(0, np.int64)
     for active, expect in ((None, False), ((np.array([0]), np.array([0])), True)):
         a = Advancement(np.array([0, 3]), np.array([5.0]), np.array([1.0, 1.0]), 0.5, 0.1)
         a.start(pts, poses, 1.0, np.array([-0.2, 2.0]), (z, z), np.zeros(0), cand, 2.0, active=active)
         assert a.proven_clear(pts + [0.0, 0.1, 0.0], poses) is expect
-    # part 1 still bounds it: its gap is the horizon, 2
-    assert not a.proven_clear(pts + [0.0, 2.1, 0.0], poses)
+    assert a.active[0].tolist() == [0, 1, 2] and a.active[1].tolist() == [0, 0, 0]
+    moved = pts.copy()
+    moved[0] += [0.0, 2.1, 0.0]
+    assert not a.proven_clear(moved, poses)          # part 1 still bounds it (gap: the horizon, 2)
+    # a far centre (no box: gap the horizon; 8 horizons = 16 away) stays bounded
+    far = np.array([[0.0, 0, 0], [1, 0, 0], [20, 0, 0], [21, 0, 0]])
+    box = (np.array([[-0.5, -0.5, -0.5], [-0.5, -0.5, -0.5]]), np.array([[0.5, 0.5, 0.5], [0.5, 0.5, 0.5]]))
+    b = Advancement(np.array([0, 4]), np.array([50.0]), np.array([1.0, 1.0]), 0.5, 0.1, np.array([0.1]), box)
+    b.start(far, poses, 100.0, np.array([-0.2, 2.0]), (z, z), np.zeros(0), cand, 2.0,
+            active=(np.array([0]), np.array([0])))
+    assert b.active[0].tolist() == [0, 1, 2]         # centre 3's element is 19.5 from the box
+    moved = far.copy()
+    moved[3] -= [17.0, 0.0, 0.0]
+    assert not b.proven_clear(moved, poses)
+    assert b.proven_clear(far + [0.0, 0.0, 1.9], poses)
 
 
 def test_bound_stretch_and_gaps_at_or_below_zero():

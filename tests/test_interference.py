@@ -374,7 +374,8 @@ def test_structure_only_is_the_full_checks_structure_records(method):
 
 
 def test_structure_many_is_each_states_check():
-    """structure_many over a run of states: per state, exactly the records
+    """structure_many over a run of states, every centre of some cables
+    active for some parts: per state, exactly the records
     check(structure_only=True) gives for those pairs (values, places, bits)."""
     from checker.interference import Checker
     seen = 0
@@ -391,8 +392,11 @@ def test_structure_many_is_each_states_check():
         pc = rng.integers(0, 3, 4)
         pk = rng.integers(0, len(parts), 4)
         offsets = np.concatenate([[0], np.cumsum([len(c.points) for c in cables])])
+        centres = np.concatenate([np.arange(offsets[c], offsets[c + 1]) for c in pc])
+        owners = np.concatenate([np.full(offsets[c + 1] - offsets[c], k) for c, k in zip(pc, pk)])
         got = checker.structure_many([c.name for c in cables], np.array([c.radius for c in cables]),
-                                     np.stack([np.concatenate(m) for m in moves]), offsets, poses, ex, (pc, pk))
+                                     np.stack([np.concatenate(m) for m in moves]), offsets, poses, ex,
+                                     (centres, owners))
         wanted = {(cables[c].name, parts[k].name) for c, k in zip(pc, pk)}
         for state, recs in zip(range(n_s), got):
             states = [CableState(c.name, m, c.radius) for c, m in zip(cables, moves[state])]
@@ -433,3 +437,27 @@ def test_single_records_many_is_each_states_check_single():
             assert all(np.array_equal(a.where, b.where) for a, b in zip(got[state], want))
             seen |= {r.type for r in want}
     assert seen == {PairType.BEND, PairType.TAUT}
+
+
+def test_structure_many_evaluates_only_next_to_active_centres():
+    """One active centre: the record is the worst over the points of its two
+    elements (the caller knows the rest to be clear); elsewhere nothing is
+    looked at."""
+    from checker.interference import Checker
+    box = PartState("box", Shape(ShapeType.BOX, [0.05, 0.05, 0.05]), pose())
+    # along x, 0.1 above the box top except centre 4, 2 mm above it (r 1 mm: value 1 mm)
+    pts = np.stack([np.linspace(-0.2, 0.2, 9), np.zeros(9), np.full(9, 0.15)], axis=1)
+    pts[4, 2] = 0.052
+    checker = Checker([box], CheckConfig(clearance=0.005))
+    names, radii, off = ["c"], np.array([0.001]), np.array([0, 9])
+    full = checker.check([CableState("c", pts, 0.001)], None, (), 0.0, structure_only=True)
+    assert len(full) == 1 and abs(full[0].min_distance - 0.001) < 1e-12
+    got = checker.structure_many(names, radii, pts[None], off, np.eye(4)[None, None], (),
+                                 (np.array([4]), np.array([0])))[0]
+    assert [(r.min_distance, r.s) for r in got] == [(full[0].min_distance, full[0].s)]
+    assert abs(got[0].s - checker.check([CableState("c", pts, 0.001)], None, (), 0.0,
+                                        structure_only=True)[0].s) == 0.0
+    far = checker.structure_many(names, radii, pts[None], off, np.eye(4)[None, None], (),
+                                 (np.array([0]), np.array([0])))[0]
+    assert far == []                    # centre 0's elements stay 0.1 m above
+
