@@ -523,8 +523,8 @@ def example_scenes_table(quick: bool, out: Path) -> tuple[Table, dict]:
         "contacts; record: rerun logging (sampled at 100 frames per simulated second).",
         "realtime_factor: simulated seconds over the step loop's wall time; _total adds building and settling.",
         "full_checks / proven_clear: checked steps run in full and steps the skip rule (checker.advance) "
-        "proved clear; a scene with a pair inside the clearance (arm, and the scenes built to show an "
-        "event) checks in full until the pair is clear again.",
+        "proved clear; a cable-structure pair inside the clearance is then checked on its own, but a "
+        "self or cable-cable pair inside it (crossing, coil_self) keeps every step a full check.",
     ] + (["--quick: each scene runs its first simulated second only."] if quick else [])
     return table, found
 

@@ -234,3 +234,17 @@ def test_only_restricts_a_run_to_one_assembly(tmp_path: Path):
 def test_only_unknown_assembly_exits_2(small_scene: Path, capsys):
     assert main(["run", str(small_scene), "--no-record", "--only", "nope"]) == 2
     assert "--only" in capsys.readouterr().err
+
+
+def test_full_every_step_checks_and_compares_every_step(small_scene: Path, tmp_path: Path, capsys):
+    fast, full = tmp_path / "fast.json", tmp_path / "full.json"
+    assert main(["run", str(small_scene), "--no-record", "--report", str(fast)]) == 0
+    out = capsys.readouterr().out
+    assert main(["run", str(small_scene), "--no-record", "--full-every-step", "--report", str(full)]) == 0
+    out_full = capsys.readouterr().out
+    a, b = json.loads(fast.read_text()), json.loads(full.read_text())
+    assert a["settings"]["advance"]["proven_clear_steps"] > 0 and "proven clear" in out
+    assert b["settings"]["advance"] is None and "proven clear" not in out_full
+    assert b["validation"]["compared_steps"] == b["settings"]["checked_steps"]
+    assert a["validation"]["compared_steps"] == a["settings"]["advance"]["full_checks"]
+    assert a["events"] == b["events"] and a["pairs"] == b["pairs"]
