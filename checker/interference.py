@@ -802,7 +802,7 @@ def _single_cable(cables: Sequence[CableState], clearance: float, hits: _Hits) -
 def single_records_many(names: Sequence[str], pts: np.ndarray, offsets: np.ndarray,
                         radius_at: np.ndarray, rest_length: np.ndarray, bend_limit: np.ndarray,
                         clearance: float) -> list[list[Interference]]:
-    """:meth:`Checker.check_single`'s records for many states at once, to the bit.
+    """The full check's bend and taut records for many states at once, to the bit.
 
     Args:
         names: the cables' names (C,).
@@ -1013,22 +1013,12 @@ class Checker:
             recs.sort(key=lambda r: (r.min_distance, _TYPE_ORDER.index(r.type), r.a, r.b))
         return out
 
-    def check_single(self, cables: Sequence[CableState]) -> list[Interference]:
-        """Only the single-cable records (bend, taut) of :meth:`check`, in its order."""
-        hits = _Hits()
-        _single_cable(cables, self.config.clearance, hits)
-        cable_names = [c.name for c in cables]
-        out = hits.reduce(self.config.clearance, cable_names, lambda ptype: cable_names)
-        out.sort(key=lambda r: (r.min_distance, _TYPE_ORDER.index(r.type), r.a, r.b))
-        return out
-
     def check(
         self,
         cables: Sequence[CableState],
         poses: np.ndarray | Sequence[np.ndarray] | None = None,
         exclusions: Sequence[Exclusion] = (),
         horizon: float | None = None,
-        structure_only: bool = False,
     ) -> list[Interference]:
         """Check one scene state; see :func:`check_state`.
 
@@ -1041,14 +1031,10 @@ class Checker:
             exclusions: arc-length windows where a cable may touch a part.
             horizon: this call's horizon instead of the checker's (0: no
                 gaps, the plain check).
-            structure_only: only cable-structure and keep-out records (no
-                self, cable-cable, bend or taut; no gaps). The cables are
-                discretised all together as always, so these records are
-                the full check's to the bit.
         """
         config = self.config
         horizon = self.horizon if horizon is None else float(horizon)
-        bounds = self.bounds_gaps and horizon > 0.0 and not structure_only
+        bounds = self.bounds_gaps and horizon > 0.0
         parts = self.parts
         tab = None
         if self._tab is not None:
@@ -1078,12 +1064,10 @@ class Checker:
             limit = config.clearance + (horizon if gaps else 0.0)
             if exact:
                 ch = _Chunks(dp.p, dp.s, dp.cable, has_next, dp.seg)
-                if not structure_only:
-                    _cable_pairs_exact(dp, ch, config.clearance, hits)
+                _cable_pairs_exact(dp, ch, config.clearance, hits)
             else:
                 ch = _Chunks(dp.p, dp.s, dp.cable, has_next, np.arange(len(dp.p)))
-                if not structure_only:
-                    _cable_pairs_points(dp, ch, config.clearance, hits, limit, self.stretch if gaps else 0.0)
+                _cable_pairs_points(dp, ch, config.clearance, hits, limit, self.stretch if gaps else 0.0)
             if tab is not None:
                 if exact:
                     _structure_exact(dp, ch, tab, config, excl, hits)
@@ -1092,8 +1076,7 @@ class Checker:
                     # or leave a window bound the gaps too
                     near = (excl[0], excl[1] + self.stretch, excl[2] - self.stretch, excl[3]) if gaps else None
                     _structure_points(dp, ch, tab, config, excl, hits, limit, near)
-            if not structure_only:
-                _single_cable(cables, config.clearance, hits)
+            _single_cable(cables, config.clearance, hits)
             self.gaps = hits.gaps(config.clearance, horizon, len(parts)) if gaps else None
             self.part_candidates = hits.part_candidates(config.clearance) if gaps else None
             self.cable_candidates = hits.cable_candidates(config.clearance) if gaps else None

@@ -144,8 +144,8 @@ class StepChecks:
             self._checker_index = np.cumsum(checked) - 1          # built part -> checker part
         self._static_parts = False   # same-body part records exist (replayed every step)
         self._horizon_next = True
-        # cable-structure and keep-out pairs inside the clearance at the last
-        # full check: evaluated on their own at every state proven clear
+        # (centre, checker part) entries of the active pairs (see ACTIVE_HORIZONS)
+        # at the last full check: evaluated on their own at every state proven clear
         self._active: tuple[np.ndarray, np.ndarray] = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         self._names = [c.name for c in built.cables]
         self._offsets = offsets

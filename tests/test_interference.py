@@ -350,33 +350,10 @@ def test_checker_reused_across_poses_matches_check_state(method):
         checker.check(cables, np.zeros((len(shapes), 4, 4)), ex)
 
 
-@pytest.mark.parametrize("method", ["points", "exact"])
-def test_structure_only_is_the_full_checks_structure_records(method):
-    """A checker of some of the parts, structure_only: exactly the full
-    check's cable-structure and keep-out records against those parts (the
-    run evaluates pairs inside the clearance this way on skipped steps)."""
-    from checker.interference import Checker
-    seen = 0
-    for seed in range(40):
-        cables, parts = random_scene(seed, n_cables=3, n_parts=5)
-        cfg = CheckConfig(method=method, clearance=0.01)
-        ex = [Exclusion(cables[0].name, parts[1].name, 0.0, 0.03)]
-        full = Checker(parts, cfg).check(cables, None, ex)
-        some = [parts[k] for k in (1, 3, len(parts) - 1)]
-        names = {p.name for p in some}
-        sub = Checker(some, cfg).check(cables, None, ex, 0.0, structure_only=True)
-        want = [r for r in full if r.type in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) and r.b in names]
-        assert [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in sub] == \
-            [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in want]
-        assert all(np.array_equal(a.where, b.where) for a, b in zip(sub, want))
-        seen += len(want)
-    assert seen > 10
-
-
 def test_structure_many_is_each_states_check():
     """structure_many over a run of states, every centre of some cables
-    active for some parts: per state, exactly the records
-    check(structure_only=True) gives for those pairs (values, places, bits)."""
+    active for some parts: per state, exactly the full check's records of
+    those pairs (values, places, bits)."""
     from checker.interference import Checker
     seen = 0
     for seed in range(25):
@@ -400,8 +377,9 @@ def test_structure_many_is_each_states_check():
         wanted = {(cables[c].name, parts[k].name) for c, k in zip(pc, pk)}
         for state, recs in zip(range(n_s), got):
             states = [CableState(c.name, m, c.radius) for c, m in zip(cables, moves[state])]
-            full = checker.check(states, poses[state], ex, 0.0, structure_only=True)
-            want = [r for r in full if (r.a, r.b) in wanted]
+            full = checker.check(states, poses[state], ex)
+            want = [r for r in full if (r.a, r.b) in wanted
+                    and r.type in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)]
             assert [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in recs] == \
                 [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in want]
             assert all(np.array_equal(a.where, b.where) for a, b in zip(recs, want))
@@ -409,7 +387,7 @@ def test_structure_many_is_each_states_check():
     assert seen > 10
 
 
-def test_single_records_many_is_each_states_check_single():
+def test_single_records_many_is_each_states_bend_and_taut():
     from checker.cable import CableMeasures
     from checker.interference import Checker, single_records_many
     rng = np.random.default_rng(8)
@@ -431,7 +409,7 @@ def test_single_records_many_is_each_states_check_single():
         for state in range(n_s):
             cables = [CableState(n, pts[state, a:b], 0.004, None if np.isnan(lim) else float(lim), float(rl))
                       for n, a, b, lim, rl in zip(names, offsets[:-1], offsets[1:], limit, rest)]
-            want = checker.check_single(cables)
+            want = [r for r in checker.check(cables) if r.type in (PairType.BEND, PairType.TAUT)]
             assert [(r.type, r.a, r.min_distance, r.s, r.severity) for r in got[state]] == \
                 [(r.type, r.a, r.min_distance, r.s, r.severity) for r in want]
             assert all(np.array_equal(a.where, b.where) for a, b in zip(got[state], want))
@@ -450,13 +428,11 @@ def test_structure_many_evaluates_only_next_to_active_centres():
     pts[4, 2] = 0.052
     checker = Checker([box], CheckConfig(clearance=0.005))
     names, radii, off = ["c"], np.array([0.001]), np.array([0, 9])
-    full = checker.check([CableState("c", pts, 0.001)], None, (), 0.0, structure_only=True)
+    full = [r for r in checker.check([CableState("c", pts, 0.001)]) if r.type is PairType.CABLE_STRUCTURE]
     assert len(full) == 1 and abs(full[0].min_distance - 0.001) < 1e-12
     got = checker.structure_many(names, radii, pts[None], off, np.eye(4)[None, None], (),
                                  (np.array([4]), np.array([0])))[0]
     assert [(r.min_distance, r.s) for r in got] == [(full[0].min_distance, full[0].s)]
-    assert abs(got[0].s - checker.check([CableState("c", pts, 0.001)], None, (), 0.0,
-                                        structure_only=True)[0].s) == 0.0
     far = checker.structure_many(names, radii, pts[None], off, np.eye(4)[None, None], (),
                                  (np.array([0]), np.array([0])))[0]
     assert far == []                    # centre 0's elements stay 0.1 m above
