@@ -229,7 +229,8 @@ class Advancement:
               pairs: tuple[np.ndarray, np.ndarray], pair_bound: np.ndarray,
               candidates: tuple[np.ndarray, ...] | None = None, horizon: float = 0.0,
               cable_candidates: tuple[np.ndarray, ...] | None = None,
-              active: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+              active: tuple[np.ndarray, np.ndarray] | None = None,
+              cable_active: np.ndarray | None = None) -> None:
         """A full check ran at this state: cable body centres (N, 3) and part
         poses (P, 4, 4); the checker's gaps (cable, per part (P,), inf for
         parts it does not check) and part pairs with their distance bounds.
@@ -248,7 +249,11 @@ class Advancement:
         at this state) where they may come close: the cable's body centres
         whose gap to the part is below ``FAR_HORIZONS * horizon`` are left
         out of the bound against it and listed in :attr:`active` as
-        (centre, part) arrays; its farther centres still bound the step."""
+        (centre, part) arrays; its farther centres still bound the step.
+        ``cable_active``: (P, 2) self and cable-cable pairs (a <= b) the
+        caller evaluates itself at every step where they came near: the
+        pairs of body centres their candidates are charged to bound nothing
+        and are listed in :attr:`cable_active` as (centre, centre) arrays."""
         self.full += 1
         self._pts = np.array(pts, float)
         self._rot = np.array(poses[:, :3, :3], float)
@@ -285,8 +290,9 @@ class Advancement:
             g[self.active] = np.inf
         self._g_pt = g - mu
         self._cable_pairs = cable_candidates is not None
+        self.cable_active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         if self._cable_pairs:
-            self._start_cable_pairs(cable_candidates, float(horizon), mu)
+            self._start_cable_pairs(cable_candidates, float(horizon), mu, cable_active)
             cable_ok = (bool(np.all(self._g_cc > 0)) and bool(np.all(self._g_blk > 0))
                         and self._g_far > 0)
         else:
@@ -334,9 +340,12 @@ class Advancement:
         hi = np.minimum(np.searchsorted(key_c, key + eps, "right"), self._offsets[cab + 1] - 1)
         return lo, hi
 
-    def _start_cable_pairs(self, cand: tuple[np.ndarray, ...], horizon: float, mu: float) -> None:
+    def _start_cable_pairs(self, cand: tuple[np.ndarray, ...], horizon: float, mu: float,
+                           active: np.ndarray | None = None) -> None:
         """Gaps of cable pairs per pair of body centres (candidates) and per
-        pair of blocks (everything else): the module docstring's second list."""
+        pair of blocks (everything else): the module docstring's second list.
+        ``active``: (P, 2) cable pairs (a <= b) the caller evaluates itself
+        near their candidates (see :attr:`cable_active`)."""
         n = len(self._pts)
         ca, sa, cb, sb, value = (np.asarray(x) for x in cand)
         ca, cb = ca.astype(np.int64), cb.astype(np.int64)
@@ -345,9 +354,24 @@ class Advancement:
         self._near = self._rad is not None and n > 1
         if self._near:
             self._start_near(horizon, mu)
+        pairs = np.zeros((0, 2), np.int64) if active is None else np.asarray(active, np.int64).reshape(-1, 2)
+        self.cable_active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        member = np.zeros(0, np.int64)
         if len(value) and n:
             lo_a, hi_a = self._bracket(ca, sa)
             lo_b, hi_b = self._bracket(cb, sb)
+            n_c = len(self._offsets) - 1
+            if len(pairs):
+                # the centres of every candidate of an active pair, on either side
+                pid = np.full(n_c * n_c, -1, np.int64)
+                pid[pairs[:, 0] * n_c + pairs[:, 1]] = np.arange(len(pairs))
+                cand_pid = pid[np.minimum(ca, cb) * n_c + np.maximum(ca, cb)]
+                on = cand_pid >= 0
+                k = np.arange(3)
+                rows = np.concatenate([(lo[:, None] + k[None, :])[on] for lo in (lo_a, lo_b)])
+                ok = rows <= np.concatenate([np.broadcast_to(hi[:, None], (len(hi), 3))[on] for hi in (hi_a, hi_b)])
+                owner = np.concatenate([np.broadcast_to(cand_pid[:, None], (len(ca), 3))[on]] * 2)
+                member = np.unique(owner[ok] * n + rows[ok])
             if self._near:                       # near pairs carry their own candidates
                 far_c = ~self._charge_near(ca, lo_a, hi_a, cb, lo_b, hi_b, value)
                 lo_a, hi_a, lo_b, hi_b, value = lo_a[far_c], hi_a[far_c], lo_b[far_c], hi_b[far_c], value[far_c]
@@ -368,6 +392,13 @@ class Advancement:
             ii, jj = key // n, key % n
             same = ii != jj                      # a centre against itself: no relative motion
             ii, jj, gg = ii[same], jj[same], gg[same]
+            if len(member):
+                # centre pairs both of whose centres are evaluated by the caller
+                c_i, c_j = self._cable[ii], self._cable[jj]
+                p_ij = pid[np.minimum(c_i, c_j) * n_c + np.maximum(c_i, c_j)]
+                both = (p_ij >= 0) & np.isin(p_ij * n + ii, member) & np.isin(p_ij * n + jj, member)
+                self.cable_active = (ii[both], jj[both])
+                ii, jj, gg = ii[~both], jj[~both], gg[~both]
         if self._near:
             self._g_near = np.minimum(self._g_near, horizon) - mu
             self._g_near2 = np.where(self._g_near > 0, self._g_near, 0.0) ** 2

@@ -1013,6 +1013,128 @@ class Checker:
             recs.sort(key=lambda r: (r.min_distance, _TYPE_ORDER.index(r.type), r.a, r.b))
         return out
 
+    def cable_pairs_many(self, names: Sequence[str], radii: np.ndarray, pts: np.ndarray,
+                         offsets: np.ndarray, active: tuple[np.ndarray, np.ndarray]
+                         ) -> list[list[Interference]]:
+        """The full check's self and cable-cable records at many states at
+        once, from the discrete places next to given pairs of body centres
+        (method ``points``; to the bit).
+
+        For each active pair of centres (i, j) every discrete point next to
+        i (i itself, the points inside its two elements) is paired with
+        every one next to j, and on one cable also with the midpoint of
+        every piece next to j (and the other way round); a record is the
+        worst of those (the caller knows the others to be clear). Every
+        state must split each element into as many pieces as the first.
+
+        Args:
+            names, radii: the cables' names and radii (C,).
+            pts: (S, N, 3) every state's body centres, cables concatenated.
+            offsets: (C + 1,) start of each cable in a state's centres.
+            active: (centre i, centre j) arrays.
+
+        Returns:
+            per state, its records (worst first).
+        """
+        config = self.config
+        n_s, n = pts.shape[:2]
+        n_c = len(names)
+        out: list[list[Interference]] = [[] for _ in range(n_s)]
+        ci, cj = (np.asarray(x, np.int64) for x in active)
+        if n_s == 0 or len(ci) == 0:
+            return out
+        radii = np.asarray(radii, float)
+        starts = (np.asarray(offsets[:-1], np.int64)[None] + n * np.arange(n_s)[:, None]).ravel()
+        p, s, poly, _, src, own = densify_batch(pts.reshape(-1, 3), np.append(starts, n_s * n),
+                                                np.tile(config.spacing * radii, n_s), source=True)
+        cab, rad = poly % n_c, radii[poly % n_c]
+        m = len(p) // n_s                                  # points per state (the same in each)
+        if m * n_s != len(p) or not np.all(src.reshape(n_s, m) - n * np.arange(n_s)[:, None] == src[:m]):
+            raise ValueError("every state must split its elements into as many pieces as the first")
+        # one state's layout: the points next to each centre (its own point,
+        # the points inside its two elements) and the pieces inside them
+        c0, own0 = src[:m], own[:m]
+        piece0 = np.r_[poly[1:m] == poly[:m - 1], False]
+        pt_c = np.concatenate([c0[own0], c0[~own0], c0[~own0] + 1])           # centre each point is next to
+        pt_i = np.concatenate([np.flatnonzero(own0), np.flatnonzero(~own0), np.flatnonzero(~own0)])
+        pc_c = np.concatenate([c0[piece0], c0[piece0] + 1])                  # centre each piece is next to
+        pc_i = np.concatenate([np.flatnonzero(piece0)] * 2)
+
+        def around(centres, of_c, of_i):
+            """(which entry, item index) for the items next to each centre."""
+            o = np.argsort(of_c, kind="stable")
+            of_c, of_i = of_c[o], of_i[o]
+            lo = np.searchsorted(of_c, centres, "left")
+            cnt = np.searchsorted(of_c, centres, "right") - lo
+            entry = np.repeat(np.arange(len(centres)), cnt)
+            return entry, of_i[np.repeat(lo, cnt) + np.arange(int(cnt.sum())) - np.repeat(np.cumsum(cnt) - cnt, cnt)]
+
+        def product(ea, xa, eb, xb):
+            """Every (x, y) with x from side a and y from side b of one entry."""
+            oa, ob = np.argsort(ea, kind="stable"), np.argsort(eb, kind="stable")
+            ea, xa, eb, xb = ea[oa], xa[oa], eb[ob], xb[ob]
+            na = np.bincount(ea, minlength=len(ci))
+            nb = np.bincount(eb, minlength=len(ci))
+            fa, fb = np.cumsum(na) - na, np.cumsum(nb) - nb
+            per = na * nb
+            e = np.repeat(np.arange(len(ci)), per)
+            r = np.arange(int(per.sum())) - np.repeat(np.cumsum(per) - per, per)
+            return xa[fa[e] + r // np.maximum(nb[e], 1)], xb[fb[e] + r % np.maximum(nb[e], 1)]
+
+        def tiled(x, y):
+            """Unique (x, y) of one state, for every state."""
+            key = np.unique(x * m + y)
+            off = (m * np.arange(n_s))[:, None]
+            return ((key // m)[None] + off).ravel(), ((key % m)[None] + off).ravel()
+
+        ia, xa = around(ci, pt_c, pt_i)
+        ib, xb = around(cj, pt_c, pt_i)
+        x, y = product(ia, xa, ib, xb)
+        lo, hi = tiled(np.minimum(x, y), np.maximum(x, y))
+        keep = lo != hi
+        lo, hi = lo[keep], hi[keep]
+        clear = config.clearance
+        same = cab[lo] == cab[hi]
+        # cable-cable: the lower index is cable a (the full check's order)
+        d = row_norm(p[lo] - p[hi]) - rad[lo] - rad[hi]
+        o = ~same & (d < clear)
+        rows = [(PairType.CABLE_CABLE, lo[o], hi[o], d[o], s[hi[o]])]
+        # self, point against point
+        d = row_norm(p[lo] - p[hi]) - 2 * rad[lo]
+        o = same & (d < clear) & ~self_pair_excluded(s[lo], s[hi], rad[lo], clear)
+        rows.append((PairType.SELF, lo[o], lo[o], d[o], s[hi[o]]))
+        # self, a point against the midpoint of a piece not touching it
+        pa, qa = around(ci, pc_c, pc_i)
+        pb, qb = around(cj, pc_c, pc_i)
+        q1, e1 = product(ia, xa, pb, qb)
+        q2, e2 = product(ib, xb, pa, qa)
+        q, e = tiled(np.r_[q1, q2], np.r_[e1, e2])
+        keep = (cab[q] == cab[e]) & (q != e) & (q != e + 1)
+        q, e = q[keep], e[keep]
+        mid = 0.5 * (p[e] + p[e + 1])
+        sm = 0.5 * (s[e] + s[e + 1])
+        d = row_norm(p[q] - mid) - 2 * rad[q]
+        o = (d < clear) & ~self_pair_excluded(s[q], sm, rad[q], clear)
+        rows.append((PairType.SELF, q[o], q[o], d[o], sm[o]))
+        t = np.concatenate([np.full(len(r[1]), _TYPE_ORDER.index(r[0])) for r in rows])
+        w, wb, v, sb = (np.concatenate([r[k] for r in rows]) for k in (1, 2, 3, 4))
+        if len(v) == 0:
+            return out
+        st, a, b, sa = w // m, cab[w], cab[wb], s[w]
+        # the worst per (state, type, a, b); ties to the smallest arc lengths (_Hits.reduce)
+        o = np.lexsort((sb, sa, v, b, a, t, st))
+        head = np.r_[True, (st[o][1:] != st[o][:-1]) | (t[o][1:] != t[o][:-1]) | (a[o][1:] != a[o][:-1])
+                     | (b[o][1:] != b[o][:-1])]
+        o = o[head]
+        for st_i, t_i, a_i, b_i, d_i, s_i, sb_i, where in zip(st[o].tolist(), t[o].tolist(), a[o].tolist(),
+                                                             b[o].tolist(), v[o].tolist(), sa[o].tolist(),
+                                                             sb[o].tolist(), p[w[o]]):
+            out[st_i].append(Interference(type=_TYPE_ORDER[t_i], a=names[a_i], b=names[b_i], min_distance=d_i,
+                                          severity=severity_of(d_i, clear), where=where, s=s_i, s_b=sb_i))
+        for recs in out:
+            recs.sort(key=lambda r: (r.min_distance, _TYPE_ORDER.index(r.type), r.a, r.b))
+        return out
+
     def check(
         self,
         cables: Sequence[CableState],

@@ -41,7 +41,6 @@ from sim.contacts import Contacts
 from sim.loop import StepState
 from sim.sweep import DEFAULT_PRECISION_M, part_set, part_shapes, selection
 
-_CABLE_PAIRS = (PairType.SELF, PairType.CABLE_CABLE)
 
 BATCH = 32
 """Consecutive states checked together (a run's states arrive this many at a time)."""
@@ -143,10 +142,10 @@ class StepChecks:
             self._checked_index = np.nonzero(checked)[0]
             self._checker_index = np.cumsum(checked) - 1          # built part -> checker part
         self._static_parts = False   # same-body part records exist (replayed every step)
-        self._horizon_next = True
         # (centre, checker part) entries of the active pairs (see ACTIVE_HORIZONS)
         # at the last full check: evaluated on their own at every state proven clear
         self._active: tuple[np.ndarray, np.ndarray] = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        self._cable_active = (np.zeros((0, 2), np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64))
         self._names = [c.name for c in built.cables]
         self._offsets = offsets
         self._radii = radii
@@ -208,6 +207,9 @@ class StepChecks:
             found = self.checker.structure_many(names, self._radii, pts, self._offsets,
                                                 poses[:, self.checked_parts], self.exclusions, self._active)
             records = [a + b for a, b in zip(found, records)]
+        if len(self._cable_active[1]):
+            found = self.checker.cable_pairs_many(names, self._radii, pts, self._offsets, self._cable_active)
+            records = [a + b for a, b in zip(found, records)]
         out = []
         for state, recs, st, bd in zip(states, records, strain, bend):
             cable_records = self._focus(recs)
@@ -219,18 +221,13 @@ class StepChecks:
               bend: np.ndarray) -> StepResult:
         cables = self._cable_states(state)
         adv = self.advance
-        # The horizon costs candidates: only worth it when the last full
-        # check found no pair below the clearance (else no skip).
-        cable_records = self.checker.check(cables, poses[self.checked_parts], self.exclusions,
-                                           None if self._horizon_next else 0.0)
+        cable_records = self.checker.check(cables, poses[self.checked_parts], self.exclusions)
         # moving part pairs still provably apart: only same-body records
         if adv is not None and state.step > 0 and adv.part_pairs_clear(poses):
             part_records = self.part_checker.check(poses) if self._static_parts else []
         else:
             part_records = self.part_checker.check(poses)
         if adv is not None:
-            # only a self or cable-cable pair inside the clearance stops the skipping
-            self._horizon_next = not any(r.type in _CABLE_PAIRS for r in cable_records)
             if state.step == 0:
                 self._static_parts = any(self._group[self._part_index[r.a]] == self._group[self._part_index[r.b]]
                                          for r in part_records)
@@ -247,11 +244,17 @@ class StepChecks:
                 near = value < ACTIVE_HORIZONS * self.horizon
                 n_k = max(len(self.built.parts), 1)
                 key = np.unique(cab[near] * n_k + part[near])
+                # self and cable-cable pairs likewise, near their candidates
+                ca, _, cb, _, c_value = self.checker.cable_candidates
+                n_c = max(len(self.built.cables), 1)
+                near = c_value < ACTIVE_HORIZONS * self.horizon
+                c_key = np.unique(np.minimum(ca, cb)[near] * n_c + np.maximum(ca, cb)[near])
                 adv.start(pts, poses, gap_cable, self._gap_part, self._moving_pairs, bound,
                           (cab, s_c, part, value), self.horizon, self.checker.cable_candidates,
-                          (key // n_k, key % n_k))
+                          (key // n_k, key % n_k), np.stack([c_key // n_c, c_key % n_c], axis=1))
                 centre, built_part = adv.active
                 self._active = (centre, self._checker_index[built_part])   # (centre, checker part)
+                self._cable_active = adv.cable_active
             else:
                 adv.stop()
                 adv.start_pairs(poses, self._moving_pairs, bound)

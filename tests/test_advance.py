@@ -454,3 +454,31 @@ def test_chord_bound_sound_on_random_kinks():
             moved[i:j + 1] = _turn(moved[i:j + 1], moved[i], rng.normal() * 2.0)
         moves.append(moved)
     _assert_sound(checker, adv, offsets, moves)
+
+
+def test_active_cable_pairs_leave_the_bound():
+    """Two cables crossing within the clearance: nothing is proven, unless
+    the pair is active; then the centre pairs its candidates are charged to
+    are listed for the caller and the rest still bounds the step."""
+    a = _line([0.0, 0, 0], [0.4, 0, 0], 41)
+    b = _line([0.2, -0.2, 0.022], [0.2, 0.2, 0.022], 41)     # 2 mm past the surfaces: soft
+    config = CheckConfig(clearance=_CLEAR)
+    checker = Checker([], config, horizon=_H, stretch=_STRETCH)
+    states = [CableState("c0", a, _R), CableState("c1", b, _R)]
+    assert [r.type for r in checker.check(states)] == [PairType.CABLE_CABLE]
+    offsets = np.array([0, 41, 82])
+    radii = np.full(2, _R)
+    pts = np.concatenate([a, b])
+    z = np.zeros(0, np.int64)
+    for active, expect in ((None, False), (np.array([[0, 1]]), True)):
+        adv = Advancement(offsets, config.spacing * radii, np.zeros(0), _CLEAR, _STRETCH, radii)
+        gap_cable, _ = checker.gaps
+        adv.start(pts, _NO_PARTS, gap_cable, np.zeros(0), (z, z), np.zeros(0),
+                  (z, np.zeros(0), z, np.zeros(0)), _H, checker.cable_candidates, cable_active=active)
+        assert adv.proven_clear(pts + [0.0, 0.0, 0.001], _NO_PARTS) is expect
+    i, j = adv.cable_active
+    near = set(range(14, 27))                                # within the horizon (20 mm) of x = 0.2
+    assert len(i) and set(i.tolist()) <= near and set((j - 41).tolist()) <= near
+    moved = pts.copy()
+    moved[:5] += [0.0, 0.0, 0.03]                            # far from the crossing: still bounded
+    assert not adv.proven_clear(moved, _NO_PARTS)

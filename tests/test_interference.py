@@ -437,3 +437,48 @@ def test_structure_many_evaluates_only_next_to_active_centres():
                                  (np.array([0]), np.array([0])))[0]
     assert far == []                    # centre 0's elements stay 0.1 m above
 
+
+
+def test_cable_pairs_many_is_each_states_self_and_cable_cable():
+    """cable_pairs_many with every pair of centres of some cable pairs active
+    (so every place pair is evaluated): per state, exactly the full check's
+    self and cable-cable records of those pairs (values, places, bits)."""
+    from checker.cable import densify_batch
+    from checker.interference import Checker
+    seen = set()
+    for seed in range(30):
+        rng = np.random.default_rng(300 + seed)
+        cables = []
+        for c in range(3):
+            n = int(rng.integers(4, 14))
+            # loose coils about a shared centre: self and cable-cable hits
+            t = np.linspace(0, rng.uniform(4, 12), n)
+            pts = np.stack([0.03 * np.cos(t), 0.03 * np.sin(t), 0.004 * t + 0.01 * c], axis=1)
+            cables.append(CableState(f"c{c}", pts + rng.normal(size=pts.shape) * 0.002, 0.004))
+        cfg = CheckConfig(clearance=0.004)
+        checker = Checker([], cfg)
+        offsets = np.concatenate([[0], np.cumsum([len(c.points) for c in cables])])
+        radii = np.array([c.radius for c in cables])
+        states = np.stack([np.concatenate([c.points for c in cables]) + rng.normal(size=(offsets[-1], 3)) * 1e-5
+                           for _ in range(int(rng.integers(1, 5)))])
+        pieces = [np.diff(densify_batch(x, offsets, cfg.spacing * radii)[3]) for x in states]
+        if any(not np.array_equal(pieces[0], q) for q in pieces):
+            continue
+        chosen = [(0, 0), (0, 1), (2, 2)][: int(rng.integers(1, 4))]
+        ci, cj = [], []
+        for a, b in chosen:
+            i, j = np.meshgrid(np.arange(offsets[a], offsets[a + 1]), np.arange(offsets[b], offsets[b + 1]))
+            ci.append(i.ravel())
+            cj.append(j.ravel())
+        got = checker.cable_pairs_many([c.name for c in cables], radii, states, offsets,
+                                       (np.concatenate(ci), np.concatenate(cj)))
+        wanted = {(f"c{a}", f"c{b}") for a, b in chosen}
+        for x, recs in zip(states, got):
+            now = [CableState(c.name, x[a:b], c.radius) for c, a, b in zip(cables, offsets[:-1], offsets[1:])]
+            want = [r for r in checker.check(now) if r.type in (PairType.SELF, PairType.CABLE_CABLE)
+                    and (r.a, r.b) in wanted]
+            assert [(r.type, r.a, r.b, r.min_distance, r.s, r.s_b) for r in recs] == \
+                [(r.type, r.a, r.b, r.min_distance, r.s, r.s_b) for r in want]
+            assert all(np.array_equal(a.where, b.where) for a, b in zip(recs, want))
+            seen |= {r.type for r in want}
+    assert seen == {PairType.SELF, PairType.CABLE_CABLE}
