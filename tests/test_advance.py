@@ -482,3 +482,31 @@ def test_active_cable_pairs_leave_the_bound():
     moved = pts.copy()
     moved[:5] += [0.0, 0.0, 0.03]                            # far from the crossing: still bounded
     assert not adv.proven_clear(moved, _NO_PARTS)
+
+
+def test_sliding_cable_cable_contact(tmp_path):
+    """The crossing's second lead carried along the first: the contact slides
+    along "power" while the skipped steps evaluate the active pair on their
+    own; the answers are those of checking every step in full."""
+    text = (SCENES[[p.stem for p in SCENES].index("crossing")]).read_text()
+    text = text.replace("duration = 0.4", "duration = 0.8")
+    text = text.replace('start = { pos = [0, -120, 100] }', 'start = { body = "carriage", pos = [0, -120, 100] }')
+    text = text.replace('end = { pos = [0, 120, 100] }', 'end = { body = "carriage", pos = [0, 120, 100] }')
+    text += '''
+[[bodies]]
+name = "carriage"
+
+[[motion]]
+body = "carriage"
+keys = [ { t = 0.0, pos = [0, 0, 0] }, { t = 0.8, pos = [60, 0, 0] } ]
+'''
+    path = tmp_path / "sliding.toml"
+    path.write_text(text)
+    scene = load_scene(path)
+    fast = run_scene(scene, RunOptions(report=tmp_path / "a.json", record=None))
+    full = run_scene(scene, RunOptions(report=tmp_path / "b.json", record=None, advance=False))
+    assert [e["type"] for e in full["events"]] == ["cable-cable"]
+    assert _strip(fast["events"]) == _strip(full["events"])
+    assert _strip(fast["pairs"]) == _strip(full["pairs"])
+    adv = fast["settings"]["advance"]
+    assert adv["proven_clear_steps"] > adv["full_checks"]
