@@ -1,5 +1,7 @@
 """Signed distances of shapes, for points and for segments, against references."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import trimesh
@@ -310,3 +312,26 @@ def test_translation_and_scale_invariance_of_point_distances():
         d0, _ = signed_distance(Shape(stype, size), p)
         d1, _ = signed_distance(Shape(stype, np.array(size) * 1000), p * 1000)
         assert np.allclose(d1, d0 * 1000, rtol=1e-12, atol=1e-9)
+
+
+def test_small_mesh_nearest_is_the_brute_force_nearest(monkeypatch):
+    """Low-poly meshes take the triangle-box road in _mesh_nearest: the same
+    distances as every triangle tried, and the same as the centroid-tree road."""
+    from checker import shapes
+    from checker.closest import point_triangle
+    rng = np.random.default_rng(4)
+    for mesh in (trimesh.creation.box([0.04, 0.03, 0.05]), trimesh.creation.icosphere(0, 0.02),
+                 trimesh.load(Path(__file__).resolve().parents[1] / "scenes" / "meshes" / "l_bracket.stl")):
+        md = mesh_shape(mesh.vertices, mesh.faces).mesh
+        assert len(md.faces) <= shapes._BOX_FACES
+        p = rng.uniform(mesh.bounds[0] - 0.5 * mesh.extents, mesh.bounds[1] + 0.5 * mesh.extents, (300, 3))
+        p[:20] = mesh.vertices[rng.integers(0, len(mesh.vertices), 20)]          # on corners
+        d, cl, face, _ = shapes._mesh_nearest(md, p)
+        rows = np.repeat(np.arange(len(p)), len(md.faces))
+        fi = np.tile(np.arange(len(md.faces)), len(p))
+        brute = point_triangle(p[rows], md.a[fi], md.b[fi], md.c[fi])[0].reshape(len(p), -1).min(axis=1)
+        assert np.array_equal(d, brute)
+        assert np.allclose(np.linalg.norm(p - cl, axis=1), d, rtol=1e-12, atol=1e-15)
+        with monkeypatch.context() as mp:
+            mp.setattr(shapes, "_BOX_FACES", 0)                                  # the centroid-tree road
+            assert np.array_equal(d, shapes._mesh_nearest(md, p)[0])
