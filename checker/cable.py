@@ -90,14 +90,24 @@ def polyline_arc_lengths(step: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     offsets = np.asarray(offsets, dtype=np.int64)
     counts = np.diff(offsets)
     n = int(offsets[-1])
+    out = np.zeros(n)
     if n == 0:
-        return np.zeros(0)
-    cable = np.repeat(np.arange(len(counts)), counts)
-    pos = np.arange(n) - offsets[:-1][cable]
-    pad = np.zeros((len(counts), int(counts.max())))
-    later = pos > 0                       # element i - 1 leads to point i
-    pad[cable[later], pos[later]] = step[np.nonzero(later)[0] - 1]
-    return np.cumsum(pad, axis=1)[cable, pos]
+        return out
+    # One padded row per polyline, summed along the rows; polylines of about
+    # the same length share a pad (within a factor 2: no long pad for many
+    # short lines), a few groups at most.
+    group = np.floor(np.log2(np.maximum(counts, 1))).astype(np.int64)
+    for g in np.unique(group):
+        lines = np.flatnonzero(group == g)
+        cnt = counts[lines]
+        cable = np.repeat(np.arange(len(lines)), cnt)
+        pos = np.arange(int(cnt.sum())) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+        idx = offsets[lines][cable] + pos                  # points of these polylines
+        pad = np.zeros((len(lines), int(cnt.max())))
+        later = pos > 0                                    # element i - 1 leads to point i
+        pad[cable[later], pos[later]] = step[idx[later] - 1]
+        out[idx] = np.cumsum(pad, axis=1)[cable, pos]
+    return out
 
 
 def densify_batch(
