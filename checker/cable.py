@@ -285,12 +285,9 @@ class CableMeasures:
         if self._none:
             return
         self._starts = offsets[:-1]
-        # element e (points e, e+1) of the concatenation -> (cable, index in cable)
+        self._ends = offsets[1:] - 1
         cable = np.repeat(np.arange(len(counts)), counts)
         valid = cable[:-1] == cable[1:]
-        self._elem = np.nonzero(valid)[0]
-        self._flat = cable[:-1][valid] * (int(counts.max()) - 1) + (self._elem - offsets[:-1][cable[:-1][valid]])
-        self._pad = np.zeros((len(counts), int(counts.max()) - 1))
         self._single = len(counts) == 1
         # interior points (both neighbours on the same cable); the rest stay inf
         self._interior = (valid[:-1] & valid[1:]) if n >= 3 else np.zeros(0, bool)
@@ -324,12 +321,7 @@ class CableMeasures:
         d = pts[1:] - pts[:-1]
         if seg is None:
             seg = row_norm(d)
-        if self._single:
-            lengths = np.cumsum(seg)[-1:]
-        else:
-            pad = self._pad
-            pad.flat[self._flat] = seg[self._elem]
-            lengths = np.cumsum(pad, axis=1)[:, -1]   # trailing zeros add nothing
+        lengths = np.cumsum(seg)[-1:] if self._single else polyline_arc_lengths(seg, self._offsets)[self._ends]
         r = self._r
         if len(self._interior):
             rr, nonzero = _turn_radius(d[:-1], d[1:], seg[:-1], seg[1:], row_norm(pts[2:] - pts[:-2]))
