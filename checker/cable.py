@@ -87,27 +87,42 @@ def polyline_arc_lengths(step: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     so they do not depend on the polylines before it (the same bits as
     :func:`arc_length`, whichever polylines are batched together).
     """
-    offsets = np.asarray(offsets, dtype=np.int64)
-    counts = np.diff(offsets)
-    n = int(offsets[-1])
-    out = np.zeros(n)
-    if n == 0:
+    return ArcLayout(offsets)(step)
+
+
+class ArcLayout:
+    """:func:`polyline_arc_lengths` for one set of offsets, prepared once.
+
+    One padded row per polyline, summed along the rows; polylines of about
+    the same length share a pad (within a factor 2: no long pad for many
+    short lines), a few groups at most.
+    """
+
+    def __init__(self, offsets: np.ndarray):
+        offsets = np.asarray(offsets, dtype=np.int64)
+        counts = np.diff(offsets)
+        self.n = int(offsets[-1]) if len(offsets) else 0
+        self._groups = []
+        if self.n == 0:
+            return
+        group = np.floor(np.log2(np.maximum(counts, 1))).astype(np.int64)
+        for g in np.unique(group):
+            lines = np.flatnonzero(group == g)
+            cnt = counts[lines]
+            row = np.repeat(np.arange(len(lines)), cnt)
+            pos = np.arange(int(cnt.sum())) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+            idx = offsets[lines][row] + pos                    # the points of these polylines
+            later = pos > 0                                    # element i - 1 leads to point i
+            self._groups.append(((len(lines), int(cnt.max())), row[later], pos[later], idx[later] - 1,
+                                 row, pos, idx))
+
+    def __call__(self, step: np.ndarray) -> np.ndarray:
+        out = np.zeros(self.n)
+        for shape, r_in, p_in, e_in, row, pos, idx in self._groups:
+            pad = np.zeros(shape)
+            pad[r_in, p_in] = step[e_in]
+            out[idx] = np.cumsum(pad, axis=1)[row, pos]
         return out
-    # One padded row per polyline, summed along the rows; polylines of about
-    # the same length share a pad (within a factor 2: no long pad for many
-    # short lines), a few groups at most.
-    group = np.floor(np.log2(np.maximum(counts, 1))).astype(np.int64)
-    for g in np.unique(group):
-        lines = np.flatnonzero(group == g)
-        cnt = counts[lines]
-        cable = np.repeat(np.arange(len(lines)), cnt)
-        pos = np.arange(int(cnt.sum())) - np.repeat(np.cumsum(cnt) - cnt, cnt)
-        idx = offsets[lines][cable] + pos                  # points of these polylines
-        pad = np.zeros((len(lines), int(cnt.max())))
-        later = pos > 0                                    # element i - 1 leads to point i
-        pad[cable[later], pos[later]] = step[idx[later] - 1]
-        out[idx] = np.cumsum(pad, axis=1)[cable, pos]
-    return out
 
 
 def densify_batch(
@@ -286,6 +301,7 @@ class CableMeasures:
             return
         self._starts = offsets[:-1]
         self._ends = offsets[1:] - 1
+        self._arc = ArcLayout(offsets)
         cable = np.repeat(np.arange(len(counts)), counts)
         valid = cable[:-1] == cable[1:]
         self._single = len(counts) == 1
@@ -321,7 +337,7 @@ class CableMeasures:
         d = pts[1:] - pts[:-1]
         if seg is None:
             seg = row_norm(d)
-        lengths = np.cumsum(seg)[-1:] if self._single else polyline_arc_lengths(seg, self._offsets)[self._ends]
+        lengths = np.cumsum(seg)[-1:] if self._single else self._arc(seg)[self._ends]
         r = self._r
         if len(self._interior):
             rr, nonzero = _turn_radius(d[:-1], d[1:], seg[:-1], seg[1:], row_norm(pts[2:] - pts[:-2]))
