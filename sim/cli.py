@@ -260,8 +260,10 @@ def _print_summary(report: dict, report_path: Path) -> None:
               + (f", {v['severity_differs']} differ in severity" if v.get("severity_differs") else "") + ")")
     adv = s.get("advance")
     if adv and adv["proven_clear_steps"]:
-        print(f"  {adv['proven_clear_steps']} of {s['checked_steps']} checked steps proven clear since the "
-              f"last full check ({adv['full_checks']} full checks; --full-every-step checks them all)")
+        full = adv["full_checks"]
+        print(f"  full check on {full} of {s['checked_steps']} checked steps; on the others everything was "
+              f"proven clear since the last one but the pairs already near the clearance, checked on "
+              f"their own (MuJoCo compared on full checks only; --full-every-step for all)")
     if report.get("warnings"):
         print(f"  MuJoCo warnings: {report['warnings']}")
     for w in report.get("part_warnings", ()):
