@@ -87,7 +87,8 @@ def simulator_pairs(contacts: SimContacts, cables: dict[str, tuple[np.ndarray, f
 
     `cables`: name -> (points (n, 3), radius) at this step; `clearance` as
     the checker's (it widens the self-exclusion window)."""
-    keep = np.isin(contacts.kind, COMPARED_TYPES)
+    # a cable on side a (a part touching a keep-out part is a part-part matter)
+    keep = np.isin(contacts.kind, COMPARED_TYPES) & (np.asarray(contacts.elem_a) >= 0)
     idx = np.flatnonzero(keep)
     if len(idx) == 0:
         return {}

@@ -1,0 +1,70 @@
+"""The cross-check's reduction of simulator contacts and its comparison (checker.validation)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from checker.records import Interference, PairType, Severity
+from checker.scene_state import Exclusion
+from checker.validation import SimContacts, Validation, classify, contact_arc_length, simulator_pairs
+
+# a straight cable along x, 10 elements of 0.1 m
+CABLE = np.stack([np.linspace(0.0, 1.0, 11), np.zeros(11), np.zeros(11)], axis=1)
+
+
+def _contacts(rows):
+    """rows: (kind, a, b, elem_a, elem_b, dist, (x, y, z))."""
+    kind, a, b, ea, eb, dist, pos = zip(*rows)
+    return SimContacts(np.array(kind, dtype=object), np.array(a, dtype=object), np.array(b, dtype=object),
+                       np.array(ea), np.array(eb), np.array(dist, float), np.array(pos, float))
+
+
+def test_least_distance_per_pair_and_contact_places():
+    sim = simulator_pairs(_contacts([
+        ("cable-structure", "c", "box", 2, -1, 0.003, (0.25, 0, 0)),
+        ("cable-structure", "c", "box", 3, -1, -0.001, (0.33, 0, 0)),
+        ("keepout", "c", "zone", 7, -1, 0.002, (0.71, 0, 0)),
+    ]), {"c": (CABLE, 0.01)}, (), 0.005)
+    assert sim[("cable-structure", "c", "box")][0] == -0.001
+    assert np.allclose(sim[("cable-structure", "c", "box")][1], [0.33, 0, 0])
+    assert sim[("keepout", "c", "zone")][0] == 0.002
+    assert np.allclose(contact_arc_length(CABLE, np.array([3]), np.array([[0.33, 0.05, 0]])), [0.33])
+
+
+def test_part_touching_a_keepout_part_is_not_compared():
+    """A part against a keep-out part is labelled keep-out by the contact
+    reader, with a part on side a: not a cable pair, so left out (it used to
+    be looked up as a cable)."""
+    sim = simulator_pairs(_contacts([
+        ("keepout", "bracket", "zone", -1, -1, -0.002, (0.5, 0, 0)),
+        ("cable-structure", "c", "box", 1, -1, 0.001, (0.15, 0, 0)),
+    ]), {"c": (CABLE, 0.01)}, (), 0.005)
+    assert list(sim) == [("cable-structure", "c", "box")]
+
+
+def test_attachment_windows_and_near_self_contacts_are_dropped():
+    excl = [Exclusion("c", "clamp", 0.0, 0.2)]
+    sim = simulator_pairs(_contacts([
+        ("cable-structure", "c", "clamp", 1, -1, -0.004, (0.15, 0, 0)),    # element 1 in [0, 0.2]
+        ("cable-structure", "c", "clamp", 4, -1, 0.001, (0.45, 0, 0)),     # outside
+        ("self", "c", "c", 2, 3, -0.01, (0.3, 0, 0)),                      # 0.1 apart along it: neighbours
+    ]), {"c": (CABLE, 0.01)}, excl, 0.005)
+    assert list(sim) == [("cable-structure", "c", "clamp")]
+    assert sim[("cable-structure", "c", "clamp")][0] == 0.001
+
+
+def test_compare_counts_and_reasons():
+    v = Validation(clearance=0.005, method="points", mesh_parts=frozenset({"mesh"}))
+    rec = [Interference(PairType.CABLE_STRUCTURE, "c", "box", -0.001, Severity.HARD, np.zeros(3), 0.1),
+           Interference(PairType.CABLE_STRUCTURE, "c", "mesh", 0.00495, Severity.SOFT, np.zeros(3), 0.2),
+           Interference(PairType.BEND, "c", "c", -0.01, Severity.HARD, np.zeros(3), 0.3)]   # not compared
+    sim = {("cable-structure", "c", "box"): (-0.0012, np.zeros(3)),
+           ("cable-structure", "c", "mesh"): (0.00502, np.zeros(3)),                       # just clear for MuJoCo
+           ("cable-cable", "c", "d"): (0.001, np.zeros(3))}                                # MuJoCo only
+    assert v.compare(0.5, rec, sim) == 1 / 3
+    assert (v.compared_steps, v.pair_steps, v.agree, v.checker_only, v.mujoco_only) == (1, 3, 1, 1, 1)
+    assert abs(v.max_distance_error - 0.0002) < 1e-15
+    reasons = {(d.a, d.b): d.reason for d in v.disagreements}
+    assert reasons[("c", "d")].startswith("between points")
+    assert reasons[("c", "mesh")].startswith("at a boundary")
+    assert classify(None, 0.005) == "clear" and classify(0.0, 0.005) == "soft" and classify(-1e-9, 0.005) == "hard"
