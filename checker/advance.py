@@ -117,10 +117,9 @@ box axis (or, for a plane, the box's lowest point above it), which
 :func:`part_pair_bounds` takes at k0. Rounding is absorbed by a margin of
 1e-9 of the scene's extent.
 
-So on such a step the pairwise checks (and the simulator's detection used to
-validate them) can be skipped: their answer is "no pair below the
-clearance" apart from the active pairs, exactly what a full check would
-return. Single-cable checks (bend, taut) and the active pairs are still
+So on such a step the pairwise checks can be skipped: their answer is "no
+pair below the clearance" apart from the active pairs, exactly what a full
+check would return. Single-cable checks (bend, taut) and the active pairs are still
 evaluated every step, by the caller. Method ``exact`` (closest points whose
 exclusion can change discontinuously) and the face-plane distance never
 skip.

@@ -31,8 +31,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from checker.cable import arc_length, self_pair_excluded
-from checker.closest import point_segment
+from checker.cable import arc_length, polyline_arc_lengths, self_pair_excluded
+from checker.closest import point_segment, row_norm
 from checker.records import Interference, PairType
 from checker.scene_state import Exclusion
 
@@ -69,13 +69,14 @@ class SimContacts:
     pos: np.ndarray
 
 
-def contact_arc_length(points: np.ndarray, elem: np.ndarray, pos: np.ndarray) -> np.ndarray:
+def contact_arc_length(points: np.ndarray, elem: np.ndarray, pos: np.ndarray,
+                       s: np.ndarray | None = None) -> np.ndarray:
     """Arc length along a polyline of the projection of `pos` onto element `elem`.
 
     points (n, 3); elem (k,) element indices (i joins points i and i+1);
-    pos (k, 3). Returns (k,)."""
+    pos (k, 3); s: ``arc_length(points)`` when known. Returns (k,)."""
     elem = np.clip(np.asarray(elem, int), 0, len(points) - 2)
-    s = arc_length(points)
+    s = arc_length(points) if s is None else s
     _, t, _ = point_segment(np.asarray(pos, float), points[elem], points[elem + 1])
     return s[elem] + t * (s[elem + 1] - s[elem])
 
@@ -86,51 +87,137 @@ def simulator_pairs(contacts: SimContacts, cables: dict[str, tuple[np.ndarray, f
     """Least distance and its contact point per pair, after the checker's filters.
 
     `cables`: name -> (points (n, 3), radius) at this step; `clearance` as
-    the checker's (it widens the self-exclusion window)."""
-    # a cable on side a (a part touching a keep-out part is a part-part matter)
-    keep = np.isin(contacts.kind, COMPARED_TYPES) & (np.asarray(contacts.elem_a) >= 0)
-    idx = np.flatnonzero(keep)
-    if len(idx) == 0:
-        return {}
-    kind, a, b = contacts.kind[idx], contacts.a[idx], contacts.b[idx]
-    s_a = np.zeros(len(idx))
-    s_b = np.zeros(len(idx))
-    elem_lo = np.zeros(len(idx))  # arc length span of each contact's element on cable a
-    elem_hi = np.zeros(len(idx))
-    elem_len = np.zeros(len(idx))
-    for name in np.unique(a):  # per cable, vectorised over its contacts
-        pts, _ = cables[name]
-        on_a = a == name
-        s_a[on_a] = contact_arc_length(pts, contacts.elem_a[idx][on_a], contacts.pos[idx][on_a])
-        s_pts = arc_length(pts)
-        e = np.clip(contacts.elem_a[idx][on_a], 0, len(pts) - 2)
-        elem_lo[on_a], elem_hi[on_a] = s_pts[e], s_pts[e + 1]
-        elem_len[on_a] = s_pts[e + 1] - s_pts[e]
-        on_b = (b == name) & (contacts.elem_b[idx] >= 0)
-        if on_b.any():
-            s_b[on_b] = contact_arc_length(pts, contacts.elem_b[idx][on_b], contacts.pos[idx][on_b])
-    drop = np.zeros(len(idx), bool)
-    self_rows = kind == PairType.SELF.value
-    if self_rows.any():
-        radius = np.array([cables[n][1] for n in a[self_rows]])
-        drop[self_rows] = self_pair_excluded(s_a[self_rows], s_b[self_rows], radius, clearance)
-    # A simulator contact stands for its whole element: drop it when the element
-    # lies in the window (windows are aligned to elements by the caller; a
-    # quarter element absorbs the cable's stretch since rest).
-    slack = 0.25 * elem_len
-    for e in exclusions:
-        lo, hi = min(e.s_min, e.s_max), max(e.s_min, e.s_max)
-        drop |= (a == e.cable) & (b == e.part) & (elem_lo >= lo - slack) & (elem_hi <= hi + slack) & \
-            np.isin(kind, (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value))
-    out: dict[tuple[str, str, str], tuple[float, np.ndarray]] = {}
-    dist, pos = contacts.dist[idx], contacts.pos[idx]
-    for i in np.flatnonzero(~drop):
-        k = (str(kind[i]), str(a[i]), str(b[i]))
-        if k[0] == PairType.CABLE_CABLE.value and k[1] > k[2]:
-            k = (k[0], k[2], k[1])
-        if k not in out or dist[i] < out[k][0]:
-            out[k] = (float(dist[i]), pos[i])
-    return out
+    the checker's (it widens the self-exclusion window). See
+    :class:`SimulatorPairs` for many steps with the same windows."""
+    return SimulatorPairs(exclusions, clearance)(contacts, cables)
+
+
+class SimulatorPairs:
+    """:func:`simulator_pairs` with the attachment windows prepared once;
+    :meth:`many` for many states at once."""
+
+    def __init__(self, exclusions: Sequence[Exclusion], clearance: float):
+        self.clearance = float(clearance)
+        self._ex_cable = np.array([e.cable for e in exclusions], dtype=object)
+        self._ex_part = np.array([e.part for e in exclusions], dtype=object)
+        self._ex_lo = np.array([min(e.s_min, e.s_max) for e in exclusions], dtype=float)
+        self._ex_hi = np.array([max(e.s_min, e.s_max) for e in exclusions], dtype=float)
+
+    def __call__(self, contacts: SimContacts, cables: dict[str, tuple[np.ndarray, float]]
+                 ) -> dict[tuple[str, str, str], tuple[float, np.ndarray]]:
+        elem_a = np.asarray(contacts.elem_a)
+        # a cable on side a (a part touching a keep-out part is a part-part matter)
+        keep = elem_a >= 0
+        if not keep.any():
+            return {}
+        kinds = contacts.kind
+        keep &= np.logical_or.reduce([kinds == k for k in COMPARED_TYPES])   # few kinds: no isin on strings
+        idx = np.flatnonzero(keep)
+        if len(idx) == 0:
+            return {}
+        kind, a, b = kinds[idx], contacts.a[idx], contacts.b[idx]
+        elem_a, elem_b, pos = elem_a[idx], np.asarray(contacts.elem_b)[idx], contacts.pos[idx]
+        n = len(idx)
+        s_a, s_b = np.zeros(n), np.zeros(n)
+        elem_lo, elem_hi = np.zeros(n), np.zeros(n)  # arc length span of each contact's element on cable a
+        for name in set(a.tolist()):  # per cable (few), vectorised over its contacts
+            pts, _ = cables[name]
+            s_pts = arc_length(pts)
+            on_a = a == name
+            s_a[on_a] = contact_arc_length(pts, elem_a[on_a], pos[on_a], s_pts)
+            e = np.clip(elem_a[on_a], 0, len(pts) - 2)
+            elem_lo[on_a], elem_hi[on_a] = s_pts[e], s_pts[e + 1]
+            on_b = (b == name) & (elem_b >= 0)
+            if on_b.any():
+                s_b[on_b] = contact_arc_length(pts, elem_b[on_b], pos[on_b], s_pts)
+        drop = np.zeros(n, bool)
+        self_rows = kind == PairType.SELF.value
+        if self_rows.any():
+            radius = np.array([cables[c][1] for c in a[self_rows]])
+            drop[self_rows] = self_pair_excluded(s_a[self_rows], s_b[self_rows], radius, self.clearance)
+        # A simulator contact stands for its whole element: drop it when the
+        # element lies in the window (windows are aligned to elements by the
+        # caller; a quarter element absorbs the cable's stretch since rest).
+        # Every contact against every window at once.
+        if len(self._ex_lo):
+            slack = (0.25 * (elem_hi - elem_lo))[:, None]
+            structure = (kind == PairType.CABLE_STRUCTURE.value) | (kind == PairType.KEEPOUT.value)
+            inside = ((a[:, None] == self._ex_cable) & (b[:, None] == self._ex_part)
+                      & (elem_lo[:, None] >= self._ex_lo - slack) & (elem_hi[:, None] <= self._ex_hi + slack))
+            drop |= structure & inside.any(axis=1)
+        out: dict[tuple[str, str, str], tuple[float, np.ndarray]] = {}
+        dist = contacts.dist[idx]
+        for i in np.flatnonzero(~drop).tolist():  # first least per pair
+            k = (str(kind[i]), str(a[i]), str(b[i]))
+            if k[0] == PairType.CABLE_CABLE.value and k[1] > k[2]:
+                k = (k[0], k[2], k[1])
+            if k not in out or dist[i] < out[k][0]:
+                out[k] = (float(dist[i]), pos[i])
+        return out
+
+
+    def many(self, contacts: Sequence[SimContacts], names: Sequence[str], radii: np.ndarray,
+             pts: np.ndarray, offsets: np.ndarray) -> list[dict[tuple[str, str, str], tuple[float, np.ndarray]]]:
+        """:meth:`__call__` for S states at once: their contacts (S,), the
+        cables' names and radii (C,), every state's body centres (S, N, 3),
+        cables concatenated from ``offsets`` (C + 1,). One pass for all
+        states (a state's few contacts cost numpy's per-call overhead)."""
+        n_s, n = pts.shape[:2]
+        out: list[dict] = [{} for _ in range(n_s)]
+        counts = np.array([len(c.dist) for c in contacts], np.int64)
+        if counts.sum() == 0:
+            return out
+        def cat(field: str) -> np.ndarray:
+            return np.concatenate([np.asarray(getattr(c, field)) for c in contacts])
+
+        kind, a, b = cat("kind"), cat("a"), cat("b")
+        elem_a, elem_b, dist = cat("elem_a"), cat("elem_b"), cat("dist")
+        pos = np.concatenate([np.asarray(c.pos, float).reshape(-1, 3) for c in contacts])
+        st = np.repeat(np.arange(n_s), counts)
+        keep = (elem_a >= 0) & np.logical_or.reduce([kind == k for k in COMPARED_TYPES])
+        if not keep.any():
+            return out
+        kind, a, b, elem_a, elem_b, dist, pos, st = (x[keep] for x in (kind, a, b, elem_a, elem_b, dist, pos, st))
+        code = {name: i for i, name in enumerate(names)}
+        offsets = np.asarray(offsets, np.int64)
+        ca = np.array([code[x] for x in a.tolist()], np.int64)
+        cb = np.array([code.get(x, -1) for x in b.tolist()], np.int64)
+        # arc lengths of every state's cables, each on its own (arc_length's bits)
+        starts = (offsets[:-1][None] + n * np.arange(n_s)[:, None]).ravel()
+        flat = pts.reshape(-1, 3)
+        s_all = polyline_arc_lengths(row_norm(np.diff(flat, axis=0)), np.append(starts, n_s * n))
+
+        def place(cab, elem):
+            """(arc length of the projection, element start, element end) on cable cab."""
+            g = st * n + offsets[cab] + np.clip(elem, 0, offsets[cab + 1] - offsets[cab] - 2)
+            _, t, _ = point_segment(pos, flat[g], flat[g + 1])
+            return s_all[g] + t * (s_all[g + 1] - s_all[g]), s_all[g], s_all[g + 1]
+
+        s_a, elem_lo, elem_hi = place(ca, elem_a)
+        on_b = (cb >= 0) & (elem_b >= 0)
+        s_b = np.where(on_b, place(np.maximum(cb, 0), np.maximum(elem_b, 0))[0], 0.0)
+        drop = (kind == PairType.SELF.value) & self_pair_excluded(s_a, s_b, np.asarray(radii, float)[ca],
+                                                                   self.clearance)
+        if len(self._ex_lo):
+            slack = (0.25 * (elem_hi - elem_lo))[:, None]
+            structure = (kind == PairType.CABLE_STRUCTURE.value) | (kind == PairType.KEEPOUT.value)
+            inside = ((a[:, None] == self._ex_cable) & (b[:, None] == self._ex_part)
+                      & (elem_lo[:, None] >= self._ex_lo - slack) & (elem_hi[:, None] <= self._ex_hi + slack))
+            drop |= structure & inside.any(axis=1)
+        keep = ~drop
+        kind, a, b, dist, pos, st = kind[keep], a[keep], b[keep], dist[keep], pos[keep], st[keep]
+        if len(dist) == 0:
+            return out
+        swap = (kind == PairType.CABLE_CABLE.value) & (a.astype(str) > b.astype(str))
+        a, b = np.where(swap, b, a), np.where(swap, a, b)
+        # the first least distance per (state, kind, a, b), as __call__ keeps
+        _, key = np.unique(np.stack([kind.astype(str), a.astype(str), b.astype(str)], axis=1), axis=0,
+                           return_inverse=True)
+        o = np.lexsort((np.arange(len(dist)), dist, key.ravel(), st))
+        head = o[np.r_[True, (st[o][1:] != st[o][:-1]) | (key.ravel()[o][1:] != key.ravel()[o][:-1])]]
+        for i in head.tolist():
+            out[st[i]][(str(kind[i]), str(a[i]), str(b[i]))] = (float(dist[i]), pos[i])
+        return out
 
 
 @dataclass(frozen=True)

@@ -76,10 +76,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--fail-on", choices=("hard", "soft", "never"), default="hard",
                      help="exit 1 when interference of this severity or worse is found (default: hard)")
     run.add_argument("--full-every-step", action="store_true",
-                     help="run the full pairwise check and MuJoCo's cross-check on every checked "
-                          "step; by default (method points) steps proven clear since the last full "
-                          "check are skipped: the same events and pairs, several times faster, but "
-                          "MuJoCo is compared on the fully checked steps only")
+                     help="run the full pairwise check on every checked step; by default (method "
+                          "points) a step on which everything is proven clear since the last full "
+                          "check, but the pairs already near the clearance, checks only those: the "
+                          "same events, pairs and MuJoCo comparison, several times faster")
     run.add_argument("--quiet", action="store_true", help="print nothing but errors")
     run.add_argument("--only", metavar="PATH",
                      help="check only interference involving this assembly path (a part name or "
@@ -263,7 +263,7 @@ def _print_summary(report: dict, report_path: Path) -> None:
         full = adv["full_checks"]
         print(f"  full check on {full} of {s['checked_steps']} checked steps; on the others everything was "
               f"proven clear since the last one but the pairs already near the clearance, checked on "
-              f"their own (MuJoCo compared on full checks only; --full-every-step for all)")
+              f"their own (--full-every-step checks every step in full)")
     if report.get("warnings"):
         print(f"  MuJoCo warnings: {report['warnings']}")
     for w in report.get("part_warnings", ()):

@@ -4,8 +4,9 @@ Data flows one way: scene -> models -> steps -> (cable body centres, part
 poses) -> per-cable measures, checks and MuJoCo's contacts (`sim.stepcheck`,
 a batch of consecutive steps at a time) -> events, report and recording.
 `run_scene` owns the order of those stages, their timing, and what happens
-on Ctrl-C: the loop stops, the recording is finished and moved into place,
-and the report is written with `"complete": false`.
+on Ctrl-C: the loop stops after the step being simulated (its batch is
+checked first), the recording is finished and moved into place, and the
+report is written with `"complete": false`.
 
 This module does not parse arguments or print (see `cli`), and holds no
 geometry of its own: distances come from `checker`.
@@ -13,6 +14,8 @@ geometry of its own: distances come from `checker`.
 
 from __future__ import annotations
 
+import signal
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -50,10 +53,11 @@ class RunOptions:
         other parts, and cables against its parts (cable-structure and
         keep-out). Checks that involve none of its parts (self, cable-cable,
         bend, taut) are skipped. None checks everything.
-      advance: skip the pairwise checks and the validation on steps where
-        no pair can have come within the clearance since the last full check
-        (:mod:`checker.advance`; the same events and pairs as checking every
-        step). False checks every step in full.
+      advance: skip the full pairwise check on steps where no pair but
+        those already near the clearance (checked on their own) can have
+        come within it since the last full check (:mod:`checker.advance`;
+        the same events, pairs and MuJoCo comparison as checking every step
+        in full). False checks every step in full.
     """
 
     report: Path
@@ -111,54 +115,31 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                          clearance=scene.check.clearance)
     checks = StepChecks(built, config, options.only, options.advance,
                         sim.detect_qpos if validate else None, timer.lap)
-    names = [c.name for c in built.cables]
     every = scene.check.every
     tracker = EventTracker(hold=3 * every * scene.timestep)
-    n = len(built.cables)
-    max_strain = np.full(n, -np.inf)
-    min_bend = np.full(n, np.inf)
-    rest_points: list[np.ndarray] = []
-    final_points: list[np.ndarray] = []
-    steps = checked = 0
-    t_last = 0.0
-    complete = False
-    markers: set[str] = set()
     # The recording samples the checked steps at about RECORD_RATE (and at
     # every step where an event starts or ends): a viewer needs no 500 Hz.
     record_stride = max(1, int(round(1.0 / (RECORD_RATE * every * scene.timestep))))
+    out = _Outcome(built, tracker, recorder, timer, progress, record_stride, sim.total_steps)
+    complete = False
     batch: list = []
+    stop = _Interrupt()
     try:
-        for state in sim.steps(contacts=False, every=every):
-            # states are checked BATCH at a time (sim.stepcheck): the last
-            # one of the run closes its batch
-            batch.append(state)
-            if len(batch) < BATCH and state.step < sim.total_steps:
-                continue
-            timer.lap("sim")
-            results = checks.run(batch)
-            for state, res in zip(batch, results):
-                if state.step == 0:
-                    rest_points = state.cables
-                    if recorder:
-                        recorder.log_static(state.part_poses)
-                max_strain = np.maximum(max_strain, res.strain)
-                min_bend = np.minimum(min_bend, res.bend)
-                started, closed = tracker.update(state.t, res.records)
-                timer.lap("check")
-                if recorder and (checked % record_stride == 0 or started or closed
-                                 or state.step == sim.total_steps):
-                    _record_step(recorder, state, res.contacts, res.records, names, res.strain, res.bend,
-                                 res.agreement, started, closed, tracker, markers, scene.scale)
-                    timer.lap("record")
-                final_points = state.cables
-                steps, t_last = state.step, state.t
-                checked += 1
-                if progress:
-                    progress("run", state.step, sim.total_steps)
-            batch = []
-        complete = True
+        with stop:
+            for state in sim.steps(contacts=False, every=every):
+                # states are checked BATCH at a time (sim.stepcheck): the last
+                # one of the run, or of an interrupted run, closes its batch
+                batch.append(state)
+                if len(batch) < BATCH and state.step < sim.total_steps and not stop.asked:
+                    continue
+                timer.lap("sim")
+                out.take(batch, checks.run(batch))
+                batch = []
+                if stop.asked:
+                    break
+            complete = not stop.asked
     except KeyboardInterrupt:
-        complete = False   # states simulated but not yet checked are left out
+        complete = False    # a second Ctrl-C: the batch being checked is left out
     finally:
         still_open = set(tracker.open_pairs())
         events = tracker.finish()
@@ -171,9 +152,9 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
             recorder.close()
             timer.lap("record")
     total = time.perf_counter() - start
-    report = _report(scene, built, config, complete, steps, checked, t_last, max_strain, min_bend,
-                     rest_points, final_points, timer, total, sim, events, tracker, checks.validation,
-                     options)
+    report = _report(scene, built, config, complete, out.steps, out.checked, out.t_last, out.max_strain,
+                     out.min_bend, out.rest_points, out.final_points, timer, total, sim, events, tracker,
+                     checks.validation, options)
     advance = checks.advance
     report["settings"]["advance"] = None if advance is None else {
         "horizon": checks.horizon / scene.scale, "stretch": checks.stretch / scene.scale,
@@ -181,6 +162,74 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     report["part_warnings"] = list(checks.rigid.warnings)
     write_report(report, options.report)
     return report
+
+
+class _Interrupt:
+    """Ctrl-C asks the run to stop after the step being simulated, once its
+    batch is checked; a second Ctrl-C raises KeyboardInterrupt at once.
+    (Outside the main thread, where Python takes no signal handler, the
+    first Ctrl-C raises at once.)"""
+
+    def __init__(self):
+        self.asked = False
+        self._old = None
+
+    def _handler(self, signum, frame) -> None:
+        if self.asked:
+            raise KeyboardInterrupt
+        self.asked = True
+
+    def __enter__(self) -> "_Interrupt":
+        if threading.current_thread() is threading.main_thread():
+            self._old = signal.signal(signal.SIGINT, self._handler)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._old is not None:
+            signal.signal(signal.SIGINT, self._old)
+
+
+class _Outcome:
+    """What the run keeps of its checked steps, taken in order: events,
+    strain and bend extremes, first and last cable shapes, the recording
+    and progress."""
+
+    def __init__(self, built: Built, tracker: EventTracker, recorder: Recorder | None, timer: _Timer,
+                 progress: Progress | None, record_stride: int, total_steps: int):
+        self.built, self.tracker, self.recorder, self.timer = built, tracker, recorder, timer
+        self.progress, self.record_stride, self.total_steps = progress, record_stride, total_steps
+        self.names = [c.name for c in built.cables]
+        n = len(built.cables)
+        self.max_strain = np.full(n, -np.inf)
+        self.min_bend = np.full(n, np.inf)
+        self.rest_points: list[np.ndarray] = []
+        self.final_points: list[np.ndarray] = []
+        self.steps = self.checked = 0
+        self.t_last = 0.0
+        self.markers: set[str] = set()
+
+    def take(self, states, results) -> None:
+        """The checked states (oldest first) and their results."""
+        recorder, scale = self.recorder, self.built.scene.scale
+        for state, res in zip(states, results):
+            if state.step == 0:
+                self.rest_points = state.cables
+                if recorder:
+                    recorder.log_static(state.part_poses)
+            self.max_strain = np.maximum(self.max_strain, res.strain)
+            self.min_bend = np.minimum(self.min_bend, res.bend)
+            started, closed = self.tracker.update(state.t, res.records)
+            self.timer.lap("check")
+            if recorder and (self.checked % self.record_stride == 0 or started or closed
+                             or state.step == self.total_steps):
+                _record_step(recorder, state, res.contacts, res.records, self.names, res.strain, res.bend,
+                             res.agreement, started, closed, self.tracker, self.markers, scale)
+                self.timer.lap("record")
+            self.final_points = state.cables
+            self.steps, self.t_last = state.step, state.t
+            self.checked += 1
+            if self.progress:
+                self.progress("run", state.step, self.total_steps)
 
 
 def _record_step(recorder: Recorder, state, contacts, records, names, strain, bend, agreement,

@@ -1,16 +1,15 @@
 """The checks of a run, a batch of consecutive step states at a time.
 
 For every state: the cables' lengths and smallest bend radii, and the
-records a full check would return. States the skip rule proves clear
+records a full check would return, compared with MuJoCo's own contacts for
+the same positions when the scene validates. States the skip rule proves clear
 (:mod:`checker.advance`) get only their single-cable records (bend, taut),
 the replayed same-body part records and the records of the *active* pairs:
-cable-structure and keep-out pairs that were inside (or within a tenth of
-the horizon of) the clearance at the last full check, which the skip rule
-leaves out and which are checked on their own (a cable lying on an arm
-link, or held in a part just inside its attachment window, would otherwise
-stop all skipping). The other states are checked in full and, when the
-scene validates, compared with MuJoCo's own contacts for the same
-positions.
+pairs that were inside (or within a tenth of the horizon of) the clearance
+at the last full check, which the skip rule leaves out and which are
+checked on their own (a cable lying on an arm link or held in a part just
+inside its attachment window, two leads crossing, would otherwise stop all
+skipping). The other states are checked in full.
 
 Why batches: a cable has a few dozen body centres, so numpy's cost per call,
 not the arrays' size, is what a step costs. The skip rule and the measures
@@ -35,7 +34,7 @@ from checker.interference import Checker, single_records_many
 from checker.parts import PartChecker
 from checker.records import Interference, PairType
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
-from checker.validation import Validation, simulator_pairs
+from checker.validation import SimulatorPairs, Validation
 from sim.build import Built
 from sim.contacts import Contacts
 from sim.loop import StepState
@@ -149,6 +148,7 @@ class StepChecks:
         self._names = [c.name for c in built.cables]
         self._offsets = offsets
         self._radii = radii
+        self._simulator_pairs = SimulatorPairs(self.exclusions, config.clearance)
         self.validation = Validation(scene.check.clearance, config.method,
                                      frozenset(p.name for p in built.parts if p.shape == "mesh"),
                                      unit=scene.scale, unit_name=scene.units)
@@ -185,7 +185,24 @@ class StepChecks:
                 out.append(self._full(states[j], pts[j], poses[j], strain[j], bend[j]))
                 j += 1
         self.lap("check")
+        if self.detect is not None:
+            self._validate(states, pts, out)
         return out
+
+    def _validate(self, states: Sequence[StepState], pts: np.ndarray, results: list[StepResult]) -> None:
+        """MuJoCo's contacts at every state against its cable records
+        (complete on a proven-clear step too: every other pair is clear);
+        the contacts reduced to pairs for all the states at once."""
+        contacts = [self.detect(state.qpos) for state in states]   # timed with the simulation
+        self.lap("sim")
+        seen = self._simulator_pairs.many(contacts, self._names, self._radii, pts, self._offsets)
+        for state, result, found, pairs in zip(states, results, contacts, seen):
+            result.contacts = found
+            if self.focus_names is not None:
+                pairs = {k: v for k, v in pairs.items() if k[2] in self.focus_names
+                         and k[0] in (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value)}
+            result.agreement = self.validation.compare(state.t, result.cable_records, pairs)
+        self.lap("validate")
 
     def _proven_clear(self, states: Sequence[StepState], pts: np.ndarray, poses: np.ndarray,
                       single: np.ndarray, radius_at: np.ndarray, strain: np.ndarray,
@@ -259,19 +276,7 @@ class StepChecks:
                 adv.stop()
                 adv.start_pairs(poses, self._moving_pairs, bound)
         cable_records = self._focus(cable_records)
-        result = StepResult(cable_records + part_records, cable_records, strain, bend, True)
-        if self.detect is not None:
-            self.lap("check")
-            result.contacts = self.detect(state.qpos)   # timed with the simulation
-            self.lap("sim")
-            seen = simulator_pairs(result.contacts, {c.name: (c.points, c.radius) for c in cables},
-                                   self.exclusions, self.config.clearance)
-            if self.focus_names is not None:
-                seen = {k: v for k, v in seen.items() if k[2] in self.focus_names
-                        and k[0] in (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value)}
-            result.agreement = self.validation.compare(state.t, cable_records, seen)
-            self.lap("validate")
-        return result
+        return StepResult(cable_records + part_records, cable_records, strain, bend, True)
 
     def _focus(self, records: list[Interference]) -> list[Interference]:
         """With --only: the records against the assembly's parts alone."""

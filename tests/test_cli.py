@@ -245,6 +245,34 @@ def test_full_every_step_checks_and_compares_every_step(small_scene: Path, tmp_p
     a, b = json.loads(fast.read_text()), json.loads(full.read_text())
     assert a["settings"]["advance"]["proven_clear_steps"] > 0 and "proven clear" in out
     assert b["settings"]["advance"] is None and "proven clear" not in out_full
-    assert b["validation"]["compared_steps"] == b["settings"]["checked_steps"]
-    assert a["validation"]["compared_steps"] == a["settings"]["advance"]["full_checks"]
-    assert a["events"] == b["events"] and a["pairs"] == b["pairs"]
+    assert a["validation"]["compared_steps"] == b["validation"]["compared_steps"] == b["settings"]["checked_steps"]
+    assert a["events"] == b["events"] and a["pairs"] == b["pairs"] and a["validation"] == b["validation"]
+
+
+def test_ctrl_c_stops_after_the_batch_and_a_second_stops_at_once(small_scene: Path, tmp_path: Path):
+    """SIGINT asks the run to stop: the states already simulated are checked
+    and reported; a second SIGINT raises at once (the batch is left out)."""
+    import signal
+
+    scene = load_scene(small_scene)
+    sent = []
+
+    def once(stage, done, total):
+        if stage == "run" and done >= 10 and not sent:
+            sent.append(done)
+            signal.raise_signal(signal.SIGINT)
+
+    report = run_scene(scene, RunOptions(report=tmp_path / "a.json", record=None), progress=once)
+    total = round(scene.duration / scene.timestep)
+    assert report["complete"] is False and 10 <= report["settings"]["steps"] < total
+    assert report["settings"]["checked_steps"] == report["settings"]["steps"] + 1
+    assert report["validation"]["compared_steps"] == report["settings"]["checked_steps"]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # handler put back
+
+    def twice(stage, done, total):
+        if stage == "run" and done >= 10 and len(sent) < 3:
+            sent.append(done)
+            signal.raise_signal(signal.SIGINT)
+
+    report = run_scene(scene, RunOptions(report=tmp_path / "b.json", record=None), progress=twice)
+    assert report["complete"] is False and report["settings"]["steps"] < total

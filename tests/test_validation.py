@@ -68,3 +68,40 @@ def test_compare_counts_and_reasons():
     assert reasons[("c", "d")].startswith("between points")
     assert reasons[("c", "mesh")].startswith("at a boundary")
     assert classify(None, 0.005) == "clear" and classify(0.0, 0.005) == "soft" and classify(-1e-9, 0.005) == "hard"
+
+
+def test_many_states_at_once_is_each_state_alone():
+    """SimulatorPairs.many over random contacts of random states: per state,
+    exactly what the one-state call gives (pairs, distances, points)."""
+    from checker.validation import SimulatorPairs
+    rng = np.random.default_rng(2)
+    names, radii = ["c", "d"], np.array([0.01, 0.004])
+    offsets = np.array([0, 11, 18])
+    excl = [Exclusion("c", "clamp", 0.0, 0.25), Exclusion("d", "box", 0.3, 0.6)]
+    pairs = SimulatorPairs(excl, 0.005)
+    seen = 0
+    for trial in range(20):
+        n_s = int(rng.integers(1, 6))
+        pts = np.cumsum(rng.normal(size=(n_s, 18, 3)) * 0.05, axis=1)
+        contacts = []
+        for _ in range(n_s):
+            m = int(rng.integers(0, 8))
+            kind = rng.choice(["cable-structure", "keepout", "self", "cable-cable", "part-part"], m)
+            a = np.where(kind == "part-part", "bracket", rng.choice(names, m)).astype(object)
+            b = np.array([("c" if k == "self" and x == "c" else "d" if k == "self" else
+                           rng.choice(names) if k == "cable-cable" else rng.choice(["clamp", "box", "zone"]))
+                          for k, x in zip(kind, a)], dtype=object)
+            b = np.where(kind == "cable-cable", np.where(a == "c", "d", "c"), b).astype(object)
+            ea = np.where(kind == "part-part", -1, rng.integers(0, 10, m))
+            eb = np.where(np.isin(kind, ["self", "cable-cable"]), rng.integers(0, 6, m), -1)
+            contacts.append(SimContacts(kind.astype(object), a, b, ea, eb, rng.normal(size=m) * 0.004,
+                                        rng.normal(size=(m, 3)) * 0.2))
+        got = pairs.many(contacts, names, radii, pts, offsets)
+        for k in range(n_s):
+            cables = {"c": (pts[k, :11], 0.01), "d": (pts[k, 11:], 0.004)}
+            want = pairs(contacts[k], cables)
+            assert got[k].keys() == want.keys()
+            for key in want:
+                assert got[k][key][0] == want[key][0] and np.array_equal(got[k][key][1], want[key][1])
+            seen += len(want)
+    assert seen > 20
