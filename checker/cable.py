@@ -103,8 +103,14 @@ class ArcLayout:
         counts = np.diff(offsets)
         self.n = int(offsets[-1]) if len(offsets) else 0
         self._groups = []
+        self._block = None
         if self.n == 0:
             return
+        if len(counts) and np.all(counts == counts[0]):
+            # every polyline as long: the points reshape into the pad's rows
+            self._block = (len(counts), int(counts[0]))
+            return
+        self._block = None
         group = np.floor(np.log2(np.maximum(counts, 1))).astype(np.int64)
         for g in np.unique(group):
             lines = np.flatnonzero(group == g)
@@ -117,6 +123,13 @@ class ArcLayout:
                                  row, pos, idx))
 
     def __call__(self, step: np.ndarray) -> np.ndarray:
+        if self._block is not None:
+            rows, cnt = self._block
+            pad = np.zeros((rows, cnt))
+            lead = np.zeros(rows * cnt)
+            lead[1:] = step[: rows * cnt - 1]                   # element i - 1 before point i
+            pad[:, 1:] = lead.reshape(rows, cnt)[:, 1:]
+            return np.cumsum(pad, axis=1).ravel()
         out = np.zeros(self.n)
         for shape, r_in, p_in, e_in, row, pos, idx in self._groups:
             pad = np.zeros(shape)
