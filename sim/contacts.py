@@ -31,50 +31,55 @@ distance, metres; pos: (n, 3) contact points, world metres."""
 
 
 class ContactReader:
-    """Maps contacts of a model built by `sim.build` to names."""
+    """Maps contacts of a model built by `sim.build` to names.
+
+    The mapping runs on integer codes (one table of names: the flexes', then
+    the geoms'), indexing the names once at the end: a step has few
+    contacts, so numpy's per-call cost on string arrays is what reading them
+    would otherwise cost."""
+
+    _KINDS = np.array(["part-part", "cable-structure", "keepout", "cable-cable", "self"], dtype=object)
 
     def __init__(self, built: Built):
         m = built.model
-        self.flex_cable = np.full(max(m.nflex, 1), "", dtype=object)
+        self._nflex = max(m.nflex, 1)
+        names = np.full(self._nflex + max(m.ngeom, 1), "", dtype=object)
         for c in built.cables:
-            self.flex_cable[c.flex_id] = c.name
-        self.geom_name = np.full(max(m.ngeom, 1), "", dtype=object)
-        self.geom_keepout = np.zeros(max(m.ngeom, 1), bool)
+            names[c.flex_id] = c.name
+        keepout = np.zeros(len(names), bool)
         for p in built.parts:
-            self.geom_name[p.geom_id] = p.name
-            self.geom_keepout[p.geom_id] = p.keepout
+            names[self._nflex + p.geom_id] = p.name
+            keepout[self._nflex + p.geom_id] = p.keepout
+        self._names, self._keepout, self._named = names, keepout, names != ""
+        self._empty = Contacts(np.zeros(0, dtype=object), np.zeros(0, dtype=object), np.zeros(0, dtype=object),
+                               np.zeros(0, int), np.zeros(0, int), np.zeros(0), np.zeros((0, 3)))
 
     def read(self, data: mujoco.MjData, origin: np.ndarray) -> Contacts:
         """All contacts of `data` (after mj_collision) with names; contact
         points are moved from model coordinates to the scene world by `origin`."""
         n = int(data.ncon)
+        if n == 0:
+            return self._empty
         con = data.contact
         geom = np.asarray(con.geom[:n], int).reshape(n, 2)
         flex = np.asarray(con.flex[:n], int).reshape(n, 2)
         elem = np.asarray(con.elem[:n], int).reshape(n, 2)
-        dist = np.asarray(con.dist[:n], float).copy()
+        dist = np.array(con.dist[:n], float)
         pos = np.asarray(con.pos[:n], float).reshape(n, 3) + origin
         # Put the flex side first so a is always the cable.
         swap = (flex[:, 0] < 0) & (flex[:, 1] >= 0)
-        for arr in (geom, flex, elem):
-            arr[swap] = arr[swap][:, ::-1]
-        is_flex_a = flex[:, 0] >= 0
-        is_flex_b = flex[:, 1] >= 0
-        a = np.where(is_flex_a, self.flex_cable[np.maximum(flex[:, 0], 0)],
-                     self.geom_name[np.maximum(geom[:, 0], 0)])
-        b = np.where(is_flex_b, self.flex_cable[np.maximum(flex[:, 1], 0)],
-                     self.geom_name[np.maximum(geom[:, 1], 0)])
-        keepout = (~is_flex_b) & self.geom_keepout[np.maximum(geom[:, 1], 0)]
-        kind = np.full(n, "part-part", dtype=object)
-        kind[is_flex_a & ~is_flex_b] = "cable-structure"
-        kind[is_flex_a & ~is_flex_b & keepout] = "keepout"
-        kind[is_flex_a & is_flex_b] = "cable-cable"
-        kind[is_flex_a & is_flex_b & (flex[:, 0] == flex[:, 1])] = "self"
-        keep_pp = ~is_flex_a & ~is_flex_b
-        kind[keep_pp & (self.geom_keepout[np.maximum(geom[:, 0], 0)] | keepout)] = "keepout"
-        elem_a = np.where(is_flex_a, elem[:, 0], -1)
-        elem_b = np.where(is_flex_b, elem[:, 1], -1)
+        if swap.any():
+            for arr in (geom, flex, elem):
+                arr[swap] = arr[swap][:, ::-1]
+        is_flex = flex >= 0
+        code = np.where(is_flex, flex, self._nflex + np.maximum(geom, 0))     # (n, 2) into the name table
+        ko = self._keepout[code]
+        kind = np.where(is_flex[:, 0], np.where(is_flex[:, 1], 3 + (flex[:, 0] == flex[:, 1]), 1 + ko[:, 1]),
+                        2 * (ko[:, 0] | ko[:, 1]))                           # codes into _KINDS
+        elem = np.where(is_flex, elem, -1)
         # Contacts with geoms that are not parts (none are built today) are dropped.
-        valid = (a != "") & (b != "")
-        return Contacts(kind[valid], a[valid], b[valid], elem_a[valid], elem_b[valid],
-                        dist[valid], pos[valid])
+        valid = self._named[code[:, 0]] & self._named[code[:, 1]]
+        if not valid.all():
+            code, kind, elem, dist, pos = code[valid], kind[valid], elem[valid], dist[valid], pos[valid]
+        return Contacts(self._KINDS[kind], self._names[code[:, 0]], self._names[code[:, 1]],
+                        elem[:, 0], elem[:, 1], dist, pos)

@@ -1,0 +1,84 @@
+"""MuJoCo's contacts mapped back to scene names (sim.contacts)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from sim.build import build
+from sim.loop import Simulation
+from sim.scene import load_scene
+
+SCENES = Path(__file__).resolve().parents[1] / "scenes"
+
+PARTS = """
+[scene]
+name = "touching"
+units = "mm"
+duration = 0.01
+settle = 0.0
+
+[effects]
+dynamics = false
+contact = []
+
+[[bodies]]
+name = "slider"
+
+[[parts]]
+name = "frame/block"
+shape = "box"
+size = [20, 20, 20]
+pos = [0, 0, 0]
+
+[[parts]]
+name = "slider/zone"
+body = "slider"
+shape = "box"
+size = [20, 20, 20]
+pos = [30, 0, 0]
+keepout = true
+
+[[cables]]
+name = "lead"
+radius = 3.0
+start = { pos = [-60, 0, 22] }
+end = { pos = [60, 0, 22] }
+length = 120.0
+segments = 12
+"""
+
+
+def _contacts(scene, every=1):
+    built = build(scene, detect=True)
+    sim = Simulation(built)
+    sim.reset()
+    sim.settle()
+    return [sim.detect_qpos(state.qpos) for state in list(sim.steps(contacts=False))[::every]]
+
+
+def test_kinds_and_names(tmp_path):
+    path = tmp_path / "touching.toml"
+    path.write_text(PARTS)
+    c = _contacts(load_scene(path))[0]
+    got = {(k, a, b) for k, a, b in zip(c.kind, c.a, c.b)}
+    # the lead lies 2 mm above both boxes (its radius 3 mm): cable-structure and keep-out
+    assert ("cable-structure", "lead", "frame/block") in got
+    assert ("keepout", "lead", "slider/zone") in got
+    # the two boxes overlap by 10 mm: a part against a keep-out part, no cable on either side
+    part = [i for i, (a, b) in enumerate(zip(c.a, c.b)) if {a, b} == {"frame/block", "slider/zone"}]
+    assert part and all(c.kind[i] == "keepout" and c.elem_a[i] == -1 and c.elem_b[i] == -1 for i in part)
+    cable = [i for i, a in enumerate(c.a) if a == "lead"]
+    assert all(0 <= c.elem_a[i] < 12 and c.elem_b[i] == -1 for i in cable)
+    assert abs(c.dist[cable].min() + 0.001) < 1e-6       # 2 mm above the tops minus the 3 mm radius
+
+
+def test_cable_pairs_put_a_cable_first():
+    crossing = _contacts(load_scene(SCENES / "crossing.toml"), every=50)
+    assert any({(k, frozenset((a, b))) for k, a, b in zip(c.kind, c.a, c.b)}
+               >= {("cable-cable", frozenset(("power", "signal")))} for c in crossing)
+    coil = _contacts(load_scene(SCENES / "coil_self.toml"), every=50)
+    selfs = [(a, b, ea, eb) for c in coil for k, a, b, ea, eb in zip(c.kind, c.a, c.b, c.elem_a, c.elem_b)
+             if k == "self"]
+    assert selfs and all(a == b == "lead" and ea >= 0 and eb >= 0 for a, b, ea, eb in selfs)
