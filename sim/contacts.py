@@ -14,6 +14,8 @@ validation compare that.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import mujoco
 import numpy as np
 
@@ -54,18 +56,31 @@ class ContactReader:
         self._empty = Contacts(np.zeros(0, dtype=object), np.zeros(0, dtype=object), np.zeros(0, dtype=object),
                                np.zeros(0, int), np.zeros(0, int), np.zeros(0), np.zeros((0, 3)))
 
+    @staticmethod
+    def raw(data: mujoco.MjData) -> "RawContacts":
+        """A copy of the contact arrays of `data` (after mj_collision), to be
+        named later (:meth:`read_many`); the data may be reused meanwhile."""
+        n = int(data.ncon)
+        con = data.contact
+        return RawContacts(np.array(con.geom[:n], int).reshape(n, 2), np.array(con.flex[:n], int).reshape(n, 2),
+                           np.array(con.elem[:n], int).reshape(n, 2), np.array(con.dist[:n], float),
+                           np.array(con.pos[:n], float).reshape(n, 3))
+
     def read(self, data: mujoco.MjData, origin: np.ndarray) -> Contacts:
         """All contacts of `data` (after mj_collision) with names; contact
         points are moved from model coordinates to the scene world by `origin`."""
-        n = int(data.ncon)
-        if n == 0:
-            return self._empty
-        con = data.contact
-        geom = np.asarray(con.geom[:n], int).reshape(n, 2)
-        flex = np.asarray(con.flex[:n], int).reshape(n, 2)
-        elem = np.asarray(con.elem[:n], int).reshape(n, 2)
-        dist = np.array(con.dist[:n], float)
-        pos = np.asarray(con.pos[:n], float).reshape(n, 3) + origin
+        return self.read_many([self.raw(data)], origin)[0]
+
+    def read_many(self, raws: list["RawContacts"], origin: np.ndarray) -> list[Contacts]:
+        """:meth:`read` for the raw contacts of many steps at once."""
+        counts = np.array([len(r.dist) for r in raws], np.int64)
+        if counts.sum() == 0:
+            return [self._empty] * len(raws)
+        geom = np.concatenate([r.geom for r in raws])
+        flex = np.concatenate([r.flex for r in raws])
+        elem = np.concatenate([r.elem for r in raws])
+        dist = np.concatenate([r.dist for r in raws])
+        pos = np.concatenate([r.pos for r in raws]) + origin
         # Put the flex side first so a is always the cable.
         swap = (flex[:, 0] < 0) & (flex[:, 1] >= 0)
         if swap.any():
@@ -80,6 +95,21 @@ class ContactReader:
         # Contacts with geoms that are not parts (none are built today) are dropped.
         valid = self._named[code[:, 0]] & self._named[code[:, 1]]
         if not valid.all():
+            step = np.repeat(np.arange(len(raws)), counts)[valid]
+            counts = np.bincount(step, minlength=len(raws))
             code, kind, elem, dist, pos = code[valid], kind[valid], elem[valid], dist[valid], pos[valid]
-        return Contacts(self._KINDS[kind], self._names[code[:, 0]], self._names[code[:, 1]],
-                        elem[:, 0], elem[:, 1], dist, pos)
+        kinds, a, b = self._KINDS[kind], self._names[code[:, 0]], self._names[code[:, 1]]
+        cut = np.cumsum(counts)[:-1]
+        return [Contacts(*parts) for parts in zip(*(np.split(x, cut) for x in
+                                                  (kinds, a, b, elem[:, 0], elem[:, 1], dist, pos)))]
+
+
+@dataclass(frozen=True)
+class RawContacts:
+    """MuJoCo's contact arrays of one step, unnamed (model coordinates)."""
+
+    geom: np.ndarray
+    flex: np.ndarray
+    elem: np.ndarray
+    dist: np.ndarray
+    pos: np.ndarray

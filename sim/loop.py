@@ -23,7 +23,7 @@ import mujoco
 import numpy as np
 
 from sim.build import Built
-from sim.contacts import ContactReader, Contacts
+from sim.contacts import ContactReader, Contacts, RawContacts
 from sim.motion import Motion
 
 
@@ -127,13 +127,21 @@ class Simulation:
     def detect_qpos(self, qpos: np.ndarray) -> Contacts:
         """MuJoCo's contacts for the generalized positions `qpos` (of the
         simulation model), from the detection model."""
+        return self.read_many([self.collide(qpos)])[0]
+
+    def collide(self, qpos: np.ndarray) -> RawContacts:
+        """The detection model's collision pass at `qpos`: its contacts, unnamed."""
         m2, d2 = self.built.detect, self.detect_data
         d2.qpos[:] = qpos
         mujoco.mj_kinematics(m2, d2)
         mujoco.mj_comPos(m2, d2)
         mujoco.mj_flex(m2, d2)
         mujoco.mj_collision(m2, d2)
-        return self.reader.read(d2, self.built.origin)
+        return self.reader.raw(d2)
+
+    def read_many(self, raws: list[RawContacts]) -> list[Contacts]:
+        """Contacts of :meth:`collide` named, for many steps at once."""
+        return self.reader.read_many(raws, self.built.origin)
 
     def warnings(self) -> dict[str, int]:
         """MuJoCo warnings raised so far, by name, nonzero only."""

@@ -114,7 +114,7 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
                          spacing=options.spacing or scene.check.spacing,
                          clearance=scene.check.clearance)
     checks = StepChecks(built, config, options.only, options.advance,
-                        sim.detect_qpos if validate else None, timer.lap)
+                        sim if validate else None, timer.lap)
     every = scene.check.every
     tracker = EventTracker(hold=3 * every * scene.timestep)
     # The recording samples the checked steps at about RECORD_RATE (and at

@@ -24,6 +24,7 @@ This module does not step the simulation, track events, record or report
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from typing import Protocol
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,7 +37,7 @@ from checker.records import Interference, PairType
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from checker.validation import SimulatorPairs, Validation
 from sim.build import Built
-from sim.contacts import Contacts
+from sim.contacts import Contacts, RawContacts
 from sim.loop import StepState
 from sim.sweep import DEFAULT_PRECISION_M, part_set, part_shapes, selection
 
@@ -56,6 +57,14 @@ bounding the skip (checker.advance)."""
 ADVANCE_STRETCH_RADII = 0.25
 """... and up to this many (smallest) cable radii of arc length inside the
 exclusion windows (the total change of element lengths a skipped step allows)."""
+
+
+class Detector(Protocol):
+    """MuJoCo's own contacts for a state (see :class:`sim.loop.Simulation`)."""
+
+    def collide(self, qpos: np.ndarray) -> RawContacts: ...
+
+    def read_many(self, raws: list[RawContacts]) -> list[Contacts]: ...
 
 
 @dataclass
@@ -89,17 +98,19 @@ class StepChecks:
       config: method, spacing and clearance.
       only: an assembly path for ``--only`` (see :class:`sim.run.RunOptions`), or None.
       advance: use the skip rule.
-      detect: MuJoCo's contacts for a state's qpos, or None (no validation).
+      detector: MuJoCo's detection (``collide(qpos)`` per state, then
+        ``read_many(raws)`` to name a batch's contacts: a
+        :class:`sim.loop.Simulation`), or None (no validation).
       lap: lap(stage) ends a timed stage ("check", "sim", "validate").
     """
 
     def __init__(self, built: Built, config: CheckConfig, only: str | None, advance: bool,
-                 detect: Callable[[np.ndarray], Contacts] | None,
+                 detector: Detector | None,
                  lap: Callable[[str], None] = lambda stage: None):
         scene = built.scene
         self.built = built
         self.config = config
-        self.detect = detect
+        self.detector = detector
         self.lap = lap
         shapes = part_shapes(built)
         # Rigid parts against each other: prepared once, same-body pairs checked once.
@@ -185,7 +196,7 @@ class StepChecks:
                 out.append(self._full(states[j], pts[j], poses[j], strain[j], bend[j]))
                 j += 1
         self.lap("check")
-        if self.detect is not None:
+        if self.detector is not None:
             self._validate(states, pts, out)
         return out
 
@@ -193,8 +204,9 @@ class StepChecks:
         """MuJoCo's contacts at every state against its cable records
         (complete on a proven-clear step too: every other pair is clear);
         the contacts reduced to pairs for all the states at once."""
-        contacts = [self.detect(state.qpos) for state in states]   # timed with the simulation
+        raws = [self.detector.collide(state.qpos) for state in states]   # MuJoCo's work: the simulation's time
         self.lap("sim")
+        contacts = self.detector.read_many(raws)
         seen = self._simulator_pairs.many(contacts, self._names, self._radii, pts, self._offsets)
         for state, result, found, pairs in zip(states, results, contacts, seen):
             result.contacts = found
