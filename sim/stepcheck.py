@@ -221,7 +221,7 @@ class StepChecks:
                       bend: np.ndarray) -> list[StepResult]:
         """States proven clear since the last full check: what a full check
         returns is the single-cable records, the active pairs' records and
-        the replayed same-body part records; the first two for all the
+        the replayed same-body part records; all but the last for all the
         states at once."""
         n = len(states)
         names = self._names
