@@ -4,8 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-
 from sim.build import build
 from sim.loop import Simulation
 from sim.scene import load_scene
