@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from checker.cable import arc_length, polyline_arc_lengths, self_pair_excluded
+from checker.cable import polyline_arc_lengths, self_pair_excluded
 from checker.closest import point_segment, row_norm
 from checker.records import Interference, PairType
 from checker.scene_state import Exclusion
@@ -69,18 +69,6 @@ class SimContacts:
     pos: np.ndarray
 
 
-def contact_arc_length(points: np.ndarray, elem: np.ndarray, pos: np.ndarray,
-                       s: np.ndarray | None = None) -> np.ndarray:
-    """Arc length along a polyline of the projection of `pos` onto element `elem`.
-
-    points (n, 3); elem (k,) element indices (i joins points i and i+1);
-    pos (k, 3); s: ``arc_length(points)`` when known. Returns (k,)."""
-    elem = np.clip(np.asarray(elem, int), 0, len(points) - 2)
-    s = arc_length(points) if s is None else s
-    _, t, _ = point_segment(np.asarray(pos, float), points[elem], points[elem + 1])
-    return s[elem] + t * (s[elem + 1] - s[elem])
-
-
 def simulator_pairs(contacts: SimContacts, cables: dict[str, tuple[np.ndarray, float]],
                     exclusions: Sequence[Exclusion],
                     clearance: float) -> dict[tuple[str, str, str], tuple[float, np.ndarray]]:
@@ -105,56 +93,13 @@ class SimulatorPairs:
 
     def __call__(self, contacts: SimContacts, cables: dict[str, tuple[np.ndarray, float]]
                  ) -> dict[tuple[str, str, str], tuple[float, np.ndarray]]:
-        elem_a = np.asarray(contacts.elem_a)
-        # a cable on side a (a part touching a keep-out part is a part-part matter)
-        keep = elem_a >= 0
-        if not keep.any():
+        """One state: `cables` maps name -> (points (n, 3), radius)."""
+        names = list(cables)
+        if not names:
             return {}
-        kinds = contacts.kind
-        keep &= np.logical_or.reduce([kinds == k for k in COMPARED_TYPES])   # few kinds: no isin on strings
-        idx = np.flatnonzero(keep)
-        if len(idx) == 0:
-            return {}
-        kind, a, b = kinds[idx], contacts.a[idx], contacts.b[idx]
-        elem_a, elem_b, pos = elem_a[idx], np.asarray(contacts.elem_b)[idx], contacts.pos[idx]
-        n = len(idx)
-        s_a, s_b = np.zeros(n), np.zeros(n)
-        elem_lo, elem_hi = np.zeros(n), np.zeros(n)  # arc length span of each contact's element on cable a
-        for name in set(a.tolist()):  # per cable (few), vectorised over its contacts
-            pts, _ = cables[name]
-            s_pts = arc_length(pts)
-            on_a = a == name
-            s_a[on_a] = contact_arc_length(pts, elem_a[on_a], pos[on_a], s_pts)
-            e = np.clip(elem_a[on_a], 0, len(pts) - 2)
-            elem_lo[on_a], elem_hi[on_a] = s_pts[e], s_pts[e + 1]
-            on_b = (b == name) & (elem_b >= 0)
-            if on_b.any():
-                s_b[on_b] = contact_arc_length(pts, elem_b[on_b], pos[on_b], s_pts)
-        drop = np.zeros(n, bool)
-        self_rows = kind == PairType.SELF.value
-        if self_rows.any():
-            radius = np.array([cables[c][1] for c in a[self_rows]])
-            drop[self_rows] = self_pair_excluded(s_a[self_rows], s_b[self_rows], radius, self.clearance)
-        # A simulator contact stands for its whole element: drop it when the
-        # element lies in the window (windows are aligned to elements by the
-        # caller; a quarter element absorbs the cable's stretch since rest).
-        # Every contact against every window at once.
-        if len(self._ex_lo):
-            slack = (0.25 * (elem_hi - elem_lo))[:, None]
-            structure = (kind == PairType.CABLE_STRUCTURE.value) | (kind == PairType.KEEPOUT.value)
-            inside = ((a[:, None] == self._ex_cable) & (b[:, None] == self._ex_part)
-                      & (elem_lo[:, None] >= self._ex_lo - slack) & (elem_hi[:, None] <= self._ex_hi + slack))
-            drop |= structure & inside.any(axis=1)
-        out: dict[tuple[str, str, str], tuple[float, np.ndarray]] = {}
-        dist = contacts.dist[idx]
-        for i in np.flatnonzero(~drop).tolist():  # first least per pair
-            k = (str(kind[i]), str(a[i]), str(b[i]))
-            if k[0] == PairType.CABLE_CABLE.value and k[1] > k[2]:
-                k = (k[0], k[2], k[1])
-            if k not in out or dist[i] < out[k][0]:
-                out[k] = (float(dist[i]), pos[i])
-        return out
-
+        pts = np.concatenate([np.asarray(cables[c][0], float).reshape(-1, 3) for c in names])
+        offsets = np.concatenate([[0], np.cumsum([len(cables[c][0]) for c in names])])
+        return self.many([contacts], names, np.array([cables[c][1] for c in names], float), pts[None], offsets)[0]
 
     def many(self, contacts: Sequence[SimContacts], names: Sequence[str], radii: np.ndarray,
              pts: np.ndarray, offsets: np.ndarray) -> list[dict[tuple[str, str, str], tuple[float, np.ndarray]]]:

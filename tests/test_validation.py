@@ -6,7 +6,7 @@ import numpy as np
 
 from checker.records import Interference, PairType, Severity
 from checker.scene_state import Exclusion
-from checker.validation import SimContacts, Validation, classify, contact_arc_length, simulator_pairs
+from checker.validation import SimContacts, Validation, classify, simulator_pairs
 
 # a straight cable along x, 10 elements of 0.1 m
 CABLE = np.stack([np.linspace(0.0, 1.0, 11), np.zeros(11), np.zeros(11)], axis=1)
@@ -28,7 +28,6 @@ def test_least_distance_per_pair_and_contact_places():
     assert sim[("cable-structure", "c", "box")][0] == -0.001
     assert np.allclose(sim[("cable-structure", "c", "box")][1], [0.33, 0, 0])
     assert sim[("keepout", "c", "zone")][0] == 0.002
-    assert np.allclose(contact_arc_length(CABLE, np.array([3]), np.array([[0.33, 0.05, 0]])), [0.33])
 
 
 def test_part_touching_a_keepout_part_is_not_compared():
