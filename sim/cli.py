@@ -270,7 +270,7 @@ def _print_summary(report: dict, report_path: Path) -> None:
         print(f"  warning: {w}")
     t = report["timing"]
     print(f"  time {t['total_s']:.2f} s (simulation {t['sim_s']:.2f} s, checks {t['check_s']:.2f} s, "
-          f"recording {t['record_s']:.2f} s)")
+          f"MuJoCo comparison {t['validate_s']:.2f} s, recording {t['record_s']:.2f} s)")
     print(f"  report: {report_path}")
     if report.get("recording"):
         print(f"  recording: {report['recording']}  (view: rerun {report['recording']})")
