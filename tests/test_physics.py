@@ -26,28 +26,19 @@ the catenary through those points within 0.1 %.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
+from checker.cable import arc_length
 from sim.build import build
 from sim.loop import Simulation
-from sim.reference import CANTILEVER, CATENARY, cantilever_tip
+from sim.reference import CANTILEVER, CATENARY, cantilever_scene, cantilever_tip, catenary_scene
 from sim.reference import catenary_sag as _catenary_sag
 from sim.reference import free_end as _free_end
-from sim.scene import parse_scene
-
-
-def _scene(name: str, cable: dict, settle: float, timestep: float = 0.002):
-    data = {"scene": {"name": name, "units": "m", "duration": 0.0, "settle": settle,
-                      "timestep": timestep},
-            "cables": [cable]}
-    return parse_scene(data, Path(f"/virtual/{name}.toml"))
 
 
 def _length(points: np.ndarray) -> float:
-    return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+    return float(arc_length(points)[-1])
 
 
 def _settled(scene, free_end: bool = False):
@@ -70,10 +61,7 @@ def test_limp_cable_hangs_as_a_catenary():
 
     Measured: sag 0.26689 m against 0.26544 m (+0.55 %), length +0.009 %."""
     p = CATENARY
-    scene = _scene("catenary", {
-        "name": "limp", "radius": p["radius"], "start": {"body": "world", "pos": [0, 0, p["height"]]},
-        "end": {"body": "world", "pos": [p["span"], 0, p["height"]]}, "length": p["length"],
-        "segments": p["elements"], "young": 1.0, "density": 1500}, settle=3.0)
+    scene = catenary_scene()
     built, sim, state = _settled(scene)
     assert built.cables[0].count == p["elements"] + 1
     points = state.cables[0]
@@ -101,10 +89,7 @@ def test_limp_cable_hangs_as_a_catenary():
 
 def _cantilever(elements: int):
     p = CANTILEVER
-    scene = _scene(f"cantilever{elements}", {
-        "name": "rod", "radius": p["radius"], "start": {"body": "world", "pos": [0, 0, p["height"]]},
-        "end": {"body": "world", "pos": [p["length"], 0, p["height"]]},
-        "segments": elements, "young": p["young"], "density": p["density"]}, settle=1.0)
+    scene = cantilever_scene(elements)
     built, sim, state = _settled(scene, free_end=True)
     points = state.cables[0]
     assert np.isfinite(points).all()
