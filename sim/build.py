@@ -108,8 +108,6 @@ class CableModel:
       length: rest length, metres.
       element_length: rest length of one element, metres.
       routed: (count, 3) routed shape at t = 0 (before settling), scene world, metres.
-      qpos_adr: (count, 3) qpos addresses of each vertex's x, y, z slides,
-        -1 for pinned vertices.
       attachments: vertices held by bodies.
       min_bend_radius: metres or None.
       rest_s: (count,) arc length of each vertex along the rest shape, metres.
@@ -123,7 +121,6 @@ class CableModel:
     length: float
     element_length: float
     routed: np.ndarray
-    qpos_adr: np.ndarray
     attachments: tuple[Attachment, ...]
     min_bend_radius: float | None
     rest_s: np.ndarray
@@ -208,8 +205,6 @@ class Built:
     base_dof_adr: np.ndarray
     joints: dict[str, JointDrive]
     qpos0: np.ndarray
-    geom_part: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
-    """geom id -> index into `parts`, -1 for geoms that are not parts."""
     origin: np.ndarray = field(default_factory=lambda: np.zeros(3))
     """Scene-world position of the model's origin (see `scene_origin`):
     model coordinates + origin = scene world coordinates."""
@@ -567,7 +562,6 @@ def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
     scene_parts = {p.name: p for p in scene.parts}
     scene_bodies = {b.name for b in scene.bodies}
     parts: list[PartModel] = []
-    geom_part = np.full(m.ngeom, -1, int)
     # Name base-model geoms by body, adding the geom name (or index) when a body has several.
     for g in range(m.ngeom):
         gtype = int(m.geom_type[g])
@@ -590,7 +584,6 @@ def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
             fa, fn = int(m.mesh_faceadr[mid]), int(m.mesh_facenum[mid])
             verts = m.mesh_vert[va:va + vn].astype(float).copy()
             faces = m.mesh_face[fa:fa + fn].astype(int).copy()
-        geom_part[g] = len(parts)
         parts.append(PartModel(name, g, body, _SHAPES[gtype], m.geom_size[g].copy(), verts, faces, keepout))
 
     cables = []
@@ -599,22 +592,20 @@ def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
         c = plan.cable
         fid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_FLEX, f"{CABLE_PREFIX}{c.name}")
         n = len(plan.routed)
-        qadr = np.full((n, 3), -1, int)
         for v in range(n):
             try:
                 bid = m.body(f"{CABLE_PREFIX}{c.name}_{v}").id
             except KeyError:
                 continue  # pinned to the world
             ja = int(m.body_jntadr[bid])
-            qadr[v] = m.jnt_qposadr[ja:ja + 3]
             # The three slides run along the parent's (the world's) x, y, z axes.
-            qpos0[qadr[v]] += plan.routed[v] - plan.straight[v]
+            qpos0[m.jnt_qposadr[ja:ja + 3]] += plan.routed[v] - plan.straight[v]
         seg = np.linalg.norm(np.diff(plan.straight, axis=0), axis=1)
         s = np.concatenate([[0.0], np.cumsum(seg)])
         attachments = [Attachment("start", c.start.body, v, float(s[v])) for v in ((0, 1) if plan.pinned_to_world else ())]
         attachments += [Attachment(kind, body, v, float(s[v])) for kind, body, v, _ in plan.holds]
         cables.append(CableModel(c.name, c.radius, fid, int(m.flex_vertadr[fid]), n, float(s[-1]),
-                                 float(seg.mean()), plan.routed + origin, qadr,
+                                 float(seg.mean()), plan.routed + origin,
                                  tuple(sorted(attachments, key=lambda a: a.vertex)), c.min_bend_radius, s))
 
     free = {}
@@ -642,4 +633,4 @@ def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
             scale = np.pi / 180.0 if jt == int(mujoco.mjtJoint.mjJNT_HINGE) else scene.scale
             joints[name] = JointDrive(name, jt, qa, da, scale)
     return Built(scene, m, det, cables, parts, free, body_ids,
-                 np.array(qadr_list, int), np.array(dadr_list, int), joints, qpos0, geom_part, origin)
+                 np.array(qadr_list, int), np.array(dadr_list, int), joints, qpos0, origin)

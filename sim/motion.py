@@ -132,8 +132,3 @@ class Motion:
         for track in self.joints:
             data.qpos[track.qpos_adr], velocity = track.at(t)
             data.qvel[track.dof_adr] = 0.0 if frozen else velocity
-
-    @property
-    def is_static(self) -> bool:
-        """True when nothing moves after t = 0."""
-        return all(len(t.times) == 1 for t in self.bodies) and not self.joints

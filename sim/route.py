@@ -16,6 +16,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
+from checker.cable import arc_length
+
 _DENSE = 4000
 """Samples along the route when measuring and resampling it."""
 
@@ -25,15 +27,9 @@ def polyline_length(points: np.ndarray) -> float:
     return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
 
 
-def arc_lengths(points: np.ndarray) -> np.ndarray:
-    """(n,) cumulative arc length of an (n, 3) polyline, starting at 0."""
-    seg = np.linalg.norm(np.diff(points, axis=0), axis=1)
-    return np.concatenate([[0.0], np.cumsum(seg)])
-
-
 def resample_even(points: np.ndarray, count: int) -> np.ndarray:
     """`count` points evenly spaced in arc length along an (n, 3) polyline."""
-    s = arc_lengths(points)
+    s = arc_length(points)
     targets = np.linspace(0.0, s[-1], count)
     return np.stack([np.interp(targets, s, points[:, k]) for k in range(3)], axis=1)
 
@@ -56,7 +52,7 @@ def _droop_direction(route: np.ndarray, down: np.ndarray) -> np.ndarray:
 def _droop(route: np.ndarray, length: float, count: int, down: np.ndarray) -> np.ndarray:
     """`count` evenly spaced points of `route` drooped to arc length `length`."""
     dense = resample_even(route, _DENSE)
-    s = arc_lengths(dense)
+    s = arc_length(dense)
     total = s[-1]
     if length > total * (1.0 + 1e-9):
         bump = np.sin(np.pi * s / total)[:, None] * _droop_direction(route, down)[None, :]
