@@ -246,7 +246,27 @@ class PartChecker:
             self._static = (found, ka, placed.local(ka, wa) if len(found) else wa)
         moving = check_parts(self.parts, placed, self.clearance, self.focus,
                              lambda i, j: (grp[i] != grp[j]) & ~skip[i, j], self.assemblies)
+        return self._replay(placed) + moving
+
+    def moving_pairs(self) -> tuple[np.ndarray, np.ndarray]:
+        """(i, j) arrays, i < j: the part pairs that can move relative to
+        each other (on different rigid bodies), as :meth:`check` tests them."""
+        i, j = np.triu_indices(len(self._group), 1)
+        keep = (self._group[i] != self._group[j]) & ~self._skip[i, j]
+        return i[keep], j[keep]
+
+    @property
+    def has_same_body_records(self) -> bool:
+        """The first :meth:`check` found same-body records (replayed since)."""
+        return self._static is not None and len(self._static[0]) > 0
+
+    def replay(self, poses: np.ndarray) -> list[Interference]:
+        """The same-body records alone at poses (P, 4, 4): what :meth:`check`
+        returns when no moving pair can be within the clearance. Needs a
+        :meth:`check` first."""
+        return self._replay(self.parts.place(poses))
+
+    def _replay(self, placed) -> list[Interference]:
         found, ka, local = self._static
         world = placed.world(ka, local)[:, 0] if len(found) else local[:, 0]
-        static = [replace(r, where=w) for r, w in zip(found, world)]
-        return static + moving
+        return [replace(r, where=w) for r, w in zip(found, world)]

@@ -141,17 +141,10 @@ class StepChecks:
             box_lo[checked], box_hi[checked] = self.checker.part_bounds()
             self.advance = Advancement(offsets, config.spacing * radii, rho, config.clearance,
                                        self.stretch, radii, (box_lo, box_hi))
-            # part pairs that can move relative to each other (PartChecker's moving pairs)
-            gname = {g: k for k, g in enumerate(dict.fromkeys(rigid.groups))}
-            self._group = np.array([gname[g] for g in rigid.groups], np.int64)
-            pi, pj = np.triu_indices(len(self._group), 1)
-            keep = (self._group[pi] != self._group[pj]) & ~skipped_pairs[pi, pj]
-            self._moving_pairs = (pi[keep], pj[keep])
-            self._part_index = {name: k for k, name in enumerate(rigid.names)}
+            self._moving_pairs = self.part_checker.moving_pairs()
             self._gap_part = np.full(len(built.parts), np.inf)
             self._checked_index = np.nonzero(checked)[0]
             self._checker_index = np.cumsum(checked) - 1          # built part -> checker part
-        self._static_parts = False   # same-body part records exist (replayed every step)
         # (centre, checker part) entries of the active pairs (see ACTIVE_HORIZONS)
         # at the last full check: evaluated on their own at every state proven clear
         self._active: tuple[np.ndarray, np.ndarray] = (np.zeros(0, np.int64), np.zeros(0, np.int64))
@@ -242,7 +235,7 @@ class StepChecks:
         out = []
         for state, recs, st, bd in zip(states, records, strain, bend):
             cable_records = self._focus(recs)
-            part_records = self.part_checker.check(state.part_poses) if self._static_parts else []
+            part_records = self._same_body_records(state.part_poses)
             out.append(StepResult(cable_records + part_records, cable_records, st, bd, False))
         return out
 
@@ -253,13 +246,10 @@ class StepChecks:
         cable_records = self.checker.check(cables, poses[self.checked_parts], self.exclusions)
         # moving part pairs still provably apart: only same-body records
         if adv is not None and state.step > 0 and adv.part_pairs_clear(poses):
-            part_records = self.part_checker.check(poses) if self._static_parts else []
+            part_records = self._same_body_records(poses)
         else:
             part_records = self.part_checker.check(poses)
         if adv is not None:
-            if state.step == 0:
-                self._static_parts = any(self._group[self._part_index[r.a]] == self._group[self._part_index[r.b]]
-                                         for r in part_records)
             bound = part_pair_bounds(self.rigid, self.rigid.place(poses), *self._moving_pairs)
             if self.checker.gaps is not None:
                 gap_cable, gap_checked = self.checker.gaps
@@ -289,6 +279,11 @@ class StepChecks:
                 adv.start_pairs(poses, self._moving_pairs, bound)
         cable_records = self._focus(cable_records)
         return StepResult(cable_records + part_records, cable_records, strain, bend, True)
+
+    def _same_body_records(self, poses: np.ndarray) -> list[Interference]:
+        """The part-part records of a step on which no moving pair can be
+        within the clearance: the same-body ones, replayed."""
+        return self.part_checker.replay(poses) if self.part_checker.has_same_body_records else []
 
     def _focus(self, records: list[Interference]) -> list[Interference]:
         """With --only: the records against the assembly's parts alone."""
