@@ -205,7 +205,6 @@ class Advancement:
         self._valid = cable_of_pt[:-1] == cable_of_pt[1:]
         self._offsets = offsets
         self._cable = cable_of_pt
-        self._first = offsets[:-1]
         self._lim = np.asarray(spacing, float)[cable_of_pt[:-1]]
         self._rho = np.asarray(part_radius, float)
         self._rad = None if radius is None else np.asarray(radius, float)[cable_of_pt]
@@ -217,12 +216,13 @@ class Advancement:
         self.full = 0
         self.skipped = 0
 
-    def _elements(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _elements(self, pts: np.ndarray) -> np.ndarray:
+        """Pieces per element of centres pts (0 between cables); leaves the
+        element lengths in ``_seg_raw``."""
         seg = row_norm(pts[1:] - pts[:-1])
         self._seg_raw = seg
         # the same arithmetic as checker.cable.densify_batch
-        pieces = np.where(self._valid, np.maximum(1, np.ceil(seg / self._lim * (1.0 - 1e-12))), 0)
-        return np.where(self._valid, seg, 0.0), pieces
+        return np.where(self._valid, np.maximum(1, np.ceil(seg / self._lim * (1.0 - 1e-12))), 0)
 
     def start(self, pts: np.ndarray, poses: np.ndarray, gap_cable: float, gap_part: np.ndarray,
               pairs: tuple[np.ndarray, np.ndarray], pair_bound: np.ndarray,
@@ -257,12 +257,11 @@ class Advancement:
         self._pts = np.array(pts, float)
         self._rot = np.array(poses[:, :3, :3], float)
         self._pos = np.array(poses[:, :3, 3], float)
-        self._seg, self._pieces = self._elements(self._pts)
+        self._pieces = self._elements(self._pts)
         scale = max(float(np.abs(self._pts).max(initial=0.0)), float(np.abs(self._pos).max(initial=0.0)))
         mu = 1e-9 * (1.0 + scale)
         self._g_cable = float(gap_cable) - mu
         gap_part = np.asarray(gap_part, float)
-        self._g_part = gap_part - mu
         n, n_p = len(self._pts), len(gap_part)
         # arc length of each centre, as densify_batch computes it
         self._s_c = polyline_arc_lengths(np.where(self._valid, self._seg_raw, 0.0), self._offsets)

@@ -110,7 +110,6 @@ class ArcLayout:
             # every polyline as long: the points reshape into the pad's rows
             self._block = (len(counts), int(counts[0]))
             return
-        self._block = None
         group = np.floor(np.log2(np.maximum(counts, 1))).astype(np.int64)
         for g in np.unique(group):
             lines = np.flatnonzero(group == g)

@@ -298,7 +298,6 @@ class _Chunks:
         b = np.where(has_next[last], last + 1, last)
         self.centre = 0.5 * (p[a] + p[b])
         self.radius = 0.5 * (s[b] - s[a])
-        self.n_items = n
         self.has_next = has_next
         # Pairs of consecutive chunks of one cable ("super chunks") hold the
         # tree for chunk pairs: half as many spheres to pair up.
@@ -620,9 +619,6 @@ class _PartTable:
         """World points x (n, 3) into the frames of parts k (n,)."""
         return np.einsum("ni,nij->nj", x - self.trans[k], self.rot[k])
 
-    def to_world(self, k: np.ndarray, x: np.ndarray) -> np.ndarray:
-        return np.einsum("nij,nj->ni", self.rot[k], x) + self.trans[k]
-
 
 def _part_candidates(tab: _PartTable, ch: _Chunks, margin: float) -> tuple[np.ndarray, np.ndarray]:
     """(item, part) pairs where the item may lie within ``margin`` of the part.
@@ -900,7 +896,6 @@ class Checker:
         self.gaps: tuple[float, np.ndarray] | None = None
         self.part_candidates: tuple[np.ndarray, ...] | None = None
         self.cable_candidates: tuple[np.ndarray, ...] | None = None
-        self._excl_key = None
 
     @property
     def bounds_gaps(self) -> bool:

@@ -1,8 +1,8 @@
 """MuJoCo's contacts mapped back to the scene's names.
 
 Each contact in `mjData.contact` names two geoms, or a flex element and a
-geom, or two flex elements. `read_contacts` turns the whole contact array
-into one `Contacts` record of parallel arrays (no per-contact Python
+geom, or two flex elements. `ContactReader.read_many` turns the contact arrays of
+each step into one `Contacts` record of parallel arrays (no per-contact Python
 objects): the kind of pair, the cable or part names on both sides, the
 element index along a cable (-1 for a part), MuJoCo's signed distance and the
 contact point.
@@ -66,13 +66,9 @@ class ContactReader:
                            np.array(con.elem[:n], int).reshape(n, 2), np.array(con.dist[:n], float),
                            np.array(con.pos[:n], float).reshape(n, 3))
 
-    def read(self, data: mujoco.MjData, origin: np.ndarray) -> Contacts:
-        """All contacts of `data` (after mj_collision) with names; contact
-        points are moved from model coordinates to the scene world by `origin`."""
-        return self.read_many([self.raw(data)], origin)[0]
-
     def read_many(self, raws: list["RawContacts"], origin: np.ndarray) -> list[Contacts]:
-        """:meth:`read` for the raw contacts of many steps at once."""
+        """The raw contacts of many steps (:meth:`raw`) with names; contact
+        points are moved from model coordinates to the scene world by `origin`."""
         counts = np.array([len(r.dist) for r in raws], np.int64)
         if counts.sum() == 0:
             return [self._empty] * len(raws)

@@ -148,7 +148,7 @@ class StepChecks:
         # (centre, checker part) entries of the active pairs (see ACTIVE_HORIZONS)
         # at the last full check: evaluated on their own at every state proven clear
         self._active: tuple[np.ndarray, np.ndarray] = (np.zeros(0, np.int64), np.zeros(0, np.int64))
-        self._cable_active = (np.zeros((0, 2), np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64))
+        self._cable_active = (np.zeros(0, np.int64), np.zeros(0, np.int64))    # (centre, centre)
         self._names = [c.name for c in built.cables]
         self._offsets = offsets
         self._radii = radii
