@@ -20,6 +20,8 @@ Deliberately not here: distances between cables or to parts
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from checker.closest import cross, row_norm
@@ -87,7 +89,23 @@ def polyline_arc_lengths(step: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     so they do not depend on the polylines before it (the same bits as
     :func:`arc_length`, whichever polylines are batched together).
     """
-    return ArcLayout(offsets)(step)
+    offsets = np.ascontiguousarray(offsets, dtype=np.int64)
+    return _arc_layout(offsets.tobytes())(step)
+
+
+@lru_cache(maxsize=16)
+def _arc_layout(offsets: bytes) -> "ArcLayout":
+    """The layout of these offsets, prepared once (a run uses a handful)."""
+    return ArcLayout(np.frombuffer(offsets, dtype=np.int64))
+
+
+def tile_offsets(offsets: np.ndarray, states: int) -> np.ndarray:
+    """Offsets (S C + 1,) of S states of concatenated points, each laid out
+    by ``offsets`` (C + 1,): every cable of every state a polyline of its own."""
+    offsets = np.asarray(offsets, np.int64)
+    n = int(offsets[-1])
+    starts = (offsets[:-1][None, :] + n * np.arange(states)[:, None]).ravel()
+    return np.append(starts, states * n)
 
 
 class ArcLayout:
@@ -334,9 +352,7 @@ class CableMeasures:
             return (np.zeros((s, 0)), np.zeros((s, 0))) + ((np.zeros((s, 0)),) if at_points else ())
         tiled = self._tiled.get(s)
         if tiled is None:
-            n = int(self._offsets[-1])
-            starts = (self._offsets[:-1][None, :] + n * np.arange(s)[:, None]).ravel()
-            tiled = self._tiled[s] = CableMeasures(np.append(starts, s * n))
+            tiled = self._tiled[s] = CableMeasures(tile_offsets(self._offsets, s))
         lengths, bend = tiled(np.asarray(pts, float).reshape(-1, 3))
         out = (lengths.reshape(s, -1), bend.reshape(s, -1))
         return out + ((tiled._r.reshape(s, -1).copy(),) if at_points else ())

@@ -52,12 +52,13 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from checker.cable import (arc_length, bend_radius, densify_batch, polyline_arc_lengths,
-                           self_pair_excluded, taut_margin)
+                           self_pair_excluded, taut_margin, tile_offsets)
 from checker.closest import row_norm, segment_segment
 from checker.records import Interference, PairType, severity_of
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
@@ -795,6 +796,28 @@ def _single_cable(cables: Sequence[CableState], clearance: float, hits: _Hits) -
                      np.array([s[-1]]))
 
 
+@dataclass(frozen=True)
+class DenseStates:
+    """The discrete points of S states at once (:meth:`Checker.densify_many`).
+
+    Attributes:
+        p, s: (M, 3) points and (M,) their arc lengths.
+        poly: (M,) polyline: state * cables + cable.
+        src, own: (M,) the body centre (counted over all states) each point
+            starts from, and whether it is that centre itself.
+        states, centres, cables: S, body centres per state, cables.
+    """
+
+    p: np.ndarray
+    s: np.ndarray
+    poly: np.ndarray
+    src: np.ndarray
+    own: np.ndarray
+    states: int
+    centres: int
+    cables: int
+
+
 def single_records_many(names: Sequence[str], pts: np.ndarray, offsets: np.ndarray,
                         radius_at: np.ndarray, rest_length: np.ndarray, bend_limit: np.ndarray,
                         clearance: float) -> list[list[Interference]]:
@@ -814,11 +837,10 @@ def single_records_many(names: Sequence[str], pts: np.ndarray, offsets: np.ndarr
     n_c = len(names)
     if n_s == 0 or n_c == 0:
         return out
-    offsets = np.asarray(offsets, np.int64)
-    starts = (offsets[:-1][None] + n * np.arange(n_s)[:, None]).ravel()
+    tiled = tile_offsets(offsets, n_s)
+    starts, ends = tiled[:-1], tiled[1:] - 1
     flat = pts.reshape(-1, 3)
-    s = polyline_arc_lengths(row_norm(np.diff(flat, axis=0)), np.append(starts, n_s * n))
-    ends = np.append(starts[1:], n_s * n) - 1
+    s = polyline_arc_lengths(row_norm(np.diff(flat, axis=0)), tiled)
     cab = np.tile(np.arange(n_c), n_s)
     state = np.repeat(np.arange(n_s), n_c)
     # bend: the first place of the least radius per (state, cable), when finite
@@ -931,8 +953,19 @@ class Checker:
         o = np.argsort(key, kind="stable")
         return (key[o], ex_lo[o], ex_hi[o], n_parts), ex_c, ex_lo, ex_hi
 
-    def structure_many(self, names: Sequence[str], radii: np.ndarray, pts: np.ndarray,
-                       offsets: np.ndarray, poses: np.ndarray, exclusions: Sequence[Exclusion],
+    def densify_many(self, pts: np.ndarray, offsets: np.ndarray, radii: np.ndarray) -> DenseStates:
+        """The discrete points of S states (S, N, 3) at once, each cable of
+        each state a polyline of its own (the bits of :meth:`check`'s own
+        discretisation of each state), for :meth:`structure_many` and
+        :meth:`cable_pairs_many`."""
+        n_s, n = pts.shape[:2]
+        radii = np.asarray(radii, float)
+        p, s, poly, _, src, own = densify_batch(pts.reshape(-1, 3), tile_offsets(offsets, n_s),
+                                                np.tile(self.config.spacing * radii, n_s), source=True)
+        return DenseStates(p, s, poly, src, own, n_s, n, len(radii))
+
+    def structure_many(self, names: Sequence[str], radii: np.ndarray, dense: DenseStates,
+                       poses: np.ndarray, exclusions: Sequence[Exclusion],
                        active: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
         """The full check's cable-structure and keep-out records at many
         states at once, from the discrete points next to given body centres
@@ -945,8 +978,7 @@ class Checker:
 
         Args:
             names, radii: the cables' names and radii (C,).
-            pts: (S, N, 3) every state's body centres, cables concatenated.
-            offsets: (C + 1,) start of each cable in a state's centres.
+            dense: the states' discrete points (:meth:`densify_many`).
             poses: (S, K, 4, 4) the parts' poses at every state.
             exclusions: as for :meth:`check`.
             active: (centre index in a state, part index) arrays.
@@ -955,19 +987,14 @@ class Checker:
             per state, its records (worst first).
         """
         config = self.config
-        n_s, n = pts.shape[:2]
-        n_c, n_k = len(names), len(self.parts)
+        n_s, n, n_c, n_k = dense.states, dense.centres, dense.cables, len(self.parts)
         out: list[list[Interference]] = [[] for _ in range(n_s)]
         ci, pi = (np.asarray(x, np.int64) for x in active)
         if n_s == 0 or len(ci) == 0 or self._tab is None:
             return out
         radii = np.asarray(radii, float)
-        # every state's cables as polylines of their own (arc lengths per
-        # polyline: the bits of discretising each state alone)
-        starts = (np.asarray(offsets[:-1], np.int64)[None] + n * np.arange(n_s)[:, None]).ravel()
-        p, s, poly, _, src, own = densify_batch(pts.reshape(-1, 3), np.append(starts, n_s * n),
-                                                np.tile(config.spacing * radii, n_s), source=True)
-        state, cab = poly // n_c, poly % n_c
+        p, s, src, own = dense.p, dense.s, dense.src, dense.own
+        state, cab = dense.poly // n_c, dense.poly % n_c
         # each point against the parts it is active for: its own centre's, or
         # (inside an element) either end's
         parts, row = np.unique(pi, return_inverse=True)
@@ -1008,9 +1035,8 @@ class Checker:
             recs.sort(key=lambda r: (r.min_distance, _TYPE_ORDER.index(r.type), r.a, r.b))
         return out
 
-    def cable_pairs_many(self, names: Sequence[str], radii: np.ndarray, pts: np.ndarray,
-                         offsets: np.ndarray, active: tuple[np.ndarray, np.ndarray]
-                         ) -> list[list[Interference]]:
+    def cable_pairs_many(self, names: Sequence[str], radii: np.ndarray, dense: DenseStates,
+                         active: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
         """The full check's self and cable-cable records at many states at
         once, from the discrete places next to given pairs of body centres
         (method ``points``; to the bit).
@@ -1024,24 +1050,20 @@ class Checker:
 
         Args:
             names, radii: the cables' names and radii (C,).
-            pts: (S, N, 3) every state's body centres, cables concatenated.
-            offsets: (C + 1,) start of each cable in a state's centres.
+            dense: the states' discrete points (:meth:`densify_many`).
             active: (centre i, centre j) arrays.
 
         Returns:
             per state, its records (worst first).
         """
         config = self.config
-        n_s, n = pts.shape[:2]
-        n_c = len(names)
+        n_s, n, n_c = dense.states, dense.centres, dense.cables
         out: list[list[Interference]] = [[] for _ in range(n_s)]
         ci, cj = (np.asarray(x, np.int64) for x in active)
         if n_s == 0 or len(ci) == 0:
             return out
         radii = np.asarray(radii, float)
-        starts = (np.asarray(offsets[:-1], np.int64)[None] + n * np.arange(n_s)[:, None]).ravel()
-        p, s, poly, _, src, own = densify_batch(pts.reshape(-1, 3), np.append(starts, n_s * n),
-                                                np.tile(config.spacing * radii, n_s), source=True)
+        p, s, poly, src, own = dense.p, dense.s, dense.poly, dense.src, dense.own
         cab, rad = poly % n_c, radii[poly % n_c]
         m = len(p) // n_s                                  # points per state (the same in each)
         if m * n_s != len(p) or not np.all(src.reshape(n_s, m) - n * np.arange(n_s)[:, None] == src[:m]):

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from checker.cable import polyline_arc_lengths, self_pair_excluded
+from checker.cable import polyline_arc_lengths, self_pair_excluded, tile_offsets
 from checker.closest import point_segment, row_norm
 from checker.records import Interference, PairType
 from checker.scene_state import Exclusion
@@ -128,9 +128,8 @@ class SimulatorPairs:
         ca = np.array([code[x] for x in a.tolist()], np.int64)
         cb = np.array([code.get(x, -1) for x in b.tolist()], np.int64)
         # arc lengths of every state's cables, each on its own (arc_length's bits)
-        starts = (offsets[:-1][None] + n * np.arange(n_s)[:, None]).ravel()
         flat = pts.reshape(-1, 3)
-        s_all = polyline_arc_lengths(row_norm(np.diff(flat, axis=0)), np.append(starts, n_s * n))
+        s_all = polyline_arc_lengths(row_norm(np.diff(flat, axis=0)), tile_offsets(offsets, n_s))
 
         def place(cab, elem):
             """(arc length of the projection, element start, element end) on cable cab."""

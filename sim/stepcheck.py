@@ -225,13 +225,15 @@ class StepChecks:
                                         self._rest_length, self._bend_limit_nan, self.config.clearance)
             for i, recs in zip(flagged.tolist(), found):
                 records[i] = recs
-        if len(self._active[0]):
-            found = self.checker.structure_many(names, self._radii, pts, self._offsets,
-                                                poses[:, self.checked_parts], self.exclusions, self._active)
-            records = [a + b for a, b in zip(found, records)]
-        if len(self._cable_active[1]):
-            found = self.checker.cable_pairs_many(names, self._radii, pts, self._offsets, self._cable_active)
-            records = [a + b for a, b in zip(found, records)]
+        if len(self._active[0]) or len(self._cable_active[0]):
+            dense = self.checker.densify_many(pts, self._offsets, self._radii)    # once for both
+            if len(self._active[0]):
+                found = self.checker.structure_many(names, self._radii, dense, poses[:, self.checked_parts],
+                                                    self.exclusions, self._active)
+                records = [a + b for a, b in zip(found, records)]
+            if len(self._cable_active[0]):
+                found = self.checker.cable_pairs_many(names, self._radii, dense, self._cable_active)
+                records = [a + b for a, b in zip(found, records)]
         out = []
         for state, recs, st, bd in zip(states, records, strain, bend):
             cable_records = self._focus(recs)

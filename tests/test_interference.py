@@ -371,9 +371,9 @@ def test_structure_many_is_each_states_check():
         offsets = np.concatenate([[0], np.cumsum([len(c.points) for c in cables])])
         centres = np.concatenate([np.arange(offsets[c], offsets[c + 1]) for c in pc])
         owners = np.concatenate([np.full(offsets[c + 1] - offsets[c], k) for c, k in zip(pc, pk)])
-        got = checker.structure_many([c.name for c in cables], np.array([c.radius for c in cables]),
-                                     np.stack([np.concatenate(m) for m in moves]), offsets, poses, ex,
-                                     (centres, owners))
+        radii = np.array([c.radius for c in cables])
+        dense = checker.densify_many(np.stack([np.concatenate(m) for m in moves]), offsets, radii)
+        got = checker.structure_many([c.name for c in cables], radii, dense, poses, ex, (centres, owners))
         wanted = {(cables[c].name, parts[k].name) for c, k in zip(pc, pk)}
         for state, recs in zip(range(n_s), got):
             states = [CableState(c.name, m, c.radius) for c, m in zip(cables, moves[state])]
@@ -430,10 +430,11 @@ def test_structure_many_evaluates_only_next_to_active_centres():
     names, radii, off = ["c"], np.array([0.001]), np.array([0, 9])
     full = [r for r in checker.check([CableState("c", pts, 0.001)]) if r.type is PairType.CABLE_STRUCTURE]
     assert len(full) == 1 and abs(full[0].min_distance - 0.001) < 1e-12
-    got = checker.structure_many(names, radii, pts[None], off, np.eye(4)[None, None], (),
+    dense = checker.densify_many(pts[None], off, radii)
+    got = checker.structure_many(names, radii, dense, np.eye(4)[None, None], (),
                                  (np.array([4]), np.array([0])))[0]
     assert [(r.min_distance, r.s) for r in got] == [(full[0].min_distance, full[0].s)]
-    far = checker.structure_many(names, radii, pts[None], off, np.eye(4)[None, None], (),
+    far = checker.structure_many(names, radii, dense, np.eye(4)[None, None], (),
                                  (np.array([0]), np.array([0])))[0]
     assert far == []                    # centre 0's elements stay 0.1 m above
 
@@ -470,7 +471,7 @@ def test_cable_pairs_many_is_each_states_self_and_cable_cable():
             i, j = np.meshgrid(np.arange(offsets[a], offsets[a + 1]), np.arange(offsets[b], offsets[b + 1]))
             ci.append(i.ravel())
             cj.append(j.ravel())
-        got = checker.cable_pairs_many([c.name for c in cables], radii, states, offsets,
+        got = checker.cable_pairs_many([c.name for c in cables], radii, checker.densify_many(states, offsets, radii),
                                        (np.concatenate(ci), np.concatenate(cj)))
         wanted = {(f"c{a}", f"c{b}") for a, b in chosen}
         for x, recs in zip(states, got):
