@@ -188,22 +188,27 @@ def _plane_records(parts: PartSet, placed: Placement, clearance: float, focus, p
     out = []
     if not len(planes):
         return out
-    vw = placed.world(parts.vert_part, parts.vertices[:, None, :])[:, 0]
+    with_verts = np.unique(parts.vert_part)
     for p in planes:     # a handful of planes per scene at most
+        # the parts this plane is checked against, before touching their vertices
+        q = with_verts
+        if focus is not None:
+            q = q[np.asarray(focus, bool)[q] != bool(focus[p])]
+        if pair_mask is not None and len(q):
+            q = q[np.asarray(pair_mask(np.minimum(p, q), np.maximum(p, q)), bool)]
+        if not len(q):
+            continue
+        sel = np.flatnonzero(np.isin(parts.vert_part, q))
+        vp = parts.vert_part[sel]
+        vw = placed.world(vp, parts.vertices[sel][:, None, :])[:, 0]
         z = (vw - placed.pos[p]) @ placed.rot[p][:, 2]
-        order = np.lexsort((z, parts.vert_part))
-        vp = parts.vert_part[order]
-        first = order[np.r_[True, vp[1:] != vp[:-1]]] if len(order) else order
-        for v in first:
-            q = int(parts.vert_part[v])
-            if focus is not None and bool(focus[p]) == bool(focus[q]):
-                continue
-            a_, b_ = min(p, q), max(p, q)
-            if pair_mask is not None and not pair_mask(np.array([a_]), np.array([b_]))[0]:
-                continue
-            touch = float(parts.touch(np.array([q]), np.array([q]))[0])
-            if abs(z[v]) > touch:
-                out.append(_record(parts, a_, b_, float(z[v]), vw[v], clearance))
+        order = np.lexsort((z, vp))
+        first = order[np.r_[True, vp[order][1:] != vp[order][:-1]]]
+        lowest = vp[first]
+        touch = parts.touch(lowest, lowest)
+        for v, part, t in zip(first.tolist(), lowest.tolist(), touch.tolist()):
+            if abs(z[v]) > t:
+                out.append(_record(parts, min(p, part), max(p, part), float(z[v]), vw[v], clearance))
     return out
 
 
