@@ -408,6 +408,7 @@ class _Parser:
 
     def __init__(self, file: Path):
         self.file = file
+        self._meshes: dict[Path, list] = {}
         self.folder = file.parent
         self.scale = 1.0
         self.mjcf: _MjcfInfo | None = None
@@ -693,14 +694,21 @@ class _Parser:
                        euler=self.vector(t.get("euler", [0, 0, 0]), f"{where}.euler"),
                        file=file, mesh_scale=mesh_scale, keepout=keepout)
 
+    def mesh_nodes(self, path: Path, where: str) -> list:
+        """The meshes of a file, read once however many parts use it."""
+        if path not in self._meshes:
+            try:
+                self._meshes[path] = mesh_nodes(path)
+            except MeshFileError as e:
+                raise self.error(where, str(e)) from None
+        return self._meshes[path]
+
     def check_mesh(self, path: Path, where: str, closed: bool) -> None:
-        try:
-            nodes = mesh_nodes(path)
-        except MeshFileError as e:
-            raise self.error(where, str(e)) from None
+        nodes = self.mesh_nodes(path, where)
+        if not closed:
+            return
         for node in nodes:
-            mesh = trimesh.Trimesh(node.vertices, node.faces)
-            if closed and not mesh.is_watertight:
+            if not trimesh.Trimesh(node.vertices, node.faces).is_watertight:
                 label = f"{path.name}" + (f" node {node.path!r}" if node.path else "")
                 raise self.error(where, f"{label} is not a closed surface (keepout zones "
                                         "need an inside); close its holes")
@@ -710,10 +718,7 @@ class _Parser:
         ``<name>/<node path>``; any other part stays as it is."""
         if part.shape != "mesh" or not is_tree(part.file):
             return [part]
-        try:
-            nodes = mesh_nodes(part.file)
-        except MeshFileError as e:
-            raise self.error(f"{where}.file", str(e)) from None
+        nodes = self.mesh_nodes(part.file, f"{where}.file")
         return [replace(part, name=f"{part.name}/{n.path}", node=n.path) for n in nodes]
 
     def anchor(self, value: Any, where: str, with_pos: bool = True) -> Anchor:
