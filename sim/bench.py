@@ -152,7 +152,7 @@ def _compare(ref: dict, got: dict) -> tuple[int, int, int, float]:
     return missed_hard, missed, false, (max(shared) if shared else 0.0)
 
 
-def discretisation_table(quick: bool) -> tuple[Table, dict]:
+def discretisation_table(quick: bool) -> Table:
     """Spacing and method against the exact method on randomised scenes."""
     n_seeds = 4 if quick else 12
     repeat = 3 if quick else 7
@@ -174,7 +174,6 @@ def discretisation_table(quick: bool) -> tuple[Table, dict]:
     table = Table("discretisation", "Discretisation: accuracy against exact geometry, time per check",
                   ["config", "spacing_r", "ms_per_check", "ms_large", "pairs", "ref_pairs",
                    "ref_hard", "missed_hard", "missed", "false_alarms", "worst_error_mm"])
-    extra = {}
     for label, cfg in configs:
         tot = [0, 0, 0, 0]
         worst = 0.0
@@ -195,7 +194,6 @@ def discretisation_table(quick: bool) -> tuple[Table, dict]:
         table.add(label, cfg.spacing if cfg.method == "points" else None, 1e3 * secs / len(scenes),
                   1e3 * t_large, n_pairs, sum(len(x) for x in refs),
                   sum(1 for x in refs for d in x.values() if d < 0), tot[0], tot[1], tot[2], 1e3 * worst)
-        extra[label] = t_large
     # The reference itself against dense points: points only over-estimate a
     # distance (they sample the centreline), so dense points bound it from above.
     dense = CheckConfig("points", 0.125)
@@ -219,7 +217,7 @@ def discretisation_table(quick: bool) -> tuple[Table, dict]:
         "missed: reference pairs a configuration does not report; false alarms: pairs it reports that "
         "the reference does not, or hard where the reference is not.",
     ]
-    return table, extra
+    return table
 
 
 # -- physics resolution -------------------------------------------------------
@@ -290,7 +288,7 @@ def _scene_for(n_cables: int, n_parts: int, seed: int = 0):
                       n_meshes=n_meshes)
 
 
-def scale_table(quick: bool) -> tuple[Table, dict]:
+def scale_table(quick: bool) -> Table:
     """Time per check as cables and parts grow."""
     repeat = 3 if quick else 7
     cable_axis = [1, 10, 50, 100, 200]
@@ -321,7 +319,7 @@ def scale_table(quick: bool) -> tuple[Table, dict]:
         f"{fits['parts'][0]:.2f}, exact {fits['parts'][1]:.2f}; the cable-cable work is a fixed share.",
         "parts: one torus mesh (2,000 triangles) per 31 parts, the rest primitives, in a 2 x 2 x 1 m room.",
     ]
-    return table, fits
+    return table
 
 
 # -- side by side ----------------------------------------------------------------
@@ -531,7 +529,7 @@ def example_scenes_table(quick: bool, out: Path) -> tuple[Table, dict]:
 
 # -- targets and plot ----------------------------------------------------------------
 
-def targets_table(disc_large: dict, side: dict, examples: dict) -> Table:
+def targets_table(side: dict, examples: dict) -> Table:
     """Issue 6's performance targets against this run's numbers."""
     table = Table("targets", "Targets (issue 6) on this machine", ["target", "measured", "met"])
     tp, te = side["checker_points"], side["checker_exact"]
@@ -635,17 +633,17 @@ def run_bench(quick: bool = False, out: Path = Path("recordings/bench"),
 
     echo(f"cablecheck bench{' --quick' if quick else ''}: MuJoCo {mujoco.__version__}, "
          f"numpy {np.__version__}; medians of repeats, one process")
-    disc, disc_large = discretisation_table(quick)
+    disc = discretisation_table(quick)
     done(disc)
     done(physics_table(quick))
-    scale, _ = scale_table(quick)
+    scale = scale_table(quick)
     done(scale)
     side, side_found = side_by_side_table(quick)
     done(side)
     done(paper_table(quick))
     ex, ex_found = example_scenes_table(quick, out)
     done(ex)
-    done(targets_table(disc_large, side_found, ex_found))
+    done(targets_table(side_found, ex_found))
     png = plot(tables, out / "bench.png")
     echo(f"\nwrote {', '.join(sorted(t + '.csv' for t in tables))} and {png.name} into {out} "
          f"({time.perf_counter() - t0:.1f} s)")

@@ -132,21 +132,18 @@ class Recorder:
 
     # -- per step ---------------------------------------------------------
     def log_step(self, t: float, cables: list[np.ndarray], part_poses: np.ndarray,
-                 cable_states: list[str] | None = None,
-                 strain: np.ndarray | None = None, bend: np.ndarray | None = None) -> None:
+                 cable_states: list[str], strain: np.ndarray, bend: np.ndarray) -> None:
         """One step: moving parts' poses, cables (coloured by state) and per-cable series."""
         rec, u = self.rec, self.unit
         rec.set_time("sim_time", duration=t)
         for k in np.flatnonzero(self.moving_parts):
             rec.log(part_path(self.built.parts[k].name), self._transform(part_poses[k]))
         for i, (cable, pts) in enumerate(zip(self.built.cables, cables)):
-            state = cable_states[i] if cable_states else "clear"
             rec.log(f"world/cables/{_escape(cable.name)}",
                     rr.LineStrips3D([pts / u], radii=[cable.radius / u],
-                                    colors=[STATE_COLOURS[state]]))
-            if strain is not None:
-                rec.log(f"cables/strain/{_escape(cable.name)}", rr.Scalars(100.0 * float(strain[i])))
-            if bend is not None and np.isfinite(bend[i]):
+                                    colors=[STATE_COLOURS[cable_states[i]]]))
+            rec.log(f"cables/strain/{_escape(cable.name)}", rr.Scalars(100.0 * float(strain[i])))
+            if np.isfinite(bend[i]):
                 rec.log(f"cables/bend_radius/{_escape(cable.name)}", rr.Scalars(float(bend[i] / u)))
 
     def log_markers(self, markers: dict[str, tuple[np.ndarray, str]]) -> None:
