@@ -132,7 +132,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from checker.cable import polyline_arc_lengths
+from checker.cable import polyline_arc_lengths, self_pair_window
 from checker.closest import row_norm
 from checker.partset import PartSet, Placement
 
@@ -470,7 +470,7 @@ class Advancement:
         # max(w, S) apart along the cable, with S the arc length from centre
         # e + 1 to f, which can shrink by at most ``stretch`` while skipping
         arc = self._s_c
-        window = np.pi * r + self.clearance - mu                        # self_pair_excluded's window
+        window = self_pair_window(r, self.clearance) - mu
         ds = np.maximum(window, arc[self._nf] - arc[self._ne + 1] - self.stretch - mu)
         ratio = (2.0 * r + self.clearance + mu) / ds
         self._near_turn = np.where(ratio < 1.0, 2.0 * np.arccos(np.minimum(ratio, 1.0)) - 1e-9, -1.0)

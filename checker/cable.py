@@ -260,8 +260,13 @@ def self_pair_excluded(s_a: np.ndarray, s_b: np.ndarray, radius: float | np.ndar
     Returns:
         bool array of the broadcast shape.
     """
-    reach = np.pi * np.asarray(radius, dtype=float) + clearance
-    return np.abs(np.asarray(s_a, dtype=float) - np.asarray(s_b, dtype=float)) < reach
+    return np.abs(np.asarray(s_a, dtype=float) - np.asarray(s_b, dtype=float)) < self_pair_window(radius, clearance)
+
+
+def self_pair_window(radius, clearance: float = 0.0):
+    """``pi * radius + clearance``: the arc-length separation below which
+    :func:`self_pair_excluded` drops a pair of places of one cable."""
+    return np.pi * np.asarray(radius, dtype=float) + clearance
 
 
 def bend_radius(points: np.ndarray) -> np.ndarray:

@@ -58,7 +58,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from checker.cable import (arc_length, bend_radius, densify_batch, polyline_arc_lengths,
-                           self_pair_excluded, taut_margin, tile_offsets)
+                           self_pair_excluded, self_pair_window, taut_margin, tile_offsets)
 from checker.closest import row_norm, segment_segment
 from checker.records import Interference, PairType, severity_of
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
@@ -252,14 +252,6 @@ _NEAR = 2 * _CHUNK - 1  # offsets along a cable covered by the near field
 _SLACK = 1e-9  # relative margin of the pruning bounds against rounding
 
 
-def _exclusion_reach(rad: np.ndarray, clearance: float) -> np.ndarray:
-    """Arc-length separation below which :func:`self_pair_excluded` drops a pair.
-
-    Used only for pruning, so it may err low, never high.
-    """
-    return np.pi * rad + clearance
-
-
 class _Chunks:
     """Runs of up to ``_CHUNK`` consecutive items of one cable with bounding spheres.
 
@@ -420,7 +412,7 @@ def _cable_pairs_points(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hit
     fi, fj, sq, se = [e0], [e0], [e0], [e0]  # self first pass (i < j); second pass (point q, element e)
     # Near field: offsets 1.._NEAR along one cable, from the window starts
     # that can hold a hit at all (see _near_windows).
-    reach = _exclusion_reach(rad, clearance) - stretch
+    reach = self_pair_window(rad, clearance) - stretch
     start = _near_windows(p, s, cab, reach, lim_self)
     if len(start):
         k = np.tile(np.arange(1, _NEAR + 1), len(start))
@@ -502,7 +494,7 @@ def _cable_pairs_exact(dp: _Discrete, ch: _Chunks, clearance: float, hits: _Hits
     mid = 0.5 * (p[:-1] + p[1:])
     half = 0.5 * (s[1:] - s[:-1])  # half element lengths (arc = chord per element)
     lim_self = 2.0 * rad + clearance
-    reach = _exclusion_reach(rad, clearance)
+    reach = self_pair_window(rad, clearance)
 
     def self_ok(e, f):
         """Element pairs e < f of one cable that may hold a self hit."""
