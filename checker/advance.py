@@ -206,6 +206,9 @@ class Advancement:
         self._offsets = offsets
         self._cable = cable_of_pt
         self._lim = np.asarray(spacing, float)[cable_of_pt[:-1]]
+        # per element: the limit (inf between cables) and 1 for a real element
+        self._lim_all = np.where(self._valid, self._lim, np.inf)
+        self._validf = self._valid.astype(float)
         self._rho = np.asarray(part_radius, float)
         self._rad = None if radius is None else np.asarray(radius, float)[cable_of_pt]
         self._box = None if part_box is None or radius is None else \
@@ -295,21 +298,15 @@ class Advancement:
                         and self._g_far > 0)
         else:
             cable_ok = self._g_cable > 0
-        self._pi, self._pj = pairs
-        self._g_pair = np.asarray(pair_bound, float) - self.clearance - mu
+        self.start_pairs(poses, pairs, pair_bound, mu)
         self._stretch = self.stretch - mu
-        # fused-pass data: per element (inf limit, 1 piece, weight 0 between
-        # cables), per part its pose and each centre in its frame (homogeneous)
-        self._lim_all = np.where(self._valid, self._lim, np.inf)
+        # fused-pass data: pieces per element (1 between cables), each centre
+        # in each part's frame (homogeneous)
         self._pieces_all = np.where(self._valid, self._pieces, 1.0)
-        self._validf = self._valid.astype(float)
-        self._poses = np.array(poses, float)
         self._u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
         self._g_kn = np.ascontiguousarray(self._g_pt.T)
         self._g2 = np.where(self._g_kn > 0, self._g_kn, 0.0) ** 2
-        self._pairs_ok = bool(np.all(self._g_pair > 0))
-        self._ok = (cable_ok and bool(np.all(self._g_pt > 0))
-                    and bool(np.all(self._g_pair > 0)) and self.stretch > mu)
+        self._ok = cable_ok and bool(np.all(self._g_pt > 0)) and self._pairs_ok and self.stretch > mu
 
     def _floor(self, u0: np.ndarray) -> np.ndarray:
         """(P, N): per centre and part, the least over the elements next to
@@ -565,14 +562,16 @@ class Advancement:
         self._ok = self._pairs_ok = False
 
     def start_pairs(self, poses: np.ndarray, pairs: tuple[np.ndarray, np.ndarray],
-                    pair_bound: np.ndarray) -> None:
+                    pair_bound: np.ndarray, mu: float | None = None) -> None:
         """Restart the part-pair condition alone (:meth:`part_pairs_clear`)
         at this state: after a full check whose cable checks left no gaps
         (a pair inside the clearance), the part-part check can still be
-        proven clear on later full checks."""
+        proven clear on later full checks. (:meth:`start` restarts it too,
+        with its own rounding margin ``mu``.)"""
         self._poses = np.array(poses, float)
         self._pi, self._pj = pairs
-        mu = 1e-9 * (1.0 + float(np.abs(self._poses[:, :3, 3]).max(initial=0.0)))
+        if mu is None:
+            mu = 1e-9 * (1.0 + float(np.abs(self._poses[:, :3, 3]).max(initial=0.0)))
         self._g_pair = np.asarray(pair_bound, float) - self.clearance - mu
         self._pairs_ok = bool(np.all(self._g_pair > 0))
 
