@@ -132,6 +132,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from checker.arrays import ranges
 from checker.cable import polyline_arc_lengths, self_pair_window
 from checker.closest import row_norm
 from checker.partset import PartSet, Placement
@@ -280,7 +281,7 @@ class Advancement:
             if len(value):
                 lo, hi = self._bracket(cab, s)
                 count = hi - lo + 1
-                rows = np.repeat(lo, count) + (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count))
+                rows = ranges(lo, count)
                 np.minimum.at(g, (rows, np.repeat(part, count)), np.repeat(value, count))
         self.active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         if active is not None and len(active[0]):

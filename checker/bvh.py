@@ -34,6 +34,8 @@ from functools import cached_property
 
 import numpy as np
 
+from checker.arrays import ranges, within
+
 LEAF_SIZE = 8
 """Triangles per leaf of a part's tree."""
 
@@ -143,9 +145,8 @@ class TriangleForest:
                 lq, ln = q[leaf], n[leaf]
                 cnt = self.count[ln]
                 rows = np.repeat(lq, cnt)
-                offs = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
                 out_q.append(rows)
-                out_t.append(self.order[np.repeat(self.first[ln], cnt) + offs])
+                out_t.append(self.order[ranges(self.first[ln], cnt)])
             inner = ~leaf
             q = np.concatenate([q[inner], q[inner]])
             n = np.concatenate([self.left[n[inner]], self.right[n[inner]]])
@@ -229,7 +230,7 @@ def aabb_pairs(lo: np.ndarray, hi: np.ndarray, margin: float = 0.0) -> tuple[np.
     end = np.searchsorted(slo, hi[order, 0], side="right")
     cnt = np.maximum(end - np.arange(n) - 1, 0)
     a = np.repeat(np.arange(n), cnt)
-    b = a + 1 + (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt))
+    b = a + 1 + within(cnt)
     i, j = order[a], order[b]
     ok = np.all((lo[i, 1:] <= hi[j, 1:]) & (lo[j, 1:] <= hi[i, 1:]), axis=1)
     i, j = i[ok], j[ok]
@@ -333,8 +334,7 @@ def _grouped_range(g_pts: np.ndarray, x_pts: np.ndarray, g_q: np.ndarray, lo_q: 
     end = np.searchsorted(ks, base + rhi, side="right")
     cnt = np.maximum(end - start, 0)
     q = np.repeat(np.arange(k), cnt)
-    offs = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
-    return q, order[np.repeat(start, cnt) + offs]
+    return q, order[ranges(start, cnt)]
 
 
 def assembly_pairs(asm: Assemblies, lo: np.ndarray, hi: np.ndarray, a_lo: np.ndarray, a_hi: np.ndarray,
@@ -372,8 +372,7 @@ def assembly_pairs(asm: Assemblies, lo: np.ndarray, hi: np.ndarray, a_lo: np.nda
         k = np.where(is_asm, nodes + 1, 0)
         cnt = np.where(is_asm, start[np.minimum(k + 1, na + 1)] - start[k], 1)
         row = np.repeat(np.arange(len(nodes)), cnt)
-        offs = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
-        pos = np.repeat(start[k], cnt) + offs
+        pos = ranges(start[k], cnt)
         child = np.where(np.repeat(is_asm, cnt), ch[np.minimum(pos, len(ch) - 1)] if len(ch) else 0,
                          np.repeat(nodes, cnt))
         return row, child
@@ -390,7 +389,7 @@ def assembly_pairs(asm: Assemblies, lo: np.ndarray, hi: np.ndarray, a_lo: np.nda
         k = selves + 1
         cnt = start[k + 1] - start[k]
         grp = np.repeat(np.arange(len(selves)), cnt)
-        kids = ch[np.repeat(start[k], cnt) + np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)]
+        kids = ch[ranges(start[k], cnt)]
         q, p = _grouped_range(grp, node_lo[kids, 0], grp, node_lo[kids, 0], node_hi[kids, 0], False)
         a, b = kids[q], kids[p]
         la, lb = node_lo[a, 0], node_lo[b, 0]

@@ -24,6 +24,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from checker.arrays import within
 from checker.closest import cross, row_norm
 
 TAUT_STRAIN = 0.01
@@ -133,7 +134,7 @@ class ArcLayout:
             lines = np.flatnonzero(group == g)
             cnt = counts[lines]
             row = np.repeat(np.arange(len(lines)), cnt)
-            pos = np.arange(int(cnt.sum())) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+            pos = within(cnt)
             idx = offsets[lines][row] + pos                    # the points of these polylines
             later = pos > 0                                    # element i - 1 leads to point i
             self._groups.append(((len(lines), int(cnt.max())), row[later], pos[later], idx[later] - 1,

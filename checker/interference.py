@@ -57,6 +57,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from checker.arrays import ranges, within
 from checker.cable import (arc_length, bend_radius, densify_batch, polyline_arc_lengths,
                            self_pair_excluded, self_pair_window, taut_margin, tile_offsets)
 from checker.closest import row_norm, segment_segment
@@ -1076,7 +1077,7 @@ class Checker:
             lo = np.searchsorted(of_c, centres, "left")
             cnt = np.searchsorted(of_c, centres, "right") - lo
             entry = np.repeat(np.arange(len(centres)), cnt)
-            return entry, of_i[np.repeat(lo, cnt) + np.arange(int(cnt.sum())) - np.repeat(np.cumsum(cnt) - cnt, cnt)]
+            return entry, of_i[ranges(lo, cnt)]
 
         def product(ea, xa, eb, xb):
             """Every (x, y) with x from side a and y from side b of one entry."""
@@ -1087,7 +1088,7 @@ class Checker:
             fa, fb = np.cumsum(na) - na, np.cumsum(nb) - nb
             per = na * nb
             e = np.repeat(np.arange(len(ci)), per)
-            r = np.arange(int(per.sum())) - np.repeat(np.cumsum(per) - per, per)
+            r = within(per)
             return xa[fa[e] + r // np.maximum(nb[e], 1)], xb[fb[e] + r % np.maximum(nb[e], 1)]
 
         def tiled(x, y):

@@ -45,6 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from checker.arrays import ranges
 from checker.bvh import obb_overlap, prefix_hits, transformed_aabb
 from checker.partset import PROBE_DEPTH, TOUCH, Placement, PartSet
 from checker.shapes import signed_distance, signed_distance_value_batch
@@ -318,7 +319,7 @@ def _verify(parts: PartSet, placed: Placement, moving_parts: np.ndarray, d: np.n
         lo = np.searchsorted(pair_part, fp)
         hi = np.searchsorted(pair_part, fp, side="right")
         cnt = hi - lo
-        rows = pair_order[np.repeat(lo, cnt) + np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)]
+        rows = pair_order[ranges(lo, cnt)]
         shifted = m_world[rows] + (travel[f_part[rows]])[:, None, None] * d
         crossing = triangles_cross(shifted, f_world[rows], parts.touch(m_part[rows], f_part[rows]))
         ok = np.zeros(len(parts.names), bool)
@@ -415,7 +416,7 @@ def probes_inside_batch(parts: PartSet, placed: Placement, a: np.ndarray, b: np.
     first = ps[a[rows]]
     cnt = ps[a[rows] + 1] - first
     row = np.repeat(rows, cnt)                            # pair row of each probe
-    idx = np.repeat(first, cnt) + np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    idx = ranges(first, cnt)
     pa, pb = a[row], b[row]
     world = placed.world(pa, parts.probes[idx][:, None, :])
     if shift is not None:
