@@ -4,11 +4,13 @@ Subcommands:
   run SCENE   simulate a scene, check it, write the report and the recording.
   sweep SCENE move one part (or assembly) along a line; list the parts it hits.
   bench       measure what accuracy costs in time (tables, CSV and a plot).
+  check SCENE validate a scene file without simulating it.
 
 Exit status: 0 when nothing reaches the `--fail-on` level, 1 when something
 does, 2 for bad input (the message names the file, the key and the
-problem; never a traceback), 130 when interrupted with Ctrl-C (the report,
-marked incomplete, and the recording are still written).
+problem; never a traceback), 130 when interrupted with Ctrl-C and 143 when
+terminated with SIGTERM (the report, marked incomplete, and the recording are
+still written). Output paths are checked before any work starts.
 
 This module parses arguments, shows progress and prints summaries; the work
 is done in `sim.run`.
@@ -21,9 +23,9 @@ import sys
 import time
 from pathlib import Path
 
-from sim.scene import SceneError, load_scene
+from sim.stop import StopRequest   # first: signals are taken before the heavy imports
 
-EXIT_OK, EXIT_FAIL, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_OK, EXIT_FAIL, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
 
 _DESCRIPTION = """\
 Physics-backed interference checking for flexible cables and rigid parts.
@@ -41,7 +43,8 @@ outputs:
 
 exit status:
   0  nothing reached the --fail-on level    1  something did
-  2  bad input (file, key and problem are printed)    130  interrupted
+  2  bad input (file, key and problem are printed)
+  130  interrupted (Ctrl-C)    143  terminated (SIGTERM)
 """
 
 
@@ -58,7 +61,14 @@ def _positive_float(text: str) -> float:
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="cablecheck", description=_DESCRIPTION,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"%(prog)s {version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    chk = sub.add_parser("check", help="validate a scene file without simulating it",
+                         description="Read and validate SCENE (and the files it names) as `run` "
+                                     "would, print what it holds and exit: 0 when it is valid, 2 "
+                                     "when it is not (the file, the key and the problem are printed).")
+    chk.add_argument("scene", metavar="SCENE", type=Path, help="scene file (TOML)")
+    chk.add_argument("--quiet", action="store_true", help="print nothing but errors")
     run = sub.add_parser("run", help="simulate and check a scene",
                          description="Simulate SCENE, check every step, write a report and a recording.",
                          epilog=_RUN_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -173,31 +183,72 @@ class _ProgressBar:
             sys.stderr.flush()
 
 
-def _cmd_run(args: argparse.Namespace) -> int:
-    from sim.run import RunOptions, run_scene  # MuJoCo and rerun load only when needed
+def version() -> str:
+    """The installed product version."""
+    from importlib.metadata import PackageNotFoundError, version as dist_version
 
+    try:
+        return dist_version("cablecheck")
+    except PackageNotFoundError:   # run from a source tree that was never installed
+        return "unknown"
+
+
+def _cmd_check(args: argparse.Namespace) -> int:
+    from sim.scene import load_scene
+
+    scene = load_scene(args.scene)
+    if not args.quiet:
+        steps = round(scene.duration / scene.timestep)
+        print(f"{args.scene}: valid scene {scene.name!r} ({scene.units}): {len(scene.cables)} cable(s), "
+              f"{len(scene.parts)} part(s), {len(scene.bodies)} scripted bod"
+              f"{'y' if len(scene.bodies) == 1 else 'ies'}, {len(scene.motions)} motion(s)"
+              + (f", on {scene.mjcf.name}" if scene.mjcf else "")
+              + f"; {scene.duration:g} s in {steps} steps of {scene.timestep:g} s")
+    return EXIT_OK
+
+
+def _cmd_run(args: argparse.Namespace, stop: StopRequest) -> int:
+    from sim.outputs import check_output
+    from sim.scene import load_scene
+
+    for option, path in (("--report", args.report), ("--record", args.record)):
+        if path is not None:
+            check_output(path, option)
     scene = load_scene(args.scene)
     record = None if args.no_record else (args.record or Path("recordings") / f"{scene.name}.rrd")
     report = args.report or (record or Path("recordings") / scene.name).with_suffix(".json")
+    if record is not None and args.record is None:
+        check_output(record, "recording (default path)")
+    if args.report is None:
+        check_output(report, "report (default path)")
+    from sim.run import RunOptions, run_scene  # MuJoCo and rerun load only when needed
+
     options = RunOptions(report=report, record=record, method=args.method, spacing=args.spacing,
                          only=args.only, advance=not args.full_every_step)
     bar = _ProgressBar(enabled=not args.quiet)
     try:
-        result = run_scene(scene, options, progress=bar)
+        result = run_scene(scene, options, progress=bar, stop=stop)
     finally:
         bar.done()
     if not args.quiet:
         _print_summary(result, report)
     if not result["complete"]:
-        return EXIT_INTERRUPTED
+        return EXIT_TERMINATED if result.get("interrupted") == "SIGTERM" else EXIT_INTERRUPTED
     return EXIT_FAIL if _fails(result, args.fail_on) else EXIT_OK
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
     from sim.sweep import SweepOptions, sweep_scene  # MuJoCo loads only when needed
 
+    from sim.outputs import check_output
+    from sim.scene import load_scene
+
+    if args.report is not None:
+        check_output(args.report, "--report")
     scene = load_scene(args.scene)
     report = args.report or Path("recordings") / f"{scene.name}-sweep.json"
+    if args.report is None:
+        check_output(report, "report (default path)")
     options = SweepOptions(part=args.part, direction=args.direction, distance=args.distance,
                            precision=args.precision, only=args.only, report=report)
     result = sweep_scene(scene, options)
@@ -296,19 +347,41 @@ def _print_events(report: dict, most: int = 10) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the `cablecheck` command; returns the exit status."""
-    args = _parser().parse_args(argv)
+    """Entry point of the `cablecheck` command; returns the exit status.
+
+    SIGINT and SIGTERM are taken from the start (`sim.stop`): a run asked to
+    stop while it starts up still writes its incomplete report."""
+    with StopRequest() as stop:
+        return _main(_parser().parse_args(argv), stop)
+
+
+def _main(args: argparse.Namespace, stop: StopRequest) -> int:
+    try:   # numpy, MuJoCo and trimesh load here, with the signals already taken
+        from sim.outputs import OutputPathError
+        from sim.scene import SceneError
+    except KeyboardInterrupt:
+        print("cablecheck: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
     try:
+        if args.command == "check":
+            return _cmd_check(args)
         if args.command == "run":
-            return _cmd_run(args)
+            return _cmd_run(args, stop)
         if args.command == "sweep":
             return _cmd_sweep(args)
         if args.command == "bench":
-            from sim.bench import run_bench  # MuJoCo and matplotlib load only when needed
+            from sim.bench import run_bench
+            from sim.outputs import check_folder
+
+            check_folder(args.out, "--out")  # MuJoCo and matplotlib load only when needed
 
             run_bench(quick=args.quick, out=args.out)
             return EXIT_OK
     except SceneError as e:
+        print(f"cablecheck: error: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except OutputPathError as e:
         print(f"cablecheck: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except ValueError as e:
@@ -322,7 +395,7 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("cablecheck: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return EXIT_TERMINATED if stop.signal_name == "SIGTERM" else EXIT_INTERRUPTED
     return EXIT_BAD_INPUT
 
 

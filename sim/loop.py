@@ -76,9 +76,12 @@ class Simulation:
         self.motion.apply(d, 0.0, frozen=True)
         mujoco.mj_forward(self.model, d)
 
-    def settle(self, progress=None) -> None:
-        """Simulate `settle` seconds with the script frozen at t = 0."""
+    def settle(self, progress=None, stop=None) -> None:
+        """Simulate `settle` seconds with the script frozen at t = 0; `stop()`
+        returning True ends settling early."""
         for k in range(self.settle_steps):
+            if stop is not None and stop():
+                return
             self.motion.apply(self.data, 0.0, frozen=True)
             mujoco.mj_step(self.model, self.data)
             if progress is not None:

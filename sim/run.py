@@ -14,8 +14,6 @@ geometry of its own: distances come from `checker`.
 
 from __future__ import annotations
 
-import signal
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -35,6 +33,7 @@ from sim.loop import Simulation
 from sim.record import Recorder, pair_path
 from sim.scene import Scene
 from sim.stepcheck import BATCH, StepChecks
+from sim.stop import StopRequest
 
 RECORD_RATE = 100.0
 """Recorded frames per simulated second (checks still run at every checked step)."""
@@ -97,17 +96,34 @@ def _worst_by_cable(records, names: list[str]) -> list[str]:
     return [state[n] for n in names]
 
 
-def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = None) -> dict:
-    """Run `scene`; write the report (and recording); return the report dict."""
+def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = None,
+              stop: StopRequest | None = None) -> dict:
+    """Run `scene`; write the report (and recording); return the report dict.
+
+    SIGINT (Ctrl-C) and SIGTERM at any moment stop the run cleanly: what was
+    simulated is checked, the recording is finished and the report is written
+    with ``"complete": false`` and ``"interrupted"`` naming the signal. A
+    caller that listens from earlier on (the command line, from its start)
+    passes its `stop`; a stop already asked runs nothing but the report."""
     start = time.perf_counter()
+    if stop is not None:
+        return _run(scene, options, progress, stop, start)
+    with StopRequest() as stop:
+        return _run(scene, options, progress, stop, start)
+
+
+def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: StopRequest,
+         start: float) -> dict:
     validate = scene.check.validate
     built = build(scene, detect=validate)
     sim = Simulation(built)
     sim.reset()
     if progress:
         progress("settle", 0, max(sim.settle_steps, 1))
-    sim.settle(None if progress is None else
-               (lambda k: progress("settle", k, sim.settle_steps) if k % 50 == 0 else None))
+    if not stop.asked:
+        sim.settle(None if progress is None else
+                   (lambda k: progress("settle", k, sim.settle_steps) if k % 50 == 0 else None),
+                   stop=lambda: stop.asked)
     recorder = Recorder(built, options.record) if options.record else None
     timer = _Timer()
     config = CheckConfig(method=options.method or scene.check.method,
@@ -123,21 +139,19 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     out = _Outcome(built, tracker, recorder, timer, progress, record_stride, sim.total_steps)
     complete = False
     batch: list = []
-    stop = _Interrupt()
     try:
-        with stop:
-            for state in sim.steps(contacts=False, every=every):
-                # states are checked BATCH at a time (sim.stepcheck): the last
-                # one of the run, or of an interrupted run, closes its batch
-                batch.append(state)
-                if len(batch) < BATCH and state.step < sim.total_steps and not stop.asked:
-                    continue
-                timer.lap("sim")
-                out.take(batch, checks.run(batch))
-                batch = []
-                if stop.asked:
-                    break
-            complete = not stop.asked
+        for state in (() if stop.asked else sim.steps(contacts=False, every=every)):
+            # states are checked BATCH at a time (sim.stepcheck): the last
+            # one of the run, or of an interrupted run, closes its batch
+            batch.append(state)
+            if len(batch) < BATCH and state.step < sim.total_steps and not stop.asked:
+                continue
+            timer.lap("sim")
+            out.take(batch, checks.run(batch))
+            batch = []
+            if stop.asked:
+                break
+        complete = not stop.asked
     except KeyboardInterrupt:
         complete = False    # a second Ctrl-C: the batch being checked is left out
     finally:
@@ -160,33 +174,9 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
         "horizon": checks.horizon / scene.scale, "stretch": checks.stretch / scene.scale,
         "full_checks": advance.full, "proven_clear_steps": advance.skipped}
     report["part_warnings"] = list(checks.rigid.warnings)
+    report["interrupted"] = stop.signal_name
     write_report(report, options.report)
     return report
-
-
-class _Interrupt:
-    """Ctrl-C asks the run to stop after the step being simulated, once its
-    batch is checked; a second Ctrl-C raises KeyboardInterrupt at once.
-    (Outside the main thread, where Python takes no signal handler, the
-    first Ctrl-C raises at once.)"""
-
-    def __init__(self):
-        self.asked = False
-        self._old = None
-
-    def _handler(self, signum, frame) -> None:
-        if self.asked:
-            raise KeyboardInterrupt
-        self.asked = True
-
-    def __enter__(self) -> "_Interrupt":
-        if threading.current_thread() is threading.main_thread():
-            self._old = signal.signal(signal.SIGINT, self._handler)
-        return self
-
-    def __exit__(self, *exc) -> None:
-        if self._old is not None:
-            signal.signal(signal.SIGINT, self._old)
 
 
 class _Outcome:

@@ -276,3 +276,60 @@ def test_ctrl_c_stops_after_the_batch_and_a_second_stops_at_once(small_scene: Pa
 
     report = run_scene(scene, RunOptions(report=tmp_path / "b.json", record=None), progress=twice)
     assert report["complete"] is False and report["settings"]["steps"] < total
+
+
+@pytest.mark.parametrize("delay", [0.05, 0.6, 2.5])
+def test_sigterm_at_any_moment_leaves_incomplete_report_and_readable_recording(tmp_path: Path, delay: float):
+    """SIGTERM (what `timeout` and schedulers send) while starting up, settling or
+    simulating: exit 143, an incomplete report, a verified recording, no temp files."""
+    import signal
+    import time
+
+    scene = tmp_path / "long.toml"
+    scene.write_text(SMALL.replace("duration = 0.2", "duration = 600.0").replace("settle = 0.2", "settle = 1.5"))
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "sim.cli", "run", str(scene), "--record",
+                             str(out / "long.rrd"), "--quiet"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    time.sleep(delay)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 143, err
+    assert "Traceback" not in err
+    report = json.loads((out / "long.json").read_text())
+    assert report["complete"] is False and report["interrupted"] == "SIGTERM"
+    _assert_rrd_has(out / "long.rrd", [], timelines=())
+    assert not [p for p in out.iterdir() if p.name.endswith(".tmp")]
+
+
+@pytest.mark.parametrize("option", ["--report", "--record"])
+def test_output_path_naming_a_folder_fails_before_running(small_scene: Path, tmp_path: Path, option, capsys):
+    folder = tmp_path / "d"
+    folder.mkdir()
+    assert main(["run", str(small_scene), option, str(folder)]) == 2
+    err = capsys.readouterr().err
+    assert f"{option} {folder}: is a folder" in err and ".tmp" not in err
+    assert list(folder.iterdir()) == [] and not (tmp_path / "recordings").exists()
+
+
+def test_output_path_under_a_file_fails_before_running(small_scene: Path, tmp_path: Path, capsys):
+    blocker = tmp_path / "afile"
+    blocker.write_text("")
+    assert main(["run", str(small_scene), "--report", str(blocker / "r.json"), "--no-record"]) == 2
+    assert f"{blocker} is a file, not a folder" in capsys.readouterr().err
+
+
+def test_version(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0
+    assert capsys.readouterr().out.startswith("cablecheck ")
+
+
+def test_check_validates_without_simulating(small_scene: Path, tmp_path: Path, capsys):
+    assert main(["check", str(small_scene)]) == 0
+    assert "valid scene 'small'" in capsys.readouterr().out
+    bad = tmp_path / "bad.toml"
+    bad.write_text(SMALL.replace("radius = 3.0", "radius = -3.0"))
+    assert main(["check", str(bad)]) == 2
+    assert "cables[0].radius" in capsys.readouterr().err
