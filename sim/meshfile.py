@@ -50,14 +50,43 @@ def is_tree(path: Path) -> bool:
     return Path(path).suffix.lower() in GLTF_SUFFIXES
 
 
+def stl_problem(path: Path) -> str | None:
+    """What is wrong with an STL file that cannot hold triangles, or None.
+
+    An STL file is either ASCII (starting with ``solid`` and holding ``facet``
+    records) or binary (an 80-byte header, a triangle count n, then exactly
+    50 bytes per triangle); trimesh, given neither, falls back to decoding
+    the bytes as text and fails with an error about that, not the file.
+    Checking the binary layout here (two numbers) lets the message say what
+    is wrong with the file."""
+    data = Path(path).read_bytes()
+    head = data[:512].lstrip()
+    if head[:5].lower() == b"solid" and b"facet" in data[:100_000]:
+        return None   # ASCII STL: trimesh says what is wrong with its records
+    if len(data) < 84:
+        return f"is {len(data)} bytes, too short for an STL file (binary STL needs 84 or more)"
+    count = int(np.frombuffer(data[80:84], "<u4")[0])
+    expected = 84 + 50 * count
+    if expected == len(data):
+        return None
+    return (f"is neither ASCII STL (no 'solid' ... 'facet' records) nor binary STL: its header "
+            f"declares {count} triangles, which take {expected} bytes, but the file has "
+            f"{len(data)} (a truncated or corrupt file, or another format named .stl)")
+
+
 def mesh_nodes(path: Path) -> list[MeshNode]:
     """The meshes of a file (see the module docstring), glTF nodes sorted by path."""
     path = Path(path)
+    if path.suffix.lower() == ".stl":
+        problem = stl_problem(path)
+        if problem is not None:
+            raise MeshFileError(f"{path.name} {problem}")
     try:
         if not is_tree(path):
             mesh = trimesh.load(str(path), force="mesh")
             if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-                raise MeshFileError(f"{path.name} holds no triangles")
+                raise MeshFileError(f"{path.name} holds no triangles (trimesh read it as "
+                                    f"{path.suffix.lstrip('.').upper() or 'a mesh'} and found no faces)")
             return [MeshNode("", np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int64))]
         scene = trimesh.load(str(path), force="scene")
     except MeshFileError:

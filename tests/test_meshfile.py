@@ -10,7 +10,7 @@ import pytest
 import trimesh
 
 from sim.cli import main
-from sim.meshfile import mesh_nodes
+from sim.meshfile import MeshFileError, mesh_nodes
 from sim.scene import SceneError, load_scene
 
 SCENE = """
@@ -114,3 +114,22 @@ def test_unreadable_mesh_exits_2(tmp_path: Path, capsys):
     assert main(["sweep", str(scene), "--part", "mover", "--direction", "1,0,0", "--distance", "1"]) == 2
     err = capsys.readouterr().err
     assert "parts[1].file" in err and "Traceback" not in err
+
+
+def test_corrupt_stl_says_what_is_wrong(tmp_path):
+    """Random bytes, a truncated binary STL and a tiny file: the message names the
+    layout that does not fit, not an error of trimesh's text fallback."""
+    good = tmp_path / "good.stl"
+    trimesh.creation.box().export(good)
+    assert len(mesh_nodes(good)[0].faces) == 12
+    rng = np.random.default_rng(0)
+    cases = {"random.stl": rng.bytes(3000), "truncated.stl": good.read_bytes()[:500], "tiny.stl": b"hello\n"}
+    for name, data in cases.items():
+        (tmp_path / name).write_bytes(data)
+        with pytest.raises(MeshFileError) as e:
+            mesh_nodes(tmp_path / name)
+        assert name in str(e.value) and "charset" not in str(e.value)
+    with pytest.raises(MeshFileError, match="declares 12 triangles, which take 684 bytes, but the file has 500"):
+        mesh_nodes(tmp_path / "truncated.stl")
+    with pytest.raises(MeshFileError, match="6 bytes, too short"):
+        mesh_nodes(tmp_path / "tiny.stl")
