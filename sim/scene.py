@@ -46,6 +46,7 @@ import numpy as np
 import trimesh
 
 from sim.meshfile import MeshFileError, is_tree, mesh_nodes
+from sim.route import polyline_length
 
 UNITS = {"m": 1.0, "mm": 0.001}
 """Scene units and their size in metres."""
@@ -84,7 +85,8 @@ ROUTE_TOLERANCE = 1e-9
 DEGENERATE = 1e-6
 """A route segment shorter than this many cable radii has zero length."""
 
-_TOP_KEYS = ("scene", "effects", "check", "bodies", "parts", "cables", "motion")
+_TOP_KEYS = ("scene", "effects", "check", "bodies", "parts", "cables", "motion", "limits")
+_LIMIT_KEYS = ("steps", "elements", "points")
 _SCENE_KEYS = ("name", "units", "duration", "timestep", "settle", "mjcf")
 _EFFECTS_KEYS = ("dynamics", "gravity", "contact")
 _CHECK_KEYS = ("method", "spacing", "clearance", "every", "validate", "attach_zone")
@@ -153,6 +155,26 @@ class CheckSettings:
     every: int = 1
     validate: bool = True
     attach_zone: float = 5.0
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Sizes above which a scene is refused as a likely mistake (`[limits]`).
+
+    A radius typed in metres in a mm scene, or a duration of 1e9 s, would
+    otherwise start a run that never ends, silently. A scene that really
+    needs more raises the limit in its `[limits]` table.
+
+    Attributes:
+      steps: simulated steps (settle plus duration, over the timestep).
+      elements: MuJoCo elements of one cable (`segments`).
+      points: discrete points of all cables in one check (method points:
+        each cable's length over its spacing).
+    """
+
+    steps: int = 10_000_000
+    elements: int = 2_000
+    points: int = 2_000_000
 
 
 @dataclass(frozen=True)
@@ -320,6 +342,7 @@ class Scene:
       start_frames: world frame of every body at t = 0 (see the module
         docstring), name -> (origin (3,) metres, rotation (3, 3)), for
         "world", each `[[bodies]]` body and each named mjcf body. Read-only.
+      limits: the sizes the scene was checked against.
     """
 
     path: Path
@@ -338,6 +361,7 @@ class Scene:
     motions: tuple[MotionDef, ...]
     start_frames: Mapping[str, tuple[np.ndarray, np.ndarray]] = field(
         default_factory=lambda: MappingProxyType({}))
+    limits: Limits = Limits()
 
 
 def load_scene(path: str | Path) -> Scene:
@@ -568,11 +592,44 @@ class _Parser:
             if cable.name in part_index:
                 raise self.error(f"cables[{i}].name", f"{cable.name!r} is also the name of "
                                  f"parts[{part_index[cable.name]}]; names must differ")
+        limits = self.limits(data.get("limits", {}))
+        self.within_limits(limits, duration + settle, timestep, check, cables)
         return Scene(path=self.file, name=name, units=units, scale=self.scale,
                      duration=duration, timestep=timestep, settle=settle, mjcf=mjcf,
                      effects=effects, check=check, bodies=bodies, parts=parts,
                      cables=cables, motions=motions,
-                     start_frames=MappingProxyType(dict(self.frames)))
+                     start_frames=MappingProxyType(dict(self.frames)), limits=limits)
+
+    def limits(self, value: Any) -> Limits:
+        t = self.table(value, "limits", _LIMIT_KEYS)
+        return Limits(**{k: self.integer(t[k], f"limits.{k}", 1) for k in _LIMIT_KEYS if k in t})
+
+    def within_limits(self, limits: Limits, seconds: float, timestep: float,
+                      check: CheckSettings, cables: tuple[CableDef, ...]) -> None:
+        """Refuse sizes above `limits`, naming the key, the size and how to raise the limit."""
+        steps = seconds / timestep
+        if steps > limits.steps:
+            raise self.error("scene.duration", f"{_g(seconds)} s (settle and duration) at a timestep "
+                             f"of {_g(timestep)} s is {steps:.3g} steps, above the limit of "
+                             f"{limits.steps:,} (raise it with [limits] steps = ...)")
+        for i, c in enumerate(cables):
+            if c.segments is not None and c.segments > limits.elements:
+                raise self.error(f"cables[{i}].segments", f"{c.segments:,} elements, above the limit "
+                                 f"of {limits.elements:,} per cable (raise it with [limits] "
+                                 "elements = ...)")
+        if check.method != "points" or not cables:
+            return
+        lengths = np.array([c.length or polyline_length(c.route) for c in cables])
+        radii = np.array([c.radius for c in cables])
+        points = lengths / (check.spacing * radii) + 1.0
+        if points.sum() > limits.points:
+            k = int(np.argmax(points))
+            raise self.error(f"cables[{k}].radius", f"the cables need {points.sum():.3g} discrete points "
+                             f"per check ({points[k]:.3g} for {cables[k].name!r}: "
+                             f"{_g(lengths[k] / self.scale)} {self._units()} at a spacing of "
+                             f"{_g(check.spacing)} radii of {_g(radii[k] / self.scale)} {self._units()}), "
+                             f"above the limit of {limits.points:,}; check the radius and units "
+                             "(raise the limit with [limits] points = ...)")
 
     def compile_mjcf(self, path: Path) -> _MjcfInfo:
         try:

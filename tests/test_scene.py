@@ -666,3 +666,32 @@ def test_any_edit_gives_a_scene_or_a_scene_error(folder, edits):
         parse(data, folder)
     except SceneError as e:
         assert e.key and e.problem
+
+
+# -- limits -------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("path, value, key, fragment", [
+    ("scene.duration", 1e9, "scene.duration", "steps, above the limit of 10,000,000"),
+    ("cables.0.radius", 1e-9, "cables[0].radius", "discrete points per check"),
+])
+def test_absurd_sizes_are_refused_with_the_limit(folder, path, value, key, fragment):
+    data = put(copy.deepcopy(BASE), "check.method", "points")
+    with pytest.raises(SceneError) as exc:
+        parse(put(data, path, value), folder)
+    check_error(exc, folder / "scene.toml", key, fragment)
+    assert "[limits]" in exc.value.problem
+
+
+def test_limits_can_be_raised(folder):
+    data = put(copy.deepcopy(BASE), "scene.duration", 20_000.0)   # 2e7 steps at 1 ms
+    with pytest.raises(SceneError, match="limit of 10,000,000"):
+        parse(data, folder)
+    assert parse(put(data, "limits", {"steps": 30_000_000}), folder).limits.steps == 30_000_000
+    data = put(copy.deepcopy(BASE), "cables.0.segments", 30)
+    with pytest.raises(SceneError) as exc:
+        parse(put(data, "limits", {"elements": 20}), folder)
+    check_error(exc, folder / "scene.toml", "cables[0].segments", "30 elements, above the limit of 20")
+    with pytest.raises(SceneError) as exc:
+        parse(put(copy.deepcopy(BASE), "limits", {"points": 0}), folder)
+    check_error(exc, folder / "scene.toml", "limits.points", "at least 1")
