@@ -266,7 +266,7 @@ def _print_sweep(r: dict, path: Path) -> None:
         width = max(len(h["part"]) for h in r["hits"])
         print(f"  {'part':<{width}}  {'distance':>12}  where")
         for h in r["hits"]:
-            w = ", ".join(f"{x:.4g}" for x in h["where"])
+            w = _position(h["where"], u)
             print(f"  {h['part']:<{width}}  {h['distance']:>12.6g}  ({w})")
     else:
         print("  no part hit")
@@ -275,6 +275,16 @@ def _print_sweep(r: dict, path: Path) -> None:
     for w in r["warnings"]:
         print(f"  warning: {w}")
     print(f"  report: {path}")
+
+
+POSITION_DECIMALS = {"mm": 2, "m": 5}
+"""Decimals of printed positions: 10 um in either unit, wherever the scene
+lies (``%g`` prints 1.235e+07 for a point 12.3 km out in mm)."""
+
+
+def _position(values, units: str) -> str:
+    """A position as fixed-point numbers at `POSITION_DECIMALS` for its units."""
+    return ", ".join(f"{x:.{POSITION_DECIMALS.get(units, 5)}f}" for x in values)
 
 
 def _fails(report: dict, level: str) -> bool:
@@ -338,7 +348,7 @@ def _print_events(report: dict, most: int = 10) -> None:
           f"{summary['static']} static, {summary['dynamic']} dynamic")
     for e in sorted(events, key=lambda e: (e["severity"] != "hard", e["min_distance"]))[:most]:
         pair = e["a"] if e["a"] == e["b"] else f"{e['a']} / {e['b']}"
-        where = ", ".join(f"{x:.4g}" for x in e["where"])
+        where = _position(e["where"], units)
         print(f"    {e['severity'].upper():4} {e['phase']:7} {e['type']:15} {pair}: "
               f"t {e['t_start']:.3f}-{e['t_end']:.3f} s, worst {e['min_distance']:.4g} {units} "
               f"at t {e['t_worst']:.3f} s, ({where}), s = {e['s']:.4g} {units}")

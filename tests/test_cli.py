@@ -333,3 +333,31 @@ def test_check_validates_without_simulating(small_scene: Path, tmp_path: Path, c
     bad.write_text(SMALL.replace("radius = 3.0", "radius = -3.0"))
     assert main(["check", str(bad)]) == 2
     assert "cables[0].radius" in capsys.readouterr().err
+
+
+def test_event_positions_print_at_the_scene_units_precision_far_from_the_origin(tmp_path: Path, capsys):
+    """12 km out in mm, %g would print 1.2e+07 for every place; fixed decimals keep 10 um."""
+    far = SMALL.replace("[[cables]]", "[[parts]]\nname = \"post\"\nshape = \"box\"\nsize = [5, 50, 150]\n"
+                        "pos = [100, 0, 0]\n\n[[cables]]")
+    near, shifted = tmp_path / "near.toml", tmp_path / "far.toml"
+    near.write_text(far)
+    offset = 12_345_678.0
+    text = far
+    for old, new in (("pos = [150, 0, -5]", f"pos = [{150 + offset}, 0, -5]"),
+                     ("pos = [100, 0, 0]", f"pos = [{100 + offset}, 0, 0]"),
+                     ("start = { pos = [0, 0, 100] }", f"start = {{ pos = [{offset}, 0, 100] }}"),
+                     ("name = \"slider\"\n", f"name = \"slider\"\npos = [{offset}, 0, 0]\n"),
+                     ("pos = [0, 0, 0] }, { t = 0.2, pos = [20, 0, 0]",
+                      f"pos = [{offset}, 0, 0] }}, {{ t = 0.2, pos = [{offset + 20}, 0, 0]")):
+        assert old in text
+        text = text.replace(old, new)
+    shifted.write_text(text)
+    assert main(["run", str(near), "--no-record", "--report", str(tmp_path / "n.json"), "--fail-on", "never"]) == 0
+    out_near = capsys.readouterr().out
+    assert main(["run", str(shifted), "--no-record", "--report", str(tmp_path / "f.json"),
+                 "--fail-on", "never"]) == 0
+    out_far = capsys.readouterr().out
+    assert "cable-structure" in out_near and "e+07" not in out_far
+    row = next(line for line in out_far.splitlines() if "post" in line)
+    x = float(row.split("(")[1].split(",")[0])
+    assert abs(x - offset) < 1000 and len(row.split("(")[1].split(",")[0].split(".")[1]) == 2
