@@ -15,6 +15,7 @@ import trimesh
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import sim.scene as scene_module
 from sim.scene import (DEFAULT_CLEARANCE, Anchor, BodyKey, JointKey, Scene, SceneError,
                        euler_matrix, load_scene, parse_scene)
 
@@ -695,3 +696,46 @@ def test_limits_can_be_raised(folder):
     with pytest.raises(SceneError) as exc:
         parse(put(copy.deepcopy(BASE), "limits", {"points": 0}), folder)
     check_error(exc, folder / "scene.toml", "limits.points", "at least 1")
+
+
+# -- the format reference -------------------------------------------------------
+
+REFERENCE = Path(__file__).resolve().parents[1] / "docs" / "scene-format.md"
+
+# Heading of each table in docs/scene-format.md -> the keys the loader accepts there.
+REFERENCE_TABLES = {
+    "`[scene]`": scene_module._SCENE_KEYS,
+    "`[effects]`": scene_module._EFFECTS_KEYS,
+    "`[check]`": scene_module._CHECK_KEYS,
+    "`[[bodies]]`": scene_module._BODY_KEYS,
+    "`[[parts]]`": scene_module._PART_KEYS,
+    "`[[cables]]`": scene_module._CABLE_KEYS,
+    "`[[cables]]` `start`, `end` and `clips`": scene_module._ANCHOR_KEYS,
+    "`[[motion]]`": scene_module._MOTION_KEYS,
+    "`[[motion]]` keys of a body": scene_module._BODY_KEY_KEYS,
+    "`[[motion]]` keys of a joint": scene_module._JOINT_KEY_KEYS,
+    "`[limits]`": scene_module._LIMIT_KEYS,
+}
+
+
+def _documented_keys() -> dict[str, list[str]]:
+    """Heading -> keys of the rows of its table (rows start with | `key` |)."""
+    out: dict[str, list[str]] = {}
+    heading = None
+    for line in REFERENCE.read_text().splitlines():
+        if line.startswith("### "):
+            heading = line[4:].strip()
+            out[heading] = []
+        elif heading and line.startswith("| `"):
+            out[heading].append(line.split("`")[1])
+    return out
+
+
+def test_scene_format_reference_lists_every_accepted_key():
+    """docs/scene-format.md documents exactly the keys the loader accepts, table by table."""
+    documented = _documented_keys()
+    assert set(documented) == set(REFERENCE_TABLES)
+    for heading, accepted in REFERENCE_TABLES.items():
+        assert sorted(documented[heading]) == sorted(accepted), heading
+    tops = {h.strip("`[]").split("`")[0].strip("[]") for h in documented}
+    assert set(scene_module._TOP_KEYS) <= tops
