@@ -1,118 +1,107 @@
-"""Scripted motion: keyframes interpolated in time and applied to the model.
+"""Scripted motion: the scene's trajectories, interpolated in time and applied to the model.
 
-Bodies (`[[bodies]]`, free bodies in MuJoCo) follow their keys' world poses:
-position linearly, orientation by spherical linear interpolation, and get
-the matching linear and angular velocity. Joints of
-the base mjcf model follow their keys linearly, and every base joint, keyed
-or not, is driven kinematically: its qpos and qvel are set before each step
-(held at qpos0 when it has no keys), so the robot follows the script exactly
-and the cable's reaction does not push it around.
+Every `[[motion]]` arrives as a `Trajectory` (keys, the model's keyframes or
+a CSV file, in MuJoCo units on scene time). Its channels are interpolated
+by `sim.curves` ("cubic": shape-preserving, continuous velocity; "linear"),
+and all channels of all motions are merged into one `Curve`, so a step
+evaluates every joint and body at once (two vectorised polynomial
+evaluations, no loop over joints).
 
-Before the first key and after the last one a target holds that key's pose.
+- Joints of the base mjcf model are driven kinematically: before each step
+  every base joint's qpos and qvel are set (the velocity is the derivative
+  of the interpolant), so the robot follows the script exactly and the
+  cable's reaction does not push it around. Joints without a motion hold the
+  model's own `qpos0` (MuJoCo's reference pose, the joints' `ref`).
+- `[[bodies]]` (free bodies in MuJoCo) follow their positions and euler
+  angles, each angle interpolated on its own (the loader unwraps them to
+  the short way between samples); the angular velocity handed to MuJoCo is
+  the body-frame rate of those angles. A body without a motion holds its
+  `[[bodies]]` pose.
+
+Before its first sample and after its last one a motion holds that sample.
 This module does not step the simulation; the loop calls `apply` each step.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import mujoco
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from sim.build import Built
-from sim.scene import euler_matrix
-
-
-def _quat(rot: np.ndarray) -> np.ndarray:
-    q = np.zeros(4)
-    mujoco.mju_mat2Quat(q, np.ascontiguousarray(rot).ravel())
-    return q
+from sim.build import Built, JointDrive
+from sim.curves import Curve, interpolant, merge
 
 
-def slerp(q0: np.ndarray, q1: np.ndarray, u: float) -> np.ndarray:
-    """Unit quaternion between q0 (u = 0) and q1 (u = 1) along the short arc."""
-    dot = float(np.dot(q0, q1))
-    if dot < 0.0:
-        q1, dot = -q1, -dot
-    if dot > 0.9995:  # nearly parallel: normalised lerp avoids 0/0
-        q = q0 + u * (q1 - q0)
-        return q / np.linalg.norm(q)
-    theta = np.arccos(dot)
-    return (np.sin((1.0 - u) * theta) * q0 + np.sin(u * theta) * q1) / np.sin(theta)
+def body_rates(euler: np.ndarray, rates: np.ndarray) -> np.ndarray:
+    """(B, 3) body-frame angular velocities of rotations Rx(a) Ry(b) Rz(c)
+    (MuJoCo's intrinsic x-y-z euler sequence) from angles (B, 3) and their
+    time derivatives (B, 3), radians and radians per second.
 
-
-@dataclass(frozen=True, eq=False)
-class BodyTrack:
-    """Keyframes of one scripted body. times (k,), pos (k, 3) metres, quat (k, 4)."""
-
-    qpos_adr: int
-    dof_adr: int
-    times: np.ndarray
-    pos: np.ndarray
-    quat: np.ndarray
-
-    def at(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """World position, quaternion, linear velocity (world) and angular
-        velocity (body frame, as MuJoCo's free joint) at time t."""
-        i = int(np.searchsorted(self.times, t, side="right")) - 1
-        still = np.zeros(3)
-        if i < 0:
-            return self.pos[0], self.quat[0], still, still
-        if i >= len(self.times) - 1:
-            return self.pos[-1], self.quat[-1], still, still
-        dt = self.times[i + 1] - self.times[i]
-        u = (t - self.times[i]) / dt
-        q0, q1 = self.quat[i], self.quat[i + 1]
-        if np.dot(q0, q1) < 0.0:
-            q1 = -q1
-        omega = np.zeros(3)
-        mujoco.mju_subQuat(omega, q1, q0)  # q0 * exp(omega) = q1, in q0's frame
-        return (self.pos[i] + u * (self.pos[i + 1] - self.pos[i]), slerp(q0, q1, u),
-                (self.pos[i + 1] - self.pos[i]) / dt, omega / dt)
-
-
-@dataclass(frozen=True, eq=False)
-class JointTrack:
-    """Keyframes of one base-model joint: times (k,), values (k,) in MuJoCo units."""
-
-    qpos_adr: int
-    dof_adr: int
-    times: np.ndarray
-    values: np.ndarray
-
-    def at(self, t: float) -> tuple[float, float]:
-        """Joint value and velocity at time t."""
-        value = float(np.interp(t, self.times, self.values))
-        i = int(np.searchsorted(self.times, t, side="right")) - 1
-        if i < 0 or i >= len(self.times) - 1:
-            return value, 0.0
-        return value, float((self.values[i + 1] - self.values[i]) / (self.times[i + 1] - self.times[i]))
+    omega = Rz^T Ry^T (a' e_x) + Rz^T (b' e_y) + c' e_z."""
+    b, c = euler[:, 1], euler[:, 2]
+    da, db, dc = rates.T
+    cb, sb, cc, sc = np.cos(b), np.sin(b), np.cos(c), np.sin(c)
+    return np.stack([da * cb * cc + db * sc, -da * cb * sc + db * cc, da * sb + dc], axis=1)
 
 
 class Motion:
-    """All scripted targets of a built scene."""
+    """All scripted targets of a built scene, merged into one curve.
+
+    Attributes:
+      curve: every channel: driven joints' values (MuJoCo units), then each
+        body's position (model coordinates, metres) and euler angles (radians).
+      joints: the driven joints, in channel order.
+      bodies: names of the `[[bodies]]`, in channel order (scripted or held).
+      moving: names of the driven joints whose value changes over the script.
+    """
 
     def __init__(self, built: Built):
         scene = built.scene
-        self.bodies: list[BodyTrack] = []
-        self.joints: list[JointTrack] = []
-        keyed = set()
+        polys, joints, bodies = [], [], []
+        moving = []
         for m in scene.motions:
-            times = np.array([k.t for k in m.keys], float)
-            if m.body is not None:
-                pos = np.array([k.pos for k in m.keys], float) - built.origin
-                quat = np.array([_quat(euler_matrix(k.euler)) for k in m.keys])
-                self.bodies.append(BodyTrack(*built.free[m.body], times, pos, quat))
-                keyed.add(m.body)
-            else:
-                drive = built.joints[m.joint]
-                values = np.array([k.value for k in m.keys], float) * drive.scale
-                self.joints.append(JointTrack(drive.qpos_adr, drive.dof_adr, times, values))
+            tr = m.trajectory
+            n = len(tr.times)
+            columns = np.hstack([tr.joint_values, (tr.body_pos - built.origin).reshape(n, -1),
+                                 np.radians(tr.body_euler).reshape(n, -1)])
+            polys.append(interpolant(tr.times, columns, tr.interpolation))
+            # joint channels first: reorder after merging (see `order` below)
+            joints.append([built.joints[j] for j in tr.joints])
+            bodies.append(list(tr.bodies))
+            moving += [j for j, values in zip(tr.joints, tr.joint_values.T) if np.ptp(values) > 0]
+        driven = {b for names in bodies for b in names}
         for b in scene.bodies:
-            if b.name not in keyed:
-                self.bodies.append(BodyTrack(*built.free[b.name], np.zeros(1),
-                                             np.array([b.pos], float) - built.origin,
-                                             np.array([_quat(euler_matrix(b.euler))])))
+            if b.name not in driven:
+                pose = np.concatenate([np.asarray(b.pos, float) - built.origin, np.radians(b.euler)])
+                polys.append(interpolant(np.zeros(1), pose[None, :], "linear"))
+                joints.append([])
+                bodies.append([b.name])
+        if not polys:
+            polys.append(interpolant(np.zeros(1), np.zeros((1, 0)), "linear"))
+        merged = merge(polys)
+        # Channel order in the merged curve: per motion [joints, body pos, body euler];
+        # gather the indices of each kind once, so apply() indexes arrays.
+        joint_idx, pos_idx, rot_idx = [], [], []
+        offset = 0
+        for js, bs in zip(joints, bodies):
+            joint_idx += range(offset, offset + len(js))
+            offset += len(js)
+            pos_idx += [range(offset + 3 * k, offset + 3 * k + 3) for k in range(len(bs))]
+            offset += 3 * len(bs)
+            rot_idx += [range(offset + 3 * k, offset + 3 * k + 3) for k in range(len(bs))]
+            offset += 3 * len(bs)
+        self.curve: Curve = merged
+        self.joints: list[JointDrive] = [j for js in joints for j in js]
+        self.bodies: list[str] = [b for bs in bodies for b in bs]
+        self.moving: tuple[str, ...] = tuple(moving)
+        self._joint_idx = np.array(joint_idx, int)
+        self._pos_idx = np.array(pos_idx, int).reshape(-1, 3)
+        self._rot_idx = np.array(rot_idx, int).reshape(-1, 3)
+        self._joint_qadr = np.array([j.qpos_adr for j in self.joints], int)
+        self._joint_dadr = np.array([j.dof_adr for j in self.joints], int)
+        free = np.array([built.free[b] for b in self.bodies], int).reshape(-1, 2)
+        self._body_qadr = free[:, :1] + np.arange(7)     # (B, 7): position, quaternion
+        self._body_dadr = free[:, 1:] + np.arange(6)     # (B, 6): linear, angular velocity
         self.base_qpos_adr = built.base_qpos_adr
         self.base_dof_adr = built.base_dof_adr
         self.base_qpos0 = built.model.qpos0[built.base_qpos_adr].copy()
@@ -121,14 +110,16 @@ class Motion:
         """Put every scripted target at its time-t pose and velocity.
 
         `frozen`: hold the pose with zero velocity (settling before t = 0)."""
-        for track in self.bodies:
-            pos, quat, vel, omega = track.at(t)
-            data.qpos[track.qpos_adr:track.qpos_adr + 3] = pos
-            data.qpos[track.qpos_adr + 3:track.qpos_adr + 7] = quat
-            data.qvel[track.dof_adr:track.dof_adr + 3] = 0.0 if frozen else vel
-            data.qvel[track.dof_adr + 3:track.dof_adr + 6] = 0.0 if frozen else omega
+        value, rate = self.curve.at(t)
+        if frozen:
+            rate = np.zeros_like(rate)
         data.qpos[self.base_qpos_adr] = self.base_qpos0
         data.qvel[self.base_dof_adr] = 0.0
-        for track in self.joints:
-            data.qpos[track.qpos_adr], velocity = track.at(t)
-            data.qvel[track.dof_adr] = 0.0 if frozen else velocity
+        data.qpos[self._joint_qadr] = value[self._joint_idx]
+        data.qvel[self._joint_dadr] = rate[self._joint_idx]
+        if len(self.bodies):
+            euler = value[self._rot_idx]
+            quat = Rotation.from_euler("XYZ", euler).as_quat(scalar_first=True)
+            data.qpos[self._body_qadr] = np.hstack([value[self._pos_idx], quat])
+            data.qvel[self._body_dadr] = np.hstack([rate[self._pos_idx],
+                                                    body_rates(euler, rate[self._rot_idx])])

@@ -13,14 +13,14 @@ Conventions of the records:
 - `check.spacing` and `check.attach_zone` are multiples of the cable radius;
   `check.clearance` is in metres.
 - Joint keyframe values stay as written (degrees for hinges, scene units for
-  slides): only the builder knows the joint type's unit, it multiplies slide
-  values by `Scene.scale`.
+  slides) in `MotionDef.keys`; every motion's `Trajectory` holds its samples
+  in MuJoCo units (radians, metres), on scene time (`time_scale` applied).
 - Positions of parts, clips and cable ends are in the frame of the body they
   ride on; `via`, `points` and `CableDef.route` are world coordinates at t = 0.
   "At t = 0" is the pose the motion script gives: a keyframed body at its
   first key's pose (before the first key a body holds it), any other
   `[[bodies]]` body at its `[[bodies]]` pose, and the mjcf model at `qpos0`
-  with each keyframed joint at its first key's value. `Scene.start_frames`
+  with each driven joint at its first sample's value. `Scene.start_frames`
   holds these frames, so the builder need not work them out again.
 
 The mjcf model is compiled once here (to know its bodies, joints and the
@@ -28,11 +28,18 @@ pose of its bodies at qpos0); meshes are loaded with trimesh to check they
 exist, load, and (for keepout parts) are closed. The builder loads both again.
 A mesh part whose file is glTF / GLB expands into one part per mesh node of
 the file, named ``<name>/<node path>`` (`sim.meshfile`).
+
+A `[[motion]]` gives keys, the mjcf model's keyframes (``key = "home"``) or a
+CSV file of samples (`read_samples`); every sample of a joint with a range
+(`jnt_limited`) must lie in it. Both interpolations (`sim.curves`) stay
+between neighbouring samples, so the samples bound the whole motion.
 """
 
 from __future__ import annotations
 
+import csv
 import difflib
+import io
 import math
 import re
 import tomllib
@@ -45,6 +52,7 @@ import mujoco
 import numpy as np
 import trimesh
 
+from sim.curves import INTERPOLATIONS
 from sim.meshfile import MeshFileError, is_tree, mesh_nodes
 from sim.route import polyline_length
 
@@ -95,9 +103,13 @@ _PART_KEYS = ("name", "body", "shape", "size", "pos", "euler", "file", "scale", 
 _CABLE_KEYS = ("name", "radius", "start", "end", "via", "length", "points", "clips",
                "segments", "young", "density", "min_bend_radius")
 _ANCHOR_KEYS = ("body", "pos")
-_MOTION_KEYS = ("body", "joint", "keys")
+_MOTION_KEYS = ("body", "joint", "file", "keys", "angles", "interpolation", "time_scale")
 _BODY_KEY_KEYS = ("t", "pos", "euler")
-_JOINT_KEY_KEYS = ("t", "value")
+_JOINT_KEY_KEYS = ("t", "value", "key")
+ANGLES = {"deg": math.pi / 180.0, "rad": 1.0}
+"""Values of `[[motion]] angles` and radians per unit."""
+BODY_AXES = ("x", "y", "z", "rx", "ry", "rz")
+"""Column suffixes of a body in a motion file: position (scene units), euler angles (degrees)."""
 _REQUIRED = object()
 _ZERO3 = (0.0, 0.0, 0.0)
 
@@ -306,21 +318,74 @@ class JointKey:
 
 
 @dataclass(frozen=True)
-class MotionDef:
-    """Scripted motion of one body or one joint (`[[motion]]`).
+class KeyframeKey:
+    """A key naming a keyframe of the mjcf model (``{ t = 0.0, key = "home" }``).
 
-    Exactly one of `body` and `joint` is set.
+    Attributes:
+      t: seconds after t = 0 (as written, before `time_scale`).
+      key: name of a ``<keyframe><key>`` of the model; its qpos gives the
+        joint's value (in a joint's motion) or every hinge and slide joint's
+        value (in a motion of keyframes only).
+    """
+
+    t: float
+    key: str
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    """A motion's samples in MuJoCo units on scene time. Compared by identity.
+
+    Attributes:
+      times: (n,) scene seconds (written times / `time_scale`), strictly increasing.
+      joints: names of the mjcf hinge and slide joints it drives.
+      joint_values: (n, J) radians (hinge) or metres (slide).
+      bodies: names of the `[[bodies]]` it drives.
+      body_pos: (n, B, 3) world positions, metres.
+      body_euler: (n, B, 3) world orientations, degrees (intrinsic x, y, z),
+        unwrapped: consecutive samples differ by at most 180 degrees per angle.
+      interpolation: "cubic" or "linear" (`sim.curves`).
+    """
+
+    times: np.ndarray
+    joints: tuple[str, ...]
+    joint_values: np.ndarray
+    bodies: tuple[str, ...]
+    body_pos: np.ndarray
+    body_euler: np.ndarray
+    interpolation: str
+
+
+@dataclass(frozen=True, eq=False)
+class MotionDef:
+    """Scripted motion (`[[motion]]`): of one body, one joint, the mjcf
+    model's keyframes, or whatever a file's columns name. Compared by identity.
+
+    At most one of `body`, `joint` and `file` is set; none for a motion of
+    keyframes only (every key a KeyframeKey).
 
     Attributes:
       body: a `[[bodies]]` name, or None.
       joint: a hinge or slide joint of the mjcf model, or None.
-      keys: keyframes with strictly increasing t: BodyKey for a body,
-        JointKey for a joint.
+      keys: as written, with strictly increasing t: BodyKey for a body,
+        JointKey or KeyframeKey for a joint, KeyframeKey for keyframes
+        only; () for a file.
+      file: absolute path of the CSV file of samples, or None.
+      angles: "deg" or "rad": unit of hinge values (keys' `value`, file columns).
+      interpolation: "cubic" or "linear".
+      time_scale: plays the motion this many times faster.
+      trajectory: the samples in MuJoCo units on scene time (filled by the
+        loader; None only for hand-built records).
     """
 
     body: str | None
     joint: str | None
-    keys: tuple[BodyKey, ...] | tuple[JointKey, ...]
+    keys: tuple[BodyKey, ...] | tuple[JointKey | KeyframeKey, ...]
+    file: Path | None = None
+    angles: str = "deg"
+    interpolation: str = INTERPOLATIONS[0]
+    time_scale: float = 1.0
+    trajectory: Trajectory | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -425,6 +490,7 @@ class _MjcfInfo:
     model: mujoco.MjModel
     bodies: dict[str, int]   # name -> body id
     joints: dict[str, int]   # name -> joint id
+    keyframes: dict[str, int]   # name -> keyframe id
 
 
 class _Parser:
@@ -575,13 +641,15 @@ class _Parser:
                         for i, m in enumerate(self.tables(data.get("motion", []), "motion")))
         driven: dict[str, int] = {}
         for i, m in enumerate(motions):
-            target = f"body {m.body!r}" if m.body else f"joint {m.joint!r}"
-            if target in driven:
-                raise self.error(f"motion[{i}]", f"{target} is already driven by "
-                                                 f"motion[{driven[target]}]")
-            driven[target] = i
-            if m.body is not None:
-                self.frames[m.body] = _frame(m.keys[0].pos, euler_matrix(m.keys[0].euler))
+            traj = m.trajectory
+            for target in ([f"body {b!r}" for b in traj.bodies]
+                           + [f"joint {j!r}" for j in traj.joints]):
+                if target in driven:
+                    raise self.error(f"motion[{i}]", f"{target} is already driven by "
+                                                     f"motion[{driven[target]}]")
+                driven[target] = i
+            for k, b in enumerate(traj.bodies):
+                self.frames[b] = _frame(traj.body_pos[0, k], euler_matrix(traj.body_euler[0, k]))
         if self.mjcf is not None:
             self.frames.update(self.mjcf_frames(motions))
         cables = tuple(self.cable(c, f"cables[{i}]")
@@ -640,18 +708,16 @@ class _Parser:
                                            f"{message}") from None
         bodies = {model.body(i).name: i for i in range(model.nbody) if model.body(i).name}
         joints = {model.joint(i).name: i for i in range(model.njnt) if model.joint(i).name}
-        return _MjcfInfo(model=model, bodies=bodies, joints=joints)
+        keyframes = {model.key(i).name: i for i in range(model.nkey) if model.key(i).name}
+        return _MjcfInfo(model=model, bodies=bodies, joints=joints, keyframes=keyframes)
 
     def mjcf_frames(self, motions: tuple[MotionDef, ...]) -> dict:
-        """World frames of the mjcf bodies at t = 0: qpos0, keyframed joints at their first key."""
+        """World frames of the mjcf bodies at t = 0: qpos0, driven joints at their first sample."""
         model = self.mjcf.model
         data = mujoco.MjData(model)
         for m in motions:
-            if m.joint is not None:
-                j = self.mjcf.joints[m.joint]
-                hinge = int(model.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_HINGE)
-                data.qpos[model.jnt_qposadr[j]] = m.keys[0].value * (
-                    math.pi / 180 if hinge else self.scale)
+            for j, name in enumerate(m.trajectory.joints):
+                data.qpos[model.jnt_qposadr[self.mjcf.joints[name]]] = m.trajectory.joint_values[0, j]
         mujoco.mj_kinematics(model, data)
         return {name: _frame(data.xpos[i], data.xmat[i].reshape(3, 3))
                 for name, i in self.mjcf.bodies.items()}
@@ -877,54 +943,94 @@ class _Parser:
             min_bend_radius=bend, route=route)
 
     def motion(self, value: dict, where: str, bodies: dict[str, BodyDef]) -> MotionDef:
-        t = self.table(value, where, _MOTION_KEYS, ("keys",))
-        if ("body" in t) == ("joint" in t):
-            raise self.error(where, "give exactly one of 'body' (a [[bodies]] name) "
-                                    "and 'joint' (a joint of the mjcf model)")
-        keys_raw = t["keys"]
-        if not isinstance(keys_raw, list) or not all(isinstance(k, dict) for k in keys_raw):
-            raise self.error(f"{where}.keys", f"expected an array of tables "
-                                              f"({{ t = ..., ... }}), got {_describe(keys_raw)}")
-        if not keys_raw:
-            raise self.error(f"{where}.keys", "empty: give at least one keyframe")
-        body = joint = None
+        t = self.table(value, where, _MOTION_KEYS)
+        targets = [k for k in ("body", "joint", "file") if k in t]
+        if "file" in t and "keys" in t:
+            raise self.error(f"{where}.keys", "not allowed with 'file' (the file holds "
+                                              "the samples)")
+        if "file" not in t and "keys" not in t:
+            raise self.error(f"{where}.keys", "missing (required unless 'file' gives "
+                                              "the samples)")
+        keys_raw = t.get("keys", [])
+        if "keys" in t:
+            if (not isinstance(keys_raw, list)
+                    or not all(isinstance(k, dict) for k in keys_raw)):
+                raise self.error(f"{where}.keys", f"expected an array of tables "
+                                                  f"({{ t = ..., ... }}), got {_describe(keys_raw)}")
+            if not keys_raw:
+                raise self.error(f"{where}.keys", "empty: give at least one keyframe")
+        keyframes_only = not targets and all("key" in k for k in keys_raw)
+        if len(targets) > 1 or not (targets or keyframes_only):
+            raise self.error(where, "give exactly one of 'body' (a [[bodies]] name), 'joint' "
+                                    "(a joint of the mjcf model) and 'file' (a CSV file of "
+                                    "samples), or keys that all name keyframes of the mjcf "
+                                    "model ({ t = ..., key = \"home\" })")
+        interpolation = self.string(t.get("interpolation", INTERPOLATIONS[0]),
+                                    f"{where}.interpolation", INTERPOLATIONS)
+        time_scale = self.number(t.get("time_scale", 1.0), f"{where}.time_scale", positive=True)
+        if "angles" in t and "body" in t:
+            raise self.error(f"{where}.angles", "not used by a body's motion (its euler "
+                                                "angles are degrees, as in [[bodies]])")
+        angles = self.string(t.get("angles", "deg"), f"{where}.angles", tuple(ANGLES))
+        body = joint = file = None
+        keys: tuple = ()
         if "body" in t:
-            body = self.name(t["body"], f"{where}.body")
-            if body not in bodies:
-                if body == "world":
-                    problem = "the world frame cannot move"
-                elif self.mjcf and body in self.mjcf.bodies:
-                    problem = (f"{body!r} is a body of the mjcf model, which cannot be "
-                               "keyframed by pose; drive its joints (joint = ...)")
-                else:
-                    problem = f"no [[bodies]] entry named {body!r}"
-                raise self.error(f"{where}.body", problem)
+            body = self.motion_body(t["body"], f"{where}.body", bodies)
             home = bodies[body]
             keys = tuple(self.body_key(k, f"{where}.keys[{i}]", home)
                          for i, k in enumerate(keys_raw))
-        else:
-            joint = self.name(t["joint"], f"{where}.joint")
+        elif "joint" in t:
+            joint = self.motion_joint(t["joint"], f"{where}.joint")
+            keys = tuple(self.joint_key(k, f"{where}.keys[{i}]") for i, k in enumerate(keys_raw))
+        elif keyframes_only:
             if self.mjcf is None:
-                raise self.error(f"{where}.joint", "no mjcf model in [scene]; joints "
-                                                   "come from it")
-            if joint not in self.mjcf.joints:
-                close = difflib.get_close_matches(joint, list(self.mjcf.joints), n=1)
-                hint = f" (did you mean {close[0]!r}?)" if close else ""
-                raise self.error(f"{where}.joint",
-                                 f"no joint named {joint!r} in the mjcf model{hint}")
-            kind = int(self.mjcf.model.jnt_type[self.mjcf.joints[joint]])
-            if kind not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
-                raise self.error(f"{where}.joint", f"{joint!r} is a "
-                                 f"{mujoco.mjtJoint(kind).name[6:].lower()} joint; only hinge "
-                                 "and slide joints are driven by a value")
-            keys = tuple(self.joint_key(k, f"{where}.keys[{i}]")
-                         for i, k in enumerate(keys_raw))
+                raise self.error(f"{where}.keys[0].key", "no mjcf model in [scene]; "
+                                                         "keyframes come from it")
+            keys = tuple(self.joint_key(k, f"{where}.keys[{i}]") for i, k in enumerate(keys_raw))
         for i in range(1, len(keys)):
             if keys[i].t <= keys[i - 1].t:
                 raise self.error(f"{where}.keys[{i}].t",
                                  f"times must increase strictly: {_g(keys[i].t)} after "
                                  f"{_g(keys[i - 1].t)}")
-        return MotionDef(body=body, joint=joint, keys=keys)
+        if "file" in t:
+            file = self.file_path(t["file"], f"{where}.file")
+            trajectory = self.file_trajectory(file, t["file"], where, bodies, angles,
+                                              interpolation, time_scale)
+        else:
+            trajectory = self.keys_trajectory(keys, body, joint, where, angles, interpolation,
+                                              time_scale)
+        return MotionDef(body=body, joint=joint, keys=keys, file=file, angles=angles,
+                         interpolation=interpolation, time_scale=time_scale,
+                         trajectory=trajectory)
+
+    def motion_body(self, value: Any, where: str, bodies: dict[str, BodyDef]) -> str:
+        """A body a motion may drive: a [[bodies]] body."""
+        body = self.name(value, where)
+        if body not in bodies:
+            if body == "world":
+                problem = "the world frame cannot move"
+            elif self.mjcf and body in self.mjcf.bodies:
+                problem = (f"{body!r} is a body of the mjcf model, which cannot be "
+                           "keyframed by pose; drive its joints (joint = ...)")
+            else:
+                problem = f"no [[bodies]] entry named {body!r}"
+            raise self.error(where, problem)
+        return body
+
+    def motion_joint(self, value: Any, where: str) -> str:
+        """A joint a motion may drive: a hinge or slide joint of the mjcf model."""
+        joint = self.name(value, where)
+        if self.mjcf is None:
+            raise self.error(where, "no mjcf model in [scene]; joints come from it")
+        if joint not in self.mjcf.joints:
+            close = difflib.get_close_matches(joint, list(self.mjcf.joints), n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise self.error(where, f"no joint named {joint!r} in the mjcf model{hint}")
+        kind = int(self.mjcf.model.jnt_type[self.mjcf.joints[joint]])
+        if kind not in _DRIVEN:
+            raise self.error(where, f"{joint!r} is a {mujoco.mjtJoint(kind).name[6:].lower()} "
+                                    "joint; only hinge and slide joints are driven by a value")
+        return joint
 
     def body_key(self, value: dict, where: str, home: BodyDef) -> BodyKey:
         t = self.table(value, where, _BODY_KEY_KEYS, ("t",))
@@ -933,10 +1039,213 @@ class _Parser:
                        euler=(self.vector(t["euler"], f"{where}.euler") if "euler" in t
                               else home.euler))
 
-    def joint_key(self, value: dict, where: str) -> JointKey:
-        t = self.table(value, where, _JOINT_KEY_KEYS, ("t", "value"))
-        return JointKey(t=self.number(t["t"], f"{where}.t", nonnegative=True),
-                        value=self.number(t["value"], f"{where}.value"))
+    def joint_key(self, value: dict, where: str) -> JointKey | KeyframeKey:
+        t = self.table(value, where, _JOINT_KEY_KEYS, ("t",))
+        time = self.number(t["t"], f"{where}.t", nonnegative=True)
+        if ("value" in t) == ("key" in t):
+            raise self.error(f"{where}.value" if "value" not in t else where,
+                             "missing (required unless 'key' names a keyframe of the mjcf "
+                             "model)" if "value" not in t else "give 'value' or 'key', not both")
+        if "value" in t:
+            return JointKey(t=time, value=self.number(t["value"], f"{where}.value"))
+        name = self.name(t["key"], f"{where}.key")
+        if self.mjcf is None:
+            raise self.error(f"{where}.key", "no mjcf model in [scene]; keyframes come from it")
+        if name not in self.mjcf.keyframes:
+            known = sorted(self.mjcf.keyframes)
+            raise self.error(f"{where}.key", f"no keyframe named {name!r} in the mjcf model "
+                                             f"(known: {', '.join(known) or 'none'})")
+        return KeyframeKey(t=time, key=name)
+
+    # -- trajectories -------------------------------------------------------
+
+    def driven_joints(self) -> list[str]:
+        """Named hinge and slide joints of the mjcf model, in model order."""
+        model = self.mjcf.model
+        return [name for name, j in sorted(self.mjcf.joints.items(), key=lambda item: item[1])
+                if int(model.jnt_type[j]) in _DRIVEN]
+
+    def keyframe_qpos(self, name: str, where: str) -> np.ndarray:
+        """The qpos of keyframe `name`; it may move only named hinge and slide joints."""
+        model = self.mjcf.model
+        qpos = model.key_qpos[self.mjcf.keyframes[name]]
+        driven = {self.mjcf.joints[j] for j in self.driven_joints()}
+        sizes = {int(mujoco.mjtJoint.mjJNT_FREE): 7, int(mujoco.mjtJoint.mjJNT_BALL): 4}
+        for j in range(model.njnt):
+            if j in driven:
+                continue
+            a = int(model.jnt_qposadr[j])
+            n = sizes.get(int(model.jnt_type[j]), 1)
+            if not np.allclose(qpos[a:a + n], model.qpos0[a:a + n], rtol=0.0, atol=1e-12):
+                label = model.joint(j).name or f"#{j} (unnamed, on body {model.body(int(model.jnt_bodyid[j])).name!r})"
+                raise self.error(where, f"keyframe {name!r} moves joint {label}; only named hinge "
+                                        "and slide joints are driven")
+        return qpos
+
+    def joint_scale(self, joint: str, angles: str) -> float:
+        """Multiplies a written value of `joint` into MuJoCo units."""
+        hinge = int(self.mjcf.model.jnt_type[self.mjcf.joints[joint]]) == _HINGE
+        return ANGLES[angles] if hinge else self.scale
+
+    def keys_trajectory(self, keys: tuple, body: str | None, joint: str | None, where: str,
+                        angles: str, interpolation: str, time_scale: float) -> Trajectory:
+        times = np.array([k.t for k in keys], float) / time_scale
+        none = np.zeros((len(keys), 0))
+        if body is not None:
+            pos = np.array([k.pos for k in keys], float)[:, None, :]
+            euler = np.array([k.euler for k in keys], float)[:, None, :]
+            return _trajectory(times, (), none, (body,), pos, euler, interpolation)
+        joints = (joint,) if joint is not None else tuple(self.driven_joints())
+        adr = self.mjcf.model.jnt_qposadr[[self.mjcf.joints[j] for j in joints]]
+        values = np.zeros((len(keys), len(joints)))
+        for i, k in enumerate(keys):
+            if isinstance(k, KeyframeKey):
+                values[i] = self.keyframe_qpos(k.key, f"{where}.keys[{i}].key")[adr]
+            else:
+                values[i] = k.value * self.joint_scale(joint, angles)
+        no_bodies = np.zeros((len(keys), 0, 3))
+        trajectory = _trajectory(times, joints, values, (), no_bodies, no_bodies, interpolation)
+        self.check_ranges(trajectory, angles, lambda i: (
+            f"{where}.keys[{i}].{'key' if isinstance(keys[i], KeyframeKey) else 'value'}",
+            f"t = {_g(keys[i].t)} s"))
+        return trajectory
+
+    def file_trajectory(self, path: Path, written: str, where: str, bodies: dict[str, BodyDef],
+                        angles: str, interpolation: str, time_scale: float) -> Trajectory:
+        """The samples of a CSV motion file (see `read_samples`)."""
+        where = f"{where}.file"
+        header, table, lines = self.read_samples(path, written, where)
+        joints: list[str] = []
+        body_axes: dict[str, dict[str, int]] = {}
+        for c, name in enumerate(header[1:], start=1):
+            if self.mjcf is not None and name in self.mjcf.joints:
+                joints.append(self.motion_joint(name, f"{where} ({written}, column {name!r})"))
+                continue
+            body, _, axis = name.rpartition(".")
+            if body and axis in BODY_AXES:
+                self.motion_body(body, f"{where} ({written}, column {name!r})", bodies)
+                body_axes.setdefault(body, {})[axis] = c
+                continue
+            known = sorted(self.mjcf.joints if self.mjcf else []) + [
+                f"{b}.{a}" for b in bodies for a in BODY_AXES]
+            close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise self.error(where, f"{written} column {name!r}: neither a joint of the mjcf "
+                                    f"model nor <body>.x/.y/.z/.rx/.ry/.rz of a [[bodies]] "
+                                    f"body{hint}")
+        n = len(table)
+        columns = [header.index(j) for j in joints]
+        values = table[:, columns] * np.array([self.joint_scale(j, angles) for j in joints])
+        names = tuple(body_axes)
+        pos = np.zeros((n, len(names), 3))
+        euler = np.zeros((n, len(names), 3))
+        for b, (name, axes) in enumerate(body_axes.items()):
+            home = bodies[name]
+            for k, axis in enumerate(BODY_AXES):
+                target, index = (pos, k) if k < 3 else (euler, k - 3)
+                default = home.pos[k] if k < 3 else home.euler[k - 3]
+                target[:, b, index] = (table[:, axes[axis]] * (self.scale if k < 3 else 1.0)
+                                       if axis in axes else default)
+        times = table[:, 0] / time_scale
+        trajectory = _trajectory(times, tuple(joints), values, names, pos, euler, interpolation)
+        self.check_ranges(trajectory, angles, lambda i: (
+            where, f"{written} line {lines[i]}, t = {_g(table[i, 0])} s"))
+        return trajectory
+
+    def read_samples(self, path: Path, written: str, where: str
+                     ) -> tuple[list[str], np.ndarray, list[int]]:
+        """A CSV motion file: its header (``t`` first), its (n, columns) numbers
+        and each row's line number. Blank lines are skipped; every cell must be
+        a finite number, t not negative and strictly increasing."""
+        def fail(problem: str) -> SceneError:
+            return self.error(where, f"{written}: {problem}")
+
+        try:
+            text = path.read_bytes().decode("utf-8-sig")
+        except OSError as e:
+            raise fail(f"cannot read: {e.strerror or e}") from None
+        except UnicodeDecodeError as e:
+            raise fail(f"not UTF-8 text (byte {e.start}: {e.reason})") from None
+        reader = csv.reader(io.StringIO(text))
+        rows, lines = [], []
+        try:
+            for row in reader:
+                if any(cell.strip() for cell in row):
+                    rows.append([cell.strip() for cell in row])
+                    lines.append(reader.line_num)
+        except csv.Error as e:
+            raise fail(f"line {reader.line_num}: not CSV: {e}") from None
+        if not rows:
+            raise fail("empty: expected a header 't,<joint or body.axis>,...' and rows")
+        header = rows[0]
+        if header[0] != "t":
+            raise fail(f"line {lines[0]}: the header's first column must be 't' (time, s), "
+                       f"got {header[0]!r}")
+        if len(header) < 2:
+            raise fail(f"line {lines[0]}: the header names no joint or body column")
+        for c, name in enumerate(header):
+            if not name:
+                raise fail(f"line {lines[0]}: column {c + 1} of the header is empty")
+            if name in header[:c]:
+                raise fail(f"line {lines[0]}: column {name!r} appears twice")
+        body = rows[1:]
+        if not body:
+            raise fail("no samples: the header is the only row")
+        for row, line in zip(body, lines[1:]):
+            if len(row) != len(header):
+                raise fail(f"line {line}: {len(row)} cells, the header has {len(header)}")
+        try:
+            table = np.array(body, dtype=float)
+        except ValueError:
+            table = None
+        bad = None
+        if table is None:
+            for r, row in enumerate(body):
+                for c, cell in enumerate(row):
+                    try:
+                        float(cell)
+                    except ValueError:
+                        raise fail(f"line {lines[r + 1]}, column {header[c]!r}: not a number: "
+                                   f"{cell!r}") from None
+        finite = np.isfinite(table) & (np.abs(table) <= LARGEST)
+        if not finite.all():
+            r, c = np.argwhere(~finite)[0]
+            bad = body[r][c]
+            raise fail(f"line {lines[r + 1]}, column {header[c]!r}: not a finite number of "
+                       f"magnitude at most {LARGEST:g}: {bad!r}")
+        t = table[:, 0]
+        if t[0] < 0:
+            raise fail(f"line {lines[1]}, column 't': must not be negative, got {_g(t[0])}")
+        steps = np.flatnonzero(np.diff(t) <= 0)
+        if len(steps):
+            r = steps[0] + 1
+            raise fail(f"line {lines[r + 1]}, column 't': times must increase strictly: "
+                       f"{_g(t[r])} after {_g(t[r - 1])} (line {lines[r]})")
+        return header, table, lines[1:]
+
+    def check_ranges(self, trajectory: Trajectory, angles: str, sample) -> None:
+        """Every joint sample inside its joint's range, when the joint is
+        limited. `sample(i)` gives (key path, "where in the source") of sample i.
+        The interpolants stay between neighbouring samples (`sim.curves`), so
+        the samples bound the whole motion."""
+        model = self.mjcf.model if self.mjcf else None
+        for j, name in enumerate(trajectory.joints):
+            jid = self.mjcf.joints[name]
+            if not model.jnt_limited[jid]:
+                continue
+            lo, hi = (float(v) for v in model.jnt_range[jid])
+            tol = 1e-9 * max(1.0, abs(lo), abs(hi))
+            values = trajectory.joint_values[:, j]
+            out = np.flatnonzero((values < lo - tol) | (values > hi + tol))
+            if not len(out):
+                continue
+            i = out[0]
+            hinge = int(model.jnt_type[jid]) == _HINGE
+            unit = angles if hinge else self._units()
+            per = ANGLES[angles] if hinge else self.scale
+            key, source = sample(i)
+            raise self.error(key, f"{source}: joint {name!r} at {_g(values[i] / per)} {unit} is "
+                                  f"outside its range {_g(lo / per)}..{_g(hi / per)} {unit}")
 
     def unique(self, records: tuple, where: str, kind: str) -> None:
         seen: dict[str, int] = {}
@@ -953,6 +1262,22 @@ class _Parser:
 _SIZE_HELP = {"box": "half-extents x, y, z", "sphere": "radius",
               "cylinder": "radius, half-length", "capsule": "radius, half-length",
               "ellipsoid": "semi-axes x, y, z"}
+
+
+_HINGE = int(mujoco.mjtJoint.mjJNT_HINGE)
+_DRIVEN = (_HINGE, int(mujoco.mjtJoint.mjJNT_SLIDE))
+
+
+def _trajectory(times, joints, values, bodies, pos, euler, interpolation) -> Trajectory:
+    """A read-only Trajectory; euler angles unwrapped (short way between samples)."""
+    euler = np.unwrap(np.asarray(euler, float), period=360.0, axis=0)
+    arrays = [np.array(a, float) for a in (times, values, pos, euler)]
+    for a in arrays:
+        a.setflags(write=False)
+    times, values, pos, euler = arrays
+    return Trajectory(times=times, joints=tuple(joints), joint_values=values,
+                      bodies=tuple(bodies), body_pos=pos, body_euler=euler,
+                      interpolation=interpolation)
 
 
 def _frame(origin, rotation) -> tuple[np.ndarray, np.ndarray]:
