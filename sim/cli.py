@@ -352,8 +352,18 @@ def _print_events(report: dict, most: int = 10) -> None:
         print(f"    {e['severity'].upper():4} {e['phase']:7} {e['type']:15} {pair}: "
               f"t {e['t_start']:.3f}-{e['t_end']:.3f} s, worst {e['min_distance']:.4g} {units} "
               f"at t {e['t_worst']:.3f} s, ({where}), s = {e['s']:.4g} {units}")
+        if e["severity"] == "hard" and e.get("joint_ranges"):
+            print(f"         {_joint_cause(e, report.get('joint_units', {}))}")
     if len(events) > most:
         print(f"    ... {len(events) - most} more in the report")
+
+
+def _joint_cause(event: dict, joint_units: dict) -> str:
+    """The link an event rubs and the ranges of the joints moving it over the event."""
+    ranges = ", ".join(f"{name} {lo:.4g}..{hi:.4g} {joint_units.get(name, '')}".rstrip()
+                       for name, (lo, hi) in event["joint_ranges"].items())
+    link = f"link {event['link']}" if event["link"] else "no moving link"
+    return f"{link}; joints over the event: {ranges}"
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -44,6 +44,13 @@ def body_rates(euler: np.ndarray, rates: np.ndarray) -> np.ndarray:
     return np.stack([da * cb * cc + db * sc, -da * cb * sc + db * cc, da * sb + dc], axis=1)
 
 
+def moving_joints(scene) -> tuple[str, ...]:
+    """Names of the mjcf joints whose scripted value changes, in motion order."""
+    return tuple(j for m in scene.motions
+                 for j, values in zip(m.trajectory.joints, m.trajectory.joint_values.T)
+                 if np.ptp(values) > 0)
+
+
 class Motion:
     """All scripted targets of a built scene, merged into one curve.
 
@@ -58,7 +65,6 @@ class Motion:
     def __init__(self, built: Built):
         scene = built.scene
         polys, joints, bodies = [], [], []
-        moving = []
         for m in scene.motions:
             tr = m.trajectory
             n = len(tr.times)
@@ -68,7 +74,6 @@ class Motion:
             # joint channels first: reorder after merging (see `order` below)
             joints.append([built.joints[j] for j in tr.joints])
             bodies.append(list(tr.bodies))
-            moving += [j for j, values in zip(tr.joints, tr.joint_values.T) if np.ptp(values) > 0]
         driven = {b for names in bodies for b in names}
         for b in scene.bodies:
             if b.name not in driven:
@@ -93,7 +98,7 @@ class Motion:
         self.curve: Curve = merged
         self.joints: list[JointDrive] = [j for js in joints for j in js]
         self.bodies: list[str] = [b for bs in bodies for b in bs]
-        self.moving: tuple[str, ...] = tuple(moving)
+        self.moving: tuple[str, ...] = moving_joints(scene)
         self._joint_idx = np.array(joint_idx, int)
         self._pos_idx = np.array(pos_idx, int).reshape(-1, 3)
         self._rot_idx = np.array(rot_idx, int).reshape(-1, 3)
@@ -105,6 +110,11 @@ class Motion:
         self.base_qpos_adr = built.base_qpos_adr
         self.base_dof_adr = built.base_dof_adr
         self.base_qpos0 = built.model.qpos0[built.base_qpos_adr].copy()
+
+    def joint_values(self, times: np.ndarray, names: list[str]) -> np.ndarray:
+        """(m, J) scripted values (MuJoCo units) of the driven joints `names` at `times` (m,)."""
+        channel = {j.name: int(k) for j, k in zip(self.joints, self._joint_idx)}
+        return self.curve.sample(times)[:, [channel[n] for n in names]]
 
     def apply(self, data: mujoco.MjData, t: float, frozen: bool = False) -> None:
         """Put every scripted target at its time-t pose and velocity.

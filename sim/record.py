@@ -11,7 +11,9 @@ Entity tree (mirrors the scene, in the scene's units, z up):
 - `cables/strain/<name>` (percent), `cables/bend_radius/<name>` (scene
   units), `checks/<type>/<a>/<b>/distance` (scene units) and
   `validation/agreement` (fraction of pairs classed alike by the checker
-  and MuJoCo): time series, one view each, since their scales differ.
+  and MuJoCo) and, where the mjcf model's joints move, `joints/<name>` (each
+  moving joint's value, degrees or scene units, named with its unit): time
+  series, one view each, since their scales differ.
 - `events`: one text entry per interference event at its start time.
 
 Geometry is logged in batches (one call per cable per step), never per point.
@@ -32,6 +34,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from sim.build import Built, PartModel
+from sim.motion import moving_joints
 
 CLEAR = (70, 160, 255)
 SOFT = (255, 190, 40)
@@ -56,19 +59,22 @@ def pair_path(kind: str, a: str, b: str) -> str:
     return f"{kind}/{_escape(a)}/{_escape(b)}"
 
 
-def _blueprint() -> rrb.Blueprint:
+def _blueprint(joints: bool = False) -> rrb.Blueprint:
+    """The views; `joints`: with a view of the moving joints' values."""
+    joint_view = [rrb.TimeSeriesView(name="Joint values", origin="joints")] if joints else []
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Spatial3DView(name="Scene", origin="world"),
             rrb.Vertical(
                 rrb.TimeSeriesView(name="Pair distances (scene units)", origin="checks"),
+                *joint_view,
                 rrb.Horizontal(
                     rrb.TimeSeriesView(name="Strain (%)", origin="cables/strain"),
                     rrb.TimeSeriesView(name="Min bend radius (scene units)", origin="cables/bend_radius"),
                 ),
                 rrb.TimeSeriesView(name="Agreement with MuJoCo", origin="validation"),
                 rrb.TextLogView(name="Events", origin="events"),
-                row_shares=[3, 2, 1, 2],
+                row_shares=[3, *([2] if joints else []), 2, 1, 2],
             ),
             column_shares=[3, 2],
         ),
@@ -87,7 +93,7 @@ class Recorder:
         self.unit = built.scene.scale  # metres per scene unit
         self.rec = rr.RecordingStream(application_id="cablecheck",
                                       recording_id=f"{built.scene.name}")
-        self.rec.save(str(self.tmp), default_blueprint=_blueprint())
+        self.rec.save(str(self.tmp), default_blueprint=_blueprint(bool(moving_joints(built.scene))))
         body_of_part = [p.body for p in built.parts]
         moving = {name for name in built.body_ids if name != "world"}
         self.moving_parts = np.array([b in moving for b in body_of_part], bool)
@@ -171,6 +177,11 @@ class Recorder:
             self._labelled.add(path)
             self.rec.log(path, rr.SeriesLines(names=[label]), static=True)
         self.rec.log(path, rr.Scalars(float(value)))
+
+    def log_joints(self, names: list[str], units: list[str], values: np.ndarray) -> None:
+        """The moving joints' values at the current time, one series each."""
+        for name, unit, value in zip(names, units, values):
+            self.log_scalar(f"joints/{_escape(name)}", value, label=f"{name} ({unit})")
 
     def log_event(self, t: float, text: str, level: str) -> None:
         """An event as a text log entry at time t."""

@@ -29,6 +29,7 @@ from checker.report import SCHEMA, write_report
 from checker.scene_state import CheckConfig
 from checker.validation import Validation
 from sim.build import Built, build
+from sim.jointspace import JointLog
 from sim.loop import Simulation
 from sim.record import Recorder, pair_path
 from sim.scene import Scene
@@ -136,7 +137,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     # The recording samples the checked steps at about RECORD_RATE (and at
     # every step where an event starts or ends): a viewer needs no 500 Hz.
     record_stride = max(1, int(round(1.0 / (RECORD_RATE * every * scene.timestep))))
-    out = _Outcome(built, tracker, recorder, timer, progress, record_stride, sim.total_steps)
+    joints = JointLog(built, sim.motion)
+    out = _Outcome(built, tracker, recorder, timer, progress, record_stride, sim.total_steps, joints)
     complete = False
     batch: list = []
     try:
@@ -169,6 +171,10 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     report = _report(scene, built, config, complete, out.steps, out.checked, out.t_last, out.max_strain,
                      out.min_bend, out.rest_points, out.final_points, timer, total, sim, events, tracker,
                      checks.validation, options)
+    if joints:   # where the mjcf model's joints move: their values per event
+        report["joint_units"] = dict(zip(joints.names, joints.units))
+        for row, e in zip(report["events"], events):
+            row.update(joints.event_fields(e.t_start, e.t_end, e.t_worst, e.a, e.b))
     advance = checks.advance
     report["settings"]["advance"] = None if advance is None else {
         "horizon": checks.horizon / scene.scale, "stretch": checks.stretch / scene.scale,
@@ -185,8 +191,9 @@ class _Outcome:
     and progress."""
 
     def __init__(self, built: Built, tracker: EventTracker, recorder: Recorder | None, timer: _Timer,
-                 progress: Progress | None, record_stride: int, total_steps: int):
+                 progress: Progress | None, record_stride: int, total_steps: int, joints: JointLog):
         self.built, self.tracker, self.recorder, self.timer = built, tracker, recorder, timer
+        self.joints = joints
         self.progress, self.record_stride, self.total_steps = progress, record_stride, total_steps
         self.names = [c.name for c in built.cables]
         n = len(built.cables)
@@ -214,6 +221,8 @@ class _Outcome:
                              or state.step == self.total_steps):
                 _record_step(recorder, state, res.contacts, res.records, self.names, res.strain, res.bend,
                              res.agreement, started, closed, self.tracker, self.markers, scale)
+                if self.joints:
+                    recorder.log_joints(self.joints.names, self.joints.units, self.joints.values(state.t)[0])
                 self.timer.lap("record")
             self.final_points = state.cables
             self.steps, self.t_last = state.step, state.t
