@@ -49,7 +49,10 @@ def interpolant(times: np.ndarray, values: np.ndarray, kind: str) -> PPoly:
         return PPoly(coef, times)
     if kind != "cubic":
         raise ValueError(f"interpolation must be one of {INTERPOLATIONS}, got {kind!r}")
-    slopes = PchipInterpolator(times, values, axis=0).derivative()(times)
+    # Secant slopes near the smallest float overflow scipy's weighted harmonic
+    # mean to inf, whose reciprocal is the right slope (0): no warning for that.
+    with np.errstate(over="ignore", divide="ignore"):
+        slopes = PchipInterpolator(times, values, axis=0).derivative()(times)
     slopes[[0, -1]] = 0.0
     return CubicHermiteSpline(times, values, slopes, axis=0)
 

@@ -1196,10 +1196,7 @@ class _Parser:
                 raise fail(f"line {line}: {len(row)} cells, the header has {len(header)}")
         try:
             table = np.array(body, dtype=float)
-        except ValueError:
-            table = None
-        bad = None
-        if table is None:
+        except ValueError:   # find the cell numpy could not read
             for r, row in enumerate(body):
                 for c, cell in enumerate(row):
                     try:
@@ -1207,12 +1204,12 @@ class _Parser:
                     except ValueError:
                         raise fail(f"line {lines[r + 1]}, column {header[c]!r}: not a number: "
                                    f"{cell!r}") from None
+            raise
         finite = np.isfinite(table) & (np.abs(table) <= LARGEST)
         if not finite.all():
             r, c = np.argwhere(~finite)[0]
-            bad = body[r][c]
             raise fail(f"line {lines[r + 1]}, column {header[c]!r}: not a finite number of "
-                       f"magnitude at most {LARGEST:g}: {bad!r}")
+                       f"magnitude at most {LARGEST:g}: {body[r][c]!r}")
         t = table[:, 0]
         if t[0] < 0:
             raise fail(f"line {lines[1]}, column 't': must not be negative, got {_g(t[0])}")
