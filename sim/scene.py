@@ -1077,7 +1077,8 @@ class _Parser:
             a = int(model.jnt_qposadr[j])
             n = sizes.get(int(model.jnt_type[j]), 1)
             if not np.allclose(qpos[a:a + n], model.qpos0[a:a + n], rtol=0.0, atol=1e-12):
-                label = model.joint(j).name or f"#{j} (unnamed, on body {model.body(int(model.jnt_bodyid[j])).name!r})"
+                body = model.body(int(model.jnt_bodyid[j])).name
+                label = model.joint(j).name or f"#{j} (unnamed, on body {body!r})"
                 raise self.error(where, f"keyframe {name!r} moves joint {label}; only named hinge "
                                         "and slide joints are driven")
         return qpos

@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import sim.scene as scene_module
-from sim.scene import (DEFAULT_CLEARANCE, Anchor, BodyKey, JointKey, Scene, SceneError,
+from sim.scene import (DEFAULT_CLEARANCE, Anchor, BodyKey, JointKey, KeyframeKey, Scene, SceneError,
                        euler_matrix, load_scene, parse_scene)
 
 ARM_XML = """
@@ -739,3 +739,156 @@ def test_scene_format_reference_lists_every_accepted_key():
         assert sorted(documented[heading]) == sorted(accepted), heading
     tops = {h.strip("`[]").split("`")[0].strip("[]") for h in documented}
     assert set(scene_module._TOP_KEYS) <= tops
+
+
+# -- motion files, keyframes, interpolation ------------------------------------------
+
+LIMITED_XML = ARM_XML.replace('<joint name="elbow" type="hinge" axis="0 1 0"/>',
+                              '<joint name="elbow" type="hinge" axis="0 1 0" range="-180 180"/>'
+                              ).replace('<joint name="lift" type="slide"/>',
+                                        '<joint name="lift" type="slide" range="0 0.2"/>'
+                                        ).replace("</worldbody>", """</worldbody>
+  <keyframe>
+    <key name="home" qpos="1 0 0 0 0.4 0.05"/>
+    <key name="tilted" qpos="0.9 0.1 0 0 0.4 0.05"/>
+  </keyframe>""")
+
+
+def _with_file(folder: Path, text: str | None, **motion) -> dict:
+    """BASE with motion[1] (elbow) replaced by a file motion; `text` written as f.csv."""
+    (folder / "limited.xml").write_text(LIMITED_XML)
+    if text is not None:
+        (folder / "f.csv").write_text(text)
+    data = put(copy.deepcopy(BASE), "scene.mjcf", "limited.xml")
+    data["motion"][1] = {"file": "f.csv", **motion}
+    return data
+
+
+def test_motion_file_in_scene_units(folder):
+    text = "t,elbow,lift,drawer.x,drawer.rz\n0,10,20,1000,90\n0.5,20,30,1200,-170\n"
+    m = _with_file(folder, text, time_scale=2.0)
+    drop(m, "motion.2")
+    data = put(copy.deepcopy(m), "scene.units", "mm")
+    put(data, "check.clearance", 2.0)
+    drop(data, "motion.0")
+    data["bodies"][0]["pos"] = [1000.0, 0.0, 0.0]
+    data["parts"] = data["parts"][:3]
+    data["cables"] = []
+    s = parse(data, folder)
+    (motion,) = s.motions
+    tr = motion.trajectory
+    assert motion.file == folder / "f.csv" and motion.time_scale == 2.0 and motion.keys == ()
+    assert motion.interpolation == "cubic" and motion.angles == "deg"
+    np.testing.assert_allclose(tr.times, [0.0, 0.25])
+    assert tr.joints == ("elbow", "lift") and tr.bodies == ("drawer",)
+    np.testing.assert_allclose(tr.joint_values, [[np.radians(10), 0.02], [np.radians(20), 0.03]])
+    np.testing.assert_allclose(tr.body_pos[:, 0], [[1.0, 0.0, 0.0], [1.2, 0.0, 0.0]])
+    # rz unwrapped the short way (90 -> 190, not -170); rx, ry from [[bodies]]
+    np.testing.assert_allclose(tr.body_euler[:, 0], [[0, 0, 90], [0, 0, 190]])
+    np.testing.assert_allclose(s.start_frames["drawer"][1], euler_matrix([0, 0, 90]), atol=1e-15)
+
+
+def test_keyframe_keys(folder):
+    data = _with_file(folder, None)
+    data["motion"][1] = {"joint": "elbow", "keys": [{"t": 0.0, "key": "home"},
+                                                    {"t": 1.0, "value": 30.0}]}
+    s = parse(data, folder)
+    np.testing.assert_allclose(s.motions[1].trajectory.joint_values[:, 0], [0.4, np.radians(30)])
+    assert s.motions[1].keys[0] == KeyframeKey(0.0, "home")
+    data["motion"][1:] = [{"keys": [{"t": 0.0, "key": "home"}], "interpolation": "linear"}]
+    tr = parse(data, folder).motions[1].trajectory
+    assert tr.joints == ("elbow", "lift") and tr.interpolation == "linear"
+    np.testing.assert_allclose(tr.joint_values, [[0.4, 0.05]])
+
+
+MOTION_BAD = [
+    # (id, csv text or None, motion keys, key, fragment)
+    ("file missing", None, {"file": "nope.csv"}, "motion[1].file", "file not found"),
+    ("empty file", "", {}, "motion[1].file", "f.csv: empty"),
+    ("header without t", "time,elbow\n0,1\n", {}, "motion[1].file",
+     "f.csv: line 1: the header's first column must be 't'"),
+    ("header only t", "t\n0\n", {}, "motion[1].file", "names no joint or body column"),
+    ("header only", "t,elbow\n", {}, "motion[1].file", "no samples"),
+    ("duplicate column", "t,elbow,elbow\n0,1,1\n", {}, "motion[1].file", "'elbow' appears twice"),
+    ("unknown column", "t,elbw\n0,1\n", {}, "motion[1].file",
+     "f.csv column 'elbw': neither a joint of the mjcf model nor <body>.x/.y/.z/.rx/.ry/.rz of a "
+     "[[bodies]] body (did you mean 'elbow'?)"),
+    ("ball joint column", "t,shoulder\n0,1\n", {}, "motion[1].file (f.csv, column 'shoulder')",
+     "ball joint"),
+    ("mjcf body column", "t,forearm.x\n0,1\n", {}, "motion[1].file (f.csv, column 'forearm.x')",
+     "body of the mjcf model"),
+    ("short row", "t,elbow\n0,1\n\n1\n", {}, "motion[1].file", "f.csv: line 4: 1 cells, the header has 2"),
+    ("not a number", "t,elbow\n0,1\n1,abc\n", {}, "motion[1].file",
+     "f.csv: line 3, column 'elbow': not a number: 'abc'"),
+    ("nan", "t,elbow\n0,1\n1,nan\n", {}, "motion[1].file",
+     "f.csv: line 3, column 'elbow': not a finite number"),
+    ("t repeats", "t,elbow\n0,1\n0.5,2\n0.5,3\n", {}, "motion[1].file",
+     "f.csv: line 4, column 't': times must increase strictly: 0.5 after 0.5 (line 3)"),
+    ("t negative", "t,elbow\n-1,1\n0.5,2\n", {}, "motion[1].file", "must not be negative"),
+    ("sample out of range", "t,elbow\n0,0\n1.5,181\n", {}, "motion[1].file",
+     "f.csv line 3, t = 1.5 s: joint 'elbow' at 181 deg is outside its range -180..180 deg"),
+    ("rad out of range", "t,elbow\n0,0\n2,3.2\n", {"angles": "rad"}, "motion[1].file",
+     "f.csv line 3, t = 2 s: joint 'elbow' at 3.2 rad is outside its range -3.14159..3.14159 rad"),
+    ("slide out of range", "t,lift\n0,0\n2,0.3\n", {}, "motion[1].file",
+     "joint 'lift' at 0.3 m is outside its range 0..0.2 m"),
+    ("file and keys", "t,elbow\n0,1\n", {"keys": [{"t": 0, "value": 1}]}, "motion[1].keys",
+     "not allowed with 'file'"),
+    ("file and joint", "t,elbow\n0,1\n", {"joint": "elbow"}, "motion[1]", "exactly one"),
+    ("bad interpolation", "t,elbow\n0,1\n", {"interpolation": "spline"},
+     "motion[1].interpolation", "must be one of 'cubic', 'linear'"),
+    ("bad angles", "t,elbow\n0,1\n", {"angles": "grad"}, "motion[1].angles", "must be one of"),
+    ("time_scale zero", "t,elbow\n0,1\n", {"time_scale": 0}, "motion[1].time_scale",
+     "must be positive"),
+    ("driven twice", "t,lift\n0,0.1\n", {}, "motion[2]", "joint 'lift' is already driven by motion[1]"),
+]
+
+
+@pytest.mark.parametrize("text, motion, key, fragment", [b[1:] for b in MOTION_BAD],
+                         ids=[b[0] for b in MOTION_BAD])
+def test_bad_motion_file(folder, text, motion, key, fragment):
+    data = _with_file(folder, text, **motion)
+    if "file" in motion:
+        data["motion"][1]["file"] = motion["file"]
+    with pytest.raises(SceneError) as exc:
+        parse(data, folder)
+    check_error(exc, folder / "scene.toml", key, fragment)
+
+
+KEY_BAD = [
+    ("key out of range", {"joint": "elbow", "keys": [{"t": 0, "value": 0}, {"t": 1.5, "value": 250}]},
+     "motion[1].keys[1].value",
+     "t = 1.5 s: joint 'elbow' at 250 deg is outside its range -180..180 deg"),
+    ("unknown keyframe", {"joint": "elbow", "keys": [{"t": 0, "key": "hme"}]}, "motion[1].keys[0].key",
+     "no keyframe named 'hme' in the mjcf model (known: home, tilted)"),
+    ("value and key", {"joint": "elbow", "keys": [{"t": 0, "key": "home", "value": 1}]},
+     "motion[1].keys[0]", "not both"),
+    ("keyframe moves a ball joint", {"keys": [{"t": 0, "key": "tilted"}]}, "motion[1].keys[0].key",
+     "keyframe 'tilted' moves joint shoulder; only named hinge and slide joints are driven"),
+    ("keyframes and values", {"keys": [{"t": 0, "key": "home"}, {"t": 1, "value": 2}]}, "motion[1]",
+     "exactly one"),
+    ("keyframes drive lift twice", {"keys": [{"t": 0, "key": "home"}]}, "motion[2]",
+     "joint 'lift' is already driven by motion[1]"),
+    ("angles on a body", {"body": "drawer", "angles": "rad", "keys": [{"t": 0}]}, "motion[1].angles",
+     "not used by a body's motion"),
+]
+
+
+@pytest.mark.parametrize("motion, key, fragment", [b[1:] for b in KEY_BAD], ids=[b[0] for b in KEY_BAD])
+def test_bad_motion_keys(folder, motion, key, fragment):
+    data = _with_file(folder, None)
+    data["motion"][1] = motion
+    if motion.get("body") == "drawer":
+        drop(data, "motion.0")
+        data["motion"].insert(0, {"joint": "elbow", "keys": [{"t": 0, "value": 0}]})
+    with pytest.raises(SceneError) as exc:
+        parse(data, folder)
+    check_error(exc, folder / "scene.toml", key, fragment)
+
+
+def test_keyframes_need_an_mjcf_model(folder):
+    data = drop(drop(copy.deepcopy(BASE), "scene.mjcf"), "parts.1")
+    put(data, "cables.0.clips", [])
+    data["motion"][1:] = [{"keys": [{"t": 0.0, "key": "home"}]}]
+    with pytest.raises(SceneError) as exc:
+        parse(data, folder)
+    check_error(exc, folder / "scene.toml", "motion[1].keys[0].key", "no mjcf model")
