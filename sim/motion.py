@@ -24,24 +24,24 @@ This module does not step the simulation; the loop calls `apply` each step.
 
 from __future__ import annotations
 
+import math
+
 import mujoco
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from sim.build import Built, JointDrive
 from sim.curves import Curve, interpolant, merge
 
 
-def body_rates(euler: np.ndarray, rates: np.ndarray) -> np.ndarray:
-    """(B, 3) body-frame angular velocities of rotations Rx(a) Ry(b) Rz(c)
-    (MuJoCo's intrinsic x-y-z euler sequence) from angles (B, 3) and their
-    time derivatives (B, 3), radians and radians per second.
-
+def body_rate(euler, rate) -> tuple[float, float, float]:
+    """Body-frame angular velocity of the rotation Rx(a) Ry(b) Rz(c) (MuJoCo's
+    intrinsic x-y-z euler sequence) at angles `euler` (3,) changing at `rate`
+    (3,), radians and radians per second:
     omega = Rz^T Ry^T (a' e_x) + Rz^T (b' e_y) + c' e_z."""
-    b, c = euler[:, 1], euler[:, 2]
-    da, db, dc = rates.T
-    cb, sb, cc, sc = np.cos(b), np.sin(b), np.cos(c), np.sin(c)
-    return np.stack([da * cb * cc + db * sc, -da * cb * sc + db * cc, da * sb + dc], axis=1)
+    _, b, c = euler
+    da, db, dc = rate
+    cb, sb, cc, sc = math.cos(b), math.sin(b), math.cos(c), math.sin(c)
+    return (da * cb * cc + db * sc, db * cc - da * cb * sc, da * sb + dc)
 
 
 def moving_joints(scene) -> tuple[str, ...]:
@@ -107,6 +107,7 @@ class Motion:
         free = np.array([built.free[b] for b in self.bodies], int).reshape(-1, 2)
         self._body_qadr = free[:, :1] + np.arange(7)     # (B, 7): position, quaternion
         self._body_dadr = free[:, 1:] + np.arange(6)     # (B, 6): linear, angular velocity
+        self._quat = np.zeros(4)
         self.base_qpos_adr = built.base_qpos_adr
         self.base_dof_adr = built.base_dof_adr
         self.base_qpos0 = built.model.qpos0[built.base_qpos_adr].copy()
@@ -128,8 +129,13 @@ class Motion:
         data.qpos[self._joint_qadr] = value[self._joint_idx]
         data.qvel[self._joint_dadr] = rate[self._joint_idx]
         if len(self.bodies):
-            euler = value[self._rot_idx]
-            quat = Rotation.from_euler("XYZ", euler).as_quat(scalar_first=True)
-            data.qpos[self._body_qadr] = np.hstack([value[self._pos_idx], quat])
-            data.qvel[self._body_dadr] = np.hstack([rate[self._pos_idx],
-                                                    body_rates(euler, rate[self._rot_idx])])
+            qpos, qvel = data.qpos, data.qvel
+            qpos[self._body_qadr[:, :3]] = value[self._pos_idx]
+            qvel[self._body_dadr[:, :3]] = rate[self._pos_idx]
+            euler, euler_rate = value[self._rot_idx], rate[self._rot_idx]
+            # A handful of scripted bodies: MuJoCo's own euler conversion per body
+            # costs less than numpy's per-call overhead on 3-vectors would.
+            for k in range(len(self.bodies)):
+                mujoco.mju_euler2Quat(self._quat, euler[k], "xyz")
+                qpos[self._body_qadr[k, 3:]] = self._quat
+                qvel[self._body_dadr[k, 3:]] = body_rate(euler[k], euler_rate[k])
