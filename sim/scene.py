@@ -1119,14 +1119,17 @@ class _Parser:
         joints: list[str] = []
         body_axes: dict[str, dict[str, int]] = {}
         for c, name in enumerate(header[1:], start=1):
-            if self.mjcf is not None and name in self.mjcf.joints:
-                joints.append(self.motion_joint(name, f"{where} ({written}, column {name!r})"))
-                continue
             body, _, axis = name.rpartition(".")
-            if body and axis in BODY_AXES:
-                self.motion_body(body, f"{where} ({written}, column {name!r})", bodies)
-                body_axes.setdefault(body, {})[axis] = c
-                continue
+            try:
+                if self.mjcf is not None and name in self.mjcf.joints:
+                    joints.append(self.motion_joint(name, where))
+                    continue
+                if body and axis in BODY_AXES:
+                    self.motion_body(body, where, bodies)
+                    body_axes.setdefault(body, {})[axis] = c
+                    continue
+            except SceneError as e:
+                raise self.error(where, f"{written} column {name!r}: {e.problem}") from None
             known = sorted(self.mjcf.joints if self.mjcf else []) + [
                 f"{b}.{a}" for b in bodies for a in BODY_AXES]
             close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
@@ -1194,7 +1197,8 @@ class _Parser:
             raise fail("no samples: the header is the only row")
         for row, line in zip(body, lines[1:]):
             if len(row) != len(header):
-                raise fail(f"line {line}: {len(row)} cells, the header has {len(header)}")
+                raise fail(f"line {line}: {len(row)} cell{'s' * (len(row) != 1)}, the header "
+                           f"has {len(header)}")
         try:
             table = np.array(body, dtype=float)
         except ValueError:   # find the cell numpy could not read
