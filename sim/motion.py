@@ -71,7 +71,6 @@ class Motion:
             columns = np.hstack([tr.joint_values, (tr.body_pos - built.origin).reshape(n, -1),
                                  np.radians(tr.body_euler).reshape(n, -1)])
             polys.append(interpolant(tr.times, columns, tr.interpolation))
-            # joint channels first: reorder after merging (see `order` below)
             joints.append([built.joints[j] for j in tr.joints])
             bodies.append(list(tr.bodies))
         driven = {b for names in bodies for b in names}
