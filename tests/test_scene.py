@@ -743,3 +743,27 @@ def test_scene_format_reference_lists_every_accepted_key():
         assert sorted(documented[heading]) == sorted(accepted), heading
     tops = {h.strip("`[]").split("`")[0].strip("[]") for h in documented}
     assert set(scene_module._TOP_KEYS) <= tops
+
+
+def test_plane_takes_an_optional_drawing_size_in_scene_units(folder):
+    data = copy.deepcopy(BASE)
+    data["scene"]["units"] = "mm"
+    for cable in data["cables"]:
+        cable.pop("segments", None)
+    put(data, "parts.2.size", [500, 200])
+    assert parse(data, folder).parts[2].size == (0.5, 0.2)
+    put(data, "parts.2.size", [500, 0, 20])
+    assert parse(data, folder).parts[2].size == (0.5, 0.0, 0.02)
+    drop(data, "parts.2.size")
+    assert parse(data, folder).parts[2].size == ()
+
+
+def test_twist_stiffness_is_a_positive_modulus(folder):
+    data = copy.deepcopy(BASE)
+    put(data, "cables.0.twist_stiffness", 2.5e7)
+    assert parse(data, folder).cables[0].twist_stiffness == 2.5e7
+    assert parse(copy.deepcopy(BASE), folder).cables[0].twist_stiffness is None
+    put(data, "cables.0.twist_stiffness", 0)
+    with pytest.raises(SceneError) as e:
+        parse(data, folder)
+    check_error(e, folder / "scene.toml", "cables[0].twist_stiffness", "must be positive")
