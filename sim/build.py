@@ -468,11 +468,17 @@ def _cables_xml(plans: list[_CablePlan], scene: Scene, detect: bool, margin: flo
             inertiabox="{inertiabox!r}" point="{_fmt(plan.straight)}" element="{elements}">
     {pin}
     <edge equality="true" solref="{_edge_solref(scene)} 1" solimp="{_edge_solimp(plan)}"/>
-    <elasticity young="{c.young!r}"/>
+    <elasticity young="{c.young!r}"{_shear(c)}/>
     <contact selfcollide="{selfcollide}" contype="{contype}" conaffinity="{conaff}"
              margin="{margin!r}" condim="3" solref="{contact_solref!r} 1"/>
   </flexcomp>""")
     return "<mujoco><worldbody>" + "".join(parts) + "\n</worldbody></mujoco>"
+
+
+def _shear(cable: CableDef) -> str:
+    """The rod's torsional (shear) modulus attribute: `twist_stiffness`, else
+    MuJoCo's default E / (2 (1 + poisson)) = E / 2 (docs/twist.md)."""
+    return "" if cable.twist_stiffness is None else f' shear="{cable.twist_stiffness!r}"'
 
 
 def _edge_solref(scene: Scene) -> float:

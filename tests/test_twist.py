@@ -95,3 +95,26 @@ def test_vectorised_transport_matches_edge_by_edge(points, vector):
     assume(np.linalg.norm(np.cross(v, t[0])) > 1e-3)
     _, moved = transport(pts[None], v[None])
     assert np.allclose(moved[0], _brute_transport(pts, v), atol=1e-9)
+
+
+def _wrist_scene(dynamics: bool, turns_deg: float) -> dict:
+    """A straight cable along x from the world to a body that turns about x."""
+    return {"scene": {"name": "w", "units": "m", "duration": 0.5, "settle": 0.0},
+            "effects": {"dynamics": dynamics, "gravity": False},
+            "bodies": [{"name": "wrist", "pos": [0.5, 0, 0.3]}],
+            "cables": [{"name": "c", "radius": 0.004, "start": {"pos": [0, 0, 0.3]},
+                        "end": {"body": "wrist", "pos": [0, 0, 0]}, "twist_stiffness": 2e7}],
+            "motion": [{"body": "wrist", "keys": [{"t": 0.0, "euler": [0, 0, 0]},
+                                                  {"t": 0.4, "euler": [turns_deg, 0, 0]}]}]}
+
+
+def test_run_reports_the_twist_a_turning_end_winds_in(tmp_path):
+    from sim.run import RunOptions, run_scene
+    from sim.scene import parse_scene
+    for dynamics in (False, True):
+        report = run_scene(parse_scene(_wrist_scene(dynamics, 90.0), tmp_path / "w.toml"),
+                           RunOptions(report=tmp_path / "r.json", record=None))
+        (cable,) = report["cables"]
+        assert abs(cable["max_twist"] - 90.0) < (1e-6 if not dynamics else 0.5), dynamics
+        moment = 2e7 * np.pi * 0.004 ** 4 / 2 * np.radians(cable["max_twist"]) / cable["length"]
+        assert np.isclose(cable["max_twist_moment"], moment)
