@@ -372,10 +372,26 @@ class _Obstacles:
         self.shapes = shapes
         self.rot = np.asarray(rot, float).reshape(-1, 3, 3)
         self.pos = np.asarray(pos, float).reshape(-1, 3)
+        # world boxes (a plane's is infinite): only parts whose box comes
+        # near the queried points are measured
+        self.lo = np.full((len(shapes), 3), -np.inf)
+        self.hi = np.full((len(shapes), 3), np.inf)
+        for k, sh in enumerate(shapes):
+            if sh.type is not ShapeType.PLANE:
+                lo, hi = sh.local_bounds()
+                corners = np.array(np.meshgrid(*zip(lo, hi), indexing="ij")).reshape(3, -1).T
+                world = corners @ self.rot[k].T + self.pos[k]
+                self.lo[k], self.hi[k] = world.min(axis=0), world.max(axis=0)
 
     def measure(self, radius: float):
-        """depth(points) for a cable of `radius`: radius less the signed distance."""
-        return lambda points: radius - least_signed_distance(self.shapes, self.rot, self.pos, points)
+        """depth(points) for a cable of `radius`: radius less the signed
+        distance (-inf where no part's box comes within the radius)."""
+        def depth(points: np.ndarray) -> np.ndarray:
+            lo, hi = points.min(axis=0) - radius, points.max(axis=0) + radius
+            near = np.flatnonzero(np.all((self.lo <= hi) & (self.hi >= lo), axis=1))
+            shapes = [self.shapes[k] for k in near]
+            return radius - least_signed_distance(shapes, self.rot[near], self.pos[near], points)
+        return depth
 
 
 def _closest_arc(route: np.ndarray, point: np.ndarray) -> tuple[int, float]:
