@@ -10,7 +10,7 @@ Entity tree (mirrors the scene, in the scene's units, z up):
 - `world/interference/<type>/<a>/<b>`: a marker at the worst point of each
   pair below the clearance; `world/mujoco_contacts`: MuJoCo's contact points.
 - `cables/strain/<name>` (percent), `cables/bend_radius/<name>` (scene
-  units), `checks/<type>/<a>/<b>/distance` (scene units) and
+  units), `cables/twist/<name>` (degrees, cables clamped at both ends), `checks/<type>/<a>/<b>/distance` (scene units) and
   `validation/agreement` (fraction of pairs classed alike by the checker
   and MuJoCo): time series, one view each, since their scales differ.
 - `events`: one text entry per interference event at its start time.
@@ -83,6 +83,7 @@ def _blueprint() -> rrb.Blueprint:
                 rrb.Horizontal(
                     rrb.TimeSeriesView(name="Strain (%)", origin="cables/strain"),
                     rrb.TimeSeriesView(name="Min bend radius (scene units)", origin="cables/bend_radius"),
+                    rrb.TimeSeriesView(name="Twist (deg)", origin="cables/twist"),
                 ),
                 rrb.TimeSeriesView(name="Agreement with MuJoCo", origin="validation"),
                 rrb.TextLogView(name="Events", origin="events"),
@@ -186,6 +187,12 @@ class Recorder:
             rec.log(f"cables/strain/{_escape(cable.name)}", rr.Scalars(100.0 * float(strain[i])))
             if np.isfinite(bend[i]):
                 rec.log(f"cables/bend_radius/{_escape(cable.name)}", rr.Scalars(float(bend[i] / u)))
+
+    def log_twist(self, twist_deg: np.ndarray) -> None:
+        """Each cable's twist (degrees) at the current time; NaN: not measured."""
+        for cable, value in zip(self.built.cables, twist_deg):
+            if np.isfinite(value):
+                self.rec.log(f"cables/twist/{_escape(cable.name)}", rr.Scalars(float(value)))
 
     def log_markers(self, markers: dict[str, tuple[np.ndarray, str]]) -> None:
         """Interference markers at worst points: entity path -> (point, state)."""

@@ -210,6 +210,7 @@ class _Outcome:
     def take_twist(self, states) -> None:
         """Each cable's twist over the batch (`checker.twist`), for cables
         clamped at both ends; the first state (t = 0) is the reference."""
+        self.batch_twist = np.full((len(states), len(self.clamped)), np.nan)
         if not states or states[0].end_rot is None:
             return
         for i, clamped in enumerate(self.clamped):
@@ -219,13 +220,13 @@ class _Outcome:
             rot = np.stack([s.end_rot[i] for s in states])
             if self.twist[i] is None:
                 self.twist[i] = TwistMeter(pts[0], rot[0, 0], rot[0, 1])
-            self.twist[i].update(pts, rot[:, 0], rot[:, 1])
+            self.batch_twist[:, i] = np.degrees(self.twist[i].update(pts, rot[:, 0], rot[:, 1]))
 
     def take(self, states, results) -> None:
         """The checked states (oldest first) and their results."""
         recorder, scale = self.recorder, self.built.scene.scale
         self.take_twist(states)
-        for state, res in zip(states, results):
+        for k, (state, res) in enumerate(zip(states, results)):
             if state.step == 0:
                 self.rest_points = state.cables
                 if recorder:
@@ -238,6 +239,7 @@ class _Outcome:
                              or state.step == self.total_steps):
                 _record_step(recorder, state, res.contacts, res.records, self.names, res.strain, res.bend,
                              res.agreement, started, closed, self.tracker, self.markers, scale)
+                recorder.log_twist(self.batch_twist[k])
                 self.timer.lap("record")
             self.final_points = state.cables
             self.steps, self.t_last = state.step, state.t
