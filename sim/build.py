@@ -28,7 +28,9 @@ Two models come out of one scene:
 Cables are 1D flexcomp rods built straight (their rest shape, since a rod
 keeps as rest curvature whatever bend its qpos0 has) along the tangent of
 the route's first element and then put into the routed shape through qpos,
-so bending energy is stored where a real cable would have it.
+so bending energy is stored where a real cable would have it. The routed
+shape (`sim.route`) has every route point as a vertex and droops clear of
+the parts the cable collides with, placed at t = 0 (`_Obstacles`).
 
 This module does not step, move or read the simulation; see `loop`.
 """
