@@ -28,9 +28,10 @@ batches at once:
 
 Batches may mix sizes (one row of ``size`` per query), so callers can answer
 every part of one shape type in one call; the ``*_batch`` functions are that
-interface. Nothing here knows about poses, cables or interference records, and
-nothing here builds a broad phase over several parts: that is
-:mod:`checker.interference`'s job.
+interface. :func:`least_signed_distance` answers world points against a few
+posed shapes without any pruning. Nothing else here knows about poses, and
+nothing here knows cables or interference records or builds a broad phase
+over several parts: that is :mod:`checker.interference`'s job.
 """
 
 from __future__ import annotations
@@ -880,3 +881,42 @@ def segment_signed_distance(shape: Shape, a: np.ndarray, b: np.ndarray) -> tuple
     if shape.type is ShapeType.MESH:
         return _segment_sd_mesh(shape.mesh, a, b)
     return segment_signed_distance_batch(shape.type, np.broadcast_to(shape.size, (len(a), len(shape.size))), a, b)
+
+
+def least_signed_distance(shapes: list[Shape], rotations: np.ndarray, positions: np.ndarray,
+                          points: np.ndarray) -> np.ndarray:
+    """Least signed distance (n,) from world points to shapes placed in the world.
+
+    Args:
+        shapes: P shapes, each in its own frame.
+        rotations: (P, 3, 3) part-to-world rotations.
+        positions: (P, 3) part origins in the world.
+        points: (n, 3) world points.
+
+    Every point is taken into every part's frame at once; primitives of one
+    type are answered in one batched call and each mesh in one call. No
+    broad phase (meant for a few parts and points, e.g. placing a cable's
+    initial shape; :mod:`checker.interference` prunes for the per-step
+    checks). No parts: +inf.
+    """
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    out = np.full(len(p), np.inf)
+    if not shapes or not len(p):
+        return out
+    rot = np.asarray(rotations, float).reshape(-1, 3, 3)
+    pos = np.asarray(positions, float).reshape(-1, 3)
+    local = np.einsum("pji,pnj->pni", rot, p[None, :, :] - pos[:, None, :])   # (P, n, 3)
+    kinds: dict = {}
+    for k, sh in enumerate(shapes):     # group parts: one call per type or mesh
+        kinds.setdefault(("mesh", id(sh)) if sh.mesh is not None else sh.type, []).append(k)
+    for key, members in kinds.items():
+        members = np.asarray(members)
+        sh = shapes[members[0]]
+        loc = local[members].reshape(-1, 3)
+        if sh.mesh is not None:
+            d = signed_distance(sh, loc)[0]
+        else:
+            size = np.repeat(np.stack([shapes[m].size for m in members]), len(p), axis=0)
+            d = signed_distance_value_batch(sh.type, size, loc)
+        out = np.minimum(out, d.reshape(len(members), len(p)).min(axis=0))
+    return out

@@ -55,7 +55,8 @@ class SimContacts:
     Attributes:
       kind: pair type value per contact.
       a, b: names (a is a cable for every type compared here).
-      elem_a, elem_b: element index along cable a / b (-1 for a part).
+      elem_a, elem_b: element index along cable a / b (-1 for a part; -2 - v
+        for a contact at vertex v, as MuJoCo gives flex-plane contacts).
       dist: signed surface distance.
       pos: (n, 3) contact points.
     """
@@ -119,7 +120,7 @@ class SimulatorPairs:
         elem_a, elem_b, dist = cat("elem_a"), cat("elem_b"), cat("dist")
         pos = np.concatenate([np.asarray(c.pos, float).reshape(-1, 3) for c in contacts])
         st = np.repeat(np.arange(n_s), counts)
-        keep = (elem_a >= 0) & np.logical_or.reduce([kind == k for k in COMPARED_TYPES])
+        keep = (elem_a != -1) & np.logical_or.reduce([kind == k for k in COMPARED_TYPES])
         if not keep.any():
             return out
         kind, a, b, elem_a, elem_b, dist, pos, st = (x[keep] for x in (kind, a, b, elem_a, elem_b, dist, pos, st))
@@ -137,7 +138,13 @@ class SimulatorPairs:
             _, t, _ = point_segment(pos, flat[g], flat[g + 1])
             return s_all[g] + t * (s_all[g + 1] - s_all[g]), s_all[g], s_all[g + 1]
 
+        vertex = elem_a <= -2                      # a contact at a vertex: a span of no length there
+        vert = -2 - elem_a
+        elem_a = np.where(vertex, np.maximum(vert - 1, 0), elem_a)
         s_a, elem_lo, elem_hi = place(ca, elem_a)
+        if vertex.any():
+            at = s_all[st * n + offsets[ca] + np.clip(vert, 0, offsets[ca + 1] - offsets[ca] - 1)]
+            s_a, elem_lo, elem_hi = (np.where(vertex, at, x) for x in (s_a, elem_lo, elem_hi))
         on_b = (cb >= 0) & (elem_b >= 0)
         s_b = np.where(on_b, place(np.maximum(cb, 0), np.maximum(elem_b, 0))[0], 0.0)
         drop = (kind == PairType.SELF.value) & self_pair_excluded(s_a, s_b, np.asarray(radii, float)[ca],

@@ -28,7 +28,9 @@ Two models come out of one scene:
 Cables are 1D flexcomp rods built straight (their rest shape, since a rod
 keeps as rest curvature whatever bend its qpos0 has) along the tangent of
 the route's first element and then put into the routed shape through qpos,
-so bending energy is stored where a real cable would have it.
+so bending energy is stored where a real cable would have it. The routed
+shape (`sim.route`) has every route point as a vertex and droops clear of
+the parts the cable collides with, placed at t = 0 (`_Obstacles`).
 
 This module does not step, move or read the simulation; see `loop`.
 """
@@ -41,8 +43,9 @@ from enum import IntFlag
 import mujoco
 import numpy as np
 
+from checker.shapes import Shape, ShapeType, least_signed_distance, mesh_shape
 from sim.meshfile import mesh_nodes
-from sim.route import initial_shape, polyline_length
+from sim.route import initial_shape, run_elements
 from sim.scene import CableDef, Scene, SceneError, euler_matrix
 
 CABLE_PREFIX = "cables/"
@@ -65,6 +68,9 @@ BASE_ARMATURE = 100.0
 """Armature added to the base model's joints, which are driven kinematically:
 the cable's reaction barely moves them within the one step before the script
 sets them again."""
+
+PLANE_GRID = 0.1
+"""Grid spacing MuJoCo draws on a plane part given no size, metres."""
 
 SIM_MARGIN_FRACTION = 0.25
 """Contact margin in the simulation model, as a fraction of the thinnest cable radius."""
@@ -319,6 +325,77 @@ class _Frames:
         return np.asarray(r, float).T @ (np.asarray(point, float) + self.origin - np.asarray(p, float))
 
 
+class _Obstacles:
+    """The parts a scene's cables collide with, placed at t = 0 in model
+    coordinates: what an initial shape must not droop into (`sim.route`).
+
+    Scene parts that are not keep-outs, and the base mjcf model's colliding
+    geoms (compiled once more on their own for their local poses and sizes)
+    on the bodies whose t = 0 frames the scene knows. Only built when some
+    cable has slack and `cable-structure` contact is on."""
+
+    def __init__(self, scene: Scene, frames: _Frames, meshes: dict):
+        shapes, rot, pos = [], [], []
+
+        def place(body: str, local_pos, local_rot) -> None:
+            p, r = frames.poses[body]
+            r = np.asarray(r, float)
+            rot.append(r @ local_rot)
+            pos.append(np.asarray(p, float) - frames.origin + r @ np.asarray(local_pos, float))
+
+        for part in scene.parts:
+            if part.keepout:
+                continue
+            if part.shape == "mesh":
+                shapes.append(mesh_shape(*meshes[part.name]))
+            else:
+                shapes.append(Shape(ShapeType(part.shape), np.asarray(part.size, float) if part.size else np.zeros(3)))
+            place(part.body, part.pos, euler_matrix(part.euler))
+        if scene.mjcf is not None:
+            m = _base_spec(scene).compile()
+            for g in range(m.ngeom):
+                gtype = int(m.geom_type[g])
+                body = m.body(int(m.geom_bodyid[g])).name or "world"
+                if gtype not in _SHAPES or body not in frames.poses:
+                    continue
+                if m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0:
+                    continue    # visual geoms never collide
+                if gtype == int(mujoco.mjtGeom.mjGEOM_MESH):
+                    mid = int(m.geom_dataid[g])
+                    va, vn = int(m.mesh_vertadr[mid]), int(m.mesh_vertnum[mid])
+                    fa, fn = int(m.mesh_faceadr[mid]), int(m.mesh_facenum[mid])
+                    shapes.append(mesh_shape(m.mesh_vert[va:va + vn].astype(float),
+                                             m.mesh_face[fa:fa + fn].astype(int)))
+                else:
+                    shapes.append(Shape(ShapeType(_SHAPES[gtype]), m.geom_size[g].copy()))
+                local = np.zeros(9)
+                mujoco.mju_quat2Mat(local, m.geom_quat[g])
+                place(body, m.geom_pos[g], local.reshape(3, 3))
+        self.shapes = shapes
+        self.rot = np.asarray(rot, float).reshape(-1, 3, 3)
+        self.pos = np.asarray(pos, float).reshape(-1, 3)
+        # world boxes (a plane's is infinite): only parts whose box comes
+        # near the queried points are measured
+        self.lo = np.full((len(shapes), 3), -np.inf)
+        self.hi = np.full((len(shapes), 3), np.inf)
+        for k, sh in enumerate(shapes):
+            if sh.type is not ShapeType.PLANE:
+                lo, hi = sh.local_bounds()
+                corners = np.array(np.meshgrid(*zip(lo, hi), indexing="ij")).reshape(3, -1).T
+                world = corners @ self.rot[k].T + self.pos[k]
+                self.lo[k], self.hi[k] = world.min(axis=0), world.max(axis=0)
+
+    def measure(self, radius: float):
+        """depth(points) for a cable of `radius`: radius less the signed
+        distance (-inf where no part's box comes within the radius)."""
+        def depth(points: np.ndarray) -> np.ndarray:
+            lo, hi = points.min(axis=0) - radius, points.max(axis=0) + radius
+            near = np.flatnonzero(np.all((self.lo <= hi) & (self.hi >= lo), axis=1))
+            shapes = [self.shapes[k] for k in near]
+            return radius - least_signed_distance(shapes, self.rot[near], self.pos[near], points)
+        return depth
+
+
 def _closest_arc(route: np.ndarray, point: np.ndarray) -> tuple[int, float]:
     """(segment index, arc length) of the point of `route` closest to `point`."""
     a, b = route[:-1], route[1:]
@@ -331,13 +408,17 @@ def _closest_arc(route: np.ndarray, point: np.ndarray) -> tuple[int, float]:
     return k, float(seglen[:k].sum() + t[k] * seglen[k])
 
 
-def _plan_cable(cable: CableDef, frames: _Frames) -> _CablePlan:
-    """Routed shape through start, clips and end, with the cable's length.
+def _plan_cable(cable: CableDef, frames: _Frames, where: str, scene: Scene,
+                depth: "_Obstacles | None" = None) -> _CablePlan:
+    """Routed shape through start, via or points, clips and end, with the cable's length.
 
-    The route is split at the clips (each clip is inserted where the route
-    passes closest to it) and every span gets a share of the cable's length
-    and elements in proportion to its route length, so clips sit exactly on
-    vertices and each span droops on its own."""
+    Every waypoint (start, each via or given point, each clip, end) is a
+    vertex (`sim.route`): each clip is inserted where the route passes
+    closest to it, the elements are shared among the straight runs between
+    waypoints in proportion to their lengths (`segments`, or the default
+    element count raised to one element per run; with slack and no run of
+    two elements, two per run), and the runs droop to make up the length,
+    away from the parts the cable collides with when `depth` is given."""
     route = np.asarray(cable.route if cable.route is not None else cable.points, float) - frames.origin
     route[0] = frames.to_world(cable.start.body, cable.start.pos)
     route[-1] = frames.to_world(cable.end.body, cable.end.pos)
@@ -352,17 +433,26 @@ def _plan_cable(cable: CableDef, frames: _Frames) -> _CablePlan:
         route = np.insert(route, k + 1, point, axis=0)
     keep = np.concatenate([[True], np.linalg.norm(np.diff(route, axis=0), axis=1) > 0])
     route = route[keep]
-    total = polyline_length(route)
+    runs = np.linalg.norm(np.diff(route, axis=0), axis=1)
+    total = float(runs.sum())
     length = max(cable.length if cable.length is not None else total, total)
-    elements = cable.segments or default_segments(length, cable.radius)
-    cuts = [0] + [int(np.argmin(np.linalg.norm(route - c[2], axis=1))) for c in clips] + [len(route) - 1]
-    spans = [route[a:b + 1] for a, b in zip(cuts[:-1], cuts[1:])]
-    span_len = np.array([polyline_length(sp) for sp in spans])
-    counts = np.maximum(np.round(elements * span_len / span_len.sum()).astype(int), 2)
-    pieces = [initial_shape(sp, length * sl / total, int(cnt) + 1)
-              for sp, sl, cnt in zip(spans, span_len, counts)]
-    routed = np.concatenate([pieces[0]] + [p[1:] for p in pieces[1:]])
-    clip_vertices = np.cumsum(counts)[:-1]
+    slack = length > total * (1.0 + 1e-9)
+    if cable.segments is not None:
+        if cable.segments < len(runs) + (1 if slack else 0):
+            need = len(runs) + (1 if slack else 0)
+            raise SceneError(scene.path, f"{where}.segments",
+                             f"{cable.segments} elements cannot pass through all {len(runs) + 1} "
+                             f"route points and clips{' and droop to the length' if slack else ''}; "
+                             f"give at least {need}")
+        counts = run_elements(runs, cable.segments)
+    else:
+        counts = run_elements(runs, max(default_segments(length, cable.radius), len(runs)))
+        if slack and counts.max() < 2:
+            counts = np.full(len(runs), 2)
+    measure = None if (depth is None or not slack) else depth.measure(cable.radius)
+    routed = initial_shape(route, length, counts, depth=measure)
+    cuts = [int(np.argmin(np.linalg.norm(route - c[2], axis=1))) for c in clips]
+    clip_vertices = np.concatenate([[0], np.cumsum(counts)])[cuts]
     seg = np.linalg.norm(np.diff(routed, axis=0), axis=1)
     tangent = (routed[1] - routed[0]) / seg[0]
     s = np.concatenate([[0.0], np.cumsum(seg)])
@@ -396,11 +486,17 @@ def _cables_xml(plans: list[_CablePlan], scene: Scene, detect: bool, margin: flo
             inertiabox="{inertiabox!r}" point="{_fmt(plan.straight)}" element="{elements}">
     {pin}
     <edge equality="true" solref="{_edge_solref(scene)} 1" solimp="{_edge_solimp(plan)}"/>
-    <elasticity young="{c.young!r}"/>
+    <elasticity young="{c.young!r}"{_shear(c)}/>
     <contact selfcollide="{selfcollide}" contype="{contype}" conaffinity="{conaff}"
              margin="{margin!r}" condim="3" solref="{contact_solref!r} 1"/>
   </flexcomp>""")
     return "<mujoco><worldbody>" + "".join(parts) + "\n</worldbody></mujoco>"
+
+
+def _shear(cable: CableDef) -> str:
+    """The rod's torsional (shear) modulus attribute: `twist_stiffness`, else
+    MuJoCo's default E / (2 (1 + poisson)) = E / 2 (docs/twist.md)."""
+    return "" if cable.twist_stiffness is None else f' shear="{cable.twist_stiffness!r}"'
 
 
 def _edge_solref(scene: Scene) -> float:
@@ -447,13 +543,23 @@ def build(scene: Scene, detect: bool = True) -> Built:
     """Compile the simulation model (and, if `detect`, the detection model)."""
     origin = scene_origin(scene)
     frames = _Frames(scene, origin)
-    plans = [_plan_cable(c, frames) for c in scene.cables]
     meshes = _part_meshes(scene)
+    obstacles = None
+    if "cable-structure" in scene.effects.contact and any(_has_slack(c) for c in scene.cables):
+        obstacles = _Obstacles(scene, frames, meshes)
+    plans = [_plan_cable(c, frames, f"cables[{i}]", scene, obstacles) for i, c in enumerate(scene.cables)]
     sim = _compile(scene, plans, meshes, detect=False, origin=origin)
     det = _compile(scene, plans, meshes, detect=True, origin=origin) if detect else None
     if det is not None and (det.nq != sim.nq or det.ngeom != sim.ngeom):
         raise RuntimeError("detection and simulation models differ in structure")
     return _finish(scene, sim, det, plans, origin)
+
+
+def _has_slack(cable: CableDef) -> bool:
+    """The cable is longer than its route (clips aside), so its initial shape droops."""
+    route = np.asarray(cable.route if cable.route is not None else cable.points, float)
+    total = float(np.linalg.norm(np.diff(route, axis=0), axis=1).sum())
+    return cable.length is not None and cable.length > total * (1.0 + 1e-9)
 
 
 def _part_meshes(scene: Scene) -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -517,6 +623,11 @@ def _compile(scene: Scene, plans: list[_CablePlan], meshes: dict[str, tuple[np.n
             parent.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"mesh:{part.name}", **common)
         else:
             size = list(part.size) + [0.0] * (3 - len(part.size))
+            if part.shape == "plane":
+                # MuJoCo's plane is infinite whatever its size: x, y half-sizes
+                # are for drawing (0: infinite), the third, the drawn grid's
+                # spacing, must be positive
+                size[2] = size[2] or max(size[0], size[1]) / 10.0 or PLANE_GRID
             gtype = getattr(mujoco.mjtGeom, f"mjGEOM_{part.shape.upper()}")
             parent.add_geom(type=gtype, size=size, **common)
 

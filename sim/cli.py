@@ -309,6 +309,7 @@ def _print_summary(report: dict, report_path: Path) -> None:
         print(f"  cable {c['name']}: length {c['length']:.4g} {units}, max strain "
               f"{round(100 * strain, 2) + 0.0:.2f} %, min bend radius "
               f"{'straight' if bend is None else f'{bend:.4g} {units}'}"
+              + (f", max twist {c['max_twist']:.3g} deg" if c.get("max_twist") is not None else "")
               + (f"  [{', '.join(flags)}]" if flags else ""))
     _print_events(report)
     v = report.get("validation")

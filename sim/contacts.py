@@ -28,7 +28,8 @@ Contacts = SimContacts
 
 kind: "cable-structure", "keepout", "cable-cable", "self" or "part-part";
 a, b: names (for contacts with a cable, a is the cable); elem_a, elem_b:
-element index along cable a / b, -1 for a part; dist: signed surface
+element index along cable a / b, -1 for a part, -2 - v for a contact
+MuJoCo puts at vertex v (flex-plane); dist: signed surface
 distance, metres; pos: (n, 3) contact points, world metres."""
 
 
@@ -62,8 +63,10 @@ class ContactReader:
         named later (:meth:`read_many`); the data may be reused meanwhile."""
         n = int(data.ncon)
         con = data.contact
+        elem = np.array(con.elem[:n], int).reshape(n, 2)
+        vert = np.array(con.vert[:n], int).reshape(n, 2)
         return RawContacts(np.array(con.geom[:n], int).reshape(n, 2), np.array(con.flex[:n], int).reshape(n, 2),
-                           np.array(con.elem[:n], int).reshape(n, 2), np.array(con.dist[:n], float),
+                           np.where((elem < 0) & (vert >= 0), -2 - vert, elem), np.array(con.dist[:n], float),
                            np.array(con.pos[:n], float).reshape(n, 3))
 
     def read_many(self, raws: list["RawContacts"], origin: np.ndarray) -> list[Contacts]:
@@ -102,7 +105,10 @@ class ContactReader:
 
 @dataclass(frozen=True)
 class RawContacts:
-    """MuJoCo's contact arrays of one step, unnamed (model coordinates)."""
+    """MuJoCo's contact arrays of one step, unnamed (model coordinates);
+    `elem` holds -2 - vertex for a flex side MuJoCo gives a vertex, not an
+    element: MuJoCo collides a flex with a plane vertex by vertex (a capsule
+    chain's distance to a plane is reached at a vertex, so it is exact)."""
 
     geom: np.ndarray
     flex: np.ndarray

@@ -39,6 +39,8 @@ class StepState:
       contacts: MuJoCo's contacts from the detection model, or None.
       energy: (2,) potential and kinetic energy of the simulation, J.
       qpos: the simulation's generalized positions (for detecting later).
+      end_rot: (C, 2, 3, 3) world rotation of the bodies each cable's start
+        and end ride on (the frames clamped ends hold; `checker.twist`).
     """
 
     step: int
@@ -48,6 +50,7 @@ class StepState:
     contacts: Contacts | None
     energy: np.ndarray
     qpos: np.ndarray
+    end_rot: np.ndarray | None = None
 
 
 class Simulation:
@@ -63,6 +66,8 @@ class Simulation:
         self.reader = ContactReader(built)
         self._part_geoms = np.array([p.geom_id for p in built.parts], int)
         self._verts = [np.arange(c.vert_adr, c.vert_adr + c.count) for c in built.cables]
+        self._end_bodies = np.array([[built.body_ids[c.start.body], built.body_ids[c.end.body]]
+                                     for c in built.scene.cables], int).reshape(-1, 2)
         scene = built.scene
         self.timestep = scene.timestep
         self.settle_steps = int(round(scene.settle / scene.timestep)) if scene.effects.dynamics else 0
@@ -121,7 +126,9 @@ class Simulation:
         poses[:, :3, 3] = d.geom_xpos[self._part_geoms] + origin
         poses[:, 3, 3] = 1.0
         found = self.detect(d) if (contacts and self.detect_data is not None) else None
-        return StepState(step, step * self.timestep, cables, poses, found, d.energy.copy(), d.qpos.copy())
+        end_rot = d.xmat[self._end_bodies].reshape(-1, 2, 3, 3)
+        return StepState(step, step * self.timestep, cables, poses, found, d.energy.copy(), d.qpos.copy(),
+                         end_rot)
 
     def detect(self, d: mujoco.MjData) -> Contacts:
         """MuJoCo's contacts for the positions in `d`, from the detection model."""

@@ -2,14 +2,15 @@
 
 Entity tree (mirrors the scene, in the scene's units, z up):
 - `world/parts/<assembly path>`: each part's shape, logged once as static in
-  its own frame; its pose is static for parts on the world and logged per
+  its own frame (a plane as a rectangle: its given size, else sized to cover
+  the scene); its pose is static for parts on the world and logged per
   step for parts riding a moving body.
 - `world/cables/<name>`: the cable's centreline as a line strip of its true
   radius, coloured by its worst state at that step (clear, soft, hard).
 - `world/interference/<type>/<a>/<b>`: a marker at the worst point of each
   pair below the clearance; `world/mujoco_contacts`: MuJoCo's contact points.
 - `cables/strain/<name>` (percent), `cables/bend_radius/<name>` (scene
-  units), `checks/<type>/<a>/<b>/distance` (scene units) and
+  units), `cables/twist/<name>` (degrees, cables clamped at both ends), `checks/<type>/<a>/<b>/distance` (scene units) and
   `validation/agreement` (fraction of pairs classed alike by the checker
   and MuJoCo) and, where the mjcf model's joints move, `joints/<name>` (each
   moving joint's value, degrees or scene units, named with its unit): time
@@ -54,6 +55,23 @@ def _escape(level: str) -> str:
     return "".join(c if (c.isalnum() or c in "-_.") else "_" for c in level) or "_"
 
 
+def plane_half_sizes(size: np.ndarray, pose: np.ndarray, scene_points: np.ndarray) -> np.ndarray:
+    """(2,) half-sizes (metres) of the rectangle that draws a plane part.
+
+    The plane is infinite; MuJoCo's size (x, y half-sizes) says how much to
+    draw. Where it is 0, the rectangle covers `scene_points` (n, 3) seen
+    along the plane's normal, plus a fifth on each side, and is at least a
+    tenth as wide as it is long; 1 m with nothing to cover."""
+    size = np.asarray(size, float)
+    if len(size) >= 2 and size[0] > 0 and size[1] > 0:
+        return size[:2].copy()
+    if not len(scene_points):
+        return np.ones(2)
+    local = (np.asarray(scene_points, float) - pose[:3, 3]) @ pose[:3, :3]
+    half = 1.2 * np.abs(local[:, :2]).max(axis=0)
+    return np.maximum(half, 0.1 * half.max()) if half.max() > 0 else np.ones(2)
+
+
 def pair_path(kind: str, a: str, b: str) -> str:
     """Entity path of a checked pair."""
     return f"{kind}/{_escape(a)}/{_escape(b)}"
@@ -71,6 +89,7 @@ def _blueprint(joints: bool = False) -> rrb.Blueprint:
                 rrb.Horizontal(
                     rrb.TimeSeriesView(name="Strain (%)", origin="cables/strain"),
                     rrb.TimeSeriesView(name="Min bend radius (scene units)", origin="cables/bend_radius"),
+                    rrb.TimeSeriesView(name="Twist (deg)", origin="cables/twist"),
                 ),
                 rrb.TimeSeriesView(name="Agreement with MuJoCo", origin="validation"),
                 rrb.TextLogView(name="Events", origin="events"),
@@ -105,8 +124,12 @@ class Recorder:
         """Parts' shapes (and poses of parts that never move), once."""
         rec = self.rec
         rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        scene_points = self._scene_points(part_poses)
         for k, part in enumerate(self.built.parts):
             path = part_path(part.name)
+            if part.shape == "plane":
+                rec.log(path, self._plane(part, part_poses[k], scene_points), static=True)
+                continue
             rec.log(path, self._shape(part), static=True)
             if not self.moving_parts[k]:
                 rec.log(path, self._transform(part_poses[k]), static=True)
@@ -127,11 +150,30 @@ class Recorder:
         if part.shape == "cylinder":
             return rr.Cylinders3D(lengths=[2 * size[1]], radii=[size[0]], colors=[colour],
                                   fill_mode="solid")
-        if part.shape == "plane":
-            extent = size[:2] if size[0] > 0 else np.array([1.0, 1.0]) / u
-            return rr.Boxes3D(half_sizes=[[extent[0], extent[1], 0.0]], colors=[colour])
         return rr.Mesh3D(vertex_positions=part.vertices / u, triangle_indices=part.faces,
                          albedo_factor=colour)
+
+    def _scene_points(self, part_poses: np.ndarray) -> np.ndarray:
+        """(n, 3) points that span the scene at t = 0 (metres): the cables'
+        routes and the corners of the other parts' boxes."""
+        pts = [c.routed for c in self.built.cables]
+        for part, pose in zip(self.built.parts, part_poses):
+            if part.shape == "plane":
+                continue
+            if part.shape == "mesh":
+                corners = part.vertices
+            else:
+                r = part.size[0]
+                half = {"sphere": [r, r, r], "capsule": [r, r, part.size[1] + r],
+                        "cylinder": [r, r, part.size[1]]}.get(part.shape, part.size[:3])
+                corners = np.array(np.meshgrid(*[[-h, h] for h in half], indexing="ij")).reshape(3, -1).T
+            pts.append(corners @ pose[:3, :3].T + pose[:3, 3])
+        return np.concatenate(pts) if pts else np.zeros((0, 3))
+
+    def _plane(self, part: PartModel, pose: np.ndarray, scene_points: np.ndarray) -> rr.Boxes3D:
+        colour = KEEPOUT_COLOUR if part.keepout else PART_COLOUR
+        half = plane_half_sizes(part.size, pose, scene_points) / self.unit
+        return rr.Boxes3D(half_sizes=[[half[0], half[1], 0.0]], colors=[colour], fill_mode="solid")
 
     def _transform(self, pose: np.ndarray) -> rr.Transform3D:
         return rr.Transform3D(translation=pose[:3, 3] / self.unit, mat3x3=pose[:3, :3])
@@ -151,6 +193,12 @@ class Recorder:
             rec.log(f"cables/strain/{_escape(cable.name)}", rr.Scalars(100.0 * float(strain[i])))
             if np.isfinite(bend[i]):
                 rec.log(f"cables/bend_radius/{_escape(cable.name)}", rr.Scalars(float(bend[i] / u)))
+
+    def log_twist(self, twist_deg: np.ndarray) -> None:
+        """Each cable's twist (degrees) at the current time; NaN: not measured."""
+        for cable, value in zip(self.built.cables, twist_deg):
+            if np.isfinite(value):
+                self.rec.log(f"cables/twist/{_escape(cable.name)}", rr.Scalars(float(value)))
 
     def log_markers(self, markers: dict[str, tuple[np.ndarray, str]]) -> None:
         """Interference markers at worst points: entity path -> (point, state)."""

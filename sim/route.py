@@ -1,17 +1,28 @@
-"""The initial shape of a cable: its route made as long as the cable, resampled.
+"""The initial shape of a cable: its route made as long as the cable, as vertices.
 
-A cable is routed as a polyline (start, via points, end, or the given
-`points`) at t = 0. When the cable is longer than that polyline it cannot lie
-straight along it: `initial_shape` lets it droop (downwards, or sideways for a
-vertical run) so that the shape already has the cable's length and starts
-close to rest instead of as a compressed straight line. The droop is a smooth
-bump over the whole route, zero at both ends, whose height is found by root
-finding so that the arc length equals the requested length.
+A cable is routed as a polyline of waypoints (start, via points, clips, end,
+or the given `points`) at t = 0. Every waypoint becomes a vertex of the
+cable: each straight run between two waypoints is split into a whole number
+of equal elements (`run_elements` shares the elements among the runs in
+proportion to their lengths), so a route is never resampled across its
+corners and a `points` route is checked as given.
 
-This module does not know about MuJoCo or bodies: it takes world points.
+When the cable is longer than its route it cannot lie straight along it:
+`initial_shape` lets every run of two or more elements droop by the same
+ratio of extra length, as a half sine over the run (zero at its waypoints),
+whose height is found by root finding so that the run's elements have the
+run's share of the length. A run droops downwards (sideways for a vertical
+run) unless that takes it deeper into a part the cable collides with than
+the straight run is: then it turns about its chord to the nearest direction
+that does not (a cable laid along a floor snakes sideways on the floor
+instead of starting inside it). The caller says what "deep" is through a
+`depth` function, so this module knows nothing of parts, MuJoCo or bodies:
+it takes world points.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 from scipy.optimize import brentq
@@ -19,7 +30,17 @@ from scipy.optimize import brentq
 from checker.cable import arc_length
 
 _DENSE = 4000
-"""Samples along the route when measuring and resampling it."""
+"""Samples along a run when measuring and resampling its droop."""
+
+TURN_STEP = 10.0
+"""Degrees between the droop directions tried about a run's chord."""
+
+DOWN = np.array([0.0, 0.0, -1.0])
+
+Depth = Callable[[np.ndarray], np.ndarray]
+"""depth(points (m, 3)) -> (m,): how far a cable vertex at each point
+reaches into the parts it collides with (radius less signed distance;
+0 or less when clear)."""
 
 
 def polyline_length(points: np.ndarray) -> float:
@@ -34,85 +55,137 @@ def resample_even(points: np.ndarray, count: int) -> np.ndarray:
     return np.stack([np.interp(targets, s, points[:, k]) for k in range(3)], axis=1)
 
 
-def _droop_direction(route: np.ndarray, down: np.ndarray) -> np.ndarray:
-    """Unit direction the cable droops in: `down` without its component along the chord."""
-    chord = route[-1] - route[0]
-    norm = np.linalg.norm(chord)
-    if norm == 0.0:
-        return down
-    axis = chord / norm
-    d = down - np.dot(down, axis) * axis
-    if np.linalg.norm(d) < 1e-6:  # vertical run: droop sideways
-        d = np.cross(axis, [1.0, 0.0, 0.0])
-        if np.linalg.norm(d) < 1e-6:
-            d = np.cross(axis, [0.0, 1.0, 0.0])
-    return d / np.linalg.norm(d)
-
-
-def _droop(route: np.ndarray, length: float, count: int, down: np.ndarray) -> np.ndarray:
-    """`count` evenly spaced points of `route` drooped to arc length `length`."""
-    dense = resample_even(route, _DENSE)
-    s = arc_length(dense)
-    total = s[-1]
-    if length > total * (1.0 + 1e-9):
-        bump = np.sin(np.pi * s / total)[:, None] * _droop_direction(route, down)[None, :]
-
-        def excess(h: float) -> float:
-            # measured on the resampled points: their chords are the cable's elements
-            return polyline_length(resample_even(dense + h * bump, count)) - length
-
-        hi = length
-        while excess(hi) < 0.0:
-            hi *= 2.0
-        h = brentq(excess, 0.0, hi, xtol=1e-12 * length, rtol=1e-12)
-        dense = dense + h * bump
-    return resample_even(dense, count)
-
-
-def _allocate(weights: np.ndarray, total: int, least: int) -> np.ndarray:
-    """Integers >= least summing to `total`, as near as possible to proportional to weights."""
-    share = weights / weights.sum() * total
-    out = np.maximum(np.floor(share).astype(int), least)
-    while out.sum() < total:  # give to the runs furthest below their share
+def run_elements(runs: np.ndarray, elements: int) -> np.ndarray:
+    """Elements per run (each >= 1, summing to `elements`), as near as possible
+    to proportional to the run lengths `runs` (so elements come out nearly
+    equal). `elements` must be at least the number of runs."""
+    runs = np.asarray(runs, float)
+    if elements < len(runs):
+        raise ValueError(f"{elements} elements cannot have all {len(runs) + 1} waypoints as vertices")
+    share = runs / runs.sum() * elements
+    out = np.maximum(np.floor(share).astype(int), 1)
+    while out.sum() < elements:  # give to the runs furthest below their share
         out[np.argmax(share - out)] += 1
-    while out.sum() > total:  # take from the runs furthest above it, never below `least`
-        over = np.where(out > least, out - share, -np.inf)
+    while out.sum() > elements:  # take from the runs furthest above it, never below 1
+        over = np.where(out > 1, out - share, -np.inf)
         out[np.argmax(over)] -= 1
     return out
 
 
-def initial_shape(route: np.ndarray, length: float, count: int,
-                  down: np.ndarray = np.array([0.0, 0.0, -1.0])) -> np.ndarray:
-    """(count, 3) points along `route` whose polyline has arc length `length`.
+def _profile(ratio: float, count: int) -> np.ndarray:
+    """(count + 1, 2) points of a unit run drooped to length `ratio`: (along
+    the chord, across it), evenly spaced along the half sine, whose height is
+    found by Brent's method so that the `count` elements have length `ratio`
+    to 1e-12 relative."""
+    x = np.linspace(0.0, 1.0, _DENSE)
+    bump = np.sin(np.pi * x)
 
-    Method: with no slack the points are spaced evenly along the route. With
-    slack, every waypoint of the route stays where it is: the elements are
-    shared among the straight runs between waypoints in proportion to their
-    lengths (so elements come out nearly equal), and every run given two or
-    more elements droops by the same ratio of extra length, as a half sine
-    h * sin(pi s / S) towards `down` (sideways for a vertical run), h found by
-    Brent's method so that its resampled points (the cable's elements) have
-    the run's length to 1e-9 relative. Runs given a single element stay
-    straight and the others take their share of slack. Drooping run by run
-    keeps every waypoint on the cable; a droop over a route with corners
-    could shorten a run instead of lengthening it. If no run can droop (a
-    dense `points` route), the route droops as a whole. Both ends stay where
-    they are. `length` shorter than the route is the caller's error (the
-    scene loader rejects it) and is treated as the route's length.
+    def shape(h: float) -> np.ndarray:
+        return resample_even(np.stack([x, h * bump, np.zeros_like(x)], axis=1), count + 1)[:, :2]
+
+    if ratio <= 1.0 + 1e-12 or count < 2:
+        return np.stack([np.linspace(0.0, 1.0, count + 1), np.zeros(count + 1)], axis=1)
+
+    def excess(h: float) -> float:
+        # measured on the resampled points: their chords are the cable's elements
+        return float(np.linalg.norm(np.diff(shape(h), axis=0), axis=1).sum()) - ratio
+
+    hi = ratio
+    while excess(hi) < 0.0:
+        hi *= 2.0
+    return shape(brentq(excess, 0.0, hi, xtol=1e-13, rtol=1e-12))
+
+
+def _directions(axis: np.ndarray, down: np.ndarray) -> np.ndarray:
+    """(R, C, 3) unit droop directions per run, perpendicular to its chord
+    `axis` (R, 3), in order of preference: `down` without its component along
+    the chord (sideways for a vertical run), then turning about the chord by
+    +-TURN_STEP, +-2 TURN_STEP, ... up to 180 degrees."""
+    d0 = down[None, :] - (axis @ down)[:, None] * axis
+    n0 = np.linalg.norm(d0, axis=1)
+    side = np.cross(axis, [1.0, 0.0, 0.0])
+    side_y = np.cross(axis, [0.0, 1.0, 0.0])
+    side = np.where((np.linalg.norm(side, axis=1) < 1e-6)[:, None], side_y, side)
+    d0 = np.where((n0 < 1e-6)[:, None], side, d0)
+    d0 /= np.linalg.norm(d0, axis=1)[:, None]
+    e = np.cross(axis, d0)
+    steps = np.arange(1, int(round(180.0 / TURN_STEP)) + 1) * np.radians(TURN_STEP)
+    theta = np.concatenate([[0.0], np.stack([steps, -steps], axis=1).ravel()[:-1]])
+    return np.cos(theta)[None, :, None] * d0[:, None, :] + np.sin(theta)[None, :, None] * e[:, None, :]
+
+
+def initial_shape(route: np.ndarray, length: float, counts: np.ndarray,
+                  down: np.ndarray = DOWN, depth: Depth | None = None) -> np.ndarray:
+    """(sum(counts) + 1, 3) vertices through every waypoint of `route`, with
+    arc length `length`.
+
+    Args:
+      route: (W, 3) waypoints; consecutive ones distinct.
+      length: the cable's length, not shorter than the route (shorter is
+        treated as the route's length: the scene loader rejects it).
+      counts: (W - 1,) elements per run (`run_elements`).
+      down: the direction a run droops in by preference.
+      depth: how deep a vertex would be in the parts the cable collides
+        with; None: droop towards `down` whatever is there.
+
+    Method: run i is split into counts[i] equal elements. With slack (the
+    length longer than the route by more than 1e-9 relative), every run of
+    two or more elements droops by the same ratio of its length, as a half
+    sine (`_profile`), so every waypoint stays a vertex and the elements of a
+    run are equal; runs of one element stay straight. Of the directions about
+    a run's chord (`_directions`) the first whose vertices go no deeper into
+    the parts than the straight run's (`depth`; so a run that starts clear
+    stays clear) is taken, else the one that goes least deep. Raises
+    ValueError when there is slack but no run has two elements to droop in.
     """
     route = np.asarray(route, dtype=float)
-    runs = np.linalg.norm(np.diff(route, axis=0), axis=1)
+    counts = np.asarray(counts, dtype=int)
+    chord = np.diff(route, axis=0)
+    runs = np.linalg.norm(chord, axis=1)
+    axis = chord / runs[:, None]
     total = runs.sum()
-    elements = count - 1
-    if length <= total * (1.0 + 1e-9) or len(runs) == 1:
-        return _droop(route, length, count, down)
-    if elements < len(runs):
-        return _droop(route, length, count, down)
-    counts = _allocate(runs, elements, 1)
     bends = counts >= 2
-    if not bends.any():
-        return _droop(route, length, count, down)
-    ratio = (length - runs[~bends].sum()) / runs[bends].sum()
-    pieces = [_droop(route[i:i + 2], runs[i] * (ratio if bends[i] else 1.0), int(counts[i]) + 1, down)
-              for i in range(len(runs))]
-    return np.concatenate([pieces[0]] + [p[1:] for p in pieces[1:]])
+    ratio = 1.0
+    if length > total * (1.0 + 1e-9):
+        if not bends.any():
+            raise ValueError("the cable is longer than its route but no run between two "
+                             "waypoints has two elements to droop in")
+        ratio = (length - runs[~bends].sum()) / runs[bends].sum()
+    # one profile per distinct element count, looked up per vertex
+    run_ratio = np.where(bends, ratio, 1.0)
+    kinds, kind_of_run = np.unique(np.stack([counts, run_ratio > 1.0], axis=1), axis=0, return_inverse=True)
+    kind_of_run = kind_of_run.ravel()
+    profiles = [_profile(ratio if droops else 1.0, int(n)) for n, droops in kinds]
+    start = np.concatenate([[0], np.cumsum([len(p) for p in profiles])])
+    table = np.concatenate(profiles)
+    # vertices 1..counts[i] of each run (vertex 0 is the previous run's last)
+    run = np.repeat(np.arange(len(runs)), counts)
+    k = np.arange(len(run)) - np.repeat(np.cumsum(counts) - counts, counts) + 1
+    prof = table[start[kind_of_run[run]] + k]
+    along = route[run] + (prof[:, 0] * runs[run])[:, None] * axis[run]
+    across = prof[:, 1] * runs[run]
+    dirs = _directions(axis, np.asarray(down, float))           # (R, C, 3)
+    choice = np.zeros(len(runs), int)
+    if depth is not None and ratio > 1.0:
+        choice = _choose(along, across, dirs, run, runs, depth)
+    vertices = along + across[:, None] * dirs[run, choice[run]]
+    vertices[np.cumsum(counts) - 1] = route[1:]  # waypoints exactly as given
+    return np.concatenate([route[:1], vertices])
+
+
+def _choose(along: np.ndarray, across: np.ndarray, dirs: np.ndarray, run: np.ndarray,
+            runs: np.ndarray, depth: Depth) -> np.ndarray:
+    """(R,) index of the droop direction per run (see `initial_shape`)."""
+    n_dir = dirs.shape[1]
+    candidates = along[:, None, :] + across[:, None, None] * dirs[run]   # (V, C, 3)
+    deep = depth(candidates.reshape(-1, 3)).reshape(len(run), n_dir)
+    straight = depth(along)
+    first = np.flatnonzero(np.r_[True, run[1:] != run[:-1]])  # vertices are grouped by run
+    runs_present = run[first]
+    worst = np.maximum.reduceat(deep, first, axis=0)              # (R', C)
+    allowed = np.maximum(np.maximum.reduceat(straight, first), 0.0) + 1e-9 * runs[runs_present]
+    ok = worst <= allowed[:, None]
+    pick = np.where(ok.any(axis=1), np.argmax(ok, axis=1), np.argmin(worst, axis=1))
+    choice = np.zeros(len(runs), int)
+    choice[runs_present] = pick
+    return choice

@@ -27,6 +27,7 @@ from checker.events import EventTracker
 from checker.records import PairType, Severity
 from checker.report import SCHEMA, write_report
 from checker.scene_state import CheckConfig
+from checker.twist import TwistMeter
 from checker.validation import Validation
 from sim.build import Built, build
 from sim.jointspace import JointLog
@@ -175,6 +176,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         report["joint_units"] = dict(zip(joints.names, joints.units))
         for row, e in zip(report["events"], events):
             row.update(joints.event_fields(e.t_start, e.t_end, e.t_worst, e.a, e.b))
+    _report_twist(report, built, out.twist)
     advance = checks.advance
     report["settings"]["advance"] = None if advance is None else {
         "horizon": checks.horizon / scene.scale, "stretch": checks.stretch / scene.scale,
@@ -183,6 +185,11 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     report["interrupted"] = stop.signal_name
     write_report(report, options.report)
     return report
+
+
+def _clamped(anchor) -> bool:
+    """The end holds the cable's tangent and roll (the default `hold`)."""
+    return getattr(anchor, "hold", "clamp") == "clamp"
 
 
 class _Outcome:
@@ -204,11 +211,29 @@ class _Outcome:
         self.steps = self.checked = 0
         self.t_last = 0.0
         self.markers: set[str] = set()
+        self.clamped = [_clamped(c.start) and _clamped(c.end) for c in built.scene.cables]
+        self.twist: list[TwistMeter | None] = [None] * n
+
+    def take_twist(self, states) -> None:
+        """Each cable's twist over the batch (`checker.twist`), for cables
+        clamped at both ends; the first state (t = 0) is the reference."""
+        self.batch_twist = np.full((len(states), len(self.clamped)), np.nan)
+        if not states or states[0].end_rot is None:
+            return
+        for i, clamped in enumerate(self.clamped):
+            if not clamped:
+                continue
+            pts = np.stack([s.cables[i] for s in states])
+            rot = np.stack([s.end_rot[i] for s in states])
+            if self.twist[i] is None:
+                self.twist[i] = TwistMeter(pts[0], rot[0, 0], rot[0, 1])
+            self.batch_twist[:, i] = np.degrees(self.twist[i].update(pts, rot[:, 0], rot[:, 1]))
 
     def take(self, states, results) -> None:
         """The checked states (oldest first) and their results."""
         recorder, scale = self.recorder, self.built.scene.scale
-        for state, res in zip(states, results):
+        self.take_twist(states)
+        for k, (state, res) in enumerate(zip(states, results)):
             if state.step == 0:
                 self.rest_points = state.cables
                 if recorder:
@@ -223,6 +248,7 @@ class _Outcome:
                              res.agreement, started, closed, self.tracker, self.markers, scale)
                 if self.joints:
                     recorder.log_joints(self.joints.names, self.joints.units, self.joints.values(state.t)[0])
+                recorder.log_twist(self.batch_twist[k])
                 self.timer.lap("record")
             self.final_points = state.cables
             self.steps, self.t_last = state.step, state.t
@@ -256,6 +282,21 @@ def _record_step(recorder: Recorder, state, contacts, records, names, strain, be
     for ev in closed:
         recorder.log_event(ev.t_end, f"{ev.type} {ev.a} / {ev.b} ends: {ev.severity}, worst "
                            f"{ev.min_distance / unit:.4g} at t = {ev.t_worst:.3f} s", "INFO")
+
+
+def _report_twist(report: dict, built: Built, meters: list) -> None:
+    """Each cable's `max_twist` (degrees over the cable, largest absolute
+    value over the run) and `max_twist_moment` (N m: G J twist / L, the
+    torsional moment a straight cable of that twist carries), None for a
+    cable not clamped at both ends (docs/twist.md)."""
+    for row, cable, defn, meter in zip(report["cables"], built.cables, built.scene.cables, meters):
+        if meter is None:
+            row["max_twist"] = row["max_twist_moment"] = None
+            continue
+        shear = defn.twist_stiffness if defn.twist_stiffness is not None else defn.young / 2.0
+        polar = np.pi * cable.radius ** 4 / 2.0
+        row["max_twist"] = float(np.degrees(meter.max_abs))
+        row["max_twist_moment"] = float(shear * polar * meter.max_abs / cable.length)
 
 
 def _report(scene: Scene, built: Built, config: CheckConfig, complete: bool, steps: int,

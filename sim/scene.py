@@ -90,6 +90,10 @@ LARGEST = 1e15
 ROUTE_TOLERANCE = 1e-9
 """Relative tolerance by which `length` may fall short of its route."""
 
+POINTS_LENGTH_TOLERANCE = 1e-6
+"""Relative tolerance by which `length` may exceed a `points` route with
+dynamics off (the route's length printed to 6 digits is accepted)."""
+
 DEGENERATE = 1e-6
 """A route segment shorter than this many cable radii has zero length."""
 
@@ -101,7 +105,7 @@ _CHECK_KEYS = ("method", "spacing", "clearance", "every", "validate", "attach_zo
 _BODY_KEYS = ("name", "pos", "euler")
 _PART_KEYS = ("name", "body", "shape", "size", "pos", "euler", "file", "scale", "keepout")
 _CABLE_KEYS = ("name", "radius", "start", "end", "via", "length", "points", "clips",
-               "segments", "young", "density", "min_bend_radius")
+               "segments", "young", "density", "min_bend_radius", "twist_stiffness")
 _ANCHOR_KEYS = ("body", "pos")
 _MOTION_KEYS = ("body", "joint", "file", "keys", "angles", "interpolation", "time_scale")
 _BODY_KEY_KEYS = ("t", "pos", "euler")
@@ -213,7 +217,9 @@ class PartDef:
       body: "world", a `[[bodies]]` name or a body of the mjcf model.
       shape: one of `SHAPE_SIZES`.
       size: MuJoCo size in metres (half-extents, radius, half-length); ()
-        for plane and mesh.
+        for mesh; for plane () or MuJoCo's drawing size (half-sizes x, y
+        and optionally the grid spacing; the plane itself is infinite; 0 or
+        () draws it sized to the scene).
       pos: (3,) position in the body's frame, metres.
       euler: (3,) orientation in the body's frame, degrees.
       file: absolute mesh path for shape "mesh", else None.
@@ -270,6 +276,8 @@ class CableDef:
       min_bend_radius: metres, or None for no bend check.
       route: (m, 3) world polyline at t = 0, metres: start, via..., end, or
         `points`. Filled by the loader; None only for hand-built records.
+      twist_stiffness: shear modulus G of the torsion, Pa, or None for
+        MuJoCo's default E / 2 (see docs/twist.md).
     """
 
     name: str
@@ -285,6 +293,7 @@ class CableDef:
     density: float = DEFAULT_DENSITY
     min_bend_radius: float | None = None
     route: np.ndarray | None = None
+    twist_stiffness: float | None = None
 
 
 @dataclass(frozen=True)
@@ -652,7 +661,7 @@ class _Parser:
                 self.frames[b] = _frame(traj.body_pos[0, k], euler_matrix(traj.body_euler[0, k]))
         if self.mjcf is not None:
             self.frames.update(self.mjcf_frames(motions))
-        cables = tuple(self.cable(c, f"cables[{i}]")
+        cables = tuple(self.cable(c, f"cables[{i}]", effects.dynamics)
                        for i, c in enumerate(self.tables(data.get("cables", []), "cables")))
         self.unique(cables, "cables", "cable")
         part_index = {p.name: i for i, p in enumerate(parts)}
@@ -784,10 +793,11 @@ class _Parser:
                                               "('/' separates non-empty levels)")
         shape = self.string(t["shape"], f"{where}.shape", tuple(SHAPE_SIZES))
         arity = SHAPE_SIZES[shape]
-        if arity == 0:
+        if shape == "plane":
+            size = self.plane_size(t.get("size"), f"{where}.size")
+        elif arity == 0:
             if "size" in t:
-                raise self.error(f"{where}.size", f"not used by shape {shape!r} "
-                                 + ("(infinite)" if shape == "plane" else "(see file, scale)"))
+                raise self.error(f"{where}.size", f"not used by shape {shape!r} (see file, scale)")
             size = ()
         else:
             if "size" not in t:
@@ -816,6 +826,25 @@ class _Parser:
                        pos=self.position(t.get("pos", [0, 0, 0]), f"{where}.pos"),
                        euler=self.vector(t.get("euler", [0, 0, 0]), f"{where}.euler"),
                        file=file, mesh_scale=mesh_scale, keepout=keepout)
+
+    def plane_size(self, value: Any, where: str) -> tuple[float, ...]:
+        """A plane's optional drawing size in metres (MuJoCo's: half-sizes x,
+        y and optionally the grid spacing); () when absent.
+
+        The plane is the infinite half-space below its local z = 0 for the
+        simulation and the checker whatever the size; the size only says how
+        much of it a recording draws (0 or absent: sized to the scene)."""
+        if value is None:
+            return ()
+        if not isinstance(value, list) or len(value) not in (2, 3):
+            got = f"{len(value)}" if isinstance(value, list) else _describe(value)
+            raise self.error(where, "shape 'plane' takes 2 or 3 numbers (drawn half-sizes x, y "
+                                    f"and grid spacing; the plane itself is infinite), got {got}")
+        size = tuple(self.length(v, f"{where}[{i}]", nonnegative=True)
+                     for i, v in enumerate(self.vector(value, where, len(value))))
+        if len(size) == 3 and size[2] == 0:
+            raise self.error(f"{where}[2]", "the grid spacing must be positive (MuJoCo's rule)")
+        return size
 
     def mesh_nodes(self, path: Path, where: str) -> list:
         """The meshes of a file, read once however many parts use it."""
@@ -860,7 +889,7 @@ class _Parser:
         origin, rotation = self.frames[body]
         return tuple(float(v) for v in rotation.T @ (point - origin))
 
-    def cable(self, value: dict, where: str) -> CableDef:
+    def cable(self, value: dict, where: str, dynamics: bool = True) -> CableDef:
         t = self.table(value, where, _CABLE_KEYS, ("name", "radius"))
         name = self.name(t["name"], f"{where}.name")
         radius = self.length(t["radius"], f"{where}.radius", positive=True)
@@ -916,6 +945,14 @@ class _Parser:
                                  f"{_g(length / self.scale)} {self._units()} is shorter than "
                                  f"the route ({_g(route_length / self.scale)} {self._units()} "
                                  f"{along} at t = 0)")
+            if (points is not None and not dynamics
+                    and length > route_length * (1 + POINTS_LENGTH_TOLERANCE)):
+                raise self.error(f"{where}.length",
+                                 f"{_g(length / self.scale)} {self._units()} is longer than the "
+                                 f"route along points ({_g(route_length / self.scale)} "
+                                 f"{self._units()}): with dynamics = false a points route is "
+                                 "checked as given, so the cable's length is the route's "
+                                 "(omit length)")
         clips = t.get("clips", [])
         if not isinstance(clips, list):
             raise self.error(f"{where}.clips", f"expected an array of tables, "
@@ -924,6 +961,14 @@ class _Parser:
         segments = None
         if "segments" in t:
             segments = self.integer(t["segments"], f"{where}.segments", 2)
+            slack = length is not None and length > route_length * (1 + ROUTE_TOLERANCE)
+            need = len(route) - 1 + len(clips) + (1 if slack else 0)
+            if segments < need:
+                raise self.error(f"{where}.segments",
+                                 f"{segments} elements cannot have all {len(route)} route points"
+                                 f"{' and the clips' if clips else ''} as vertices"
+                                 f"{' and droop to the length' if slack else ''}: give at least "
+                                 f"{need} (or omit segments)")
             element = (length or route_length) / segments
             if element <= radius:
                 most = max(1, math.ceil((length or route_length) / radius) - 1)
@@ -940,7 +985,9 @@ class _Parser:
             young=self.number(t.get("young", DEFAULT_YOUNG), f"{where}.young", positive=True),
             density=self.number(t.get("density", DEFAULT_DENSITY), f"{where}.density",
                                 positive=True),
-            min_bend_radius=bend, route=route)
+            min_bend_radius=bend, route=route,
+            twist_stiffness=(self.number(t["twist_stiffness"], f"{where}.twist_stiffness",
+                                         positive=True) if "twist_stiffness" in t else None))
 
     def motion(self, value: dict, where: str, bodies: dict[str, BodyDef]) -> MotionDef:
         t = self.table(value, where, _MOTION_KEYS)

@@ -174,7 +174,9 @@ class StepChecks:
         strain = lengths / self._rest_length - 1.0
         # a full check's single-cable records: none unless a bend is within
         # the clearance of its limit or a cable is taut
-        single = (((bend - self._bend_limit < self.config.clearance) & self._has_bend_limit).any(axis=1)
+        # (a cable without a limit compares with 0: a straight one's inf - inf is no number)
+        single = (((bend - np.where(self._has_bend_limit, self._bend_limit, 0.0) < self.config.clearance)
+                   & self._has_bend_limit).any(axis=1)
                   | (taut_margin(lengths, self._rest_length) < 0.0).any(axis=1))
         out: list[StepResult] = []
         j = 0

@@ -159,3 +159,108 @@ def test_scene_far_from_origin_gives_the_same_physics(tmp_path):
     for a, b in zip(s_near, s_far):
         assert np.allclose(a.cables[0], b.cables[0] - off, atol=1e-7)
         assert np.allclose(np.sort(a.contacts.dist), np.sort(b.contacts.dist), atol=1e-7)
+
+
+# -- initial shapes: points routes as given, droop clear of parts, planes ------------------
+
+def _points_scene(dynamics: bool, length=None, segments=None) -> dict:
+    a = np.linspace(0.0, np.pi, 9)
+    points = np.stack([0.2 * np.cos(a), 0.05 * np.sin(2 * a), 0.3 + 0.1 * np.sin(a)], axis=1)
+    cable = {"name": "c", "radius": 0.004, "points": points.tolist()}
+    if length is not None:
+        cable["length"] = length
+    if segments is not None:
+        cable["segments"] = segments
+    return {"scene": {"name": "p", "units": "m", "duration": 0.0, "settle": 0.2},
+            "effects": {"dynamics": dynamics}, "cables": [cable]}, points
+
+
+def _distance_to_polyline(points: np.ndarray, route: np.ndarray) -> np.ndarray:
+    a, b = route[:-1], route[1:]
+    ab = b - a
+    t = np.clip(np.einsum("pij,ij->pi", points[:, None, :] - a[None], ab) / np.einsum("ij,ij->i", ab, ab), 0, 1)
+    return np.linalg.norm(points[:, None, :] - (a[None] + t[:, :, None] * ab[None]), axis=2).min(axis=1)
+
+
+def test_points_route_with_dynamics_off_is_checked_as_given(tmp_path):
+    data, points = _points_scene(dynamics=False, segments=20)
+    sim, states = _run(data, tmp_path)
+    checked = states[0].cables[0]
+    assert len(checked) == 21
+    assert _distance_to_polyline(checked, points).max() < 1e-12      # on the given centreline
+    assert all(np.abs(checked - p).sum(axis=1).min() < 1e-12 for p in points)   # every point a vertex
+    route = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+    assert np.isclose(sim.built.cables[0].length, route, rtol=1e-12)
+
+
+def test_points_route_longer_than_given_with_dynamics_off_is_refused(tmp_path):
+    import pytest
+    from sim.scene import SceneError
+    data, points = _points_scene(dynamics=False, length=0.8)
+    with pytest.raises(SceneError, match="checked as given") as e:
+        parse_scene(data, tmp_path / "s.toml")
+    assert e.value.key == "cables[0].length"
+
+
+def test_points_route_with_slack_starts_through_every_point(tmp_path):
+    data, points = _points_scene(dynamics=True, length=0.8)
+    built = build(parse_scene(data, tmp_path / "s.toml"))
+    routed = built.cables[0].routed
+    assert all(np.abs(routed - p).sum(axis=1).min() < 1e-12 for p in points)
+    assert np.isclose(np.linalg.norm(np.diff(routed, axis=0), axis=1).sum(), 0.8, rtol=1e-9)
+
+
+def test_too_few_segments_for_the_points_is_refused(tmp_path):
+    import pytest
+    from sim.scene import SceneError
+    data, _ = _points_scene(dynamics=True, segments=6)
+    with pytest.raises(SceneError, match="at least 8") as e:
+        parse_scene(data, tmp_path / "s.toml")
+    assert e.value.key == "cables[0].segments"
+
+
+def _floor_scene(shape: str, pressed: float = 0.0) -> dict:
+    """A cable of radius 5 mm laid along a floor (top at z = 0): ends and via
+    on it, 20 % longer than its route; the via `pressed` into it."""
+    r = 5.0
+    floor = ({"name": "floor", "shape": "box", "size": [400, 300, 10], "pos": [0, 0, -10]} if shape == "box"
+             else {"name": "floor", "shape": "plane", "pos": [0, 0, 0]})
+    return {"scene": {"name": "f", "units": "mm", "duration": 0.3, "settle": 1.0},
+            "effects": {"contact": ["cable-structure"]}, "parts": [floor],
+            "cables": [{"name": "c", "radius": r, "start": {"pos": [-300, 0, r]}, "end": {"pos": [300, 0, r]},
+                        "via": [[0, 0, r - pressed]], "length": 720.0}]}
+
+
+def test_cable_along_a_floor_starts_and_stays_on_it(tmp_path):
+    for shape in ("box", "plane"):
+        sim, states = _run(_floor_scene(shape), tmp_path)
+        r = sim.built.cables[0].radius
+        routed = sim.built.cables[0].routed
+        assert routed[:, 2].min() > r - 1e-9                          # droops sideways on the floor
+        for state in (states[0], states[-1]):                          # settled, and at the end
+            assert state.cables[0][:, 2].min() > 0.9 * r, shape
+        assert not sim.warnings()
+
+
+def test_cable_pressed_into_a_plane_is_measured_exactly_by_both_sides(tmp_path):
+    from sim.run import RunOptions, run_scene
+    data = _floor_scene("plane", pressed=2.0)
+    data["effects"]["dynamics"] = False
+    report = run_scene(parse_scene(data, tmp_path / "s.toml"), RunOptions(report=tmp_path / "r.json", record=tmp_path / "r.rrd"))
+    (event,) = report["events"]
+    assert (event["a"], event["b"], event["severity"]) == ("c", "floor", "hard")
+    assert np.isclose(event["min_distance"], -2.0, atol=1e-9)
+    assert report["validation"]["agreement"] == 1.0 and report["validation"]["max_distance_error"] < 1e-9
+    assert (tmp_path / "r.rrd").stat().st_size > 0
+
+
+def test_plane_is_drawn_sized_to_the_scene_or_as_given():
+    from sim.record import plane_half_sizes
+    pose = np.eye(4)
+    pose[:3, 3] = [1.0, 0.0, 0.0]
+    pts = np.array([[0.0, -0.5, 0.3], [3.0, 0.2, 0.1]])
+    assert np.allclose(plane_half_sizes(np.zeros(3), pose, pts), [2.4, 0.6])
+    tilted = np.eye(4)
+    tilted[:3, :3] = [[0, 0, 1], [0, 1, 0], [-1, 0, 0]]     # normal along +x: local x is world -z
+    assert np.allclose(plane_half_sizes(np.zeros(3), tilted, pts), [0.36, 0.6])
+    assert np.allclose(plane_half_sizes(np.array([0.5, 0.25, 0.1]), pose, pts), [0.5, 0.25])

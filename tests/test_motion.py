@@ -259,8 +259,8 @@ def test_events_carry_joint_values_link_and_ranges(tmp_path, capsys):
 name = "bump"
 body = "upper_arm"
 shape = "sphere"
-size = [0.015]
-pos = [0.015, 0.144, -0.017]
+size = [0.025]
+pos = [0.027, 0.12, 0.051]
 keepout = true
 
 [[cables]]""")

@@ -511,8 +511,12 @@ BAD = [
      "shape 'box' takes 3 numbers"),
     ("sphere three sizes", lambda d: put(d, "parts.1.size", [1, 2, 3]), "parts[1].size",
      "takes 1 number (radius)"),
-    ("plane with size", lambda d: put(d, "parts.2.size", [1, 1, 0.1]), "parts[2].size",
-     "not used by shape 'plane'"),
+    ("plane size of one number", lambda d: put(d, "parts.2.size", [1]), "parts[2].size",
+     "takes 2 or 3 numbers"),
+    ("plane size negative", lambda d: put(d, "parts.2.size", [1, -1]), "parts[2].size[1]",
+     "must not be negative"),
+    ("plane grid spacing zero", lambda d: put(d, "parts.2.size", [1, 1, 0]), "parts[2].size[2]",
+     "grid spacing must be positive"),
     ("mesh with size", lambda d: put(d, "parts.3.size", [1]), "parts[3].size",
      "not used by shape 'mesh'"),
     ("file on box", lambda d: put(d, "parts.0.file", "box.stl"), "parts[0].file",
@@ -892,3 +896,27 @@ def test_keyframes_need_an_mjcf_model(folder):
     with pytest.raises(SceneError) as exc:
         parse(data, folder)
     check_error(exc, folder / "scene.toml", "motion[1].keys[0].key", "no mjcf model")
+
+
+def test_plane_takes_an_optional_drawing_size_in_scene_units(folder):
+    data = copy.deepcopy(BASE)
+    data["scene"]["units"] = "mm"
+    for cable in data["cables"]:
+        cable.pop("segments", None)
+    put(data, "parts.2.size", [500, 200])
+    assert parse(data, folder).parts[2].size == (0.5, 0.2)
+    put(data, "parts.2.size", [500, 0, 20])
+    assert parse(data, folder).parts[2].size == (0.5, 0.0, 0.02)
+    drop(data, "parts.2.size")
+    assert parse(data, folder).parts[2].size == ()
+
+
+def test_twist_stiffness_is_a_positive_modulus(folder):
+    data = copy.deepcopy(BASE)
+    put(data, "cables.0.twist_stiffness", 2.5e7)
+    assert parse(data, folder).cables[0].twist_stiffness == 2.5e7
+    assert parse(copy.deepcopy(BASE), folder).cables[0].twist_stiffness is None
+    put(data, "cables.0.twist_stiffness", 0)
+    with pytest.raises(SceneError) as e:
+        parse(data, folder)
+    check_error(e, folder / "scene.toml", "cables[0].twist_stiffness", "must be positive")

@@ -335,3 +335,24 @@ def test_small_mesh_nearest_is_the_brute_force_nearest(monkeypatch):
         with monkeypatch.context() as mp:
             mp.setattr(shapes, "_BOX_FACES", 0)                                  # the centroid-tree road
             assert np.array_equal(d, shapes._mesh_nearest(md, p)[0])
+
+
+def test_least_signed_distance_over_posed_shapes_matches_one_by_one():
+    from checker.shapes import least_signed_distance
+    rng = np.random.default_rng(7)
+    shapes = [Shape(ShapeType.BOX, [0.1, 0.2, 0.05]), Shape(ShapeType.SPHERE, [0.1]),
+              Shape(ShapeType.BOX, [0.3, 0.1, 0.1]), Shape(ShapeType.PLANE, [0, 0, 0]),
+              Shape(ShapeType.CAPSULE, [0.05, 0.2])]
+    box = trimesh.creation.box([0.2, 0.3, 0.4])
+    shapes.append(mesh_shape(box.vertices, box.faces))
+    rot = []
+    for _ in shapes:
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        rot.append(q * np.sign(np.linalg.det(q)))
+    rot = np.array(rot)
+    pos = rng.normal(size=(len(shapes), 3))
+    pos[3] = [0.0, 0.0, -2.0]
+    pts = rng.normal(size=(200, 3))
+    one_by_one = np.min([signed_distance(s, (pts - p) @ r)[0] for s, r, p in zip(shapes, rot, pos)], axis=0)
+    assert np.allclose(least_signed_distance(shapes, rot, pos, pts), one_by_one, atol=1e-12)
+    assert np.all(np.isinf(least_signed_distance([], np.zeros((0, 3, 3)), np.zeros((0, 3)), pts)))
