@@ -25,6 +25,27 @@ Two models come out of one scene:
   pair the checker may report, exact (a large contact `gap` in the simulation
   model would make MuJoCo's general convex collider inexact, see SPEC).
 
+An mjcf model is taken as it comes. Its geoms that MuJoCo never collides
+(`contype` and `conaffinity` both 0 as written: visual meshes) stay so in both
+models; they are `Built.visuals`, drawn in the recording and never checker
+parts. Its other geoms are parts whose own bits say which of them meet each
+other; the scene's interactions use three bits the model leaves unused
+(`ContactBits`), added to the model geoms' conaffinity only, so they never
+make two model geoms meet:
+- detection model: the model geoms keep their own bits plus the cable and
+  part bits (scene parts carry the part bit as contype), so MuJoCo reports
+  cable contacts with every part, scene part against model geom, and model
+  geom against model geom exactly where the model itself would collide;
+  the checker leaves out the same model-geom pairs (their own bits never
+  meet, or their bodies form a `<contact><exclude>` pair: `Built.model_skip`);
+- simulation model, cable-structure: the model geoms' conaffinity is the
+  cable bit, so cables push on every link;
+- simulation model, part-part: the model geoms keep their own bits (a
+  robot's self-collision as its author set it) plus the part bit, so they
+  also meet the scene's parts. Without part-part their contype is 0: the
+  base model is driven kinematically, and contacts among its own geoms (a
+  housing resting on its column) could only fight the script.
+
 Cables are 1D flexcomp rods built straight (their rest shape, since a rod
 keeps as rest curvature whatever bend its qpos0 has) along the tangent of
 the route's first element and then put into the routed shape through qpos,
@@ -38,7 +59,6 @@ This module does not step, move or read the simulation; see `loop`.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from enum import IntFlag
 
 import mujoco
 import numpy as np
@@ -76,12 +96,30 @@ SIM_MARGIN_FRACTION = 0.25
 """Contact margin in the simulation model, as a fraction of the thinnest cable radius."""
 
 
-class Bits(IntFlag):
-    """contype/conaffinity bits: a pair collides when (type1 & aff2) | (type2 & aff1)."""
+@dataclass(frozen=True)
+class ContactBits:
+    """The scene's contype/conaffinity bits (a pair collides when
+    (type1 & aff2) | (type2 & aff1)): three bits no geom of the base model
+    uses, so the model's own bits keep their meaning beside them.
 
-    CABLE = 1       # cable contype; part conaffinity when cable-structure is on
-    CABLE_CABLE = 2  # cable conaffinity and contype when cable-cable is on
-    PART = 4        # part contype and conaffinity when part-part is on
+    Attributes:
+      cable: cable contype; conaffinity of parts when cable-structure is on.
+      cable_cable: cable conaffinity and contype when cable-cable is on.
+      part: scene parts' contype; conaffinity of all parts when part-part is on.
+    """
+
+    cable: int
+    cable_cable: int
+    part: int
+
+    @classmethod
+    def free_of(cls, used: int) -> "ContactBits":
+        """The three lowest bits not set in `used` (the model's bits, or'ed)."""
+        free = [1 << k for k in range(32) if not used & (1 << k)]
+        if len(free) < 3:
+            raise ValueError("the mjcf model uses 30 or more of MuJoCo's 32 contact bits; "
+                             "three free ones are needed for the cables and the scene's parts")
+        return cls(*free[:3])
 
 
 @dataclass(frozen=True)
@@ -137,8 +175,10 @@ class PartModel:
     """A structure part as built: one MuJoCo geom.
 
     Attributes:
-      name: scene part name, or for a geom of the mjcf model its body name
-        (plus "/" and the geom's name or index when the body has several).
+      name: scene part name, or for a geom of the mjcf model
+        `<body>/<geom name>`, else `<body>/<mesh name>`, else
+        `<body>/<type><k>` (k: the geom's index among its body's colliding
+        geoms, or among its visual geoms for a visual one).
       geom_id: the geom's id (same in both models).
       body: scene body name the part rides on.
       shape: "box", "sphere", "cylinder", "capsule", "ellipsoid", "plane" or "mesh".
@@ -214,6 +254,12 @@ class Built:
     origin: np.ndarray = field(default_factory=lambda: np.zeros(3))
     """Scene-world position of the model's origin (see `scene_origin`):
     model coordinates + origin = scene world coordinates."""
+    visuals: list[PartModel] = field(default_factory=list)
+    """Geoms of the mjcf model MuJoCo never collides (contype = conaffinity = 0
+    as written): drawn in the recording, never checked."""
+    model_skip: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), bool))
+    """(P, P) bool over `parts`: pairs the mjcf model tells MuJoCo never to
+    collide (its own contact bits, `<contact><exclude>`), see `_model_skip`."""
 
 
 def default_segments(length: float, radius: float) -> int:
@@ -257,21 +303,36 @@ def _set_options(spec: mujoco.MjSpec, scene: Scene) -> None:
     spec.compiler.autolimits = True
 
 
-def _part_bits(scene: Scene, detect: bool, keepout: bool) -> tuple[int, int]:
+def _part_bits(scene: Scene, bits: ContactBits, detect: bool, keepout: bool) -> tuple[int, int]:
+    """contype, conaffinity of a scene part."""
     contact = scene.effects.contact
     if detect:
-        return int(Bits.PART), int(Bits.CABLE | Bits.PART)
+        return bits.part, bits.cable | bits.part
     if keepout:
         return 0, 0
-    contype = int(Bits.PART) if "part-part" in contact else 0
-    conaff = (int(Bits.CABLE) if "cable-structure" in contact else 0) | contype
+    contype = bits.part if "part-part" in contact else 0
+    conaff = (bits.cable if "cable-structure" in contact else 0) | contype
     return contype, conaff
 
 
-def _cable_bits(scene: Scene, detect: bool) -> tuple[int, int]:
+def _model_bits(scene: Scene, bits: ContactBits, detect: bool, own: tuple[int, int]) -> tuple[int, int]:
+    """contype, conaffinity of a colliding geom of the mjcf model (see the
+    module docstring): the scene's bits go into conaffinity only, so the
+    model's geoms meet each other only as their own bits say; in the
+    simulation model those own bits act only when part-part is asked."""
+    contact = scene.effects.contact
+    if detect:
+        return own[0], own[1] | bits.cable | bits.part
+    cable = bits.cable if "cable-structure" in contact else 0
+    if "part-part" not in contact:
+        return 0, cable
+    return own[0], own[1] | cable | bits.part
+
+
+def _cable_bits(scene: Scene, bits: ContactBits, detect: bool) -> tuple[int, int]:
     if detect or "cable-cable" in scene.effects.contact:
-        return int(Bits.CABLE | Bits.CABLE_CABLE), int(Bits.CABLE_CABLE)
-    return int(Bits.CABLE), 0
+        return bits.cable | bits.cable_cable, bits.cable_cable
+    return bits.cable, 0
 
 
 def _fmt(values) -> str:
@@ -468,8 +529,8 @@ def _plan_cable(cable: CableDef, frames: _Frames, where: str, scene: Scene,
     return _CablePlan(cable, routed, straight, holds, pinned)
 
 
-def _cables_xml(plans: list[_CablePlan], scene: Scene, detect: bool, margin: float) -> str:
-    contype, conaff = _cable_bits(scene, detect)
+def _cables_xml(plans: list[_CablePlan], scene: Scene, bits: ContactBits, detect: bool, margin: float) -> str:
+    contype, conaff = _cable_bits(scene, bits, detect)
     selfcollide = "auto" if (detect or "self" in scene.effects.contact) else "none"
     contact_solref = max(0.004, 2.0 * scene.timestep)
     parts = []
@@ -548,11 +609,11 @@ def build(scene: Scene, detect: bool = True) -> Built:
     if "cable-structure" in scene.effects.contact and any(_has_slack(c) for c in scene.cables):
         obstacles = _Obstacles(scene, frames, meshes)
     plans = [_plan_cable(c, frames, f"cables[{i}]", scene, obstacles) for i, c in enumerate(scene.cables)]
-    sim = _compile(scene, plans, meshes, detect=False, origin=origin)
-    det = _compile(scene, plans, meshes, detect=True, origin=origin) if detect else None
+    sim, own_bits = _compile(scene, plans, meshes, detect=False, origin=origin)
+    det = _compile(scene, plans, meshes, detect=True, origin=origin)[0] if detect else None
     if det is not None and (det.nq != sim.nq or det.ngeom != sim.ngeom):
         raise RuntimeError("detection and simulation models differ in structure")
-    return _finish(scene, sim, det, plans, origin)
+    return _finish(scene, sim, det, plans, origin, own_bits)
 
 
 def _has_slack(cable: CableDef) -> bool:
@@ -579,7 +640,9 @@ def _part_meshes(scene: Scene) -> dict[str, tuple[np.ndarray, np.ndarray]]:
 
 
 def _compile(scene: Scene, plans: list[_CablePlan], meshes: dict[str, tuple[np.ndarray, np.ndarray]],
-             detect: bool, origin: np.ndarray) -> mujoco.MjModel:
+             detect: bool, origin: np.ndarray) -> tuple[mujoco.MjModel, np.ndarray]:
+    """The model, and (ngeom, 2) contype, conaffinity of each geom of the mjcf
+    model as written (0, 0 for the geoms the scene adds)."""
     spec = _base_spec(scene)
     _set_options(spec, scene)
     # Model coordinates are the scene's world less `origin` (see scene_origin).
@@ -596,9 +659,20 @@ def _compile(scene: Scene, plans: list[_CablePlan], meshes: dict[str, tuple[np.n
     radii = [c.radius for c in scene.cables] or [1.0]
     margin = scene.check.clearance if detect else SIM_MARGIN_FRACTION * min(radii)
 
-    # The base model's geoms are structure parts; their contact bits follow the scene.
-    for g in spec.geoms:
-        g.contype, g.conaffinity = _part_bits(scene, detect, keepout=False)
+    # The base model's colliding geoms are structure parts; they keep their own
+    # bits, and the scene's are added (module docstring). Visual geoms (both 0)
+    # stay out of every collision.
+    colliding = [g for g in spec.geoms if g.contype or g.conaffinity]
+    own = [(g, int(g.contype), int(g.conaffinity)) for g in colliding]
+    used = 0
+    for g in colliding:
+        used |= int(g.contype) | int(g.conaffinity)
+    try:
+        bits = ContactBits.free_of(used)
+    except ValueError as e:
+        raise SceneError(scene.path, "scene.mjcf", str(e)) from None
+    for g in colliding:
+        g.contype, g.conaffinity = _model_bits(scene, bits, detect, (int(g.contype), int(g.conaffinity)))
         g.margin = margin
 
     for body in scene.bodies:
@@ -611,7 +685,7 @@ def _compile(scene: Scene, plans: list[_CablePlan], meshes: dict[str, tuple[np.n
         b.inertia = [1.0, 1.0, 1.0]
     for part in scene.parts:
         parent = spec.worldbody if part.body == "world" else spec.body(part.body)
-        contype, conaff = _part_bits(scene, detect, part.keepout)
+        contype, conaff = _part_bits(scene, bits, detect, part.keepout)
         pos = np.asarray(part.pos, float) - (origin if part.body == "world" else 0.0)
         common = dict(name=part.name, pos=list(pos), quat=list(_quat(part.euler)),
                       contype=contype, conaffinity=conaff, margin=margin,
@@ -632,14 +706,18 @@ def _compile(scene: Scene, plans: list[_CablePlan], meshes: dict[str, tuple[np.n
             parent.add_geom(type=gtype, size=size, **common)
 
     if plans:
-        child = mujoco.MjSpec.from_string(_cables_xml(plans, scene, detect, margin))
+        child = mujoco.MjSpec.from_string(_cables_xml(plans, scene, bits, detect, margin))
         spec.worldbody.add_frame().attach_body(child.worldbody, CABLE_PREFIX, "")
         for plan in plans:
             _add_holds(spec, scene, plan)
     try:
-        return spec.compile()
+        model = spec.compile()
     except Exception as e:  # MuJoCo's compiler raises ValueError with its message
         raise SceneError(scene.path, "(model)", f"MuJoCo cannot compile the scene: {e}") from None
+    own_bits = np.zeros((model.ngeom, 2), np.int64)
+    for g, contype, conaff in own:
+        own_bits[g.id] = contype, conaff
+    return model, own_bits
 
 
 def _add_holds(spec: mujoco.MjSpec, scene: Scene, plan: _CablePlan) -> None:
@@ -668,35 +746,107 @@ _SHAPES = {int(mujoco.mjtGeom.mjGEOM_PLANE): "plane", int(mujoco.mjtGeom.mjGEOM_
            int(mujoco.mjtGeom.mjGEOM_MESH): "mesh"}
 
 
-def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
-            plans: list[_CablePlan], origin: np.ndarray) -> Built:
+def _mesh_arrays(m: mujoco.MjModel, g: int) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """MuJoCo's own vertices (geom frame) and faces of a mesh geom, else None, None."""
+    if int(m.geom_type[g]) != int(mujoco.mjtGeom.mjGEOM_MESH):
+        return None, None
+    mid = int(m.geom_dataid[g])
+    va, vn = int(m.mesh_vertadr[mid]), int(m.mesh_vertnum[mid])
+    fa, fn = int(m.mesh_faceadr[mid]), int(m.mesh_facenum[mid])
+    return m.mesh_vert[va:va + vn].astype(float).copy(), m.mesh_face[fa:fa + fn].astype(int).copy()
+
+
+def _body_name(m: mujoco.MjModel, bid: int) -> str:
+    return m.body(bid).name or ("world" if bid == 0 else f"body{bid}")
+
+
+def _geom_names(m: mujoco.MjModel, geoms: list[int]) -> list[str]:
+    """Names of one body's geoms (all colliding, or all visual), in model order:
+    `<body>/<geom name>`, else `<body>/<mesh name>`, else `<body>/<type><k>`
+    with k the geom's index among `geoms`; names that would repeat within the
+    body fall back to `<type><k>` for each of them. Counting within the
+    colliding geoms only keeps part names when visual geoms come or go."""
+    if not geoms:
+        return []
+    bname = _body_name(m, int(m.geom_bodyid[geoms[0]]))
+    own = []
+    for g in geoms:
+        name = m.geom(g).name
+        if not name and int(m.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_MESH):
+            name = m.mesh(int(m.geom_dataid[g])).name
+        own.append(name)
+    counts: dict[str, int] = {}
+    for name in own:
+        counts[name] = counts.get(name, 0) + 1
+    return [f"{bname}/{name}" if name and counts[name] == 1 else f"{bname}/{_SHAPES[int(m.geom_type[g])]}{k}"
+            for k, (g, name) in enumerate(zip(geoms, own))]
+
+
+def _geom_parts(scene: Scene, m: mujoco.MjModel, own_bits: np.ndarray) -> tuple[list[PartModel], list[PartModel]]:
+    """(parts, visuals): the scene's parts and the mjcf model's colliding geoms
+    in model order; the mjcf model's visual geoms (contype = conaffinity = 0)."""
     scene_parts = {p.name: p for p in scene.parts}
-    scene_bodies = {b.name for b in scene.bodies}
-    parts: list[PartModel] = []
-    # Name base-model geoms by body, adding the geom name (or index) when a body has several.
+    named: dict[int, tuple[str, str, bool]] = {}   # geom id -> (name, body, keepout)
+    visual: set[int] = set()
+    per_body: dict[tuple[int, bool], list[int]] = {}
     for g in range(m.ngeom):
-        gtype = int(m.geom_type[g])
-        if gtype not in _SHAPES:
+        if int(m.geom_type[g]) not in _SHAPES:
             continue  # heightfields and SDFs are not parts the checker knows
         gname = m.geom(g).name
-        bid = int(m.geom_bodyid[g])
-        bname = m.body(bid).name or "world"
         if gname in scene_parts:
             sp = scene_parts[gname]
-            name, body, keepout = sp.name, sp.body, sp.keepout
-        else:
-            siblings = np.flatnonzero(m.geom_bodyid == bid)
-            name = bname if len(siblings) == 1 else f"{bname}/{gname or int(np.searchsorted(siblings, g))}"
-            body, keepout = bname, False
-        verts = faces = None
-        if gtype == int(mujoco.mjtGeom.mjGEOM_MESH):
-            mid = int(m.geom_dataid[g])
-            va, vn = int(m.mesh_vertadr[mid]), int(m.mesh_vertnum[mid])
-            fa, fn = int(m.mesh_faceadr[mid]), int(m.mesh_facenum[mid])
-            verts = m.mesh_vert[va:va + vn].astype(float).copy()
-            faces = m.mesh_face[fa:fa + fn].astype(int).copy()
-        parts.append(PartModel(name, g, body, _SHAPES[gtype], m.geom_size[g].copy(), verts, faces, keepout))
+            named[g] = (sp.name, sp.body, sp.keepout)
+            continue
+        if m.body(int(m.geom_bodyid[g])).name.startswith(CABLE_PREFIX):
+            continue
+        is_visual = not own_bits[g].any()
+        if is_visual:
+            visual.add(g)
+        per_body.setdefault((int(m.geom_bodyid[g]), is_visual), []).append(g)
+    for (bid, _), geoms in per_body.items():
+        for g, name in zip(geoms, _geom_names(m, geoms)):
+            named[g] = (name, _body_name(m, bid), False)
+    parts, visuals, seen = [], [], {}
+    for g in sorted(named):
+        name, body, keepout = named[g]
+        if g not in visual:
+            if name in seen:
+                raise SceneError(scene.path, "parts", f"two parts are named {name!r} (a scene part and a "
+                                                      f"geom of the mjcf model); rename the scene part")
+            seen[name] = g
+        verts, faces = _mesh_arrays(m, g)
+        gtype = int(m.geom_type[g])
+        (visuals if g in visual else parts).append(
+            PartModel(name, g, body, _SHAPES[gtype], m.geom_size[g].copy(), verts, faces, keepout))
+    return parts, visuals
 
+
+def _model_skip(scene: Scene, m: mujoco.MjModel, parts: list[PartModel], own_bits: np.ndarray) -> np.ndarray:
+    """(P, P) bool: part pairs MuJoCo is told never to collide, which the
+    checker leaves out too: two geoms of the mjcf model whose own bits never
+    meet as written ((type1 & aff2) | (type2 & aff1) == 0), and any two parts
+    on a body pair of the model's `<contact><exclude>`. The parent-child and
+    same-body filters are `sim.stepcheck.part_pairs_skipped`'s."""
+    scene_names = {p.name for p in scene.parts}
+    gid = np.array([p.geom_id for p in parts], np.int64)
+    base = np.array([p.name not in scene_names for p in parts], bool)
+    ct, ca = own_bits[gid, 0], own_bits[gid, 1]
+    meet = ((ct[:, None] & ca[None, :]) | (ca[:, None] & ct[None, :])) != 0
+    skip = ~meet & base[:, None] & base[None, :]
+    if m.nexclude:
+        body = m.geom_bodyid[gid].astype(np.int64)
+        sig = m.exclude_signature.astype(np.int64)
+        pair = np.zeros((m.nbody, m.nbody), bool)
+        pair[sig >> 16, sig & 0xFFFF] = True
+        pair |= pair.T
+        skip |= pair[body[:, None], body[None, :]]
+    return skip
+
+
+def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
+            plans: list[_CablePlan], origin: np.ndarray, own_bits: np.ndarray) -> Built:
+    parts, visuals = _geom_parts(scene, m, own_bits)
+    model_skip = _model_skip(scene, m, parts, own_bits)
     cables = []
     qpos0 = m.qpos0.copy()
     for plan in plans:
@@ -719,6 +869,7 @@ def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
                                  float(seg.mean()), plan.routed + origin,
                                  tuple(sorted(attachments, key=lambda a: a.vertex)), c.min_bend_radius, s))
 
+    scene_bodies = {b.name for b in scene.bodies}
     free = {}
     for b in scene_bodies:
         j = int(m.body_jntadr[m.body(b).id])
@@ -744,4 +895,5 @@ def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
             scale = np.pi / 180.0 if jt == int(mujoco.mjtJoint.mjJNT_HINGE) else scene.scale
             joints[name] = JointDrive(name, jt, qa, da, scale)
     return Built(scene, m, det, cables, parts, free, body_ids,
-                 np.array(qadr_list, int), np.array(dadr_list, int), joints, qpos0, origin)
+                 np.array(qadr_list, int), np.array(dadr_list, int), joints, qpos0, origin,
+                 visuals, model_skip)

@@ -5,6 +5,9 @@ Entity tree (mirrors the scene, in the scene's units, z up):
   its own frame (a plane as a rectangle: its given size, else sized to cover
   the scene); its pose is static for parts on the world and logged per
   step for parts riding a moving body.
+- `world/visual/<body>/<geom>`: the mjcf model's visual geoms (those MuJoCo
+  never collides), in their own colours, posed like the parts (from the
+  step's qpos through MuJoCo's kinematics); drawn, never checked.
 - `world/cables/<name>`: the cable's centreline as a line strip of its true
   radius, coloured by its worst state at that step (clear, soft, hard).
 - `world/interference/<type>/<a>/<b>`: a marker at the worst point of each
@@ -30,6 +33,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import mujoco
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
@@ -48,6 +52,11 @@ KEEPOUT_COLOUR = (255, 140, 0, 90)
 def part_path(name: str) -> str:
     """Entity path of a part: its assembly levels become tree levels."""
     return "world/parts/" + "/".join(_escape(p) for p in name.split("/"))
+
+
+def visual_path(name: str) -> str:
+    """Entity path of a visual geom of the mjcf model (`<body>/<geom>`)."""
+    return "world/visual/" + "/".join(_escape(p) for p in name.split("/"))
 
 
 def _escape(level: str) -> str:
@@ -116,12 +125,17 @@ class Recorder:
         body_of_part = [p.body for p in built.parts]
         moving = {name for name in built.body_ids if name != "world"}
         self.moving_parts = np.array([b in moving for b in body_of_part], bool)
+        m = built.model
+        self._visual_geoms = np.array([v.geom_id for v in built.visuals], int)
+        self.moving_visuals = np.array([int(m.body_weldid[m.geom_bodyid[g]]) != 0 for g in self._visual_geoms], bool)
+        self._kin = mujoco.MjData(m) if len(self._visual_geoms) else None
         self._closed = False
         self._labelled: set[str] = set()
 
     # -- static content ---------------------------------------------------
-    def log_static(self, part_poses: np.ndarray) -> None:
-        """Parts' shapes (and poses of parts that never move), once."""
+    def log_static(self, part_poses: np.ndarray, qpos: np.ndarray | None = None) -> None:
+        """Parts' and visual geoms' shapes (and poses of those that never
+        move), once; `qpos` (the simulation's, at t = 0) poses the visual geoms."""
         rec = self.rec
         rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         scene_points = self._scene_points(part_poses)
@@ -133,10 +147,38 @@ class Recorder:
             rec.log(path, self._shape(part), static=True)
             if not self.moving_parts[k]:
                 rec.log(path, self._transform(part_poses[k]), static=True)
+        if self._kin is None:
+            return
+        poses = self._visual_poses(self.built.qpos0 if qpos is None else qpos)
+        for k, vis in enumerate(self.built.visuals):
+            path = visual_path(vis.name)
+            rec.log(path, self._shape(vis, self._visual_colour(vis.geom_id)), static=True)
+            if not self.moving_visuals[k]:
+                rec.log(path, self._transform(poses[k]), static=True)
 
-    def _shape(self, part: PartModel):
+    def _visual_poses(self, qpos: np.ndarray) -> np.ndarray:
+        """(V, 4, 4) scene-world poses of the visual geoms at `qpos`."""
+        m, d = self.built.model, self._kin
+        d.qpos[:] = qpos
+        mujoco.mj_kinematics(m, d)
+        g = self._visual_geoms
+        poses = np.zeros((len(g), 4, 4))
+        poses[:, :3, :3] = d.geom_xmat[g].reshape(-1, 3, 3)
+        poses[:, :3, 3] = d.geom_xpos[g] + self.built.origin
+        poses[:, 3, 3] = 1.0
+        return poses
+
+    def _visual_colour(self, g: int) -> tuple[int, ...]:
+        """The geom's colour as MuJoCo draws it: its material's, else its own rgba."""
+        m = self.built.model
+        mat = int(m.geom_matid[g])
+        rgba = m.mat_rgba[mat] if mat >= 0 else m.geom_rgba[g]
+        return tuple(int(round(255 * float(c))) for c in np.clip(rgba, 0.0, 1.0))
+
+    def _shape(self, part: PartModel, colour=None):
         u = self.unit
-        colour = KEEPOUT_COLOUR if part.keepout else PART_COLOUR
+        if colour is None:
+            colour = KEEPOUT_COLOUR if part.keepout else PART_COLOUR
         size = np.asarray(part.size, float) / u
         if part.shape == "box":
             return rr.Boxes3D(half_sizes=[size], colors=[colour], fill_mode="solid")
@@ -180,12 +222,18 @@ class Recorder:
 
     # -- per step ---------------------------------------------------------
     def log_step(self, t: float, cables: list[np.ndarray], part_poses: np.ndarray,
-                 cable_states: list[str], strain: np.ndarray, bend: np.ndarray) -> None:
-        """One step: moving parts' poses, cables (coloured by state) and per-cable series."""
+                 cable_states: list[str], strain: np.ndarray, bend: np.ndarray,
+                 qpos: np.ndarray | None = None) -> None:
+        """One step: moving parts' and (given `qpos`) visual geoms' poses,
+        cables (coloured by state) and per-cable series."""
         rec, u = self.rec, self.unit
         rec.set_time("sim_time", duration=t)
         for k in np.flatnonzero(self.moving_parts):
             rec.log(part_path(self.built.parts[k].name), self._transform(part_poses[k]))
+        if qpos is not None and self.moving_visuals.any():
+            poses = self._visual_poses(qpos)
+            for k in np.flatnonzero(self.moving_visuals):
+                rec.log(visual_path(self.built.visuals[k].name), self._transform(poses[k]))
         for i, (cable, pts) in enumerate(zip(self.built.cables, cables)):
             rec.log(f"world/cables/{_escape(cable.name)}",
                     rr.LineStrips3D([pts / u], radii=[cable.radius / u],

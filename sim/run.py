@@ -237,7 +237,7 @@ class _Outcome:
             if state.step == 0:
                 self.rest_points = state.cables
                 if recorder:
-                    recorder.log_static(state.part_poses)
+                    recorder.log_static(state.part_poses, state.qpos)
             self.max_strain = np.maximum(self.max_strain, res.strain)
             self.min_bend = np.minimum(self.min_bend, res.bend)
             started, closed = self.tracker.update(state.t, res.records)
@@ -260,7 +260,7 @@ class _Outcome:
 def _record_step(recorder: Recorder, state, contacts, records, names, strain, bend, agreement,
                  started, closed, tracker: EventTracker, markers: set[str], unit: float) -> None:
     recorder.log_step(state.t, state.cables, state.part_poses, _worst_by_cable(records, names),
-                      strain=strain, bend=bend)
+                      strain=strain, bend=bend, qpos=state.qpos)
     now = {}
     for r in records:
         path = pair_path(PairType(r.type).value, r.a, r.b)

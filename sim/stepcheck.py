@@ -313,7 +313,9 @@ def part_pairs_skipped(built: Built) -> np.ndarray:
       body itself) when a joint joins them: arm links overlap at their joints
       by design;
     - two geoms of the base mjcf model in the same rigid (weld) group: the
-      model author's layout, never colliding in MuJoCo either.
+      model author's layout, never colliding in MuJoCo either;
+    - pairs the mjcf model itself excludes (`Built.model_skip`: its own
+      contact bits, `<contact><exclude>`).
     Scene `[[parts]]` on one body are checked against each other (once, at
     t = 0)."""
     m = built.model
@@ -326,6 +328,8 @@ def part_pairs_skipped(built: Built) -> np.ndarray:
     child_of = (parent[:, None] == body[None, :]) & (parent[:, None] != 0) & jointed[body][:, None]
     skip = child_of | child_of.T
     skip |= (weld[:, None] == weld[None, :]) & base[:, None] & base[None, :]
+    if built.model_skip.shape == skip.shape:
+        skip |= built.model_skip
     np.fill_diagonal(skip, True)
     return skip
 

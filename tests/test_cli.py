@@ -228,7 +228,7 @@ def test_only_restricts_a_run_to_one_assembly(tmp_path: Path):
     assert events("keepout_bolt.toml", "--only", "plate/base") == set()
     everything = events("arm.toml")
     forearm = events("arm.toml", "--only", "forearm")
-    assert forearm and forearm == {e for e in everything if e[2] == "forearm"} != everything
+    assert forearm and forearm == {e for e in everything if e[2] == "forearm/fore_link"} != everything
 
 
 def test_only_unknown_assembly_exits_2(small_scene: Path, capsys):
