@@ -264,3 +264,114 @@ def test_plane_is_drawn_sized_to_the_scene_or_as_given():
     tilted[:3, :3] = [[0, 0, 1], [0, 1, 0], [-1, 0, 0]]     # normal along +x: local x is world -z
     assert np.allclose(plane_half_sizes(np.zeros(3), tilted, pts), [0.36, 0.6])
     assert np.allclose(plane_half_sizes(np.array([0.5, 0.25, 0.1]), pose, pts), [0.5, 0.25])
+
+
+# -- an mjcf model as it comes ------------------------------------------------
+
+_ARM = """<mujoco>
+  <asset><mesh name="lug" vertex="0 0 0  0.02 0 0  0 0.02 0  0 0 0.02"/></asset>
+  <worldbody>
+    <body name="stand" pos="0 0 0.2">
+      {visual_stand}
+      <geom name="column" type="box" size="0.03 0.03 0.1" contype="1" conaffinity="1"/>
+      <body name="link" pos="0 0 0.15">
+        <joint name="j" type="hinge" axis="0 0 1"/>
+        {visual_link}
+        <geom type="capsule" fromto="0 0 0 0.25 0 0" size="0.02" contype="2" conaffinity="0"/>
+        <geom type="mesh" mesh="lug" pos="0.25 0 0" contype="2" conaffinity="0"/>
+        <geom type="sphere" size="0.015" pos="0.1 0 0.05" contype="0" conaffinity="2"/>
+      </body>
+    </body>
+    <body name="post" pos="0.45 0 0.2">
+      <joint name="lift" type="slide" axis="0 0 1"/>
+      <geom name="rod" type="cylinder" size="0.02 0.15" contype="2" conaffinity="1"/>
+    </body>
+  </worldbody>
+  {contact}
+</mujoco>"""
+
+_VISUALS = dict(
+    visual_stand='<geom type="box" size="0.05 0.05 0.12" contype="0" conaffinity="0" group="2"/>',
+    visual_link='<geom type="mesh" mesh="lug" contype="0" conaffinity="0" group="2"/>'
+                '<geom name="shell" type="capsule" fromto="0 0 0 0.25 0 0" size="0.03" '
+                'contype="0" conaffinity="0" group="2"/>')
+
+
+def _arm_scene(tmp_path: Path, visuals: bool, contact: str = "", effects=("cable-structure",)) -> dict:
+    fill = _VISUALS if visuals else dict.fromkeys(_VISUALS, "")
+    (tmp_path / "arm.xml").write_text(_ARM.format(contact=contact, **fill))
+    return {
+        "scene": {"name": "t", "units": "m", "duration": 0.05, "settle": 0.05, "mjcf": "arm.xml"},
+        "effects": {"contact": list(effects)},
+        "parts": [{"name": "cell/table", "shape": "box", "size": [0.5, 0.5, 0.01], "pos": [0.2, 0, 0.09]}],
+        "cables": [{"name": "hose", "radius": 0.005, "start": {"body": "stand", "pos": [-0.05, 0, 0.0]},
+                    "end": {"body": "link", "pos": [0.2, 0, 0.03]}, "length": 0.5, "segments": 16}],
+    }
+
+
+def _built(tmp_path: Path, **kw):
+    return build(parse_scene(_arm_scene(tmp_path, **kw), tmp_path / "s.toml"))
+
+
+def test_visual_geoms_are_drawn_never_parts_and_names_do_not_move(tmp_path):
+    """A model with and without its visual geoms gives the same parts, names
+    and skipped pairs; the visual geoms are listed to be drawn."""
+    from sim.stepcheck import part_pairs_skipped
+    bare, dressed = _built(tmp_path, visuals=False), _built(tmp_path, visuals=True)
+    names = [p.name for p in bare.parts]
+    assert names == [p.name for p in dressed.parts]
+    assert set(names) == {"cell/table", "stand/column", "link/capsule0", "link/lug", "link/sphere2", "post/rod"}
+    assert [v.name for v in dressed.visuals] == ["stand/box0", "link/lug", "link/shell"] and not bare.visuals
+    assert np.array_equal(part_pairs_skipped(bare), part_pairs_skipped(dressed))
+    for built in (bare, dressed):
+        for m in (built.model, built.detect):
+            for v in built.visuals:
+                assert m.geom_contype[v.geom_id] == 0 and m.geom_conaffinity[v.geom_id] == 0
+
+
+def test_the_models_own_bits_are_kept_and_filter_part_pairs(tmp_path):
+    from sim.stepcheck import part_pairs_skipped
+    built = _built(tmp_path, visuals=True, effects=("cable-structure", "part-part"))
+    by = {p.name: p.geom_id for p in built.parts}
+    m, det = built.model, built.detect
+    # the scene's bits are the three lowest the model leaves free (it uses 1 and 2): 4, 8, 16
+    cable, part = 4, 16
+    assert m.flex_contype[0] == cable
+    for name, own in {"stand/column": (1, 1), "link/capsule0": (2, 0), "link/sphere2": (0, 2)}.items():
+        g = by[name]
+        assert (m.geom_contype[g], m.geom_conaffinity[g]) == (own[0], own[1] | cable | part)
+        assert (det.geom_contype[g], det.geom_conaffinity[g]) == (own[0], own[1] | cable | part)
+    assert (m.geom_contype[by["cell/table"]], m.geom_conaffinity[by["cell/table"]]) == (part, part | cable)
+    # without part-part the model's geoms take no part in collisions but the cable's
+    only_cable = _built(tmp_path, visuals=True)
+    g = [p.geom_id for p in only_cable.parts if p.name == "stand/column"][0]
+    assert (only_cable.model.geom_contype[g], only_cable.model.geom_conaffinity[g]) == (0, cable)
+    skip = part_pairs_skipped(built)
+    idx = {p.name: k for k, p in enumerate(built.parts)}
+    # the rod (2/1) meets the column (1/1) and the sphere (0/2), never the capsule or lug (2/0)
+    assert not skip[idx["stand/column"], idx["post/rod"]] and not skip[idx["link/sphere2"], idx["post/rod"]]
+    assert skip[idx["link/capsule0"], idx["post/rod"]] and skip[idx["post/rod"], idx["link/lug"]]
+    # scene parts meet every model geom
+    assert not skip[idx["cell/table"], idx["link/capsule0"]] and not skip[idx["cell/table"], idx["stand/column"]]
+
+
+def test_model_exclude_pairs_are_honoured(tmp_path):
+    from sim.stepcheck import part_pairs_skipped
+    plain = _built(tmp_path, visuals=False)
+    excluded = _built(tmp_path, visuals=False, contact='<contact><exclude body1="link" body2="post"/></contact>')
+    for built, expect in ((plain, False), (excluded, True)):
+        idx = {p.name: k for k, p in enumerate(built.parts)}
+        skip = part_pairs_skipped(built)
+        assert skip[idx["link/sphere2"], idx["post/rod"]] == expect
+        assert skip[idx["post/rod"], idx["link/sphere2"]] == expect
+        assert not skip[idx["cell/table"], idx["post/rod"]]
+
+
+def test_visual_geoms_make_no_contacts_nor_events(tmp_path):
+    """A visual shell the cable runs through is never a contact, part or event."""
+    data = _arm_scene(tmp_path, visuals=True)
+    sim, states = _run(data, tmp_path)
+    visual_ids = {v.geom_id for v in sim.built.visuals}
+    raw = sim.collide(states[-1].qpos)
+    assert not (set(raw.geom.ravel()) & visual_ids)
+    assert all(not str(n).startswith(("link/shell", "stand/box0")) for s in states for n in s.contacts.b)
