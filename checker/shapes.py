@@ -36,6 +36,8 @@ over several parts: that is :mod:`checker.interference`'s job.
 
 from __future__ import annotations
 
+import itertools
+
 from dataclasses import dataclass, field
 from enum import Enum
 
@@ -99,6 +101,12 @@ class MeshData:
         centroids: (F, 3) triangle centroids.
         reach: float, largest distance from a centroid to its corners.
         tree: k-d tree over ``centroids``.
+        levels: the faces split by their own reach (centroid to farthest
+            corner) into halving classes, each ``(bound, face indices, k-d
+            tree over their centroids)``: a query for every triangle that
+            may come within r of a point asks each class for centroids
+            within r + its bound, so the few long slivers of a CAD
+            tessellation no longer widen the search for all the others.
         closed: the mesh is watertight and consistently wound, so inside and
             outside are defined and distances are signed.
         lo, hi: (3,) bounding box corners.
@@ -116,6 +124,7 @@ class MeshData:
     centroids: np.ndarray
     reach: float
     tree: cKDTree
+    levels: tuple
     closed: bool
     lo: np.ndarray
     hi: np.ndarray
@@ -153,15 +162,52 @@ class MeshData:
         vn = np.zeros_like(v)
         np.add.at(vn, f.ravel(), (ang[:, :, None] * fn[:, None, :]).reshape(-1, 3))
         centroids = (a + b + c) / 3.0
-        reach = float(
-            np.max(np.linalg.norm(corners - centroids[:, None, :], axis=2))
-        ) if len(f) else 0.0
+        face_reach = np.max(np.linalg.norm(corners - centroids[:, None, :], axis=2), axis=1) \
+            if len(f) else np.zeros(0)
+        reach = float(face_reach.max()) if len(f) else 0.0
         return MeshData(
             a=a, b=b, c=c, face_normals=fn, edge_normals=edge_normals, vertex_normals=vn,
             faces=f, vertices=v, centroids=centroids, reach=reach,
-            tree=cKDTree(centroids), closed=closed, lo=v.min(axis=0), hi=v.max(axis=0),
+            tree=cKDTree(centroids), levels=_reach_levels(centroids, face_reach, reach), closed=closed, lo=v.min(axis=0), hi=v.max(axis=0),
             tri_lo=np.minimum(np.minimum(a, b), c), tri_hi=np.maximum(np.maximum(a, b), c),
         )
+
+
+REACH_LEVELS = 6
+"""Classes of :attr:`MeshData.levels`: reach bounds reach_max / 2^j, the
+last class holding every face below reach_max / 2^5."""
+
+
+def _reach_levels(centroids: np.ndarray, face_reach: np.ndarray, reach: float) -> tuple:
+    if not len(face_reach):
+        return ()
+    bounds = reach / 2.0 ** np.arange(REACH_LEVELS)
+    cls = np.clip(np.floor(np.log2(reach / np.maximum(face_reach, reach * 2.0 ** -REACH_LEVELS))), 0,
+                  REACH_LEVELS - 1).astype(np.int64) if reach > 0 else np.zeros(len(face_reach), np.int64)
+    out = []
+    for j in range(REACH_LEVELS):
+        idx = np.flatnonzero(cls == j)
+        if len(idx):
+            # the class's own largest reach is the bound (never above bounds[j])
+            out.append((float(face_reach[idx].max()), idx, cKDTree(centroids[idx])))
+    return tuple(out)
+
+
+def _faces_within(m: "MeshData", q: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, faces): for each query point q[i], every face whose triangle may
+    come within radius[i] of it (its centroid within radius plus the face's
+    reach class bound; see :attr:`MeshData.levels`). A superset, exact to
+    filter."""
+    rows, faces = [], []
+    for bound, idx, tree in m.levels:
+        lists = tree.query_ball_point(q, radius + bound * (1 + 1e-12) + 1e-300)
+        cnt = np.fromiter(map(len, lists), dtype=np.int64, count=len(q))
+        flat = np.fromiter(itertools.chain.from_iterable(lists), dtype=np.int64, count=int(cnt.sum()))
+        rows.append(np.repeat(np.arange(len(q)), cnt))
+        faces.append(idx[flat])
+    if not rows:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return np.concatenate(rows), np.concatenate(faces)
 
 
 @dataclass(frozen=True, eq=False)
@@ -403,8 +449,9 @@ def _mesh_nearest(m: MeshData, p: np.ndarray, k: int = 8) -> tuple[np.ndarray, n
 
     Takes the k nearest centroids; a triangle whose centroid is farther than
     the k-th one cannot beat the best found if ``best <= d_k - reach``. Points
-    failing that bound are redone with every triangle whose centroid lies
-    within ``best + reach`` (rare for even meshes).
+    failing that bound are redone with every triangle that may come within
+    ``best`` (:func:`_faces_within`: its centroid within ``best`` plus its
+    reach class's bound).
 
     A small mesh (up to ``_BOX_FACES`` triangles, ``n * F`` up to
     ``_BOX_PAIRS``) takes another road, exact
@@ -435,10 +482,8 @@ def _mesh_nearest(m: MeshData, p: np.ndarray, k: int = 8) -> tuple[np.ndarray, n
     out_r = reg[sel]
     redo = np.nonzero((k < nf) & (best > dk[:, -1] - m.reach))[0]
     if len(redo):
-        lists = m.tree.query_ball_point(p[redo], best[redo] + m.reach * (1 + 1e-12) + 1e-300)
-        cnt = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(redo))
-        fi2 = np.fromiter((i for x in lists for i in x), dtype=np.int64, count=int(cnt.sum()))
-        rows2 = np.repeat(redo, cnt)
+        local, fi2 = _faces_within(m, p[redo], best[redo])
+        rows2 = redo[local]
         d2, cl2, reg2 = point_triangle(p[rows2], m.a[fi2], m.b[fi2], m.c[fi2])
         # Least per point: sort by (row, distance) and take each row's first.
         o = np.lexsort((d2, rows2))
@@ -822,10 +867,8 @@ def _mesh_segment_unsigned(m: MeshData, a: np.ndarray, b: np.ndarray,
     fb = fi[np.arange(n) * k + j]
     redo = np.nonzero((k < nf) & (best > dk[:, -1] - m.reach - half))[0]
     if len(redo):
-        lists = m.tree.query_ball_point(mid[redo], best[redo] + half[redo] + m.reach * (1 + 1e-12) + 1e-300)
-        cnt = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(redo))
-        fi2 = np.fromiter((i for x in lists for i in x), dtype=np.int64, count=int(cnt.sum()))
-        rows2 = np.repeat(redo, cnt)
+        local, fi2 = _faces_within(m, mid[redo], best[redo] + half[redo])
+        rows2 = redo[local]
         d2, t2, _ = segment_triangle(a[rows2], b[rows2], m.a[fi2], m.b[fi2], m.c[fi2])
         o = np.lexsort((d2, rows2))
         first = o[np.r_[True, rows2[o][1:] != rows2[o][:-1]]]
