@@ -135,3 +135,64 @@ def test_static_scenes_agree_with_mujoco(name: str, tmp_path_factory):
     """Nothing moves: MuJoCo's contacts class every (step, pair) as the checker does."""
     v = _report(name, "exact", tmp_path_factory)["validation"]
     assert v["pair_steps"] > 0 and v["agreement"] == 1.0
+
+
+# -- the robot cell: a real arm as published, visual meshes and all ------------
+
+ROBOT_CELL = SCENES / "robot_cell.toml"
+ROBOT_CELL_CI_S = 1.2
+"""Simulated seconds of the robot cell in the tests (the example runs 5 s;
+benchmarks/bench_robot_cell.py times the whole of it)."""
+
+
+@pytest.fixture(scope="module")
+def robot_cell(tmp_path_factory):
+    import dataclasses
+
+    from sim.build import build
+    scene = dataclasses.replace(load_scene(ROBOT_CELL), duration=ROBOT_CELL_CI_S)
+    out = tmp_path_factory.mktemp("cell") / "cell.json"
+    report = run_scene(scene, RunOptions(report=out, record=out.with_suffix(".rrd")))
+    return build(scene, detect=False), report, out.with_suffix(".rrd")
+
+
+def test_robot_cell_checks_collision_meshes_only(robot_cell):
+    built, report, recording = robot_cell
+    visual = {v.name for v in built.visuals}
+    assert len(visual) == 13 and len(built.parts) == 4 + 7      # cell parts + one collision mesh per link
+    assert {p.name for p in built.parts} >= {"j2s7s300_link_2/ah1_collision", "j2s7s300_link_4/f_collision"}
+    named = {e["a"] for e in report["events"]} | {e["b"] for e in report["events"]}
+    named |= {p["a"] for p in report["pairs"]} | {p["b"] for p in report["pairs"]}
+    assert report["complete"] and not (named & visual)
+    assert recording.stat().st_size > 0
+
+
+def test_robot_cell_dress_pack_is_clear_and_agrees_with_mujoco(robot_cell):
+    _, report, _ = robot_cell
+    # the hoses run on stand-offs: near the links (soft) but never into them, nor into each other
+    assert report["summary"]["hard"] == 0
+    assert {e["type"] for e in report["events"]} <= {"cable-structure"}
+    v = report["validation"]
+    assert v["checker_only"] == 0 and v["agreement"] >= 0.98
+
+
+def test_robot_cell_trajectory_file_is_the_scenes_motion():
+    """robot_cell/pick_place.csv (t, then joints in degrees) holds the keys the
+    scene drives its joints with, each within its joint's range."""
+    import csv
+
+    import mujoco
+    scene = load_scene(ROBOT_CELL)
+    with open(SCENES / "robot_cell" / "pick_place.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    header, values = rows[0], np.array(rows[1:], float)
+    assert header[0] == "t" and values[-1, 0] == pytest.approx(scene.duration)
+    by_joint = {m.joint: m for m in scene.motions}
+    assert set(header[1:]) == set(by_joint)
+    model = mujoco.MjModel.from_xml_path(str(scene.mjcf))
+    for k, joint in enumerate(header[1:], start=1):
+        keys = by_joint[joint].keys
+        assert np.allclose([key.t for key in keys], values[:, 0])
+        assert np.allclose([key.value for key in keys], values[:, k])
+        lo, hi = np.degrees(model.joint(joint).range)
+        assert lo <= values[:, k].min() and values[:, k].max() <= hi
