@@ -6,8 +6,9 @@ Entity tree (mirrors the scene, in the scene's units, z up):
   the scene); its pose is static for parts on the world and logged per
   step for parts riding a moving body.
 - `world/visual/<body>/<geom>`: the mjcf model's visual geoms (those MuJoCo
-  never collides), in their own colours, posed like the parts (from the
-  step's qpos through MuJoCo's kinematics); drawn, never checked.
+  never collides), in their own colours, static in their body's frame; the
+  body's pose (`world/visual/<body>`) comes from the step's qpos through
+  MuJoCo's kinematics, once per moving body. Drawn, never checked.
 - `world/cables/<name>`: the cable's centreline as a line strip of its true
   radius, coloured by its worst state at that step (clear, soft, hard).
 - `world/interference/<type>/<a>/<b>`: a marker at the worst point of each
@@ -54,9 +55,12 @@ def part_path(name: str) -> str:
     return "world/parts/" + "/".join(_escape(p) for p in name.split("/"))
 
 
-def visual_path(name: str) -> str:
-    """Entity path of a visual geom of the mjcf model (`<body>/<geom>`)."""
-    return "world/visual/" + "/".join(_escape(p) for p in name.split("/"))
+def visual_paths(body: str, name: str) -> tuple[str, str]:
+    """Entity paths of a visual geom of the mjcf model: its body's and its own
+    (`name` is `<body>/<geom>`)."""
+    body_path = "world/visual/" + _escape(body)
+    rest = name[len(body) + 1:] if name.startswith(body + "/") else name
+    return body_path, body_path + "/" + "/".join(_escape(p) for p in rest.split("/"))
 
 
 def _escape(level: str) -> str:
@@ -126,9 +130,13 @@ class Recorder:
         moving = {name for name in built.body_ids if name != "world"}
         self.moving_parts = np.array([b in moving for b in body_of_part], bool)
         m = built.model
-        self._visual_geoms = np.array([v.geom_id for v in built.visuals], int)
-        self.moving_visuals = np.array([int(m.body_weldid[m.geom_bodyid[g]]) != 0 for g in self._visual_geoms], bool)
-        self._kin = mujoco.MjData(m) if len(self._visual_geoms) else None
+        vis_body = np.array([int(m.geom_bodyid[v.geom_id]) for v in built.visuals], int)
+        self._vis_bodies = np.unique(vis_body)
+        self._vis_body_paths = {}
+        for v, b in zip(built.visuals, vis_body):
+            self._vis_body_paths[int(b)] = visual_paths(v.body, v.name)[0]
+        self.moving_visual_bodies = self._vis_bodies[m.body_weldid[self._vis_bodies] != 0]
+        self._kin = mujoco.MjData(m) if len(self._vis_bodies) else None
         self._closed = False
         self._labelled: set[str] = set()
 
@@ -149,22 +157,29 @@ class Recorder:
                 rec.log(path, self._transform(part_poses[k]), static=True)
         if self._kin is None:
             return
-        poses = self._visual_poses(self.built.qpos0 if qpos is None else qpos)
-        for k, vis in enumerate(self.built.visuals):
-            path = visual_path(vis.name)
-            rec.log(path, self._shape(vis, self._visual_colour(vis.geom_id)), static=True)
-            if not self.moving_visuals[k]:
-                rec.log(path, self._transform(poses[k]), static=True)
+        m = self.built.model
+        for vis in self.built.visuals:
+            g = vis.geom_id
+            local = np.eye(4)
+            mat = np.zeros(9)
+            mujoco.mju_quat2Mat(mat, m.geom_quat[g])
+            local[:3, :3], local[:3, 3] = mat.reshape(3, 3), m.geom_pos[g]
+            path = visual_paths(vis.body, vis.name)[1]
+            rec.log(path, self._shape(vis, self._visual_colour(g)), static=True)
+            rec.log(path, self._transform(local), static=True)
+        poses = self._body_poses(self.built.qpos0 if qpos is None else qpos, self._vis_bodies)
+        for b, pose in zip(self._vis_bodies, poses):
+            if m.body_weldid[b] == 0:
+                rec.log(self._vis_body_paths[int(b)], self._transform(pose), static=True)
 
-    def _visual_poses(self, qpos: np.ndarray) -> np.ndarray:
-        """(V, 4, 4) scene-world poses of the visual geoms at `qpos`."""
+    def _body_poses(self, qpos: np.ndarray, bodies: np.ndarray) -> np.ndarray:
+        """(B, 4, 4) scene-world poses of `bodies` at `qpos` (MuJoCo's kinematics)."""
         m, d = self.built.model, self._kin
         d.qpos[:] = qpos
         mujoco.mj_kinematics(m, d)
-        g = self._visual_geoms
-        poses = np.zeros((len(g), 4, 4))
-        poses[:, :3, :3] = d.geom_xmat[g].reshape(-1, 3, 3)
-        poses[:, :3, 3] = d.geom_xpos[g] + self.built.origin
+        poses = np.zeros((len(bodies), 4, 4))
+        poses[:, :3, :3] = d.xmat[bodies].reshape(-1, 3, 3)
+        poses[:, :3, 3] = d.xpos[bodies] + self.built.origin
         poses[:, 3, 3] = 1.0
         return poses
 
@@ -230,10 +245,10 @@ class Recorder:
         rec.set_time("sim_time", duration=t)
         for k in np.flatnonzero(self.moving_parts):
             rec.log(part_path(self.built.parts[k].name), self._transform(part_poses[k]))
-        if qpos is not None and self.moving_visuals.any():
-            poses = self._visual_poses(qpos)
-            for k in np.flatnonzero(self.moving_visuals):
-                rec.log(visual_path(self.built.visuals[k].name), self._transform(poses[k]))
+        if qpos is not None and len(self.moving_visual_bodies):
+            poses = self._body_poses(qpos, self.moving_visual_bodies)
+            for b, pose in zip(self.moving_visual_bodies, poses):
+                rec.log(self._vis_body_paths[int(b)], self._transform(pose))
         for i, (cable, pts) in enumerate(zip(self.built.cables, cables)):
             rec.log(f"world/cables/{_escape(cable.name)}",
                     rr.LineStrips3D([pts / u], radii=[cable.radius / u],

@@ -164,7 +164,34 @@ def test_robot_cell_checks_collision_meshes_only(robot_cell):
     named = {e["a"] for e in report["events"]} | {e["b"] for e in report["events"]}
     named |= {p["a"] for p in report["pairs"]} | {p["b"] for p in report["pairs"]}
     assert report["complete"] and not (named & visual)
-    assert recording.stat().st_size > 0
+    from test_cli import _assert_rrd_has
+    _assert_rrd_has(recording, ["/world/visual/j2s7s300_link_4/f_visual", "/world/visual/j2s7s300_link_4",
+                                "/world/parts/j2s7s300_link_4/f_collision"])
+
+
+def test_robot_cell_visual_geoms_are_drawn_where_mujoco_puts_them(robot_cell, tmp_path):
+    """Body pose (logged per step) times the geom's pose in its body (static)
+    is MuJoCo's own geom pose."""
+    import mujoco
+
+    from sim.record import Recorder
+    built, _, _ = robot_cell
+    rec = Recorder(built, tmp_path / "v.rrd")
+    m = built.model
+    qpos = built.qpos0.copy()
+    qpos[[built.joints[f"j2s7s300_joint_{k}"].qpos_adr for k in (1, 2, 4)]] += [0.3, -0.2, 0.4]
+    d = mujoco.MjData(m)
+    d.qpos[:] = qpos
+    mujoco.mj_kinematics(m, d)
+    for v in built.visuals:
+        body = int(m.geom_bodyid[v.geom_id])
+        pose = rec._body_poses(qpos, np.array([body]))[0]
+        mat = np.zeros(9)
+        mujoco.mju_quat2Mat(mat, m.geom_quat[v.geom_id])
+        assert np.allclose(pose[:3, :3] @ m.geom_pos[v.geom_id] + pose[:3, 3],
+                           d.geom_xpos[v.geom_id] + built.origin, atol=1e-12)
+        assert np.allclose(pose[:3, :3] @ mat.reshape(3, 3), d.geom_xmat[v.geom_id].reshape(3, 3), atol=1e-12)
+    rec.close()
 
 
 def test_robot_cell_dress_pack_is_clear_and_agrees_with_mujoco(robot_cell):
