@@ -174,21 +174,23 @@ class MeshData:
 
 
 REACH_LEVELS = 6
-"""Classes of :attr:`MeshData.levels`: reach bounds reach_max / 2^j, the
-last class holding every face below reach_max / 2^5."""
+"""Classes of :attr:`MeshData.levels`: a face of reach r goes to class
+floor(log2(reach_max / r)), the last class taking every face below
+reach_max / 2^5."""
 
 
-def _reach_levels(centroids: np.ndarray, face_reach: np.ndarray, reach: float) -> tuple:
-    if not len(face_reach):
-        return ()
-    bounds = reach / 2.0 ** np.arange(REACH_LEVELS)
-    cls = np.clip(np.floor(np.log2(reach / np.maximum(face_reach, reach * 2.0 ** -REACH_LEVELS))), 0,
-                  REACH_LEVELS - 1).astype(np.int64) if reach > 0 else np.zeros(len(face_reach), np.int64)
+def _reach_levels(centroids: np.ndarray, face_reach: np.ndarray, reach: float,
+                  levels: int = REACH_LEVELS, ratio: float = 2.0) -> tuple:
+    if not len(face_reach) or reach <= 0:
+        return ((reach, np.arange(len(face_reach)), cKDTree(centroids)),) if len(face_reach) else ()
+    floor = reach * ratio ** -(levels - 1)
+    cls = np.minimum(np.floor(np.log(reach / np.maximum(face_reach, floor)) / np.log(ratio)),
+                     levels - 1).astype(np.int64)
     out = []
-    for j in range(REACH_LEVELS):
+    for j in range(levels):
         idx = np.flatnonzero(cls == j)
         if len(idx):
-            # the class's own largest reach is the bound (never above bounds[j])
+            # the class's own largest reach is its bound
             out.append((float(face_reach[idx].max()), idx, cKDTree(centroids[idx])))
     return tuple(out)
 
@@ -207,7 +209,12 @@ def _faces_within(m: "MeshData", q: np.ndarray, radius: np.ndarray) -> tuple[np.
         faces.append(idx[flat])
     if not rows:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    return np.concatenate(rows), np.concatenate(faces)
+    rows, faces = np.concatenate(rows), np.concatenate(faces)
+    # A triangle is no nearer than its box: cheaper than the exact test it saves.
+    qr = q[rows]
+    gap = np.maximum(np.maximum(m.tri_lo[faces] - qr, qr - m.tri_hi[faces]), 0.0)
+    keep = np.einsum("ij,ij->i", gap, gap) <= np.square(radius[rows] * (1 + 1e-12) + 1e-300)
+    return rows[keep], faces[keep]
 
 
 @dataclass(frozen=True, eq=False)
