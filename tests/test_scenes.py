@@ -199,8 +199,12 @@ def test_robot_cell_dress_pack_is_clear_and_agrees_with_mujoco(robot_cell):
     # the hoses run on stand-offs: near the links (soft) but never into them, nor into each other
     assert report["summary"]["hard"] == 0
     assert {e["type"] for e in report["events"]} <= {"cable-structure"}
+    # MuJoCo collides a mesh's convex hull: the hoses pass within the clearance
+    # of the links' hulls where the meshes themselves are concave. Those are
+    # the only disagreements, and all MuJoCo's.
     v = report["validation"]
-    assert v["checker_only"] == 0 and v["agreement"] >= 0.98
+    assert v["checker_only"] == 0 and v["agreement"] >= 0.95
+    assert set(v["reasons"]) <= {"mesh convex hull"}, v["reasons"]
 
 
 def test_robot_cell_trajectory_file_is_the_scenes_motion():
