@@ -5,6 +5,8 @@ Subcommands:
   sweep SCENE move one part (or assembly) along a line; list the parts it hits.
   bench       measure what accuracy costs in time (tables, CSV and a plot).
   check SCENE validate a scene file without simulating it.
+  study FILE  run the variants of a design study on a Dask cluster (`sim.study`,
+              `sim.studyrun`); tabulate, plot and answer it.
 
 Exit status: 0 when nothing reaches the `--fail-on` level, 1 when something
 does, 2 for bad input (the message names the file, the key and the
@@ -19,6 +21,7 @@ is done in `sim.run`.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -113,6 +116,28 @@ def _parser() -> argparse.ArgumentParser:
                     help="precision in scene units (default 0.5 mm)")
     sw.add_argument("--only", metavar="PATH", help="test only the parts of this assembly path")
     sw.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    st = sub.add_parser("study", help="run the variants of a design study, locally or on a Dask cluster",
+                        description="Vary a scene as STUDY.toml says ([[vary]] keys, a grid or zip of "
+                                    "values), check every variant's scene, run the variants in parallel "
+                                    "and write <out>/<name>/results.csv, study.json, study.png and each "
+                                    "variant's report and recording under variants/<id>/. Exit status: 0 "
+                                    "when no variant reaches --fail-on, 1 when one does (or failed), 2 "
+                                    "for bad input, 130 when interrupted (finished variants are kept).")
+    st.add_argument("study", metavar="STUDY", type=Path, help="study file (TOML)")
+    where = st.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=_positive_int, metavar="N",
+                       help="worker processes of the embedded local cluster (default: the number "
+                            "of cores); it listens on 127.0.0.1 only")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="run on a running Dask scheduler instead, e.g. tcp://host:8786 "
+                            "(the scene's files travel with the tasks)")
+    st.add_argument("--out", type=Path, default=Path("recordings/studies"), metavar="DIR",
+                    help="output folder; the study writes DIR/<name>/ (default: recordings/studies)")
+    st.add_argument("--fail-on", choices=("hard", "soft", "never"), default="hard",
+                    help="exit 1 when a variant has interference of this severity or worse "
+                         "(default: hard)")
+    st.add_argument("--no-record", action="store_true", help="write no recordings, reports only")
+    st.add_argument("--quiet", action="store_true", help="print nothing but errors")
     bench = sub.add_parser("bench", help="what accuracy costs in time: tables, CSV and a plot",
                            description="Measure discretisation accuracy, physics resolution, scale, "
                                        "the checker beside python-fcl and MuJoCo's collision, and "
@@ -131,6 +156,16 @@ def _nonnegative_float(text: str) -> float:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
     if not (value >= 0 and value < float("inf")):
         raise argparse.ArgumentTypeError(f"must be a non-negative number: {text!r}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1: {text!r}")
     return value
 
 
@@ -257,6 +292,126 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     return EXIT_FAIL if (result["hits"] or result["overlapping"]) else EXIT_OK
 
 
+class _StudyBar:
+    """Progress over a study's variants on stderr: a redrawn bar on a terminal, else a line per tenth."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled
+        self.tty = sys.stderr.isatty()
+        self._tenth = -1
+
+    def __call__(self, done: int, total: int, failed: int) -> None:
+        if not self.enabled:
+            return
+        note = f", {failed} failed" if failed else ""
+        if self.tty:
+            bar = "#" * int(30 * done / total)
+            sys.stderr.write(f"\rvariants [{bar:<30}] {done}/{total}{note}  ")
+            sys.stderr.flush()
+        elif 10 * done // total != self._tenth:
+            self._tenth = 10 * done // total
+            sys.stderr.write(f"variants: {done}/{total}{note}\n")
+
+    def done(self) -> None:
+        if self.enabled and self.tty:
+            sys.stderr.write("\r" + " " * 70 + "\r")
+            sys.stderr.flush()
+
+
+def _cmd_study(args: argparse.Namespace, stop: StopRequest) -> int:
+    from sim.bundle import make_bundle
+    from sim.outputs import check_folder
+    from sim.study import check_variants, load_study, variants
+    from sim.studyresult import fails, length_window
+
+    check_folder(args.out, "--out")
+    study = load_study(args.study)
+    folder = args.out / study.name
+    check_folder(folder, "study folder (--out/<name>)")
+    found = variants(study)
+    scenes = check_variants(study, found)   # every variant's scene, before anything runs
+    bundle, datas = make_bundle(study.scene_path, [v.data for v in found])
+    from sim.studyplot import write_outputs
+    from sim.studyrun import VariantTask, run_variants
+
+    tasks = [VariantTask(id=v.id, data=d, record=not args.no_record) for v, d in zip(found, datas)]
+    where = (f"the Dask scheduler at {args.scheduler}" if args.scheduler else
+             f"{args.workers or os.cpu_count() or 1} local worker process(es)")
+    if not args.quiet:
+        print(f"study {study.name}: {len(tasks)} variant(s) of {study.scene_path} on {where}",
+              flush=True)
+    bar = _StudyBar(enabled=not args.quiet)
+    try:
+        rows, complete = run_variants(tasks, {v.id: v.values for v in found}, bundle, folder,
+                                      workers=args.workers, scheduler=args.scheduler, stop=stop,
+                                      progress=bar)
+    finally:
+        bar.done()
+    units = scenes[0].units
+    window = None
+    if len(study.vary) == 1 and study.vary[0].path.endswith(".length") and \
+            study.vary[0].path.startswith("cables[") and all(
+                isinstance(x, (int, float)) and not isinstance(x, bool) for x in study.vary[0].values):
+        window = length_window(rows)
+    settings = {"fail_on": args.fail_on, "record": not args.no_record,
+                "cluster": args.scheduler or f"local, {args.workers or os.cpu_count() or 1} workers",
+                "version": version()}
+    paths = write_outputs(folder, study, rows, complete=complete, units=units, window=window,
+                          settings=settings)
+    if not args.quiet:
+        _print_study(study, rows, units, window, complete, paths)
+    if not complete:
+        return EXIT_TERMINATED if stop.signal_name == "SIGTERM" else EXIT_INTERRUPTED
+    return EXIT_FAIL if any(fails(r, args.fail_on) for r in rows) else EXIT_OK
+
+
+def _print_study(study, rows, units: str, window, complete: bool, paths: dict) -> None:
+    from sim.study import format_value
+    from sim.studyresult import Status, free_of_hard
+
+    def num(x, fmt=".4g"):
+        return "-" if x is None else format(x, fmt)
+
+    keys = [v.key for v in study.vary]
+    values = [", ".join(format_value(x) for x in r.values) for r in rows]
+    vw = max(len(" ; ".join(keys)), *(len(v) for v in values))
+    print(f"  {'id':<4} {' ; '.join(keys):<{vw}}  {'hard':>4} {'soft':>4} {'worst':>9} "
+          f"{'strain %':>8} {'bend':>8}  time s  status")
+    for r, v in zip(rows, values):
+        if r.status is Status.DONE:
+            flags = "".join(f" {f}" for f, on in (("TAUT", r.taut), ("BEND", r.bend_violation)) if on)
+            strain = None if r.max_strain is None else 100 * r.max_strain
+            print(f"  {r.id:<4} {v:<{vw}}  {r.hard:>4} {r.soft:>4} {num(r.worst_distance):>9} "
+                  f"{num(strain, '.2f'):>8} {num(r.min_bend_radius):>8}  {num(r.run_s, '6.1f'):>6}  "
+                  f"done{flags}")
+        else:
+            print(f"  {r.id:<4} {v:<{vw}}  {r.status.value.upper()}: {r.error}")
+    free = free_of_hard(rows)
+    print(f"  free of hard events: {len(free)} of {len(rows)}"
+          + (": " + "; ".join(f"{r.id} ({', '.join(format_value(x) for x in r.values)})"
+                              for r in free) if free else ""))
+    if window is not None:
+        key = study.vary[0].key
+        if window.shortest is None:
+            print(f"  {key}: every length tried was pulled taut; try longer")
+        elif window.longest is None:
+            print(f"  {key}: every length tried had hard contact or a bend violation")
+        elif not window.exists:
+            print(f"  {key}: no interference-free length: shortest not taut {window.shortest:g} {units}, "
+                  f"longest without hard contact or bend violation {window.longest:g} {units}")
+        else:
+            lo = f" (taut at {window.below:g})" if window.below is not None else " (shortest tried)"
+            hi = (f" (hard contact or bend violation at {window.above:g})" if window.above is not None
+                  else " (longest tried)")
+            print(f"  interference-free window of {key}: {window.shortest:g}{lo} to "
+                  f"{window.longest:g} {units}{hi}")
+            print(f"  recommended: {window.recommended:g} {units} (the clean length tried nearest "
+                  f"the middle of the window)")
+    if not complete:
+        print("  INTERRUPTED: the tables hold the variants that finished (the others: not run)")
+    print(f"  results: {paths['csv']}  (also {paths['json'].name}, {paths['png'].name})")
+
+
 def _print_sweep(r: dict, path: Path) -> None:
     u = r["units"]
     d = ", ".join(f"{x:.4g}" for x in r["direction"])
@@ -380,6 +535,7 @@ def _main(args: argparse.Namespace, stop: StopRequest) -> int:
     try:   # numpy, MuJoCo and trimesh load here, with the signals already taken
         from sim.outputs import OutputPathError
         from sim.scene import SceneError
+        from sim.studyrun import StudyRunError
     except KeyboardInterrupt:
         print("cablecheck: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
@@ -391,6 +547,8 @@ def _main(args: argparse.Namespace, stop: StopRequest) -> int:
             return _cmd_run(args, stop)
         if args.command == "sweep":
             return _cmd_sweep(args)
+        if args.command == "study":
+            return _cmd_study(args, stop)
         if args.command == "bench":
             from sim.bench import run_bench
             from sim.outputs import check_folder
@@ -413,6 +571,9 @@ def _main(args: argparse.Namespace, stop: StopRequest) -> int:
         return EXIT_BAD_INPUT
     except OSError as e:
         print(f"cablecheck: error: {e.filename or ''}: {e.strerror or e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except StudyRunError as e:   # a cluster that cannot be used
+        print(f"cablecheck: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("cablecheck: interrupted", file=sys.stderr)

@@ -1,0 +1,160 @@
+"""A study's outputs: results.csv, study.json and study.png.
+
+`write_outputs` writes, into the study's folder, the rows as a CSV table
+(one row per variant: id, the varied values, then `sim.studyresult.COLUMNS`),
+the same as JSON with the study's settings, each variant's report and
+recording path and the answer (variants free of hard events, the length
+window), and a plot of each varied value against hard / soft counts, worst
+distance, max strain and min bend radius (matplotlib, Agg backend: no
+display needed). Every file is written atomically.
+
+This module does not run variants (see `sim.studyrun`) or decide the answer
+(see `sim.studyresult`).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import tempfile
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+from sim.study import Study, format_value
+from sim.studyresult import COLUMNS, Row, Status, Window
+
+SCHEMA = "cablecheck.study/1"
+
+PLOTTED = (("hard", "hard events"), ("soft", "soft events"), ("worst_distance", "worst distance"),
+           ("max_strain", "max strain"), ("min_bend_radius", "min bend radius"))
+"""Row fields drawn in study.png, with their axis labels (lengths in scene units)."""
+
+
+def write_outputs(folder: Path, study: Study, rows: list[Row], *, complete: bool, units: str,
+                  window: Window | None, settings: dict[str, Any]) -> dict[str, Path]:
+    """Write results.csv, study.json and study.png into `folder`; return their paths."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = {"csv": folder / "results.csv", "json": folder / "study.json", "png": folder / "study.png"}
+    _atomic_text(paths["csv"], results_csv(study, rows))
+    _atomic_text(paths["json"], json.dumps(study_json(study, rows, complete=complete, units=units,
+                                                      window=window, settings=settings),
+                                           indent=1, allow_nan=False) + "\n")
+    plot(paths["png"], study, rows, units)
+    return paths
+
+
+def results_csv(study: Study, rows: list[Row]) -> str:
+    """The CSV text: header id, the vary keys, COLUMNS; one line per row (empty cells for None)."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["id", *(v.key for v in study.vary), *COLUMNS])
+    for r in rows:
+        w.writerow([r.id, *(format_value(x) for x in r.values),
+                    *(_cell(getattr(r, c)) for c in COLUMNS)])
+    return buf.getvalue()
+
+
+def _cell(value: Any) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, Status):
+        return value.value
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return repr(value)
+    return str(value)
+
+
+def study_json(study: Study, rows: list[Row], *, complete: bool, units: str, window: Window | None,
+               settings: dict[str, Any]) -> dict:
+    """The study.json document."""
+    out_rows = []
+    for r in rows:
+        d = asdict(r)
+        d["status"] = r.status.value
+        d["values"] = {v.key: x for v, x in zip(study.vary, r.values)}
+        out_rows.append(d)
+    return {
+        "schema": SCHEMA,
+        "study": study.name,
+        "study_file": str(study.path),
+        "scene": str(study.scene_path),
+        "units": units,
+        "mode": study.mode.value,
+        "vary": [{"key": v.key, "scene_key": v.path, "values": list(v.values)} for v in study.vary],
+        "complete": complete,
+        "settings": settings,
+        "rows": out_rows,
+        "free_of_hard": [r.id for r in rows if r.status is Status.DONE and r.hard == 0],
+        "window": None if window is None else {**asdict(window), "clean": list(window.clean),
+                                               "key": study.vary[0].key},
+    }
+
+
+def plot(path: Path, study: Study, rows: list[Row], units: str) -> None:
+    """study.png: one column per varied key, one row of axes per plotted field.
+
+    A key with number values is the x axis as it is; any other (arrays,
+    strings) is drawn against the value's position in its list, labelled
+    with the values."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    done = [r for r in rows if r.status is Status.DONE]
+    ncol = len(study.vary)
+    fig, axes = plt.subplots(len(PLOTTED), ncol, figsize=(4.2 * ncol, 2.0 * len(PLOTTED)),
+                             squeeze=False, sharex="col")
+    for j, v in enumerate(study.vary):
+        numeric = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v.values)
+        labels = [format_value(x) for x in v.values]
+        xs = [(float(r.values[j]) if numeric else labels.index(format_value(r.values[j]))) for r in done]
+        for i, (field, label) in enumerate(PLOTTED):
+            ax = axes[i][j]
+            pts = sorted((x, getattr(r, field)) for x, r in zip(xs, done)
+                         if getattr(r, field) is not None)
+            if pts:
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-" if ncol == 1 else "o",
+                        markersize=4)
+            unit = f" ({units})" if field in ("worst_distance", "min_bend_radius") else ""
+            if j == 0:
+                ax.set_ylabel(label + unit, fontsize=8)
+            ax.grid(alpha=0.3)
+            ax.tick_params(labelsize=7)
+        bottom = axes[-1][j]
+        bottom.set_xlabel(v.key, fontsize=8)
+        if not numeric:
+            bottom.set_xticks(range(len(labels)), labels, rotation=30, fontsize=6)
+    failed = len(rows) - len(done)
+    fig.suptitle(f"study {study.name}: {len(done)} of {len(rows)} variants"
+                 + (f" ({failed} failed or not run)" if failed else ""), fontsize=10)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    write_atomic(Path(path), buf.getvalue())
+
+
+def _atomic_text(path: Path, text: str) -> None:
+    write_atomic(path, text.encode("utf-8"))
+
+
+def write_atomic(path: Path, content: bytes) -> None:
+    """Write `content` to `path` through a temporary file in the same folder."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(content)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

@@ -1,0 +1,171 @@
+"""A study's rows and its answer, from the variants' reports.
+
+`row_from_report` reduces one variant's report to the numbers a study
+compares (hard / soft event counts, worst distance, strain and bend
+extremes, agreement with MuJoCo, run time); `free_of_hard` and
+`length_window` answer the study's question: which variants have no hard
+interference, and for a single varied cable length, the window of lengths
+that are neither pulled taut nor in hard contact or bent too tight.
+
+This module is pure bookkeeping on report dicts: it runs nothing (see
+`sim.studyrun`) and writes nothing (see `sim.studyplot`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+from typing import Any
+
+SHAPE_TYPES = ("bend", "taut")
+"""Event types about one cable's shape, not a distance between surfaces."""
+
+
+class Status(Enum):
+    """What became of a variant."""
+
+    DONE = "done"          # ran to the end; its report is there
+    FAILED = "failed"      # raised an error (see `Row.error`)
+    NOT_RUN = "not run"    # the study was interrupted before it finished
+
+
+@dataclass(frozen=True)
+class Row:
+    """One variant of a study.
+
+    Attributes:
+      id: the variant's id (its folder name).
+      values: the varied values, one per ``[[vary]]`` key.
+      status: done, failed or not run.
+      exit_status: what `cablecheck run` of this variant exits with under
+        ``--fail-on hard`` (0 or 1); None unless done.
+      hard, soft: event counts.
+      worst_distance: the smallest signed surface distance of any pair that
+        came within the clearance (scene units), excluding bend and taut;
+        None when none did.
+      max_strain: the largest absolute strain over the cables (signed).
+      min_bend_radius: the tightest bend over the cables (scene units);
+        None when every cable stayed straight.
+      taut, bend_violation: any cable pulled taut / bent below its limit.
+      agreement: fraction of (step, pair) classifications on which the
+        checker and MuJoCo agree; None without validation.
+      run_s: the run's own wall time (its report's timing.total_s).
+      error: the failure, in words, for a failed or unrun variant.
+      report, recording: the variant's output files (paths as text), or None.
+    """
+
+    id: str
+    values: tuple[Any, ...]
+    status: Status
+    exit_status: int | None = None
+    hard: int | None = None
+    soft: int | None = None
+    worst_distance: float | None = None
+    max_strain: float | None = None
+    min_bend_radius: float | None = None
+    taut: bool | None = None
+    bend_violation: bool | None = None
+    agreement: float | None = None
+    run_s: float | None = None
+    error: str | None = None
+    report: str | None = None
+    recording: str | None = None
+
+
+COLUMNS = ("status", "exit_status", "hard", "soft", "worst_distance", "max_strain",
+           "min_bend_radius", "taut", "bend_violation", "agreement", "run_s", "error")
+"""Row fields after the id and the varied values, in the order results.csv gives them."""
+
+
+def row_from_report(id: str, values: tuple, report: dict, report_path: str | None = None,
+                    recording: str | None = None) -> Row:
+    """The study row of a variant's report (see `Row` for each field)."""
+    summary = report["summary"]
+    distances = [p["min_distance"] for p in report.get("pairs", ()) if p["type"] not in SHAPE_TYPES]
+    cables = report.get("cables", ())
+    strains = [c["max_strain"] for c in cables if c.get("max_strain") is not None]
+    bends = [c["min_bend_radius"] for c in cables if c.get("min_bend_radius") is not None]
+    validation = report.get("validation")
+    return Row(
+        id=id, values=tuple(values), status=Status.DONE,
+        exit_status=1 if summary["hard"] > 0 else 0,
+        hard=summary["hard"], soft=summary["soft"],
+        worst_distance=min(distances) if distances else None,
+        max_strain=max(strains, key=abs) if strains else None,
+        min_bend_radius=min(bends) if bends else None,
+        taut=any(c.get("taut", False) for c in cables),
+        bend_violation=any(c.get("bend_violation", False) for c in cables),
+        agreement=None if validation is None else validation.get("agreement"),
+        run_s=report.get("timing", {}).get("total_s"),
+        report=report_path, recording=recording)
+
+
+def fails(row: Row, level: str) -> bool:
+    """The row fails `--fail-on level` ("hard", "soft" or "never"); a
+    variant that did not finish fails unless the level is "never"."""
+    if level == "never":
+        return False
+    if row.status is not Status.DONE:
+        return True
+    return row.hard > 0 or (level == "soft" and row.soft > 0)
+
+
+def free_of_hard(rows: list[Row]) -> list[Row]:
+    """The finished variants with no hard interference event."""
+    return [r for r in rows if r.status is Status.DONE and r.hard == 0]
+
+
+@dataclass(frozen=True)
+class Window:
+    """The interference-free window of a single varied cable length.
+
+    Lengths are the tried values, in scene units. The true bounds lie
+    between a bound and its neighbour outside the window (`below`, `above`).
+
+    Attributes:
+      shortest: the shortest length that is not taut; None if all were.
+      below: the longest taut length shorter than `shortest`, or None.
+      longest: the longest length without hard contact or bend violation;
+        None if every length had one.
+      above: the shortest length longer than `longest` that had one, or None.
+      clean: the tried lengths in [shortest, longest] that are neither taut
+        nor in hard contact nor bent too tight.
+      recommended: the clean length nearest the middle of the window (the
+        longer one of two as near); None when no tried length is clean.
+    """
+
+    shortest: float | None
+    below: float | None
+    longest: float | None
+    above: float | None
+    clean: tuple[float, ...]
+    recommended: float | None
+
+    @property
+    def exists(self) -> bool:
+        return self.recommended is not None
+
+
+def length_window(rows: list[Row], index: int = 0) -> Window:
+    """The interference-free window over the finished rows, the length
+    being `values[index]`: shortest length not taut, longest length with
+    no hard contact and no bend violation."""
+    done = sorted((r for r in rows if r.status is Status.DONE), key=lambda r: r.values[index])
+    lengths = [float(r.values[index]) for r in done]
+    untaut = [L for L, r in zip(lengths, done) if not r.taut]
+    shortest = min(untaut) if untaut else None
+    below = max((L for L, r in zip(lengths, done) if r.taut and shortest is not None
+                 and L < shortest), default=None)
+    ok = [L for L, r in zip(lengths, done) if r.hard == 0 and not r.bend_violation]
+    longest = max(ok) if ok else None
+    above = min((L for L, r in zip(lengths, done) if (r.hard > 0 or r.bend_violation)
+                 and longest is not None and L > longest), default=None)
+    clean = tuple(L for L, r in zip(lengths, done)
+                  if not r.taut and r.hard == 0 and not r.bend_violation
+                  and shortest is not None and longest is not None and shortest <= L <= longest)
+    recommended = None
+    if clean:
+        middle = 0.5 * (shortest + longest)
+        recommended = min(clean, key=lambda L: (abs(L - middle), -L))
+    return Window(shortest=shortest, below=below, longest=longest, above=above, clean=clean,
+                  recommended=recommended)

@@ -1,0 +1,220 @@
+"""Run a study's variants on Dask distributed: an embedded local cluster or a running scheduler.
+
+`run_variants` submits one task per variant and collects the outcomes as
+they finish. Each task (`run_variant`) gets the variant's scene dict and the
+scene's files as bytes (`sim.bundle`, scattered to the cluster once), writes
+them into a temporary folder on the worker, parses and runs the scene with
+`sim.run.run_scene`, and returns the report and the recording as bytes: the
+workers need no shared disk, and the same inputs give the same numbers
+wherever they run. The client writes each variant's report and recording
+into ``<out>/variants/<id>/`` as soon as it arrives.
+
+The embedded cluster (`--workers`) is a `distributed.LocalCluster` of worker
+processes with one thread each, listening on 127.0.0.1 only, without a
+dashboard; its worker processes ignore SIGINT, so a Ctrl-C in the terminal
+reaches only the study, which cancels what has not finished, closes the
+cluster and keeps what has. Dask's nanny starts worker processes with
+OMP / MKL / OpenBLAS threads set to 1 (`distributed.nanny.pre-spawn-environ`).
+A variant that raises, or whose worker dies, becomes a failed row with its
+error; the others go on.
+
+This module does not parse study files (see `sim.study`), reduce reports to
+rows (`sim.studyresult`) or write the study's tables and plot (`sim.studyplot`).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import shutil
+import signal
+import tempfile
+import threading
+import time
+from collections.abc import Callable
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+from sim.bundle import Bundle, materialise
+from sim.studyplot import write_atomic
+from sim.studyresult import Row, Status, row_from_report
+
+POLL_S = 0.05
+"""How often the client looks for finished variants and a stop request, seconds."""
+
+WORKER_WAIT_S = 60.0
+"""How long a study on a running scheduler waits for its first worker, seconds."""
+
+Progress = Callable[[int, int, int], None]
+"""progress(finished, total, failed): called as variants finish."""
+
+
+class StudyRunError(Exception):
+    """The cluster could not be used (a scheduler that cannot be reached, no worker)."""
+
+
+@dataclass(frozen=True)
+class VariantTask:
+    """What one task needs besides the scene's files.
+
+    Attributes:
+      id: the variant's id.
+      data: its scene dict (file names relative to the scene's folder).
+      record: write a recording.
+    """
+
+    id: str
+    data: dict
+    record: bool
+
+
+@dataclass(frozen=True)
+class VariantOutput:
+    """What a task returns.
+
+    Attributes:
+      report: the report file's bytes (JSON).
+      recording: the recording's bytes, or None without one.
+    """
+
+    report: bytes
+    recording: bytes | None
+
+
+def run_variant(task: VariantTask, bundle: Bundle) -> VariantOutput:
+    """Run one variant in a temporary folder on this machine (a Dask task)."""
+    from sim.run import RunOptions, run_scene   # loads MuJoCo on the worker
+    from sim.scene import parse_scene
+
+    with tempfile.TemporaryDirectory(prefix=f"cablecheck-variant-{task.id}-") as tmp:
+        scene_path = materialise(bundle, Path(tmp) / "scene")
+        scene = parse_scene(task.data, scene_path)
+        report = Path(tmp) / "out" / "report.json"
+        record = Path(tmp) / "out" / "recording.rrd" if task.record else None
+        run_scene(scene, RunOptions(report=report, record=record))
+        return VariantOutput(report=report.read_bytes(),
+                             recording=record.read_bytes() if record else None)
+
+
+def run_variants(tasks: list[VariantTask], values: dict[str, tuple], bundle: Bundle, out: Path, *,
+                 workers: int | None = None, scheduler: str | None = None,
+                 stop=None, progress: Progress | None = None) -> tuple[list[Row], bool]:
+    """Run every task on the cluster; write each variant's outputs under
+    `out`/variants/<id>/ as it arrives. Returns the rows in task order and
+    whether every task was run (False after a stop request: unfinished
+    variants are cancelled and become rows marked not run).
+
+    `workers`: size of the embedded cluster (default: the number of cores);
+    `scheduler`: address of a running one instead. `stop` has an `asked`
+    attribute polled while waiting (`sim.stop.StopRequest`)."""
+    from distributed import Client
+
+    folder = Path(out) / "variants"
+    if folder.exists():
+        shutil.rmtree(folder)   # a study rewrites its own folder: no stale variants
+    rows: dict[str, Row] = {}
+    complete = True
+    with _client(workers, scheduler) as client:
+        shared = client.scatter(bundle, broadcast=False, hash=False)
+        futures = {client.submit(run_variant, t, shared, key=f"cablecheck-variant-{t.id}-{os.urandom(4).hex()}",
+                                 pure=False, retries=0): t for t in tasks}
+        failed = 0
+        try:
+            while futures:
+                if stop is not None and stop.asked:
+                    complete = False
+                    break
+                done = [f for f in futures if f.done()]
+                if not done:
+                    time.sleep(POLL_S)
+                    continue
+                for f in done:
+                    t = futures.pop(f)
+                    rows[t.id] = _collect(f, t, values[t.id], folder / t.id)
+                    failed += rows[t.id].status is Status.FAILED
+                    f.release()
+                    if progress:
+                        progress(len(rows), len(tasks), failed)
+        except KeyboardInterrupt:   # a second Ctrl-C: stop waiting at once
+            complete = False
+        finally:
+            if futures:
+                client.cancel(list(futures))
+    for t in tasks:
+        if t.id not in rows:
+            rows[t.id] = Row(id=t.id, values=values[t.id], status=Status.NOT_RUN,
+                             error="not run: the study was interrupted")
+    return [rows[t.id] for t in tasks], complete
+
+
+def _collect(future, task: VariantTask, values: tuple, folder: Path) -> Row:
+    """The row of a finished future; its report and recording written under `folder`."""
+    try:
+        output: VariantOutput = future.result()
+    except Exception as e:   # the variant's own error, or its worker's death (KilledWorker)
+        return Row(id=task.id, values=values, status=Status.FAILED,
+                   error=f"{type(e).__name__}: {e}".strip())
+    from checker.report import write_report
+
+    folder.mkdir(parents=True, exist_ok=True)
+    report = json.loads(output.report)
+    recording = None
+    if output.recording is not None:
+        recording = folder / "recording.rrd"
+        write_atomic(recording, output.recording)
+    report["recording"] = None if recording is None else str(recording)
+    path = folder / "report.json"
+    write_report(report, path)
+    return row_from_report(task.id, values, report, str(path),
+                           None if recording is None else str(recording))
+
+
+@contextmanager
+def _client(workers: int | None, scheduler: str | None):
+    """A Dask client on the embedded cluster or on `scheduler`; closed on leaving."""
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout="10s")
+        except (OSError, TimeoutError) as e:
+            raise StudyRunError(f"cannot reach the Dask scheduler at {scheduler}: {e}") from None
+        try:
+            try:
+                client.wait_for_workers(1, timeout=WORKER_WAIT_S)
+            except TimeoutError:
+                raise StudyRunError(f"no Dask worker joined the scheduler at {scheduler} within "
+                                    f"{WORKER_WAIT_S:g} s (start one: dask worker {scheduler})") from None
+            yield client
+        finally:
+            client.close()
+        return
+    n = workers or os.cpu_count() or 1
+    with _sigint_ignored():   # worker processes inherit the ignored SIGINT (see module docstring)
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                               dashboard_address=None, silence_logs=logging.ERROR)
+    try:
+        client = Client(cluster)
+        try:
+            yield client
+        finally:
+            client.close()
+    finally:
+        cluster.close()
+
+
+@contextmanager
+def _sigint_ignored():
+    """SIGINT ignored while child processes are started (Python keeps an
+    ignored SIGINT ignored at its start-up); the caller's handler is back on
+    leaving. A no-op off the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
