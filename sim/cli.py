@@ -390,7 +390,7 @@ def _print_study(study, rows, units: str, window, complete: bool, paths: dict) -
     print(f"  free of hard events: {len(free)} of {len(rows)}"
           + (": " + "; ".join(f"{r.id} ({', '.join(format_value(x) for x in r.values)})"
                               for r in free) if free else ""))
-    if window is not None:
+    if window is not None and complete:
         key = study.vary[0].key
         if window.shortest is None:
             print(f"  {key}: every length tried was pulled taut; try longer")

@@ -12,8 +12,9 @@ into ``<out>/variants/<id>/`` as soon as it arrives.
 The embedded cluster (`--workers`) is a `distributed.LocalCluster` of worker
 processes with one thread each, listening on 127.0.0.1 only, without a
 dashboard; its worker processes ignore SIGINT, so a Ctrl-C in the terminal
-reaches only the study, which cancels what has not finished, closes the
-cluster and keeps what has. Dask's nanny starts worker processes with
+reaches only the study, which cancels what has not finished (variants
+already running see the study's Dask `Event` set and stop within half a
+second, on any cluster), closes the cluster and keeps what has finished. Dask's nanny starts worker processes with
 OMP / MKL / OpenBLAS threads set to 1 (`distributed.nanny.pre-spawn-environ`).
 A variant that raises, or whose worker dies, becomes a failed row with its
 error; the others go on.
@@ -34,7 +35,7 @@ import threading
 import time
 from collections.abc import Callable
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from sim.bundle import Bundle, materialise
@@ -55,6 +56,10 @@ class StudyRunError(Exception):
     """The cluster could not be used (a scheduler that cannot be reached, no worker)."""
 
 
+STOP_POLL_S = 0.5
+"""How often a running variant asks whether its study was stopped, seconds."""
+
+
 @dataclass(frozen=True)
 class VariantTask:
     """What one task needs besides the scene's files.
@@ -63,11 +68,37 @@ class VariantTask:
       id: the variant's id.
       data: its scene dict (file names relative to the scene's folder).
       record: write a recording.
+      stop_event: name of the study's Dask `Event`, set when the study is
+        stopped: a running variant then ends within `STOP_POLL_S` seconds
+        (a cancelled Dask task that has started would run on to its end).
     """
 
     id: str
     data: dict
     record: bool
+    stop_event: str | None = None
+
+
+class _EventStop:
+    """`run_scene`'s stop request on a worker: asked once the study's Dask
+    Event is set, looked up at most every STOP_POLL_S seconds."""
+
+    signal_name = None
+
+    def __init__(self, name: str):
+        from distributed import Event
+
+        self._event = Event(name)
+        self._next = 0.0
+        self._asked = False
+
+    @property
+    def asked(self) -> bool:
+        now = time.monotonic()
+        if not self._asked and now >= self._next:
+            self._next = now + STOP_POLL_S
+            self._asked = self._event.is_set()
+        return self._asked
 
 
 @dataclass(frozen=True)
@@ -93,7 +124,8 @@ def run_variant(task: VariantTask, bundle: Bundle) -> VariantOutput:
         scene = parse_scene(task.data, scene_path)
         report = Path(tmp) / "out" / "report.json"
         record = Path(tmp) / "out" / "recording.rrd" if task.record else None
-        run_scene(scene, RunOptions(report=report, record=record))
+        stop = _EventStop(task.stop_event) if task.stop_event else None
+        run_scene(scene, RunOptions(report=report, record=record), stop=stop)
         return VariantOutput(report=report.read_bytes(),
                              recording=record.read_bytes() if record else None)
 
@@ -109,17 +141,21 @@ def run_variants(tasks: list[VariantTask], values: dict[str, tuple], bundle: Bun
     `workers`: size of the embedded cluster (default: the number of cores);
     `scheduler`: address of a running one instead. `stop` has an `asked`
     attribute polled while waiting (`sim.stop.StopRequest`)."""
-    from distributed import Client
-
     folder = Path(out) / "variants"
     if folder.exists():
         shutil.rmtree(folder)   # a study rewrites its own folder: no stale variants
     rows: dict[str, Row] = {}
     complete = True
     with _client(workers, scheduler) as client:
+        from distributed import Event
+
         shared = client.scatter(bundle, broadcast=False, hash=False)
-        futures = {client.submit(run_variant, t, shared, key=f"cablecheck-variant-{t.id}-{os.urandom(4).hex()}",
-                                 pure=False, retries=0): t for t in tasks}
+        tag = os.urandom(4).hex()
+        stopped = Event(f"cablecheck-stop-{tag}", client=client)
+        futures = {client.submit(run_variant, replace(t, stop_event=stopped.name), shared,
+                                 key=f"cablecheck-{tag}-{t.id}", pure=False,
+                                 priority=len(tasks) - k): t   # in study order
+                   for k, t in enumerate(tasks)}
         failed = 0
         try:
             while futures:
@@ -141,11 +177,12 @@ def run_variants(tasks: list[VariantTask], values: dict[str, tuple], bundle: Bun
             complete = False
         finally:
             if futures:
+                stopped.set()   # running variants end at their next look (their reports are dropped)
                 client.cancel(list(futures))
     for t in tasks:
         if t.id not in rows:
             rows[t.id] = Row(id=t.id, values=values[t.id], status=Status.NOT_RUN,
-                             error="not run: the study was interrupted")
+                             error="the study was interrupted before it finished")
     return [rows[t.id] for t in tasks], complete
 
 
@@ -202,7 +239,10 @@ def _client(workers: int | None, scheduler: str | None):
         finally:
             client.close()
     finally:
-        cluster.close()
+        try:   # waits for running tasks a few seconds, then ends their processes
+            cluster.close()
+        except KeyboardInterrupt:   # a second Ctrl-C: the worker processes, daemonic, end with us
+            pass
 
 
 @contextmanager

@@ -1,0 +1,429 @@
+"""Tests of `cablecheck study`: the study file (paths, ranges, grid and zip, bad
+input named by study file and key), the files that travel with a task, the
+answer (free variants, length window), and execution on an embedded local
+cluster and on a scheduler with two workers started here on 127.0.0.1."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from checker.cable import TAUT_STRAIN
+from sim.bundle import make_bundle, materialise
+from sim.cli import main
+from sim.scene import load_scene, parse_scene
+from sim.study import Mode, StudyError, check_variants, load_study, resolve, variants
+from sim.studyresult import Row, Status, length_window, row_from_report
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENES = ROOT / "scenes"
+EXAMPLE = SCENES / "drawer_length_study.toml"
+
+
+def _write(path: Path, text: str) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    return path
+
+
+def _study(tmp: Path, vary: str, head: str = "", scene: str = "drawer.toml") -> Path:
+    """A study file in `tmp` on a copy of the drawer scene."""
+    shutil.copy(SCENES / "drawer.toml", tmp / "drawer.toml")
+    return _write(tmp / "s.toml", f'[study]\nname = "s"\nscene = "{scene}"\n{head}\n{vary}')
+
+
+# -- the study file -----------------------------------------------------------------------------
+
+def test_paths_resolve_by_name_index_and_dotted_names():
+    data = {"cables": [{"name": "power", "clips": [{"pos": [1, 2, 3]}, {"pos": [4, 5, 6]}]}],
+            "parts": [{"name": "cabinet/rail.v2", "pos": [0, 0, 0]}],
+            "motion": [{"body": "drawer", "keys": []}, {"joint": "elbow", "keys": []},
+                       {"file": "pick.csv"}]}
+    assert resolve(data, "cables.power.length") == (["cables", 0, "length"], "cables[0].length")
+    assert resolve(data, "cables.power.clips.1.pos")[1] == "cables[0].clips[1].pos"
+    assert resolve(data, "cables.power.clips.0.pos.2")[1] == "cables[0].clips[0].pos[2]"
+    assert resolve(data, "parts.cabinet/rail.v2.pos")[1] == "parts[0].pos"   # a name with a dot
+    assert resolve(data, "motion.elbow.time_scale")[1] == "motion[1].time_scale"
+    assert resolve(data, "motion.drawer.time_scale")[1] == "motion[0].time_scale"
+    assert resolve(data, "motion.pick.csv.time_scale")[1] == "motion[2].time_scale"
+    assert resolve(data, "motion.2.time_scale")[1] == "motion[2].time_scale"
+    assert resolve(data, "check.clearance") == (["check", "clearance"], "check.clearance")
+    for key, words in (("cables.powr.length", "did you mean 'power'"),
+                       ("cables.power.clips.5.pos", "past the end"),
+                       ("cables.power.clips.0.pos.x", "give a 0-based index"),
+                       ("cables.power", "is a table"),
+                       ("cables..length", "empty step")):
+        with pytest.raises(KeyError, match=words):
+            resolve(data, key)
+
+
+def test_ranges_grid_and_zip(tmp_path):
+    path = _study(tmp_path, '[[vary]]\nkey = "cables.power.length"\nfrom = 600\nto = 700\ncount = 5\n'
+                            '[[vary]]\nkey = "scene.settle"\nvalues = [0.5, 1.0]\n')
+    study = load_study(path)
+    assert study.mode is Mode.GRID
+    assert study.vary[0].values == (600.0, 625.0, 650.0, 675.0, 700.0)
+    found = variants(study)
+    assert [v.values for v in found[:3]] == [(600.0, 0.5), (600.0, 1.0), (625.0, 0.5)]
+    assert len(found) == 10 and [v.id for v in found] == [f"{k:03d}" for k in range(10)]
+    assert found[3].data["cables"][0]["length"] == 625.0 and found[3].data["scene"]["settle"] == 1.0
+    assert study.scene_data["cables"][0]["length"] == 650.0      # the scene itself is left alone
+    scenes = check_variants(study, found)
+    assert scenes[9].cables[0].length == pytest.approx(0.7) and scenes[9].settle == 1.0
+
+    path = _study(tmp_path, '[[vary]]\nkey = "cables.power.length"\nvalues = [600, 700]\n'
+                            '[[vary]]\nkey = "scene.settle"\nvalues = [0.5, 1.0]\n', 'mode = "zip"')
+    assert [v.values for v in variants(load_study(path))] == [(600, 0.5), (700, 1.0)]
+    path = _study(tmp_path, '[[vary]]\nkey = "cables.power.end.pos"\nfrom = [285, 0, 300]\n'
+                            'to = [285, 0, 320]\ncount = 3\n')
+    assert load_study(path).vary[0].values == ([285.0, 0.0, 300.0], [285.0, 0.0, 310.0],
+                                               [285.0, 0.0, 320.0])
+
+
+def test_time_scale_is_addressed_on_the_motion_entry(tmp_path):
+    """`motion.<body>.time_scale` sets the key on that [[motion]] entry; the
+    scene parser, not the study, decides whether it is accepted."""
+    path = _study(tmp_path, '[[vary]]\nkey = "motion.drawer.time_scale"\nvalues = [0.5, 2.0]\n')
+    study = load_study(path)
+    assert study.vary[0].path == "motion[0].time_scale"
+    assert [v.data["motion"][0]["time_scale"] for v in variants(study)] == [0.5, 2.0]
+
+
+@pytest.mark.parametrize("vary, head, key, words", [
+    ('[[vary]]\nkey = "cables.hose.length"\nvalues = [600]\n', "", "vary[0].key",
+     "no entry of cables named 'hose'"),
+    ('[[vary]]\nkey = "cables.power.length"\n', "", "vary[0]", "give either 'values'"),
+    ('[[vary]]\nkey = "cables.power.length"\nfrom = 600\nto = 700\ncount = 0\n', "",
+     "vary[0].count", "positive integer"),
+    ('[[vary]]\nkey = "cables.power.length"\nvalues = [600, 700]\n'
+     '[[vary]]\nkey = "scene.settle"\nvalues = [1.0]\n', 'mode = "zip"', "vary[1]", "as many values"),
+    ('[[vary]]\nkey = "cables.power.length"\nvalues = [600]\nstep = 5\n', "", "vary[0].step",
+     "unknown key"),
+    ('[[vary]]\nkey = "cables.power.length"\nvalues = [600]\n', 'mode = "all"', "study.mode",
+     "'grid' or 'zip'"),
+])
+def test_bad_study_exits_2_naming_file_and_key(tmp_path, capsys, vary, head, key, words):
+    path = _study(tmp_path, vary, head)
+    assert main(["study", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}: {key}" in err and words in err and "Traceback" not in err
+    assert not (tmp_path / "out" / "s").exists()
+
+
+def test_bad_value_names_study_key_value_and_scene_problem(tmp_path, capsys):
+    """A length shorter than the route (the ends are 325 mm apart) is refused
+    before anything runs, naming the study file, the key, the value and the
+    scene parser's complaint."""
+    path = _study(tmp_path, '[[vary]]\nkey = "cables.power.length"\nvalues = [650, 300]\n'
+                            '[[vary]]\nkey = "scene.settle"\nvalues = [1.0]\n')
+    assert main(["study", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}: vary[0] cables.power.length = 300: scene " in err
+    assert "cables[0].length: 300 mm is shorter than the route" in err
+    assert "scene.settle" not in err          # the value to blame, not every value
+    with pytest.raises(StudyError):
+        check_variants(load_study(path), variants(load_study(path)))
+    path = _study(tmp_path, '[[vary]]\nkey = "motion.drawer.tiem_scale"\nvalues = [2.0]\n')
+    assert main(["study", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "vary[0] motion.drawer.tiem_scale = 2" in err and "motion[0].tiem_scale: unknown key" in err
+
+
+# -- files that travel --------------------------------------------------------------------------
+
+def test_bundle_carries_meshes_and_mjcf_files(tmp_path):
+    """A scene's files, unpacked elsewhere, load as the original: a mesh part,
+    an mjcf model with an <include> and a mesh under the compiler's meshdir."""
+    src = tmp_path / "src"
+    shutil.copy(SCENES / "meshes" / "l_bracket.stl", _write(src / "robot" / "assets" / "x", "").parent
+                / "bracket.stl")
+    _write(src / "robot" / "arm.xml",
+           '<mujoco><compiler meshdir="assets"/><include file="parts.xml"/>'
+           '<worldbody><body name="b"><geom type="mesh" mesh="m"/></body></worldbody></mujoco>')
+    _write(src / "robot" / "parts.xml", '<mujoco><asset><mesh name="m" file="bracket.stl"'
+                                        ' scale="0.001 0.001 0.001"/></asset></mujoco>')
+    _write(src / "unrelated.bin", "not needed")
+    shutil.copy(SCENES / "meshes" / "l_bracket.stl", src / "l_bracket.stl")
+    scene = _write(src / "cell" / "scene.toml", """
+[scene]
+name = "cell"
+units = "m"
+duration = 0.0
+mjcf = "../robot/arm.xml"
+[[parts]]
+name = "bracket"
+shape = "mesh"
+file = "%s"
+scale = 0.001
+""" % (src / "l_bracket.stl"))   # an absolute name: rewritten relative
+    base = load_scene(scene)
+    import tomllib
+    bundle, (data,) = make_bundle(scene, [tomllib.loads(scene.read_text())])
+    names = {rel for rel, _ in bundle.files}
+    assert names == {"robot/arm.xml", "robot/parts.xml", "robot/assets/bracket.stl", "l_bracket.stl"}
+    assert bundle.scene == "cell/scene.toml" and data["parts"][0]["file"] == "../l_bracket.stl"
+    shutil.rmtree(src)
+    moved = parse_scene(data, materialise(bundle, tmp_path / "elsewhere"))
+    assert moved.mjcf == (tmp_path / "elsewhere" / "robot" / "arm.xml").resolve()
+    assert moved.parts[0].file == (tmp_path / "elsewhere" / "l_bracket.stl").resolve()
+    assert [p.name for p in moved.parts] == [p.name for p in base.parts]
+
+
+# -- the answer ---------------------------------------------------------------------------------
+
+def _row(length, taut=False, hard=0, bend=False):
+    return Row(id=str(length), values=(length,), status=Status.DONE, hard=hard, soft=0,
+               taut=taut, bend_violation=bend)
+
+
+def test_length_window_bounds_and_recommendation():
+    rows = [_row(540, taut=True, hard=1), _row(580, taut=True, hard=1), _row(620), _row(660),
+            _row(700), _row(740, hard=1), _row(780, bend=True),
+            Row(id="x", values=(800,), status=Status.FAILED, error="boom")]
+    w = length_window(rows)
+    assert (w.shortest, w.below, w.longest, w.above) == (620, 580, 700, 740)
+    assert w.clean == (620, 660, 700) and w.recommended == 660
+    assert length_window([_row(600, taut=True), _row(700, taut=True)]).shortest is None
+    w = length_window([_row(600, taut=True, hard=1), _row(700, hard=1)])
+    assert w.shortest == 700 and w.longest is None and not w.exists
+
+
+def test_row_from_report_reduces_the_report():
+    report = {"summary": {"hard": 1, "soft": 2},
+              "pairs": [{"type": "taut", "min_distance": -30.0},
+                        {"type": "cable-structure", "min_distance": -2.5},
+                        {"type": "self", "min_distance": 1.0}],
+              "cables": [{"max_strain": 0.01, "min_bend_radius": 40.0, "taut": False,
+                          "bend_violation": False},
+                         {"max_strain": -0.03, "min_bend_radius": None, "taut": True,
+                          "bend_violation": False}],
+              "validation": {"agreement": 0.99}, "timing": {"total_s": 1.5}}
+    r = row_from_report("007", (650,), report)
+    assert (r.exit_status, r.hard, r.soft, r.worst_distance) == (1, 1, 2, -2.5)
+    assert (r.max_strain, r.min_bend_radius, r.taut, r.bend_violation) == (-0.03, 40.0, True, False)
+    assert (r.agreement, r.run_s) == (0.99, 1.5)
+
+
+# -- execution ----------------------------------------------------------------------------------
+
+TINY_VALUES = (600.0, 700.0)
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    """A short drawer scene with a mesh part (its file must travel) and a
+    study of two lengths."""
+    folder = tmp_path_factory.mktemp("tiny")
+    text = (SCENES / "drawer.toml").read_text()
+    text = text.replace("duration = 4.0", "duration = 0.3").replace("settle = 1.0", "settle = 0.1")
+    text += ('\n[[parts]]\nname = "bracket"\nshape = "mesh"\nfile = "meshes/l_bracket.stl"\n'
+             'pos = [200, -150, 20]\n')
+    _write(folder / "scene" / "tiny.toml", text)
+    shutil.copytree(SCENES / "meshes", folder / "scene" / "meshes")
+    values = ", ".join(f"{v:g}" for v in TINY_VALUES)
+    study = _write(folder / "tiny_study.toml", '[study]\nname = "tiny"\nscene = "scene/tiny.toml"\n'
+                   f'[[vary]]\nkey = "cables.power.length"\nvalues = [{values}]\n')
+    return study
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def scheduler():
+    """`dask scheduler` and two `dask worker` processes on 127.0.0.1, stopped afterwards."""
+    from distributed import Client
+
+    port = _free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    quiet = dict(env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    procs = [subprocess.Popen([sys.executable, "-m", "dask", "scheduler", "--host", "127.0.0.1",
+                               "--port", str(port), "--no-dashboard"], **quiet)]
+    try:
+        procs += [subprocess.Popen([sys.executable, "-m", "dask", "worker", address, "--host",
+                                    "127.0.0.1", "--nthreads", "1", "--no-dashboard", "--no-nanny"],
+                                   **quiet)
+                  for _ in range(2)]
+        deadline = time.monotonic() + 60
+        while True:
+            try:
+                with Client(address, timeout="2s") as client:
+                    client.wait_for_workers(2, timeout=max(1.0, deadline - time.monotonic()))
+                break
+            except OSError:
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.3)
+        yield address
+    finally:
+        for p in reversed(procs):
+            p.send_signal(signal.SIGTERM)
+        for p in procs:
+            try:
+                p.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+
+
+def _rows(folder: Path) -> list[dict]:
+    with open(folder / "results.csv", newline="") as f:
+        return list(csv.DictReader(f))
+
+
+COMPARED = ("id", "cables.power.length", "status", "exit_status", "hard", "soft", "worst_distance",
+            "max_strain", "min_bend_radius", "taut", "bend_violation", "agreement", "error")
+"""Every results.csv column but the run time."""
+
+
+@pytest.fixture(scope="module")
+def local_run(tiny, tmp_path_factory):
+    out = tmp_path_factory.mktemp("local")
+    assert main(["study", str(tiny), "--workers", "2", "--out", str(out), "--quiet"]) == 0
+    return out / "tiny"
+
+
+def test_local_cluster_writes_rows_reports_recordings_and_plot(local_run):
+    rows = _rows(local_run)
+    assert [float(r["cables.power.length"]) for r in rows] == list(TINY_VALUES)
+    assert all(r["status"] == "done" and r["error"] == "" for r in rows)
+    doc = json.loads((local_run / "study.json").read_text())
+    assert doc["complete"] is True and doc["vary"][0]["scene_key"] == "cables[0].length"
+    for r, d in zip(rows, doc["rows"]):
+        report = json.loads(Path(d["report"]).read_text())
+        assert Path(d["report"]).parent == local_run / "variants" / r["id"]
+        assert report["recording"] == d["recording"] and Path(d["recording"]).stat().st_size > 0
+        assert report["cables"][0]["length"] == pytest.approx(float(r["cables.power.length"]))
+        assert d["values"] == {"cables.power.length": float(r["cables.power.length"])}
+    assert (local_run / "study.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert doc["window"]["key"] == "cables.power.length"
+
+
+def test_scheduler_with_two_workers_gives_the_same_rows(tiny, local_run, scheduler, tmp_path):
+    assert main(["study", str(tiny), "--scheduler", scheduler, "--out", str(tmp_path),
+                 "--quiet"]) == 0
+    remote = _rows(tmp_path / "tiny")
+    assert [{k: r[k] for k in COMPARED} for r in remote] == \
+           [{k: r[k] for k in COMPARED} for r in _rows(local_run)]
+
+
+def test_each_row_equals_running_that_variant_alone(tiny, local_run, tmp_path):
+    rows = _rows(local_run)
+    scene = tiny.parent / "scene" / "tiny.toml"
+    for r in rows:
+        alone = scene.with_name(f"alone_{r['id']}.toml")
+        alone.write_text(scene.read_text().replace("length = 650.0",
+                                                   f"length = {r['cables.power.length']}"))
+        report = tmp_path / f"{r['id']}.json"
+        status = main(["run", str(alone), "--report", str(report), "--no-record", "--quiet"])
+        single = row_from_report(r["id"], (float(r["cables.power.length"]),),
+                                 json.loads(report.read_text()))
+        assert str(status) == r["exit_status"]
+        for field in ("hard", "soft", "worst_distance", "max_strain", "min_bend_radius", "taut",
+                      "bend_violation", "agreement"):
+            value = getattr(single, field)
+            text = "" if value is None else ("true" if value is True else "false" if value is False
+                                            else repr(value) if isinstance(value, float) else str(value))
+            assert text == r[field], field
+
+
+def test_a_failing_variant_is_a_row_with_its_error(tiny, scheduler, tmp_path):
+    """A variant whose task raises (here: its mesh did not travel with it)
+    is a failed row; the other variant still runs."""
+    from sim.studyrun import VariantTask, run_variants
+
+    study = load_study(tiny)
+    found = variants(study)
+    bundle, datas = make_bundle(study.scene_path, [v.data for v in found])
+    broken = replace(bundle, files=tuple((n, b) for n, b in bundle.files if not n.endswith(".stl")))
+    tasks = [VariantTask(id=v.id, data=d, record=False) for v, d in zip(found, datas)]
+    datas[1]["parts"][-1]["file"] = "meshes/missing.stl"
+    tasks[1] = VariantTask(id=found[1].id, data=datas[1], record=False)
+    rows, complete = run_variants(tasks, {v.id: v.values for v in found}, broken, tmp_path,
+                                  scheduler=scheduler)
+    assert complete
+    assert rows[0].status is Status.FAILED and "l_bracket.stl" in rows[0].error
+    assert rows[1].status is Status.FAILED and "missing.stl" in rows[1].error
+    rows, _ = run_variants(tasks[:1], {found[0].id: found[0].values}, bundle, tmp_path,
+                           scheduler=scheduler)
+    assert rows[0].status is Status.DONE
+
+
+def _largest_end_distance(scene) -> float:
+    """The largest distance between the power cable's ends over the drawer's
+    keyframes (scene units): the start rides on the world, the end on the
+    drawer, which moves by translation only, piecewise linearly between keys,
+    so the distance is largest at a key."""
+    cable = scene.cables[0]
+    start = np.asarray(cable.start.pos)
+    (motion,) = scene.motions
+    ends = np.array([np.asarray(k.pos) + np.asarray(cable.end.pos) for k in motion.keys])
+    return float(np.max(np.linalg.norm(ends - start, axis=1))) / scene.scale
+
+
+def test_example_window_matches_the_geometry(scheduler, tmp_path, capsys):
+    """The example study: a length shorter than the largest distance between
+    the ends over the motion (less the 1 % allowance) must be taut, so the
+    window cannot start below it; and the printed answer is the window."""
+    assert main(["study", str(EXAMPLE), "--scheduler", scheduler, "--out", str(tmp_path),
+                 "--no-record"]) == 1
+    printed = capsys.readouterr().out
+    study = load_study(EXAMPLE)
+    reach = _largest_end_distance(load_scene(study.scene_path))
+    assert reach == pytest.approx(575.0)
+    rows = [Row(id=r["id"], values=(float(r["cables.power.length"]),), status=Status(r["status"]),
+                hard=int(r["hard"]), soft=int(r["soft"]), taut=r["taut"] == "true",
+                bend_violation=r["bend_violation"] == "true")
+            for r in _rows(tmp_path / study.name)]
+    for r in rows:
+        if r.values[0] < reach / (1 + TAUT_STRAIN):
+            assert r.taut, r
+    w = length_window(rows)
+    assert w.exists and w.shortest >= reach / (1 + TAUT_STRAIN)
+    assert f"recommended: {w.recommended:g} mm" in printed
+    assert f"window of cables.power.length: {w.shortest:g}" in printed
+
+
+def test_ctrl_c_keeps_finished_variants(tiny, tmp_path):
+    """SIGINT to the whole process group (as a terminal's Ctrl-C) once the
+    first variant is in: the study cancels the rest, closes its cluster and
+    writes the tables with what finished, marked incomplete; exit 130."""
+    study = _write(tmp_path / "s.toml", f'[study]\nname = "int"\nscene = "{tiny.parent}/scene/tiny.toml"\n'
+                   'mode = "zip"\n[[vary]]\nkey = "scene.duration"\nvalues = [0.1, 60.0, 60.0]\n'
+                   '[[vary]]\nkey = "cables.power.length"\nvalues = [650, 651, 652]\n')
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.Popen([sys.executable, "-m", "sim.cli", "study", str(study), "--workers", "1",
+                             "--out", str(tmp_path / "out"), "--no-record"], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        for line in proc.stderr:
+            if line.startswith("variants: 1/3"):
+                break
+        os.killpg(proc.pid, signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and "INTERRUPTED" in out
+    rows = _rows(tmp_path / "out" / "int")
+    assert [r["status"] for r in rows] == ["done", "not run", "not run"]
+    assert json.loads((tmp_path / "out" / "int" / "study.json").read_text())["complete"] is False
