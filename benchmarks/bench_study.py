@@ -1,6 +1,6 @@
 """What a study's parallel run saves: the example study's 8 variants on 2 workers against one after another.
 
-The example study (scenes/drawer_length_study.toml: the drawer's power
+The example study (scenes/studies/drawer_length_study.toml: the drawer's power
 cable at 8 lengths) is run three ways, side by side in one run:
 
 - serial processes: `cablecheck run` of each variant, one after another,
@@ -43,7 +43,7 @@ from sim.studyresult import COLUMNS, length_window, row_from_report
 from sim.studyplot import results_csv
 
 ROOT = Path(__file__).resolve().parents[1]
-STUDY = ROOT / "scenes" / "drawer_length_study.toml"
+STUDY = ROOT / "scenes" / "studies" / "drawer_length_study.toml"
 TARGET = 0.6
 
 

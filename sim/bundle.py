@@ -96,13 +96,13 @@ def _strings(value: Any):
 def _named_files(data: dict, folder: Path):
     """Existing files named by the string values of a scene dict."""
     for text in _strings(data):
-        if not text.strip() or "\n" in text or len(text) > 4096:
+        if not text.strip() or len(text) > 4096:
             continue
-        path = (folder / text).resolve()
         try:
+            path = (folder / text).resolve()
             if path.is_file():
                 yield path
-        except OSError:
+        except (OSError, ValueError):   # not a possible file name (e.g. a NUL character)
             continue
 
 
@@ -112,7 +112,7 @@ def _relative_names(value: Any, folder: Path) -> Any:
         return {k: _relative_names(v, folder) for k, v in value.items()}
     if isinstance(value, list):
         return [_relative_names(v, folder) for v in value]
-    if isinstance(value, str) and os.path.isabs(value) and "\n" not in value and Path(value).is_file():
+    if isinstance(value, str) and os.path.isabs(value) and "\0" not in value and Path(value).is_file():
         return Path(os.path.relpath(Path(value).resolve(), folder.resolve())).as_posix()
     return value
 

@@ -190,7 +190,7 @@ def _collect(future, task: VariantTask, values: tuple, folder: Path) -> Row:
     """The row of a finished future; its report and recording written under `folder`."""
     try:
         output: VariantOutput = future.result()
-    except Exception as e:   # the variant's own error, or its worker's death (KilledWorker)
+    except Exception as e:   # its own error, its worker's death (KilledWorker), or cancelled
         return Row(id=task.id, values=values, status=Status.FAILED,
                    error=f"{type(e).__name__}: {e}".strip())
     from checker.report import write_report
@@ -249,7 +249,7 @@ def _client(workers: int | None, scheduler: str | None):
 def _sigint_ignored():
     """SIGINT ignored while child processes are started (Python keeps an
     ignored SIGINT ignored at its start-up); the caller's handler is back on
-    leaving. A no-op off the main thread."""
+    leaving. A Ctrl-C in those seconds is not seen. A no-op off the main thread."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return

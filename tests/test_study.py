@@ -29,7 +29,7 @@ from sim.studyresult import Row, Status, length_window, row_from_report
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
-EXAMPLE = SCENES / "drawer_length_study.toml"
+EXAMPLE = SCENES / "studies" / "drawer_length_study.toml"
 
 
 def _write(path: Path, text: str) -> Path:
