@@ -79,16 +79,19 @@ COLUMNS = ("status", "exit_status", "hard", "soft", "worst_distance", "max_strai
 
 def row_from_report(id: str, values: tuple, report: dict, report_path: str | None = None,
                     recording: str | None = None) -> Row:
-    """The study row of a variant's report (see `Row` for each field)."""
+    """The study row of a variant's report (see `Row` for each field); a
+    report marked incomplete is a failed row (with what it measured)."""
     summary = report["summary"]
     distances = [p["min_distance"] for p in report.get("pairs", ()) if p["type"] not in SHAPE_TYPES]
     cables = report.get("cables", ())
     strains = [c["max_strain"] for c in cables if c.get("max_strain") is not None]
     bends = [c["min_bend_radius"] for c in cables if c.get("min_bend_radius") is not None]
     validation = report.get("validation")
+    complete = report.get("complete", True)
     return Row(
-        id=id, values=tuple(values), status=Status.DONE,
-        exit_status=1 if summary["hard"] > 0 else 0,
+        id=id, values=tuple(values), status=Status.DONE if complete else Status.FAILED,
+        error=None if complete else f"the run stopped early ({report.get('interrupted') or 'incomplete'})",
+        exit_status=(1 if summary["hard"] > 0 else 0) if complete else None,
         hard=summary["hard"], soft=summary["soft"],
         worst_distance=min(distances) if distances else None,
         max_strain=max(strains, key=abs) if strains else None,

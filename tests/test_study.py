@@ -98,7 +98,9 @@ def test_time_scale_is_addressed_on_the_motion_entry(tmp_path):
     path = _study(tmp_path, '[[vary]]\nkey = "motion.drawer.time_scale"\nvalues = [0.5, 2.0]\n')
     study = load_study(path)
     assert study.vary[0].path == "motion[0].time_scale"
-    assert [v.data["motion"][0]["time_scale"] for v in variants(study)] == [0.5, 2.0]
+    found = variants(study)
+    assert [v.data["motion"][0]["time_scale"] for v in found] == [0.5, 2.0]
+    assert [s.motions[0].time_scale for s in check_variants(study, found)] == [0.5, 2.0]
 
 
 @pytest.mark.parametrize("vary, head, key, words", [
@@ -213,7 +215,9 @@ def test_row_from_report_reduces_the_report():
     r = row_from_report("007", (650,), report)
     assert (r.exit_status, r.hard, r.soft, r.worst_distance) == (1, 1, 2, -2.5)
     assert (r.max_strain, r.min_bend_radius, r.taut, r.bend_violation) == (-0.03, 40.0, True, False)
-    assert (r.agreement, r.run_s) == (0.99, 1.5)
+    assert (r.agreement, r.run_s, r.status) == (0.99, 1.5, Status.DONE)
+    r = row_from_report("008", (650,), {**report, "complete": False, "interrupted": "SIGINT"})
+    assert r.status is Status.FAILED and "SIGINT" in r.error and r.exit_status is None
 
 
 # -- execution ----------------------------------------------------------------------------------
