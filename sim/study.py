@@ -37,6 +37,7 @@ import copy
 import difflib
 import itertools
 import math
+import os
 import re
 import tomllib
 from dataclasses import dataclass
@@ -144,7 +145,7 @@ def load_study(path: str | Path) -> Study:
     scene = head["scene"]
     if not isinstance(scene, str) or not scene.strip():
         raise StudyError(path, "study.scene", f"expected a file name, got {scene!r}")
-    scene_path = path.parent / scene
+    scene_path = Path(os.path.normpath(path.parent / scene))   # "studies/../drawer.toml" -> "drawer.toml"
     if not scene_path.is_file():
         raise StudyError(path, "study.scene", f"file not found: {scene_path}")
     mode_text = head.get("mode", "grid")

@@ -106,6 +106,7 @@ def plot(path: Path, study: Study, rows: list[Row], units: str) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
 
     done = [r for r in rows if r.status is Status.DONE]
     ncol = len(study.vary)
@@ -122,6 +123,8 @@ def plot(path: Path, study: Study, rows: list[Row], units: str) -> None:
             if pts:
                 ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-" if ncol == 1 else "o",
                         markersize=4)
+            if field in ("hard", "soft"):
+                ax.yaxis.set_major_locator(MaxNLocator(integer=True))
             unit = f" ({units})" if field in ("worst_distance", "min_bend_radius") else ""
             if j == 0:
                 ax.set_ylabel(label + unit, fontsize=8)
