@@ -405,8 +405,10 @@ def _print_study(study, rows, units: str, window, complete: bool, paths: dict) -
                   else " (longest tried)")
             print(f"  interference-free window of {key}: {window.shortest:g}{lo} to "
                   f"{window.longest:g} {units}{hi}")
-            print(f"  recommended: {window.recommended:g} {units} (the clean length tried nearest "
-                  f"the middle of the window)")
+            pool, kind = (window.quiet, "with no event at all") if window.quiet else \
+                (window.clean, "neither taut nor in hard contact nor bent too tight")
+            print(f"  recommended: {window.recommended:g} {units}: of the lengths tried {kind} "
+                  f"({', '.join(f'{x:g}' for x in pool)}), the nearest to the window's middle")
     if not complete:
         print("  INTERRUPTED: the tables hold the variants that finished (the others: not run)")
     print(f"  results: {paths['csv']}  (also {paths['json'].name}, {paths['png'].name})")

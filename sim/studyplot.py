@@ -92,7 +92,7 @@ def study_json(study: Study, rows: list[Row], *, complete: bool, units: str, win
         "rows": out_rows,
         "free_of_hard": [r.id for r in rows if r.status is Status.DONE and r.hard == 0],
         "window": None if window is None else {**asdict(window), "clean": list(window.clean),
-                                               "key": study.vary[0].key},
+                                               "quiet": list(window.quiet), "key": study.vary[0].key},
     }
 
 

@@ -133,8 +133,11 @@ class Window:
       above: the shortest length longer than `longest` that had one, or None.
       clean: the tried lengths in [shortest, longest] that are neither taut
         nor in hard contact nor bent too tight.
-      recommended: the clean length nearest the middle of the window (the
-        longer one of two as near); None when no tried length is clean.
+      quiet: the clean lengths with no soft event either (nothing came
+        within the clearance).
+      recommended: of the quiet lengths (or, when none is quiet, the clean
+        ones), the one nearest the middle of the window, the shorter of two
+        as near; None when no tried length is clean.
     """
 
     shortest: float | None
@@ -142,6 +145,7 @@ class Window:
     longest: float | None
     above: float | None
     clean: tuple[float, ...]
+    quiet: tuple[float, ...]
     recommended: float | None
 
     @property
@@ -166,9 +170,12 @@ def length_window(rows: list[Row], index: int = 0) -> Window:
     clean = tuple(L for L, r in zip(lengths, done)
                   if not r.taut and r.hard == 0 and not r.bend_violation
                   and shortest is not None and longest is not None and shortest <= L <= longest)
+    soft = {L for L, r in zip(lengths, done) if r.soft > 0}
+    quiet = tuple(L for L in clean if L not in soft)
+    pool = quiet or clean
     recommended = None
-    if clean:
+    if pool:
         middle = 0.5 * (shortest + longest)
-        recommended = min(clean, key=lambda L: (abs(L - middle), -L))
+        recommended = min(pool, key=lambda L: (abs(L - middle), L))
     return Window(shortest=shortest, below=below, longest=longest, above=above, clean=clean,
-                  recommended=recommended)
+                  quiet=quiet, recommended=recommended)

@@ -185,8 +185,8 @@ scale = 0.001
 
 # -- the answer ---------------------------------------------------------------------------------
 
-def _row(length, taut=False, hard=0, bend=False):
-    return Row(id=str(length), values=(length,), status=Status.DONE, hard=hard, soft=0,
+def _row(length, taut=False, hard=0, bend=False, soft=0):
+    return Row(id=str(length), values=(length,), status=Status.DONE, hard=hard, soft=soft,
                taut=taut, bend_violation=bend)
 
 
@@ -197,6 +197,15 @@ def test_length_window_bounds_and_recommendation():
     w = length_window(rows)
     assert (w.shortest, w.below, w.longest, w.above) == (620, 580, 700, 740)
     assert w.clean == (620, 660, 700) and w.recommended == 660
+    # soft contact at the long end: the recommendation keeps to the lengths with no event
+    w = length_window([_row(600, taut=True, hard=1), _row(650), _row(700), _row(750),
+                       _row(800, soft=2), _row(850, soft=1), _row(900, hard=1)])
+    assert (w.shortest, w.longest, w.quiet) == (650, 850, (650, 700, 750))
+    assert w.recommended == 750
+    w = length_window([_row(600), _row(700), _row(800)])
+    assert w.recommended == 700 and w.below is None and w.above is None
+    w = length_window([_row(600), _row(700)])
+    assert w.recommended == 600   # two as near: the shorter
     assert length_window([_row(600, taut=True), _row(700, taut=True)]).shortest is None
     w = length_window([_row(600, taut=True, hard=1), _row(700, hard=1)])
     assert w.shortest == 700 and w.longest is None and not w.exists
@@ -400,7 +409,7 @@ def test_example_window_matches_the_geometry(scheduler, tmp_path, capsys):
             assert r.taut, r
     w = length_window(rows)
     assert w.exists and w.shortest >= reach / (1 + TAUT_STRAIN)
-    assert f"recommended: {w.recommended:g} mm" in printed
+    assert f"recommended: {w.recommended:g} mm:" in printed
     assert f"window of cables.power.length: {w.shortest:g}" in printed
 
 
