@@ -101,7 +101,7 @@ def main() -> None:
         study_s = time.perf_counter() - t0
         with open(tmp / "out" / study.name / "results.csv", newline="") as f:
             study_rows = list(csv.DictReader(f))
-    compared = [c for c in COLUMNS if c != "run_s"]
+    compared = [c for c in COLUMNS if c != "run_time_s"]
     serial_table = list(csv.DictReader(results_csv(study, serial_rows).splitlines()))
     same = all(a[c] == b[c] for a, b in zip(study_rows, serial_table) for c in compared)
     print(f"  serial, a `cablecheck run` process each : {processes_s:7.1f} s")

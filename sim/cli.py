@@ -382,7 +382,7 @@ def _print_study(study, rows, units: str, window, complete: bool, paths: dict) -
             flags = "".join(f" {f}" for f, on in (("TAUT", r.taut), ("BEND", r.bend_violation)) if on)
             strain = None if r.max_strain is None else 100 * r.max_strain
             print(f"  {r.id:<4} {v:<{vw}}  {r.hard:>4} {r.soft:>4} {num(r.worst_distance):>9} "
-                  f"{num(strain, '.2f'):>8} {num(r.min_bend_radius):>8}  {num(r.run_s, '6.1f'):>6}  "
+                  f"{num(strain, '.2f'):>8} {num(r.min_bend_radius):>8}  {num(r.run_time_s, '6.1f'):>6}  "
                   f"done{flags}")
         else:
             print(f"  {r.id:<4} {v:<{vw}}  {r.status.value.upper()}: {r.error}")

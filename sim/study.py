@@ -150,7 +150,7 @@ def load_study(path: str | Path) -> Study:
         raise StudyError(path, "study.scene", f"file not found: {scene_path}")
     mode_text = head.get("mode", "grid")
     try:
-        mode = Mode(mode_text)
+        mode = Mode(mode_text if isinstance(mode_text, str) else None)
     except ValueError:
         raise StudyError(path, "study.mode", f"must be 'grid' or 'zip', got {mode_text!r}") from None
     scene_data = _read_toml(scene_path, SceneError)

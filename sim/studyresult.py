@@ -49,7 +49,7 @@ class Row:
       taut, bend_violation: any cable pulled taut / bent below its limit.
       agreement: fraction of (step, pair) classifications on which the
         checker and MuJoCo agree; None without validation.
-      run_s: the run's own wall time (its report's timing.total_s).
+      run_time_s: the run's own wall time (its report's timing.total_s).
       error: the failure, in words, for a failed or unrun variant.
       report, recording: the variant's output files (paths as text), or None.
     """
@@ -66,14 +66,14 @@ class Row:
     taut: bool | None = None
     bend_violation: bool | None = None
     agreement: float | None = None
-    run_s: float | None = None
+    run_time_s: float | None = None
     error: str | None = None
     report: str | None = None
     recording: str | None = None
 
 
 COLUMNS = ("status", "exit_status", "hard", "soft", "worst_distance", "max_strain",
-           "min_bend_radius", "taut", "bend_violation", "agreement", "run_s", "error")
+           "min_bend_radius", "taut", "bend_violation", "agreement", "run_time_s", "error")
 """Row fields after the id and the varied values, in the order results.csv gives them."""
 
 
@@ -99,7 +99,7 @@ def row_from_report(id: str, values: tuple, report: dict, report_path: str | Non
         taut=any(c.get("taut", False) for c in cables),
         bend_violation=any(c.get("bend_violation", False) for c in cables),
         agreement=None if validation is None else validation.get("agreement"),
-        run_s=report.get("timing", {}).get("total_s"),
+        run_time_s=report.get("timing", {}).get("total_s"),
         report=report_path, recording=recording)
 
 

@@ -224,7 +224,7 @@ def test_row_from_report_reduces_the_report():
     r = row_from_report("007", (650,), report)
     assert (r.exit_status, r.hard, r.soft, r.worst_distance) == (1, 1, 2, -2.5)
     assert (r.max_strain, r.min_bend_radius, r.taut, r.bend_violation) == (-0.03, 40.0, True, False)
-    assert (r.agreement, r.run_s, r.status) == (0.99, 1.5, Status.DONE)
+    assert (r.agreement, r.run_time_s, r.status) == (0.99, 1.5, Status.DONE)
     r = row_from_report("008", (650,), {**report, "complete": False, "interrupted": "SIGINT"})
     assert r.status is Status.FAILED and "SIGINT" in r.error and r.exit_status is None
 
