@@ -125,6 +125,7 @@ def plot(path: Path, study: Study, rows: list[Row], units: str) -> None:
                         markersize=4)
             if field in ("hard", "soft"):
                 ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+                ax.set_ylim(-0.3, max([1] + [p[1] for p in pts]) + 0.3)
             unit = f" ({units})" if field in ("worst_distance", "min_bend_radius") else ""
             if j == 0:
                 ax.set_ylabel(label + unit, fontsize=8)
@@ -132,7 +133,9 @@ def plot(path: Path, study: Study, rows: list[Row], units: str) -> None:
             ax.tick_params(labelsize=7)
         bottom = axes[-1][j]
         bottom.set_xlabel(v.key, fontsize=8)
-        if not numeric:
+        if numeric:
+            bottom.xaxis.set_major_locator(MaxNLocator(6))
+        else:
             bottom.set_xticks(range(len(labels)), labels, rotation=30, fontsize=6)
     failed = len(rows) - len(done)
     fig.suptitle(f"study {study.name}: {len(done)} of {len(rows)} variants"
