@@ -183,6 +183,25 @@ scale = 0.001
     assert [p.name for p in moved.parts] == [p.name for p in base.parts]
 
 
+@pytest.mark.parametrize("name", ["arm.toml", "robot_cell.toml", "bracket_static.toml"])
+def test_example_scenes_travel(name, tmp_path):
+    """The example scenes with files (an mjcf model and its meshes, a motion
+    CSV, a mesh part), unpacked elsewhere, load with the same parts and
+    motions; nothing else of their folders travels."""
+    import tomllib
+
+    path = SCENES / name
+    bundle, (data,) = make_bundle(path, [tomllib.loads(path.read_text())])
+    moved = parse_scene(data, materialise(bundle, tmp_path))
+    base = load_scene(path)
+    assert [p.name for p in moved.parts] == [p.name for p in base.parts]
+    assert len(moved.motions) == len(base.motions)
+    assert all(str(p.file).startswith(str(tmp_path)) for p in moved.parts if p.file is not None)
+    assert moved.mjcf is None or str(moved.mjcf).startswith(str(tmp_path))
+    assert all(m.file is None or str(m.file).startswith(str(tmp_path)) for m in moved.motions)
+    assert not any(n.endswith((".md", "LICENSE")) or n.endswith("_study.toml") for n, _ in bundle.files)
+
+
 # -- the answer ---------------------------------------------------------------------------------
 
 def _row(length, taut=False, hard=0, bend=False, soft=0):
