@@ -505,7 +505,7 @@ def example_scenes_table(quick: bool, out: Path) -> tuple[Table, dict]:
         rep = run_scene(scene, RunOptions(report=out / f"{name}.json", record=out / f"{name}.rrd"))
         t = rep["timing"]
         steps = rep["settings"]["steps"]
-        loop = t["sim_s"] + t["check_s"] + t["validate_s"] + t["record_s"]
+        loop = t["sim_s"] + t["check_s"] + t["validate_s"] + t["record_s"] + t.get("wear_s", 0.0)
         mj = _mj_step_ms(scene, min(steps, 500))
         cv = t["check_ms_per_step"] + t["validate_ms_per_step"]
         row = dict(mj=mj, cv=cv, rtf=scene.duration / loop, rtf_total=scene.duration / t["total_s"])
@@ -519,7 +519,8 @@ def example_scenes_table(quick: bool, out: Path) -> tuple[Table, dict]:
         "stage per step (mj_step, positions and the detection model's mj_collision for validation).",
         "check: cable and part-part checks, strain and bend per step; validate: comparing with MuJoCo's "
         "contacts; record: rerun logging (sampled at 100 frames per simulated second).",
-        "realtime_factor: simulated seconds over the step loop's wall time; _total adds building and settling.",
+        "realtime_factor: simulated seconds over the step loop's wall time (the wear map's too); _total adds "
+        "building and settling.",
         "full_checks / proven_clear: checked steps run in full and steps the skip rule (checker.advance) "
         "proved clear; a cable-structure pair inside the clearance is then checked on its own, but a "
         "self or cable-cable pair inside it (crossing, coil_self) keeps every step a full check.",

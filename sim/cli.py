@@ -469,6 +469,8 @@ def _print_summary(report: dict, report_path: Path) -> None:
               + (f", max twist {c['max_twist']:.3g} deg" if c.get("max_twist") is not None else "")
               + (f"  [{', '.join(flags)}]" if flags else ""))
     _print_events(report)
+    for c in report["cables"]:
+        _print_wear(c["name"], c.get("wear"), units)
     v = report.get("validation")
     if v and not v["pair_steps"]:
         print(f"  MuJoCo cross-check: no cable pair came within the clearance on either side "
@@ -493,6 +495,23 @@ def _print_summary(report: dict, report_path: Path) -> None:
     print(f"  report: {report_path}")
     if report.get("recording"):
         print(f"  recording: {report['recording']}  (view: rerun {report['recording']})")
+
+
+def _print_wear(cable: str, wear: dict | None, units: str) -> None:
+    """The cable's most worn place (what it touches) and its most bent-back one."""
+    if not wear:
+        return
+    worn = wear.get("most_worn")
+    cycles = [float(x) for x in wear.get("bend_cycles", ())]
+    parts = []
+    if worn:
+        parts.append(f"most worn at s = {worn['s']:.4g} {units} touching {worn['touches']}: "
+                     f"in contact {worn['contact_time']:.3g} s, slid {worn['sliding']:.3g} {units}")
+    if cycles and max(cycles) > 0:
+        k = max(range(len(cycles)), key=cycles.__getitem__)
+        parts.append(f"most bending cycles {cycles[k]:g} at s = {wear['s'][k]:.4g} {units}")
+    if parts:
+        print(f"  wear of {cable}: " + "; ".join(parts))
 
 
 def _print_events(report: dict, most: int = 10) -> None:

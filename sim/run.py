@@ -29,10 +29,11 @@ from checker.report import SCHEMA, write_report
 from checker.scene_state import CheckConfig
 from checker.twist import TwistMeter
 from checker.validation import Validation
+from checker.wear import CableWear, WearMap
 from sim.build import Built, build
 from sim.jointspace import JointLog
 from sim.loop import Simulation
-from sim.record import Recorder, pair_path
+from sim.record import Mark, Recorder, Settings, summary_text
 from sim.scene import Scene
 from sim.stepcheck import BATCH, StepChecks
 from sim.stop import StopRequest
@@ -77,25 +78,17 @@ class _Timer:
     """Wall-clock seconds per stage."""
 
     def __init__(self):
-        self.total = {"sim": 0.0, "check": 0.0, "validate": 0.0, "record": 0.0}
+        self.total = {"sim": 0.0, "check": 0.0, "validate": 0.0, "record": 0.0, "wear": 0.0}
+        self._t = time.perf_counter()
+
+    def skip(self) -> None:
+        """Start the next stage now, the time since the last lap counted nowhere."""
         self._t = time.perf_counter()
 
     def lap(self, stage: str) -> None:
         now = time.perf_counter()
         self.total[stage] += now - self._t
         self._t = now
-
-
-def _worst_by_cable(records, names: list[str]) -> list[str]:
-    """"hard", "soft" or "clear" per cable from the step's records."""
-    rank = {"clear": 0, "soft": 1, "hard": 2}
-    state = dict.fromkeys(names, "clear")
-    for r in records:
-        sev = Severity(r.severity).value
-        for name in {r.a, r.b}:
-            if name in state and rank[sev] > rank[state[name]]:
-                state[name] = sev
-    return [state[n] for n in names]
 
 
 def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = None,
@@ -126,20 +119,28 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         sim.settle(None if progress is None else
                    (lambda k: progress("settle", k, sim.settle_steps) if k % 50 == 0 else None),
                    stop=lambda: stop.asked)
-    recorder = Recorder(built, options.record) if options.record else None
     timer = _Timer()
     config = CheckConfig(method=options.method or scene.check.method,
                          spacing=options.spacing or scene.check.spacing,
                          clearance=scene.check.clearance)
     checks = StepChecks(built, config, options.only, options.advance,
                         sim if validate else None, timer.lap)
+    timer.lap("sim")      # preparing the checks: counted as before
+    settings = _settings(scene)
+    recorder = Recorder(built, options.record, checks.shapes, settings) if options.record else None
+    wear = WearMap([c.name for c in built.cables], [c.rest_s for c in built.cables],
+                   [c.radius for c in built.cables],
+                   [(p.name, shape) for p, shape in zip(built.parts, checks.shapes)],
+                   scene.check.clearance, checks.exclusions)
+    timer.skip()          # opening the recording is no step's cost (it was never timed)
     every = scene.check.every
     tracker = EventTracker(hold=3 * every * scene.timestep)
     # The recording samples the checked steps at about RECORD_RATE (and at
     # every step where an event starts or ends): a viewer needs no 500 Hz.
     record_stride = max(1, int(round(1.0 / (RECORD_RATE * every * scene.timestep))))
     joints = JointLog(built, sim.motion)
-    out = _Outcome(built, tracker, recorder, timer, progress, record_stride, sim.total_steps, joints)
+    out = _Outcome(built, tracker, recorder, timer, progress, record_stride, sim.total_steps, joints, wear,
+                   checks.exclusions)
     complete = False
     batch: list = []
     try:
@@ -158,20 +159,24 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     except KeyboardInterrupt:
         complete = False    # a second Ctrl-C: the batch being checked is left out
     finally:
-        still_open = set(tracker.open_pairs())
+        closed = {id(ev) for ev in tracker.events}
         events = tracker.finish()
+        worn = wear.result()
         if recorder:
-            for ev in events:  # events running at the end get their entry too
-                if (ev.type, ev.a, ev.b) in still_open:
-                    recorder.log_event(ev.t_end, f"{ev.type} {ev.a} / {ev.b} still present at the end: "
-                                       f"{ev.severity}, worst {ev.min_distance / scene.scale:.4g} at "
-                                       f"t = {ev.t_worst:.3f} s", "INFO")
+            timer.lap("check")
+            for ev in events:  # each event still open at the end gets its one end entry
+                if id(ev) not in closed:
+                    _log_end(recorder, ev, scene.scale, scene.units, at_end=True)
+            joint_values = ([joints.event_fields(e.t_start, e.t_end, e.t_worst, e.a, e.b)["joints"] for e in events]
+                            if joints else None)
+            recorder.finish(events, worn, summary_text(scene.name, settings, events, worn, scene.scale, complete),
+                            joint_values)
             recorder.close()
             timer.lap("record")
     total = time.perf_counter() - start
     report = _report(scene, built, config, complete, out.steps, out.checked, out.t_last, out.max_strain,
                      out.min_bend, out.rest_points, out.final_points, timer, total, sim, events, tracker,
-                     checks.validation, options)
+                     checks.validation, options, worn, settings)
     if joints:   # where the mjcf model's joints move: their values per event
         report["joint_units"] = dict(zip(joints.names, joints.units))
         for row, e in zip(report["events"], events):
@@ -198,9 +203,13 @@ class _Outcome:
     and progress."""
 
     def __init__(self, built: Built, tracker: EventTracker, recorder: Recorder | None, timer: _Timer,
-                 progress: Progress | None, record_stride: int, total_steps: int, joints: JointLog):
+                 progress: Progress | None, record_stride: int, total_steps: int, joints: JointLog,
+                 wear: WearMap, exclusions=()):
         self.built, self.tracker, self.recorder, self.timer = built, tracker, recorder, timer
         self.joints = joints
+        self.wear = wear
+        self.near = _NearPairs(built, exclusions, built.scene.check.clearance)
+        self.pending_near = None
         self.progress, self.record_stride, self.total_steps = progress, record_stride, total_steps
         self.names = [c.name for c in built.cables]
         n = len(built.cables)
@@ -210,7 +219,6 @@ class _Outcome:
         self.final_points: list[np.ndarray] = []
         self.steps = self.checked = 0
         self.t_last = 0.0
-        self.markers: set[str] = set()
         self.clamped = [_clamped(c.start) and _clamped(c.end) for c in built.scene.cables]
         self.twist: list[TwistMeter | None] = [None] * n
 
@@ -233,19 +241,29 @@ class _Outcome:
         """The checked states (oldest first) and their results."""
         recorder, scale = self.recorder, self.built.scene.scale
         self.take_twist(states)
+        self.timer.lap("check")
+        if len(states):
+            self.wear.update_many([s.t for s in states],
+                                  np.stack([np.concatenate(s.cables) if s.cables else np.zeros((0, 3))
+                                            for s in states]),
+                                  np.stack([s.part_poses for s in states]), [r.records for r in results])
+            self.timer.lap("wear")
         for k, (state, res) in enumerate(zip(states, results)):
             if state.step == 0:
                 self.rest_points = state.cables
                 if recorder:
-                    recorder.log_static(state.part_poses, state.qpos)
+                    recorder.log_static(state.part_poses, state.cables, state.qpos)
             self.max_strain = np.maximum(self.max_strain, res.strain)
             self.min_bend = np.minimum(self.min_bend, res.bend)
             started, closed = self.tracker.update(state.t, res.records)
+            if res.near is not None:
+                self.pending_near = res.near     # a full check's candidates, shown at the next frame
             self.timer.lap("check")
             if recorder and (self.checked % self.record_stride == 0 or started or closed
                              or state.step == self.total_steps):
-                _record_step(recorder, state, res.contacts, res.records, self.names, res.strain, res.bend,
-                             res.agreement, started, closed, self.tracker, self.markers, scale)
+                _record_step(recorder, state, res, started, closed, self.tracker, self.near,
+                             self.pending_near, scale, self.built.scene.units)
+                self.pending_near = None
                 if self.joints:
                     recorder.log_joints(self.joints.names, self.joints.units, self.joints.values(state.t)[0])
                 recorder.log_twist(self.batch_twist[k])
@@ -257,31 +275,104 @@ class _Outcome:
                 self.progress("run", state.step, self.total_steps)
 
 
-def _record_step(recorder: Recorder, state, contacts, records, names, strain, bend, agreement,
-                 started, closed, tracker: EventTracker, markers: set[str], unit: float) -> None:
-    recorder.log_step(state.t, state.cables, state.part_poses, _worst_by_cable(records, names),
-                      strain=strain, bend=bend, qpos=state.qpos)
-    now = {}
-    for r in records:
-        path = pair_path(PairType(r.type).value, r.a, r.b)
-        now[path] = (r.where, Severity(r.severity).value)
-        recorder.log_scalar(f"checks/{path}/distance", r.min_distance / unit,
-                            label=f"{PairType(r.type).value}: {r.a} / {r.b}")
-    recorder.log_markers(now)
-    recorder.clear_markers(markers - set(now))
-    markers.clear()
-    markers.update(now)
-    if contacts is not None:
-        recorder.log_contacts(contacts.pos)
-    if agreement is not None:
-        recorder.log_scalar("validation/agreement", agreement)
+def _record_step(recorder: Recorder, state, res, started, closed, tracker: EventTracker,
+                 near: "_NearPairs", pending, unit: float, units: str) -> None:
+    """One recorded frame: the step's clashes as marks, the pairs evaluated
+    near the clearance (approach history), contacts, agreement, event entries."""
+    marks = [Mark(PairType(r.type).value, r.a, r.b, float(r.min_distance), Severity(r.severity).value,
+                  np.asarray(r.where), float(r.s), r.s_b) for r in res.records]
+    recorder.log_step(state.t, state.cables, state.part_poses, marks, strain=res.strain, bend=res.bend,
+                      near=None if pending is None else near.distances(pending), qpos=state.qpos)
+    if res.contacts is not None:
+        recorder.log_contacts(res.contacts.pos)
+    if res.agreement is not None:
+        recorder.log_scalar("validation/agreement", res.agreement, label="agreement with MuJoCo")
     for key in started:
         worst = tracker.pairs[key]
-        recorder.log_event(state.t, f"{key[0]} {key[1]} / {key[2]} starts (distance "
-                           f"{worst.min_distance / unit:.4g})", "WARN")
+        sev = Severity.HARD if worst.min_distance < 0.0 else Severity.SOFT   # below the clearance
+        recorder.log_event(state.t, f"{key[0]} {_pair(key[1], key[2])} starts: distance "
+                           f"{worst.min_distance / unit:.4g} {units}", _LEVEL[sev.value])
     for ev in closed:
-        recorder.log_event(ev.t_end, f"{ev.type} {ev.a} / {ev.b} ends: {ev.severity}, worst "
-                           f"{ev.min_distance / unit:.4g} at t = {ev.t_worst:.3f} s", "INFO")
+        _log_end(recorder, ev, unit, units, at_end=False)
+
+
+_LEVEL = {"hard": "ERROR", "soft": "WARN"}
+"""Text log level of an event's entries by severity."""
+
+
+def _pair(a: str, b: str) -> str:
+    return a if a == b else f"{a} / {b}"
+
+
+def _log_end(recorder: Recorder, ev, unit: float, units: str, at_end: bool) -> None:
+    how = "still present at the end of the run" if at_end else "ends"
+    recorder.log_event(ev.t_end, f"{ev.type} {_pair(ev.a, ev.b)} {how}: {ev.severity} {ev.phase}, "
+                       f"{ev.t_start:.3f}-{ev.t_end:.3f} s, worst {ev.min_distance / unit:.4g} {units} "
+                       f"at t = {ev.t_worst:.3f} s", _LEVEL[ev.severity])
+
+
+class _NearPairs:
+    """Per pair, the least distance among a full check's candidates (up to its
+    horizon), leaving out the places inside attachment windows: the approach
+    history of pairs not (yet) below the clearance."""
+
+    def __init__(self, built: Built, exclusions, clearance: float):
+        self.clearance = clearance
+        self.cables = [c.name for c in built.cables]
+        self.parts = [p.name for p in built.parts]
+        self.keepout = np.array([p.keepout for p in built.parts], bool)
+        index = {n: i for i, n in enumerate(self.cables)}
+        part_index = {n: k for k, n in enumerate(self.parts)}
+        rows = [(index[e.cable], part_index[e.part], e.s_min, e.s_max) for e in exclusions
+                if e.cable in index and e.part in part_index]
+        self.excl = np.array(rows, float).reshape(-1, 4)
+
+    def distances(self, near: tuple) -> dict[tuple[str, str, str], float]:
+        (cab, s, part, value), cable_pairs = near
+        clearance = self.clearance     # the candidates' values are relative to it
+        out: dict[tuple[str, str, str], float] = {}
+        if len(cab):
+            keep = np.ones(len(cab), bool)
+            for c, k, lo, hi in self.excl:    # a few attachment windows per scene
+                keep &= ~((cab == c) & (part == k) & (s >= lo) & (s <= hi))
+            n_k = max(len(self.parts), 1)
+            key = cab[keep] * n_k + part[keep]
+            if len(key):
+                uniq, inv = np.unique(key, return_inverse=True)
+                least = np.full(len(uniq), np.inf)
+                np.minimum.at(least, inv, value[keep])
+                for k, v in zip(uniq.tolist(), least.tolist()):
+                    c, p = divmod(k, n_k)
+                    kind = PairType.KEEPOUT if self.keepout[p] else PairType.CABLE_STRUCTURE
+                    out[(kind.value, self.cables[c], self.parts[p])] = v + clearance
+        ca, _, cb, _, c_value = cable_pairs
+        if len(ca):
+            lo_c, hi_c = np.minimum(ca, cb), np.maximum(ca, cb)
+            n_c = max(len(self.cables), 1)
+            uniq, inv = np.unique(lo_c * n_c + hi_c, return_inverse=True)
+            least = np.full(len(uniq), np.inf)
+            np.minimum.at(least, inv, c_value)
+            for k, v in zip(uniq.tolist(), least.tolist()):
+                a, b = divmod(k, n_c)
+                kind = PairType.SELF if a == b else PairType.CABLE_CABLE
+                out[(kind.value, self.cables[a], self.cables[b])] = v + clearance
+        return out
+
+
+def _settings(scene: Scene) -> Settings:
+    from sim.cli import version   # the product version (the command line owns it)
+
+    return Settings(scene.units, scene.check.clearance, str(scene.path), version())
+
+
+def _wear_row(w: CableWear, u: float) -> dict:
+    worn = w.most_worn()
+    return {
+        "s": w.s / u, "contact_time": w.contact_time, "sliding": w.sliding / u, "bend_cycles": w.bend_cycles,
+        "most_worn": None if worn is None else {
+            "s": w.s[worn] / u, "touches": w.touches[worn], "contact_time": w.contact_time[worn],
+            "sliding": w.sliding[worn] / u},
+    }
 
 
 def _report_twist(report: dict, built: Built, meters: list) -> None:
@@ -302,7 +393,7 @@ def _report_twist(report: dict, built: Built, meters: list) -> None:
 def _report(scene: Scene, built: Built, config: CheckConfig, complete: bool, steps: int,
             checked: int, t_last: float, max_strain, min_bend, rest_points, final_points,
             timer: _Timer, total: float, sim: Simulation, events, tracker: EventTracker,
-            validation: Validation, options: RunOptions) -> dict:
+            validation: Validation, options: RunOptions, wear: list[CableWear], settings: Settings) -> dict:
     u = scene.scale
     radii = [c.radius for c in built.cables]
     cables = []
@@ -318,6 +409,7 @@ def _report(scene: Scene, built: Built, config: CheckConfig, complete: bool, ste
             "bend_violation": bool(limit is not None and checked and min_bend[i] < limit),
             "rest_points": (np.asarray(rest_points[i]) / u) if rest_points else [],
             "final_points": (np.asarray(final_points[i]) / u) if final_points else [],
+            "wear": _wear_row(wear[i], u),
         })
     check_steps = max(checked, 1)
     event_rows = [{
@@ -356,6 +448,9 @@ def _report(scene: Scene, built: Built, config: CheckConfig, complete: bool, ste
             "steps": steps,
             "checked_steps": checked,
             "t_end": t_last,
+            "units": settings.units,
+            "scene_file": settings.scene_file,
+            "version": settings.version,
         },
         "summary": summary,
         "events": event_rows,
@@ -383,9 +478,11 @@ def _report(scene: Scene, built: Built, config: CheckConfig, complete: bool, ste
             "check_s": timer.total["check"],
             "validate_s": timer.total["validate"],
             "record_s": timer.total["record"],
+            "wear_s": timer.total["wear"],
             "check_ms_per_step": 1e3 * timer.total["check"] / check_steps,
             "validate_ms_per_step": 1e3 * timer.total["validate"] / check_steps,
             "record_ms_per_step": 1e3 * timer.total["record"] / check_steps,
+            "wear_ms_per_step": 1e3 * timer.total["wear"] / check_steps,
             "sim_ms_per_step": 1e3 * timer.total["sim"] / max(steps, 1),
         },
         "recording": str(options.record) if options.record else None,

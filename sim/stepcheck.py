@@ -79,6 +79,10 @@ class StepResult:
       full: the pairwise checks ran (False: proven clear).
       contacts: MuJoCo's contacts at this state when it was validated.
       agreement: the validation's agreement at this state, or None.
+      near: at a full check with the skip rule, every candidate the checker
+        evaluated up to its horizon, as ((cable, s, part, value - clearance)
+        for parts, (cable a, s_a, cable b, s_b, value - clearance) for cable
+        pairs; built part indices, metres), else None.
     """
 
     records: list[Interference]
@@ -88,6 +92,7 @@ class StepResult:
     full: bool
     contacts: Contacts | None = None
     agreement: float | None = None
+    near: tuple | None = None
 
 
 class StepChecks:
@@ -112,7 +117,7 @@ class StepChecks:
         self.config = config
         self.detector = detector
         self.lap = lap
-        shapes = part_shapes(built)
+        self.shapes = shapes = part_shapes(built)
         # Rigid parts against each other: prepared once, same-body pairs checked once.
         self.rigid = rigid = part_set(built, tolerance=DEFAULT_PRECISION_M, shapes=shapes)
         focus = selection(rigid, only, "--only") if only is not None else None
@@ -247,6 +252,7 @@ class StepChecks:
               bend: np.ndarray) -> StepResult:
         cables = self._cable_states(state)
         adv = self.advance
+        near = None
         cable_records = self.checker.check(cables, poses[self.checked_parts], self.exclusions)
         # moving part pairs still provably apart: only same-body records
         if adv is not None and state.step > 0 and adv.part_pairs_clear(poses):
@@ -264,14 +270,15 @@ class StepChecks:
                 # stop the skipping at once: evaluated on their own wherever
                 # the cable comes near the part (so a contact may slide along)
                 part = self._checked_index[part]
-                near = value < ACTIVE_HORIZONS * self.horizon
+                near = ((cab, s_c, part, value), self.checker.cable_candidates)
+                close = value < ACTIVE_HORIZONS * self.horizon
                 n_k = max(len(self.built.parts), 1)
-                key = np.unique(cab[near] * n_k + part[near])
+                key = np.unique(cab[close] * n_k + part[close])
                 # self and cable-cable pairs likewise, near their candidates
                 ca, _, cb, _, c_value = self.checker.cable_candidates
                 n_c = max(len(self.built.cables), 1)
-                near = c_value < ACTIVE_HORIZONS * self.horizon
-                c_key = np.unique(np.minimum(ca, cb)[near] * n_c + np.maximum(ca, cb)[near])
+                close = c_value < ACTIVE_HORIZONS * self.horizon
+                c_key = np.unique(np.minimum(ca, cb)[close] * n_c + np.maximum(ca, cb)[close])
                 adv.start(pts, poses, gap_cable, self._gap_part, self._moving_pairs, bound,
                           (cab, s_c, part, value), self.horizon, self.checker.cable_candidates,
                           (key // n_k, key % n_k), np.stack([c_key // n_c, c_key % n_c], axis=1))
@@ -282,7 +289,7 @@ class StepChecks:
                 adv.stop()
                 adv.start_pairs(poses, self._moving_pairs, bound)
         cable_records = self._focus(cable_records)
-        return StepResult(cable_records + part_records, cable_records, strain, bend, True)
+        return StepResult(cable_records + part_records, cable_records, strain, bend, True, near=near)
 
     def _same_body_records(self, poses: np.ndarray) -> list[Interference]:
         """The part-part records of a step on which no moving pair can be

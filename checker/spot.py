@@ -1,0 +1,47 @@
+"""The other side of a clash: the closest point opposite a record's worst place.
+
+An :class:`~checker.records.Interference` carries its worst place on cable
+``a`` (``where``, ``s``) and, for cable pairs, the arc length on cable ``b``
+(``s_b``). To draw the gap (a segment from one side to the other) a viewer
+needs the matching point on the other side; it is found here from the same
+geometry, for the few records shown, not carried by every record of every
+step:
+
+- against a part: the closest surface point of the part's shape to
+  ``where`` (:func:`checker.shapes.signed_distance`, in the part's frame);
+- against a cable (another one or a loop of the same): the closest point
+  to ``where`` on the elements of cable ``b`` next to arc length ``s_b``.
+
+This module does not decide what interferes and does not know MuJoCo.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from checker.cable import arc_length
+from checker.closest import point_segment
+from checker.shapes import Shape, signed_distance
+
+
+def on_part(shape: Shape, pose: np.ndarray, where: np.ndarray) -> np.ndarray:
+    """(3,) the point of the part's surface closest to `where` (world), given
+    the part's (4, 4) world pose."""
+    pose = np.asarray(pose, float)
+    local = (np.asarray(where, float).reshape(1, 3) - pose[:3, 3]) @ pose[:3, :3]
+    _, closest = signed_distance(shape, local)
+    return closest[0] @ pose[:3, :3].T + pose[:3, 3]
+
+
+def on_cable(points: np.ndarray, s_b: float, where: np.ndarray, reach: int = 1) -> np.ndarray:
+    """(3,) the point closest to `where` on the elements of a cable's (n, 3)
+    centreline within `reach` elements of the one holding arc length `s_b`."""
+    p = np.asarray(points, float)
+    if len(p) < 2:
+        return p[0].copy()
+    s = arc_length(p)
+    j = int(np.clip(np.searchsorted(s, s_b, side="right") - 1, 0, len(p) - 2))
+    lo, hi = max(j - reach, 0), min(j + reach, len(p) - 2) + 1
+    q = np.broadcast_to(np.asarray(where, float), (hi - lo, 3))
+    d, _, closest = point_segment(q, p[lo:hi], p[lo + 1:hi + 1])
+    return closest[int(np.argmin(d))]

@@ -1,0 +1,381 @@
+"""Wear map: where along each cable it lies in contact, slides and bends back and forth.
+
+Each cable is split into arc-length bins, one per element of the built cable
+(bin ``j`` runs between the rest arc lengths of body centres ``j`` and
+``j + 1``: a material piece of the cable, whatever its shape). Over the
+checked steps of a run, per bin:
+
+- ``contact_time``: seconds the element was within the clearance of a part
+  or of a cable (another one, or a loop of itself), by the rectangle rule
+  over checked steps (a step's contact counts from the previous checked
+  step).
+- ``sliding``: the distance the element's contact point moved along the
+  surface it touches, relative to that surface, while in contact at both
+  ends of a step: the element's material point (at the segment parameter of
+  its closest approach) is taken at both steps in the frame of the part it
+  touches (or against the other cable's material point), and the component
+  of its displacement along the contact normal is removed. Archard's wear
+  law takes worn volume proportional to sliding distance times load, so
+  this is the cable's share of that product that geometry alone can give.
+- ``bend_cycles``: bending reversals counted by hysteresis on the discrete
+  curvature vector (Bergou et al., "Discrete Elastic Rods", 2008:
+  ``2 e0 x e1 / (|e0||e1| + e0.e1)`` over the Voronoi length) at each body
+  centre: a reversal is counted when the curvature, having moved away from
+  its last turning point, comes back towards it by more than
+  :data:`REVERSAL_STRAIN` of surface strain (``radius * change of
+  curvature``); ``bend_cycles`` is half the reversals (a full swing back
+  and forth is one cycle), the larger of the element's two ends.
+
+Where contact comes from: the step's interference records name every pair
+below the clearance (at every checked step, proven-clear steps included, so
+a pair in contact is never missed). For each named cable-structure pair all
+elements of the cable are measured against the part (exact segment to shape
+distance, :func:`checker.shapes.segment_signed_distance`); for cable-cable
+and self pairs every element pair (self: farther apart along the cable
+than :func:`checker.cable.self_pair_window`). Keep-outs are clearance
+zones, not surfaces, and make no wear; an attachment window (the cable held
+in a part) is not contact either. Cost: one vectorised distance call per
+pair in contact per step; nothing when nothing touches.
+
+Limits: contact is geometric (within the clearance), not load: a cable
+resting with no force and one pressed hard count alike. Sliding between two
+checked steps is the straight-line displacement, so a contact that slides
+back and forth faster than the check rate is undercounted.
+
+This module does not know MuJoCo, events or the report's layout.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from checker.cable import self_pair_window
+from checker.closest import row_norm, segment_segment
+from checker.records import Interference, PairType
+from checker.scene_state import Exclusion
+from checker.shapes import Shape, signed_distance, segment_signed_distance
+
+REVERSAL_STRAIN = 1e-3
+"""Surface bending strain (radius times change of curvature) a bend must swing
+back by to count as a reversal: smaller wiggles (solver noise, vibration of a
+few micrometres) are no fatigue cycles."""
+
+
+@dataclass(frozen=True)
+class CableWear:
+    """One cable's wear map, per arc-length bin.
+
+    Attributes:
+      name: the cable.
+      s: (B,) bin starts along the rest length, metres (bin ``j`` ends at ``s[j + 1]``,
+        the last at ``length``).
+      length: the cable's rest length, metres.
+      contact_time: (B,) seconds in contact.
+      sliding: (B,) distance slid while in contact, metres.
+      bend_cycles: (B,) bending cycles (half the reversals).
+      touches: per bin, the name of what it was in contact with longest, or None.
+    """
+
+    name: str
+    s: np.ndarray
+    length: float
+    contact_time: np.ndarray
+    sliding: np.ndarray
+    bend_cycles: np.ndarray
+    touches: tuple[str | None, ...]
+
+    def most_worn(self) -> int | None:
+        """Index of the bin that slid farthest (or, with no sliding, lay longest
+        in contact), None when the cable touched nothing."""
+        if self.sliding.size and self.sliding.max() > 0.0:
+            return int(np.argmax(self.sliding))
+        if self.contact_time.size and self.contact_time.max() > 0.0:
+            return int(np.argmax(self.contact_time))
+        return None
+
+
+def curvature_vectors(points: np.ndarray) -> np.ndarray:
+    """(n, 3) discrete curvature vector at each point of a polyline (Bergou et
+    al. 2008), zero at both ends and at degenerate (zero-length) elements."""
+    p = np.asarray(points, float)
+    interior = np.zeros(len(p), bool)
+    interior[1:-1] = True
+    return curvature_many(p[None], interior)[0]
+
+
+def curvature_many(points: np.ndarray, interior: np.ndarray) -> np.ndarray:
+    """(S, N, 3) curvature vectors of polylines laid one after the other in
+    (S, N, 3) `points`; `interior` (N,) marks the points that have both
+    neighbours on their own polyline (the others get zero)."""
+    p = np.asarray(points, float)
+    out = np.zeros_like(p)
+    if p.shape[1] < 3:
+        return out
+    e = p[:, 1:] - p[:, :-1]
+    e0, e1 = e[:, :-1], e[:, 1:]
+    l0, l1 = row_norm(e0), row_norm(e1)
+    den = (l0 * l1 + np.einsum("sij,sij->si", e0, e1)) * (0.5 * (l0 + l1))
+    ok = (den > 1e-300) & (l0 > 0.0) & (l1 > 0.0) & interior[None, 1:-1]
+    cross = np.stack([e0[..., 1] * e1[..., 2] - e0[..., 2] * e1[..., 1],
+                      e0[..., 2] * e1[..., 0] - e0[..., 0] * e1[..., 2],
+                      e0[..., 0] * e1[..., 1] - e0[..., 1] * e1[..., 0]], axis=-1)
+    out[:, 1:-1] = np.where(ok[..., None], 2.0 * cross / np.where(ok, den, 1.0)[..., None], 0.0)
+    return out
+
+
+class WearMap:
+    """Accumulates the wear map over a run's checked steps (see the module docstring).
+
+    Args:
+      names: the cables' names (C,).
+      rest_s: per cable, (n,) rest arc length of each body centre, metres.
+      radii: (C,) cable radii, metres.
+      parts: the parts as (name, shape in its own frame); poses given per step.
+      clearance: contact distance, metres.
+      exclusions: attachment windows (cable, part, s range) that are no contact.
+    """
+
+    def __init__(self, names: Sequence[str], rest_s: Sequence[np.ndarray], radii: Sequence[float],
+                 parts: Sequence[tuple[str, Shape]], clearance: float,
+                 exclusions: Iterable[Exclusion] = ()):
+        self.names = list(names)
+        self.index = {n: i for i, n in enumerate(self.names)}
+        self.rest_s = [np.asarray(s, float) for s in rest_s]
+        self.radii = np.asarray(radii, float)
+        self.shapes = {name: (k, shape) for k, (name, shape) in enumerate(parts)}
+        # each part's bounding sphere in its own frame (infinite for planes)
+        self._part_centre, self._part_reach = {}, {}
+        for name, shape in parts:
+            lo, hi = shape.local_bounds()
+            finite = bool(np.isfinite(lo).all() and np.isfinite(hi).all())
+            self._part_centre[name] = 0.5 * (lo + hi) if finite else np.zeros(3)
+            self._part_reach[name] = 0.5 * float(np.linalg.norm(hi - lo)) if finite else np.inf
+        self.clearance = float(clearance)
+        mid = [0.5 * (s[1:] + s[:-1]) for s in self.rest_s]
+        self._excluded: dict[tuple[int, str], np.ndarray] = {}
+        for e in exclusions:
+            c = self.index.get(e.cable)
+            if c is None:
+                continue
+            mask = (mid[c] >= e.s_min) & (mid[c] <= e.s_max)
+            key = (c, e.part)
+            self._excluded[key] = self._excluded.get(key, np.zeros(len(mid[c]), bool)) | mask
+        n_el = [max(len(s) - 1, 0) for s in self.rest_s]
+        self.contact_time = [np.zeros(n) for n in n_el]
+        self.sliding = [np.zeros(n) for n in n_el]
+        self._touch_prev = [np.zeros(n, bool) for n in n_el]
+        self._partner_time: list[dict[str, np.ndarray]] = [{} for _ in n_el]
+        # bending reversals, all body centres of all cables in one array
+        self._offsets = np.concatenate([[0], np.cumsum([len(s) for s in self.rest_s])]).astype(int)
+        n_v = int(self._offsets[-1])
+        self._threshold = np.repeat(REVERSAL_STRAIN / np.maximum(self.radii, 1e-300),
+                                    [len(s) for s in self.rest_s])
+        self._anchor = np.zeros((n_v, 3))
+        self._peak = np.zeros((n_v, 3))
+        self._peak_dist = np.zeros(n_v)
+        self._reversals = np.zeros(n_v, np.int64)
+        self._interior = np.ones(n_v, bool)
+        self._interior[self._offsets[:-1]] = False
+        self._interior[np.maximum(self._offsets[1:] - 1, 0)] = False
+        self._started = False
+        self._prev: tuple[float, np.ndarray, np.ndarray] | None = None
+
+    def update(self, t: float, points: Sequence[np.ndarray], poses: np.ndarray,
+               records: Iterable[Interference]) -> None:
+        """Take one checked step: time t (s), each cable's (n, 3) body centres,
+        the parts' (P, 4, 4) poses, and the step's interference records."""
+        flat = np.concatenate([np.asarray(p, float) for p in points]) if len(points) else np.zeros((0, 3))
+        self.update_many([t], flat[None], np.asarray(poses, float)[None], [list(records)])
+
+    def update_many(self, times: Sequence[float], points: np.ndarray, poses: np.ndarray,
+                    records: Sequence[Sequence[Interference]]) -> None:
+        """Take consecutive checked steps (oldest first): times (S,), the
+        cables' body centres (S, N, 3) one cable after the other, the parts'
+        poses (S, P, 4, 4) and each step's records. The bends of all steps are
+        measured in one vectorised pass; contact pair by pair, for all the
+        steps whose records name the pair at once."""
+        points = np.asarray(points, float)
+        poses = np.asarray(poses, float)
+        n_s = len(points)
+        if n_s == 0:
+            return
+        self._bend_many(points)
+        t = np.asarray(times, float)
+        if self._prev is None:     # the first step: contact without time or slip
+            self._prev = (float(t[0]), points[0], poses[0])
+        t0, p0, q0 = self._prev
+        dt = np.diff(np.r_[t0, t])
+        prev_points = np.concatenate([p0[None], points[:-1]])
+        prev_poses = np.concatenate([q0[None], poses[:-1]])
+        self._prev = (float(t[-1]), points[-1], poses[-1])
+        groups: dict[tuple[int, str, str], list[int]] = {}
+        for i, recs in enumerate(records):
+            for r in recs:
+                kind = PairType(r.type)
+                if r.a not in self.index:
+                    continue
+                if kind is PairType.CABLE_STRUCTURE and r.b in self.shapes:
+                    groups.setdefault((self.index[r.a], "part", r.b), []).append(i)
+                elif kind in (PairType.CABLE_CABLE, PairType.SELF) and r.b in self.index:
+                    groups.setdefault((self.index[r.a], "cable", r.b), []).append(i)
+        n_el = [len(c) for c in self.contact_time]
+        if not groups:
+            self._touch_prev = [np.zeros(n, bool) for n in n_el]
+            return
+        touch = [np.zeros((n_s, n), bool) for n in n_el]
+        slide = [np.zeros((n_s, n)) for n in n_el]
+        o = self._offsets
+        span = lambda c: slice(o[c], o[c + 1])
+        for (c, what, other), idx in groups.items():
+            idx = np.asarray(idx)
+            if what == "part":
+                k, shape = self.shapes[other]
+                hit, moved = self._against_part(c, other, shape, points[idx][:, span(c)],
+                                                prev_points[idx][:, span(c)], poses[idx, k], prev_poses[idx, k])
+                self._take(c, other, idx, hit, moved, touch, slide, dt)
+            else:
+                b = self.index[other]
+                hit_a, moved_a, hit_b, moved_b = self._against_cable(
+                    c, b, points[idx][:, span(c)], points[idx][:, span(b)],
+                    prev_points[idx][:, span(c)], prev_points[idx][:, span(b)])
+                self._take(c, other, idx, hit_a, moved_a, touch, slide, dt)
+                if b != c:
+                    self._take(b, self.names[c], idx, hit_b, moved_b, touch, slide, dt)
+        for c in range(len(touch)):
+            before = np.concatenate([self._touch_prev[c][None], touch[c][:-1]])
+            self.contact_time[c] += (dt[:, None] * touch[c]).sum(axis=0)
+            self.sliding[c] += np.where(touch[c] & before, slide[c], 0.0).sum(axis=0)
+            self._touch_prev[c] = touch[c][-1].copy()
+
+    def _take(self, c: int, partner: str, idx: np.ndarray, hit: np.ndarray, moved: np.ndarray,
+              touch, slide, dt: np.ndarray) -> None:
+        """Steps `idx`' (m, B) contact and slip against `partner` into the batch's."""
+        if not hit.any():
+            return
+        touch[c][idx] |= hit
+        slide[c][idx] = np.maximum(slide[c][idx], np.where(hit, moved, 0.0))
+        acc = self._partner_time[c].setdefault(partner, np.zeros(hit.shape[1]))
+        acc += (dt[idx, None] * hit).sum(axis=0)
+
+    def _against_part(self, c: int, part: str, shape: Shape, pts: np.ndarray, prev: np.ndarray,
+                      pose: np.ndarray, prev_pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(m, B) elements within the clearance of the part at m steps, and the
+        tangential slip of each since the step before; pts, prev (m, n, 3),
+        pose, prev_pose (m, 4, 4)."""
+        m, n = pts.shape[:2]
+        local = np.einsum("mni,mij->mnj", pts - pose[:, None, :3, 3], pose[:, :3, :3])   # R^T (p - o)
+        a, b = local[:, :-1].reshape(-1, 3), local[:, 1:].reshape(-1, 3)
+        # only elements whose bounding sphere reaches the part's are measured
+        reach = self._part_reach[part] + self.radii[c] + self.clearance
+        mid, half = 0.5 * (a + b), 0.5 * row_norm(b - a)
+        keep = row_norm(mid - self._part_centre[part]) <= reach + half
+        excluded = self._excluded.get((c, part))
+        if excluded is not None:
+            keep &= ~np.tile(excluded, m)
+        cand = np.flatnonzero(keep)
+        hit = np.zeros(len(a), bool)
+        moved = np.zeros(len(a))
+        if len(cand):
+            d, u = segment_signed_distance(shape, a[cand], b[cand])
+            near = (d - self.radii[c]) < self.clearance
+            i, u = cand[near], u[near]
+            hit[i] = True
+            if len(i):
+                prev_local = np.einsum("mni,mij->mnj", prev - prev_pose[:, None, :3, 3], prev_pose[:, :3, :3])
+                pa, pb = prev_local[:, :-1].reshape(-1, 3), prev_local[:, 1:].reshape(-1, 3)
+                now = a[i] + u[:, None] * (b[i] - a[i])
+                then = pa[i] + u[:, None] * (pb[i] - pa[i])
+                _, closest = signed_distance(shape, now)
+                moved[i] = _tangential(now - then, now - closest)
+        return hit.reshape(m, n - 1), moved.reshape(m, n - 1)
+
+    def _against_cable(self, c: int, b: int, pa: np.ndarray, pb: np.ndarray, qa: np.ndarray,
+                       qb: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Elements of cables c and b within the clearance of each other at m
+        steps (for a self pair, of the same cable's far part), (m, Ba) and
+        (m, Bb), and their relative slip since the step before; pa, pb now and
+        qa, qb before, (m, n, 3)."""
+        m, na, nb = len(pa), pa.shape[1] - 1, pb.shape[1] - 1
+        # element pairs whose bounding spheres come within the clearance, then exact
+        ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
+        ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
+        gap = row_norm(ma[:, :, None, :] - mb[:, None, :, :]) - ha[:, :, None] - hb[:, None, :]
+        st, ia, ib = np.nonzero(gap < self.radii[c] + self.radii[b] + self.clearance)
+        if b == c:   # places of one cable close along it are its own bends, not contact
+            mid = 0.5 * (self.rest_s[c][1:] + self.rest_s[c][:-1])
+            far = np.abs(mid[ia] - mid[ib]) > self_pair_window(self.radii[c], self.clearance)
+            st, ia, ib = st[far], ia[far], ib[far]
+        dist, u, v, cp, cq = segment_segment(pa[st, ia], pa[st, ia + 1], pb[st, ib], pb[st, ib + 1])
+        near = (dist - self.radii[c] - self.radii[b]) < self.clearance
+        st, ia, ib, u, v, cp, cq = st[near], ia[near], ib[near], u[near], v[near], cp[near], cq[near]
+        hit_a, hit_b = np.zeros((m, na), bool), np.zeros((m, nb), bool)
+        moved_a, moved_b = np.zeros((m, na)), np.zeros((m, nb))
+        if len(st):
+            then_a = qa[st, ia] + u[:, None] * (qa[st, ia + 1] - qa[st, ia])
+            then_b = qb[st, ib] + v[:, None] * (qb[st, ib + 1] - qb[st, ib])
+            slip = _tangential((cp - then_a) - (cq - then_b), cp - cq)
+            hit_a[st, ia] = True
+            hit_b[st, ib] = True
+            np.maximum.at(moved_a, (st, ia), slip)
+            np.maximum.at(moved_b, (st, ib), slip)
+        return hit_a, moved_a, hit_b, moved_b
+
+    def _bend_many(self, points: np.ndarray) -> None:
+        """Hysteresis turning points of every body centre's curvature vector,
+        step after step (S, N, 3)."""
+        if points.shape[1] == 0:
+            return
+        k = curvature_many(points, self._interior)
+        start = 0
+        if not self._started:     # the first step: its bend is the first turning point
+            self._anchor[:] = k[0]
+            self._peak[:] = k[0]
+            self._started = True
+            start = 1
+        anchor, peak, peak_dist, thr = self._anchor, self._peak, self._peak_dist, self._threshold
+        for kk in k[start:]:
+            away = row_norm(kk - anchor)
+            further = away >= peak_dist
+            peak[further] = kk[further]
+            peak_dist[further] = away[further]
+            back = ~further & (peak_dist > thr)
+            if back.any():
+                back &= row_norm(kk - peak) > thr
+                if back.any():
+                    self._reversals[back] += 1
+                    anchor[back] = peak[back]
+                    peak[back] = kk[back]
+                    peak_dist[back] = row_norm(kk[back] - anchor[back])
+
+    def result(self) -> list[CableWear]:
+        """The wear map so far, per cable."""
+        out = []
+        for c, name in enumerate(self.names):
+            s = self.rest_s[c]
+            rev = self._reversals[self._offsets[c]:self._offsets[c + 1]]
+            cycles = 0.5 * np.maximum(rev[:-1], rev[1:]) if len(rev) > 1 else np.zeros(0)
+            partners = self._partner_time[c]
+            if partners:
+                names = sorted(partners)
+                table = np.stack([partners[n] for n in names])
+                best = np.argmax(table, axis=0)
+                touches = tuple(names[j] if table[j, i] > 0.0 else None for i, j in enumerate(best))
+            else:
+                touches = (None,) * (len(s) - 1)
+            out.append(CableWear(name, s[:-1].copy(), float(s[-1]) if len(s) else 0.0,
+                                 self.contact_time[c].copy(), self.sliding[c].copy(), cycles, touches))
+        return out
+
+
+def _tangential(displacement: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """|displacement with its component along `normal` removed|, per row
+    (the whole displacement where the normal is degenerate)."""
+    n_len = row_norm(normal)
+    ok = n_len > 0.0
+    unit = np.zeros_like(normal)
+    unit[ok] = normal[ok] / n_len[ok, None]
+    along = np.einsum("ij,ij->i", displacement, unit)
+    return row_norm(displacement - along[:, None] * unit)

@@ -1,0 +1,289 @@
+"""sim.record: the clash review recording, read back with rerun's own reader.
+
+The runs are the example scenes; every assertion reads the written .rrd
+through `rerun.chunk.RrdReader` (the SDK's reader of recordings), never the
+recorder's own buffers.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pytest
+from rerun.chunk import RrdReader
+
+from sim.cli import main, version
+from sim.record import SPOT, STATE_COLOURS, PART_COLOUR, KEEPOUT_COLOUR, wear_colours
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _run(scene: str, out: Path) -> tuple[dict, Path]:
+    record = out / f"{Path(scene).stem}.rrd"
+    assert main(["run", str(ROOT / "scenes" / scene), "--record", str(record), "--quiet",
+                 "--fail-on", "never", "--report", str(record.with_suffix(".json"))]) == 0
+    return json.loads(record.with_suffix(".json").read_text()), record
+
+
+def _rows(record: Path, entity: str) -> list[dict]:
+    """Every row logged at `entity`, in time order: {column: value} plus "t" (s) or None for static."""
+    rows = []
+    for chunk in RrdReader(record).stream():
+        if chunk.entity_path != entity:
+            continue
+        batch = chunk.to_record_batch()
+        n = chunk.num_rows
+        # sim_time in nanoseconds (not every one is a whole number of microseconds)
+        times = (batch.column("sim_time").cast(pa.int64()).to_numpy() * 1e-9 if "sim_time" in batch.schema.names
+                 else [None] * n)
+        data = {k: batch.column(k).to_pylist() for k in batch.schema.names if "RowId" not in k and k != "sim_time"}
+        for i in range(n):
+            row = {k: v[i] for k, v in data.items()}
+            row["t"] = None if times[i] is None else float(times[i])
+            rows.append(row)
+    return sorted(rows, key=lambda r: (r["t"] is not None, r["t"] or 0.0))
+
+
+def _entities(record: Path) -> set[str]:
+    return {c.entity_path for c in RrdReader(record).stream()}
+
+
+@pytest.fixture(scope="module")
+def pinch(tmp_path_factory) -> tuple[dict, Path]:
+    """drawer_pinch: the drawer's back panel sweeps through a cable loop (one hard event)."""
+    return _run("drawer_pinch.toml", tmp_path_factory.mktemp("pinch"))
+
+
+@pytest.fixture(scope="module")
+def crossing(tmp_path_factory) -> tuple[dict, Path]:
+    """crossing: two leads overlapping from the start to the end (one event open at the end)."""
+    return _run("crossing.toml", tmp_path_factory.mktemp("crossing"))
+
+
+def test_every_run_is_its_own_recording_named_after_the_scene(crossing, tmp_path: Path):
+    _, first = crossing
+    _, second = _run("crossing.toml", tmp_path)
+    ids = []
+    for record in (first, second):
+        recordings = RrdReader(record).recordings()
+        assert len(recordings) == 1
+        assert recordings[0].application_id == "crossing"
+        ids.append(recordings[0].recording_id)
+        names = [r["RecordingInfo:name"] for r in _rows(record, "/__properties") if "RecordingInfo:name" in r]
+        assert names == [["crossing"]]
+    assert ids[0] != ids[1]
+
+
+def test_properties_hold_units_clearance_scene_file_and_version(pinch):
+    report, record = pinch
+    (props,) = _rows(record, "/__properties/cablecheck")
+    assert props["units"] == ["mm"] and props["clearance"] == [pytest.approx(3.0)]
+    assert props["scene_file"][0].endswith("drawer_pinch.toml") and props["version"] == [version()]
+    s = report["settings"]
+    assert (s["units"], s["scene_file"], s["version"]) == ("mm", props["scene_file"][0], version())
+
+
+def test_only_the_simulation_timeline_is_written(pinch):
+    _, record = pinch
+    timelines = {t for c in RrdReader(record).stream() for t in c.timeline_names}
+    assert timelines == {"sim_time"}
+
+
+def test_the_spot_is_labelled_with_pair_and_distance_in_its_own_colour(pinch):
+    report, record = pinch
+    (event,) = report["events"]
+    path = "/world/interference/cable-structure/loop/drawer_back"
+    static = [r for r in _rows(record, path) if r["t"] is None][0]
+    rgba = static["Ellipsoids3D:colors"][0]
+    assert (rgba >> 24, (rgba >> 16) & 255, (rgba >> 8) & 255) == SPOT
+    assert SPOT not in (*STATE_COLOURS.values(), PART_COLOUR, KEEPOUT_COLOUR[:3])
+    assert static["Ellipsoids3D:show_labels"] == [True]
+    shown = [r for r in _rows(record, path) if r["t"] is not None]
+    # every row holds as many sizes as centres: an emptied row draws nothing (not a sphere at the origin)
+    assert all(len(r["Ellipsoids3D:half_sizes"]) == len(r["Ellipsoids3D:centers"]) for r in shown)
+    worst = min(shown, key=lambda r: abs(r["t"] - event["t_worst"]))
+    assert worst["Ellipsoids3D:labels"] == [f"loop / drawer/back: {event['min_distance']:.3g} mm"]
+    # shown from the event's start, emptied at the frame after its last
+    assert shown[0]["t"] == pytest.approx(event["t_start"]) and shown[-1]["Ellipsoids3D:labels"] == []
+    # the gap: from the worst place on the centreline (radius 3 mm) to the panel's surface
+    gaps = [r for r in _rows(record, path + "/gap") if r["t"] is not None and r["LineStrips3D:strips"]]
+    seg = np.array([r for r in gaps if r["t"] == pytest.approx(event["t_worst"])][0]["LineStrips3D:strips"][0])
+    assert np.linalg.norm(seg[1] - seg[0]) == pytest.approx(abs(event["min_distance"] + 3.0), abs=1e-3)
+
+
+def test_only_the_elements_near_the_spot_take_the_state_colour(pinch):
+    report, record = pinch
+    (event,) = report["events"]
+    rows = [r for r in _rows(record, "/world/cables/loop") if r["t"] is not None]
+    at_worst = min(rows, key=lambda r: abs(r["t"] - event["t_worst"]))
+    hard = np.uint32(int.from_bytes(bytes([*STATE_COLOURS["hard"], 255]), "big"))
+    clear = np.uint32(int.from_bytes(bytes([*STATE_COLOURS["clear"], 255]), "big"))
+    colours = np.array(at_worst["LineStrips3D:colors"], np.uint32)
+    sizes = np.array([len(strip) - 1 for strip in at_worst["LineStrips3D:strips"]])   # elements per strip
+    n = report["cables"][0]["segments"]
+    assert sizes.sum() == n and set(colours.tolist()) == {int(hard), int(clear)}
+    assert 0 < sizes[colours == hard].sum() < n // 3
+    before = min(rows, key=lambda r: abs(r["t"] - 0.5))
+    assert np.array(before["LineStrips3D:colors"], np.uint32).tolist() == [int(clear)]   # one clear strip
+
+
+def test_the_clash_list_has_one_row_per_event_at_its_worst_time(pinch):
+    report, record = pinch
+    rows = _rows(record, "/clashes")
+    assert len(rows) == len(report["events"]) == 1
+    (row,), (ev,) = rows, report["events"]
+    assert row["t"] == pytest.approx(ev["t_worst"])
+    assert (row["type"], row["pair"], row["severity"], row["phase"]) == \
+        (["cable-structure"], ["loop / drawer/back"], ["hard"], ["dynamic"])
+    assert row["start_s"] == [pytest.approx(ev["t_start"])] and row["end_s"] == [pytest.approx(ev["t_end"])]
+    assert row["worst_distance"] == [pytest.approx(ev["min_distance"])]
+
+
+def test_the_event_log_has_one_start_and_one_end_per_event_levelled_by_severity(pinch, crossing):
+    for report, record in (pinch, crossing):
+        log = [r for r in _rows(record, "/events")]
+        assert len(log) == 2 * len(report["events"])
+        for ev in report["events"]:
+            pair = ev["a"] if ev["a"] == ev["b"] else f"{ev['a']} / {ev['b']}"
+            mine = [r for r in log if f" {pair} " in r["TextLog:text"][0]]
+            assert [r["t"] for r in mine] == [pytest.approx(ev["t_start"]), pytest.approx(ev["t_end"])]
+            assert mine[-1]["TextLog:level"] == [{"hard": "ERROR", "soft": "WARN"}[ev["severity"]]]
+    # crossing's event is still open when the run ends: its one end entry says so
+    (ev,) = crossing[0]["events"]
+    ends = [r for r in _rows(crossing[1], "/events") if "still present" in r["TextLog:text"][0]]
+    assert len(ends) == 1 and ends[0]["t"] == pytest.approx(ev["t_end"])
+
+
+def test_pair_state_lanes_follow_the_event(pinch):
+    report, record = pinch
+    (ev,) = report["events"]
+    lane = [r for r in _rows(record, "/lanes/cable-structure/loop/drawer_back") if r["t"] is not None]
+    states = [(r["t"], r["StateChange:state"][0]) for r in lane]
+    assert states[0] == (pytest.approx(ev["t_start"]), "soft")
+    assert "hard" in [s for _, s in states] and states[-1][1] == "clear"
+    assert states[-1][0] > ev["t_end"]
+
+
+def test_distances_have_limit_lines_and_break_where_unknown(pinch):
+    report, record = pinch
+    clearance = [r for r in _rows(record, "/checks/limits/clearance") if r["t"] is not None]
+    assert [r["Scalars:scalars"] for r in clearance] == [[3.0], [3.0]]
+    assert [r["t"] for r in clearance] == [0.0, pytest.approx(report["settings"]["t_end"])]
+    dist = [r for r in _rows(record, "/checks/cable-structure/loop/drawer_back/distance") if r["t"] is not None]
+    values = np.array([r["Scalars:scalars"][0] for r in dist])
+    assert np.isnan(values).any()                          # the line stops after the event
+    assert np.nanmin(values) == pytest.approx(report["events"][0]["min_distance"])
+    # the loop has no min_bend_radius in the scene: no limit line
+    assert "/cables/bend_radius/loop_limit" not in _entities(record)
+
+
+def test_summary_at_t0_names_the_clash_and_the_most_worn_spot(pinch):
+    report, record = pinch
+    (doc,) = _rows(record, "/summary")
+    assert doc["t"] == 0.0
+    text = doc["TextDocument:text"][0]
+    assert "drawer-pinch" in text and "loop / drawer/back" in text and "hard" in text
+    worn = report["cables"][0]["wear"]["most_worn"]
+    assert worn is not None and worn["touches"] == "drawer/back"
+    assert f"s = {worn['s']:.4g} mm" in text and "touching drawer/back" in text
+
+
+def test_the_wear_map_is_in_the_report_and_the_recording(pinch):
+    report, record = pinch
+    wear = report["cables"][0]["wear"]
+    n = report["cables"][0]["segments"]
+    assert all(len(wear[k]) == n for k in ("s", "contact_time", "sliding", "bend_cycles"))
+    assert wear["s"][0] == 0.0 and np.all(np.diff(wear["s"]) > 0)
+    touched = np.array(wear["contact_time"]) > 0
+    # the panel cuts the loop for about the event's length, at some places only
+    (ev,) = report["events"]
+    assert 0 < touched.sum() < n
+    assert max(wear["contact_time"]) <= ev["t_end"] - ev["t_start"] + 0.011
+    assert not np.array(wear["sliding"])[~touched].any()
+    entities = _entities(record)
+    assert {"/wear_map/loop", "/wear/loop/contact_time", "/wear/loop/sliding", "/wear/loop/bend_cycles"} <= entities
+    (strip,) = _rows(record, "/wear_map/loop")
+    assert len(strip["LineStrips3D:colors"]) == n
+
+
+def test_wear_colours_grey_where_untouched():
+    c = wear_colours(np.array([0.0, 0.0, 1.0, 2.0]), np.array([0.0, 1.0, 1.0, 1.0]))
+    assert tuple(c[0]) == (200, 200, 200) and tuple(c[1]) != (200, 200, 200)
+    assert tuple(c[3]) == (253, 231, 37)
+    assert not np.isnan(wear_colours(np.zeros(3), np.zeros(3)).astype(float)).any()
+
+
+ON_PLATE = """
+[scene]
+name = "on-plate"
+units = "mm"
+duration = 0.5
+settle = 0.3
+
+[effects]
+contact = ["cable-structure"]
+
+[check]
+clearance = 2.0
+
+[[bodies]]
+name = "slider"
+
+[[parts]]
+name = "plate"
+shape = "box"
+size = [300, 100, 5]
+pos = [150, 0, -5]
+
+[[cables]]
+name = "lead"
+radius = 3.0
+start = { pos = [-60, 0, 120] }
+via = [ [0, 0, 3] ]
+end = { body = "slider", pos = [200, 0, 3] }
+segments = 24
+
+[[motion]]
+body = "slider"
+keys = [ { t = 0.0, pos = [0, 0, 0] }, { t = 0.5, pos = [60, 0, 0] } ]
+"""
+
+
+def test_a_cable_lying_on_a_plate_with_one_end_sliding_wears_only_where_it_touches(tmp_path: Path):
+    """The simulated cable hangs from above the plate's edge and lies on the
+    plate to its end, which is dragged 60 mm along it (lifting the cable off
+    the plate bit by bit as it draws taut). Judged against the cable's shape
+    in every recorded frame: bins that never came near the plate have no
+    contact and no sliding, bins that lay on it throughout were in contact
+    the whole run and slid."""
+    scene = tmp_path / "on_plate.toml"
+    scene.write_text(ON_PLATE)
+    record = tmp_path / "p.rrd"
+    assert main(["run", str(scene), "--record", str(record), "--quiet", "--fail-on", "never"]) == 0
+    report = json.loads(record.with_suffix(".json").read_text())
+    wear = report["cables"][0]["wear"]
+    frames = []
+    for row in _rows(record, "/world/cables/lead"):
+        if row["t"] is not None:
+            strips = [np.array(x) for x in row["LineStrips3D:strips"]]
+            frames.append(np.concatenate([strips[0]] + [x[1:] for x in strips[1:]]))
+    z = np.stack(frames)[:, :, 2]                                   # (frames, body centres)
+    low, high = z.min(axis=0), z.max(axis=0)
+    r, clearance, top = 3.0, 2.0, 0.0
+    never = (low[:-1] > top + r + clearance + 1.0) & (low[1:] > top + r + clearance + 1.0)
+    always = (high[:-1] < top + r + 0.5 * clearance) & (high[1:] < top + r + 0.5 * clearance)
+    contact, sliding = np.array(wear["contact_time"]), np.array(wear["sliding"])
+    assert never.sum() >= 3 and always.sum() >= 1
+    assert not contact[never].any() and not sliding[never].any()
+    duration = report["settings"]["t_end"]
+    assert (contact[always] > duration - 0.011).all() and contact.max() <= duration + 1e-9
+    assert (sliding[always] > 30.0).all() and sliding.max() <= 60.0 + 1.0   # the end travels 60 mm
+    assert wear["most_worn"]["touches"] == "plate"
+    # the recording's wear map colours the untouched bins grey, the others not
+    (strip,) = _rows(record, "/wear_map/lead")
+    grey = int.from_bytes(bytes([200, 200, 200, 255]), "big")
+    colours = np.array(strip["LineStrips3D:colors"], np.uint32)
+    assert (colours[never] == grey).all() and not (colours[contact > 0] == grey).any()
