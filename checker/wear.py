@@ -28,19 +28,24 @@ checked steps of a run, per bin:
 
 Where contact comes from: the step's interference records name every pair
 below the clearance (at every checked step, proven-clear steps included, so
-a pair in contact is never missed). For each named cable-structure pair all
-elements of the cable are measured against the part (exact segment to shape
-distance, :func:`checker.shapes.segment_signed_distance`); for cable-cable
-and self pairs every element pair (self: farther apart along the cable
-than :func:`checker.cable.self_pair_window`). Keep-outs are clearance
-zones, not surfaces, and make no wear; an attachment window (the cable held
-in a part) is not contact either. Cost: one vectorised distance call per
-pair in contact per step; nothing when nothing touches.
+a pair in contact is never missed). For each named cable-structure pair the
+cable's elements whose box meets the part's are measured against it (exact
+segment to shape distance, :func:`checker.shapes.segment_signed_distance`;
+for a mesh the element's ends and middle); for cable-cable and self pairs
+the element pairs whose bounding spheres meet (self: farther apart along
+the cable than :func:`checker.cable.self_pair_window`), exactly. Keep-outs
+are clearance zones, not surfaces, and make no wear; an attachment window
+(the cable held in a part) is not contact either. Cost: one vectorised
+distance call per pair in contact per batch of steps; nothing when nothing
+touches. Contact may be measured at every `stride`-th step only (the run
+measures it at the recording's rate), each measurement counting for the
+time since the last; bends are followed at every step.
 
 Limits: contact is geometric (within the clearance), not load: a cable
 resting with no force and one pressed hard count alike. Sliding between two
-checked steps is the straight-line displacement, so a contact that slides
-back and forth faster than the check rate is undercounted.
+measurements is the straight-line displacement, so a contact that slides
+back and forth faster than they are taken is undercounted, and a contact
+shorter than the time between two is missed.
 
 This module does not know MuJoCo, events or the report's layout.
 """
@@ -56,7 +61,7 @@ from checker.cable import self_pair_window
 from checker.closest import row_norm, segment_segment
 from checker.records import Interference, PairType
 from checker.scene_state import Exclusion
-from checker.shapes import Shape, signed_distance, segment_signed_distance
+from checker.shapes import Shape, ShapeType, signed_distance, segment_signed_distance
 
 REVERSAL_STRAIN = 1e-3
 """Surface bending strain (radius times change of curvature) a bend must swing
@@ -136,23 +141,22 @@ class WearMap:
       parts: the parts as (name, shape in its own frame); poses given per step.
       clearance: contact distance, metres.
       exclusions: attachment windows (cable, part, s range) that are no contact.
+      stride: contact is measured at every `stride`-th step taken (each
+        measurement counting the time since the last one); bends at every step.
     """
 
     def __init__(self, names: Sequence[str], rest_s: Sequence[np.ndarray], radii: Sequence[float],
                  parts: Sequence[tuple[str, Shape]], clearance: float,
-                 exclusions: Iterable[Exclusion] = ()):
+                 exclusions: Iterable[Exclusion] = (), stride: int = 1):
+        self.stride = max(int(stride), 1)
+        self._count = 0
         self.names = list(names)
         self.index = {n: i for i, n in enumerate(self.names)}
         self.rest_s = [np.asarray(s, float) for s in rest_s]
         self.radii = np.asarray(radii, float)
         self.shapes = {name: (k, shape) for k, (name, shape) in enumerate(parts)}
-        # each part's bounding sphere in its own frame (infinite for planes)
-        self._part_centre, self._part_reach = {}, {}
-        for name, shape in parts:
-            lo, hi = shape.local_bounds()
-            finite = bool(np.isfinite(lo).all() and np.isfinite(hi).all())
-            self._part_centre[name] = 0.5 * (lo + hi) if finite else np.zeros(3)
-            self._part_reach[name] = 0.5 * float(np.linalg.norm(hi - lo)) if finite else np.inf
+        # each part's box in its own frame (infinite for planes)
+        self._part_box = {name: shape.local_bounds() for name, shape in parts}
         self.clearance = float(clearance)
         mid = [0.5 * (s[1:] + s[:-1]) for s in self.rest_s]
         self._excluded: dict[tuple[int, str], np.ndarray] = {}
@@ -203,7 +207,15 @@ class WearMap:
         if n_s == 0:
             return
         self._bend_many(points)
-        t = np.asarray(times, float)
+        first = self._count
+        self._count += n_s
+        sel = np.flatnonzero((first + np.arange(n_s)) % self.stride == 0)
+        if not len(sel):
+            return
+        points, poses = points[sel], poses[sel]
+        records = [records[i] for i in sel]
+        n_s = len(sel)
+        t = np.asarray(times, float)[sel]
         if self._prev is None:     # the first step: contact without time or slip
             self._prev = (float(t[0]), points[0], poses[0])
         t0, p0, q0 = self._prev
@@ -268,10 +280,10 @@ class WearMap:
         m, n = pts.shape[:2]
         local = np.einsum("mni,mij->mnj", pts - pose[:, None, :3, 3], pose[:, :3, :3])   # R^T (p - o)
         a, b = local[:, :-1].reshape(-1, 3), local[:, 1:].reshape(-1, 3)
-        # only elements whose bounding sphere reaches the part's are measured
-        reach = self._part_reach[part] + self.radii[c] + self.clearance
-        mid, half = 0.5 * (a + b), 0.5 * row_norm(b - a)
-        keep = row_norm(mid - self._part_centre[part]) <= reach + half
+        # only elements whose box meets the part's box, both grown by the contact reach
+        grow = self.radii[c] + self.clearance
+        lo, hi = self._part_box[part]
+        keep = np.all((np.minimum(a, b) <= hi + grow) & (np.maximum(a, b) >= lo - grow), axis=1)
         excluded = self._excluded.get((c, part))
         if excluded is not None:
             keep &= ~np.tile(excluded, m)
@@ -279,7 +291,7 @@ class WearMap:
         hit = np.zeros(len(a), bool)
         moved = np.zeros(len(a))
         if len(cand):
-            d, u = segment_signed_distance(shape, a[cand], b[cand])
+            d, u = _element_distance(shape, a[cand], b[cand])
             near = (d - self.radii[c]) < self.clearance
             i, u = cand[near], u[near]
             hit[i] = True
@@ -368,6 +380,22 @@ class WearMap:
             out.append(CableWear(name, s[:-1].copy(), float(s[-1]) if len(s) else 0.0,
                                  self.contact_time[c].copy(), self.sliding[c].copy(), cycles, touches))
         return out
+
+
+def _element_distance(shape: Shape, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Signed distance of elements `a b` (n, 3) to a shape in its frame and
+    the parameter of the nearest place: exact for primitives
+    (:func:`checker.shapes.segment_signed_distance`); for a mesh, the least
+    of the element's ends and middle (its exact segment search costs a
+    millisecond an element on a CAD mesh; elements are a few radii long, so
+    this errs by at most the element's sag over half its length)."""
+    if shape.type is not ShapeType.MESH:
+        return segment_signed_distance(shape, a, b)
+    n = len(a)
+    d, _ = signed_distance(shape, np.concatenate([a, 0.5 * (a + b), b]))
+    d = d.reshape(3, n)
+    k = np.argmin(d, axis=0)
+    return d[k, np.arange(n)], 0.5 * k
 
 
 def _tangential(displacement: np.ndarray, normal: np.ndarray) -> np.ndarray:

@@ -128,16 +128,17 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     timer.lap("sim")      # preparing the checks: counted as before
     settings = _settings(scene)
     recorder = Recorder(built, options.record, checks.shapes, settings) if options.record else None
+    every = scene.check.every
+    # The recording samples the checked steps at about RECORD_RATE (and at
+    # every step where an event starts or ends): a viewer needs no 500 Hz.
+    # The wear map measures contact at the same rate (bends at every step).
+    record_stride = max(1, int(round(1.0 / (RECORD_RATE * every * scene.timestep))))
     wear = WearMap([c.name for c in built.cables], [c.rest_s for c in built.cables],
                    [c.radius for c in built.cables],
                    [(p.name, shape) for p, shape in zip(built.parts, checks.shapes)],
-                   scene.check.clearance, checks.exclusions)
+                   scene.check.clearance, checks.exclusions, stride=record_stride)
     timer.skip()          # opening the recording is no step's cost (it was never timed)
-    every = scene.check.every
     tracker = EventTracker(hold=3 * every * scene.timestep)
-    # The recording samples the checked steps at about RECORD_RATE (and at
-    # every step where an event starts or ends): a viewer needs no 500 Hz.
-    record_stride = max(1, int(round(1.0 / (RECORD_RATE * every * scene.timestep))))
     joints = JointLog(built, sim.motion)
     out = _Outcome(built, tracker, recorder, timer, progress, record_stride, sim.total_steps, joints, wear,
                    checks.exclusions)
