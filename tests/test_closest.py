@@ -34,7 +34,11 @@ def _seg_seg_ref(p0, p1, q0, q1):
     # pytest) on the tiny magnitudes hypothesis finds.
     det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
     if abs(det) > 1e-12 * (d1 @ d1) * (d2 @ d2) and (d1 @ d1) > 0 and (d2 @ d2) > 0:
-        s, t = np.linalg.solve(A, [-d1 @ r, d2 @ r])
+        # Cramer's rule with that determinant (np.linalg.solve's LU can still
+        # call such a matrix exactly singular and raise)
+        b0, b1 = -d1 @ r, d2 @ r
+        s = (b0 * A[1, 1] - A[0, 1] * b1) / det
+        t = (A[0, 0] * b1 - A[1, 0] * b0) / det
         if 0 <= s <= 1 and 0 <= t <= 1:
             cands.append(np.linalg.norm(p0 + s * d1 - q0 - t * d2))
     return min(cands)
