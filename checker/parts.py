@@ -99,6 +99,25 @@ def candidate_pairs(parts: PartSet, placed: Placement, clearance: float,
     return i, j
 
 
+def candidate_pairs_of(parts: PartSet, placed: Placement, clearance: float, focus: np.ndarray | None,
+                       i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The given pairs (i < j) of non-plane parts whose oriented boxes, grown
+    by the clearance, overlap (sorted; with ``focus``, one focus part each)."""
+    i, j = np.asarray(i, np.int64), np.asarray(j, np.int64)
+    keep = ~parts.plane[i] & ~parts.plane[j]
+    if focus is not None:
+        focus = np.asarray(focus, bool)
+        keep &= focus[i] != focus[j]
+    i, j = i[keep], j[keep]
+    order = np.lexsort((j, i))
+    i, j = i[order], j[order]
+    if len(i):
+        half = parts.half() + 0.5 * clearance
+        ok = obb_overlap(placed.centre[i], placed.rot[i], half[i], placed.centre[j], placed.rot[j], half[j])
+        i, j = i[ok], j[ok]
+    return i, j
+
+
 def _triangle_pairs(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray,
                     clearance: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Triangle pairs (tri of i, tri of j, pair row) whose boxes come within ``clearance``."""
@@ -123,7 +142,8 @@ def _triangle_pairs(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndar
 
 def check_parts(parts: PartSet, placed: Placement, clearance: float,
                 focus: np.ndarray | None = None,
-                pair_mask=None, assemblies: bool = True) -> list[Interference]:
+                pair_mask=None, assemblies: bool = True,
+                pairs: tuple[np.ndarray, np.ndarray] | None = None) -> list[Interference]:
     """Interference between parts at one set of poses.
 
     Args:
@@ -134,8 +154,19 @@ def check_parts(parts: PartSet, placed: Placement, clearance: float,
             candidate pairs to test (e.g. only parts on different bodies).
         assemblies: prune by assembly boxes before part boxes (False: part
             boxes only; the records are the same, for comparison).
+        pairs: (i, j) arrays, i < j: test these pairs alone (no box broad
+            phase over all parts; ``pair_mask`` must not be given). Each
+            pair's record is the one the check of all pairs gives it: the
+            broad phase only drops pairs whose boxes are farther apart than
+            the clearance, which have no record.
     """
-    i, j = candidate_pairs(parts, placed, clearance, focus, pair_mask, assemblies)
+    if pairs is not None:
+        i, j = candidate_pairs_of(parts, placed, clearance, focus, *pairs)
+        listed = np.zeros((len(parts.names),) * 2, bool)
+        listed[pairs[0], pairs[1]] = listed[pairs[1], pairs[0]] = True
+        pair_mask = lambda a, b: listed[a, b]    # noqa: E731  (the planes' pairs)
+    else:
+        i, j = candidate_pairs(parts, placed, clearance, focus, pair_mask, assemblies)
     out: list[Interference] = []
     n = len(i)
     if n:
@@ -252,6 +283,14 @@ class PartChecker:
         moving = check_parts(self.parts, placed, self.clearance, self.focus,
                              lambda i, j: (grp[i] != grp[j]) & ~skip[i, j], self.assemblies)
         return self._replay(placed) + moving
+
+    def check_pairs(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray) -> list[Interference]:
+        """The records of the moving pairs (i, j) (i < j, from
+        :meth:`moving_pairs`) alone at poses (P, 4, 4): what :meth:`check`
+        gives those pairs."""
+        if not len(i):
+            return []
+        return check_parts(self.parts, self.parts.place(poses), self.clearance, self.focus, pairs=(i, j))
 
     def moving_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         """(i, j) arrays, i < j: the part pairs that can move relative to

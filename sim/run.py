@@ -23,7 +23,7 @@ import mujoco
 import numpy as np
 
 from checker.cable import TAUT_STRAIN
-from checker.events import EventTracker
+from checker.events import AllowList, EventTracker
 from checker.records import PairType, Severity
 from checker.report import SCHEMA, write_report
 from checker.scene_state import CheckConfig
@@ -33,7 +33,7 @@ from sim.build import Built, build
 from sim.jointspace import JointLog
 from sim.loop import Simulation
 from sim.record import Recorder, pair_path
-from sim.scene import Scene
+from sim.scene import Scene, check_allow_names
 from sim.stepcheck import BATCH, StepChecks
 from sim.stop import StopRequest
 
@@ -118,6 +118,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
          start: float) -> dict:
     validate = scene.check.validate
     built = build(scene, detect=validate)
+    check_allow_names(scene, [p.name for p in built.parts] + [c.name for c in built.cables])
     sim = Simulation(built)
     sim.reset()
     if progress:
@@ -134,7 +135,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     checks = StepChecks(built, config, options.only, options.advance,
                         sim if validate else None, timer.lap)
     every = scene.check.every
-    tracker = EventTracker(hold=3 * every * scene.timestep)
+    tracker = EventTracker(hold=3 * every * scene.timestep, allow=checks.allow)
     # The recording samples the checked steps at about RECORD_RATE (and at
     # every step where an event starts or ends): a viewer needs no 500 Hz.
     record_stride = max(1, int(round(1.0 / (RECORD_RATE * every * scene.timestep))))
@@ -244,7 +245,9 @@ class _Outcome:
             self.timer.lap("check")
             if recorder and (self.checked % self.record_stride == 0 or started or closed
                              or state.step == self.total_steps):
-                _record_step(recorder, state, res.contacts, res.records, self.names, res.strain, res.bend,
+                allow = self.tracker.allow
+                shown = [r for r in res.records if not allow.match(self.tracker.key(r))] if allow else res.records
+                _record_step(recorder, state, res.contacts, shown, self.names, res.strain, res.bend,
                              res.agreement, started, closed, self.tracker, self.markers, scale)
                 if self.joints:
                     recorder.log_joints(self.joints.names, self.joints.units, self.joints.values(state.t)[0])
@@ -360,6 +363,9 @@ def _report(scene: Scene, built: Built, config: CheckConfig, complete: bool, ste
         "summary": summary,
         "events": event_rows,
         "pairs": pair_rows,
+        "allowed": [{"type": p.type, "a": p.a, "b": p.b, "min_distance": p.min_distance / u, "t": p.t,
+                     "reason": p.reason}
+                    for p in sorted(tracker.allowed.values(), key=lambda p: (p.min_distance, p.type, p.a, p.b))],
     }
     if scene.check.validate:
         v = validation
@@ -368,11 +374,15 @@ def _report(scene: Scene, built: Built, config: CheckConfig, complete: bool, ste
             "checker_only": v.checker_only, "mujoco_only": v.mujoco_only,
             "severity_differs": v.severity_differs, "agreement": v.agreement,
             "max_distance_error": v.max_distance_error / u,
+            "unexplained": v.unexplained, "allowed_pair_steps": v.allowed_pair_steps,
             "reasons": dict(v.reasons),
-            "disagreements": [{"t": d.t, "type": d.type, "a": d.a, "b": d.b,
+            "disagreements": [{"type": d.type, "a": d.a, "b": d.b, "t": d.t_worst, "t_start": d.t_start,
+                               "t_end": d.t_end, "t_worst": d.t_worst, "steps": d.steps,
                                "checker": None if d.checker is None else d.checker / u,
                                "mujoco": None if d.mujoco is None else d.mujoco / u,
-                               "reason": d.reason} for d in v.disagreements],
+                               "reason": d.reason.value,
+                               "second": None if d.second is None else d.second / u}
+                              for d in v.disagreements],
         }
     report.update({
         "cables": cables,

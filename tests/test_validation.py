@@ -6,7 +6,7 @@ import numpy as np
 
 from checker.records import Interference, PairType, Severity
 from checker.scene_state import Exclusion
-from checker.validation import SimContacts, Validation, classify, simulator_pairs
+from checker.validation import Reason, SimContacts, Validation, classify, simulator_pairs
 
 # a straight cable along x, 10 elements of 0.1 m
 CABLE = np.stack([np.linspace(0.0, 1.0, 11), np.zeros(11), np.zeros(11)], axis=1)
@@ -60,12 +60,28 @@ def test_compare_counts_and_reasons():
     sim = {("cable-structure", "c", "box"): (-0.0012, np.zeros(3)),
            ("cable-structure", "c", "mesh"): (0.00502, np.zeros(3)),                       # just clear for MuJoCo
            ("cable-cable", "c", "d"): (0.001, np.zeros(3))}                                # MuJoCo only
-    assert v.compare(0.5, rec, sim) == 1 / 3
+    asked = []
+
+    class Opinion:     # method exact finds the crossing the discrete points missed
+        def exact(self, key):
+            asked.append(key)
+            return 0.0012 if key == ("cable-cable", "c", "d") else None
+
+        def hull(self, key):
+            return None
+
+    assert v.compare(0.5, rec, sim, Opinion) == 1 / 3
     assert (v.compared_steps, v.pair_steps, v.agree, v.checker_only, v.mujoco_only) == (1, 3, 1, 1, 1)
     assert abs(v.max_distance_error - 0.0002) < 1e-15
     reasons = {(d.a, d.b): d.reason for d in v.disagreements}
-    assert reasons[("c", "d")].startswith("between points")
-    assert reasons[("c", "mesh")].startswith("at a boundary")
+    assert reasons[("c", "d")] is Reason.BETWEEN_POINTS
+    assert reasons[("c", "mesh")] is Reason.AT_BOUNDARY      # 0.07 mm apart: no second opinion needed
+    assert asked == [("cable-cable", "c", "d")] and v.unexplained == 0
+    # the same step with nothing to check the crossing by: unexplained, counted apart
+    w = Validation(clearance=0.005, method="points")
+    w.compare(0.5, rec, sim)
+    assert {(d.a, d.b): d.reason for d in w.disagreements}[("c", "d")] is Reason.UNEXPLAINED
+    assert w.unexplained == 1 and w.reasons == {"unexplained": 1, "at a boundary": 1}
     assert classify(None, 0.005) == "clear" and classify(0.0, 0.005) == "soft" and classify(-1e-9, 0.005) == "hard"
 
 
