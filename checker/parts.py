@@ -160,6 +160,12 @@ def check_parts(parts: PartSet, placed: Placement, clearance: float,
             broad phase only drops pairs whose boxes are farther apart than
             the clearance, which have no record.
     """
+    return [r for _, _, r in _check_indexed(parts, placed, clearance, focus, pair_mask, assemblies, pairs)]
+
+
+def _check_indexed(parts: PartSet, placed: Placement, clearance: float, focus, pair_mask, assemblies: bool,
+                   pairs) -> list[tuple[int, int, Interference]]:
+    """:func:`check_parts`'s records with the two parts' indices each."""
     if pairs is not None:
         i, j = candidate_pairs_of(parts, placed, clearance, focus, *pairs)
         listed = np.zeros((len(parts.names),) * 2, bool)
@@ -167,7 +173,7 @@ def check_parts(parts: PartSet, placed: Placement, clearance: float,
         pair_mask = lambda a, b: listed[a, b]    # noqa: E731  (the planes' pairs)
     else:
         i, j = candidate_pairs(parts, placed, clearance, focus, pair_mask, assemblies)
-    out: list[Interference] = []
+    out: list[tuple[int, int, Interference | None]] = []
     n = len(i)
     if n:
         dist = np.full(n, np.inf)
@@ -196,9 +202,10 @@ def check_parts(parts: PartSet, placed: Placement, clearance: float,
         hard = inside | crossing
         value = np.where(hard, np.where(inside, deep, -touch), dist)
         for k in np.flatnonzero(hard | ((touch < dist) & (dist < clearance))):     # records only
-            out.append(_record(parts, int(i[k]), int(j[k]), float(value[k]), where[k], clearance))
+            out.append((int(i[k]), int(j[k]), _record(parts, int(i[k]), int(j[k]), float(value[k]), where[k],
+                                                      clearance)))
     out.extend(_plane_records(parts, placed, clearance, focus, pair_mask))
-    return [r for r in out if r is not None]
+    return [x for x in out if x[2] is not None]
 
 
 def _record(parts: PartSet, a: int, b: int, d: float, where: np.ndarray, clearance: float) -> Interference | None:
@@ -239,7 +246,8 @@ def _plane_records(parts: PartSet, placed: Placement, clearance: float, focus, p
         touch = parts.touch(lowest, lowest)
         for v, part, t in zip(first.tolist(), lowest.tolist(), touch.tolist()):
             if abs(z[v]) > t:
-                out.append(_record(parts, min(p, part), max(p, part), float(z[v]), vw[v], clearance))
+                a, b = min(p, part), max(p, part)
+                out.append((a, b, _record(parts, a, b, float(z[v]), vw[v], clearance)))
     return out
 
 
@@ -267,6 +275,7 @@ class PartChecker:
         n = len(parts.names)
         self._skip = np.zeros((n, n), bool) if skip is None else np.asarray(skip, bool)
         self._static: tuple[list[Interference], np.ndarray, np.ndarray] | None = None
+        self._tiled: dict[tuple, PartSet] = {}
 
     def check(self, poses: np.ndarray) -> list[Interference]:
         """Records for poses (P, 4, 4)."""
@@ -291,6 +300,35 @@ class PartChecker:
         if not len(i):
             return []
         return check_parts(self.parts, self.parts.place(poses), self.clearance, self.focus, pairs=(i, j))
+
+    def check_pairs_many(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray) -> list[list[Interference]]:
+        """:meth:`check_pairs` at S states at once (poses (S, P, 4, 4)), to
+        the bit: the parts of the pairs are laid out once per state in one
+        :meth:`PartSet.tiled` set (built once per choice of parts), so a
+        batch of states costs about one call's numpy overhead."""
+        n_s = len(poses)
+        out: list[list[Interference]] = [[] for _ in range(n_s)]
+        if not len(i) or not n_s:
+            return out
+        used, local = np.unique(np.concatenate([i, j]), return_inverse=True)
+        k = len(used)
+        key = tuple(used.tolist())
+        view = self._tiled.get(key)
+        if view is None or len(view.names) < n_s * k:      # laid out for the longest batch seen
+            view = self._tiled[key] = self.parts.tiled(used, max(n_s, 32))
+        copies = len(view.names) // k
+        poses = np.asarray(poses, float)[:, used]
+        if copies > n_s:                                    # the copies past the states stay unused
+            poses = np.concatenate([poses, np.broadcast_to(poses[-1:], (copies - n_s,) + poses.shape[1:])])
+        li, lj = local[:len(i)], local[len(i):]
+        shift = (k * np.arange(n_s))[:, None]
+        vi, vj = (li[None] + shift).ravel(), (lj[None] + shift).ravel()
+        vi, vj = np.minimum(vi, vj), np.maximum(vi, vj)
+        focus = None if self.focus is None else np.tile(np.asarray(self.focus, bool)[used], copies)
+        placed = view.place(poses.reshape(-1, 4, 4))
+        for a, _, rec in _check_indexed(view, placed, self.clearance, focus, None, True, (vi, vj)):
+            out[a // k].append(rec)
+        return out
 
     def moving_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         """(i, j) arrays, i < j: the part pairs that can move relative to

@@ -250,10 +250,12 @@ class StepChecks:
             if len(self._cable_active[0]):
                 found = self.checker.cable_pairs_many(names, self._radii, dense, self._cable_active)
                 records = [a + b for a, b in zip(found, records)]
+        active = self.part_checker.check_pairs_many(poses, *self._part_active) if len(self._part_active[0]) \
+            else [[] for _ in range(n)]
         out = []
-        for state, recs, st, bd in zip(states, records, strain, bend):
+        for state, recs, st, bd, found in zip(states, records, strain, bend, active):
             cable_records = self._focus(recs)
-            part_records = self._same_body_records(state.part_poses) + self._active_part_records(state.part_poses)
+            part_records = self._same_body_records(state.part_poses) + found
             out.append(StepResult(cable_records + part_records, cable_records, st, bd, False))
         return out
 
