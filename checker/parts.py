@@ -118,6 +118,16 @@ def candidate_pairs_of(parts: PartSet, placed: Placement, clearance: float, focu
     return i, j
 
 
+def _world_triangles(parts: PartSet, placed: Placement, part: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Triangles ``tri`` (n,) of parts ``part`` (n,) in the world, (n, 3, 3):
+    each distinct triangle transformed once (a triangle belongs to one part),
+    however many pairs it is in."""
+    if len(tri) < 64:
+        return placed.world(part, parts.tris[tri])
+    u, first, inv = np.unique(tri, return_index=True, return_inverse=True)
+    return placed.world(part[first], parts.tris[u])[inv.ravel()]
+
+
 def _triangle_pairs(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray,
                     clearance: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Triangle pairs (tri of i, tri of j, pair row) whose boxes come within ``clearance``."""
@@ -128,7 +138,7 @@ def _triangle_pairs(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndar
     q_lo, q_hi = transformed_aabb(parts.lo[j] - g, parts.hi[j] + g, rel, shift)
     row, ti = parts.forest.query(i, q_lo - g, q_hi + g)
     # each candidate triangle of i, grown, in j's frame
-    tw = placed.world(i[row], parts.tris[ti])
+    tw = _world_triangles(parts, placed, i[row], ti)
     t_lo, t_hi = tw.min(axis=1) - clearance, tw.max(axis=1) + clearance
     # a world AABB in j's frame: transform its centre and half extents
     c = 0.5 * (t_lo + t_hi)
@@ -181,8 +191,8 @@ def _check_indexed(parts: PartSet, placed: Placement, clearance: float, focus, p
         crossing = np.zeros(n, bool)
         ti, tj, row = _triangle_pairs(parts, placed, i, j, clearance)
         if len(row):
-            a = placed.world(i[row], parts.tris[ti])
-            b = placed.world(j[row], parts.tris[tj])
+            a = _world_triangles(parts, placed, i[row], ti)
+            b = _world_triangles(parts, placed, j[row], tj)
             cr = triangles_cross(a, b, parts.touch(i[row], j[row]))
             crossing[row[cr]] = True
             where[row[cr]] = 0.5 * (a[cr].mean(axis=1) + b[cr].mean(axis=1))

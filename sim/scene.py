@@ -33,6 +33,11 @@ A `[[motion]]` gives keys, the mjcf model's keyframes (``key = "home"``) or a
 CSV file of samples (`read_samples`); every sample of a joint with a range
 (`jnt_limited`) must lie in it. Both interpolations (`sim.curves`) stay
 between neighbouring samples, so the samples bound the whole motion.
+
+`[[allow]]` names (`AllowDef`) must cover a scene part or cable (by name or
+assembly path prefix) or, with an mjcf model, begin with one of its bodies:
+its geoms' part names are the builder's, so those are checked against the
+built parts once the model exists (`check_allow_names`).
 """
 
 from __future__ import annotations
