@@ -719,6 +719,7 @@ REFERENCE_TABLES = {
     "`[[motion]]` keys of a body": scene_module._BODY_KEY_KEYS,
     "`[[motion]]` keys of a joint": scene_module._JOINT_KEY_KEYS,
     "`[limits]`": scene_module._LIMIT_KEYS,
+    "`[[allow]]`": scene_module._ALLOW_KEYS,
 }
 
 
