@@ -194,25 +194,22 @@ class SimulatorPairs:
 
 class Reason(str, Enum):
     """Why the two sides class a pair differently; each one checked before it
-    is given (:meth:`Validation.explain`). The values are the report's."""
+    is given (:meth:`Validation.explain`). The values are the report's.
+
+    - ``at a boundary``: both distances agree within 2 % of the clearance
+      but fall either side of 0 or of the clearance;
+    - ``convex hull``: MuJoCo collides a mesh as its convex hull, and the
+      cable's distance to the hull (method exact) classes the pair as MuJoCo
+      does;
+    - ``between points``: the contact or crossing falls between discrete
+      points: method exact classes the pair as MuJoCo does;
+    - ``unexplained``: no check explains it.
+    """
 
     AT_BOUNDARY = "at a boundary"
     CONVEX_HULL = "convex hull"
     BETWEEN_POINTS = "between points"
     UNEXPLAINED = "unexplained"
-
-
-REASON_TEXT = {
-    Reason.AT_BOUNDARY: "both distances agree within 2 % of the clearance but fall either side of 0 "
-                        "or of the clearance",
-    Reason.CONVEX_HULL: "MuJoCo collides the mesh as its convex hull: the cable's distance to the hull "
-                        "(method exact) classes the pair as MuJoCo does",
-    Reason.BETWEEN_POINTS: "the contact or crossing falls between discrete points: method exact classes "
-                           "the pair as MuJoCo does",
-    Reason.UNEXPLAINED: "no check explains it: neither method exact nor the mesh's convex hull classes "
-                        "the pair as MuJoCo does",
-}
-"""What each reason means, checked how (for the report and the README)."""
 
 
 class Recheck(Protocol):
@@ -274,7 +271,6 @@ class Validation:
         their convex hulls).
       allow: pairs the scene allows (``[[allow]]``): left out of the
         comparison and counted in ``allowed_pair_steps``.
-      unit, unit_name: the report's units (metres per unit, its name).
       unexplained: (step, pair) disagreements no check explains.
     """
 
@@ -282,8 +278,6 @@ class Validation:
     method: str
     mesh_parts: frozenset[str] = frozenset()
     allow: AllowList = field(default_factory=AllowList)
-    unit: float = 1.0
-    unit_name: str = ""
     compared_steps: int = 0
     pair_steps: int = 0
     agree: int = 0

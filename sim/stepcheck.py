@@ -167,7 +167,7 @@ class StepChecks:
         self._simulator_pairs = SimulatorPairs(self.exclusions, config.clearance)
         self.validation = Validation(scene.check.clearance, config.method,
                                      frozenset(p.name for p in built.parts if p.shape == "mesh"),
-                                     allow=self.allow, unit=scene.scale, unit_name=scene.units)
+                                     allow=self.allow)
         self._recheck = Recheck(self.checker.parts, config, self.exclusions)
         self._measures = CableMeasures(offsets)
         self._rest_length = np.array([c.length for c in built.cables], float)
