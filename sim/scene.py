@@ -647,8 +647,12 @@ class _Parser:
     def file_path(self, value: Any, where: str) -> Path:
         """A path relative to the scene file, which must exist as a file."""
         text = self.name(value, where)
-        path = (self.folder / text).resolve()
-        if not path.is_file():
+        try:
+            path = (self.folder / text).resolve()
+            found = path.is_file()
+        except (OSError, ValueError):      # a NUL byte, a name too long for the file system
+            raise self.error(where, f"not a usable file name: {text!r}") from None
+        if not found:
             raise self.error(where, f"file not found: {path}")
         return path
 
