@@ -139,7 +139,9 @@ def _triangle_pairs(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndar
     row, ti = parts.forest.query(i, q_lo - g, q_hi + g)
     # each candidate triangle of i, grown, in j's frame
     tw = _world_triangles(parts, placed, i[row], ti)
-    t_lo, t_hi = tw.min(axis=1) - clearance, tw.max(axis=1) + clearance
+    # corner by corner (numpy reduces a 3-long axis slowly; min and max are exact)
+    t_lo = np.minimum(np.minimum(tw[:, 0], tw[:, 1]), tw[:, 2]) - clearance
+    t_hi = np.maximum(np.maximum(tw[:, 0], tw[:, 1]), tw[:, 2]) + clearance
     # a world AABB in j's frame: transform its centre and half extents
     c = 0.5 * (t_lo + t_hi)
     h = 0.5 * (t_hi - t_lo)
