@@ -8,8 +8,8 @@ the new distance must class the pair as the simulator did.
   distances along the whole centreline): explains a contact or crossing
   that fell between the discrete points of method ``points``.
 - :meth:`StateRecheck.hull`: a cable against the convex hull of a mesh part
-  (method ``exact``): MuJoCo collides meshes as their convex hulls, so a
-  concave mesh's pocket or hole is solid to it.
+  (method ``exact``, or ``points`` first, cheaper): MuJoCo collides meshes
+  as their convex hulls, so a concave mesh's pocket or hole is solid to it.
 
 Only the cables and the part of the pair are checked, with the run's
 clearance and exclusion windows; the per-part checkers and hull shapes are
@@ -53,9 +53,10 @@ class Recheck:
         self.parts = list(parts)
         self.index = {p.name: k for k, p in enumerate(self.parts)}
         self.config = CheckConfig(method="exact", spacing=config.spacing, clearance=config.clearance)
+        self.points = CheckConfig(method="points", spacing=config.spacing, clearance=config.clearance)
         self.exclusions = list(exclusions)
-        self._exact: dict[int, Checker] = {}
-        self._hull: dict[int, Checker] = {}
+        self._checkers: dict[tuple[int, bool, bool], Checker] = {}
+        self._hulls: dict[int, Shape] = {}
         self._cables = Checker([], self.config)
 
     def is_mesh(self, name: str) -> bool:
@@ -67,13 +68,16 @@ class Recheck:
         """The second opinions at one state: its cables and the parts' poses (K, 4, 4)."""
         return StateRecheck(self, {c.name: c for c in cables}, np.asarray(poses, float))
 
-    def _checker(self, k: int, hull: bool) -> Checker:
-        store = self._hull if hull else self._exact
-        if k not in store:
+    def _checker(self, k: int, hull: bool, exact: bool = True) -> Checker:
+        key = (k, hull, exact)
+        if key not in self._checkers:
             p = self.parts[k]
-            shape = convex_hull_shape(p.shape) if hull else p.shape
-            store[k] = Checker([PartState(p.name, shape, np.eye(4), p.keepout)], self.config)
-        return store[k]
+            if hull and k not in self._hulls:
+                self._hulls[k] = convex_hull_shape(p.shape)
+            shape = self._hulls[k] if hull else p.shape
+            self._checkers[key] = Checker([PartState(p.name, shape, np.eye(4), p.keepout)],
+                                          self.config if exact else self.points)
+        return self._checkers[key]
 
 
 class StateRecheck:
@@ -95,16 +99,18 @@ class StateRecheck:
         found = self.owner._cables.check([self.cables[n] for n in names])
         return _distance(found, key)
 
-    def hull(self, key: tuple[str, str, str]) -> float | None:
-        """A cable against the convex hull of the mesh part b (exact)."""
-        return self._part(key, hull=True) if key[0] in _PART_TYPES else None
+    def hull(self, key: tuple[str, str, str], exact: bool = True) -> float | None:
+        """A cable against the convex hull of the mesh part b, with method
+        exact (or, cheaper, points at the run's spacing)."""
+        return self._part(key, hull=True, exact=exact) if key[0] in _PART_TYPES else None
 
-    def _part(self, key: tuple[str, str, str], hull: bool) -> float | None:
+    def _part(self, key: tuple[str, str, str], hull: bool, exact: bool = True) -> float | None:
         _, a, b = key
         k = self.owner.index.get(b)
         if k is None or a not in self.cables:
             return None
-        found = self.owner._checker(k, hull).check([self.cables[a]], self.poses[k][None], self.owner.exclusions)
+        found = self.owner._checker(k, hull, exact).check([self.cables[a]], self.poses[k][None],
+                                                          self.owner.exclusions)
         return _distance(found, key)
 
 

@@ -218,7 +218,7 @@ class Recheck(Protocol):
 
     def exact(self, key: tuple[str, str, str]) -> float | None: ...
 
-    def hull(self, key: tuple[str, str, str]) -> float | None: ...
+    def hull(self, key: tuple[str, str, str], exact: bool = True) -> float | None: ...
 
 
 @dataclass(frozen=True)
@@ -367,7 +367,8 @@ class Validation:
 
         - at a boundary: both distances known, within 2 % of the clearance;
         - convex hull (a mesh part): the cable's distance to the mesh's
-          convex hull classes the pair as MuJoCo does;
+          convex hull (discrete points, then method exact) classes the pair
+          as MuJoCo does;
         - between points (method points): method exact classes the pair as
           MuJoCo does;
         - else unexplained."""
@@ -379,9 +380,10 @@ class Validation:
         opinion = second()
         if opinion is not None:
             if kind in (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value) and b in self.mesh_parts:
-                d = opinion.hull(key)
-                if classify(d, c) == cm:
-                    return Reason.CONVEX_HULL, d
+                for exact in (False, True):        # discrete points first: cheaper, often enough
+                    d = opinion.hull(key, exact)
+                    if classify(d, c) == cm:
+                        return Reason.CONVEX_HULL, d
             if self.method == "points":
                 d = opinion.exact(key)
                 if classify(d, c) == cm:

@@ -67,7 +67,7 @@ def test_compare_counts_and_reasons():
             asked.append(key)
             return 0.0012 if key == ("cable-cable", "c", "d") else None
 
-        def hull(self, key):
+        def hull(self, key, exact=True):
             return None
 
     assert v.compare(0.5, rec, sim, Opinion) == 1 / 3
@@ -181,6 +181,7 @@ def test_convex_hull_reason_is_checked():
     key = ("cable-structure", "c", "fork")
     assert opinion.exact(key) is None                                # 20 mm from each prong
     assert abs(opinion.hull(key) - (-0.02 - 0.005)) < 1e-9          # 20 mm inside the hull, minus r
+    assert abs(opinion.hull(key, exact=False) - (-0.02 - 0.005)) < 1e-9    # a point sits at the middle
     v = Validation(clearance=0.005, method="points", mesh_parts=frozenset({"fork"}))
     v.compare(0.0, [], {key: (-0.024, np.zeros(3))}, lambda: opinion)
     (d,) = v.disagreements
