@@ -58,7 +58,9 @@ no pair can have come within the clearance while
   ``min(rel[i, k], dq_i + dp[k]) < g[i, k]`` for every part k that moved
   (cable-structure, keep-out),
 - ``dp[i] + dp[j] < bound[i, j] - clearance`` for every part pair that can
-  move relative to the other (part-part, keep-out between parts),
+  move relative to the other (part-part, keep-out between parts), except
+  the pairs the caller leaves out of the bound and checks itself at every
+  step (*active* part pairs, within the clearance at k0),
 - every cable element splits into the same number of discrete points as at
   k0, and the cables' element lengths changed by at most ``stretch`` in
   total (summed over elements).
@@ -108,10 +110,12 @@ lower the gaps); a point with no candidate for part k was at least H past
 the clearance from it, and at least ``F[e, k]`` past it, since the element
 lies in its box and the part in its own (a point outside the part's box is
 outside the part, at a distance no less than the boxes' separation). Exclusions are windows in arc length (self: ``|s_a -
-s_b| < pi r + clearance``; attachments: fixed windows), and an arc length
-moved by at most the total change of element lengths; the gaps at k0
-therefore include candidates up to ``stretch`` inside every window, so none
-that left a window since was unaccounted for. Part pairs: the least distance
+s_b| < pi r + clearance``), and an arc length moved by at most the total
+change of element lengths; attachments are fixed windows of the cable's
+material, where a discrete point, the same combination of the same two
+centres, keeps its material coordinate (and so its window) while skipping;
+the gaps at k0 include candidates up to ``stretch`` inside every window
+all the same, so none that left a window since was unaccounted for. Part pairs: the least distance
 of their triangles is at least the separation of their oriented boxes on any
 box axis (or, for a plane, the box's lowest point above it), which
 :func:`part_pair_bounds` takes at k0. Rounding is absorbed by a margin of

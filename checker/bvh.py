@@ -117,6 +117,40 @@ class TriangleForest:
             order=np.concatenate(order) if order else np.zeros(0, i64),
             root=root, tri_part=np.asarray(tri_part, i64), tri_lo=tri_lo, tri_hi=tri_hi)
 
+    def tiled(self, idx: np.ndarray) -> "TriangleForest":
+        """The trees of parts ``idx`` (n,), in that order (a part may repeat):
+        part k of the result has the tree of part ``idx[k]``, node for node,
+        with its triangles renumbered in the same order."""
+        idx = np.asarray(idx, np.int64)
+        n_parts = len(self.root)
+        # each part's nodes are contiguous (built depth first, part by part)
+        has = self.root >= 0
+        node_end = np.full(n_parts, -1, np.int64)
+        roots = self.root[has]
+        node_end[has] = np.r_[roots[1:], len(self.left)] if len(roots) else node_end[has]
+        t_start = np.searchsorted(self.tri_part, np.arange(n_parts + 1))
+        n_first = np.where(has[idx], self.root[idx], 0)
+        n_cnt = np.where(has[idx], node_end[idx] - n_first, 0)
+        t_first, t_cnt = t_start[idx], t_start[idx + 1] - t_start[idx]
+        nodes = ranges(n_first, n_cnt)
+        tris = ranges(t_first, t_cnt)
+        node_shift = np.repeat(np.cumsum(n_cnt) - n_cnt - n_first, n_cnt)       # old node -> new node
+        tri_shift = np.cumsum(t_cnt) - t_cnt - t_first                           # per part: old tri -> new
+        left, right = self.left[nodes], self.right[nodes]
+        first, count = self.first[nodes], self.count[nodes]
+        leaf = left < 0
+        # leaves' ranges in ``order``: laid out anew, part by part
+        new_first = np.where(leaf, np.cumsum(np.where(leaf, count, 0)) - np.where(leaf, count, 0), -1)
+        owner = np.repeat(np.arange(len(idx)), n_cnt)
+        order = self.order[ranges(first[leaf], count[leaf])] + np.repeat(tri_shift[owner[leaf]], count[leaf])
+        return TriangleForest(
+            node_lo=self.node_lo[nodes], node_hi=self.node_hi[nodes],
+            left=np.where(leaf, -1, left + node_shift), right=np.where(leaf, -1, right + node_shift),
+            first=new_first, count=count, order=order,
+            root=np.where(has[idx], np.cumsum(n_cnt) - n_cnt, -1),
+            tri_part=np.repeat(np.arange(len(idx)), t_cnt),
+            tri_lo=self.tri_lo[tris], tri_hi=self.tri_hi[tris])
+
     def query(self, part: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Triangles whose boxes meet query boxes, one query per row.
 

@@ -172,9 +172,10 @@ def densify_batch(
         s: (M,) arc length of each along its own polyline.
         cable: (M,) polyline index of each point.
         new_offsets: (C + 1,) start of each polyline in ``pts``.
-        src, own: with ``source``, (M,) the input point each densified point
-            starts from (it lies on the element from ``src`` to ``src + 1``)
-            and (M,) bool, the point is that input point itself.
+        src, own, frac: with ``source``, (M,) the input point each
+            densified point starts from (it lies on the element from ``src``
+            to ``src + 1``), (M,) bool, the point is that input point itself,
+            and (M,) its fraction of the way along that element (0 for own).
     """
     p = np.asarray(points, dtype=float).reshape(-1, 3)
     offsets = np.asarray(offsets, dtype=np.int64)
@@ -189,7 +190,7 @@ def densify_batch(
     s_pt = polyline_arc_lengths(step, offsets)
     if np.all(pieces <= 1):  # nothing to split
         out = (p.copy(), s_pt, cable_of_pt, offsets.copy())
-        return out + ((np.arange(len(p)), np.ones(len(p), bool)) if source else ())
+        return out + ((np.arange(len(p)), np.ones(len(p), bool), np.zeros(len(p))) if source else ())
     # Each point emits itself, then pieces-1 interior points of its element.
     emit = np.ones(len(p), dtype=np.int64)
     emit[:-1] += np.maximum(pieces - 1, 0)
@@ -203,7 +204,30 @@ def densify_batch(
     s = s_pt[src] + frac * np.r_[step, 0.0][src]
     cable = cable_of_pt[src]
     new_offsets = np.concatenate([[0], np.cumsum(np.bincount(cable, minlength=n_c))])
-    return (pts, s, cable, new_offsets) + ((src, j == 0) if source else ())
+    return (pts, s, cable, new_offsets) + ((src, j == 0, frac) if source else ())
+
+
+def material_coordinates(s: np.ndarray, src: np.ndarray, frac: np.ndarray, has_rest: np.ndarray,
+                         rest: np.ndarray) -> np.ndarray:
+    """Where densified points lie along their cable's own material.
+
+    A point a fraction ``frac`` of the way along the element from input
+    point ``src`` to ``src + 1`` lies at ``rest[src] + frac (rest[src + 1] -
+    rest[src])``: the rest (unstretched) arc length of the material there,
+    which stretching does not change. Where ``has_rest`` (M,) is False the
+    current arc length ``s`` is taken as it is (no rest shape known).
+
+    Args:
+        s, src, frac: (M,) as :func:`densify_batch` returns them.
+        has_rest: (M,) bool, the point's cable has rest coordinates.
+        rest: (N,) rest arc length of every input point (any value where
+            its cable has none).
+    """
+    if not has_rest.any():
+        return s
+    nxt = np.minimum(src + 1, len(rest) - 1)
+    m = rest[src] + frac * (rest[nxt] - rest[src])
+    return np.where(has_rest, m, s)
 
 
 def densify(points: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]:

@@ -13,8 +13,16 @@ time continues the same event, and the event's `t_end` is the last time the
 pair was below the clearance, so no clear time is counted as interference.
 
 `pairs` keeps every pair that came below the clearance with its worst
-distance and when. This module does not check geometry or know MuJoCo: it
-takes records and times.
+distance and when.
+
+Allowed pairs (:class:`AllowList`, the scene's ``[[allow]]``): contacts that
+belong to the design (a robot base bolted to its table, a hinge pin through
+its knuckles). Their records never open an event and are not in `pairs`;
+`allowed` keeps each one's worst distance and when, with the rule's reason.
+Bend and taut records (a single cable's measures) are never allowed.
+
+This module does not check geometry or know MuJoCo: it takes records and
+times.
 """
 
 from __future__ import annotations
@@ -28,6 +36,53 @@ from checker.records import Interference, PairType, Severity
 
 PairKey = tuple[str, str, str]
 """(type, a, b) of a pair."""
+
+_NEVER_ALLOWED = (PairType.BEND.value, PairType.TAUT.value)
+
+
+@dataclass(frozen=True)
+class AllowRule:
+    """A pair of names whose contact is expected.
+
+    Attributes:
+      a, b: each a part name, an assembly path prefix ("cell/table" covers
+        "cell/table/top") or a cable name.
+      reason: why the contact is expected.
+    """
+
+    a: str
+    b: str
+    reason: str
+
+
+def covered(pattern: str, name: str) -> bool:
+    """`name` is `pattern` or lies under the assembly path `pattern`."""
+    return name == pattern or name.startswith(pattern + "/")
+
+
+class AllowList:
+    """Which pairs the rules allow; each (type, a, b) is decided once."""
+
+    def __init__(self, rules=()):
+        self.rules = tuple(rules)
+        self._seen: dict[PairKey, AllowRule | None] = {}
+
+    def match(self, key: PairKey) -> AllowRule | None:
+        """The first rule allowing the pair (type, a, b), or None."""
+        try:
+            return self._seen[key]
+        except KeyError:
+            pass
+        kind, a, b = key
+        rule = None
+        if kind not in _NEVER_ALLOWED:
+            rule = next((r for r in self.rules if (covered(r.a, a) and covered(r.b, b))
+                         or (covered(r.a, b) and covered(r.b, a))), None)
+        self._seen[key] = rule
+        return rule
+
+    def __bool__(self) -> bool:
+        return bool(self.rules)
 
 
 @dataclass(frozen=True)
@@ -70,6 +125,19 @@ class PairWorst:
     where: np.ndarray
 
 
+@dataclass(frozen=True)
+class AllowedWorst:
+    """An allowed pair's worst moment over the whole run, and why it is allowed."""
+
+    type: str
+    a: str
+    b: str
+    min_distance: float
+    t: float
+    where: np.ndarray
+    reason: str
+
+
 @dataclass
 class _Open:
     t_start: float
@@ -85,11 +153,14 @@ class EventTracker:
 
     Attributes:
       hold: seconds a pair must stay clear before its event closes.
+      allow: pairs that never make events (their worst goes to `allowed`).
     """
 
     hold: float
+    allow: AllowList = field(default_factory=AllowList)
     events: list[Event] = field(default_factory=list)
     pairs: dict[PairKey, PairWorst] = field(default_factory=dict)
+    allowed: dict[PairKey, AllowedWorst] = field(default_factory=dict)
     _open: dict[PairKey, _Open] = field(default_factory=dict)
 
     @staticmethod
@@ -103,6 +174,14 @@ class EventTracker:
         seen = set()
         for r in records:
             k = self.key(r)
+            if self.allow:
+                rule = self.allow.match(k)
+                if rule is not None:
+                    best = self.allowed.get(k)
+                    if best is None or r.min_distance < best.min_distance:
+                        self.allowed[k] = AllowedWorst(k[0], r.a, r.b, float(r.min_distance), t,
+                                                       np.asarray(r.where), rule.reason)
+                    continue
             seen.add(k)
             hard = Severity(r.severity) == Severity.HARD
             ev = self._open.get(k)

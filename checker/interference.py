@@ -58,7 +58,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from checker.arrays import ranges, within
-from checker.cable import (arc_length, bend_radius, densify_batch, polyline_arc_lengths,
+from checker.cable import (arc_length, bend_radius, densify_batch, material_coordinates, polyline_arc_lengths,
                            self_pair_excluded, self_pair_window, taut_margin, tile_offsets)
 from checker.closest import row_norm, segment_segment
 from checker.records import Interference, PairType, severity_of
@@ -90,61 +90,79 @@ class _Discrete:
     Attributes:
         p: (M, 3) points.
         s: (M,) arc length along the point's cable.
+        m: (M,) material coordinate (:attr:`CableState.rest_s`; ``s`` itself
+            when no cable has one): exclusion windows are measured in it.
         cable: (M,) cable index.
         radius: (M,) the point's cable radius.
         seg: (E,) index i of each element (p[i], p[i + 1]) within one cable.
     """
 
-    def __init__(self, p, s, cable, radius):
+    def __init__(self, p, s, m, cable, radius):
         self.p = p
         self.s = s
+        self.m = m
         self.cable = cable
         self.radius = radius
         self.seg = np.nonzero(cable[:-1] == cable[1:])[0]
 
 
+def _rest_table(cables: Sequence[CableState]) -> tuple[np.ndarray, np.ndarray]:
+    """(C,) bool, the cable has rest coordinates; (N,) all cables' rest
+    coordinates concatenated (0 where a cable has none)."""
+    has = np.array([c.rest_s is not None for c in cables], bool)
+    rest = np.concatenate([c.rest_s if c.rest_s is not None else np.zeros(len(c.points)) for c in cables]) \
+        if len(cables) else np.zeros(0)
+    return has, rest
+
+
 def _discretise(
     cables: Sequence[CableState], config: CheckConfig, cuts: tuple[np.ndarray, np.ndarray]
 ) -> _Discrete:
-    """Densify every cable; add points at the arc lengths ``cuts`` = (cable, s)."""
+    """Densify every cable; add points at the material coordinates ``cuts`` = (cable, m)."""
     radii = np.array([c.radius for c in cables], dtype=float)
     pts = np.concatenate([c.points for c in cables])
     offsets = np.concatenate([[0], np.cumsum([len(c.points) for c in cables])])
-    p, s, cable, _ = densify_batch(pts, offsets, config.spacing * radii)
-    cut_c, cut_s = cuts
+    p, s, cable, _, src, _, frac = densify_batch(pts, offsets, config.spacing * radii, source=True)
+    has, rest = _rest_table(cables)
+    m = material_coordinates(s, src, frac, has[cable], rest)
+    cut_c, cut_m = cuts
     if len(cut_c):
-        p, s, cable = _insert_at_arc_length(p, s, cable, cut_c, cut_s)
-    return _Discrete(p, s, cable, radii[cable])
+        p, s, m, cable = _insert_at_material(p, s, m, cable, cut_c, cut_m)
+    return _Discrete(p, s, m, cable, radii[cable])
 
 
-def _insert_at_arc_length(p, s, cable, cut_c, cut_s):
-    """Insert points on the polylines at arc lengths ``cut_s`` of cables ``cut_c``.
+def _insert_at_material(p, s, m, cable, cut_c, cut_m):
+    """Insert points on the polylines at material coordinates ``cut_m`` of
+    cables ``cut_c`` (``m`` may be ``s`` itself: then at arc lengths).
 
     Cuts outside a cable's length or on an existing point are dropped.
     """
     n_c = int(cable.max()) + 1
     stop = np.searchsorted(cable, np.arange(n_c), side="right")
-    length = s[stop - 1]
-    keep = (cut_c >= 0) & (cut_s > 0) & (cut_s < length[cut_c])
-    cut_c, cut_s = cut_c[keep], cut_s[keep]
-    # Find the element of each cut: order all points and cuts by (cable, s).
-    order = np.lexsort((np.r_[s, cut_s], np.r_[cable, cut_c]))
-    is_cut = order >= len(s)
+    length = m[stop - 1]
+    first = m[np.r_[0, stop[:-1]]]
+    keep = (cut_c >= 0) & (cut_m > first[np.maximum(cut_c, 0)]) & (cut_m < length[np.maximum(cut_c, 0)])
+    cut_c, cut_m = cut_c[keep], cut_m[keep]
+    # Find the element of each cut: order all points and cuts by (cable, m).
+    order = np.lexsort((np.r_[m, cut_m], np.r_[cable, cut_c]))
+    is_cut = order >= len(m)
     # For each cut, the last original point before it in that order.
     last_pt = np.maximum.accumulate(np.where(is_cut, -1, order))
     k = last_pt[is_cut]
-    ci = order[is_cut] - len(s)
-    cs = cut_s[ci]
-    ds = s[k + 1] - s[k]
-    u = np.where(ds > 0, cs - s[k], 0.0) / np.where(ds > 0, ds, 1.0)
+    ci = order[is_cut] - len(m)
+    cm = cut_m[ci]
+    dm = m[k + 1] - m[k]
+    u = np.where(dm > 0, cm - m[k], 0.0) / np.where(dm > 0, dm, 1.0)
     new_p = p[k] + u[:, None] * (p[k + 1] - p[k])
-    fresh = (cs > s[k]) & (cs < s[k + 1])
-    new_p, cs, new_c = new_p[fresh], cs[fresh], cut_c[ci][fresh]
+    new_s = cm if m is s else s[k] + u * (s[k + 1] - s[k])
+    fresh = (cm > m[k]) & (cm < m[k + 1])
+    new_p, new_s, cm, new_c = new_p[fresh], new_s[fresh], cm[fresh], cut_c[ci][fresh]
     allp = np.concatenate([p, new_p])
-    alls = np.concatenate([s, cs])
+    alls = np.concatenate([s, new_s])
+    allm = alls if m is s else np.concatenate([m, cm])
     allc = np.concatenate([cable, new_c])
-    o = np.lexsort((alls, allc))
-    return allp[o], alls[o], allc[o]
+    o = np.lexsort((allm, allc))
+    return allp[o], alls[o], allm[o], allc[o]
 
 
 # ---------------------------------------------------------------------------
@@ -652,7 +670,7 @@ def _part_candidates(tab: _PartTable, ch: _Chunks, margin: float) -> tuple[np.nd
 
 
 def _excluded(cable: np.ndarray, part: np.ndarray, s: np.ndarray, excl: tuple) -> np.ndarray:
-    """True where (cable, part, arc length s) falls in an exclusion window."""
+    """True where (cable, part, material coordinate s) falls in an exclusion window."""
     key_e, smin, smax, n_parts = excl
     out = np.zeros(len(s), dtype=bool)
     if len(key_e) == 0 or len(s) == 0:
@@ -704,9 +722,9 @@ def _structure_points(dp, ch, tab, config, excl, hits, limit=None, excl_near=Non
     loc = tab.to_local(pk, dp.p[it])
     thr = (dp.radius[it] + limit)[:, None]
     box_ok = np.all((loc >= tab.lo[pk] - thr) & (loc <= tab.hi[pk] + thr), axis=1)
-    box_ok &= ~_excluded(dp.cable[it], pk, dp.s[it], excl if excl_near is None else excl_near)
+    box_ok &= ~_excluded(dp.cable[it], pk, dp.m[it], excl if excl_near is None else excl_near)
     it, pk, loc = it[box_ok], pk[box_ok], loc[box_ok]
-    rec = None if excl_near is None else ~_excluded(dp.cable[it], pk, dp.s[it], excl)
+    rec = None if excl_near is None else ~_excluded(dp.cable[it], pk, dp.m[it], excl)
     d = _point_distances(tab, pk, loc, config.face_plane)
     v = d - dp.radius[it]
     o = v < limit
@@ -732,7 +750,7 @@ def _structure_exact(dp, ch, tab, config, excl, hits) -> None:
     box_ok = np.all((np.maximum(a, b) >= tab.lo[pk] - thr) & (np.minimum(a, b) <= tab.hi[pk] + thr), axis=1)
     # Cuts were inserted at the window ends, so an element is in a window
     # exactly when its midpoint is.
-    box_ok &= ~_excluded(dp.cable[i0], pk, 0.5 * (s[i0] + s[i0 + 1]), excl)
+    box_ok &= ~_excluded(dp.cable[i0], pk, 0.5 * (dp.m[i0] + dp.m[i0 + 1]), excl)
     it, pk, i0, a, b = it[box_ok], pk[box_ok], i0[box_ok], a[box_ok], b[box_ok]
     # Signed distance is 1-Lipschitz: the midpoint's distance minus the half
     # length bounds the segment's from below, so far segments skip the search.
@@ -798,11 +816,13 @@ class DenseStates:
         poly: (M,) polyline: state * cables + cable.
         src, own: (M,) the body centre (counted over all states) each point
             starts from, and whether it is that centre itself.
+        m: (M,) material coordinate of each point (exclusion windows).
         states, centres, cables: S, body centres per state, cables.
     """
 
     p: np.ndarray
     s: np.ndarray
+    m: np.ndarray
     poly: np.ndarray
     src: np.ndarray
     own: np.ndarray
@@ -946,16 +966,23 @@ class Checker:
         o = np.argsort(key, kind="stable")
         return (key[o], ex_lo[o], ex_hi[o], n_parts), ex_c, ex_lo, ex_hi
 
-    def densify_many(self, pts: np.ndarray, offsets: np.ndarray, radii: np.ndarray) -> DenseStates:
+    def densify_many(self, pts: np.ndarray, offsets: np.ndarray, radii: np.ndarray,
+                     rest: np.ndarray | None = None) -> DenseStates:
         """The discrete points of S states (S, N, 3) at once, each cable of
         each state a polyline of its own (the bits of :meth:`check`'s own
         discretisation of each state), for :meth:`structure_many` and
-        :meth:`cable_pairs_many`."""
+        :meth:`cable_pairs_many`. ``rest``: (N,) the centres' material
+        coordinates (:attr:`CableState.rest_s` of every cable, concatenated),
+        or None (the current arc lengths)."""
         n_s, n = pts.shape[:2]
         radii = np.asarray(radii, float)
-        p, s, poly, _, src, own = densify_batch(pts.reshape(-1, 3), tile_offsets(offsets, n_s),
-                                                np.tile(self.config.spacing * radii, n_s), source=True)
-        return DenseStates(p, s, poly, src, own, n_s, n, len(radii))
+        p, s, poly, _, src, own, frac = densify_batch(pts.reshape(-1, 3), tile_offsets(offsets, n_s),
+                                                      np.tile(self.config.spacing * radii, n_s), source=True)
+        if rest is None:
+            m = s
+        else:
+            m = material_coordinates(s, src, frac, np.ones(len(s), bool), np.tile(np.asarray(rest, float), n_s))
+        return DenseStates(p, s, m, poly, src, own, n_s, n, len(radii))
 
     def structure_many(self, names: Sequence[str], radii: np.ndarray, dense: DenseStates,
                        poses: np.ndarray, exclusions: Sequence[Exclusion],
@@ -1006,7 +1033,7 @@ class Checker:
         thr = (rad + config.clearance)[:, None]
         keep = np.all((loc >= tab.lo[k] - thr) & (loc <= tab.hi[k] + thr), axis=1)
         excl = self._exclusion_table(names, exclusions)[0]
-        keep &= ~_excluded(cab[it], k, s[it], excl)
+        keep &= ~_excluded(cab[it], k, dense.m[it], excl)
         it, k, loc, rad = it[keep], k[keep], loc[keep], rad[keep]
         v = _point_distances(tab, k, loc, config.face_plane) - rad
         keep = v < config.clearance

@@ -99,6 +99,35 @@ def candidate_pairs(parts: PartSet, placed: Placement, clearance: float,
     return i, j
 
 
+def candidate_pairs_of(parts: PartSet, placed: Placement, clearance: float, focus: np.ndarray | None,
+                       i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The given pairs (i < j) of non-plane parts whose oriented boxes, grown
+    by the clearance, overlap (sorted; with ``focus``, one focus part each)."""
+    i, j = np.asarray(i, np.int64), np.asarray(j, np.int64)
+    keep = ~parts.plane[i] & ~parts.plane[j]
+    if focus is not None:
+        focus = np.asarray(focus, bool)
+        keep &= focus[i] != focus[j]
+    i, j = i[keep], j[keep]
+    order = np.lexsort((j, i))
+    i, j = i[order], j[order]
+    if len(i):
+        half = parts.half() + 0.5 * clearance
+        ok = obb_overlap(placed.centre[i], placed.rot[i], half[i], placed.centre[j], placed.rot[j], half[j])
+        i, j = i[ok], j[ok]
+    return i, j
+
+
+def _world_triangles(parts: PartSet, placed: Placement, part: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Triangles ``tri`` (n,) of parts ``part`` (n,) in the world, (n, 3, 3):
+    each distinct triangle transformed once (a triangle belongs to one part),
+    however many pairs it is in."""
+    if len(tri) < 64:
+        return placed.world(part, parts.tris[tri])
+    u, first, inv = np.unique(tri, return_index=True, return_inverse=True)
+    return placed.world(part[first], parts.tris[u])[inv.ravel()]
+
+
 def _triangle_pairs(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray,
                     clearance: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Triangle pairs (tri of i, tri of j, pair row) whose boxes come within ``clearance``."""
@@ -109,8 +138,10 @@ def _triangle_pairs(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndar
     q_lo, q_hi = transformed_aabb(parts.lo[j] - g, parts.hi[j] + g, rel, shift)
     row, ti = parts.forest.query(i, q_lo - g, q_hi + g)
     # each candidate triangle of i, grown, in j's frame
-    tw = placed.world(i[row], parts.tris[ti])
-    t_lo, t_hi = tw.min(axis=1) - clearance, tw.max(axis=1) + clearance
+    tw = _world_triangles(parts, placed, i[row], ti)
+    # corner by corner (numpy reduces a 3-long axis slowly; min and max are exact)
+    t_lo = np.minimum(np.minimum(tw[:, 0], tw[:, 1]), tw[:, 2]) - clearance
+    t_hi = np.maximum(np.maximum(tw[:, 0], tw[:, 1]), tw[:, 2]) + clearance
     # a world AABB in j's frame: transform its centre and half extents
     c = 0.5 * (t_lo + t_hi)
     h = 0.5 * (t_hi - t_lo)
@@ -123,7 +154,8 @@ def _triangle_pairs(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndar
 
 def check_parts(parts: PartSet, placed: Placement, clearance: float,
                 focus: np.ndarray | None = None,
-                pair_mask=None, assemblies: bool = True) -> list[Interference]:
+                pair_mask=None, assemblies: bool = True,
+                pairs: tuple[np.ndarray, np.ndarray] | None = None) -> list[Interference]:
     """Interference between parts at one set of poses.
 
     Args:
@@ -134,9 +166,26 @@ def check_parts(parts: PartSet, placed: Placement, clearance: float,
             candidate pairs to test (e.g. only parts on different bodies).
         assemblies: prune by assembly boxes before part boxes (False: part
             boxes only; the records are the same, for comparison).
+        pairs: (i, j) arrays, i < j: test these pairs alone (no box broad
+            phase over all parts; ``pair_mask`` must not be given). Each
+            pair's record is the one the check of all pairs gives it: the
+            broad phase only drops pairs whose boxes are farther apart than
+            the clearance, which have no record.
     """
-    i, j = candidate_pairs(parts, placed, clearance, focus, pair_mask, assemblies)
-    out: list[Interference] = []
+    return [r for _, _, r in _check_indexed(parts, placed, clearance, focus, pair_mask, assemblies, pairs)]
+
+
+def _check_indexed(parts: PartSet, placed: Placement, clearance: float, focus, pair_mask, assemblies: bool,
+                   pairs) -> list[tuple[int, int, Interference]]:
+    """:func:`check_parts`'s records with the two parts' indices each."""
+    if pairs is not None:
+        i, j = candidate_pairs_of(parts, placed, clearance, focus, *pairs)
+        listed = np.zeros((len(parts.names),) * 2, bool)
+        listed[pairs[0], pairs[1]] = listed[pairs[1], pairs[0]] = True
+        pair_mask = lambda a, b: listed[a, b]    # noqa: E731  (the planes' pairs)
+    else:
+        i, j = candidate_pairs(parts, placed, clearance, focus, pair_mask, assemblies)
+    out: list[tuple[int, int, Interference | None]] = []
     n = len(i)
     if n:
         dist = np.full(n, np.inf)
@@ -144,8 +193,8 @@ def check_parts(parts: PartSet, placed: Placement, clearance: float,
         crossing = np.zeros(n, bool)
         ti, tj, row = _triangle_pairs(parts, placed, i, j, clearance)
         if len(row):
-            a = placed.world(i[row], parts.tris[ti])
-            b = placed.world(j[row], parts.tris[tj])
+            a = _world_triangles(parts, placed, i[row], ti)
+            b = _world_triangles(parts, placed, j[row], tj)
             cr = triangles_cross(a, b, parts.touch(i[row], j[row]))
             crossing[row[cr]] = True
             where[row[cr]] = 0.5 * (a[cr].mean(axis=1) + b[cr].mean(axis=1))
@@ -165,9 +214,10 @@ def check_parts(parts: PartSet, placed: Placement, clearance: float,
         hard = inside | crossing
         value = np.where(hard, np.where(inside, deep, -touch), dist)
         for k in np.flatnonzero(hard | ((touch < dist) & (dist < clearance))):     # records only
-            out.append(_record(parts, int(i[k]), int(j[k]), float(value[k]), where[k], clearance))
+            out.append((int(i[k]), int(j[k]), _record(parts, int(i[k]), int(j[k]), float(value[k]), where[k],
+                                                      clearance)))
     out.extend(_plane_records(parts, placed, clearance, focus, pair_mask))
-    return [r for r in out if r is not None]
+    return [x for x in out if x[2] is not None]
 
 
 def _record(parts: PartSet, a: int, b: int, d: float, where: np.ndarray, clearance: float) -> Interference | None:
@@ -208,7 +258,8 @@ def _plane_records(parts: PartSet, placed: Placement, clearance: float, focus, p
         touch = parts.touch(lowest, lowest)
         for v, part, t in zip(first.tolist(), lowest.tolist(), touch.tolist()):
             if abs(z[v]) > t:
-                out.append(_record(parts, min(p, part), max(p, part), float(z[v]), vw[v], clearance))
+                a, b = min(p, part), max(p, part)
+                out.append((a, b, _record(parts, a, b, float(z[v]), vw[v], clearance)))
     return out
 
 
@@ -236,6 +287,7 @@ class PartChecker:
         n = len(parts.names)
         self._skip = np.zeros((n, n), bool) if skip is None else np.asarray(skip, bool)
         self._static: tuple[list[Interference], np.ndarray, np.ndarray] | None = None
+        self._tiled: dict[tuple, PartSet] = {}
 
     def check(self, poses: np.ndarray) -> list[Interference]:
         """Records for poses (P, 4, 4)."""
@@ -252,6 +304,43 @@ class PartChecker:
         moving = check_parts(self.parts, placed, self.clearance, self.focus,
                              lambda i, j: (grp[i] != grp[j]) & ~skip[i, j], self.assemblies)
         return self._replay(placed) + moving
+
+    def check_pairs(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray) -> list[Interference]:
+        """The records of the moving pairs (i, j) (i < j, from
+        :meth:`moving_pairs`) alone at poses (P, 4, 4): what :meth:`check`
+        gives those pairs."""
+        if not len(i):
+            return []
+        return check_parts(self.parts, self.parts.place(poses), self.clearance, self.focus, pairs=(i, j))
+
+    def check_pairs_many(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray) -> list[list[Interference]]:
+        """:meth:`check_pairs` at S states at once (poses (S, P, 4, 4)), to
+        the bit: the parts of the pairs are laid out once per state in one
+        :meth:`PartSet.tiled` set (built once per choice of parts), so a
+        batch of states costs about one call's numpy overhead."""
+        n_s = len(poses)
+        out: list[list[Interference]] = [[] for _ in range(n_s)]
+        if not len(i) or not n_s:
+            return out
+        used, local = np.unique(np.concatenate([i, j]), return_inverse=True)
+        k = len(used)
+        key = tuple(used.tolist())
+        view = self._tiled.get(key)
+        if view is None or len(view.names) < n_s * k:      # laid out for the longest batch seen
+            view = self._tiled[key] = self.parts.tiled(used, max(n_s, 32))
+        copies = len(view.names) // k
+        poses = np.asarray(poses, float)[:, used]
+        if copies > n_s:                                    # the copies past the states stay unused
+            poses = np.concatenate([poses, np.broadcast_to(poses[-1:], (copies - n_s,) + poses.shape[1:])])
+        li, lj = local[:len(i)], local[len(i):]
+        shift = (k * np.arange(n_s))[:, None]
+        vi, vj = (li[None] + shift).ravel(), (lj[None] + shift).ravel()
+        vi, vj = np.minimum(vi, vj), np.maximum(vi, vj)
+        focus = None if self.focus is None else np.tile(np.asarray(self.focus, bool)[used], copies)
+        placed = view.place(poses.reshape(-1, 4, 4))
+        for a, _, rec in _check_indexed(view, placed, self.clearance, focus, None, True, (vi, vj)):
+            out[a // k].append(rec)
+        return out
 
     def moving_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         """(i, j) arrays, i < j: the part pairs that can move relative to

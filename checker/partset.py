@@ -26,6 +26,7 @@ from functools import cached_property
 
 import numpy as np
 
+from checker.arrays import ranges
 from checker.bvh import Assemblies, TriangleForest, assembly_boxes, transformed_aabb
 from checker.shapes import Shape, ShapeType
 from checker.tessellate import part_surface
@@ -181,6 +182,30 @@ class PartSet:
                        cat(verts, (0, 3)), cat(vpart, (0,), np.int64),
                        cat(probes, (0, 3)), cat(ppart, (0,), np.int64),
                        lo, hi, np.where(plane, 0.0, np.linalg.norm(hi - lo, axis=1)), forest, Assemblies.of(list(names)), tuple(warnings))
+
+    def tiled(self, idx: np.ndarray, copies: int) -> "PartSet":
+        """The parts ``idx`` (K,) laid out ``copies`` times: part ``c K + k``
+        of the result is part ``idx[k]`` (its surface, probes and tree, in
+        the same order, gathered without tessellating again), so that one
+        set of poses can place the same parts at many states at once."""
+        idx = np.tile(np.asarray(idx, np.int64), copies)
+        n = len(idx)
+
+        def gather(part_of: np.ndarray, *arrays: np.ndarray):
+            start = np.searchsorted(part_of, np.arange(len(self.names) + 1))
+            first, cnt = start[idx], start[idx + 1] - start[idx]
+            rows = ranges(first, cnt)
+            return (np.repeat(np.arange(n), cnt),) + tuple(a[rows] for a in arrays)
+
+        tri_part, tris, normals, edge_n = gather(self.tri_part, self.tris, self.normals, self.edge_normals)
+        vert_part, verts = gather(self.vert_part, self.vertices)
+        probe_part, probes = gather(self.probe_part, self.probes)
+        forest = self.forest.tiled(idx)
+        names = tuple(self.names[k] for k in idx)
+        return PartSet(names, tuple(self.groups[k] for k in idx), self.keepout[idx], self.closed[idx],
+                       self.plane[idx], self.error[idx], tuple(self.shapes[k] for k in idx), tris, tri_part,
+                       normals, edge_n, verts, vert_part, probes, probe_part, self.lo[idx], self.hi[idx],
+                       self.size[idx], forest, Assemblies.of(list(names)), ())
 
     def place(self, poses: np.ndarray) -> Placement:
         """World boxes of every part for poses (P, 4, 4)."""

@@ -60,6 +60,12 @@ class CableState:
             ``bend``.
         rest_length: optional unstretched length; stretching beyond 1 % is
             reported as ``taut``.
+        rest_s: optional (n,) strictly increasing material coordinate of
+            each point: its arc length along the unstretched cable (element
+            index times the rest element length for a uniform cable).
+            Exclusion windows are measured in it, so a stretched cable still
+            has the same piece of material in its window. None: the current
+            arc length.
     """
 
     name: str
@@ -67,6 +73,7 @@ class CableState:
     radius: float
     min_bend_radius: float | None = None
     rest_length: float | None = None
+    rest_s: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         pts = np.asarray(self.points, dtype=float)
@@ -77,15 +84,24 @@ class CableState:
         if not (np.isfinite(self.radius) and self.radius > 0):
             raise ValueError(f"cable {self.name!r}: radius must be positive, got {self.radius}")
         object.__setattr__(self, "points", pts)
+        if self.rest_s is not None:
+            rest = np.asarray(self.rest_s, dtype=float)
+            if rest.shape != (len(pts),) or not np.all(np.isfinite(rest)) or np.any(np.diff(rest) <= 0):
+                raise ValueError(f"cable {self.name!r}: rest_s must be ({len(pts)},) finite and "
+                                 "strictly increasing")
+            object.__setattr__(self, "rest_s", rest)
 
 
 @dataclass(frozen=True)
 class Exclusion:
-    """An arc-length window on a cable where touching a part is expected.
+    """A window along a cable's material where touching a part is expected.
 
-    Points (and, with method exact, centreline pieces) of ``cable`` whose arc
-    length lies in ``[s_min, s_max]`` are not checked against ``part``: the
-    attachment or clip zone.
+    Points (and, with method exact, centreline pieces) of ``cable`` whose
+    material coordinate (:attr:`CableState.rest_s`: arc length along the
+    unstretched cable, or the current arc length where the cable has none)
+    lies in ``[s_min, s_max]`` are not checked against ``part``: the
+    attachment or clip zone. Measured along the material, the window holds
+    the same piece of cable however far the cable stretches.
     """
 
     cable: str

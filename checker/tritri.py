@@ -44,7 +44,9 @@ def _scale(*arrays: np.ndarray) -> np.ndarray:
     if not len(m):
         return m
     for a in arrays:
-        m = np.maximum(m, np.abs(a.reshape(len(a), -1)).max(axis=1))
+        flat = np.abs(a.reshape(len(a), -1))
+        for k in range(flat.shape[1]):      # column by column: numpy reduces a short row slowly
+            m = np.maximum(m, flat[:, k])
     return np.maximum(m, 1e-300)
 
 
@@ -96,14 +98,21 @@ def triangles_cross(t1: np.ndarray, t2: np.ndarray, tol: np.ndarray | float | No
     straddle1 = (d1.max(axis=1) > 0) & (d1.min(axis=1) < 0)
     straddle2 = (d2.max(axis=1) > 0) & (d2.min(axis=1) < 0)
     ok &= straddle1 & straddle2
-    line = np.cross(u1, u2)
+    # the common line and the intervals only for the pairs that straddle
+    # (most candidate pairs do not; each row's arithmetic is its own)
+    rows = np.flatnonzero(ok)
+    out = np.zeros(n, bool)
+    if not len(rows):
+        return out
+    line = np.cross(u1[rows], u2[rows])
     ll = np.linalg.norm(line, axis=1)
-    ok &= ll > 1e-12
-    line = line / np.where(ok, ll, 1.0)[:, None]
-    a_lo, a_hi = _interval(t1, d1, line)
-    b_lo, b_hi = _interval(t2, d2, line)
+    good = ll > 1e-12
+    line = line / np.where(good, ll, 1.0)[:, None]
+    a_lo, a_hi = _interval(t1[rows], d1[rows], line)
+    b_lo, b_hi = _interval(t2[rows], d2[rows], line)
     overlap = np.minimum(a_hi, b_hi) - np.maximum(a_lo, b_lo)
-    return ok & (overlap > tol)
+    out[rows] = good & (overlap > tol[rows])
+    return out
 
 
 def triangle_distance(t1: np.ndarray, t2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -11,28 +11,38 @@ between places closer along the cable than `self_pair_excluded` allows are
 near neighbours, not interference. The position of a contact along a cable
 is found by projecting the contact point onto its element.
 
-Every disagreement gets a reason, chosen from what is known about the two
-methods (a mesh the simulator collides as its convex hull, a crossing that
-falls between discrete points, distances that agree but straddle a class
-boundary, ...). Counts are kept for the whole run with the largest distance
-difference on pairs both sides saw, and the first `keep` disagreements are
-kept with their details.
+Every disagreement gets a reason (:class:`Reason`) only once it is checked:
+distances that agree within 2 % of the clearance but straddle a class
+boundary; a mesh part whose convex hull (what MuJoCo collides) classes the
+pair as MuJoCo does; with method points, method exact classing it as MuJoCo
+does. Any other disagreement is ``unexplained`` and counted apart. Counts
+are kept for the whole run with the largest distance difference on pairs
+both sides saw, and every disagreement is kept as an interval per pair
+(consecutive compared steps with one reason: start, end, worst).
+
+Pairs the scene allows (``[[allow]]``) are left out of the comparison (they
+are never reported as interference, so there is nothing to agree on) and
+counted apart.
 
 This module takes plain arrays: it does not know MuJoCo's data structures
 (the simulation side maps contacts to names) and does not compute geometry
-beyond projecting a contact point onto a segment.
+beyond projecting a contact point onto a segment; the second opinions come
+from :mod:`checker.recheck` through the caller.
 """
 
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
+from enum import Enum
+from typing import Protocol
 
 import numpy as np
 
 from checker.cable import polyline_arc_lengths, self_pair_excluded, tile_offsets
 from checker.closest import point_segment, row_norm
+from checker.events import AllowList
 from checker.records import Interference, PairType
 from checker.scene_state import Exclusion
 
@@ -92,23 +102,31 @@ class SimulatorPairs:
         self._ex_lo = np.array([min(e.s_min, e.s_max) for e in exclusions], dtype=float)
         self._ex_hi = np.array([max(e.s_min, e.s_max) for e in exclusions], dtype=float)
 
-    def __call__(self, contacts: SimContacts, cables: dict[str, tuple[np.ndarray, float]]
+    def __call__(self, contacts: SimContacts, cables: dict[str, tuple[np.ndarray, float]],
+                 rest: dict[str, np.ndarray] | None = None
                  ) -> dict[tuple[str, str, str], tuple[float, np.ndarray]]:
-        """One state: `cables` maps name -> (points (n, 3), radius)."""
+        """One state: `cables` maps name -> (points (n, 3), radius); `rest`
+        name -> (n,) material coordinates of the points (None: arc lengths)."""
         names = list(cables)
         if not names:
             return {}
         pts = np.concatenate([np.asarray(cables[c][0], float).reshape(-1, 3) for c in names])
         offsets = np.concatenate([[0], np.cumsum([len(cables[c][0]) for c in names])])
-        return self.many([contacts], names, np.array([cables[c][1] for c in names], float), pts[None], offsets)[0]
+        mat = None if rest is None else np.concatenate([np.asarray(rest[c], float) for c in names])
+        return self.many([contacts], names, np.array([cables[c][1] for c in names], float), pts[None], offsets,
+                         mat)[0]
 
     def many(self, contacts: Sequence[SimContacts], names: Sequence[str], radii: np.ndarray,
-             pts: np.ndarray, offsets: np.ndarray) -> list[dict[tuple[str, str, str], tuple[float, np.ndarray]]]:
+             pts: np.ndarray, offsets: np.ndarray, rest: np.ndarray | None = None
+             ) -> list[dict[tuple[str, str, str], tuple[float, np.ndarray]]]:
         """:meth:`__call__` for S states at once: their contacts (S,), the
         cables' names and radii (C,), every state's body centres (S, N, 3),
-        cables concatenated from ``offsets`` (C + 1,). One pass for all
-        states (a state's few contacts cost numpy's per-call overhead)."""
+        cables concatenated from ``offsets`` (C + 1,), and the centres'
+        material coordinates (N,) (the attachment windows' measure; None:
+        each state's arc lengths). One pass for all states (a state's few
+        contacts cost numpy's per-call overhead)."""
         n_s, n = pts.shape[:2]
+        rest = None if rest is None else np.asarray(rest, float)
         out: list[dict] = [{} for _ in range(n_s)]
         counts = np.array([len(c.dist) for c in contacts], np.int64)
         if counts.sum() == 0:
@@ -133,10 +151,13 @@ class SimulatorPairs:
         s_all = polyline_arc_lengths(row_norm(np.diff(flat, axis=0)), tile_offsets(offsets, n_s))
 
         def place(cab, elem):
-            """(arc length of the projection, element start, element end) on cable cab."""
-            g = st * n + offsets[cab] + np.clip(elem, 0, offsets[cab + 1] - offsets[cab] - 2)
+            """(arc length of the projection, element start, element end) on
+            cable cab; the element's ends in material coordinates."""
+            i = offsets[cab] + np.clip(elem, 0, offsets[cab + 1] - offsets[cab] - 2)
+            g = st * n + i
             _, t, _ = point_segment(pos, flat[g], flat[g + 1])
-            return s_all[g] + t * (s_all[g + 1] - s_all[g]), s_all[g], s_all[g + 1]
+            lo, hi = (s_all[g], s_all[g + 1]) if rest is None else (rest[i], rest[i + 1])
+            return s_all[g] + t * (s_all[g + 1] - s_all[g]), lo, hi
 
         vertex = elem_a <= -2                      # a contact at a vertex: a span of no length there
         vert = -2 - elem_a
@@ -171,52 +192,113 @@ class SimulatorPairs:
         return out
 
 
+class Reason(str, Enum):
+    """Why the two sides class a pair differently; each one checked before it
+    is given (:meth:`Validation.explain`). The values are the report's.
+
+    - ``at a boundary``: both distances agree within 2 % of the clearance
+      but fall either side of 0 or of the clearance;
+    - ``convex hull``: MuJoCo collides a mesh as its convex hull, and the
+      cable's distance to the hull (method exact) classes the pair as MuJoCo
+      does;
+    - ``between points``: the contact or crossing falls between discrete
+      points: method exact classes the pair as MuJoCo does;
+    - ``unexplained``: no check explains it.
+    """
+
+    AT_BOUNDARY = "at a boundary"
+    CONVEX_HULL = "convex hull"
+    BETWEEN_POINTS = "between points"
+    UNEXPLAINED = "unexplained"
+
+
+class Recheck(Protocol):
+    """Second opinions on a pair at one state (:class:`checker.recheck.StateRecheck`):
+    its signed distance when below the clearance, else None."""
+
+    def exact(self, key: tuple[str, str, str]) -> float | None: ...
+
+    def hull(self, key: tuple[str, str, str], exact: bool = True) -> float | None: ...
+
+
 @dataclass(frozen=True)
 class Disagreement:
-    """One (step, pair) the two sides classed differently."""
+    """A run of consecutive compared steps over which the two sides classed
+    one pair differently for the same reason.
 
-    t: float
+    Attributes:
+      type, a, b: the pair.
+      t_start, t_end: first and last compared time of the run, s.
+      t_worst: the time at which either side's distance was smallest.
+      checker, mujoco: the two distances at ``t_worst`` (None: clear).
+      reason: the checked explanation.
+      second: the distance that explains it at ``t_worst`` (method exact,
+        or to the convex hull), or None.
+      steps: compared steps in the run.
+    """
+
     type: str
     a: str
     b: str
+    t_start: float
+    t_end: float
+    t_worst: float
     checker: float | None
     mujoco: float | None
-    reason: str
+    reason: Reason
+    second: float | None
+    steps: int
+
+    @property
+    def t(self) -> float:
+        """The worst time (the report's ``t``)."""
+        return self.t_worst
+
+
+def _severity(dc: float | None, dm: float | None) -> float:
+    """The smaller of the two distances (inf when both are clear)."""
+    return min(np.inf if dc is None else dc, np.inf if dm is None else dm)
 
 
 @dataclass
 class Validation:
-    """Run-long comparison counts (see the module docstring).
+    """Run-long comparison counts and disagreement intervals (module docstring).
 
     Attributes:
       clearance: soft-interference distance.
       method: the checker's method ("points" or "exact").
       mesh_parts: names of parts that are meshes (the simulator collides
         their convex hulls).
-      keep: how many disagreements to keep in detail.
-      unit, unit_name: distances in reasons are written divided by `unit`
-        and followed by `unit_name` (the report's units).
+      allow: pairs the scene allows (``[[allow]]``): left out of the
+        comparison and counted in ``allowed_pair_steps``.
+      unexplained: (step, pair) disagreements no check explains.
     """
 
     clearance: float
     method: str
     mesh_parts: frozenset[str] = frozenset()
-    keep: int = 50
-    unit: float = 1.0
-    unit_name: str = ""
+    allow: AllowList = field(default_factory=AllowList)
     compared_steps: int = 0
     pair_steps: int = 0
     agree: int = 0
     checker_only: int = 0
     mujoco_only: int = 0
     severity_differs: int = 0
+    unexplained: int = 0
+    allowed_pair_steps: int = 0
     max_distance_error: float = 0.0
-    disagreements: list[Disagreement] = field(default_factory=list)
     reasons: Counter = field(default_factory=Counter)
+    _closed: list[Disagreement] = field(default_factory=list)
+    _open: dict[tuple[str, str, str], Disagreement] = field(default_factory=dict)
 
     def compare(self, t: float, records: Sequence[Interference],
-                sim: dict[tuple[str, str, str], tuple[float, np.ndarray]]) -> float:
-        """Compare one step; return its agreement (1.0 when no pair is seen)."""
+                sim: dict[tuple[str, str, str], tuple[float, np.ndarray]],
+                recheck: Callable[[], Recheck] | None = None) -> float:
+        """Compare one step; return its agreement (1.0 when no pair is seen).
+
+        ``recheck``: builds the second opinions at this state (called at
+        most once, on the first disagreement); None: nothing can be checked
+        but the distances themselves."""
         mine = {}
         for r in records:
             kind = PairType(r.type).value
@@ -226,7 +308,21 @@ class Validation:
         self.compared_steps += 1
         agree = 0
         keys = set(mine) | set(sim)
-        for k in keys:
+        if self.allow:
+            allowed = {k for k in keys if self.allow.match(k) is not None}
+            self.allowed_pair_steps += len(allowed)
+            keys -= allowed
+        opinions: list[Recheck] = []
+
+        def second() -> Recheck | None:
+            if recheck is None:
+                return None
+            if not opinions:
+                opinions.append(recheck())
+            return opinions[0]
+
+        now = set()
+        for k in sorted(keys):
             dc = mine.get(k)
             dm = sim[k][0] if k in sim else None
             cc, cm = classify(dc, self.clearance), classify(dm, self.clearance)
@@ -241,37 +337,64 @@ class Validation:
                 self.mujoco_only += 1
             else:
                 self.severity_differs += 1
-            reason = self.reason(k, dc, dm)
-            self.reasons[reason.split(":")[0]] += 1
-            if len(self.disagreements) < self.keep:
-                self.disagreements.append(Disagreement(t, k[0], k[1], k[2], dc, dm, reason))
+            reason, value = self.explain(k, dc, dm, second)
+            self.reasons[reason.value] += 1
+            self.unexplained += reason is Reason.UNEXPLAINED
+            self._extend(k, t, dc, dm, reason, value)
+            now.add(k)
+        for k in [k for k in self._open if k not in now]:
+            self._closed.append(self._open.pop(k))
         self.pair_steps += len(keys)
         self.agree += agree
         return agree / len(keys) if keys else 1.0
 
-    def reason(self, key: tuple[str, str, str], dc: float | None, dm: float | None) -> str:
-        """Why the two sides disagree on this pair, from what is known of both methods."""
-        kind, _, b = key
-        c = self.clearance
-        if kind in (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value) and b in self.mesh_parts \
-                and (dc is None or (dm is not None and dm < dc)):
-            return f"mesh convex hull: MuJoCo collides mesh '{b}' as its convex hull, which is nearer than the mesh"
-        if self.method == "points" and dm is not None and (dc is None or dm < dc):
-            what = "crossing" if kind in (PairType.SELF.value, PairType.CABLE_CABLE.value) else "contact"
-            return f"between points: the {what} falls between discrete points (method points)"
-        if dc is not None and dm is not None and abs(dc - dm) <= 0.02 * max(c, 1e-12):
-            return (f"at a boundary: distances agree within {self._len(abs(dc - dm))} but straddle "
-                    f"{'0' if min(dc, dm) < 0 <= max(dc, dm) else 'the clearance'}")
-        if dm is None and dc is not None and dc >= 0:
-            return "no simulator contact: MuJoCo generated no contact for this soft pair within its margin"
-        if dm is None:
-            return "no simulator contact: MuJoCo generated no contact for this overlapping pair"
-        if dc is None:
-            return "checker clear: the checker found this pair clear of the clearance"
-        return f"distance differs: checker {self._len(dc)}, MuJoCo {self._len(dm)}"
+    def _extend(self, k, t, dc, dm, reason: Reason, value) -> None:
+        run = self._open.get(k)
+        if run is not None and run.reason is not reason:
+            self._closed.append(self._open.pop(k))
+            run = None
+        if run is None:
+            self._open[k] = Disagreement(k[0], k[1], k[2], t, t, t, dc, dm, reason, value, 1)
+            return
+        worse = _severity(dc, dm) < _severity(run.checker, run.mujoco)
+        self._open[k] = replace(run, t_end=t, steps=run.steps + 1,
+                                **({"t_worst": t, "checker": dc, "mujoco": dm, "second": value} if worse else {}))
 
-    def _len(self, value: float) -> str:
-        return f"{value / self.unit:.4g}{' ' + self.unit_name if self.unit_name else ''}"
+    def explain(self, key: tuple[str, str, str], dc: float | None, dm: float | None,
+                second: Callable[[], Recheck | None] = lambda: None) -> tuple[Reason, float | None]:
+        """Why the two sides disagree on this pair, and the distance that
+        shows it (None for a boundary): each reason is checked, in order,
+
+        - at a boundary: both distances known, within 2 % of the clearance;
+        - convex hull (a mesh part): the cable's distance to the mesh's
+          convex hull (discrete points, then method exact) classes the pair
+          as MuJoCo does;
+        - between points (method points): method exact classes the pair as
+          MuJoCo does;
+        - else unexplained."""
+        c = self.clearance
+        cm = classify(dm, c)
+        kind, _, b = key
+        if dc is not None and dm is not None and abs(dc - dm) <= 0.02 * max(c, 1e-12):
+            return Reason.AT_BOUNDARY, None
+        opinion = second()
+        if opinion is not None:
+            if kind in (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value) and b in self.mesh_parts:
+                for exact in (False, True):        # discrete points first: cheaper, often enough
+                    d = opinion.hull(key, exact)
+                    if classify(d, c) == cm:
+                        return Reason.CONVEX_HULL, d
+            if self.method == "points":
+                d = opinion.exact(key)
+                if classify(d, c) == cm:
+                    return Reason.BETWEEN_POINTS, d
+        return Reason.UNEXPLAINED, None
+
+    @property
+    def disagreements(self) -> list[Disagreement]:
+        """Every disagreement interval so far (open ones as they stand), by
+        start time and pair."""
+        return sorted(self._closed + list(self._open.values()), key=lambda d: (d.t_start, d.type, d.a, d.b))
 
     @property
     def agreement(self) -> float:

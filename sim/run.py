@@ -16,14 +16,14 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
 from checker.cable import TAUT_STRAIN
-from checker.events import EventTracker
+from checker.events import AllowList, EventTracker
 from checker.records import PairType, Severity
 from checker.report import SCHEMA, write_report
 from checker.scene_state import CheckConfig
@@ -34,7 +34,7 @@ from sim.build import Built, build
 from sim.jointspace import JointLog
 from sim.loop import Simulation
 from sim.record import Mark, Recorder, Settings, summary_text
-from sim.scene import Scene
+from sim.scene import Scene, check_allow_names
 from sim.stepcheck import BATCH, StepChecks
 from sim.stop import StopRequest
 
@@ -111,6 +111,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
          start: float) -> dict:
     validate = scene.check.validate
     built = build(scene, detect=validate)
+    check_allow_names(scene, [p.name for p in built.parts] + [c.name for c in built.cables])
     sim = Simulation(built)
     sim.reset()
     if progress:
@@ -138,7 +139,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
                    [(p.name, shape) for p, shape in zip(built.parts, checks.shapes)],
                    scene.check.clearance, checks.exclusions, stride=record_stride)
     timer.skip()          # opening the recording is no step's cost (it was never timed)
-    tracker = EventTracker(hold=3 * every * scene.timestep)
+    tracker = EventTracker(hold=3 * every * scene.timestep, allow=checks.allow)
     joints = JointLog(built, sim.motion)
     out = _Outcome(built, tracker, recorder, timer, progress, record_stride, sim.total_steps, joints, wear,
                    checks.exclusions)
@@ -262,7 +263,10 @@ class _Outcome:
             self.timer.lap("check")
             if recorder and (self.checked % self.record_stride == 0 or started or closed
                              or state.step == self.total_steps):
-                _record_step(recorder, state, res, started, closed, self.tracker, self.near,
+                allow = self.tracker.allow   # allowed pairs are drawn as clear
+                shown = (replace(res, records=[r for r in res.records if not allow.match(self.tracker.key(r))])
+                         if allow else res)
+                _record_step(recorder, state, shown, started, closed, self.tracker, self.near,
                              self.pending_near, scale, self.built.scene.units)
                 self.pending_near = None
                 if self.joints:
@@ -456,6 +460,9 @@ def _report(scene: Scene, built: Built, config: CheckConfig, complete: bool, ste
         "summary": summary,
         "events": event_rows,
         "pairs": pair_rows,
+        "allowed": [{"type": p.type, "a": p.a, "b": p.b, "min_distance": p.min_distance / u, "t": p.t,
+                     "reason": p.reason}
+                    for p in sorted(tracker.allowed.values(), key=lambda p: (p.min_distance, p.type, p.a, p.b))],
     }
     if scene.check.validate:
         v = validation
@@ -464,11 +471,15 @@ def _report(scene: Scene, built: Built, config: CheckConfig, complete: bool, ste
             "checker_only": v.checker_only, "mujoco_only": v.mujoco_only,
             "severity_differs": v.severity_differs, "agreement": v.agreement,
             "max_distance_error": v.max_distance_error / u,
+            "unexplained": v.unexplained, "allowed_pair_steps": v.allowed_pair_steps,
             "reasons": dict(v.reasons),
-            "disagreements": [{"t": d.t, "type": d.type, "a": d.a, "b": d.b,
+            "disagreements": [{"type": d.type, "a": d.a, "b": d.b, "t": d.t_worst, "t_start": d.t_start,
+                               "t_end": d.t_end, "t_worst": d.t_worst, "steps": d.steps,
                                "checker": None if d.checker is None else d.checker / u,
                                "mujoco": None if d.mujoco is None else d.mujoco / u,
-                               "reason": d.reason} for d in v.disagreements],
+                               "reason": d.reason.value,
+                               "second": None if d.second is None else d.second / u}
+                              for d in v.disagreements],
         }
     report.update({
         "cables": cables,

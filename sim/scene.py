@@ -33,6 +33,11 @@ A `[[motion]]` gives keys, the mjcf model's keyframes (``key = "home"``) or a
 CSV file of samples (`read_samples`); every sample of a joint with a range
 (`jnt_limited`) must lie in it. Both interpolations (`sim.curves`) stay
 between neighbouring samples, so the samples bound the whole motion.
+
+`[[allow]]` names (`AllowDef`) must cover a scene part or cable (by name or
+assembly path prefix) or, with an mjcf model, begin with one of its bodies:
+its geoms' part names are the builder's, so those are checked against the
+built parts once the model exists (`check_allow_names`).
 """
 
 from __future__ import annotations
@@ -97,11 +102,12 @@ dynamics off (the route's length printed to 6 digits is accepted)."""
 DEGENERATE = 1e-6
 """A route segment shorter than this many cable radii has zero length."""
 
-_TOP_KEYS = ("scene", "effects", "check", "bodies", "parts", "cables", "motion", "limits")
+_TOP_KEYS = ("scene", "effects", "check", "bodies", "parts", "cables", "motion", "limits", "allow")
 _LIMIT_KEYS = ("steps", "elements", "points")
 _SCENE_KEYS = ("name", "units", "duration", "timestep", "settle", "mjcf")
 _EFFECTS_KEYS = ("dynamics", "gravity", "contact")
-_CHECK_KEYS = ("method", "spacing", "clearance", "every", "validate", "attach_zone")
+_CHECK_KEYS = ("method", "spacing", "clearance", "every", "validate", "attach_zone", "attach_links")
+_ALLOW_KEYS = ("a", "b", "reason")
 _BODY_KEYS = ("name", "pos", "euler")
 _PART_KEYS = ("name", "body", "shape", "size", "pos", "euler", "file", "scale", "keepout")
 _CABLE_KEYS = ("name", "radius", "start", "end", "via", "length", "points", "clips",
@@ -161,8 +167,15 @@ class CheckSettings:
       clearance: soft-interference distance, metres.
       every: check every Nth step (>= 1).
       validate: compare with MuJoCo's contacts at each checked step.
-      attach_zone: arc length next to an end or clip, in cable radii, where
-        touching the body it rides on is expected.
+      attach_zone: length of cable next to an end or clip, in cable radii,
+        where touching the body it rides on is expected. Measured along the
+        cable's own material (rest arc length), so a stretched cable keeps
+        the same piece of itself excused.
+      attach_links: the attachment window also excuses the parts of bodies
+        within this many joints of the held body in the mjcf model's
+        kinematic tree (1: the links before and after a clamp's link);
+        paths never pass through the world body, so a table or fence is
+        never a neighbour. 0: the held body's own parts only.
     """
 
     method: str = "points"
@@ -171,6 +184,25 @@ class CheckSettings:
     every: int = 1
     validate: bool = True
     attach_zone: float = 5.0
+    attach_links: int = 0
+
+
+@dataclass(frozen=True)
+class AllowDef:
+    """A contact that belongs to the design (`[[allow]]`): never an event.
+
+    Attributes:
+      a, b: each a part name, an assembly path prefix ("cell/table" covers
+        "cell/table/top"), or a cable name. The pair matches interference
+        records (self, cable-cable, cable-structure, keep-out, part-part;
+        never bend or taut) between a name under `a` and a name under `b`,
+        either way round.
+      reason: why the contact is expected (listed in the report).
+    """
+
+    a: str
+    b: str
+    reason: str
 
 
 @dataclass(frozen=True)
@@ -413,6 +445,7 @@ class Scene:
       effects: what the simulation includes.
       check: how interference is checked.
       bodies, parts, cables, motions: in file order.
+      allow: `[[allow]]` pairs in file order.
       start_frames: world frame of every body at t = 0 (see the module
         docstring), name -> (origin (3,) metres, rotation (3, 3)), for
         "world", each `[[bodies]]` body and each named mjcf body. Read-only.
@@ -433,6 +466,7 @@ class Scene:
     parts: tuple[PartDef, ...]
     cables: tuple[CableDef, ...]
     motions: tuple[MotionDef, ...]
+    allow: tuple[AllowDef, ...] = ()
     start_frames: Mapping[str, tuple[np.ndarray, np.ndarray]] = field(
         default_factory=lambda: MappingProxyType({}))
     limits: Limits = Limits()
@@ -613,8 +647,12 @@ class _Parser:
     def file_path(self, value: Any, where: str) -> Path:
         """A path relative to the scene file, which must exist as a file."""
         text = self.name(value, where)
-        path = (self.folder / text).resolve()
-        if not path.is_file():
+        try:
+            path = (self.folder / text).resolve()
+            found = path.is_file()
+        except (OSError, ValueError):      # a NUL byte, a name too long for the file system
+            raise self.error(where, f"not a usable file name: {text!r}") from None
+        if not found:
             raise self.error(where, f"file not found: {path}")
         return path
 
@@ -671,10 +709,13 @@ class _Parser:
                                  f"parts[{part_index[cable.name]}]; names must differ")
         limits = self.limits(data.get("limits", {}))
         self.within_limits(limits, duration + settle, timestep, check, cables)
+        names = [p.name for p in parts] + [c.name for c in cables]
+        allow = tuple(self.allow(a, f"allow[{i}]", names)
+                      for i, a in enumerate(self.tables(data.get("allow", []), "allow")))
         return Scene(path=self.file, name=name, units=units, scale=self.scale,
                      duration=duration, timestep=timestep, settle=settle, mjcf=mjcf,
                      effects=effects, check=check, bodies=bodies, parts=parts,
-                     cables=cables, motions=motions,
+                     cables=cables, motions=motions, allow=allow,
                      start_frames=MappingProxyType(dict(self.frames)), limits=limits)
 
     def limits(self, value: Any) -> Limits:
@@ -754,7 +795,24 @@ class _Parser:
             every=self.integer(t.get("every", 1), "check.every", 1),
             validate=self.boolean(t.get("validate", True), "check.validate"),
             attach_zone=self.number(t.get("attach_zone", 5.0), "check.attach_zone",
-                                    nonnegative=True))
+                                    nonnegative=True),
+            attach_links=self.integer(t.get("attach_links", 0), "check.attach_links", 0))
+
+    def allow(self, value: dict, where: str, names: list[str]) -> AllowDef:
+        """An `[[allow]]` pair. Its names must cover a scene part or cable
+        (or, with an mjcf model, begin with one of its bodies: the geoms'
+        names are the builder's, checked against the built parts by
+        :func:`check_allow_names`)."""
+        t = self.table(value, where, _ALLOW_KEYS, ("a", "b", "reason"))
+        out = []
+        for key in ("a", "b"):
+            name = self.name(t[key], f"{where}.{key}")
+            bodies = (set(self.mjcf.bodies) | {"world"}) if self.mjcf is not None else set()
+            if not covers(name, names) and name.split("/")[0] not in bodies:
+                raise self.error(f"{where}.{key}", unknown_name(name, names + sorted(bodies)))
+            out.append(name)
+        reason = self.name(t["reason"], f"{where}.reason")
+        return AllowDef(out[0], out[1], reason)
 
     def body(self, value: dict, where: str) -> BodyDef:
         t = self.table(value, where, _BODY_KEYS, ("name",))
@@ -1327,6 +1385,33 @@ def _trajectory(times, joints, values, bodies, pos, euler, interpolation) -> Tra
     return Trajectory(times=times, joints=tuple(joints), joint_values=values,
                       bodies=tuple(bodies), body_pos=pos, body_euler=euler,
                       interpolation=interpolation)
+
+
+def covers(pattern: str, names) -> bool:
+    """True when `pattern` is one of `names` or an assembly path prefix of one."""
+    prefix = pattern + "/"
+    return any(n == pattern or n.startswith(prefix) for n in names)
+
+
+def unknown_name(name: str, names) -> str:
+    """The problem text for an `[[allow]]` name that covers nothing, with the
+    closest part, assembly path or cable name as a hint."""
+    known = sorted({"/".join(n.split("/")[:k]) for n in names for k in range(1, n.count("/") + 2)})
+    close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+    hint = f"did you mean {close[0]!r}?" if close else f"{len(known)} names known, e.g. " + \
+        ", ".join(repr(k) for k in known[:5])
+    return f"no part, assembly path or cable named {name!r} ({hint})"
+
+
+def check_allow_names(scene: Scene, names) -> None:
+    """Raise SceneError when an `[[allow]]` name covers none of `names` (the
+    built parts' and the cables' names): a name taken at load time for a
+    body of the mjcf model whose geoms the builder named otherwise."""
+    names = list(names)
+    for i, rule in enumerate(scene.allow):
+        for key, name in (("a", rule.a), ("b", rule.b)):
+            if not covers(name, names):
+                raise SceneError(scene.path, f"allow[{i}].{key}", unknown_name(name, names))
 
 
 def _frame(origin, rotation) -> tuple[np.ndarray, np.ndarray]:

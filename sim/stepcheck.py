@@ -8,8 +8,10 @@ the replayed same-body part records and the records of the *active* pairs:
 pairs that were inside (or within a tenth of the horizon of) the clearance
 at the last full check, which the skip rule leaves out and which are
 checked on their own (a cable lying on an arm link or held in a part just
-inside its attachment window, two leads crossing, would otherwise stop all
-skipping). The other states are checked in full.
+inside its attachment window, two leads crossing, a table just under a
+robot base or a hinge pin through its knuckles would otherwise stop all
+skipping; a part pair is checked whole, as the full check would). The other
+states are checked in full.
 
 Why batches: a cable has a few dozen body centres, so numpy's cost per call,
 not the arrays' size, is what a step costs. The skip rule and the measures
@@ -31,8 +33,10 @@ import numpy as np
 
 from checker.advance import Advancement, part_pair_bounds
 from checker.cable import CableMeasures, taut_margin
+from checker.events import AllowList, AllowRule
 from checker.interference import Checker, single_records_many
 from checker.parts import PartChecker
+from checker.recheck import Recheck
 from checker.records import Interference, PairType
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from checker.validation import SimulatorPairs, Validation
@@ -50,9 +54,10 @@ ADVANCE_HORIZON_RADII = 2.0
 plus this many (largest) cable radii at a full check..."""
 
 ACTIVE_HORIZONS = 0.1
-"""Cable-structure and keep-out pairs whose gap at a full check is below this
-many horizons are *active*: checked on their own at every state instead of
-bounding the skip (checker.advance)."""
+"""Cable-structure, keep-out, self and cable-cable pairs whose gap at a full
+check is below this many horizons, and moving part pairs whose box bound is,
+are *active*: checked on their own at every state instead of bounding the
+skip (checker.advance)."""
 
 ADVANCE_STRETCH_RADII = 0.25
 """... and up to this many (smallest) cable radii of arc length inside the
@@ -154,13 +159,21 @@ class StepChecks:
         # at the last full check: evaluated on their own at every state proven clear
         self._active: tuple[np.ndarray, np.ndarray] = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         self._cable_active = (np.zeros(0, np.int64), np.zeros(0, np.int64))    # (centre, centre)
+        # moving part pairs within ACTIVE_HORIZONS of the clearance at the last
+        # full check (a table just under a robot base, a hinge pin through its
+        # knuckles): left out of the bound, checked on their own at every state
+        self._part_active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         self._names = [c.name for c in built.cables]
         self._offsets = offsets
         self._radii = radii
+        # material coordinate (rest arc length) of every body centre: the exclusion windows' measure
+        self._rest = np.concatenate([c.rest_s for c in built.cables]) if built.cables else np.zeros(0)
+        self.allow = AllowList(AllowRule(r.a, r.b, r.reason) for r in scene.allow)
         self._simulator_pairs = SimulatorPairs(self.exclusions, config.clearance)
         self.validation = Validation(scene.check.clearance, config.method,
                                      frozenset(p.name for p in built.parts if p.shape == "mesh"),
-                                     unit=scene.scale, unit_name=scene.units)
+                                     allow=self.allow)
+        self._recheck = Recheck(self.checker.parts, config, self.exclusions)
         self._measures = CableMeasures(offsets)
         self._rest_length = np.array([c.length for c in built.cables], float)
         limit = np.array([np.inf if c.min_bend_radius is None else c.min_bend_radius
@@ -207,13 +220,14 @@ class StepChecks:
         raws = [self.detector.collide(state.qpos) for state in states]   # MuJoCo's work: the simulation's time
         self.lap("sim")
         contacts = self.detector.read_many(raws)
-        seen = self._simulator_pairs.many(contacts, self._names, self._radii, pts, self._offsets)
+        seen = self._simulator_pairs.many(contacts, self._names, self._radii, pts, self._offsets, self._rest)
         for state, result, found, pairs in zip(states, results, contacts, seen):
             result.contacts = found
             if self.focus_names is not None:
                 pairs = {k: v for k, v in pairs.items() if k[2] in self.focus_names
                          and k[0] in (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value)}
-            result.agreement = self.validation.compare(state.t, result.cable_records, pairs)
+            result.agreement = self.validation.compare(state.t, result.cable_records, pairs,
+                                                       self._second_opinion(state))
         self.lap("validate")
 
     def _proven_clear(self, states: Sequence[StepState], pts: np.ndarray, poses: np.ndarray,
@@ -233,7 +247,7 @@ class StepChecks:
             for i, recs in zip(flagged.tolist(), found):
                 records[i] = recs
         if len(self._active[0]) or len(self._cable_active[0]):
-            dense = self.checker.densify_many(pts, self._offsets, self._radii)    # once for both
+            dense = self.checker.densify_many(pts, self._offsets, self._radii, self._rest)    # once for both
             if len(self._active[0]):
                 found = self.checker.structure_many(names, self._radii, dense, poses[:, self.checked_parts],
                                                     self.exclusions, self._active)
@@ -241,12 +255,18 @@ class StepChecks:
             if len(self._cable_active[0]):
                 found = self.checker.cable_pairs_many(names, self._radii, dense, self._cable_active)
                 records = [a + b for a, b in zip(found, records)]
+        active = self.part_checker.check_pairs_many(poses, *self._part_active) if len(self._part_active[0]) \
+            else [[] for _ in range(n)]
         out = []
-        for state, recs, st, bd in zip(states, records, strain, bend):
+        for state, recs, st, bd, found in zip(states, records, strain, bend, active):
             cable_records = self._focus(recs)
-            part_records = self._same_body_records(state.part_poses)
+            part_records = self._same_body_records(state.part_poses) + found
             out.append(StepResult(cable_records + part_records, cable_records, st, bd, False))
         return out
+
+    def _active_part_records(self, poses: np.ndarray) -> list[Interference]:
+        """The records of the active part pairs, checked on their own."""
+        return self.part_checker.check_pairs(poses, *self._part_active) if len(self._part_active[0]) else []
 
     def _full(self, state: StepState, pts: np.ndarray, poses: np.ndarray, strain: np.ndarray,
               bend: np.ndarray) -> StepResult:
@@ -254,13 +274,20 @@ class StepChecks:
         adv = self.advance
         near = None
         cable_records = self.checker.check(cables, poses[self.checked_parts], self.exclusions)
-        # moving part pairs still provably apart: only same-body records
+        # moving part pairs still provably apart: only same-body records and
+        # the active pairs, checked on their own
         if adv is not None and state.step > 0 and adv.part_pairs_clear(poses):
-            part_records = self._same_body_records(poses)
+            part_records = self._same_body_records(poses) + self._active_part_records(poses)
         else:
             part_records = self.part_checker.check(poses)
         if adv is not None:
             bound = part_pair_bounds(self.rigid, self.rigid.place(poses), *self._moving_pairs)
+            # pairs within ACTIVE_HORIZONS of the clearance would stop the
+            # skipping at once: left out of the bound, checked on their own
+            active = bound - self.config.clearance < ACTIVE_HORIZONS * self.horizon
+            mi, mj = self._moving_pairs
+            self._part_active = (mi[active], mj[active])
+            pairs, bound = (mi[~active], mj[~active]), bound[~active]
             if self.checker.gaps is not None:
                 gap_cable, gap_checked = self.checker.gaps
                 self._gap_part[self.checked_parts] = gap_checked
@@ -279,7 +306,7 @@ class StepChecks:
                 n_c = max(len(self.built.cables), 1)
                 close = c_value < ACTIVE_HORIZONS * self.horizon
                 c_key = np.unique(np.minimum(ca, cb)[close] * n_c + np.maximum(ca, cb)[close])
-                adv.start(pts, poses, gap_cable, self._gap_part, self._moving_pairs, bound,
+                adv.start(pts, poses, gap_cable, self._gap_part, pairs, bound,
                           (cab, s_c, part, value), self.horizon, self.checker.cable_candidates,
                           (key // n_k, key % n_k), np.stack([c_key // n_c, c_key % n_c], axis=1))
                 centre, built_part = adv.active
@@ -287,7 +314,7 @@ class StepChecks:
                 self._cable_active = adv.cable_active
             else:
                 adv.stop()
-                adv.start_pairs(poses, self._moving_pairs, bound)
+                adv.start_pairs(poses, pairs, bound)
         cable_records = self._focus(cable_records)
         return StepResult(cable_records + part_records, cable_records, strain, bend, True, near=near)
 
@@ -306,10 +333,16 @@ class StepChecks:
     def _cable_states(self, state: StepState) -> list[CableState]:
         return cable_states(self.built, state.cables)
 
+    def _second_opinion(self, state: StepState):
+        """Builds the second opinions on a disagreement at this state (only
+        when the validation asks: most states have none)."""
+        return lambda: self._recheck.at(self._cable_states(state), state.part_poses[self.checked_parts])
+
 
 def cable_states(built: Built, points: list[np.ndarray]) -> list[CableState]:
-    """The checker's view of the cables at one state (body centres per cable)."""
-    return [CableState(c.name, p, c.radius, c.min_bend_radius, c.length)
+    """The checker's view of the cables at one state (body centres per cable,
+    with their material coordinates)."""
+    return [CableState(c.name, p, c.radius, c.min_bend_radius, c.length, c.rest_s)
             for c, p in zip(built.cables, points)]
 
 
@@ -342,22 +375,59 @@ def part_pairs_skipped(built: Built) -> np.ndarray:
 
 
 def attachment_exclusions(built: Built) -> list[Exclusion]:
-    """Arc-length windows where a cable touching a part is expected.
+    """Windows along each cable's material where touching a part is expected.
 
     Around every held vertex (start, end, clip), `check.attach_zone` cable
-    radii either side, widened to whole elements (so that MuJoCo's contacts,
-    one per element, can be filtered by the same window), against every part
-    riding the same body."""
+    radii of rest arc length either side, widened to whole elements (so
+    that MuJoCo's contacts, one per element, can be filtered by the same
+    window), against every part riding the same body, and with
+    `check.attach_links` = N also every part of a body within N joints of it
+    (:func:`neighbour_bodies`). The windows are in the cable's material
+    coordinate (rest arc length, :attr:`CableModel.rest_s`), not its current
+    arc length: a stretched cable keeps the same elements excused."""
     zone = built.scene.check.attach_zone
-    parts_on: dict[str, list[str]] = {}
+    links = built.scene.check.attach_links
+    parts_on: dict[int, list[str]] = {}
+    m = built.model
     for p in built.parts:
-        parts_on.setdefault(p.body, []).append(p.name)
+        parts_on.setdefault(int(m.geom_bodyid[p.geom_id]), []).append(p.name)
     out = []
     for c in built.cables:
         for att in c.attachments:
-            for part in parts_on.get(att.body, ()):
-                lo = c.rest_s[np.searchsorted(c.rest_s, att.s - zone * c.radius, side="right") - 1] \
-                    if att.s - zone * c.radius > 0 else 0.0
-                hi = c.rest_s[min(np.searchsorted(c.rest_s, att.s + zone * c.radius), c.count - 1)]
-                out.append(Exclusion(c.name, part, float(lo), float(hi)))
+            bodies = neighbour_bodies(m, built.body_ids[att.body], links)
+            lo = c.rest_s[np.searchsorted(c.rest_s, att.s - zone * c.radius, side="right") - 1] \
+                if att.s - zone * c.radius > 0 else 0.0
+            hi = c.rest_s[min(np.searchsorted(c.rest_s, att.s + zone * c.radius), c.count - 1)]
+            for body in bodies:
+                for part in parts_on.get(body, ()):
+                    out.append(Exclusion(c.name, part, float(lo), float(hi)))
     return sorted(set(out), key=lambda e: (e.cable, e.part, e.s_min))
+
+
+def neighbour_bodies(model, body: int, links: int) -> list[int]:
+    """Body ids within `links` joints of `body` in the kinematic tree.
+
+    A step from a body to its parent or a child crosses the child's joints
+    (none for a welded body: it moves with its parent, 0 steps). Paths
+    never pass through the world body (id 0): everything fixed in the cell
+    hangs from it, and a table or fence is no neighbour of a link.
+    `links` = 0: the body alone."""
+    if links <= 0:
+        return [body]
+    parent, jnum = model.body_parentid, model.body_jntnum
+    children: dict[int, list[int]] = {}
+    for b in range(1, model.nbody):
+        children.setdefault(int(parent[b]), []).append(b)
+    cost = {body: 0}
+    todo = [body]
+    while todo:       # a tree of a few dozen bodies, searched once per attachment
+        b = todo.pop()
+        if b == 0:
+            continue
+        steps = [(int(parent[b]), int(jnum[b]))] + [(k, int(jnum[k])) for k in children.get(b, ())]
+        for nb, joints in steps:
+            c = cost[b] + joints
+            if c <= links and c < cost.get(nb, links + 1):
+                cost[nb] = c
+                todo.append(nb)
+    return sorted(k for k in cost if k != 0 or body == 0)

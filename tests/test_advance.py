@@ -568,3 +568,49 @@ def test_random_scenes_skip_without_changing_answers(seed: int, tmp_path):
     assert _strip(fast["pairs"]) == _strip(full["pairs"])
     for a, b in zip(fast["cables"], full["cables"]):
         assert a["max_strain"] == b["max_strain"] and a["min_bend_radius"] == b["min_bend_radius"]
+
+
+DOOR = Path(__file__).resolve().parent / "scenes" / "door.toml"
+
+
+def _door_variants(tmp_path) -> dict[str, Path]:
+    """The door scene as written (pin allowed), without its [[allow]] pairs
+    (the pin overlaps: hard part-part events) and without the pin."""
+    text = DOOR.read_text()
+    plain = text[:text.index("\n[[allow]]")] + "\n"
+    start = plain.index('[[parts]]\nname = "hinge/pin"')
+    no_pin = plain[:start] + plain[plain.index("[[parts]]", start + 1):]
+    out = {"door": DOOR}
+    for name, body in (("no_allow", plain), ("no_pin", no_pin)):
+        (tmp_path / f"{name}.toml").write_text(body)
+        out[name] = tmp_path / f"{name}.toml"
+    return out
+
+
+def test_door_hinge_pin_never_forces_full_checks(tmp_path):
+    """A hinge pin through its knuckles, one of them on the moving door:
+    a part pair inside the clearance for the whole run, checked on its own.
+    The door skips exactly the steps the same door without the pin skips,
+    and its answers are those of checking every step in full."""
+    runs = {}
+    for name, path in _door_variants(tmp_path).items():
+        scene = load_scene(path)
+        fast = run_scene(scene, RunOptions(report=tmp_path / f"{name}.json", record=None))
+        if name != "no_pin":
+            full = run_scene(scene, RunOptions(report=tmp_path / f"{name}-full.json", record=None, advance=False))
+            for key in ("events", "pairs", "allowed", "summary", "validation"):
+                assert _strip(fast[key]) == _strip(full[key]) if isinstance(fast[key], list) \
+                    else fast[key] == full[key], key
+        runs[name] = fast
+    skip = {name: rep["settings"]["advance"] for name, rep in runs.items()}
+    assert skip["door"] == skip["no_allow"] == skip["no_pin"]
+    assert skip["door"]["proven_clear_steps"] > 4 * skip["door"]["full_checks"]
+    # the pin: allowed in the scene as written, hard part-part events without the allow pairs
+    pin = {(p["a"], p["b"]) for p in runs["door"]["allowed"]}
+    assert pin == {("hinge/knuckle_lower", "hinge/pin"), ("hinge/knuckle_upper", "hinge/pin"),
+                   ("hinge/pin", "door/knuckle")}
+    assert all(p["min_distance"] < 0 and p["reason"] for p in runs["door"]["allowed"])
+    hard = {(e["a"], e["b"]) for e in runs["no_allow"]["events"] if e["type"] == "part-part"}
+    assert hard == pin and not any(e["type"] == "part-part" for e in runs["door"]["events"])
+    cable = lambda rep: [e for e in rep["events"] if e["type"] != "part-part"]    # noqa: E731
+    assert _strip(cable(runs["door"])) == _strip(cable(runs["no_allow"]))

@@ -483,3 +483,38 @@ def test_cable_pairs_many_is_each_states_self_and_cable_cable():
             assert all(np.array_equal(a.where, b.where) for a, b in zip(recs, want))
             seen |= {r.type for r in want}
     assert seen == {PairType.SELF, PairType.CABLE_CABLE}
+
+
+@pytest.mark.parametrize("method", ["points", "exact"])
+def test_exclusion_window_follows_the_material_of_a_stretched_cable(method):
+    """A cable of rest length 1 stretched by 10 %: its end clamp's window
+    covers the last 0.2 of material, now the last 0.22 of arc length. The
+    clamp block, touching the last 0.05 of the cable, is excused when the
+    window is measured along the material (rest_s), not when measured along
+    the current arc length (past 1.0, outside [0.8, 1.0])."""
+    from checker.interference import Checker
+    r = 0.004
+    rest = np.linspace(0.0, 1.0, 11)
+    pts = np.stack([1.1 * rest, np.zeros(11), np.zeros(11)], axis=1)
+    clamp = PartState("clamp", Shape(ShapeType.BOX, [0.025, 0.02, 0.02]), pose(t=(1.09, 0.0, 0.0)))
+    window = [Exclusion("c", "clamp", 0.8, 1.0)]
+    config = CheckConfig(method=method, clearance=0.005)
+    by_arc = check_state([CableState("c", pts, r)], [clamp], config, window)
+    assert [(x.b, x.severity) for x in by_arc] == [("clamp", Severity.HARD)] and by_arc[0].s > 1.0
+    assert check_state([CableState("c", pts, r, rest_s=rest)], [clamp], config, window) == []
+    # unstretched, both measures agree
+    assert check_state([CableState("c", pts / 1.1, r, rest_s=rest)], [clamp.__class__(
+        "clamp", clamp.shape, pose(t=(0.99, 0.0, 0.0)))], config, window) == []
+    if method == "points":     # many states at once: the same windows
+        checker = Checker([clamp], config)
+        dense = checker.densify_many(pts[None], np.array([0, 11]), np.array([r]), rest)
+        assert checker.structure_many(["c"], np.array([r]), dense, clamp.pose[None, None], window,
+                                      (np.arange(11), np.zeros(11, np.int64)))[0] == []
+        dense = checker.densify_many(pts[None], np.array([0, 11]), np.array([r]))
+        assert len(checker.structure_many(["c"], np.array([r]), dense, clamp.pose[None, None], window,
+                                          (np.arange(11), np.zeros(11, np.int64)))[0]) == 1
+
+
+def test_rest_coordinates_must_increase():
+    with pytest.raises(ValueError, match="rest_s"):
+        CableState("c", np.zeros((3, 3)) + [[0, 0, 0], [1, 0, 0], [2, 0, 0]], 0.01, rest_s=[0.0, 1.0, 1.0])

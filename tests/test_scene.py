@@ -719,6 +719,7 @@ REFERENCE_TABLES = {
     "`[[motion]]` keys of a body": scene_module._BODY_KEY_KEYS,
     "`[[motion]]` keys of a joint": scene_module._JOINT_KEY_KEYS,
     "`[limits]`": scene_module._LIMIT_KEYS,
+    "`[[allow]]`": scene_module._ALLOW_KEYS,
 }
 
 
@@ -920,3 +921,55 @@ def test_twist_stiffness_is_a_positive_modulus(folder):
     with pytest.raises(SceneError) as e:
         parse(data, folder)
     check_error(e, folder / "scene.toml", "cables[0].twist_stiffness", "must be positive")
+
+
+# -- [[allow]] and attach_links --------------------------------------------
+
+
+def _with_allow(*rules) -> dict:
+    data = copy.deepcopy(BASE)
+    data["allow"] = [dict(r) for r in rules]
+    return data
+
+
+def test_allow_pairs_parts_assemblies_cables_and_mjcf_bodies(folder):
+    scene = parse(_with_allow({"a": "cab", "b": "power", "reason": "the harness rests on the cabinet"},
+                              {"a": "forearm", "b": "ball", "reason": "the ball rides the forearm"},
+                              {"a": "signal", "b": "signal", "reason": "coiled on purpose"}), folder)
+    assert [(r.a, r.b, r.reason) for r in scene.allow] == [
+        ("cab", "power", "the harness rests on the cabinet"), ("forearm", "ball", "the ball rides the forearm"),
+        ("signal", "signal", "coiled on purpose")]
+    assert parse(copy.deepcopy(BASE), folder).allow == ()
+
+
+@pytest.mark.parametrize("rule, key, fragment", [
+    ({"a": "cab/rial", "b": "power", "reason": "x"}, "allow[0].a", "did you mean 'cab/rail'?"),
+    ({"a": "cab", "b": "powr", "reason": "x"}, "allow[0].b", "did you mean 'power'?"),
+    ({"a": "cab/rail", "b": "power"}, "allow[0].reason", "missing (required)"),
+    ({"a": "cab/rail", "b": "power", "reason": " "}, "allow[0].reason", "must not be empty"),
+    ({"a": "cab/rail", "b": "power", "reason": "x", "why": "y"}, "allow[0].why", "unknown key"),
+    ({"a": "ca", "b": "power", "reason": "x"}, "allow[0].a", "no part, assembly path or cable named 'ca'"),
+], ids=["part", "cable", "no reason", "empty reason", "unknown key", "partial level"])
+def test_allow_errors_name_the_key(folder, rule, key, fragment):
+    with pytest.raises(SceneError) as exc:
+        parse(_with_allow(rule), folder)
+    check_error(exc, folder / "scene.toml", key, fragment)
+
+
+def test_allow_names_checked_against_built_parts(folder):
+    """A name taken at load time for an mjcf body must still cover a built part."""
+    from sim.scene import check_allow_names
+    scene = parse(_with_allow({"a": "upper/wrist", "b": "power", "reason": "x"}), folder)
+    with pytest.raises(SceneError) as exc:
+        check_allow_names(scene, ["upper", "forearm", "cab/rail", "power"])
+    check_error(exc, folder / "scene.toml", "allow[0].a", "did you mean 'upper'?")
+    check_allow_names(scene, ["upper/wrist/0", "power"])
+
+
+def test_attach_links(folder):
+    assert parse(copy.deepcopy(BASE), folder).check.attach_links == 0
+    assert parse(put(copy.deepcopy(BASE), "check.attach_links", 2), folder).check.attach_links == 2
+    for bad, fragment in ((-1, "at least 0"), (1.5, "expected an integer")):
+        with pytest.raises(SceneError) as exc:
+            parse(put(copy.deepcopy(BASE), "check.attach_links", bad), folder)
+        check_error(exc, folder / "scene.toml", "check.attach_links", fragment)

@@ -44,3 +44,56 @@ def test_batch_size_changes_no_answer(name: str, tmp_path, monkeypatch):
     adv = reports[0]["advance"]
     assert adv["full_checks"] > 1 and adv["proven_clear_steps"] > 0   # both kinds in the batches
     assert reports[0] == reports[1] == reports[2]
+
+
+def test_active_part_pairs_batch_size_changes_no_answer(tmp_path, monkeypatch):
+    """The door's hinge pin pair is checked on its own for whole batches of
+    states at once (PartChecker.check_pairs_many): any batch size, the same
+    answers, allowed pairs included."""
+    scene = load_scene(Path(__file__).resolve().parent / "scenes" / "door.toml")
+    reports = []
+    for size in (1, 7, sim.run.BATCH):
+        monkeypatch.setattr(sim.run, "BATCH", size)
+        rep = run_scene(scene, RunOptions(report=tmp_path / f"{size}.json", record=None))
+        reports.append(_strip({**_comparable(rep), "allowed": rep["allowed"]}))
+    assert reports[0]["advance"]["proven_clear_steps"] > reports[0]["advance"]["full_checks"]
+    assert reports[0]["allowed"] and reports[0] == reports[1] == reports[2]
+
+
+def test_neighbour_links_in_the_kinematic_tree():
+    """arm.xml: pedestal -(base_yaw)- shoulder -(shoulder_pitch)- upper_arm
+    -(elbow)- forearm = tool (welded). Never through the world body."""
+    import mujoco
+
+    from sim.stepcheck import neighbour_bodies
+    m = mujoco.MjModel.from_xml_path(str(SCENES / "arm.xml"))
+    name = lambda ids: {m.body(i).name for i in ids}      # noqa: E731
+    upper = m.body("upper_arm").id
+    assert name(neighbour_bodies(m, upper, 0)) == {"upper_arm"}
+    assert name(neighbour_bodies(m, upper, 1)) == {"shoulder", "upper_arm", "forearm", "tool"}
+    assert name(neighbour_bodies(m, upper, 2)) == {"pedestal", "shoulder", "upper_arm", "forearm", "tool"}
+    assert name(neighbour_bodies(m, m.body("pedestal").id, 5)) == {"pedestal", "shoulder", "upper_arm",
+                                                                     "forearm", "tool"}
+    assert neighbour_bodies(m, 0, 3) == [0]
+
+
+def test_attach_links_excuse_the_clamp_links_neighbours(tmp_path):
+    """With attach_links = 1 the clip on the upper arm also excuses the
+    forearm's (and the tool flange welded to it) and the shoulder's parts
+    over its window, never the floor (on the world body); with 0 only the
+    upper arm's."""
+    from sim.build import build
+    from sim.stepcheck import attachment_exclusions
+    text = (SCENES / "arm.toml").read_text()
+    (tmp_path / "arm.xml").write_text((SCENES / "arm.xml").read_text())
+    windows = []
+    for links in (0, 1):
+        f = tmp_path / f"arm{links}.toml"
+        f.write_text(text.replace("[check]\n", f"[check]\nattach_links = {links}\n"))
+        built = build(load_scene(f), detect=False)
+        body = {p.name: p.body for p in built.parts}
+        clip = next(a for a in built.cables[0].attachments if a.body == "upper_arm")
+        s = built.cables[0].rest_s[clip.vertex]
+        windows.append({body[e.part] for e in attachment_exclusions(built) if e.s_min <= s <= e.s_max})
+    assert windows[0] == {"upper_arm"}
+    assert windows[1] == {"upper_arm", "forearm", "tool", "shoulder"}

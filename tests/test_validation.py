@@ -6,7 +6,7 @@ import numpy as np
 
 from checker.records import Interference, PairType, Severity
 from checker.scene_state import Exclusion
-from checker.validation import SimContacts, Validation, classify, simulator_pairs
+from checker.validation import Reason, SimContacts, Validation, classify, simulator_pairs
 
 # a straight cable along x, 10 elements of 0.1 m
 CABLE = np.stack([np.linspace(0.0, 1.0, 11), np.zeros(11), np.zeros(11)], axis=1)
@@ -60,12 +60,28 @@ def test_compare_counts_and_reasons():
     sim = {("cable-structure", "c", "box"): (-0.0012, np.zeros(3)),
            ("cable-structure", "c", "mesh"): (0.00502, np.zeros(3)),                       # just clear for MuJoCo
            ("cable-cable", "c", "d"): (0.001, np.zeros(3))}                                # MuJoCo only
-    assert v.compare(0.5, rec, sim) == 1 / 3
+    asked = []
+
+    class Opinion:     # method exact finds the crossing the discrete points missed
+        def exact(self, key):
+            asked.append(key)
+            return 0.0012 if key == ("cable-cable", "c", "d") else None
+
+        def hull(self, key, exact=True):
+            return None
+
+    assert v.compare(0.5, rec, sim, Opinion) == 1 / 3
     assert (v.compared_steps, v.pair_steps, v.agree, v.checker_only, v.mujoco_only) == (1, 3, 1, 1, 1)
     assert abs(v.max_distance_error - 0.0002) < 1e-15
     reasons = {(d.a, d.b): d.reason for d in v.disagreements}
-    assert reasons[("c", "d")].startswith("between points")
-    assert reasons[("c", "mesh")].startswith("at a boundary")
+    assert reasons[("c", "d")] is Reason.BETWEEN_POINTS
+    assert reasons[("c", "mesh")] is Reason.AT_BOUNDARY      # 0.07 mm apart: no second opinion needed
+    assert asked == [("cable-cable", "c", "d")] and v.unexplained == 0
+    # the same step with nothing to check the crossing by: unexplained, counted apart
+    w = Validation(clearance=0.005, method="points")
+    w.compare(0.5, rec, sim)
+    assert {(d.a, d.b): d.reason for d in w.disagreements}[("c", "d")] is Reason.UNEXPLAINED
+    assert w.unexplained == 1 and w.reasons == {"unexplained": 1, "at a boundary": 1}
     assert classify(None, 0.005) == "clear" and classify(0.0, 0.005) == "soft" and classify(-1e-9, 0.005) == "hard"
 
 
@@ -104,3 +120,106 @@ def test_many_states_at_once_is_each_state_alone():
                 assert got[k][key][0] == want[key][0] and np.array_equal(got[k][key][1], want[key][1])
             seen += len(want)
     assert seen > 20
+
+
+def test_attachment_window_follows_the_material():
+    """The cable stretched by 10 %: a contact on its last element is in the
+    window [0.8, 1.0] of material (rest_s), not of arc length (0.99-1.1)."""
+    from checker.validation import SimulatorPairs
+    stretched = CABLE * 1.1
+    rest = np.linspace(0.0, 1.0, 11)
+    contacts = _contacts([("cable-structure", "c", "clamp", 9, -1, -0.002, (1.05, 0, 0))])
+    pairs = SimulatorPairs([Exclusion("c", "clamp", 0.8, 1.0)], 0.005)
+    assert pairs(contacts, {"c": (stretched, 0.01)}, {"c": rest}) == {}
+    assert list(pairs(contacts, {"c": (stretched, 0.01)})) == [("cable-structure", "c", "clamp")]
+
+
+def test_disagreements_are_intervals_per_pair_with_their_worst():
+    """Consecutive disagreeing steps make one interval (its worst: the
+    smallest distance either side saw); an agreeing step or a new reason
+    starts another; nothing is dropped however many there are."""
+    v = Validation(clearance=0.005, method="exact")
+    key = ("cable-structure", "c", "box")
+    sides = [(-0.001, 0.003), (-0.003, 0.004), (-0.002, 0.004), (-0.001, -0.002),    # steps 0-2 differ
+             (0.00497, 0.00503), (-0.001, 0.002)]                                     # boundary, then unexplained
+    for k, (dc, dm) in enumerate(sides):
+        rec = [Interference(PairType.CABLE_STRUCTURE, "c", "box", dc, Severity.HARD if dc < 0 else Severity.SOFT,
+                            np.zeros(3), 0.1)] if dc < 0.005 else []
+        v.compare(0.1 * k, rec, {key: (dm, np.zeros(3))})
+    got = [(d.t_start, d.t_end, d.t_worst, d.checker, d.mujoco, d.reason, d.steps) for d in v.disagreements]
+    assert got == [(0.0, 0.2, 0.1, -0.003, 0.004, Reason.UNEXPLAINED, 3),
+                   (0.4, 0.4, 0.4, 0.00497, 0.00503, Reason.AT_BOUNDARY, 1),
+                   (0.5, 0.5, 0.5, -0.001, 0.002, Reason.UNEXPLAINED, 1)]
+    assert v.unexplained == 4 and v.reasons == {"unexplained": 4, "at a boundary": 1}
+    assert v.disagreements[0].t == 0.1
+
+
+def _fork(gap=0.04, prong=(0.01, 0.05, 0.02)):
+    """Two separate prongs (closed boxes) with a gap between them: a mesh
+    whose convex hull fills the gap."""
+    import trimesh
+    a = trimesh.creation.box(extents=2 * np.asarray(prong))
+    b = a.copy()
+    a.apply_translation([-(gap / 2 + prong[0]), 0, 0])
+    b.apply_translation([gap / 2 + prong[0], 0, 0])
+    both = trimesh.util.concatenate([a, b])
+    return both.vertices, both.faces
+
+
+def test_convex_hull_reason_is_checked():
+    """A cable through the gap of a fork: clear of the mesh, inside its hull.
+    MuJoCo (which collides the hull) reports an overlap: the reason is
+    'convex hull' because the hull distance says so; without the hull
+    check, or if the hull disagreed too, it is unexplained."""
+    from checker.recheck import Recheck
+    from checker.scene_state import CableState, CheckConfig, PartState
+    from checker.shapes import mesh_shape
+    fork = PartState("fork", mesh_shape(*_fork()), np.eye(4))
+    cable = CableState("c", np.array([[0.0, -0.2, 0.0], [0.0, 0.0, 0.0], [0.0, 0.2, 0.0]]), 0.005)
+    recheck = Recheck([fork], CheckConfig(clearance=0.005), [])
+    opinion = recheck.at([cable], np.eye(4)[None])
+    key = ("cable-structure", "c", "fork")
+    assert opinion.exact(key) is None                                # 20 mm from each prong
+    assert abs(opinion.hull(key) - (-0.02 - 0.005)) < 1e-9          # 20 mm inside the hull, minus r
+    assert abs(opinion.hull(key, exact=False) - (-0.02 - 0.005)) < 1e-9    # a point sits at the middle
+    v = Validation(clearance=0.005, method="points", mesh_parts=frozenset({"fork"}))
+    v.compare(0.0, [], {key: (-0.024, np.zeros(3))}, lambda: opinion)
+    (d,) = v.disagreements
+    assert (d.reason, v.unexplained) == (Reason.CONVEX_HULL, 0) and abs(d.second + 0.025) < 1e-9
+    w = Validation(clearance=0.005, method="points", mesh_parts=frozenset())      # not known as a mesh
+    w.compare(0.0, [], {key: (-0.024, np.zeros(3))}, lambda: opinion)
+    assert w.disagreements[0].reason is Reason.UNEXPLAINED and w.unexplained == 1
+
+
+def test_convex_hull_disagreement_in_a_run(tmp_path):
+    """End to end: MuJoCo collides the fork as its hull; the run's report
+    explains every disagreement (convex hull, verified), none unexplained."""
+    import trimesh
+    from sim.run import RunOptions, run_scene
+    from sim.scene import load_scene
+    v, f = _fork()
+    trimesh.Trimesh(v, f).export(tmp_path / "fork.stl")
+    (tmp_path / "fork.toml").write_text("""
+[scene]
+name = "fork"
+units = "m"
+duration = 0.02
+[effects]
+dynamics = false
+[[parts]]
+name = "fork"
+shape = "mesh"
+file = "fork.stl"
+[[cables]]
+name = "c"
+radius = 0.005
+start = { pos = [0.0, -0.2, 0.0] }
+end = { pos = [0.0, 0.2, 0.0] }
+""")
+    rep = run_scene(load_scene(tmp_path / "fork.toml"), RunOptions(report=tmp_path / "r.json", record=None))
+    val = rep["validation"]
+    assert rep["events"] == [] and val["mujoco_only"] == val["compared_steps"] > 0
+    assert val["reasons"] == {"convex hull": val["compared_steps"]} and val["unexplained"] == 0
+    (d,) = val["disagreements"]
+    assert d["reason"] == "convex hull" and d["steps"] == val["compared_steps"] and d["mujoco"] < 0
+    assert d["t_start"] == 0.0 and d["t_end"] == rep["settings"]["t_end"] and d["second"] < 0

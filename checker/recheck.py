@@ -1,0 +1,123 @@
+"""Second opinions on one pair at one state, to explain a validation disagreement.
+
+When the checker and the simulator class a pair differently, a reason is
+given only after it is checked: the pair is computed again another way and
+the new distance must class the pair as the simulator did.
+
+- :meth:`StateRecheck.exact`: the pair with method ``exact`` (capsule
+  distances along the whole centreline): explains a contact or crossing
+  that fell between the discrete points of method ``points``.
+- :meth:`StateRecheck.hull`: a cable against the convex hull of a mesh part
+  (method ``exact``, or ``points`` first, cheaper): MuJoCo collides meshes
+  as their convex hulls, so a concave mesh's pocket or hole is solid to it.
+
+Only the cables and the part of the pair are checked, with the run's
+clearance and exclusion windows; the per-part checkers and hull shapes are
+built on first use and kept. This module decides nothing: the comparison
+(:mod:`checker.validation`) takes the distances. It knows no simulator.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import trimesh
+
+from checker.interference import Checker
+from checker.records import PairType
+from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+from checker.shapes import Shape, ShapeType, mesh_shape
+
+_PART_TYPES = (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value)
+
+
+def convex_hull_shape(shape: Shape) -> Shape:
+    """The convex hull of a mesh shape, as a closed mesh shape (trimesh's
+    Qhull wrapper)."""
+    hull = trimesh.convex.convex_hull(np.asarray(shape.vertices, float))
+    return mesh_shape(np.asarray(hull.vertices), np.asarray(hull.faces))
+
+
+class Recheck:
+    """Per-part exact checkers and hulls, built on first use.
+
+    Args:
+        parts: the checked parts (names, shapes, keep-out flags), in the
+            order of the poses given to :meth:`at`.
+        config: the run's settings (spacing and clearance are kept).
+        exclusions: the run's exclusion windows.
+    """
+
+    def __init__(self, parts: Sequence[PartState], config: CheckConfig, exclusions: Sequence[Exclusion]):
+        self.parts = list(parts)
+        self.index = {p.name: k for k, p in enumerate(self.parts)}
+        self.config = CheckConfig(method="exact", spacing=config.spacing, clearance=config.clearance)
+        self.points = CheckConfig(method="points", spacing=config.spacing, clearance=config.clearance)
+        self.exclusions = list(exclusions)
+        self._checkers: dict[tuple[int, bool, bool], Checker] = {}
+        self._hulls: dict[int, Shape] = {}
+        self._cables = Checker([], self.config)
+
+    def is_mesh(self, name: str) -> bool:
+        """The part `name` is a mesh."""
+        k = self.index.get(name)
+        return k is not None and self.parts[k].shape.type is ShapeType.MESH
+
+    def at(self, cables: Sequence[CableState], poses: np.ndarray) -> "StateRecheck":
+        """The second opinions at one state: its cables and the parts' poses (K, 4, 4)."""
+        return StateRecheck(self, {c.name: c for c in cables}, np.asarray(poses, float))
+
+    def _checker(self, k: int, hull: bool, exact: bool = True) -> Checker:
+        key = (k, hull, exact)
+        if key not in self._checkers:
+            p = self.parts[k]
+            if hull and k not in self._hulls:
+                self._hulls[k] = convex_hull_shape(p.shape)
+            shape = self._hulls[k] if hull else p.shape
+            self._checkers[key] = Checker([PartState(p.name, shape, np.eye(4), p.keepout)],
+                                          self.config if exact else self.points)
+        return self._checkers[key]
+
+
+class StateRecheck:
+    """Second opinions at one state (:meth:`Recheck.at`). Each returns the
+    pair's signed distance when below the clearance, else None (clear), as
+    the checker's records do."""
+
+    def __init__(self, owner: Recheck, cables: dict[str, CableState], poses: np.ndarray):
+        self.owner, self.cables, self.poses = owner, cables, poses
+
+    def exact(self, key: tuple[str, str, str]) -> float | None:
+        """The pair (type, a, b) with method exact."""
+        kind, a, b = key
+        if kind in _PART_TYPES:
+            return self._part(key, hull=False)
+        names = [a] if kind == PairType.SELF.value else [a, b]
+        if any(n not in self.cables for n in names):
+            return None
+        found = self.owner._cables.check([self.cables[n] for n in names])
+        return _distance(found, key)
+
+    def hull(self, key: tuple[str, str, str], exact: bool = True) -> float | None:
+        """A cable against the convex hull of the mesh part b, with method
+        exact (or, cheaper, points at the run's spacing)."""
+        return self._part(key, hull=True, exact=exact) if key[0] in _PART_TYPES else None
+
+    def _part(self, key: tuple[str, str, str], hull: bool, exact: bool = True) -> float | None:
+        _, a, b = key
+        k = self.owner.index.get(b)
+        if k is None or a not in self.cables:
+            return None
+        found = self.owner._checker(k, hull, exact).check([self.cables[a]], self.poses[k][None],
+                                                          self.owner.exclusions)
+        return _distance(found, key)
+
+
+def _distance(records, key: tuple[str, str, str]) -> float | None:
+    kind, a, b = key
+    for r in records:
+        ra, rb = (r.a, r.b) if not (r.type == PairType.CABLE_CABLE and r.a > r.b) else (r.b, r.a)
+        if PairType(r.type).value == kind and ra == a and rb == b:
+            return float(r.min_distance)
+    return None
