@@ -5,9 +5,9 @@ frame, separating-axis tests; 004: assembly boxes, then part boxes, then
 triangles):
 
 - :class:`TriangleForest`: one axis-aligned box tree per part over its
-  triangles, in the part's own frame, built once (median split on the longest
-  axis, ``LEAF_SIZE`` triangles per leaf) and stored flat for all parts
-  together, so that one vectorised traversal answers many box queries against
+  triangles, in the part's own frame, built once for all parts together,
+  one numpy pass per tree level (median split on the longest axis,
+  ``LEAF_SIZE`` triangles per leaf), and stored flat, so that one vectorised traversal answers many box queries against
   many parts at once (:meth:`TriangleForest.query`). Poses never change it.
 - Oriented boxes: a part's box in its frame placed by its pose is an OBB in
   the assembly (world) frame; :func:`obb_overlap` is the 15-axis separating
@@ -70,52 +70,83 @@ class TriangleForest:
     def build(tri_lo: np.ndarray, tri_hi: np.ndarray, tri_part: np.ndarray, parts: int) -> "TriangleForest":
         """Build the trees from per-triangle boxes (T, 3) grouped by part.
 
-        ``tri_part`` must be sorted (each part's triangles contiguous)."""
-        lo_n: list[np.ndarray] = []
-        hi_n: list[np.ndarray] = []
-        left: list[int] = []
-        right: list[int] = []
-        first: list[int] = []
-        count: list[int] = []
-        order: list[np.ndarray] = []
-        placed = 0
+        ``tri_part`` must be sorted (each part's triangles contiguous). Every
+        part's tree is built at once, one numpy pass per tree level: a node is
+        a contiguous range of ``order``; a node of more than ``LEAF_SIZE``
+        triangles is split at the median of its triangles' box centres along
+        the longest axis of their extent (one sort by node, then centre,
+        for all nodes of the level), its lower half becoming the left child.
+        Memory and time are O(T) per level, O(T log T) in all."""
+        tri_lo = np.asarray(tri_lo, float).reshape(-1, 3)
+        tri_hi = np.asarray(tri_hi, float).reshape(-1, 3)
+        tri_part = np.asarray(tri_part, np.int64)
+        i64 = np.int64
         centre = 0.5 * (tri_lo + tri_hi)
         starts = np.searchsorted(tri_part, np.arange(parts + 1))
-        root = np.full(parts, -1, np.int64)
-
-        def node(idx: np.ndarray) -> int:
-            nonlocal placed
-            k = len(left)
-            lo_n.append(tri_lo[idx].min(axis=0))
-            hi_n.append(tri_hi[idx].max(axis=0))
-            left.append(-1)
-            right.append(-1)
-            first.append(-1)
-            count.append(0)
-            if len(idx) <= LEAF_SIZE:
-                first[k], count[k] = placed, len(idx)
-                order.append(idx)
-                placed += len(idx)
-                return k
-            c = centre[idx]
-            axis = int(np.argmax(c.max(axis=0) - c.min(axis=0)))
-            half = len(idx) // 2
-            split = np.argpartition(c[:, axis], half)
-            left[k] = node(idx[split[:half]])
-            right[k] = node(idx[split[half:]])
-            return k
-
-        for p in range(parts):
-            idx = np.arange(starts[p], starts[p + 1])
-            if len(idx):
-                root[p] = node(idx)
-        i64 = np.int64
+        counts = np.diff(starts)
+        has = np.flatnonzero(counts > 0)
+        root = np.full(parts, -1, i64)
+        root[has] = np.arange(len(has))
+        order = np.arange(len(tri_part), dtype=i64)
+        # per node, filled level by level: range in ``order``, children
+        n_first: list[np.ndarray] = [starts[has]]
+        n_count: list[np.ndarray] = [counts[has]]
+        n_left: list[np.ndarray] = []
+        level_first, level_count = starts[has], counts[has]
+        total = len(has)
+        while len(level_first):
+            split = level_count > LEAF_SIZE
+            left = np.full(len(level_first), -1, i64)
+            nxt_first = nxt_count = np.zeros(0, i64)
+            if split.any():
+                f, c = level_first[split], level_count[split]
+                seg = np.repeat(np.arange(len(f)), c)
+                idx = ranges(f, c)
+                cen = centre[order[idx]]
+                bounds = np.r_[0, np.cumsum(c)[:-1]]
+                c_lo = np.minimum.reduceat(cen, bounds, axis=0)
+                ext = np.maximum.reduceat(cen, bounds, axis=0) - c_lo
+                axis = np.argmax(ext, axis=1)
+                a_seg = axis[seg][:, None]
+                # by node, then centre, in one sort: node + centre scaled into [0, 0.5]
+                frac = (np.take_along_axis(cen, a_seg, 1)[:, 0] - np.take_along_axis(c_lo, axis[:, None], 1)[seg, 0]) \
+                    / np.maximum(np.take_along_axis(ext, axis[:, None], 1)[seg, 0], 1e-300)
+                perm = np.argsort(seg + 0.5 * np.clip(frac, 0.0, 1.0), kind="stable")
+                order[idx] = order[idx[perm]]
+                half = c // 2
+                k = np.flatnonzero(split)
+                left[k] = total + 2 * np.arange(len(k))  # children of a level's nodes, in pairs
+                nxt_first = np.stack([f, f + half], axis=1).ravel()
+                nxt_count = np.stack([half, c - half], axis=1).ravel()
+                total += len(nxt_first)
+                n_first.append(nxt_first)
+                n_count.append(nxt_count)
+            n_left.append(left)
+            level_first, level_count = nxt_first, nxt_count
+        first = np.concatenate(n_first) if n_first else np.zeros(0, i64)
+        count = np.concatenate(n_count) if n_count else np.zeros(0, i64)
+        left = np.concatenate(n_left) if n_left else np.zeros(0, i64)
+        right = np.where(left >= 0, left + 1, -1)
+        # node boxes: reduce each node's range of ``order`` (ranges of one level are disjoint)
+        node_lo = np.empty((len(first), 3))
+        node_hi = np.empty((len(first), 3))
+        s_lo, s_hi = tri_lo[order], tri_hi[order]
+        lvl = np.r_[0, np.cumsum([len(x) for x in n_first])]
+        for a, b in zip(lvl[:-1], lvl[1:]):     # loop over tree levels (about log2(T / LEAF_SIZE))
+            f, c = first[a:b], count[a:b]
+            if not len(f):
+                continue
+            o = np.argsort(f, kind="stable")
+            fo, co = f[o], c[o]
+            idx = ranges(fo, co)
+            bounds = np.r_[0, np.cumsum(co)[:-1]]
+            node_lo[a + o] = np.minimum.reduceat(s_lo[idx], bounds, axis=0)
+            node_hi[a + o] = np.maximum.reduceat(s_hi[idx], bounds, axis=0)
+        leaf = left < 0
         return TriangleForest(
-            node_lo=np.array(lo_n).reshape(-1, 3), node_hi=np.array(hi_n).reshape(-1, 3),
-            left=np.array(left, i64), right=np.array(right, i64),
-            first=np.array(first, i64), count=np.array(count, i64),
-            order=np.concatenate(order) if order else np.zeros(0, i64),
-            root=root, tri_part=np.asarray(tri_part, i64), tri_lo=tri_lo, tri_hi=tri_hi)
+            node_lo=node_lo, node_hi=node_hi, left=left, right=right,
+            first=np.where(leaf, first, -1), count=np.where(leaf, count, 0),
+            order=order, root=root, tri_part=tri_part, tri_lo=tri_lo, tri_hi=tri_hi)
 
     def tiled(self, idx: np.ndarray) -> "TriangleForest":
         """The trees of parts ``idx`` (n,), in that order (a part may repeat):

@@ -29,7 +29,7 @@ import numpy as np
 from checker.arrays import ranges
 from checker.bvh import Assemblies, TriangleForest, assembly_boxes, transformed_aabb
 from checker.shapes import Shape, ShapeType
-from checker.tessellate import part_surface
+from checker.tessellate import part_surfaces
 
 TOUCH = 1e-6
 """Touching tolerance, relative to a part's box diagonal: surfaces closer than
@@ -138,50 +138,38 @@ class PartSet:
         n = len(names)
         groups = list(groups) if groups is not None else list(names)
         keepout = np.array(keepout if keepout is not None else [False] * n, bool)
-        tris, tri_part, normals, edge_n, verts, vpart, probes, ppart = [], [], [], [], [], [], [], []
-        closed = np.ones(n, bool)
-        plane = np.zeros(n, bool)
-        error = np.zeros(n)
-        lo = np.zeros((n, 3))
-        hi = np.zeros((n, 3))
-        warnings = []
-        for i, sh in enumerate(shapes):
-            surf = part_surface(sh, tolerance)
-            closed[i], plane[i], error[i] = surf.closed, surf.plane, surf.error
-            if surf.plane:
-                lo[i], hi[i] = -np.inf, np.inf
-                continue
-            if not surf.closed:
-                warnings.append(f"part {names[i]!r}: open or non-manifold mesh, inside and outside "
-                                "cannot be decided; only its surface is checked (crossings and "
-                                "distances), not containment")
-            v, f = surf.vertices, surf.faces
-            t = v[f]
-            nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-            ln = np.linalg.norm(nrm, axis=1)
-            nrm = nrm / np.where(ln > 0, ln, 1.0)[:, None]
-            lo[i], hi[i] = v.min(axis=0), v.max(axis=0)
-            tris.append(t)
-            tri_part.append(np.full(len(f), i))
-            normals.append(nrm)
-            edge_n.append(_edge_pseudonormals(f, nrm, len(v)))
-            verts.append(v)
-            vpart.append(np.full(len(v), i))
-            depth = PROBE_DEPTH * float(np.linalg.norm(hi[i] - lo[i]))
-            probes.append(np.concatenate([v, t.mean(axis=1) - depth * nrm]))
-            ppart.append(np.full(len(v) + len(f), i))
-
-        def cat(x, shape, dtype=float):
-            return np.concatenate(x) if x else np.zeros(shape, dtype)
-
-        tri_part_a = cat(tri_part, (0,), np.int64)
-        tris_a = cat(tris, (0, 3, 3))
-        forest = TriangleForest.build(tris_a.min(axis=1), tris_a.max(axis=1), tri_part_a, n)
+        surf = part_surfaces(list(shapes), tolerance)
+        closed, plane, error = surf.closed, surf.plane, surf.error
+        warnings = tuple(f"part {names[i]!r}: open or non-manifold mesh, inside and outside "
+                         "cannot be decided; only its surface is checked (crossings and "
+                         "distances), not containment" for i in np.flatnonzero(~closed & ~plane))
+        v, f = surf.vertices, surf.faces
+        vcount = np.diff(surf.vert_start)
+        fcount = np.diff(surf.face_start)
+        vert_part = np.repeat(np.arange(n), vcount)
+        tri_part = np.repeat(np.arange(n), fcount)
+        tris = v[f]
+        nrm = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+        ln = np.linalg.norm(nrm, axis=1)
+        nrm = nrm / np.where(ln > 0, ln, 1.0)[:, None]
+        lo = np.full((n, 3), -np.inf)
+        hi = np.full((n, 3), np.inf)
+        has = np.flatnonzero(vcount > 0)
+        if len(has):
+            lo[has] = np.minimum.reduceat(v, surf.vert_start[has], axis=0)
+            hi[has] = np.maximum.reduceat(v, surf.vert_start[has], axis=0)
+        size = np.where(plane, 0.0, np.linalg.norm(np.where(plane[:, None], 0.0, hi - lo), axis=1))
+        # probes: every vertex, then every triangle's centroid moved inward, grouped by part
+        depth = PROBE_DEPTH * size
+        cen = tris.mean(axis=1) - depth[tri_part][:, None] * nrm
+        probe_part = np.concatenate([vert_part, tri_part])
+        order = np.argsort(probe_part, kind="stable")
+        probes = np.concatenate([v, cen])[order]
+        forest = TriangleForest.build(tris.min(axis=1), tris.max(axis=1), tri_part, n)
         return PartSet(tuple(names), tuple(groups), keepout, closed, plane, error, tuple(shapes),
-                       tris_a, tri_part_a, cat(normals, (0, 3)), cat(edge_n, (0, 3, 3)),
-                       cat(verts, (0, 3)), cat(vpart, (0,), np.int64),
-                       cat(probes, (0, 3)), cat(ppart, (0,), np.int64),
-                       lo, hi, np.where(plane, 0.0, np.linalg.norm(hi - lo, axis=1)), forest, Assemblies.of(list(names)), tuple(warnings))
+                       tris, tri_part, nrm, _edge_pseudonormals(f, nrm, len(v)),
+                       v, vert_part, probes, probe_part[order],
+                       lo, hi, size, forest, Assemblies.of(list(names)), warnings)
 
     def tiled(self, idx: np.ndarray, copies: int) -> "PartSet":
         """The parts ``idx`` (K,) laid out ``copies`` times: part ``c K + k``
@@ -263,10 +251,12 @@ class PartSet:
 
 def _edge_pseudonormals(faces: np.ndarray, normals: np.ndarray, nverts: int) -> np.ndarray:
     """(F, 3, 3): for edge k of each face, the sum of the normals of the faces on it."""
+    if not len(faces):
+        return np.zeros((0, 3, 3))
     a = faces
     b = np.roll(faces, -1, axis=1)
-    key = (np.minimum(a, b) * nverts + np.maximum(a, b)).ravel()
+    key = (np.minimum(a, b) * np.int64(nverts) + np.maximum(a, b)).ravel()
     _, inv = np.unique(key, return_inverse=True)
-    acc = np.zeros((inv.max() + 1, 3))
-    np.add.at(acc, inv, np.repeat(normals, 3, axis=0))
+    rep = np.repeat(normals, 3, axis=0)
+    acc = np.stack([np.bincount(inv, rep[:, k], minlength=inv.max() + 1) for k in range(3)], axis=1)
     return acc[inv].reshape(len(faces), 3, 3)
