@@ -46,6 +46,7 @@ from dataclasses import replace
 import numpy as np
 
 from checker.bvh import aabb_pairs, assembly_pairs, obb_overlap, prefix_hits, transformed_aabb
+from checker.convex import convex_pairs
 from checker.partset import Placement, PartSet
 from checker.records import Interference, PairType, severity_of
 from checker.sweep import probes_inside_batch
@@ -130,7 +131,8 @@ def _world_triangles(parts: PartSet, placed: Placement, part: np.ndarray, tri: n
 
 def _triangle_pairs(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray,
                     clearance: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Triangle pairs (tri of i, tri of j, pair row) whose boxes come within ``clearance``."""
+    """Triangle pairs (tri of i, tri of j, pair row) whose boxes come within ``clearance`` (scalar or (n,))."""
+    clearance = np.broadcast_to(np.asarray(clearance, float), (len(i),))[:, None]
     g = 0.5 * clearance
     # j's grown box in i's frame
     rel = np.einsum("nji,njk->nik", placed.rot[i], placed.rot[j])
@@ -140,8 +142,8 @@ def _triangle_pairs(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndar
     # each candidate triangle of i, grown, in j's frame
     tw = _world_triangles(parts, placed, i[row], ti)
     # corner by corner (numpy reduces a 3-long axis slowly; min and max are exact)
-    t_lo = np.minimum(np.minimum(tw[:, 0], tw[:, 1]), tw[:, 2]) - clearance
-    t_hi = np.maximum(np.maximum(tw[:, 0], tw[:, 1]), tw[:, 2]) + clearance
+    t_lo = np.minimum(np.minimum(tw[:, 0], tw[:, 1]), tw[:, 2]) - clearance[row]
+    t_hi = np.maximum(np.maximum(tw[:, 0], tw[:, 1]), tw[:, 2]) + clearance[row]
     # a world AABB in j's frame: transform its centre and half extents
     c = 0.5 * (t_lo + t_hi)
     h = 0.5 * (t_hi - t_lo)
@@ -150,6 +152,44 @@ def _triangle_pairs(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndar
     hl = np.einsum("nji,nj->ni", np.abs(rj), h)
     r2, tj = parts.forest.query(j[row], cl - hl, cl + hl)
     return ti[r2], tj, row[r2]
+
+
+def _triangle_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray,
+                     clearance: float) -> tuple[np.ndarray, np.ndarray]:
+    """Signed values (n,) and places (n, 3) of part pairs from their triangles and probes.
+
+    Crossing surfaces or a probe inside: minus the deepest probe's depth (or
+    minus the touching tolerance). Else the least triangle distance, less the
+    tessellation errors of both parts (so never more than the true distance);
+    such a value below minus the touching tolerance is a possible overlap no
+    deeper than those errors, reported as one."""
+    n = len(i)
+    dist = np.full(n, np.inf)
+    where = np.zeros((n, 3))
+    crossing = np.zeros(n, bool)
+    ti, tj, row = _triangle_pairs(parts, placed, i, j, clearance + parts.error[i] + parts.error[j])
+    if len(row):
+        a = _world_triangles(parts, placed, i[row], ti)
+        b = _world_triangles(parts, placed, j[row], tj)
+        cr = triangles_cross(a, b, parts.touch(i[row], j[row]))
+        crossing[row[cr]] = True
+        where[row[cr]] = 0.5 * (a[cr].mean(axis=1) + b[cr].mean(axis=1))
+        rest = ~cr & ~crossing[row]
+        d, p, q = triangle_distance(a[rest], b[rest])
+        r = row[rest]
+        order = np.lexsort((d, r))
+        first = order[np.r_[True, r[order][1:] != r[order][:-1]]] if len(order) else order
+        dist[r[first]] = d[first]
+        mid = 0.5 * (p[first] + q[first])
+        where[r[first]] = np.where(crossing[r[first]][:, None], where[r[first]], mid)
+    # containment probes of every pair, both ways, in one batch
+    deep = probes_inside_batch(parts, placed, np.concatenate([i, j]), np.concatenate([j, i]))
+    deep = np.minimum(deep[:n], deep[n:])
+    inside = np.isfinite(deep)
+    touch = parts.touch(i, j)
+    hard = inside | crossing
+    value = np.where(hard, np.where(inside, deep, -touch), dist - parts.error[i] - parts.error[j])
+    return value, where
 
 
 def check_parts(parts: PartSet, placed: Placement, clearance: float,
@@ -188,32 +228,24 @@ def _check_indexed(parts: PartSet, placed: Placement, clearance: float, focus, p
     out: list[tuple[int, int, Interference | None]] = []
     n = len(i)
     if n:
-        dist = np.full(n, np.inf)
+        value = np.full(n, np.inf)
         where = np.zeros((n, 3))
-        crossing = np.zeros(n, bool)
-        ti, tj, row = _triangle_pairs(parts, placed, i, j, clearance)
-        if len(row):
-            a = _world_triangles(parts, placed, i[row], ti)
-            b = _world_triangles(parts, placed, j[row], tj)
-            cr = triangles_cross(a, b, parts.touch(i[row], j[row]))
-            crossing[row[cr]] = True
-            where[row[cr]] = 0.5 * (a[cr].mean(axis=1) + b[cr].mean(axis=1))
-            rest = ~cr & ~crossing[row]
-            d, p, q = triangle_distance(a[rest], b[rest])
-            r = row[rest]
-            order = np.lexsort((d, r))
-            first = order[np.r_[True, r[order][1:] != r[order][:-1]]] if len(order) else order
-            dist[r[first]] = d[first]
-            mid = 0.5 * (p[first] + q[first])
-            where[r[first]] = np.where(crossing[r[first]][:, None], where[r[first]], mid)
-        # containment probes of every pair, both ways, in one batch
-        deep = probes_inside_batch(parts, placed, np.concatenate([i, j]), np.concatenate([j, i]))
-        deep = np.minimum(deep[:n], deep[n:])
-        inside = np.isfinite(deep)
+        # two primitives: their true shapes (checker.convex); two boxes apart, meshes: triangles
+        kind = parts.convex_kind
+        conv = np.flatnonzero((kind[i] >= 0) & (kind[j] >= 0))
+        tri = np.ones(n, bool)
+        if len(conv):
+            size = parts.sd_groups[2]
+            a, b = i[conv], j[conv]
+            sd, w, _, apart = convex_pairs(kind[a], size[a], placed.rot[a], placed.pos[a],
+                                           kind[b], size[b], placed.rot[b], placed.pos[b])
+            value[conv], where[conv] = sd, w
+            tri[conv[~apart]] = False
+        rows = np.flatnonzero(tri)
+        if len(rows):
+            value[rows], where[rows] = _triangle_values(parts, placed, i[rows], j[rows], clearance)
         touch = parts.touch(i, j)
-        hard = inside | crossing
-        value = np.where(hard, np.where(inside, deep, -touch), dist)
-        for k in np.flatnonzero(hard | ((touch < dist) & (dist < clearance))):     # records only
+        for k in np.flatnonzero((value < -touch) | ((touch < value) & (value < clearance))):  # records only
             out.append((int(i[k]), int(j[k]), _record(parts, int(i[k]), int(j[k]), float(value[k]), where[k],
                                                       clearance)))
     out.extend(_plane_records(parts, placed, clearance, focus, pair_mask))

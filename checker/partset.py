@@ -28,6 +28,7 @@ import numpy as np
 
 from checker.arrays import ranges
 from checker.bvh import Assemblies, TriangleForest, assembly_boxes, transformed_aabb
+from checker.convex import CONVEX
 from checker.shapes import Shape, ShapeType
 from checker.tessellate import part_surfaces
 
@@ -158,6 +159,9 @@ class PartSet:
         if len(has):
             lo[has] = np.minimum.reduceat(v, surf.vert_start[has], axis=0)
             hi[has] = np.maximum.reduceat(v, surf.vert_start[has], axis=0)
+        # boxes of the true shapes: a curved part's surface lies within its error of the triangles
+        lo -= error[:, None]
+        hi += error[:, None]
         size = np.where(plane, 0.0, np.linalg.norm(np.where(plane[:, None], 0.0, hi - lo), axis=1))
         # probes: every vertex, then every triangle's centroid moved inward, grouped by part
         depth = PROBE_DEPTH * size
@@ -234,6 +238,12 @@ class PartSet:
             key[k] = index[tag]
             size[k, :min(3, len(sh.size))] = sh.size[:3]
         return key, tuple(kinds), size
+
+    @cached_property
+    def convex_kind(self) -> np.ndarray:
+        """(P,) index into :data:`checker.convex.CONVEX` of each primitive part, -1 for meshes and planes."""
+        index = {t: k for k, t in enumerate(CONVEX)}
+        return np.array([index.get(sh.type, -1) for sh in self.shapes], np.int64)
 
     def touch(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Touching tolerance (absolute) of part pairs ``a``, ``b`` (n,)."""

@@ -1,0 +1,324 @@
+"""Signed distance between pairs of placed convex primitives, for whole arrays of pairs.
+
+Part-part checks of two primitives (box, sphere, capsule, cylinder,
+ellipsoid) use the true shapes here instead of their tessellations, so
+curved parts overlapping by less than their tessellation error are found and
+depths are not under-stated. The signed distance of convex ``A`` and ``B``
+is ``-min over unit u of h_D(u)``, ``h_D(u) = h_A(u) + h_B(-u)`` the support
+function of the Minkowski difference ``A - B``: positive, it is the distance;
+negative, minus the penetration depth (the shortest translation that
+separates the two). Every direction ``u`` gives ``-h_D(u) <=`` the signed
+distance, i.e. a distance never over-stated and a depth never under-stated.
+
+By pair (``exact`` says which answers are exact to rounding):
+
+- sphere with anything: the signed distance of the centre to the other
+  shape minus the radius (closed form; the ellipsoid by Newton to 1e-12 of
+  its size): exact, inside and out;
+- capsule with capsule: the distance between the axes minus both radii:
+  exact;
+- capsule with box, cylinder or ellipsoid, apart: the least signed distance
+  along the axis (:func:`checker.shapes.segment_signed_distance_batch`)
+  minus the radius: exact. Overlapping: with a box, the least of ``h_D`` over
+  the face normals of ``A - B`` (box axes and axis x box-axis crosses): exact;
+  with the others, the general rule below;
+- box with box overlapping: the least of ``h_D`` over the 15 separating
+  axes (they are all the face normals of ``A - B``): exact. Apart, the
+  distance is the callers' (exact triangles; see :mod:`checker.parts`);
+- any other pair (a cylinder or an ellipsoid with a box, a capsule, a
+  cylinder or an ellipsoid): the least of ``h_D`` over the 15 axes of the two
+  frames, their centres' offset and both signs, then refined by projected
+  gradient descent on the sphere of directions (the gradient of ``h_D`` is
+  the difference of the support points; backtracking accepts only
+  decreases). The answer is always a lower bound of the signed distance.
+  Apart it is exact at convergence (the sub-level sets of ``h_D`` below zero
+  are geodesically convex, so a local minimum is the global one);
+  overlapping, it is an upper bound on the depth (exact when the deepest
+  direction is among the starts or in the basin of one).
+
+``where`` is the midpoint of the two support points along the best direction
+(the closest points when apart). Not here: meshes and planes, pair
+selection, records (:mod:`checker.parts`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from checker.closest import segment_segment
+from checker.shapes import ShapeType, segment_signed_distance_batch, signed_distance_batch
+
+CONVEX = (ShapeType.BOX, ShapeType.SPHERE, ShapeType.CAPSULE, ShapeType.CYLINDER, ShapeType.ELLIPSOID)
+"""Primitive types handled here."""
+
+DESCENT_ITERS = 60
+"""Projected-gradient steps of the general rule."""
+
+GILBERT_ITERS = 100
+"""Steps of Gilbert's algorithm of the general rule."""
+
+PROJECTION_ITERS = 30
+"""Alternating projections of the general rule."""
+
+
+def support(kind: np.ndarray, size: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Support function and a support point of primitives in their own frames.
+
+    Args:
+        kind: (n,) index into :data:`CONVEX`.
+        size: (n, 3) sizes (zero-padded).
+        u: (n, 3) directions (any length > 0).
+
+    Returns:
+        h: (n,) ``max over x in the shape of x . u``.
+        s: (n, 3) a point of the shape reaching it.
+    """
+    s = np.zeros_like(u)
+    nu = np.linalg.norm(u, axis=1)
+    nu = np.where(nu > 0, nu, 1.0)
+    box = kind == 0
+    s[box] = np.sign(u[box]) * size[box]
+    sph = kind == 1
+    s[sph] = size[sph, :1] * u[sph] / nu[sph, None]
+    cap = kind == 2
+    s[cap] = size[cap, :1] * u[cap] / nu[cap, None]
+    s[cap, 2] += np.sign(u[cap, 2]) * size[cap, 1]
+    cyl = kind == 3
+    rad = np.linalg.norm(u[cyl, :2], axis=1)
+    s[cyl, :2] = size[cyl, :1] * u[cyl, :2] / np.where(rad > 0, rad, 1.0)[:, None]
+    s[cyl, 2] = np.sign(u[cyl, 2]) * size[cyl, 1]
+    ell = kind == 4
+    e2u = size[ell] ** 2 * u[ell]
+    den = np.sqrt(np.einsum("ij,ij->i", e2u, u[ell]))
+    s[ell] = e2u / np.where(den > 0, den, 1.0)[:, None]
+    return np.einsum("ij,ij->i", s, u), s
+
+
+def _h_d(ka, sa, ra, pa, kb, sb, rb, pb, u):
+    """h_D(u) (n,) and the support points of A along u and of B along -u (world)."""
+    ha, xa = support(ka, sa, np.einsum("nji,nj->ni", ra, u))
+    hb, xb = support(kb, sb, np.einsum("nji,nj->ni", rb, -u))
+    wa = np.einsum("nij,nj->ni", ra, xa) + pa
+    wb = np.einsum("nij,nj->ni", rb, xb) + pb
+    return ha + np.einsum("ij,ij->i", pa, u) + hb - np.einsum("ij,ij->i", pb, u), wa, wb
+
+
+def _axes(ra: np.ndarray, rb: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    """(n, 32, 3) start directions: 3 + 3 frame axes, 9 crosses, the centres' offset; both signs.
+    Degenerate crosses (parallel axes) are replaced by the offset."""
+    a = np.swapaxes(ra, 1, 2)                                   # rows: A's axes
+    b = np.swapaxes(rb, 1, 2)
+    cr = np.cross(a[:, :, None, :], b[:, None, :, :]).reshape(len(ra), 9, 3)
+    off = offset / np.maximum(np.linalg.norm(offset, axis=1), 1e-300)[:, None]
+    off = np.where(np.linalg.norm(off, axis=1, keepdims=True) > 0, off, a[:, 2])
+    ln = np.linalg.norm(cr, axis=2, keepdims=True)
+    cr = np.where(ln > 1e-9, cr / np.maximum(ln, 1e-300), off[:, None, :])
+    u = np.concatenate([a, b, cr, off[:, None, :]], axis=1)
+    return np.concatenate([u, -u], axis=1)
+
+
+def _least_over(dirs: np.ndarray, args) -> tuple[np.ndarray, np.ndarray]:
+    """Least h_D over the directions (n, k, 3): (value (n,), direction (n, 3))."""
+    n, k, _ = dirs.shape
+    rep = [np.repeat(x, k, axis=0) for x in args]
+    h, _, _ = _h_d(*rep, dirs.reshape(-1, 3))
+    h = h.reshape(n, k)
+    best = np.argmin(h, axis=1)
+    return h[np.arange(n), best], dirs[np.arange(n), best]
+
+
+def _gilbert(u: np.ndarray, f: np.ndarray, args) -> tuple[np.ndarray, np.ndarray]:
+    """Gilbert's distance algorithm (1966) on ``D = A - B`` from direction u (n, 3).
+
+    Keeps a point ``x`` of D and moves it to the point nearest the origin on
+    the segment to the support point of D along ``-x``; every direction
+    visited gives ``h_D``, whose least value (with ``f``) is returned with
+    its direction: apart, ``-h_D`` rises to the distance and ``|x|`` falls
+    to it. Overlapping, ``x`` tends to the origin and ``f`` only keeps the
+    starts' least value."""
+    _, wa, wb = _h_d(*args, u)
+    x = wa - wb
+    best_u = u.copy()
+    for _ in range(GILBERT_ITERS):
+        ln = np.linalg.norm(x, axis=1)
+        live = ln > 0
+        d = -x / np.where(live, ln, 1.0)[:, None]
+        d = np.where(live[:, None], d, best_u)
+        h, wa, wb = _h_d(*args, d)
+        better = h < f
+        f = np.where(better, h, f)
+        best_u = np.where(better[:, None], d, best_u)
+        w = wa - wb
+        e = w - x
+        ee = np.einsum("ij,ij->i", e, e)
+        t = np.clip(-np.einsum("ij,ij->i", x, e) / np.where(ee > 0, ee, 1.0), 0.0, 1.0)
+        x = x + t[:, None] * e
+    return f, best_u
+
+
+def _project(kind: np.ndarray, size: np.ndarray, rot: np.ndarray, pos: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The point of each solid (world) nearest x (n, 3): x itself inside, else the closest surface point."""
+    out = x.copy()
+    local = np.einsum("nji,nj->ni", rot, x - pos)
+    types = list(CONVEX)
+    for k in np.unique(kind):
+        rows = np.flatnonzero(kind == k)
+        d, q = signed_distance_batch(types[k], size[rows], local[rows])
+        outside = d > 0
+        r = rows[outside]
+        out[r] = np.einsum("nij,nj->ni", rot[r], q[outside]) + pos[r]
+    return out
+
+
+def _alternate(u: np.ndarray, f: np.ndarray, args) -> tuple[np.ndarray, np.ndarray]:
+    """Alternating projections between the solids from their support points along u; every
+    pair of points met gives the direction from one to the other, kept when h_D is lower."""
+    ka, sa, ra, pa, kb, sb, rb, pb = args
+    _, p, q = _h_d(*args, u)
+    for _ in range(PROJECTION_ITERS):
+        p = _project(ka, sa, ra, pa, q)
+        q = _project(kb, sb, rb, pb, p)
+        v = q - p
+        ln = np.linalg.norm(v, axis=1)
+        d = np.where(ln[:, None] > 0, v / np.where(ln > 0, ln, 1.0)[:, None], u)
+        h, _, _ = _h_d(*args, d)
+        better = h < f
+        f = np.where(better, h, f)
+        u = np.where(better[:, None], d, u)
+    return f, u
+
+
+def _descend(u: np.ndarray, f: np.ndarray, args, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Projected gradient descent of h_D on the unit sphere from u (n, 3), value f; monotone."""
+    step = 0.5 / scale
+    for _ in range(DESCENT_ITERS):
+        _, wa, wb = _h_d(*args, u)
+        g = wa - wb
+        g -= np.einsum("ij,ij->i", g, u)[:, None] * u
+        trial = u - step[:, None] * g
+        trial /= np.maximum(np.linalg.norm(trial, axis=1), 1e-300)[:, None]
+        ft, _, _ = _h_d(*args, trial)
+        better = ft < f
+        u = np.where(better[:, None], trial, u)
+        f = np.where(better, ft, f)
+        step = np.where(better, 1.5 * step, 0.5 * step)
+    return f, u
+
+
+def convex_pairs(kind_a: np.ndarray, size_a: np.ndarray, rot_a: np.ndarray, pos_a: np.ndarray,
+                 kind_b: np.ndarray, size_b: np.ndarray, rot_b: np.ndarray, pos_b: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Signed distances of n pairs of placed convex primitives (see the module docstring).
+
+    Args:
+        kind_a, kind_b: (n,) indices into :data:`CONVEX`.
+        size_a, size_b: (n, 3) sizes, zero-padded.
+        rot_a, rot_b: (n, 3, 3) part-to-world rotations; pos_a, pos_b: (n, 3) origins.
+
+    Returns:
+        sd: (n,) signed distance (negative: minus the depth); ``np.nan`` for
+            two boxes that do not overlap (the callers measure those).
+        where: (n, 3) world point.
+        exact: (n,) bool, ``sd`` is exact (else a lower bound: the depth an
+            upper bound).
+        boxes_apart: (n,) bool, two boxes whose distance is left to the caller.
+    """
+    # order each pair so that a sphere, else a capsule, comes first
+    rank = np.array([3, 0, 1, 2, 2])                     # box, sphere, capsule, cylinder, ellipsoid
+    swap = rank[kind_b] < rank[kind_a]
+    ka, kb = np.where(swap, kind_b, kind_a), np.where(swap, kind_a, kind_b)
+    sa = np.where(swap[:, None], size_b, size_a)
+    sb = np.where(swap[:, None], size_a, size_b)
+    ra = np.where(swap[:, None, None], rot_b, rot_a)
+    rb = np.where(swap[:, None, None], rot_a, rot_b)
+    pa = np.where(swap[:, None], pos_b, pos_a)
+    pb = np.where(swap[:, None], pos_a, pos_b)
+    n = len(ka)
+    sd = np.full(n, np.nan)
+    where = np.zeros((n, 3))
+    exact = np.zeros(n, bool)
+    done = np.zeros(n, bool)
+    args = (ka, sa, ra, pa, kb, sb, rb, pb)
+    types = list(CONVEX)
+
+    # sphere with anything: the centre's signed distance to B, minus the radius
+    sph = np.flatnonzero(ka == 1)
+    for k in np.unique(kb[sph]):
+        rows = sph[kb[sph] == k]
+        c = np.einsum("nji,nj->ni", rb[rows], pa[rows] - pb[rows])
+        d, q = signed_distance_batch(types[k], sb[rows], c)
+        qw = np.einsum("nij,nj->ni", rb[rows], q) + pb[rows]
+        cw = pa[rows]
+        v = qw - cw
+        ln = np.linalg.norm(v, axis=1)
+        # the sphere's own point nearest the other surface
+        u = np.where(ln[:, None] > 0, v / np.maximum(ln, 1e-300)[:, None], 0.0) * np.sign(d)[:, None]
+        sd[rows] = d - sa[rows, 0]
+        where[rows] = 0.5 * (qw + cw + sa[rows, :1] * u)
+        exact[rows] = done[rows] = True
+
+    # capsule with capsule, and capsule with the others while its axis stays outside
+    cap = np.flatnonzero((ka == 2) & ~done)
+    if len(cap):
+        ends = np.zeros((len(cap), 2, 3))
+        ends[:, 0, 2], ends[:, 1, 2] = -sa[cap, 1], sa[cap, 1]
+        a0 = np.einsum("nij,nj->ni", ra[cap], ends[:, 0]) + pa[cap]
+        a1 = np.einsum("nij,nj->ni", ra[cap], ends[:, 1]) + pa[cap]
+        two = kb[cap] == 2
+        rows = cap[two]
+        if len(rows):
+            e = np.zeros((len(rows), 2, 3))
+            e[:, 0, 2], e[:, 1, 2] = -sb[rows, 1], sb[rows, 1]
+            b0 = np.einsum("nij,nj->ni", rb[rows], e[:, 0]) + pb[rows]
+            b1 = np.einsum("nij,nj->ni", rb[rows], e[:, 1]) + pb[rows]
+            d, _, _, cp, cq = segment_segment(a0[two], a1[two], b0, b1)
+            v = cq - cp
+            u = v / np.maximum(np.linalg.norm(v, axis=1), 1e-300)[:, None]
+            sd[rows] = d - sa[rows, 0] - sb[rows, 0]
+            where[rows] = 0.5 * ((cp + sa[rows, :1] * u) + (cq - sb[rows, :1] * u))
+            exact[rows] = done[rows] = True
+        for k in np.unique(kb[cap[~two]]):
+            sel = ~two & (kb[cap] == k)
+            rows = cap[sel]
+            la = np.einsum("nji,nj->ni", rb[rows], a0[sel] - pb[rows])
+            lb = np.einsum("nji,nj->ni", rb[rows], a1[sel] - pb[rows])
+            m, t = segment_signed_distance_batch(types[k], sb[rows], la, lb)
+            out = m >= 0
+            r_out = rows[out]
+            if not len(r_out):
+                continue
+            p = la[out] + t[out, None] * (lb[out] - la[out])
+            _, q = signed_distance_batch(types[k], sb[r_out], p)
+            pw = np.einsum("nij,nj->ni", rb[r_out], p) + pb[r_out]
+            qw = np.einsum("nij,nj->ni", rb[r_out], q) + pb[r_out]
+            v = qw - pw
+            u = v / np.maximum(np.linalg.norm(v, axis=1), 1e-300)[:, None]
+            sd[r_out] = m[out] - sa[r_out, 0]
+            where[r_out] = 0.5 * (pw + sa[r_out, :1] * u + qw)
+            exact[r_out] = done[r_out] = True
+
+    # the rest by support functions: exact for box-box and capsule-box (all face normals
+    # of A - B are among the starts), else refined by descent
+    rest = np.flatnonzero(~done)
+    if len(rest):
+        sub = tuple(x[rest] for x in args)
+        dirs = _axes(ra[rest], rb[rest], pb[rest] - pa[rest])
+        f, u = _least_over(dirs, sub)
+        polytope = ((ka[rest] == 0) | (ka[rest] == 2)) & (kb[rest] == 0)
+        boxes = (ka[rest] == 0) & (kb[rest] == 0)
+        curved = ~polytope
+        if curved.any():
+            c = np.flatnonzero(curved)
+            scale = np.maximum(np.abs(sa[rest[c]]).max(axis=1) + np.abs(sb[rest[c]]).max(axis=1), 1e-300)
+            sc = tuple(x[c] for x in sub)
+            f[c], u[c] = _gilbert(u[c], f[c], sc)
+            f[c], u[c] = _alternate(u[c], f[c], sc)
+            f[c], u[c] = _descend(u[c], f[c], sc, scale)
+        _, wa, wb = _h_d(*sub, u)
+        sd[rest] = -f
+        where[rest] = 0.5 * (wa + wb)
+        exact[rest] = polytope
+        apart = boxes & (f < 0)          # no separating axis fails: the boxes are apart
+        sd[rest[apart]] = np.nan
+    boxes_apart = np.isnan(sd)
+    return sd, where, exact, boxes_apart
