@@ -432,8 +432,11 @@ def _sd_ellipsoid(e: np.ndarray, p: np.ndarray, t0: np.ndarray | None = None) ->
         step_ok = ~pole & (df < 0)
         tn = ta - np.where(step_ok, f, 0.0) / np.where(step_ok, df, -1.0)
         mid = 0.5 * (lo_a + hi_a)
-        tn = np.where(~step_ok | (tn < lo_a) | (tn > hi_a), mid, tn)
-        conv = (np.abs(tn - ta) <= tol[act]) | (hi_a - lo_a <= tol[act])
+        # a tiny Newton step far from the root (F steep near the pole: a point
+        # on a principal plane by rounding) is no convergence: bisect instead
+        stalled = (np.abs(tn - ta) <= tol[act]) & (np.abs(f) > 1e-10)
+        tn = np.where(~step_ok | (tn < lo_a) | (tn > hi_a) | stalled, mid, tn)
+        conv = ((np.abs(tn - ta) <= tol[act]) & ~stalled) | (hi_a - lo_a <= tol[act])
         t[act], lo[act], hi[act] = tn, lo_a, hi_a
         act = act[~conv]
     den = t[:, None] + e2

@@ -177,8 +177,6 @@ def part_surfaces(shapes: list[Shape], tolerance: float) -> Surfaces:
             key.append(("mesh", k))
         elif st is ShapeType.BOX:
             key.append(("box",))
-        elif st is ShapeType.CAPSULE and not sh.size[1] > 0:
-            key.append(("single", k))          # a capsule of zero length: a sphere, tessellated alone
         else:
             seg, error[k] = _segments_of(sh, tolerance)
             key.append((st, seg))
@@ -193,7 +191,7 @@ def part_surfaces(shapes: list[Shape], tolerance: float) -> Surfaces:
             for k in members:
                 verts[k], faces[k] = np.zeros((0, 3)), np.zeros((0, 3), np.int64)
             continue
-        if kk[0] in ("mesh", "single"):
+        if kk[0] == "mesh":
             surf = part_surface(shapes[kk[1]], tolerance)
             verts[kk[1]], faces[kk[1]] = surf.vertices, surf.faces
             closed[kk[1]], error[kk[1]] = surf.closed, surf.error
@@ -249,11 +247,6 @@ def part_surface(shape: Shape, tolerance: float) -> Surface:
         v, f, _ = _unit_box()
         return Surface(v * s[:3], f, True, 0.0)
     n, err = _segments_of(shape, tolerance)
-    if st is ShapeType.CAPSULE and not s[1] > 0:
-        # a capsule of zero length is a sphere (the template's two equators would coincide)
-        tm = trimesh.creation.capsule(height=0.0, radius=s[0], count=[n, n])
-        v, f, closed = _clean(np.asarray(tm.vertices), np.asarray(tm.faces))
-        return Surface(v, f, closed, err)
     v, f, closed = _template(st, n)
     size = np.pad(s[:3], (0, 3 - min(3, len(s))))[None]
     return Surface(_scaled(st, v, size)[0], f, closed, err)
