@@ -1,0 +1,343 @@
+"""Scale: harness-like scenes of 1-64 cables among 10-1,000 parts, side by side in one run.
+
+Scenes come from :func:`sim.harness.harness_scene` (cables of ``--segments``
+elements threaded through non-overlapping parts, a few within the
+clearance, one carriage moving). Four tables, every number measured in this
+run on this machine:
+
+1. ``build``: the part set (surfaces, trees, probes) of N harness parts,
+   built by this checkout and by ``--before`` (a git revision, exported to a
+   temporary folder), each in its own process: seconds and peak resident
+   memory (``ru_maxrss`` of the process, so the interpreter and imports are
+   included: the ``import`` row is that baseline).
+2. ``runs``: ``cablecheck run`` of each grid scene in its own process
+   (address space capped by ``--mem-limit-gb``): the report's ``timing``
+   split into simulation / check / validation / recording per simulated
+   second, peak resident memory, recording size per simulated second.
+3. ``queries``: the same cable-part state (t = 0) checked by the checker
+   (``points`` and ``exact``), by MuJoCo's ``mj_collision`` on the detection
+   model and by python-fcl (:func:`checker.benchscene.fcl_queries`), each
+   in one process per scene.
+4. ``profile`` (``--profile C P``): cProfile's top functions and
+   tracemalloc's top allocation sites of one run.
+
+Run: python benchmarks/bench_scale.py [--quick] [--cables 1,16,64] [--parts 10,100,1000]
+       [--duration S] [--harness] [--profile C P] [--out DIR]
+
+``--quick`` runs a small subset (seconds to a minute). Timings depend on the
+machine and its load: compare rows of one run, not runs of different days.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+
+BEFORE = "99b3d34"
+"""Default ``--before``: the last revision building part trees recursively in Python."""
+
+
+def _child(args: list[str], env_path: Path, mem_gb: float, timeout: float) -> tuple[int, float, float, str, str]:
+    """Run ``python args`` with PYTHONPATH=env_path; (exit status, wall s, peak RSS MB, stdout, stderr)."""
+    limit = int(mem_gb * 2 ** 30)
+
+    def cap():
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+
+    env = dict(os.environ, PYTHONPATH=str(env_path))
+    t0 = time.perf_counter()
+    with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
+        proc = subprocess.Popen([sys.executable, *args], stdout=out, stderr=err, env=env,
+                                preexec_fn=cap, cwd=str(env_path))
+        try:
+            _, status, usage = os.wait4(proc.pid, 0)
+        except KeyboardInterrupt:
+            proc.kill()
+            raise
+        wall = time.perf_counter() - t0
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        out.seek(0)
+        err.seek(0)
+        return proc.returncode, wall, usage.ru_maxrss / 1024.0, out.read(), err.read()
+
+
+# -- in-process modes (run in a child) ------------------------------------------------
+
+def _mode_build(parts_file: str) -> None:
+    """Build the part set of the parts in a JSON file (names, types, sizes in m); print JSON.
+    Imports only ``checker`` (so that older revisions run it too)."""
+    import numpy as np
+
+    from checker.partset import PartSet
+    from checker.shapes import Shape, ShapeType
+
+    data = json.loads(Path(parts_file).read_text())
+    shapes = [Shape(ShapeType(t), np.array(s)) for t, s in zip(data["types"], data["sizes"])]
+    t0 = time.perf_counter()
+    ps = PartSet.build(data["names"], shapes, tolerance=5e-4)
+    dt = time.perf_counter() - t0
+    print(json.dumps({"seconds": dt, "triangles": int(len(ps.tris)), "parts": len(shapes)}))
+
+
+def _mode_queries(scene_path: str, repeat: int) -> None:
+    """The checker, mj_collision and python-fcl on the same state; print JSON."""
+    from checker.benchscene import fcl_queries
+    from checker.scene_state import CheckConfig
+    from sim.bench import _mujoco_side
+    from sim.scene import load_scene
+
+    scene = load_scene(scene_path)
+    out = _mujoco_side(scene, repeat)
+    # python-fcl on the same cable-part (and cable-cable) queries of the same state
+    from checker.scene_state import PartState
+    from sim.build import build
+    from sim.loop import Simulation
+    from sim.stepcheck import cable_states
+    from sim.sweep import part_shapes
+
+    built = build(scene, detect=False)
+    sim = Simulation(built)
+    sim.reset()
+    state = sim.state(0, contacts=False)
+    cables = cable_states(built, state.cables)
+    parts = [PartState(p.name, sh, pose, p.keepout)
+             for p, sh, pose in zip(built.parts, part_shapes(built), state.part_poses)]
+    try:
+        for method in ("points", "exact"):
+            upd, qry, _ = fcl_queries(cables, parts, CheckConfig(method, scene.check.spacing,
+                                                                 scene.check.clearance), 3)
+            out[f"fcl_{method}"] = upd + qry
+    except ImportError:
+        out["fcl_points"] = out["fcl_exact"] = None
+    print(json.dumps(out))
+
+
+def _mode_profile(scene_path: str, top: int) -> None:
+    """cProfile and tracemalloc of one run; print both tops."""
+    import cProfile
+    import io
+    import pstats
+    import tracemalloc
+
+    from sim.run import RunOptions, run_scene
+    from sim.scene import load_scene
+
+    scene = load_scene(scene_path)
+    folder = Path(tempfile.mkdtemp())
+    opts = RunOptions(report=folder / "r.json", record=folder / "r.rrd")
+    prof = cProfile.Profile()
+    prof.enable()
+    report = run_scene(scene, opts)
+    prof.disable()
+    s = io.StringIO()
+    pstats.Stats(prof, stream=s).sort_stats("cumulative").print_stats(top)
+    print("== cProfile, cumulative ==")
+    print(s.getvalue())
+    s = io.StringIO()
+    pstats.Stats(prof, stream=s).sort_stats("tottime").print_stats(top)
+    print("== cProfile, own time ==")
+    print(s.getvalue())
+    print("timing:", json.dumps(report["timing"]))
+    tracemalloc.start(1)
+    run_scene(scene, opts)
+    snap = tracemalloc.take_snapshot()
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    print(f"== tracemalloc (second run): peak traced {peak / 2 ** 20:.1f} MB; top sites still held ==")
+    for st in snap.statistics("lineno")[:top]:
+        print(st)
+
+
+# -- the tables ------------------------------------------------------------------------
+
+def _table(title: str, cols: list[str], rows: list[list]) -> str:
+    def fmt(v):
+        if v is None:
+            return "-"
+        if isinstance(v, float):
+            return f"{v:.3g}" if abs(v) < 1000 else f"{v:,.0f}"
+        return str(v)
+
+    cells = [[fmt(v) for v in r] for r in rows]
+    width = [max(len(c), *(len(r[k]) for r in cells)) if cells else len(c) for k, c in enumerate(cols)]
+    lines = [title, "  ".join(c.rjust(w) for c, w in zip(cols, width))]
+    lines += ["  ".join(v.rjust(w) for v, w in zip(r, width)) for r in cells]
+    return "\n".join(lines)
+
+
+def _export(rev: str) -> Path:
+    """The checker and sim packages of git revision ``rev`` in a temporary folder."""
+    folder = Path(tempfile.mkdtemp(prefix="bench_scale_before_"))
+    archive = subprocess.run(["git", "-C", str(REPO), "archive", rev, "checker", "sim"],
+                             check=True, capture_output=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(folder)], input=archive, check=True)
+    return folder
+
+
+def build_table(parts: list[int], before: str | None, mem_gb: float) -> tuple[str, list[dict]]:
+    trees = [("this checkout", REPO)]
+    if before:
+        trees.append((f"before ({before})", _export(before)))
+    rows, found = [], []
+    me = str(Path(__file__).resolve())
+    for label, path in trees:
+        code, wall, rss, out, err = _child(["-c", "import numpy, scipy, trimesh"], path, mem_gb, 600)
+        rows.append([label, "import", None, None, None, rss])
+    from sim.harness import harness_scene
+
+    for n in parts:
+        data = harness_scene(64, n, duration=0.0, dynamics=False)
+        spec = Path(tempfile.mkdtemp(prefix="bench_scale_parts_")) / "parts.json"
+        spec.write_text(json.dumps({"names": [q["name"] for q in data["parts"]],
+                                    "types": [q["shape"] for q in data["parts"]],
+                                    "sizes": [[1e-3 * x for x in q["size"]] for q in data["parts"]]}))
+        for label, path in trees:
+            code, wall, rss, out, err = _child([me, "--mode-build", str(spec)], path, mem_gb, 1800)
+            if code == 0:
+                res = json.loads(out.strip().splitlines()[-1])
+                rows.append([label, res["parts"], res["triangles"], res["seconds"], wall, rss])
+                found.append({"tree": label, **res, "peak_rss_mb": rss})
+            else:
+                last = (err.strip().splitlines() or ["?"])[-1]
+                rows.append([label, n, None, f"failed ({code}): {last[:80]}", wall, rss])
+    return _table("Part set build (harness parts, tolerance 0.5 mm), one process per row",
+                  ["code", "parts", "triangles", "build_s", "process_s", "peak_rss_mb"], rows), found
+
+
+def run_table(grid: list[tuple[int, int]], duration: float, segments: int, mem_gb: float, out: Path,
+              validate: bool) -> tuple[str, list[dict]]:
+    from sim.harness import harness_scene, write_scene
+
+    rows, found = [], []
+    for c, p in grid:
+        data = harness_scene(c, p, segments=segments, duration=duration)
+        data["check"]["validate"] = validate
+        scene = write_scene(data, out / f"harness_{c}x{p}.toml")
+        rep, rec = out / f"harness_{c}x{p}.json", out / f"harness_{c}x{p}.rrd"
+        code, wall, rss, so, se = _child(["-m", "sim.cli", "run", str(scene), "--report", str(rep),
+                                          "--record", str(rec)], REPO, mem_gb, 3600)
+        if code in (0, 1) and rep.exists():
+            t = json.loads(rep.read_text())["timing"]
+            per = 1.0 / duration
+            size = rec.stat().st_size / 2 ** 20 if rec.exists() else None
+            row = {"cables": c, "parts": p, "sim_s": t["sim_s"] * per, "check_s": t["check_s"] * per,
+                   "validate_s": t["validate_s"] * per, "record_s": t["record_s"] * per,
+                   "total_s": t["total_s"] * per, "process_s": wall, "peak_rss_mb": rss,
+                   "recording_mb_per_s": None if size is None else size * per}
+            found.append(row)
+            rows.append([c, p, row["sim_s"], row["check_s"], row["validate_s"], row["record_s"], row["total_s"],
+                         wall, rss, row["recording_mb_per_s"]])
+        else:
+            last = (se.strip().splitlines() or ["?"])[-1]
+            rows.append([c, p, None, None, None, None, None, wall, rss, f"failed ({code}): {last[:80]}"])
+            found.append({"cables": c, "parts": p, "failed": last, "peak_rss_mb": rss})
+    title = (f"Runs: seconds per simulated second ({duration} s simulated, {segments} elements per cable, "
+             f"validation {'on' if validate else 'off'}), one process per row, address space <= {mem_gb} GB")
+    return _table(title, ["cables", "parts", "sim", "check", "validate", "record", "total", "process_s",
+                          "peak_rss_mb", "rec_mb_per_s"], rows), found
+
+
+def query_table(grid: list[tuple[int, int]], segments: int, mem_gb: float, out: Path) -> tuple[str, list[dict]]:
+    from sim.harness import harness_scene, write_scene
+
+    rows, found = [], []
+    me = str(Path(__file__).resolve())
+    for c, p in grid:
+        scene = write_scene(harness_scene(c, p, segments=segments, duration=1.0), out / f"query_{c}x{p}.toml")
+        code, wall, rss, so, se = _child([me, "--mode-queries", str(scene)], REPO, mem_gb, 3600)
+        if code != 0:
+            rows.append([c, p, None, None, None, None, None, None, None, f"failed: {(se.strip().splitlines() or ['?'])[-1][:80]}"])
+            continue
+        r = json.loads(so.strip().splitlines()[-1])
+        found.append({"cables": c, "parts": p, **r})
+        ms = lambda v: None if v is None else 1e3 * v
+        rows.append([c, p, r["n_points"], ms(r["points"]), ms(r["exact"]), ms(r["mj_collision"]),
+                     ms(r["detect"]), ms(r["fcl_points"]), ms(r["fcl_exact"]),
+                     None if r["fcl_exact"] is None else r["fcl_exact"] / r["exact"]])
+    return _table("Queries on one state (t = 0), ms: the checker, MuJoCo's mj_collision (detection model), "
+                  "python-fcl (update + query)",
+                  ["cables", "parts", "centres", "checker_points", "checker_exact", "mj_collision",
+                   "mj_detect", "fcl_points", "fcl_exact", "fcl/exact"], rows), found
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="a small subset")
+    ap.add_argument("--cables", default=None, help="comma-separated cable counts (default 1,4,16,64)")
+    ap.add_argument("--parts", default=None, help="comma-separated part counts (default 10,100,1000)")
+    ap.add_argument("--build-parts", default=None, help="part counts of the build table (default 100,1000,3000)")
+    ap.add_argument("--segments", type=int, default=40)
+    ap.add_argument("--duration", type=float, default=None, help="simulated seconds (default 0.5; quick 0.1)")
+    ap.add_argument("--harness", action="store_true", help="also run the 64 x 1,000 harness scene")
+    ap.add_argument("--no-validate", action="store_true", help="runs without the MuJoCo comparison")
+    ap.add_argument("--before", default=BEFORE, help="git revision for the build table's 'before' rows ('' for none)")
+    ap.add_argument("--mem-limit-gb", type=float, default=8.0)
+    ap.add_argument("--profile", nargs=2, type=int, metavar=("CABLES", "PARTS"), help="profile one run instead")
+    ap.add_argument("--out", type=Path, default=REPO / "recordings" / "bench_scale")
+    # modes of the child processes
+    ap.add_argument("--mode-build", help=argparse.SUPPRESS)
+    ap.add_argument("--mode-queries", help=argparse.SUPPRESS)
+    ap.add_argument("--mode-profile", help=argparse.SUPPRESS)
+    a = ap.parse_args()
+    if a.mode_build:
+        _mode_build(a.mode_build)
+        return 0
+    if a.mode_queries:
+        _mode_queries(a.mode_queries, 3)
+        return 0
+    if a.mode_profile:
+        _mode_profile(a.mode_profile, 40)
+        return 0
+    sys.path.insert(0, str(REPO))            # the parent uses this checkout (children: PYTHONPATH)
+    a.out.mkdir(parents=True, exist_ok=True)
+    duration = a.duration if a.duration is not None else (0.1 if a.quick else 0.5)
+    if a.profile:
+        from sim.harness import harness_scene, write_scene
+        c, p = a.profile
+        data = harness_scene(c, p, segments=a.segments, duration=duration)
+        data["check"]["validate"] = not a.no_validate
+        scene = write_scene(data, a.out / f"profile_{c}x{p}.toml")
+        code, wall, rss, so, se = _child([str(Path(__file__).resolve()), "--mode-profile", str(scene)], REPO,
+                                         a.mem_limit_gb, 3600)
+        print(so)
+        print(f"exit {code}, {wall:.1f} s, peak RSS {rss:.0f} MB (profiled; one run + one traced run)")
+        if code:
+            print(se[-3000:])
+        return code
+    ints = lambda s: [int(x) for x in s.split(",") if x]
+    cables = ints(a.cables) if a.cables else ([1, 16] if a.quick else [1, 4, 16, 64])
+    parts = ints(a.parts) if a.parts else ([10, 100] if a.quick else [10, 100, 1000])
+    build_parts = ints(a.build_parts) if a.build_parts else ([100, 1000] if a.quick else [100, 1000, 3000])
+    grid = [(c, p) for c in cables for p in parts]
+    if a.harness:
+        grid.append((64, 1000))
+    results, texts = {}, []
+    for name, fn in (("build", lambda: build_table(build_parts, a.before or None, a.mem_limit_gb)),
+                     ("runs", lambda: run_table(grid, duration, a.segments, a.mem_limit_gb, a.out,
+                                                not a.no_validate)),
+                     ("queries", lambda: query_table(grid, a.segments, a.mem_limit_gb, a.out))):
+        text, found = fn()
+        print(text + "\n", flush=True)
+        texts.append(text)
+        results[name] = found
+    load = os.getloadavg()
+    note = (f"machine: {os.cpu_count()} cores, load average {load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f} "
+            f"at the end; python {sys.version.split()[0]}")
+    print(note)
+    (a.out / "bench_scale.txt").write_text("\n\n".join(texts + [note]) + "\n")
+    (a.out / "bench_scale.json").write_text(json.dumps(results, indent=1))
+    print(f"written: {a.out / 'bench_scale.txt'}, {a.out / 'bench_scale.json'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
