@@ -45,6 +45,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from checker.arrays import ranges
 from checker.bvh import aabb_pairs, assembly_pairs, obb_overlap, prefix_hits, transformed_aabb
 from checker.convex import convex_pairs
 from checker.partset import Placement, PartSet
@@ -377,9 +378,20 @@ class PartChecker:
     def moving_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         """(i, j) arrays, i < j: the part pairs that can move relative to
         each other (on different rigid bodies), as :meth:`check` tests them."""
-        i, j = np.triu_indices(len(self._group), 1)
-        keep = (self._group[i] != self._group[j]) & ~self._skip[i, j]
-        return i[keep], j[keep]
+        # only pairs across groups are formed (no P x P intermediate): in group
+        # order, each part meets the parts of the later groups
+        grp = self._group
+        order = np.argsort(grp, kind="stable")
+        g = grp[order]
+        end = np.searchsorted(g, g, side="right")          # end of each part's group in ``order``
+        cnt = len(g) - end
+        a = order[np.repeat(np.arange(len(g)), cnt)]
+        b = order[ranges(end, cnt)]
+        i, j = np.minimum(a, b), np.maximum(a, b)
+        keep = ~self._skip[i, j]
+        i, j = i[keep], j[keep]
+        o = np.lexsort((j, i))
+        return i[o], j[o]
 
     @property
     def has_same_body_records(self) -> bool:

@@ -214,3 +214,16 @@ def test_batched_probes_equal_pair_by_pair(seed):
                 for k, (x, y) in enumerate(zip(a, b))]
         assert [None if np.isinf(g) else g for g in got.tolist()] == want
         assert any(w is not None for w in want)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_moving_pairs_equal_all_pairs_filtered(seed):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 40))
+    groups = [f"g{rng.integers(0, 4)}" for _ in range(n)]
+    skip = rng.random((n, n)) < 0.2
+    skip |= skip.T
+    ps = PartSet.build([f"p{k}" for k in range(n)], [box(0.1, 0.1, 0.1)] * n, groups=groups)
+    i, j = PartChecker(ps, 0.01, skip=skip).moving_pairs()
+    want = [(a, b) for a in range(n) for b in range(a + 1, n) if groups[a] != groups[b] and not skip[a, b]]
+    assert list(zip(i.tolist(), j.tolist())) == want
