@@ -147,14 +147,24 @@ def _mode_profile(scene_path: str, top: int) -> None:
     print("== cProfile, own time ==")
     print(s.getvalue())
     print("timing:", json.dumps(report["timing"]))
+    # allocation sites at the traced peak: a snapshot whenever the traced memory
+    # passes the last snapshot's by a tenth (at the run's progress calls)
+    best = {"bytes": 0, "snap": None, "stage": ""}
+
+    def progress(stage, done, total):
+        cur = tracemalloc.get_traced_memory()[0]
+        if cur > 1.1 * best["bytes"]:
+            best.update(bytes=cur, snap=tracemalloc.take_snapshot(), stage=f"{stage} {done:.3g}/{total:.3g}")
+
     tracemalloc.start(1)
-    run_scene(scene, opts)
-    snap = tracemalloc.take_snapshot()
+    run_scene(scene, opts, progress=progress)
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
-    print(f"== tracemalloc (second run): peak traced {peak / 2 ** 20:.1f} MB; top sites still held ==")
-    for st in snap.statistics("lineno")[:top]:
-        print(st)
+    print(f"== tracemalloc (second run): peak traced {peak / 2 ** 20:.1f} MB; largest snapshot "
+          f"{best['bytes'] / 2 ** 20:.1f} MB at '{best['stage']}', its top sites ==")
+    if best["snap"] is not None:
+        for st in best["snap"].statistics("lineno")[:top]:
+            print(st)
 
 
 # -- the tables ------------------------------------------------------------------------

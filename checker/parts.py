@@ -15,7 +15,11 @@ the 15-axis test of their oriented boxes grown by the clearance, the triangle tr
 (each part's tree queried with the other's box, then each candidate triangle
 queried against the other part's tree), and only then exact triangle tests.
 
-Per pair, in this order:
+Two primitives (box, sphere, capsule, cylinder, ellipsoid) are measured on
+their true shapes by :func:`checker.convex.convex_pairs` (exact, or a signed
+distance never above the true one); only two boxes that are apart go on to
+their (exact) triangles. Every other pair (a mesh on either side), per pair,
+in this order:
 
 - surfaces crossing properly (:func:`checker.tritri.triangles_cross`) or a
   containment probe of one part strictly inside the other (a part inside
@@ -23,8 +27,11 @@ Per pair, in this order:
   reported ``min_distance`` is minus the deepest probe's depth (a lower
   bound on the penetration); when surfaces cross with no probe inside, it is
   minus the touching tolerance (``checker.partset.TOUCH`` of the pair's size);
-- else the least triangle-triangle distance, when above the touching
-  tolerance and below the clearance -> soft.
+- else the least triangle-triangle distance less both parts' tessellation
+  errors (a mesh beside a curved primitive: never above the true distance),
+  when above the touching tolerance and below the clearance -> soft; below
+  minus the touching tolerance -> hard (an overlap no deeper than the
+  errors cannot be ruled out).
 - Touching (shared faces, shared edges, a corner on a face, parts meshed
   flush against each other, within the touching tolerance) is contact, not
   interference: mating parts of an assembly touch by design, so no record.
