@@ -206,14 +206,17 @@ def _descend(u: np.ndarray, f: np.ndarray, args, scale: np.ndarray) -> tuple[np.
 
 
 def convex_pairs(kind_a: np.ndarray, size_a: np.ndarray, rot_a: np.ndarray, pos_a: np.ndarray,
-                 kind_b: np.ndarray, size_b: np.ndarray, rot_b: np.ndarray, pos_b: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                 kind_b: np.ndarray, size_b: np.ndarray, rot_b: np.ndarray, pos_b: np.ndarray,
+                 beyond: float = np.inf) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Signed distances of n pairs of placed convex primitives (see the module docstring).
 
     Args:
         kind_a, kind_b: (n,) indices into :data:`CONVEX`.
         size_a, size_b: (n, 3) sizes, zero-padded.
         rot_a, rot_b: (n, 3, 3) part-to-world rotations; pos_a, pos_b: (n, 3) origins.
+        beyond: pairs of the general rule whose starts already prove a
+            distance of at least this are not refined (their ``sd``, a lower
+            bound, is all a clearance test needs).
 
     Returns:
         sd: (n,) signed distance (negative: minus the depth); ``np.nan`` for
@@ -306,7 +309,7 @@ def convex_pairs(kind_a: np.ndarray, size_a: np.ndarray, rot_a: np.ndarray, pos_
         f, u = _least_over(dirs, sub)
         polytope = ((ka[rest] == 0) | (ka[rest] == 2)) & (kb[rest] == 0)
         boxes = (ka[rest] == 0) & (kb[rest] == 0)
-        curved = ~polytope
+        curved = ~polytope & (-f < beyond)
         if curved.any():
             c = np.flatnonzero(curved)
             scale = np.maximum(np.abs(sa[rest[c]]).max(axis=1) + np.abs(sb[rest[c]]).max(axis=1), 1e-300)

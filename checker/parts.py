@@ -246,7 +246,7 @@ def _check_indexed(parts: PartSet, placed: Placement, clearance: float, focus, p
             size = parts.sd_groups[2]
             a, b = i[conv], j[conv]
             sd, w, _, apart = convex_pairs(kind[a], size[a], placed.rot[a], placed.pos[a],
-                                           kind[b], size[b], placed.rot[b], placed.pos[b])
+                                           kind[b], size[b], placed.rot[b], placed.pos[b], clearance)
             value[conv], where[conv] = sd, w
             tri[conv[~apart]] = False
         rows = np.flatnonzero(tri)

@@ -170,3 +170,25 @@ def test_agrees_with_a_general_collision_library_when_apart():
             assert sd[k] == pytest.approx(ref, abs=1e-3)
         checked += 1
     assert checked > 200
+
+
+def test_capsule_tip_in_a_box_is_exact():
+    # axis along z, lower tip 0.2 into the top face: pushed up by 0.2
+    sd, _, exact, _ = one(ShapeType.CAPSULE, [0.2, 0.5], EYE, [0.3, -0.2, 1.5], ShapeType.BOX, [1, 1, 1], EYE, [0, 0, 0])
+    assert exact and sd == pytest.approx(-0.2, abs=1e-12)
+    # lying across the box's top edge, axis along y through the edge line x = 1, z = 1
+    sd, _, exact, _ = one(ShapeType.CAPSULE, [0.2, 0.5], rot(np.pi / 2, 0, 0), [1.0, 0.0, 1.0],
+                          ShapeType.BOX, [1, 1, 1], EYE, [0, 0, 0])
+    assert exact and sd == pytest.approx(-0.2, abs=1e-12)
+
+
+def test_pairs_proven_beyond_the_clearance_are_not_refined():
+    rng = np.random.default_rng(3)
+    args = _random_pairs(rng, 200)
+    full, _, _, _ = convex_pairs(*args)
+    quick, _, _, _ = convex_pairs(*args, beyond=0.5)
+    both = ~np.isnan(full)                                     # (two boxes apart: the caller's)
+    assert np.array_equal(np.isnan(quick), ~both)
+    assert np.all(quick[both] <= full[both] + 1e-12)           # still lower bounds
+    near = both & (full < 0.5)
+    np.testing.assert_allclose(quick[near], full[near])        # the ones that matter are refined
