@@ -27,10 +27,12 @@ By pair (``exact`` says which answers are exact to rounding):
   distance is the callers' (exact triangles; see :mod:`checker.parts`);
 - any other pair (a cylinder or an ellipsoid with a box, a capsule, a
   cylinder or an ellipsoid): the least of ``h_D`` over the 15 axes of the two
-  frames, their centres' offset and both signs, then refined by projected
+  frames, their centres' offset and both signs, then refined by Gilbert's
+  algorithm, alternating projections between the solids and projected
   gradient descent on the sphere of directions (the gradient of ``h_D`` is
   the difference of the support points; backtracking accepts only
-  decreases). The answer is always a lower bound of the signed distance.
+  decreases); an overlapping pair also descends from the best few of those
+  axes and of 96 evenly spread directions. The answer is always a lower bound of the signed distance.
   Apart it is exact at convergence (the sub-level sets of ``h_D`` below zero
   are geodesically convex, so a local minimum is the global one);
   overlapping, it is an upper bound on the depth (exact when the deepest
@@ -56,6 +58,21 @@ DESCENT_ITERS = 60
 
 GILBERT_ITERS = 100
 """Steps of Gilbert's algorithm of the general rule."""
+
+MULTI_STARTS = 6
+"""Descents from the best starts of an overlapping pair of the general rule."""
+
+
+def _fibonacci(n: int) -> np.ndarray:
+    """n directions spread evenly over the sphere (a Fibonacci lattice)."""
+    k = np.arange(n) + 0.5
+    z = 1.0 - 2.0 * k / n
+    phi = np.pi * (1.0 + 5 ** 0.5) * k
+    r = np.sqrt(1.0 - z * z)
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
+
+
+_SPREAD = _fibonacci(96)
 
 PROJECTION_ITERS = 30
 """Alternating projections of the general rule."""
@@ -317,6 +334,26 @@ def convex_pairs(kind_a: np.ndarray, size_a: np.ndarray, rot_a: np.ndarray, pos_
             f[c], u[c] = _gilbert(u[c], f[c], sc)
             f[c], u[c] = _alternate(u[c], f[c], sc)
             f[c], u[c] = _descend(u[c], f[c], sc, scale)
+            # overlapping: h_D may have several local minima; descend from the best
+            # few of the axes and an even spread of directions too
+            o = np.flatnonzero(f[c] > 0)
+            if len(o):
+                co = c[o]
+                so = tuple(x[o] for x in sc)
+                starts = np.concatenate([dirs[co], np.broadcast_to(_SPREAD, (len(co),) + _SPREAD.shape)], axis=1)
+                k = starts.shape[1]
+                h, _, _ = _h_d(*(np.repeat(x, k, axis=0) for x in so), starts.reshape(-1, 3))
+                best = np.argsort(h.reshape(len(co), k), axis=1)[:, :MULTI_STARTS]
+                u0 = np.take_along_axis(starts, best[:, :, None], axis=1).reshape(-1, 3)
+                f0 = np.take_along_axis(h.reshape(len(co), k), best, axis=1).ravel()
+                rep = tuple(np.repeat(x, MULTI_STARTS, axis=0) for x in so)
+                f1, u1 = _descend(u0, f0, rep, np.repeat(scale[o], MULTI_STARTS))
+                f1 = f1.reshape(len(co), MULTI_STARTS)
+                j = np.argmin(f1, axis=1)
+                f_new = f1[np.arange(len(co)), j]
+                u_new = u1.reshape(len(co), MULTI_STARTS, 3)[np.arange(len(co)), j]
+                better = f_new < f[co]
+                f[co[better]], u[co[better]] = f_new[better], u_new[better]
         _, wa, wb = _h_d(*sub, u)
         sd[rest] = -f
         where[rest] = 0.5 * (wa + wb)
