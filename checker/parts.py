@@ -36,8 +36,9 @@ in this order:
   flush against each other, within the touching tolerance) is contact, not
   interference: mating parts of an assembly touch by design, so no record.
 
-Infinite planes are tested against the other part's vertices (exact for
-boxes and meshes). A pair involving a keep-out zone is of type ``keepout``
+Infinite planes are tested against the other part's lowest point along
+their normal: a primitive's support point (exact), a mesh's lowest vertex
+(exact). A pair involving a keep-out zone is of type ``keepout``
 with ``a`` the entering part and ``b`` the zone (two zones: in input order);
 other pairs are ``part-part`` with ``a`` before ``b`` in input order. ``where``
 is the deepest probe, the crossing or the midpoint of the closest points,
@@ -54,7 +55,7 @@ import numpy as np
 
 from checker.arrays import ranges
 from checker.bvh import aabb_pairs, assembly_pairs, obb_overlap, prefix_hits, transformed_aabb
-from checker.convex import convex_pairs
+from checker.convex import convex_pairs, support
 from checker.partset import Placement, PartSet
 from checker.records import Interference, PairType, severity_of
 from checker.sweep import probes_inside_batch
@@ -288,10 +289,25 @@ def _plane_records(parts: PartSet, placed: Placement, clearance: float, focus, p
             q = q[np.asarray(pair_mask(np.minimum(p, q), np.maximum(p, q)), bool)]
         if not len(q):
             continue
+        normal = placed.rot[p][:, 2]
+        # primitives: their lowest point along the plane's normal is a support point (exact)
+        qc = q[parts.convex_kind[q] >= 0]
+        if len(qc):
+            down = np.einsum("nji,j->ni", placed.rot[qc], -normal)
+            _, sup = support(parts.convex_kind[qc], parts.sd_groups[2][qc], down)
+            low = placed.world(qc, sup[:, None, :])[:, 0]
+            zc = (low - placed.pos[p]) @ normal
+            for part, zz, w, t in zip(qc.tolist(), zc.tolist(), low, parts.touch(qc, qc).tolist()):
+                if abs(zz) > t:
+                    out.append(_record(parts, min(p, part), max(p, part), float(zz), w, clearance))
+        # meshes: their lowest vertex
+        q = q[parts.convex_kind[q] < 0]
+        if not len(q):
+            continue
         sel = np.flatnonzero(np.isin(parts.vert_part, q))
         vp = parts.vert_part[sel]
         vw = placed.world(vp, parts.vertices[sel][:, None, :])[:, 0]
-        z = (vw - placed.pos[p]) @ placed.rot[p][:, 2]
+        z = (vw - placed.pos[p]) @ normal
         order = np.lexsort((z, vp))
         first = order[np.r_[True, vp[order][1:] != vp[order][:-1]]]
         lowest = vp[first]

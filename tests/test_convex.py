@@ -209,3 +209,13 @@ def test_overlapping_curved_depth_is_close_to_a_dense_search():
         args = [np.repeat(np.asarray(x)[k:k + 1], len(u), axis=0) for x in (ka, sa, ra, pa, kb, sb, rb, pb)]
         dense = _h_d(*args, u)[0].min()
         assert -sd[k] <= dense * 1.02 + 1e-9
+
+
+def test_a_sphere_sinking_into_a_plane_by_less_than_its_tessellation_error():
+    s = Shape(ShapeType.SPHERE, [0.05])
+    got = parts_records([Shape(ShapeType.PLANE, []), s], [pose(), pose(0.0, 0.0, 0.05 - 1e-4, rot(0.3, 0.2, 0.1))])
+    assert got[("p0", "p1")] == ("hard", pytest.approx(-1e-4, abs=1e-12))
+    cyl = Shape(ShapeType.CYLINDER, [0.03, 0.05])
+    tilt = rot(np.pi / 2, 0, 0)                    # lying on its side: lowest along a generator
+    got = parts_records([Shape(ShapeType.PLANE, []), cyl], [pose(), pose(0.0, 0.0, 0.03 + 2e-4, tilt)], clearance=1e-3)
+    assert got[("p0", "p1")] == ("soft", pytest.approx(2e-4, abs=1e-12))
