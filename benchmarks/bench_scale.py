@@ -22,7 +22,7 @@ run on this machine:
    tracemalloc's top allocation sites of one run.
 
 Run: python benchmarks/bench_scale.py [--quick] [--cables 1,16,64] [--parts 10,100,1000]
-       [--duration S] [--harness] [--profile C P] [--out DIR]
+       [--duration S] [--harness] [--tables build,runs,queries] [--profile C P] [--out DIR]
 
 ``--quick`` runs a small subset (seconds to a minute). Timings depend on the
 machine and its load: compare rows of one run, not runs of different days.
@@ -290,6 +290,7 @@ def main() -> int:
     ap.add_argument("--harness", action="store_true", help="also run the 64 x 1,000 harness scene")
     ap.add_argument("--no-validate", action="store_true", help="runs without the MuJoCo comparison")
     ap.add_argument("--before", default=BEFORE, help="git revision for the build table's 'before' rows ('' for none)")
+    ap.add_argument("--tables", default="build,runs,queries", help="which tables (comma-separated)")
     ap.add_argument("--mem-limit-gb", type=float, default=8.0)
     ap.add_argument("--profile", nargs=2, type=int, metavar=("CABLES", "PARTS"), help="profile one run instead")
     ap.add_argument("--out", type=Path, default=REPO / "recordings" / "bench_scale")
@@ -335,6 +336,8 @@ def main() -> int:
                      ("runs", lambda: run_table(grid, duration, a.segments, a.mem_limit_gb, a.out,
                                                 not a.no_validate)),
                      ("queries", lambda: query_table(grid, a.segments, a.mem_limit_gb, a.out))):
+        if name not in a.tables.split(","):
+            continue
         text, found = fn()
         print(text + "\n", flush=True)
         texts.append(text)
