@@ -13,8 +13,8 @@ distance, i.e. a distance never over-stated and a depth never under-stated.
 By pair (``exact`` says which answers are exact to rounding):
 
 - sphere with anything: the signed distance of the centre to the other
-  shape minus the radius (closed form; the ellipsoid by Newton to 1e-12 of
-  its size): exact, inside and out;
+  shape minus the radius (closed form; the ellipsoid by safeguarded Newton,
+  about 1e-10 of its size): exact, inside and out;
 - capsule with capsule: the distance between the axes minus both radii:
   exact;
 - capsule with box, cylinder or ellipsoid, apart: the least signed distance
@@ -32,11 +32,22 @@ By pair (``exact`` says which answers are exact to rounding):
   gradient descent on the sphere of directions (the gradient of ``h_D`` is
   the difference of the support points; backtracking accepts only
   decreases); an overlapping pair also descends from the best few of those
-  axes and of 96 evenly spread directions. The answer is always a lower bound of the signed distance.
-  Apart it is exact at convergence (the sub-level sets of ``h_D`` below zero
-  are geodesically convex, so a local minimum is the global one);
-  overlapping, it is an upper bound on the depth (exact when the deepest
-  direction is among the starts or in the basin of one).
+  axes and of 96 evenly spread directions. The answer is always a lower
+  bound of the signed distance. Apart it is exact at convergence (the
+  sub-level sets of ``h_D`` below zero are geodesically convex, so a local
+  minimum is the global one; on random pairs of sizes 0.2 to 1 it is within
+  6e-4 of coal's GJK, never above it); overlapping, it is an upper bound on
+  the depth (within 2 % of a dense search of directions). Pairs whose starts
+  already prove them farther apart than ``beyond`` (the clearance) are not
+  refined.
+
+Why by hand: coal (hpp-fcl's successor) answers one pair in about 16 us and
+as accurately when apart, but from one Python call per pair, with EPA depths
+that can be off either way (a sphere in a cylinder 4 % too deep), and with
+about 330 MB of native dependencies (boost, assimp, octomap, qhull,
+eigenpy); python-fcl's distances run a little high on curved shapes. The
+closed forms above are vectorised and exact, and only pairs within the
+clearance of each other reach the refinement.
 
 ``where`` is the midpoint of the two support points along the best direction
 (the closest points when apart). Not here: meshes and planes, pair
