@@ -299,7 +299,8 @@ def _plane_records(parts: PartSet, placed: Placement, clearance: float, focus, p
             zc = (low - placed.pos[p]) @ normal
             for part, zz, w, t in zip(qc.tolist(), zc.tolist(), low, parts.touch(qc, qc).tolist()):
                 if abs(zz) > t:
-                    out.append(_record(parts, min(p, part), max(p, part), float(zz), w, clearance))
+                    a, b = min(p, part), max(p, part)
+                    out.append((a, b, _record(parts, a, b, float(zz), w, clearance)))
         # meshes: their lowest vertex
         q = q[parts.convex_kind[q] < 0]
         if not len(q):
