@@ -66,23 +66,15 @@ import numpy as np
 from checker.shapes import Shape, ShapeType, least_signed_distance, mesh_shape
 from sim.meshfile import mesh_nodes
 from sim.route import initial_shape, run_elements
-from sim.scene import CableDef, Scene, SceneError, euler_matrix
+from sim.scene import Anchor, CableDef, Hold, Scene, SceneError, euler_matrix
 
 CABLE_PREFIX = "cables/"
 """Prefix of every element the cables add to the model (bodies, flexes)."""
 
-DRAG_RATE = 5.0
-"""Velocity damping rate of cable vertices, 1/s (time constant 0.2 s).
-
-A numerical drag, not air: it settles the cable and keeps it quasi-static
-while its ends move, as a harness behaves at the speeds mechanisms move.
-MuJoCo forbids joint damping on flex vertex bodies, so the drag comes from the
-medium viscosity (`VISCOSITY`) acting on each vertex's inertia box, whose side
-is chosen per cable to give this rate (MuJoCo: f = -6 pi mu r_eq v with r_eq
-half the box side)."""
-
-VISCOSITY = 1.0
-"""Medium viscosity in the simulation model, Pa s (see `DRAG_RATE`)."""
+CLAMP_EDGE = 0.05
+"""Length of the held edge a clamp puts at its end or clip, as a fraction of
+the cable's element length (see `_clamp_edges`): short enough that the rigid
+piece it adds changes a cantilever's deflection by about 4 x 0.05 / N."""
 
 BASE_ARMATURE = 100.0
 """Armature added to the base model's joints, which are driven kinematically:
@@ -131,12 +123,16 @@ class Attachment:
       body: the scene's body name ("world", a [[bodies]] or mjcf body).
       vertex: index of the held vertex along the cable (0 = start).
       s: arc length of that vertex along the cable at rest, metres.
+      hold: clamp (two vertices of one short edge are held, see
+        `_clamp_edges`) or pin (one vertex). Free anchors hold nothing and
+        have no attachment.
     """
 
     kind: str
     body: str
     vertex: int
     s: float
+    hold: Hold = Hold.CLAMP
 
 
 @dataclass(frozen=True, eq=False)
@@ -150,11 +146,13 @@ class CableModel:
       vert_adr: first index of its vertices in `mjData.flexvert_xpos`.
       count: number of vertices (elements + 1).
       length: rest length, metres.
-      element_length: rest length of one element, metres.
+      element_length: rest length of a regular element, metres (a clamp's
+        held edge is shorter, see `_clamp_edges`; `np.diff(rest_s)` has all).
       routed: (count, 3) routed shape at t = 0 (before settling), scene world, metres.
       attachments: vertices held by bodies.
       min_bend_radius: metres or None.
       rest_s: (count,) arc length of each vertex along the rest shape, metres.
+      elements: the regular elements (count - 1 less one short held edge per clamp).
     """
 
     name: str
@@ -168,6 +166,7 @@ class CableModel:
     attachments: tuple[Attachment, ...]
     min_bend_radius: float | None
     rest_s: np.ndarray
+    elements: int = 0
 
 
 @dataclass(frozen=True, eq=False)
@@ -260,6 +259,31 @@ class Built:
     model_skip: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), bool))
     """(P, P) bool over `parts`: pairs the mjcf model tells MuJoCo never to
     collide (its own contact bits, `<contact><exclude>`), see `_model_skip`."""
+    warnings: tuple = ()
+    """Physics warnings found before running (`tunnel_warnings`, capped substeps)."""
+    substeps: "Substeps | None" = None
+    """Simulation steps per scene step and why (`choose_substeps`); the
+    simulation model's timestep is the scene's divided by `substeps.count`."""
+
+
+@dataclass(frozen=True)
+class Substeps:
+    """How finely the simulation steps within one scene step.
+
+    Attributes:
+      count: simulation steps per scene timestep (>= 1).
+      step: the simulation step, seconds.
+      needed: the step each cable needs, seconds, by cable name.
+      reasons: per cable, what sets its step ("bending" or "speed"), its
+        fastest held point's speed (m/s) and its regular element length (m).
+      capped: the count needed exceeds `MAX_SUBSTEPS` and was capped.
+    """
+
+    count: int
+    step: float
+    needed: dict
+    reasons: dict
+    capped: bool
 
 
 def default_segments(length: float, radius: float) -> int:
@@ -295,7 +319,7 @@ def _set_options(spec: mujoco.MjSpec, scene: Scene) -> None:
     opt.tolerance = 1e-8
     opt.iterations = max(opt.iterations, 100)
     opt.gravity = [0.0, 0.0, -9.81] if scene.effects.gravity else [0.0, 0.0, 0.0]
-    opt.viscosity = VISCOSITY
+    opt.viscosity = 0.0  # no medium: cables are damped by their own material (`rayleigh_damping`)
     opt.density = 0.0
     # Unused features stay off: no actuators are driven, no sensors are read.
     opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)
@@ -339,13 +363,22 @@ def _fmt(values) -> str:
     return " ".join(repr(float(v)) for v in np.ravel(values))
 
 
+@dataclass(frozen=True)
+class _Held:
+    """One held vertex: which end or clip, the body, the vertex, the hold kind."""
+
+    kind: str      # "start", "end" or "clip"
+    body: str
+    vertex: int
+    hold: Hold
+
+
 @dataclass
 class _CablePlan:
     cable: CableDef
-    routed: np.ndarray    # (n, 3) routed shape at t = 0
+    routed: np.ndarray    # (n, 3) routed shape at t = 0, model coordinates
     straight: np.ndarray  # (n, 3) rest shape: straight along the first element
-    holds: list[tuple[str, str, int, np.ndarray]]  # (kind, body, vertex, local pos on body)
-    pinned_to_world: bool
+    held: list[_Held]     # held vertices, by vertex
 
 
 def scene_origin(scene: Scene) -> np.ndarray:
@@ -514,42 +547,77 @@ def _plan_cable(cable: CableDef, frames: _Frames, where: str, scene: Scene,
     routed = initial_shape(route, length, counts, depth=measure)
     cuts = [int(np.argmin(np.linalg.norm(route - c[2], axis=1))) for c in clips]
     clip_vertices = np.concatenate([[0], np.cumsum(counts)])[cuts]
+    anchors = ([(0, "start", cable.start)] + [(int(v), "clip", c[3]) for c, v in zip(clips, clip_vertices)]
+               + [(len(routed) - 1, "end", cable.end)])
+    shortest = float(np.linalg.norm(np.diff(routed, axis=0), axis=1).min())
+    routed, held = _clamp_edges(routed, anchors, CLAMP_EDGE * shortest)
     seg = np.linalg.norm(np.diff(routed, axis=0), axis=1)
     tangent = (routed[1] - routed[0]) / seg[0]
     s = np.concatenate([[0.0], np.cumsum(seg)])
     straight = routed[0] + s[:, None] * tangent[None, :]
-    n = len(routed)
-    pinned = cable.start.body == "world"
-    holds = []
-    if not pinned:
-        holds += [("start", cable.start.body, 0), ("start", cable.start.body, 1)]
-    holds += [("end", cable.end.body, n - 2), ("end", cable.end.body, n - 1)]
-    holds += [("clip", c[3].body, int(v)) for c, v in zip(clips, clip_vertices)]
-    holds = [(kind, body, v, frames.to_local(body, routed[v])) for kind, body, v in holds]
-    return _CablePlan(cable, routed, straight, holds, pinned)
+    return _CablePlan(cable, routed, straight, held)
+
+
+def _clamp_edges(routed: np.ndarray, anchors: list[tuple[int, str, Anchor]],
+                 edge: float) -> tuple[np.ndarray, list[_Held]]:
+    """Insert a short held edge at every clamp; list the held vertices.
+
+    A clamp holds position and tangent. In MuJoCo's discrete elastic rod
+    the bending energy of a vertex stands for the rod within half an element
+    either side, so holding a whole element (its two vertices) leaves the
+    first half element rigid and clamps the rod half an element too far in:
+    measured, a cantilever deflected 1.6 / N too little with N elements.
+    Instead a clamp holds an edge of length `edge` (CLAMP_EDGE of an
+    element) along the route's tangent at the held point, inside the cable:
+    the next vertex's bending then stands for the rod from the clamp on.
+    At the end the edge leads into the end point, at a clip it leaves the
+    clip point. A pin holds the one vertex, a free anchor nothing."""
+    points = [p for p in routed]
+    held: list[_Held] = []
+    shift = 0
+    for vertex, kind, anchor in anchors:
+        v = vertex + shift
+        if anchor.hold == Hold.FREE:
+            continue
+        if anchor.hold == Hold.PIN:
+            held.append(_Held(kind, anchor.body, v, anchor.hold))
+            continue
+        if kind == "end":
+            t = points[v] - points[v - 1]
+            points.insert(v, points[v] - edge * t / np.linalg.norm(t))
+            held += [_Held(kind, anchor.body, v, anchor.hold), _Held(kind, anchor.body, v + 1, anchor.hold)]
+        else:
+            t = points[v + 1] - points[v]
+            points.insert(v + 1, points[v] + edge * t / np.linalg.norm(t))
+            held += [_Held(kind, anchor.body, v, anchor.hold), _Held(kind, anchor.body, v + 1, anchor.hold)]
+        shift += 1
+    return np.array(points), held
 
 
 def _cables_xml(plans: list[_CablePlan], scene: Scene, bits: ContactBits, detect: bool, margin: float) -> str:
     contype, conaff = _cable_bits(scene, bits, detect)
     selfcollide = "auto" if (detect or "self" in scene.effects.contact) else "none"
-    contact_solref = max(0.004, 2.0 * scene.timestep)
+    contact_solref = contact_time_constant(scene.timestep)
     parts = []
     for plan in plans:
         c = plan.cable
         n = len(plan.straight)
-        mass = c.density * np.pi * c.radius ** 2 * float(np.linalg.norm(np.diff(plan.straight, axis=0), axis=1).sum())
-        vertex_mass = mass / n
-        inertiabox = DRAG_RATE * vertex_mass / (3.0 * np.pi * VISCOSITY)
-        pin = '<pin id="0 1"/>' if plan.pinned_to_world else ""
+        length = float(np.linalg.norm(np.diff(plan.straight, axis=0), axis=1).sum())
+        mass = c.density * np.pi * c.radius ** 2 * length
+        pins = sorted({h.vertex for h in plan.held})
+        pin = f'<pin id="{" ".join(map(str, pins))}"/>' if pins else ""
         elements = " ".join(f"{i} {i + 1}" for i in range(n - 1))
+        # inertiabox: the vertex bodies only slide, so their rotational
+        # inertia never acts; the cable's radius keeps it well scaled.
         parts.append(f"""
   <flexcomp name="{c.name}" type="direct" dim="1" radius="{c.radius!r}" mass="{mass!r}"
-            inertiabox="{inertiabox!r}" point="{_fmt(plan.straight)}" element="{elements}">
+            inertiabox="{2.0 * c.radius!r}" point="{_fmt(plan.straight)}" element="{elements}">
     {pin}
-    <edge equality="true" solref="{_edge_solref(scene)} 1" solimp="{_edge_solimp(plan)}"/>
-    <elasticity young="{c.young!r}"{_shear(c)}/>
+    <edge equality="true" solref="{edge_time_constant(scene.timestep)!r} 1" solimp="{_edge_solimp(plan)}"/>
+    <elasticity young="{c.young!r}" damping="{rayleigh_damping(c, length)!r}"{_shear(c)}/>
     <contact selfcollide="{selfcollide}" contype="{contype}" conaffinity="{conaff}"
-             margin="{margin!r}" condim="3" solref="{contact_solref!r} 1"/>
+             margin="{margin!r}" condim="3" solref="{contact_solref!r} 1"
+             solimp="{_fmt(CONTACT_SOLIMP)}" priority="1"/>
   </flexcomp>""")
     return "<mujoco><worldbody>" + "".join(parts) + "\n</worldbody></mujoco>"
 
@@ -560,48 +628,97 @@ def _shear(cable: CableDef) -> str:
     return "" if cable.twist_stiffness is None else f' shear="{cable.twist_stiffness!r}"'
 
 
-def _edge_solref(scene: Scene) -> float:
-    """Time constant of the edge-length equality, seconds.
+FIRST_BENDING_MODE = 4.7300407448627040
+"""beta_1 L of a beam's first bending mode with both ends clamped (or both
+free): cos(bL) cosh(bL) = 1, omega_1 = (beta_1 L)^2 sqrt(EI / (mu L^4))."""
 
-    MuJoCo's default (0.02 s) lets a 1 m cable hanging under gravity stretch by
-    over 1 %; measured with 40 elements: 0.004 s with solimp 0.99-0.999 keeps
-    it within 0.1 %, 0.002 s within 0.03 % (see `_edge_solimp`). Two
-    timesteps is the stiffest the discrete-time constraint resolves stably."""
-    return max(2.0 * scene.timestep, 0.002)
+
+def first_bending_frequency(cable: CableDef, length: float) -> float:
+    """omega_1 of the cable as a beam of its length clamped at both ends, rad/s.
+
+    EI / mu = E (pi r^4 / 4) / (rho pi r^2) = E r^2 / (4 rho)."""
+    return float(FIRST_BENDING_MODE ** 2 / length ** 2 * np.sqrt(cable.young * cable.radius ** 2 / (4.0 * cable.density)))
+
+
+def rayleigh_damping(cable: CableDef, length: float) -> float:
+    """MuJoCo's flex elasticity `damping` (Rayleigh, stiffness-proportional), seconds.
+
+    MuJoCo damps a rod with the force -beta K v, K its bending (and
+    torsion) stiffness; a mode of frequency omega then has the damping ratio
+    zeta = beta omega / 2. The cable's `damping` is zeta at its first
+    bending mode (`first_bending_frequency`), so beta = 2 zeta / omega_1;
+    higher bending modes are damped in proportion to their frequency, and
+    what gravity or tension alone restores (a hanging chain's swing) is not
+    damped at all: there is no air drag."""
+    return float(2.0 * cable.damping / first_bending_frequency(cable, length))
+
+
+CONTACT_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
+"""solimp of the cables' contacts: d from 0.99 at first touch to 0.999 at a
+penetration of 1 mm. MuJoCo's default (0.9 to 0.95) lets 5 to 10 % of the
+approach speed through each step."""
+
+
+def contact_time_constant(step: float) -> float:
+    """solref time constant of the cables' contacts for simulation step `step`, seconds.
+
+    Two steps: with b = 2 / tc a contact removes the approach speed within
+    one step, so a part moving at v into a cable penetrates it by about
+    v h before pushing it along. The cables' contacts take priority over
+    the parts' (`priority`), whose MuJoCo default (0.02 s) would otherwise
+    be averaged in: with 4 ms averaged with it, a 10 mm plate lifted at
+    2 m/s into a sagging cable went through it."""
+    return 2.0 * step
+
+
+EDGE_IMPEDANCE = 0.9999
+"""solimp d of the edge-length equality at small strain: MuJoCo's largest
+(`mjMAXIMP`). A soft constraint's regularisation is (1 - d) / d of the
+constraint's inertia, so the edge's axial stiffness is the edge mass times
+d / ((1 - d) tc^2): ten times stiffer than with 0.999."""
+
+
+def edge_time_constant(step: float) -> float:
+    """solref time constant of the edge-length equality for simulation step `step`, seconds.
+
+    Two steps, the stiffest that MuJoCo's discrete-time constraint resolves
+    stably (its default safety clamp). With d = `EDGE_IMPEDANCE` the
+    damping b = 2 / tc removes a velocity error along an edge within one
+    step. It must follow the step: a floor of 2 ms (the former setting) kept
+    the edges as soft at a 0.25 ms step as at 1 ms, and a cable whose end
+    moves 0.12 m at 20 Hz stretched 2.4 % instead of 0.5 %."""
+    return 2.0 * step
+
+
+EDGE_YIELD = 0.995
+"""solimp d of the edge-length equality beyond 4 % edge strain (see
+`_edge_solimp`). Measured with ends pulled 10 % past a 1 m cable's length:
+yielding to 0.95 (500 times softer than `EDGE_IMPEDANCE`) gathered the
+whole stretch in one edge (198 %); 0.995 spreads it (edges below 60 %) and
+the cable still comes to rest."""
 
 
 def _edge_solimp(plan: _CablePlan) -> str:
     """Impedance of the edge-length equality: stiff at small strain, yielding beyond a few %.
 
-    A soft equality holds a static edge at strain ~ (1 - d) / d times the
-    edge's unconstrained acceleration (its tension over its mass) over k, so
-    d sets the length accuracy: d = 0.999 keeps a 1 m, 80-element cable
-    hanging as a catenary within 0.04 % (0.42 % with the former d = 0.99).
-    But the tension of a taut edge acts on the transverse (string) motion
-    explicitly, which goes unstable once strain * d / (1 - d) exceeds a
-    constant, independent of the timestep: with d = 0.999 at every strain, a
-    cable whose ends are pulled 10 % past its length vibrated chaotically
-    (edges at 50 % strain, cable kinetic energy 0.7 J on 75 g, never settling;
-    tests/test_stability.py). So d falls from 0.999 to 0.95 between 0 and
-    4 % edge strain (power 6: flat near 0), bounding the tension of an
-    overstretched cable: it then rests at the strain its ends force, reported
-    as taut. MuJoCo's width is a length, hence per cable.
-
-    Limits (measured, tests/test_stability.py): past the yield the tension
-    falls as the strain grows, so the stretch of an overstretched cable
-    gathers in the edges next to its held ends (ends 10 % past the length:
-    11 edges at 41 %, the rest at 0.8 %); the cable's total strain, which is
-    what is reported, is right, its distribution is not. And a rod whose
-    bending load compresses its edges past the yield collapses further: a
-    200 GPa, 3 mm steel rod bowed between ends 0.5 m apart with 0.6 m of
-    length shortens by 9-27 % (4-6 % with d = 0.99-0.999); such a rod needs
-    a smaller timestep."""
+    d sets the length accuracy (see `EDGE_IMPEDANCE`). But the tension of a
+    taut edge acts on the transverse (string) motion explicitly, which goes
+    unstable once strain * d / (1 - d) exceeds a constant: with a stiff
+    edge at every strain, a cable whose ends are pulled 10 % past its length
+    vibrated chaotically (edges at 50 % strain, never settling;
+    tests/test_stability.py). So d falls to `EDGE_YIELD` between 0 and 4 %
+    edge strain (power 6: flat near 0, still 0.9998 at 1 %), bounding the tension
+    of an overstretched cable: it then rests at the strain its ends force,
+    reported as taut. Strains that loads and motion cause are kept far below
+    the yield by the step (`choose_substeps`), not by the yield. MuJoCo's
+    width is a length, hence per cable (the regular element's length)."""
     seg = np.linalg.norm(np.diff(plan.straight, axis=0), axis=1)
-    return f"0.999 0.95 {0.04 * float(seg.mean())!r} 0.5 6"
+    return f"{EDGE_IMPEDANCE!r} {EDGE_YIELD!r} {0.04 * float(seg.max())!r} 0.5 6"
 
 
 def build(scene: Scene, detect: bool = True) -> Built:
-    """Compile the simulation model (and, if `detect`, the detection model)."""
+    """Compile the simulation model (and, if `detect`, the detection model),
+    then choose its step (`choose_substeps`)."""
     origin = scene_origin(scene)
     frames = _Frames(scene, origin)
     meshes = _part_meshes(scene)
@@ -609,11 +726,213 @@ def build(scene: Scene, detect: bool = True) -> Built:
     if "cable-structure" in scene.effects.contact and any(_has_slack(c) for c in scene.cables):
         obstacles = _Obstacles(scene, frames, meshes)
     plans = [_plan_cable(c, frames, f"cables[{i}]", scene, obstacles) for i, c in enumerate(scene.cables)]
-    sim, own_bits = _compile(scene, plans, meshes, detect=False, origin=origin)
-    det = _compile(scene, plans, meshes, detect=True, origin=origin)[0] if detect else None
+    sim, own_bits = _compile(scene, plans, meshes, detect=False, frames=frames, rest=True)
+    _move_held(sim, plans, frames)
+    det = _compile(scene, plans, meshes, detect=True, frames=frames)[0] if detect else None
     if det is not None and (det.nq != sim.nq or det.ngeom != sim.ngeom):
         raise RuntimeError("detection and simulation models differ in structure")
-    return _finish(scene, sim, det, plans, origin, own_bits)
+    built = _finish(scene, sim, det, plans, origin, own_bits)
+    poses = _script_poses(built) if scene.effects.dynamics else None
+    built.substeps = choose_substeps(built, poses)
+    _set_step(sim, built.substeps.step)
+    built.warnings = tuple(tunnel_warnings(built, poses))
+    if built.substeps.capped:
+        need = min(built.substeps.needed.values())
+        built.warnings += (f"the cables need a simulation step of {need:.3g} s (see docs/physics.md) but "
+                           f"at most {MAX_SUBSTEPS} steps are taken per scene timestep; scene.timestep "
+                           f"<= {need * MAX_SUBSTEPS:.3g} s would do",)
+    return built
+
+
+MAX_SUBSTEPS = 64
+"""Most simulation steps per scene step `choose_substeps` takes; beyond it
+the run warns (the scene's timestep should be smaller)."""
+
+SPEED_FRACTION = 0.05
+"""Largest fraction of a cable's element that its fastest held point may
+travel in one simulation step (see `choose_substeps`)."""
+
+SPEED_SAMPLES = 400
+"""Samples of the script over its duration when measuring held points' speeds."""
+
+
+def bending_step(cable: CableModel, cable_def: CableDef) -> float:
+    """Largest step at which the edges stay stiffer than the rod bends, seconds.
+
+    The highest bending mode of a rod discretised into elements of length l
+    has omega_b = (2 / l)^2 sqrt(EI / mu) (the beam stencil's largest
+    eigenvalue, 16 EI / l^4, over mu). A soft edge constraint of time
+    constant tc = 2 h and impedance d stands for an axial spring of
+    frequency omega_a = 1 / (tc sqrt(1 - d)). With omega_a below omega_b,
+    the rod's bending loads compress its edges instead of bending it:
+    measured, a 200 GPa, 3 mm steel rod bowed between ends 0.5 m apart with
+    0.6 m of length (24 elements, omega_b = 4.8e4 /s) shortened by 6.6 % at
+    h = 2 ms (omega_a = 2.5e4 /s) and by 0.25 % at 1 ms (5e4 /s). So
+    h <= 1 / (2 sqrt(1 - d) omega_b)."""
+    l = cable.element_length
+    omega_b = (2.0 / l) ** 2 * np.sqrt(cable_def.young * cable_def.radius ** 2 / (4.0 * cable_def.density))
+    return float(1.0 / (2.0 * np.sqrt(1.0 - EDGE_IMPEDANCE) * omega_b))
+
+
+def _script_poses(built: Built) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every body's pose along the script: times (T,), xpos (T, nbody, 3),
+    xmat (T, nbody, 3, 3), model coordinates.
+
+    Samples the script `SPEED_SAMPLES` times over the duration and at every
+    key through forward kinematics, so bodies, their rotations and mjcf
+    joints all count. Empty when nothing moves."""
+    from sim.motion import Motion  # motion builds on this module's Built
+
+    scene, m = built.scene, built.model
+    if scene.duration <= 0.0 or not scene.motions:
+        return np.zeros(0), np.zeros((0, m.nbody, 3)), np.zeros((0, m.nbody, 3, 3))
+    times = set(np.linspace(0.0, scene.duration, SPEED_SAMPLES + 1).tolist())
+    for mo in scene.motions:  # every key or file sample, on scene time
+        keyed = mo.trajectory.times if mo.trajectory is not None else [k.t for k in mo.keys]
+        times.update(float(t) for t in keyed if t <= scene.duration)
+    times = np.unique(np.round(np.array(sorted(times)), 9))
+    motion = Motion(built)
+    d = mujoco.MjData(m)
+    d.qpos[:] = built.qpos0
+    xpos, xmat = [], []
+    for t in times:
+        motion.apply(d, float(t))
+        mujoco.mj_kinematics(m, d)
+        xpos.append(d.xpos.copy())
+        xmat.append(d.xmat.reshape(-1, 3, 3).copy())
+    return times, np.array(xpos), np.array(xmat)
+
+
+def _max_speed(times: np.ndarray, xpos: np.ndarray, xmat: np.ndarray, body: np.ndarray,
+               local: np.ndarray) -> float:
+    """Fastest speed of points `local` (n, 3) riding bodies `body` (n,) along sampled poses, m/s."""
+    if len(times) < 2 or len(body) == 0:
+        return 0.0
+    world = xpos[:, body] + np.einsum("tnij,nj->tni", xmat[:, body], local)
+    return float((np.linalg.norm(np.diff(world, axis=0), axis=2) / np.diff(times)[:, None]).max())
+
+
+def held_speeds(built: Built, poses=None) -> dict[str, float]:
+    """Fastest speed of any held point of each cable over the script, m/s."""
+    times, xpos, xmat = poses if poses is not None else _script_poses(built)
+    m = built.model
+    out = {}
+    for c in built.cables:
+        verts = np.array([a.vertex + c.vert_adr for a in c.attachments], int)
+        out[c.name] = _max_speed(times, xpos, xmat, m.flex_vertbodyid[verts], m.flex_vert[verts])
+    return out
+
+
+def _part_extent(m: mujoco.MjModel, part: PartModel) -> np.ndarray | None:
+    """Half-extents (3,) of a part's box in its geom frame (None for a plane)."""
+    size = m.geom_size[part.geom_id]
+    if part.shape == "plane":
+        return None
+    if part.shape == "mesh":
+        return 0.5 * (part.vertices.max(axis=0) - part.vertices.min(axis=0))
+    if part.shape == "sphere":
+        return np.full(3, size[0])
+    if part.shape in ("capsule", "cylinder"):
+        return np.array([size[0], size[0], size[1] + (size[0] if part.shape == "capsule" else 0.0)])
+    return np.asarray(size[:3], float)
+
+
+def tunnel_warnings(built: Built, poses=None) -> list[str]:
+    """Parts that move too fast for the simulation step to stop a cable.
+
+    A contact pushes only once a cable overlaps a part and removes the
+    approach speed within one step (`contact_time_constant`), so a part
+    moving at v overlaps a cable by up to v h before carrying it; once
+    v h exceeds the cable's radius plus half the part's thickness the
+    cable's centreline can be past the part's middle and is pushed out the
+    far side. Checked for every moving part against every cable when
+    cable-structure contact pushes back; the warning names the speed, the
+    thickness and the timestep that would do (scene units)."""
+    scene, m = built.scene, built.model
+    if not scene.effects.dynamics or "cable-structure" not in scene.effects.contact or not built.cables:
+        return []
+    times, xpos, xmat = poses if poses is not None else _script_poses(built)
+    if len(times) < 2:
+        return []
+    h = built.model.opt.timestep
+    thinnest = min(c.radius for c in built.cables)
+    unit = scene.units
+    out = []
+    for part in built.parts:
+        half = _part_extent(m, part)
+        if part.keepout or half is None:
+            continue
+        corners = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T * half
+        rot = np.zeros(9)
+        mujoco.mju_quat2Mat(rot, m.geom_quat[part.geom_id])
+        local = m.geom_pos[part.geom_id] + corners @ rot.reshape(3, 3).T
+        body = np.full(len(local), int(m.geom_bodyid[part.geom_id]))
+        v = _max_speed(times, xpos, xmat, body, local)
+        reach = thinnest + float(half.min())
+        if v * h > reach:
+            need = reach / v
+            out.append(f"part {part.name!r} moves at up to {v / scene.scale:.4g} {unit}/s: a simulation "
+                       f"step of {h:.3g} s carries it {v * h / scene.scale:.4g} {unit}, more than the "
+                       f"thinnest cable's radius plus half its thickness ({thinnest / scene.scale:.4g} + "
+                       f"{half.min() / scene.scale:.4g} {unit}), so a cable can pass through it; "
+                       f"scene.timestep <= {need:.3g} s would do")
+    return out
+
+
+def choose_substeps(built: Built, poses=None) -> Substeps:
+    """Simulation steps per scene step, from each cable's stiffness and speed.
+
+    Two causes stretch or compress a cable's edges, whose length is held
+    by soft equality constraints of time constant 2 h (h the simulation
+    step, `edge_time_constant`), and both shrink with h:
+    - bending: a stiff rod's bending loads compress its edges unless the
+      edges are stiffer than its highest bending mode (`bending_step`);
+    - speed: MuJoCo linearises each edge's length at the start of a step,
+      so an edge turning by an angle a per step gains about a^2 / 2 of
+      strain, and a held end moving v h per step stretches the edge next
+      to it. Keeping v h below `SPEED_FRACTION` of an element (v the
+      fastest held point of that cable, `held_speeds`) kept a 1.2 m cable
+      whose end moves 0.12 m back and forth at 5 Hz (v = 1.2 m/s, reversing
+      instantly) within 0.2 % strain, and the same at 20 Hz within 0.5 %
+      (measured: 5 Hz 0.55 % at h = 2 ms, 0.17 % at 1 ms; 20 Hz 3.7 % at
+      2 ms, 0.5 % at 0.25 ms).
+    The scene's timestep is divided by the smallest whole number that meets
+    every cable's need, at most `MAX_SUBSTEPS`."""
+    scene = built.scene
+    dt = scene.timestep
+    needed, reasons = {}, {}
+    speeds = held_speeds(built, poses) if scene.effects.dynamics else {}
+    defs = {c.name: c for c in scene.cables}
+    for c in built.cables:
+        bend = bending_step(c, defs[c.name])
+        v = speeds.get(c.name, 0.0)
+        speed = SPEED_FRACTION * c.element_length / v if v > 0.0 else np.inf
+        needed[c.name] = float(min(bend, speed))
+        reasons[c.name] = ("bending" if bend <= speed else "speed", v, c.element_length)
+    h = min(needed.values(), default=dt)
+    count = max(1, int(np.ceil(dt / h * (1.0 - 1e-9)))) if scene.effects.dynamics else 1
+    capped = count > MAX_SUBSTEPS
+    count = min(count, MAX_SUBSTEPS)
+    return Substeps(count, dt / count, needed, reasons, capped)
+
+
+def _set_step(m: mujoco.MjModel, step: float) -> None:
+    """Set the simulation step and what is tied to it (the time constants
+    of the edge equalities and of the cables' contacts)."""
+    m.opt.timestep = step
+    m.flex_solref[:, 0] = contact_time_constant(step)
+    flex_eq = m.eq_type == int(mujoco.mjtEq.mjEQ_FLEX)
+    m.eq_solref[flex_eq, 0] = edge_time_constant(step)
+
+
+def _move_held(m: mujoco.MjModel, plans: list[_CablePlan], frames: _Frames) -> None:
+    """Move the held vertices of a model compiled with `rest` to their routed
+    places on their bodies (`flex_vert`: vertex positions in body frames)."""
+    for plan in plans:
+        fid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_FLEX, f"{CABLE_PREFIX}{plan.cable.name}")
+        adr = int(m.flex_vertadr[fid])
+        for h in plan.held:
+            m.flex_vert[adr + h.vertex] = frames.to_local(h.body, plan.routed[h.vertex])
 
 
 def _has_slack(cable: CableDef) -> bool:
@@ -640,9 +959,19 @@ def _part_meshes(scene: Scene) -> dict[str, tuple[np.ndarray, np.ndarray]]:
 
 
 def _compile(scene: Scene, plans: list[_CablePlan], meshes: dict[str, tuple[np.ndarray, np.ndarray]],
-             detect: bool, origin: np.ndarray) -> tuple[mujoco.MjModel, np.ndarray]:
+             detect: bool, frames: _Frames, rest: bool = False) -> tuple[mujoco.MjModel, np.ndarray]:
     """The model, and (ngeom, 2) contype, conaffinity of each geom of the mjcf
-    model as written (0, 0 for the geoms the scene adds)."""
+    model as written (0, 0 for the geoms the scene adds).
+
+    `rest`: the held vertices sit on the cables' straight rest shape. MuJoCo
+    takes a rod's rest curvature from its shape at qpos0, where the free
+    vertices lie on the straight rest shape but held vertices would be
+    where their bodies hold them on the route: each vertex next to a held
+    one would keep a kink as rest curvature. `build` compiles the
+    simulation model with `rest` and then moves the held vertices to their
+    routed places (`_move_held`: `flex_vert` only), so every cable is
+    straight at rest."""
+    origin = frames.origin
     spec = _base_spec(scene)
     _set_options(spec, scene)
     # Model coordinates are the scene's world less `origin` (see scene_origin).
@@ -709,7 +1038,7 @@ def _compile(scene: Scene, plans: list[_CablePlan], meshes: dict[str, tuple[np.n
         child = mujoco.MjSpec.from_string(_cables_xml(plans, scene, bits, detect, margin))
         spec.worldbody.add_frame().attach_body(child.worldbody, CABLE_PREFIX, "")
         for plan in plans:
-            _add_holds(spec, scene, plan)
+            _hold_vertices(spec, plan, frames, rest)
     try:
         model = spec.compile()
     except Exception as e:  # MuJoCo's compiler raises ValueError with its message
@@ -720,24 +1049,42 @@ def _compile(scene: Scene, plans: list[_CablePlan], meshes: dict[str, tuple[np.n
     return model, own_bits
 
 
-def _add_holds(spec: mujoco.MjSpec, scene: Scene, plan: _CablePlan) -> None:
-    """Sites and connect equalities tying held vertices to their bodies.
+def _hold_vertices(spec: mujoco.MjSpec, plan: _CablePlan, frames: _Frames, rest: bool) -> None:
+    """Put each held vertex on the body that holds it; give free vertices their mass.
 
-    Site-to-site connects hold wherever the bodies are at qpos0, which is the
-    straight rest shape, not the routed one; a site on the body at the vertex's
-    routed position is what the vertex must meet."""
+    A held vertex is a vertex of its body (MuJoCo's flex takes vertices on
+    articulated bodies), at its routed position in that body's frame: it
+    moves exactly with the body, with no constraint between them to lag or
+    stretch, and the body takes the cable's reaction. The flexcomp pins the
+    held points (so it omits the twist joint of a clamped end edge); they are
+    moved here from the flexcomp's frame to their bodies.
+
+    `rest`: place the held vertices on the straight rest shape instead (see
+    `_compile`: the model whose rest curvature is copied).
+
+    Masses are lumped per vertex: the cable's mass per length times half
+    the length of the elements meeting there (flexcomp would give every
+    point the same share, a whole element's worth at a free end)."""
     c = plan.cable
-    solref = _edge_solref(scene)
-    for k, (kind, body, vertex, local) in enumerate(plan.holds):
-        vsite = f"{CABLE_PREFIX}{c.name}/{kind}{k}/vertex"
-        bsite = f"{CABLE_PREFIX}{c.name}/{kind}{k}/body"
-        spec.body(f"{CABLE_PREFIX}{c.name}_{vertex}").add_site(name=vsite)
-        target = spec.worldbody if body == "world" else spec.body(body)
-        target.add_site(name=bsite, pos=list(local))
-        eq = spec.add_equality(type=mujoco.mjtEq.mjEQ_CONNECT, objtype=mujoco.mjtObj.mjOBJ_SITE,
-                               name1=vsite, name2=bsite)
-        eq.solref = [solref, 1.0]
-        eq.solimp = [0.99, 0.999, 0.001, 0.5, 2.0]
+    flex = next(f for f in spec.flexes if f.name == f"{CABLE_PREFIX}{c.name}")
+    bodies = list(flex.vertbody)
+    vert = np.array(flex.vert, float).reshape(-1, 3)
+    shape = plan.straight if rest else plan.routed
+    for h in plan.held:
+        bodies[h.vertex] = h.body
+        vert[h.vertex] = frames.to_local(h.body, shape[h.vertex])
+    flex.vertbody = bodies
+    flex.vert = vert.ravel().tolist()
+    seg = np.linalg.norm(np.diff(plan.straight, axis=0), axis=1)
+    share = 0.5 * (np.concatenate([[0.0], seg]) + np.concatenate([seg, [0.0]]))
+    per_length = c.density * np.pi * c.radius ** 2
+    held = {h.vertex for h in plan.held}
+    for v in range(len(plan.straight)):
+        if v in held:
+            continue
+        b = spec.body(f"{CABLE_PREFIX}{c.name}_{v}")
+        b.mass = per_length * share[v]
+        b.inertia = [b.mass * (2.0 * c.radius) ** 2 / 6.0] * 3
 
 
 _SHAPES = {int(mujoco.mjtGeom.mjGEOM_PLANE): "plane", int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere",
@@ -863,11 +1210,11 @@ def _finish(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
             qpos0[m.jnt_qposadr[ja:ja + 3]] += plan.routed[v] - plan.straight[v]
         seg = np.linalg.norm(np.diff(plan.straight, axis=0), axis=1)
         s = np.concatenate([[0.0], np.cumsum(seg)])
-        attachments = [Attachment("start", c.start.body, v, float(s[v])) for v in ((0, 1) if plan.pinned_to_world else ())]
-        attachments += [Attachment(kind, body, v, float(s[v])) for kind, body, v, _ in plan.holds]
+        attachments = [Attachment(h.kind, h.body, h.vertex, float(s[h.vertex]), h.hold) for h in plan.held]
         cables.append(CableModel(c.name, c.radius, fid, int(m.flex_vertadr[fid]), n, float(s[-1]),
-                                 float(seg.mean()), plan.routed + origin,
-                                 tuple(sorted(attachments, key=lambda a: a.vertex)), c.min_bend_radius, s))
+                                 float(seg.max()), plan.routed + origin,
+                                 tuple(sorted(attachments, key=lambda a: a.vertex)), c.min_bend_radius, s,
+                                 n - 1 - sum(h.hold == Hold.CLAMP for h in plan.held) // 2))
 
     scene_bodies = {b.name for b in scene.bodies}
     free = {}

@@ -262,7 +262,8 @@ def _cmd_run(args: argparse.Namespace, stop: StopRequest) -> int:
                          only=args.only, advance=not args.full_every_step)
     bar = _ProgressBar(enabled=not args.quiet)
     try:
-        result = run_scene(scene, options, progress=bar, stop=stop)
+        result = run_scene(scene, options, progress=bar, stop=stop,
+                           warn=None if args.quiet else (lambda w: print(f"warning: {w}", file=sys.stderr)))
     finally:
         bar.done()
     if not args.quiet:

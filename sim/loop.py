@@ -70,7 +70,9 @@ class Simulation:
                                      for c in built.scene.cables], int).reshape(-1, 2)
         scene = built.scene
         self.timestep = scene.timestep
-        self.settle_steps = int(round(scene.settle / scene.timestep)) if scene.effects.dynamics else 0
+        self.substeps = built.substeps.count if built.substeps is not None else 1
+        self.step_size = scene.timestep / self.substeps  # the simulation model's timestep
+        self.settle_steps = int(round(scene.settle / self.step_size)) if scene.effects.dynamics else 0
         self.total_steps = int(round(scene.duration / scene.timestep))
 
     def reset(self) -> None:
@@ -82,13 +84,30 @@ class Simulation:
         mujoco.mj_forward(self.model, d)
 
     def settle(self, progress=None, stop=None) -> None:
-        """Simulate `settle` seconds with the script frozen at t = 0; `stop()`
-        returning True ends settling early."""
+        """Simulate `settle` seconds with the script frozen at t = 0, by
+        dynamic relaxation with kinetic damping; `stop()` returning True
+        ends settling early.
+
+        Settling looks for the static rest state, not for a motion, and the
+        cables carry only their material damping (see
+        `sim.build.rayleigh_damping`): a hanging cable would swing for many
+        seconds. So every time the kinetic energy passes a peak all
+        velocities are set to zero (kinetic damping, the dynamic relaxation
+        method of Cundall and of Barnes for form finding): the state then
+        descends towards the nearest equilibrium, which is where damped
+        motion would come to rest, without any force being added."""
+        d = self.data
+        previous = 0.0
         for k in range(self.settle_steps):
             if stop is not None and stop():
                 return
-            self.motion.apply(self.data, 0.0, frozen=True)
-            mujoco.mj_step(self.model, self.data)
+            mujoco.mj_step(self.model, d)
+            self.motion.apply(d, 0.0, frozen=True)  # exactly where the script holds them
+            kinetic = float(d.energy[1])  # at the start of the step just taken
+            if kinetic < previous:  # past a peak
+                d.qvel[:] = 0.0
+                kinetic = 0.0
+            previous = kinetic
             if progress is not None:
                 progress(k + 1)
 
@@ -96,17 +115,26 @@ class Simulation:
         """Yield the rest state, then every `every`-th step until the duration.
 
         `reset` and `settle` must have run. Steps that are not yielded are
-        still simulated."""
+        still simulated. Each scene step is `substeps` simulation steps
+        (`sim.build.choose_substeps`)."""
         yield self.state(0, contacts)
         dynamics = self.built.scene.effects.dynamics
+        if dynamics:
+            self.motion.apply(self.data, 0.0)  # settling froze the targets' velocity
         for k in range(1, self.total_steps + 1):
             if dynamics:
-                # Targets at their pose and velocity at the step's start; the
-                # step carries them (and the cable) to time k * dt.
-                self.motion.apply(self.data, (k - 1) * self.timestep)
+                # The step carries the targets (at their pose and velocity at
+                # its start) and the cable to time k * dt. The cable's reaction
+                # moves a target's free joint a little within the step despite
+                # its armature (a panel flush on a floor read 1e-6 m inside it);
+                # the script's pose at k * dt then replaces what the step made
+                # of it, so targets follow their script exactly, and its
+                # velocity there carries the next step.
+                for j in range(1, self.substeps):
+                    mujoco.mj_step(self.model, self.data)
+                    self.motion.apply(self.data, ((k - 1) * self.substeps + j) * self.step_size)
                 mujoco.mj_step(self.model, self.data)
-            else:
-                self.motion.apply(self.data, k * self.timestep)
+            self.motion.apply(self.data, k * self.timestep)
             if k % every == 0 or k == self.total_steps:
                 yield self.state(k, contacts)
 
@@ -120,7 +148,10 @@ class Simulation:
         mujoco.mj_flex(self.model, d)
         origin = self.built.origin  # model coordinates + origin = scene world
         xpos = d.flexvert_xpos
-        cables = [xpos[idx] + origin for idx in self._verts]
+        if self.built.scene.effects.dynamics:
+            cables = [xpos[idx] + origin for idx in self._verts]
+        else:  # exactly as routed, held ends included (they ride bodies that may move)
+            cables = [c.routed.copy() for c in self.built.cables]
         poses = np.zeros((len(self._part_geoms), 4, 4))
         poses[:, :3, :3] = d.geom_xmat[self._part_geoms].reshape(-1, 3, 3)
         poses[:, :3, 3] = d.geom_xpos[self._part_geoms] + origin

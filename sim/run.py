@@ -92,14 +92,16 @@ class _Timer:
 
 
 def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = None,
-              stop: StopRequest | None = None) -> dict:
+              stop: StopRequest | None = None, warn: Callable[[str], None] | None = None) -> dict:
     """Run `scene`; write the report (and recording); return the report dict.
 
     SIGINT (Ctrl-C) and SIGTERM at any moment stop the run cleanly: what was
     simulated is checked, the recording is finished and the report is written
     with ``"complete": false`` and ``"interrupted"`` naming the signal. A
     caller that listens from earlier on (the command line, from its start)
-    passes its `stop`; a stop already asked runs nothing but the report."""
+    passes its `stop`; a stop already asked runs nothing but the report.
+    `warn` is given each physics warning (`sim.build.Built.warnings`: a part
+    too fast for the timestep, ...) before the simulation starts."""
     start = time.perf_counter()
     if stop is not None:
         return _run(scene, options, progress, stop, start)
@@ -112,6 +114,9 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     validate = scene.check.validate
     built = build(scene, detect=validate)
     check_allow_names(scene, [p.name for p in built.parts] + [c.name for c in built.cables])
+    if warn is not None:
+        for w in built.warnings:
+            warn(w)
     sim = Simulation(built)
     sim.reset()
     if progress:
@@ -176,7 +181,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
             recorder.close()
             timer.lap("record")
     total = time.perf_counter() - start
-    report = _report(scene, built, config, complete, out.steps, out.checked, out.t_last, out.max_strain,
+    report = _report(scene, built, config, complete, out.steps, out.checked, out.t_last,
+                     (out.max_strain, out.max_stretch),
                      out.min_bend, out.rest_points, out.final_points, timer, total, sim, events, tracker,
                      checks.validation, options, worn, settings)
     if joints:   # where the mjcf model's joints move: their values per event
@@ -190,6 +196,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         "full_checks": advance.full, "proven_clear_steps": advance.skipped}
     report["part_warnings"] = list(checks.rigid.warnings)
     report["interrupted"] = stop.signal_name
+    report["physics_warnings"] = list(built.warnings)
+    report["settings"]["substeps"] = built.substeps.count if built.substeps else 1
     write_report(report, options.report)
     return report
 
@@ -215,7 +223,8 @@ class _Outcome:
         self.progress, self.record_stride, self.total_steps = progress, record_stride, total_steps
         self.names = [c.name for c in built.cables]
         n = len(built.cables)
-        self.max_strain = np.full(n, -np.inf)
+        self.max_strain = np.zeros(n)   # signed, largest in magnitude (compression negative)
+        self.max_stretch = np.full(n, -np.inf)
         self.min_bend = np.full(n, np.inf)
         self.rest_points: list[np.ndarray] = []
         self.final_points: list[np.ndarray] = []
@@ -255,7 +264,8 @@ class _Outcome:
                 self.rest_points = state.cables
                 if recorder:
                     recorder.log_static(state.part_poses, state.cables, state.qpos)
-            self.max_strain = np.maximum(self.max_strain, res.strain)
+            self.max_strain = np.where(np.abs(res.strain) > np.abs(self.max_strain), res.strain, self.max_strain)
+            self.max_stretch = np.maximum(self.max_stretch, res.strain)
             self.min_bend = np.minimum(self.min_bend, res.bend)
             started, closed = self.tracker.update(state.t, res.records)
             if res.near is not None:
@@ -396,10 +406,11 @@ def _report_twist(report: dict, built: Built, meters: list) -> None:
 
 
 def _report(scene: Scene, built: Built, config: CheckConfig, complete: bool, steps: int,
-            checked: int, t_last: float, max_strain, min_bend, rest_points, final_points,
+            checked: int, t_last: float, max_strain: tuple, min_bend, rest_points, final_points,
             timer: _Timer, total: float, sim: Simulation, events, tracker: EventTracker,
             validation: Validation, options: RunOptions, wear: list[CableWear], settings: Settings) -> dict:
     u = scene.scale
+    strain, stretch = max_strain  # signed largest |strain|; largest stretch
     radii = [c.radius for c in built.cables]
     cables = []
     for i, c in enumerate(built.cables):
@@ -407,9 +418,9 @@ def _report(scene: Scene, built: Built, config: CheckConfig, complete: bool, ste
         cables.append({
             "name": c.name,
             "length": c.length / u,
-            "segments": c.count - 1,
-            "max_strain": max_strain[i] if checked else None,
-            "taut": bool(checked and max_strain[i] > TAUT_STRAIN),
+            "segments": c.elements,
+            "max_strain": strain[i] if checked else None,
+            "taut": bool(checked and stretch[i] > TAUT_STRAIN),
             "min_bend_radius": min_bend[i] / u if checked else None,
             "bend_violation": bool(limit is not None and checked and min_bend[i] < limit),
             "rest_points": (np.asarray(rest_points[i]) / u) if rest_points else [],

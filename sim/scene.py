@@ -49,6 +49,7 @@ import math
 import re
 import tomllib
 from dataclasses import dataclass, field, replace
+from enum import Enum
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping
@@ -89,6 +90,20 @@ E = 4e7 Pa; we round to 5e7."""
 DEFAULT_DENSITY = 1500.0
 """Cable density when absent, kg/m^3: PVC (~1400) with some copper and air."""
 
+DEFAULT_DAMPING = 0.02
+"""`damping` when absent: fraction of critical damping of a cable's first
+bending mode (see `sim.build.rayleigh_damping` and docs/physics.md). 2 % is
+the loss of a polymer-jacketed cable swinging in air; a hanging cable keeps
+swinging for many periods."""
+
+
+class Hold(str, Enum):
+    """How an end or clip holds the cable (SPEC, additions)."""
+
+    CLAMP = "clamp"   # position and tangent
+    PIN = "pin"       # position only, free to turn
+    FREE = "free"     # not held: the position only shapes the initial route
+
 LARGEST = 1e15
 """No number in a scene may exceed this magnitude (keeps squares and sums finite)."""
 
@@ -98,6 +113,14 @@ ROUTE_TOLERANCE = 1e-9
 POINTS_LENGTH_TOLERANCE = 1e-6
 """Relative tolerance by which `length` may exceed a `points` route with
 dynamics off (the route's length printed to 6 digits is accepted)."""
+
+SELF_CONTACT_ELEMENT = 2.25
+"""Shortest element, in cable radii, when self-contact pushes back: MuJoCo's
+flex self-collision skips only elements sharing a vertex, so elements two
+apart along a straight cable are one element length apart and touch (within
+the simulation's contact margin of 0.25 r, `sim.build.SIM_MARGIN_FRACTION`)
+unless it exceeds 2 r + 0.25 r. Without self-contact MuJoCo sets no such
+limit on the element length."""
 
 DEGENERATE = 1e-6
 """A route segment shorter than this many cable radii has zero length."""
@@ -111,8 +134,9 @@ _ALLOW_KEYS = ("a", "b", "reason")
 _BODY_KEYS = ("name", "pos", "euler")
 _PART_KEYS = ("name", "body", "shape", "size", "pos", "euler", "file", "scale", "keepout")
 _CABLE_KEYS = ("name", "radius", "start", "end", "via", "length", "points", "clips",
-               "segments", "young", "density", "min_bend_radius", "twist_stiffness")
-_ANCHOR_KEYS = ("body", "pos")
+               "segments", "young", "density", "min_bend_radius", "twist_stiffness",
+               "damping")
+_ANCHOR_KEYS = ("body", "pos", "hold")
 _MOTION_KEYS = ("body", "joint", "file", "keys", "angles", "interpolation", "time_scale")
 _BODY_KEY_KEYS = ("t", "pos", "euler")
 _JOINT_KEY_KEYS = ("t", "value", "key")
@@ -280,12 +304,16 @@ class Anchor:
     """A point of a cable held by a body (start, end or clip).
 
     Attributes:
-      body: "world", a `[[bodies]]` name or a body of the mjcf model.
+      body: "world", a `[[bodies]]` name or a body of the mjcf model. With
+        `hold` FREE nothing holds the point: `pos` is then only read in this
+        body's frame at t = 0 to shape the initial route.
       pos: (3,) position in that body's frame, metres.
+      hold: clamp (position and tangent), pin (position) or free.
     """
 
     body: str
     pos: tuple[float, float, float] = _ZERO3
+    hold: Hold = Hold.CLAMP
 
 
 @dataclass(frozen=True, eq=False)
@@ -295,7 +323,7 @@ class CableDef:
     Attributes:
       name: unique cable name (not also a part name).
       radius: metres.
-      start: clamped end. With `points` its pos is points[0] in its body frame.
+      start: first end. With `points` its pos is points[0] in its body frame.
       end: the other end. With `points` its pos is points[-1] in its body frame.
       via: (k, 3) routing waypoints, world metres at t = 0; k may be 0.
       points: (n, 3) routed centreline, world metres at t = 0, n >= 2; or None.
@@ -306,6 +334,7 @@ class CableDef:
       young: bending modulus, Pa.
       density: kg/m^3.
       min_bend_radius: metres, or None for no bend check.
+      damping: fraction of critical damping of the first bending mode (>= 0).
       route: (m, 3) world polyline at t = 0, metres: start, via..., end, or
         `points`. Filled by the loader; None only for hand-built records.
       twist_stiffness: shear modulus G of the torsion, Pa, or None for
@@ -326,6 +355,7 @@ class CableDef:
     min_bend_radius: float | None = None
     route: np.ndarray | None = None
     twist_stiffness: float | None = None
+    damping: float = DEFAULT_DAMPING
 
 
 @dataclass(frozen=True)
@@ -548,6 +578,7 @@ class _Parser:
         # body name -> (origin, rotation) at t = 0; mjcf bodies are None until motions are read
         self.frames: dict[str, tuple[np.ndarray, np.ndarray] | None] = {}
         self.body_index: dict[str, str] = {}   # [[bodies]] name -> its key path
+        self.effects_read = Effects()
 
     # -- generic readers ---------------------------------------------------
 
@@ -678,6 +709,7 @@ class _Parser:
         self.frames["world"] = _frame(np.zeros(3), np.eye(3))
 
         effects = self.effects(data.get("effects", {}))
+        self.effects_read = effects
         check = self.check(data.get("check", {}))
         bodies = tuple(self.body(b, f"bodies[{i}]")
                        for i, b in enumerate(self.tables(data.get("bodies", []), "bodies")))
@@ -932,10 +964,12 @@ class _Parser:
         return [replace(part, name=f"{part.name}/{n.path}", node=n.path) for n in nodes]
 
     def anchor(self, value: Any, where: str, with_pos: bool = True) -> Anchor:
-        t = self.table(value, where, _ANCHOR_KEYS if with_pos else ("body",))
+        t = self.table(value, where, _ANCHOR_KEYS if with_pos else ("body", "hold"))
+        hold = Hold(self.string(t.get("hold", "clamp"), f"{where}.hold",
+                                tuple(h.value for h in Hold)))
         return Anchor(body=self.body_ref(t.get("body", "world"), f"{where}.body"),
                       pos=self.position(t.get("pos", [0, 0, 0]), f"{where}.pos")
-                      if with_pos else _ZERO3)
+                      if with_pos else _ZERO3, hold=hold)
 
     def to_world(self, anchor: Anchor) -> np.ndarray:
         """The anchor's world position at t = 0, metres."""
@@ -967,7 +1001,7 @@ class _Parser:
                                      f"not allowed with 'points': the {key} is "
                                      f"points[{0 if key == 'start' else -1}] (give only body)")
                 anchor = self.anchor(t.get(key, {}), f"{where}.{key}", with_pos=False)
-                ends.append(Anchor(anchor.body, self.from_world(anchor.body, point)))
+                ends.append(Anchor(anchor.body, self.from_world(anchor.body, point), anchor.hold))
             start, end = ends
             via = np.zeros((0, 3))
             via.setflags(write=False)
@@ -1028,13 +1062,16 @@ class _Parser:
                                  f"{' and droop to the length' if slack else ''}: give at least "
                                  f"{need} (or omit segments)")
             element = (length or route_length) / segments
-            if element <= radius:
-                most = max(1, math.ceil((length or route_length) / radius) - 1)
+            if "self" in self.effects_read.contact and element <= SELF_CONTACT_ELEMENT * radius:
+                most = max(2, math.ceil((length or route_length)
+                                        / (SELF_CONTACT_ELEMENT * radius)) - 1)
                 raise self.error(f"{where}.segments",
                                  f"{segments} elements are {_g(element / self.scale)} "
-                                 f"{self._units()} long, not longer than the radius "
-                                 f"{_g(radius / self.scale)} as MuJoCo's flex needs; "
-                                 f"use at most {most}")
+                                 f"{self._units()} long; with 'self' in effects.contact "
+                                 f"elements two apart along a straight cable would touch "
+                                 f"unless longer than {_g(SELF_CONTACT_ELEMENT)} radii "
+                                 f"({_g(SELF_CONTACT_ELEMENT * radius / self.scale)} "
+                                 f"{self._units()}); use at most {most}")
         bend = (self.length(t["min_bend_radius"], f"{where}.min_bend_radius", positive=True)
                 if "min_bend_radius" in t else None)
         return CableDef(
@@ -1045,7 +1082,9 @@ class _Parser:
                                 positive=True),
             min_bend_radius=bend, route=route,
             twist_stiffness=(self.number(t["twist_stiffness"], f"{where}.twist_stiffness",
-                                         positive=True) if "twist_stiffness" in t else None))
+                                         positive=True) if "twist_stiffness" in t else None),
+            damping=self.number(t.get("damping", DEFAULT_DAMPING), f"{where}.damping",
+                                nonnegative=True))
 
     def motion(self, value: dict, where: str, bodies: dict[str, BodyDef]) -> MotionDef:
         t = self.table(value, where, _MOTION_KEYS)

@@ -384,7 +384,9 @@ def attachment_exclusions(built: Built) -> list[Exclusion]:
     `check.attach_links` = N also every part of a body within N joints of it
     (:func:`neighbour_bodies`). The windows are in the cable's material
     coordinate (rest arc length, :attr:`CableModel.rest_s`), not its current
-    arc length: a stretched cable keeps the same elements excused."""
+    arc length: a stretched cable keeps the same elements excused. Only
+    held vertices count: a clamp holds two (its short edge), a pin one, a
+    free end none."""
     zone = built.scene.check.attach_zone
     links = built.scene.check.attach_links
     parts_on: dict[int, list[str]] = {}

@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import sim.scene as scene_module
-from sim.scene import (DEFAULT_CLEARANCE, Anchor, BodyKey, JointKey, KeyframeKey, Scene, SceneError,
+from sim.scene import (DEFAULT_CLEARANCE, DEFAULT_DAMPING, Anchor, Hold, BodyKey, JointKey, KeyframeKey, Scene, SceneError,
                        euler_matrix, load_scene, parse_scene)
 
 ARM_XML = """
@@ -199,6 +199,7 @@ def test_spec_example_loads(folder):
     assert part.name == "cabinet/rail_left" and part.size == (0.3, 0.02, 0.02)
     (cable,) = s.cables
     assert cable.start == Anchor("world", (0.0, 0.0, 0.6))
+    assert cable.start.hold == Hold.CLAMP and cable.damping == DEFAULT_DAMPING
     assert cable.end == Anchor("drawer", (0.5, 0.0, 0.6))
     assert cable.via.shape == (1, 3) and cable.points is None and cable.length == 0.7
     assert cable.clips == (Anchor("world", (0.12, 0.0, 0.55)),)
@@ -502,8 +503,18 @@ BAD = [
     ("every zero", lambda d: put(d, "check.every", 0), "check.every", "at least 1"),
     ("segments one", lambda d: put(d, "cables.0.segments", 1), "cables[0].segments",
      "at least 2"),
+    ("hold unknown", lambda d: put(d, "cables.0.start.hold", "weld"), "cables[0].start.hold",
+     "'clamp', 'pin', 'free'"),
+    ("hold not a string", lambda d: put(d, "cables.0.end.hold", 1), "cables[0].end.hold",
+     "expected a string"),
+    ("clip hold unknown", lambda d: put(d, "cables.0.clips.0.hold", "tight"), "cables[0].clips[0].hold",
+     "must be one of"),
+    ("damping negative", lambda d: put(d, "cables.0.damping", -0.1), "cables[0].damping",
+     "not be negative"),
+    ("damping not a number", lambda d: put(d, "cables.0.damping", "low"), "cables[0].damping",
+     "expected a number"),
     ("segments too many", lambda d: put(d, "cables.0.segments", 1000), "cables[0].segments",
-     "not longer than the radius"),
+     "would touch"),
     ("key t negative", lambda d: put(d, "motion.0.keys.0.t", -1.0), "motion[0].keys[0].t",
      "not be negative"),
     # shapes and sizes
@@ -973,3 +984,27 @@ def test_attach_links(folder):
         with pytest.raises(SceneError) as exc:
             parse(put(copy.deepcopy(BASE), "check.attach_links", bad), folder)
         check_error(exc, folder / "scene.toml", "check.attach_links", fragment)
+
+
+def test_holds_and_damping_are_read(tmp_path):
+    """`hold` on ends and clips, `damping` per cable (SPEC, additions)."""
+    data = {"scene": {"name": "h", "units": "mm", "duration": 0},
+            "cables": [{"name": "c", "radius": 4, "start": {"pos": [0, 0, 0], "hold": "pin"},
+                        "end": {"pos": [500, 0, 0], "hold": "free"},
+                        "clips": [{"pos": [250, 0, 0], "hold": "clamp"}], "damping": 0.1}]}
+    cable = parse_scene(data, tmp_path / "h.toml").cables[0]
+    assert (cable.start.hold, cable.end.hold, cable.clips[0].hold) == (Hold.PIN, Hold.FREE, Hold.CLAMP)
+    assert cable.damping == 0.1
+
+
+def test_many_short_elements_allowed_without_self_contact(tmp_path):
+    """Elements shorter than the radius: MuJoCo's flex takes them; only with
+    self-contact pushing back must elements exceed 2.25 radii."""
+    data = {"scene": {"name": "s", "units": "m", "duration": 0},
+            "cables": [{"name": "c", "radius": 0.004, "start": {"pos": [0, 0, 0]}, "end": {"pos": [0.2, 0, 0]},
+                        "segments": 100}]}
+    assert parse_scene(data, tmp_path / "s.toml").cables[0].segments == 100
+    data["effects"] = {"contact": ["self"]}
+    with pytest.raises(SceneError) as e:
+        parse_scene(data, tmp_path / "s.toml")
+    assert e.value.key == "cables[0].segments" and "use at most 22" in e.value.problem  # 0.2 m / 22 = 9.09 mm > 9 mm

@@ -16,21 +16,13 @@ Each case runs through the real scene parser, builder and step loop
   motion), except the taut case, whose stretch is forced by its ends and must
   be visible (above the report's 1 % taut threshold) and bounded.
 
-Measured (cable strain extremes over the run, peak cable kinetic energy), with
-the edge impedance of `sim.build._edge_solimp`:
-
-  thin_long  r 0.5 mm, 3 m, 80 el.  strain <= 0.03 %     KE 3.6e-4 J
-  stiff      E 1 GPa, r 5 mm        strain -0.49 %       KE 1.6e-3 J
-  limp       E 1 Pa                 strain <= 0.10 %     KE 7.9e-3 J
-  fast       4.5 m/s, 900 deg/s     strain 3.4 % moving  KE 0.36 J, rests at 0.01 %
-  taut       ends 10 % past length  strain 11.8 %        KE 0.024 J, rests
-  pinch      jaws 0.8 d apart       strain 0.05 %        KE 1.2e-5 J
-  long       10,000 steps           strain <= 0.03 %     KE 3.1e-3 J, no growth
-
-A steel rod (E 200 GPa, r 3 mm) forced into a 0.5 m span with 0.6 m of
-length is beyond this timestep: its ~1.4 kN buckling load compresses the
-edge constraints by 9-27 % (4-6 % with the former impedance); that needs a
-smaller timestep, not a harness setting, and is not a case here.
+The cables carry only their material damping (`sim.build.rayleigh_damping`,
+no air drag): after the script stops their mechanical energy must not grow;
+they need not come to rest (a cable swinging under gravity keeps swinging).
+The simulation steps within each 2 ms scene step as `sim.build.choose_substeps`
+decides (the fast case, and the steel rod of tests/test_physics.py, need
+several). Held vertices are vertices of the body that holds them: the
+cable's mass and energy count only its own vertices.
 """
 
 from __future__ import annotations
@@ -76,7 +68,7 @@ class Case:
     settle: float = 1.0
     rest: float = 0.01        # |strain| bound at the end (at rest), and throughout unless `moving`
     moving: float | None = None  # |strain| bound during the motion, when looser than `rest`
-    at_rest: bool = True      # the script stops before the end: the cable must come to rest
+    at_rest: bool = True      # the script stops before the end: no energy comes in after it
 
     def scene(self):
         data = {"scene": {"name": self.name, "units": "m", "duration": self.duration,
@@ -137,6 +129,7 @@ class Run:
     strain: np.ndarray      # (steps + 1,) cable strain
     edge_strain: np.ndarray  # (steps + 1,) largest |edge strain|
     kinetic: np.ndarray     # (steps,) cable kinetic energy between consecutive steps
+    mechanical: np.ndarray  # (steps,) kinetic plus gravitational potential energy, J
     mass: float
     length: float
     warnings: dict
@@ -161,8 +154,11 @@ def _simulate(case: Case) -> Run:
     sim.settle()
     m = sim.model
     cable = built.cables[0]
-    vertex_mass = m.body_mass[m.flex_vertbodyid[cable.vert_adr:cable.vert_adr + cable.count]]
-    strain, edge, kinetic = [], [], []
+    bodies = m.flex_vertbodyid[cable.vert_adr:cable.vert_adr + cable.count]
+    # held vertices are vertices of the body holding them: their mass is the body's, not the cable's
+    own = np.array([m.body(int(b)).name.startswith("cables/") for b in bodies])
+    vertex_mass = np.where(own, m.body_mass[bodies], 0.0)
+    strain, edge, kinetic, potential = [], [], [], []
     previous = None
     for state in sim.steps(contacts=False):
         points = state.cables[0]
@@ -170,21 +166,28 @@ def _simulate(case: Case) -> Run:
         assert np.isfinite(state.energy).all(), f"{case.name}: non-finite energy at step {state.step}"
         seg = np.linalg.norm(np.diff(points, axis=0), axis=1)
         strain.append(seg.sum() / cable.length - 1.0)
-        edge.append(np.max(np.abs(seg / cable.element_length - 1.0)))
+        edge.append(np.max(np.abs(seg / np.diff(cable.rest_s) - 1.0)))
         if previous is not None:
             v = (points - previous) / TIMESTEP
             kinetic.append(0.5 * float(vertex_mass @ np.einsum("ij,ij->i", v, v)))
+            potential.append(G * float(vertex_mass @ points[:, 2]))
         previous = points
     return Run(sim.total_steps, np.array(strain), np.array(edge), np.array(kinetic),
-               float(vertex_mass.sum()), cable.length, sim.warnings())
+               np.array(kinetic) + np.array(potential), float(vertex_mass.sum()), cable.length, sim.warnings())
 
 
 def _check_energy(case: Case, run: Run) -> None:
     bound = 0.5 * run.mass * (_max_speed(case) + math.sqrt(2 * G * run.length)) ** 2
     assert run.kinetic.max() < bound, f"{case.name}: kinetic energy {run.kinetic.max():.3g} J > {bound:.3g} J"
     if case.at_rest:
-        # The script stops by t = 1 s; 1 s later the cable is at rest.
-        assert run.kinetic[-1] < 1e-4 * bound, f"{case.name}: still moving, {run.kinetic[-1]:.3g} J"
+        # The script stops by t = 1 s; after it no energy comes in: the
+        # cable's mechanical energy never grows (1 % of the bound for the
+        # finite-difference velocities).
+        stop = int(round(1.0 / TIMESTEP))
+        after = run.mechanical[stop:]
+        assert np.max(after - after[0]) < 0.01 * bound, f"{case.name}: energy grew after the script stopped"
+        # It need not come to rest: with material damping only (no air
+        # drag) a cable swinging as a pendulum keeps swinging.
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])

@@ -1,0 +1,157 @@
+"""The cable model against closed-form answers, per element count: one command.
+
+    python benchmarks/physics_validation.py [--out docs]
+
+Runs every case of `sim.validation` (catenary sag, small-deflection
+cantilever, large-deflection elastica, hanging-chain first mode, U-cable
+swing damping, stretch under fast ends at 5 and 20 Hz, a bowed steel rod in
+compression, a plate lifted through a cable at rising speeds), prints one
+table with the measured value, the closed-form reference, the error and the
+cost (wall seconds per simulated second, measured in this run, side by side),
+and writes it to <out>/physics_validation.csv, a plot to
+<out>/physics_validation.png and, as markdown, into <out>/physics.md between
+its validation-table markers. Well under a few minutes on one core.
+
+It does not decide what passes (tests/test_physics.py does); it shows where
+each case stands and what resolution costs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from sim import validation  # noqa: E402  (the path above makes `sim` importable from a checkout)
+
+COLUMNS = ["case", "elements", "measured", "reference", "error_pct", "substeps", "wall_per_sim_s", "note"]
+
+
+def _row(r: validation.Result, note: str = "") -> dict:
+    return {"case": r.case, "elements": r.elements, "measured": r.measured,
+            "reference": "" if r.reference is None else r.reference,
+            "error_pct": "" if r.error is None else 100.0 * r.error,
+            "substeps": r.substeps, "wall_per_sim_s": r.wall_per_sim_s,
+            "note": "; ".join(filter(None, [note, ",".join(r.warnings)]))}
+
+
+def run(quick: bool = False) -> list[dict]:
+    counts = (10, 20, 40) if quick else (10, 20, 40, 80)
+    rows = []
+    for n in counts:
+        rows.append(_row(validation.catenary(n), "sag m; limp 1 m over 0.8 m"))
+    for n in (None,) + counts:
+        r = validation.cantilever(n)
+        rows.append(_row(r, "tip m; w L^4/8EI" + ("; default element count" if n is None else "")))
+    for n in counts:
+        rows.append(_row(validation.cantilever(n, large=True), "tip m; elastica (solve_bvp), wL^3/EI = 3.07"))
+    for n in counts:
+        r = validation.chain(n)
+        rows.append(_row(r, f"period s; 2 pi/(1.2024 sqrt(g/L)); amplitude left after one period "
+                            f"{r.extra['amplitude_left']:.3f}"))
+    for d in (0.0, 0.02, 0.1):
+        r = validation.u_swing(40, damping=d)
+        rows.append(_row(r, f"swing Hz; damping {d:g}: measured damping ratio {r.extra['damping_ratio']:.4f}"))
+    for f in (5.0, 20.0):
+        r = validation.fast_ends(f)
+        rows.append(_row(r, f"max |strain|; worst element {r.extra['edge']:+.4f}; "
+                            f"taut (stretch > 1 %): {r.extra['stretch'] > 0.01}"))
+    for n in (None, 48):
+        r = validation.bowed_rod(n)
+        rows.append(_row(r, "strain (negative: shorter)"))
+    for speed in (1.0, 3.0, 5.0, 8.0):
+        r = validation.plate(speed)
+        rows.append(_row(r, f"1 = carried; 10 mm plate; warned before running: {r.extra['warned']}"))
+    return rows
+
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.5g}"
+    return str(v)
+
+
+def print_table(rows: list[dict]) -> None:
+    widths = {c: max(len(c), *(len(_fmt(r[c])) for r in rows)) for c in COLUMNS[:-1]}
+    print("  ".join(c.ljust(widths[c]) for c in COLUMNS[:-1]) + "  note")
+    for r in rows:
+        print("  ".join(_fmt(r[c]).ljust(widths[c]) for c in COLUMNS[:-1]) + "  " + r["note"])
+
+
+def write(rows: list[dict], out: Path) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "physics_validation.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=COLUMNS)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: _fmt(v) for k, v in r.items()})
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
+    for case in ("catenary sag", "cantilever tip", "elastica tip", "chain period"):
+        pts = [(r["elements"], abs(r["error_pct"]), r["wall_per_sim_s"]) for r in rows
+               if r["case"] == case and r["error_pct"] != "" and "default" not in r["note"]]
+        if not pts:
+            continue
+        n, e, w = zip(*pts)
+        a.loglog(n, [max(x, 1e-4) for x in e], "o-", label=case)
+        b.loglog(n, w, "o-", label=case)
+    a.set_xlabel("elements")
+    a.set_ylabel("|error| %")
+    a.set_title("Error against closed-form answers")
+    a.axhline(1.0, color="0.7", lw=0.8)
+    a.legend(fontsize=8)
+    b.set_xlabel("elements")
+    b.set_ylabel("wall s per simulated s")
+    b.set_title("Cost (this machine, this run)")
+    b.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out / "physics_validation.png", dpi=110)
+
+
+BEGIN, END = "<!-- validation table: benchmarks/physics_validation.py -->", "<!-- end of validation table -->"
+
+
+def markdown(rows: list[dict]) -> str:
+    lines = ["| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
+    lines += ["| " + " | ".join(_fmt(r[c]) for c in COLUMNS) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def update_doc(rows: list[dict], doc: Path) -> bool:
+    """Put the table between the markers of `doc`; False when it has none."""
+    if not doc.exists():
+        return False
+    text = doc.read_text()
+    if BEGIN not in text or END not in text:
+        return False
+    head, rest = text.split(BEGIN, 1)
+    tail = rest.split(END, 1)[1]
+    doc.write_text(f"{head}{BEGIN}\n{markdown(rows)}\n{END}{tail}")
+    return True
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parents[1] / "docs")
+    parser.add_argument("--quick", action="store_true", help="fewer element counts")
+    args = parser.parse_args(argv)
+    t0 = time.perf_counter()
+    rows = run(args.quick)
+    print_table(rows)
+    write(rows, args.out)
+    if update_doc(rows, args.out / "physics.md"):
+        print(f"updated the table in {args.out / 'physics.md'}")
+    print(f"\n{len(rows)} rows in {time.perf_counter() - t0:.0f} s; wrote {args.out / 'physics_validation.csv'} "
+          f"and {args.out / 'physics_validation.png'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

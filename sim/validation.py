@@ -1,0 +1,262 @@
+"""Physics validation cases: the cable model run against closed-form answers.
+
+Each case builds a one-cable scene with the real parser and builder, runs
+it through the real step loop and returns a frozen record of what it
+measured, the reference value and the cost (wall time per simulated
+second). tests/test_physics.py asserts on them; benchmarks/
+physics_validation.py tabulates them per element count (docs/physics.md).
+
+- `catenary`: a limp cable between two points at one height; sag against
+  `sim.reference.catenary_sag`.
+- `cantilever`: a rod clamped at one end, the other free; tip deflection
+  against w L^4 / 8EI (small) or the elastica (large, `reference.ELASTICA`).
+- `chain`: a limp chain hanging from a clamp, started in its first mode;
+  period against 2 pi / (1.2024 sqrt(g / L)) and the amplitude left after
+  one period.
+- `u_swing`: a cable hanging in a U between two clamps, pushed sideways;
+  its swing's frequency and damping ratio (logarithmic decrement).
+- `fast_ends`: one end moved 0.1 L back and forth at a frequency; largest
+  |strain| of the cable and of any element.
+- `bowed_rod`: a 200 GPa, 3 mm steel rod of 0.6 m clamped between ends
+  0.5 m apart; its length change.
+- `plate`: a plate lifted through a sagging cable; whether it carries it.
+
+It deliberately holds no thresholds: deciding what passes is the tests'
+business.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from sim import reference
+from sim.build import build
+from sim.loop import Simulation
+from sim.scene import parse_scene
+
+
+@dataclass(frozen=True)
+class Result:
+    """One measurement.
+
+    Attributes:
+      case: the case's name.
+      elements: the cable's (regular) elements.
+      measured, reference: the quantity and its closed-form answer (None
+        where there is none).
+      error: measured / reference - 1 (None without a reference).
+      wall_per_sim_s: wall seconds per simulated second (mj_step and the loop).
+      substeps: simulation steps per scene step.
+      extra: further numbers, by name.
+      warnings: MuJoCo warnings, by name.
+    """
+
+    case: str
+    elements: int
+    measured: float
+    reference: float | None
+    error: float | None
+    wall_per_sim_s: float
+    substeps: int
+    extra: dict
+    warnings: dict
+
+
+def _scene(data: dict) -> object:
+    return parse_scene(data, Path(f"/virtual/{data['scene']['name']}.toml"))
+
+
+def _settled(scene):
+    """Built, settled simulation, its rest state and wall time per settled second."""
+    built = build(scene, detect=False)
+    sim = Simulation(built)
+    sim.reset()
+    t0 = time.perf_counter()
+    sim.settle()
+    wall = time.perf_counter() - t0
+    state = next(sim.steps(contacts=False))
+    return built, sim, state, wall / max(scene.settle, 1e-12)
+
+
+def _result(case, elements, measured, ref, wall, built, sim, **extra) -> Result:
+    error = None if ref is None else measured / ref - 1.0
+    return Result(case, elements, float(measured), None if ref is None else float(ref), error, float(wall),
+                  built.substeps.count, extra, sim.warnings())
+
+
+def catenary(elements: int = 40) -> Result:
+    p = reference.CATENARY
+    built, sim, state, wall = _settled(reference.catenary_scene(elements, settle=3.0))
+    pts = state.cables[0]
+    sag = p["height"] - pts[:, 2].min()
+    strain = float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum() / built.cables[0].length - 1.0)
+    return _result("catenary sag", built.cables[0].elements, sag, reference.catenary_sag(p["span"], p["length"]), wall,
+                   built, sim, strain=strain)
+
+
+def cantilever(elements: int | None = 40, large: bool = False) -> Result:
+    """`elements` None: the builder's default count."""
+    p = reference.ELASTICA if large else reference.CANTILEVER
+    built, sim, state, wall = _settled(reference.cantilever_scene(elements, settle=1.5 if large else 1.0, rod=p))
+    tip = p["height"] - state.cables[0][-1, 2]
+    if large:
+        w = p["density"] * reference.G * np.pi * p["radius"] ** 2
+        ref = reference.elastica_tip(p["length"], w, p["young"] * np.pi * p["radius"] ** 4 / 4.0)
+    else:
+        ref = reference.cantilever_tip(p["length"], p["radius"], p["density"], p["young"])
+    return _result("elastica tip" if large else "cantilever tip", built.cables[0].elements, tip, ref, wall,
+                   built, sim)
+
+
+def _start_in_shape(sim: Simulation, offsets: np.ndarray, axis: int) -> None:
+    """Displace the free vertices of the first cable by `offsets` (count,) along world `axis`."""
+    m, d = sim.model, sim.data
+    c = sim.built.cables[0]
+    for v in range(c.count):
+        bid = int(m.flex_vertbodyid[c.vert_adr + v])
+        if not m.body(bid).name.startswith("cables/"):
+            continue  # held by its body
+        d.qpos[m.jnt_qposadr[m.body_jntadr[bid]] + axis] += offsets[v]
+    mujoco.mj_forward(m, d)
+
+
+def _crossings(t: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Times where x crosses zero downwards, linearly interpolated."""
+    k = np.flatnonzero((x[:-1] > 0.0) & (x[1:] <= 0.0))
+    return t[k] + x[k] / (x[k] - x[k + 1]) * (t[k + 1] - t[k])
+
+
+def chain(elements: int = 40, periods: float = 2.5) -> Result:
+    """Hanging chain started in its first mode (J0 shape, amplitude at the free end)."""
+    p = reference.CHAIN
+    period = reference.chain_period(p["length"])
+    scene = reference.chain_scene(elements, duration=periods * period)
+    built = build(scene, detect=False)
+    sim = Simulation(built)
+    sim.reset()
+    c = built.cables[0]
+    _start_in_shape(sim, p["amplitude"] * reference.chain_mode(p["length"] - c.rest_s, p["length"]), 0)
+    t0 = time.perf_counter()
+    t, x = [], []
+    for state in sim.steps(contacts=False):
+        t.append(state.t)
+        x.append(state.cables[0][-1, 0])
+    wall = (time.perf_counter() - t0) / scene.duration
+    t, x = np.array(t), np.array(x)
+    measured = float(np.mean(np.diff(_crossings(t, x))))
+    one = t <= period
+    after = (t > period) & (t <= 2.0 * period)
+    left = float(np.abs(x[after]).max() / np.abs(x[one]).max())
+    return _result("chain period", elements, measured, period, wall, built, sim, amplitude_left=left)
+
+
+def u_swing(elements: int = 40, damping: float | None = None, duration: float = 4.0) -> Result:
+    """A 1 m cable (defaults) hanging in a U between clamps 0.2 m apart, pushed
+    sideways: frequency (Hz, measured) and damping ratio (extra) of its swing."""
+    cable = {"name": "u", "radius": 0.004, "start": {"pos": [0, 0, 1]}, "end": {"pos": [0.2, 0, 1]},
+             "via": [[0.1, 0, 0.6]], "length": 1.0, "segments": elements}
+    if damping is not None:
+        cable["damping"] = damping
+    scene = _scene({"scene": {"name": "uswing", "units": "m", "duration": duration, "settle": 2.0,
+                              "timestep": 0.002}, "cables": [cable]})
+    built, sim, state, _ = _settled(scene)
+    c = built.cables[0]
+    _start_in_shape(sim, 0.02 * np.sin(np.pi * c.rest_s / c.length), 1)
+    low = int(np.argmin(state.cables[0][:, 2]))
+    t0 = time.perf_counter()
+    t, y = [], []
+    for s in sim.steps(contacts=False):
+        t.append(s.t)
+        y.append(s.cables[0][low, 1])
+    wall = (time.perf_counter() - t0) / duration
+    t, y = np.array(t), np.array(y)
+    peaks = [i for i in range(1, len(y) - 1) if y[i] > y[i - 1] and y[i] >= y[i + 1] and y[i] > 0]
+    amps = y[peaks]
+    zeta = float("nan")
+    if len(amps) >= 2:
+        delta = np.log(amps[0] / amps[-1]) / (len(amps) - 1)
+        zeta = float(delta / np.sqrt(4 * np.pi ** 2 + delta ** 2))
+    freq = float(1.0 / np.mean(np.diff(_crossings(t, y))))
+    return _result("U swing", elements, freq, None, wall, built, sim, damping_ratio=zeta,
+                   damping_set=scene.cables[0].damping)
+
+
+def fast_ends(frequency: float, elements: int | None = None, duration: float = 1.0) -> Result:
+    """A 1.2 m cable between ends 1.0 m apart, one end moved 0.12 m (0.1 L) out
+    and back at `frequency` (linear keys: the speed reverses at once)."""
+    keys = [{"t": k / (2 * frequency), "pos": [1.0 + (0.12 if k % 2 else 0.0), 0, 1]}
+            for k in range(int(2 * frequency * duration) + 1)]
+    cable = {"name": "c", "radius": 0.004, "start": {"pos": [0, 0, 1]}, "end": {"body": "b", "pos": [0, 0, 0]},
+             "length": 1.2}
+    if elements:
+        cable["segments"] = elements
+    scene = _scene({"scene": {"name": "fast", "units": "m", "duration": duration, "settle": 0.5,
+                              "timestep": 0.002},
+                    "bodies": [{"name": "b", "pos": [1.0, 0, 1]}], "motion": [{"body": "b", "keys": keys}],
+                    "cables": [cable]})
+    built, sim, state, _ = _settled(scene)
+    c = built.cables[0]
+    rest = np.diff(c.rest_s)
+    strain, edge = [], []
+    t0 = time.perf_counter()
+    for s in sim.steps(contacts=False):
+        seg = np.linalg.norm(np.diff(s.cables[0], axis=0), axis=1)
+        strain.append(seg.sum() / c.length - 1.0)
+        e = seg / rest - 1.0
+        edge.append(e[np.argmax(np.abs(e))])
+    wall = (time.perf_counter() - t0) / duration
+    strain, edge = np.array(strain), np.array(edge)
+    worst = float(strain[np.argmax(np.abs(strain))])
+    return _result(f"stretch {frequency:g} Hz", c.elements, worst, None, wall, built, sim, edge=float(edge[np.argmax(np.abs(edge))]),
+                   stretch=float(strain.max()))
+
+
+def bowed_rod(elements: int | None = None) -> Result:
+    """A 200 GPa steel rod, r 3 mm, 0.6 m long, clamped between ends 0.5 m apart."""
+    cable = {"name": "rod", "radius": 0.003, "start": {"pos": [0, 0, 1]}, "end": {"pos": [0.5, 0, 1]},
+             "length": 0.6, "young": 2e11, "density": 7850}
+    if elements:
+        cable["segments"] = elements
+    scene = _scene({"scene": {"name": "rod", "units": "m", "duration": 0.5, "settle": 1.0, "timestep": 0.002},
+                    "cables": [cable]})
+    built, sim, state, _ = _settled(scene)
+    c = built.cables[0]
+    strains = []
+    t0 = time.perf_counter()
+    for s in sim.steps(contacts=False):
+        strains.append(np.linalg.norm(np.diff(s.cables[0], axis=0), axis=1).sum() / c.length - 1.0)
+    wall = (time.perf_counter() - t0) / scene.duration
+    strains = np.array(strains)
+    return _result("bowed steel rod", c.elements, float(strains[np.argmax(np.abs(strains))]), None,
+                   wall, built, sim)
+
+
+def plate(speed: float, half_thickness: float = 0.005, timestep: float = 0.002) -> Result:
+    """A 0.3 m square plate lifted at `speed` from below through the middle of
+    a 1 m cable sagging over 0.8 m; measured 1.0 when the cable ends above
+    the plate's mid-plane all along it (carried), else 0.0."""
+    z0, z1 = 0.55, 1.1
+    duration = (z1 - z0) / speed
+    scene = _scene({
+        "scene": {"name": "plate", "units": "m", "duration": duration, "settle": 1.0, "timestep": timestep},
+        "effects": {"contact": ["cable-structure"]},
+        "bodies": [{"name": "lift", "pos": [0.4, 0, z0]}],
+        "parts": [{"name": "plate", "body": "lift", "shape": "box", "size": [0.15, 0.15, half_thickness]}],
+        "motion": [{"body": "lift", "keys": [{"t": 0, "pos": [0.4, 0, z0]}, {"t": duration, "pos": [0.4, 0, z1]}]}],
+        "cables": [{"name": "c", "radius": 0.004, "start": {"pos": [0, 0, 1]}, "end": {"pos": [0.8, 0, 1]},
+                    "length": 1.0}]})
+    built, sim, state, _ = _settled(scene)
+    t0 = time.perf_counter()
+    for s in sim.steps(contacts=False):
+        pass
+    wall = (time.perf_counter() - t0) / duration
+    pts = s.cables[0]
+    over = np.abs(pts[:, 0] - 0.4) < 0.15
+    carried = bool(pts[over, 2].min() > s.part_poses[0][2, 3])
+    return _result(f"plate {speed:g} m/s", built.cables[0].elements, 1.0 if carried else 0.0, None, wall, built, sim,
+                   warned=bool(built.warnings))
