@@ -104,13 +104,13 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     too fast for the timestep, ...) before the simulation starts."""
     start = time.perf_counter()
     if stop is not None:
-        return _run(scene, options, progress, stop, start)
+        return _run(scene, options, progress, stop, start, warn)
     with StopRequest() as stop:
-        return _run(scene, options, progress, stop, start)
+        return _run(scene, options, progress, stop, start, warn)
 
 
 def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: StopRequest,
-         start: float) -> dict:
+         start: float, warn: Callable[[str], None] | None) -> dict:
     validate = scene.check.validate
     built = build(scene, detect=validate)
     check_allow_names(scene, [p.name for p in built.parts] + [c.name for c in built.cables])
