@@ -5,14 +5,18 @@ fixture) whose relative mesh paths, defaults and names must survive intact.
 `MjSpec.from_file` loads it exactly as MuJoCo would; scene bodies, parts and
 meshes are then added through the spec API, and the cables, which only the
 `flexcomp` macro can generate (twist bodies, pinning, the edge equality), are
-written as one small MJCF string and attached into the spec. Sites and
-`connect` equalities that tie cable vertices to moving bodies are added last,
-once the vertex bodies exist.
+written as one small MJCF string and attached into the spec. The held
+points are then moved onto the bodies that hold them (`_hold_vertices`).
 
 Scripted `[[bodies]]` are free bodies whose pose and velocity the script
 sets every step (see `Built.free`); the base model's joints are driven the
 same way. Both get a large armature so the cable's reaction barely moves
-them within a step.
+them within a step, and the loop puts them back on the script at each
+step's end.
+
+The simulation step is chosen from the cables' stiffness and the script's
+speeds (`choose_substeps`), and parts too fast for it are warned about
+(`tunnel_warnings`); docs/physics.md explains the model and its numbers.
 
 Two models come out of one scene:
 - the simulation model, in which only the interactions listed in
@@ -229,9 +233,9 @@ class Built:
       cables, parts: in scene order (parts: scene parts, then mjcf geoms).
       free: scene body name -> (qpos address, dof address) of its free joint.
         Scripted bodies are free bodies driven kinematically (qpos and qvel
-        set every step), not mocap bodies: MuJoCo gives mocap bodies no
-        velocity, so a cable end held to one lags behind it by its speed
-        times the constraint's time constant (measured: 1 mm at 0.1 m/s).
+        set every step), not mocap bodies: cable vertices ride the bodies
+        that hold them, and MuJoCo does not take flex vertices with elastic
+        damping on mocap bodies (XMLreference, flex elasticity).
       body_ids: scene body name -> body id ("world" is 0).
       base_qpos_adr, base_dof_adr: qpos / dof addresses of the base model's
         joints (all driven kinematically).

@@ -227,9 +227,16 @@ def test_only_restricts_a_run_to_one_assembly(tmp_path: Path):
 
     assert events("keepout_bolt.toml", "--only", "plate") == {("keepout", "lead", "plate/bolt_wrench_space")}
     assert events("keepout_bolt.toml", "--only", "plate/base") == set()
-    everything = events("arm.toml")
-    forearm = events("arm.toml", "--only", "forearm")
-    assert forearm and forearm == {e for e in everything if e[2] == "forearm/fore_link"} != everything
+    # mjcf bodies are assemblies too: each --only run keeps exactly that body's events.
+    # With the cable physics of docs/physics.md the hose comes near the upper arm
+    # only, with a single pair whose steps at the clearance's edge are a larger
+    # share of the comparison: method exact (segment distances) leaves no
+    # between-points disagreements there.
+    everything = events("arm.toml", "--method", "exact")
+    upper = events("arm.toml", "--only", "upper_arm", "--method", "exact")
+    assert upper and upper == {e for e in everything if e[2] == "upper_arm/upper_link"}
+    assert events("arm.toml", "--only", "forearm", "--method", "exact") == \
+        {e for e in everything if e[2] == "forearm/fore_link"}
 
 
 def test_only_unknown_assembly_exits_2(small_scene: Path, capsys):
