@@ -188,7 +188,8 @@ def u_swing(elements: int = 40, damping: float | None = None, duration: float = 
 
 def fast_ends(frequency: float, elements: int | None = None, duration: float = 1.0) -> Result:
     """A 1.2 m cable between ends 1.0 m apart, one end moved 0.12 m (0.1 L) out
-    and back at `frequency` (linear keys: the speed reverses at once)."""
+    and back at `frequency` (linear interpolation: the speed reverses at once,
+    the hardest case; cubic keys would reverse it smoothly)."""
     keys = [{"t": k / (2 * frequency), "pos": [1.0 + (0.12 if k % 2 else 0.0), 0, 1]}
             for k in range(int(2 * frequency * duration) + 1)]
     cable = {"name": "c", "radius": 0.004, "start": {"pos": [0, 0, 1]}, "end": {"body": "b", "pos": [0, 0, 0]},
@@ -197,7 +198,8 @@ def fast_ends(frequency: float, elements: int | None = None, duration: float = 1
         cable["segments"] = elements
     scene = _scene({"scene": {"name": "fast", "units": "m", "duration": duration, "settle": 0.5,
                               "timestep": 0.002},
-                    "bodies": [{"name": "b", "pos": [1.0, 0, 1]}], "motion": [{"body": "b", "keys": keys}],
+                    "bodies": [{"name": "b", "pos": [1.0, 0, 1]}],
+                    "motion": [{"body": "b", "keys": keys, "interpolation": "linear"}],
                     "cables": [cable]})
     built, sim, state, _ = _settled(scene)
     c = built.cables[0]
@@ -247,7 +249,8 @@ def plate(speed: float, half_thickness: float = 0.005, timestep: float = 0.002) 
         "effects": {"contact": ["cable-structure"]},
         "bodies": [{"name": "lift", "pos": [0.4, 0, z0]}],
         "parts": [{"name": "plate", "body": "lift", "shape": "box", "size": [0.15, 0.15, half_thickness]}],
-        "motion": [{"body": "lift", "keys": [{"t": 0, "pos": [0.4, 0, z0]}, {"t": duration, "pos": [0.4, 0, z1]}]}],
+        "motion": [{"body": "lift", "interpolation": "linear",
+                    "keys": [{"t": 0, "pos": [0.4, 0, z0]}, {"t": duration, "pos": [0.4, 0, z1]}]}],
         "cables": [{"name": "c", "radius": 0.004, "start": {"pos": [0, 0, 1]}, "end": {"pos": [0.8, 0, 1]},
                     "length": 1.0}]})
     built, sim, state, _ = _settled(scene)
