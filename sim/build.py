@@ -407,9 +407,32 @@ class _Frames:
     """Pose of every body at t = 0 (`Scene.start_frames`), in model coordinates
     (the scene's world less `origin`)."""
 
-    def __init__(self, scene: Scene, origin: np.ndarray):
-        self.poses = scene.start_frames
+    def __init__(self, scene: Scene, origin: np.ndarray, poses=None):
+        self.poses = scene.start_frames if poses is None else poses
         self.origin = origin
+
+    def at_qpos0(self, scene: Scene, plans: list["_CablePlan"]) -> "_Frames":
+        """The same frames where the compiled model has its bodies at qpos0:
+        `[[bodies]]` at their `[[bodies]]` pose (their first key may differ),
+        the mjcf model's bodies at its qpos0 (its first motion sample may
+        differ). Where a cable's rest shape is placed (`_compile`'s `rest`)."""
+        poses = dict(self.poses)
+        for b in scene.bodies:
+            poses[b.name] = (np.asarray(b.pos, float), euler_matrix(b.euler))
+        held = {h.body for plan in plans for h in plan.held}
+        if scene.mjcf is not None and held & self._mjcf_names(scene):
+            model = mujoco.MjModel.from_xml_path(str(scene.mjcf))
+            data = mujoco.MjData(model)
+            mujoco.mj_kinematics(model, data)
+            for i in range(1, model.nbody):
+                name = model.body(i).name
+                if name in poses:
+                    poses[name] = (data.xpos[i].copy(), data.xmat[i].reshape(3, 3).copy())
+        return _Frames(scene, self.origin, poses)
+
+    @staticmethod
+    def _mjcf_names(scene: Scene) -> set:
+        return set(scene.start_frames) - {"world"} - {b.name for b in scene.bodies}
 
     def to_world(self, body: str, pos) -> np.ndarray:
         p, r = self.poses[body]
@@ -1041,8 +1064,9 @@ def _compile(scene: Scene, plans: list[_CablePlan], meshes: dict[str, tuple[np.n
     if plans:
         child = mujoco.MjSpec.from_string(_cables_xml(plans, scene, bits, detect, margin))
         spec.worldbody.add_frame().attach_body(child.worldbody, CABLE_PREFIX, "")
+        placed = frames.at_qpos0(scene, plans) if rest else frames
         for plan in plans:
-            _hold_vertices(spec, plan, frames, rest)
+            _hold_vertices(spec, plan, placed, rest)
     try:
         model = spec.compile()
     except Exception as e:  # MuJoCo's compiler raises ValueError with its message

@@ -194,3 +194,23 @@ def test_thin_and_light_wires_build_and_run(elements, density, young):
         strain = np.linalg.norm(np.diff(s.cables[0], axis=0), axis=1).sum() / built.cables[0].length - 1
         assert abs(strain) < 0.01
     assert sim.warnings() == {}
+
+
+def test_rest_shape_is_straight_where_the_script_starts_elsewhere():
+    """A body whose first key is not its [[bodies]] pose holds a stiff cable's
+    end: the model is compiled with the body at its [[bodies]] pose, and the
+    cable's rest shape must still be straight (no kink next to the held end):
+    with gravity off it settles to the straight line between its ends."""
+    data = {"scene": {"name": "rest", "units": "m", "duration": 0.0, "settle": 2.0},
+            "effects": {"gravity": False},
+            "bodies": [{"name": "b", "pos": [0.3, 0.2, 1.0], "euler": [0, 0, 40]}],
+            "motion": [{"body": "b", "keys": [{"t": 0, "pos": [0.5, 0, 1], "euler": [0, 0, 0]}]}],
+            "cables": [{"name": "c", "radius": 0.004, "start": {"pos": [0, 0, 1]},
+                        "end": {"body": "b", "pos": [0, 0, 0]}, "young": 1e9}]}
+    built = build(parse_scene(data, Path("/virtual/rest.toml")), detect=False)
+    sim = Simulation(built)
+    sim.reset()
+    sim.settle()
+    pts = next(sim.steps(contacts=False)).cables[0]
+    assert sim.warnings() == {}
+    assert np.abs(pts[:, 1]).max() < 1e-6 and np.abs(pts[:, 2] - 1.0).max() < 1e-6
