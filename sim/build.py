@@ -69,7 +69,7 @@ import numpy as np
 
 from checker.shapes import Shape, ShapeType, least_signed_distance, mesh_shape
 from sim.meshfile import mesh_nodes
-from sim.route import initial_shape, run_elements
+from sim.route import initial_shape, polyline_length, run_elements
 from sim.scene import Anchor, CableDef, Hold, Scene, SceneError, euler_matrix
 
 CABLE_PREFIX = "cables/"
@@ -571,13 +571,22 @@ def _plan_cable(cable: CableDef, frames: _Frames, where: str, scene: Scene,
         if slack and counts.max() < 2:
             counts = np.full(len(runs), 2)
     measure = None if (depth is None or not slack) else depth.measure(cable.radius)
-    routed = initial_shape(route, length, counts, depth=measure)
     cuts = [int(np.argmin(np.linalg.norm(route - c[2], axis=1))) for c in clips]
     clip_vertices = np.concatenate([[0], np.cumsum(counts)])[cuts]
     anchors = ([(0, "start", cable.start)] + [(int(v), "clip", c[3]) for c, v in zip(clips, clip_vertices)]
-               + [(len(routed) - 1, "end", cable.end)])
-    shortest = float(np.linalg.norm(np.diff(routed, axis=0), axis=1).min())
-    routed, held = _clamp_edges(routed, anchors, CLAMP_EDGE * shortest)
+               + [(int(counts.sum()), "end", cable.end)])
+    droop = length
+    for _ in range(2):
+        # A clip's held edge along the corner's bisector leaves the route by a
+        # little; with slack the second pass droops that much less, so the
+        # cable keeps its length (to second order in the clamp edge).
+        drooped = initial_shape(route, droop, counts, depth=measure)
+        shortest = float(np.linalg.norm(np.diff(drooped, axis=0), axis=1).min())
+        routed, held = _clamp_edges(drooped, anchors, CLAMP_EDGE * shortest)
+        excess = polyline_length(routed) - length
+        if not slack or abs(excess) <= 1e-12 * length or droop - excess < total:
+            break
+        droop -= excess
     seg = np.linalg.norm(np.diff(routed, axis=0), axis=1)
     tangent = (routed[1] - routed[0]) / seg[0]
     s = np.concatenate([[0.0], np.cumsum(seg)])
@@ -598,7 +607,10 @@ def _clamp_edges(routed: np.ndarray, anchors: list[tuple[int, str, Anchor]],
     element) along the route's tangent at the held point, inside the cable:
     the next vertex's bending then stands for the rod from the clamp on.
     At the end the edge leads into the end point, at a clip it leaves the
-    clip point. A pin holds the one vertex, a free anchor nothing."""
+    clip point along the bisector of the route's corner there (so a route
+    turning at a clip bends by half the turn on either side of the clamp,
+    not all of it on one). A pin holds the one vertex, a free anchor
+    nothing."""
     points = [p for p in routed]
     held: list[_Held] = []
     shift = 0
@@ -614,8 +626,14 @@ def _clamp_edges(routed: np.ndarray, anchors: list[tuple[int, str, Anchor]],
             points.insert(v, points[v] - edge * t / np.linalg.norm(t))
             held += [_Held(kind, anchor.body, v, anchor.hold), _Held(kind, anchor.body, v + 1, anchor.hold)]
         else:
-            t = points[v + 1] - points[v]
-            points.insert(v + 1, points[v] + edge * t / np.linalg.norm(t))
+            out = points[v + 1] - points[v]
+            t = out / np.linalg.norm(out)
+            if kind == "clip":  # along the route's bisector, so the route's corner splits both sides
+                into = points[v] - points[v - 1]
+                bisector = t + into / np.linalg.norm(into)
+                if np.linalg.norm(bisector) > 1e-9 and np.dot(bisector, out) > edge * np.linalg.norm(bisector):
+                    t = bisector / np.linalg.norm(bisector)
+            points.insert(v + 1, points[v] + edge * t)
             held += [_Held(kind, anchor.body, v, anchor.hold), _Held(kind, anchor.body, v + 1, anchor.hold)]
         shift += 1
     return np.array(points), held
