@@ -272,22 +272,25 @@ keepout = true
     assert main(["run", str(path), "--no-record", "--report", str(report_path)]) == 1
     report = json.loads(report_path.read_text())
     bump = [e for e in report["events"] if e["b"] == "bump"]
-    assert len(bump) == 1 and bump[0]["severity"] == "hard"
-    e = bump[0]
+    # The hose starts in the bump; swinging with only its material damping
+    # (docs/physics.md) it may leave and come back, each stay an event of its own.
+    assert bump and all(e["severity"] == "hard" for e in bump)
     motion = Motion(build(load_scene(path), detect=False))
-    assert set(e["joints"]) == {"base_yaw", "shoulder_pitch", "elbow"}
-    for name, value in e["joints"].items():
-        assert value == pytest.approx(np.degrees(motion.joint_values([e["t_worst"]], [name])[0, 0]))
-    assert e["link"] == "upper_arm"
-    assert list(e["joint_ranges"]) == ["shoulder_pitch", "base_yaw"]   # nearest joint first
-    fine = np.degrees(motion.joint_values(np.linspace(e["t_start"], e["t_end"], 2001),
-                                          ["shoulder_pitch", "base_yaw"]))
-    assert np.allclose(list(e["joint_ranges"].values()),
-                       np.stack([fine.min(axis=0), fine.max(axis=0)], axis=1), atol=1e-9)
+    printed = capsys.readouterr().out
+    for e in bump:
+        assert set(e["joints"]) == {"base_yaw", "shoulder_pitch", "elbow"}
+        for name, value in e["joints"].items():
+            assert value == pytest.approx(np.degrees(motion.joint_values([e["t_worst"]], [name])[0, 0]))
+        assert e["link"] == "upper_arm"
+        assert list(e["joint_ranges"]) == ["shoulder_pitch", "base_yaw"]   # nearest joint first
+        fine = np.degrees(motion.joint_values(np.linspace(e["t_start"], e["t_end"], 2001),
+                                              ["shoulder_pitch", "base_yaw"]))
+        assert np.allclose(list(e["joint_ranges"].values()),
+                           np.stack([fine.min(axis=0), fine.max(axis=0)], axis=1), atol=1e-9)
+        lo, hi = e["joint_ranges"]["shoulder_pitch"]
+        assert f"link upper_arm; joints over the event: shoulder_pitch {lo:.4g}..{hi:.4g} deg, base_yaw" \
+            in printed
     assert report["joint_units"] == {"base_yaw": "deg", "shoulder_pitch": "deg", "elbow": "deg"}
-    lo, hi = e["joint_ranges"]["shoulder_pitch"]
-    assert f"link upper_arm; joints over the event: shoulder_pitch {lo:.4g}..{hi:.4g} deg, base_yaw" \
-        in capsys.readouterr().out
 
 
 def test_no_joint_fields_without_moving_joints(tmp_path):
