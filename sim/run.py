@@ -418,7 +418,7 @@ def _report(scene: Scene, built: Built, config: CheckConfig, complete: bool, ste
         cables.append({
             "name": c.name,
             "length": c.length / u,
-            "segments": c.elements,
+            "segments": c.count - 1,   # every element, a clamp's short held edge included
             "max_strain": strain[i] if checked else None,
             "taut": bool(checked and stretch[i] > TAUT_STRAIN),
             "min_bend_radius": min_bend[i] / u if checked else None,
