@@ -155,7 +155,7 @@ def _least_over(dirs: np.ndarray, args) -> tuple[np.ndarray, np.ndarray]:
     return h[np.arange(n), best], dirs[np.arange(n), best]
 
 
-def _gilbert(u: np.ndarray, f: np.ndarray, args) -> tuple[np.ndarray, np.ndarray]:
+def _gilbert(u: np.ndarray, f: np.ndarray, args, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Gilbert's distance algorithm (1966) on ``D = A - B`` from direction u (n, 3).
 
     Keeps a point ``x`` of D and moves it to the point nearest the origin on
@@ -163,25 +163,66 @@ def _gilbert(u: np.ndarray, f: np.ndarray, args) -> tuple[np.ndarray, np.ndarray
     visited gives ``h_D``, whose least value (with ``f``) is returned with
     its direction: apart, ``-h_D`` rises to the distance and ``|x|`` falls
     to it. Overlapping, ``x`` tends to the origin and ``f`` only keeps the
-    starts' least value."""
+    starts' least value. A pair stops once its ``x`` moves less than
+    ``CONVERGED`` of its size (:func:`_rows`)."""
+    f, best_u = f.copy(), u.copy()
     _, wa, wb = _h_d(*args, u)
     x = wa - wb
-    best_u = u.copy()
-    for _ in range(GILBERT_ITERS):
-        ln = np.linalg.norm(x, axis=1)
+    for act, sub in _rows(len(u), args, GILBERT_ITERS):
+        xa = x[act]
+        ln = np.linalg.norm(xa, axis=1)
         live = ln > 0
-        d = -x / np.where(live, ln, 1.0)[:, None]
-        d = np.where(live[:, None], d, best_u)
-        h, wa, wb = _h_d(*args, d)
-        better = h < f
-        f = np.where(better, h, f)
-        best_u = np.where(better[:, None], d, best_u)
-        w = wa - wb
-        e = w - x
+        d = -xa / np.where(live, ln, 1.0)[:, None]
+        d = np.where(live[:, None], d, best_u[act])
+        h, wa, wb = _h_d(*sub, d)
+        better = h < f[act]
+        f[act] = np.where(better, h, f[act])
+        best_u[act] = np.where(better[:, None], d, best_u[act])
+        e = (wa - wb) - xa
         ee = np.einsum("ij,ij->i", e, e)
-        t = np.clip(-np.einsum("ij,ij->i", x, e) / np.where(ee > 0, ee, 1.0), 0.0, 1.0)
-        x = x + t[:, None] * e
+        t = np.clip(-np.einsum("ij,ij->i", xa, e) / np.where(ee > 0, ee, 1.0), 0.0, 1.0)
+        x[act] = xa + t[:, None] * e
+        act.moved = t * np.sqrt(ee) > CONVERGED * scale[act]
     return f, best_u
+
+
+CONVERGED = 1e-9
+"""Gilbert's and the projections' iterations of a pair stop once its points
+move less than this fraction of its size (the two parts' largest sizes
+summed): far below any clearance, and decided by the pair alone, so a pair's
+answer does not depend on the others checked with it. Stopping early only
+keeps fewer directions: the answer stays a lower bound of the signed
+distance."""
+
+CONVERGED_ANGLE = 1e-7
+"""The descent of a pair stops once a trial fails with a turn of the
+direction below this (radians): near the minimum h_D differs from its least
+value by the square of that times its curvature."""
+
+
+class _Active(np.ndarray):
+    """Row indices still iterating, with a `moved` mask set by each iteration."""
+
+    moved: np.ndarray
+
+
+def _rows(n: int, args, iters: int):
+    """Yield (rows still iterating, args of those rows) up to `iters` times;
+    after each iteration the rows whose `act.moved` is False stop (their
+    values stay as they were: every update is row by row, so the rows left
+    give the same bits as iterating them alone)."""
+    act = np.arange(n)
+    sub = args
+    for _ in range(iters):
+        if not len(act):
+            return
+        view = act.view(_Active)
+        view.moved = np.ones(len(act), bool)
+        yield view, sub
+        keep = view.moved
+        if not keep.all():
+            act = act[keep]
+            sub = tuple(x[act] for x in args)
 
 
 def _project(kind: np.ndarray, size: np.ndarray, rot: np.ndarray, pos: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -198,38 +239,48 @@ def _project(kind: np.ndarray, size: np.ndarray, rot: np.ndarray, pos: np.ndarra
     return out
 
 
-def _alternate(u: np.ndarray, f: np.ndarray, args) -> tuple[np.ndarray, np.ndarray]:
+def _alternate(u: np.ndarray, f: np.ndarray, args, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Alternating projections between the solids from their support points along u; every
-    pair of points met gives the direction from one to the other, kept when h_D is lower."""
-    ka, sa, ra, pa, kb, sb, rb, pb = args
+    pair of points met gives the direction from one to the other, kept when h_D is lower.
+    A pair stops once its points move less than ``CONVERGED`` of its size."""
+    f, u = f.copy(), u.copy()
     _, p, q = _h_d(*args, u)
-    for _ in range(PROJECTION_ITERS):
-        p = _project(ka, sa, ra, pa, q)
-        q = _project(kb, sb, rb, pb, p)
-        v = q - p
+    for act, sub in _rows(len(u), args, PROJECTION_ITERS):
+        ka, sa, ra, pa, kb, sb, rb, pb = sub
+        p_new = _project(ka, sa, ra, pa, q[act])
+        q_new = _project(kb, sb, rb, pb, p_new)
+        step = np.linalg.norm(p_new - p[act], axis=1) + np.linalg.norm(q_new - q[act], axis=1)
+        p[act], q[act] = p_new, q_new
+        v = q_new - p_new
         ln = np.linalg.norm(v, axis=1)
-        d = np.where(ln[:, None] > 0, v / np.where(ln > 0, ln, 1.0)[:, None], u)
-        h, _, _ = _h_d(*args, d)
-        better = h < f
-        f = np.where(better, h, f)
-        u = np.where(better[:, None], d, u)
+        d = np.where(ln[:, None] > 0, v / np.where(ln > 0, ln, 1.0)[:, None], u[act])
+        h, _, _ = _h_d(*sub, d)
+        better = h < f[act]
+        f[act] = np.where(better, h, f[act])
+        u[act] = np.where(better[:, None], d, u[act])
+        act.moved = step > CONVERGED * scale[act]
     return f, u
 
 
 def _descend(u: np.ndarray, f: np.ndarray, args, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Projected gradient descent of h_D on the unit sphere from u (n, 3), value f; monotone."""
+    """Projected gradient descent of h_D on the unit sphere from u (n, 3), value f; monotone.
+    A pair stops once a trial fails with a turn below ``CONVERGED_ANGLE``."""
+    f, u = f.copy(), u.copy()
     step = 0.5 / scale
-    for _ in range(DESCENT_ITERS):
-        _, wa, wb = _h_d(*args, u)
+    for act, sub in _rows(len(u), args, DESCENT_ITERS):
+        ua = u[act]
+        _, wa, wb = _h_d(*sub, ua)
         g = wa - wb
-        g -= np.einsum("ij,ij->i", g, u)[:, None] * u
-        trial = u - step[:, None] * g
+        g -= np.einsum("ij,ij->i", g, ua)[:, None] * ua
+        turn = step[act] * np.linalg.norm(g, axis=1)
+        trial = ua - step[act, None] * g
         trial /= np.maximum(np.linalg.norm(trial, axis=1), 1e-300)[:, None]
-        ft, _, _ = _h_d(*args, trial)
-        better = ft < f
-        u = np.where(better[:, None], trial, u)
-        f = np.where(better, ft, f)
-        step = np.where(better, 1.5 * step, 0.5 * step)
+        ft, _, _ = _h_d(*sub, trial)
+        better = ft < f[act]
+        u[act] = np.where(better[:, None], trial, ua)
+        f[act] = np.where(better, ft, f[act])
+        step[act] = np.where(better, 1.5 * step[act], 0.5 * step[act])
+        act.moved = better | (turn > CONVERGED_ANGLE)
     return f, u
 
 
@@ -342,8 +393,8 @@ def convex_pairs(kind_a: np.ndarray, size_a: np.ndarray, rot_a: np.ndarray, pos_
             c = np.flatnonzero(curved)
             scale = np.maximum(np.abs(sa[rest[c]]).max(axis=1) + np.abs(sb[rest[c]]).max(axis=1), 1e-300)
             sc = tuple(x[c] for x in sub)
-            f[c], u[c] = _gilbert(u[c], f[c], sc)
-            f[c], u[c] = _alternate(u[c], f[c], sc)
+            f[c], u[c] = _gilbert(u[c], f[c], sc, scale)
+            f[c], u[c] = _alternate(u[c], f[c], sc, scale)
             f[c], u[c] = _descend(u[c], f[c], sc, scale)
             # overlapping: h_D may have several local minima; descend from the best
             # few of the axes and an even spread of directions too
