@@ -688,8 +688,13 @@ def _excluded(cable: np.ndarray, part: np.ndarray, s: np.ndarray, excl: tuple) -
     return np.bincount(rows, weights=inside, minlength=len(s)) > 0
 
 
-def _point_distances(tab: _PartTable, pk: np.ndarray, loc: np.ndarray, face_plane: bool) -> np.ndarray:
-    """Signed distance (n,) of local points ``loc`` to parts ``pk``, batched by type."""
+def _point_distances(tab: _PartTable, pk: np.ndarray, loc: np.ndarray, face_plane: bool,
+                     limit: np.ndarray | None = None) -> np.ndarray:
+    """Signed distance (n,) of local points ``loc`` to parts ``pk``, batched by type.
+
+    With ``limit`` (n,): a mesh may answer a point that provably lies beyond
+    its limit with a lower bound above it instead (see
+    :func:`checker.shapes.signed_distance`); callers keep only values below."""
     d = np.full(len(pk), np.inf)
     types = list(ShapeType)
     for code in np.unique(tab.type[pk]):
@@ -700,7 +705,8 @@ def _point_distances(tab: _PartTable, pk: np.ndarray, loc: np.ndarray, face_plan
             for g in np.unique(grp):
                 sk = sel[grp == g]
                 shape = tab.mesh_shapes[g]
-                d[sk] = face_plane_distance(shape, loc[sk]) if face_plane else signed_distance(shape, loc[sk])[0]
+                d[sk] = face_plane_distance(shape, loc[sk]) if face_plane else \
+                    signed_distance(shape, loc[sk], None if limit is None else limit[sk])[0]
         elif face_plane:
             d[sel] = face_plane_distance_batch(stype, tab.size[pk[sel]], loc[sel])
         else:
@@ -725,7 +731,7 @@ def _structure_points(dp, ch, tab, config, excl, hits, limit=None, excl_near=Non
     box_ok &= ~_excluded(dp.cable[it], pk, dp.m[it], excl if excl_near is None else excl_near)
     it, pk, loc = it[box_ok], pk[box_ok], loc[box_ok]
     rec = None if excl_near is None else ~_excluded(dp.cable[it], pk, dp.m[it], excl)
-    d = _point_distances(tab, pk, loc, config.face_plane)
+    d = _point_distances(tab, pk, loc, config.face_plane, dp.radius[it] + limit)
     v = d - dp.radius[it]
     o = v < limit
     it, pk, v = it[o], pk[o], v[o]
@@ -754,8 +760,9 @@ def _structure_exact(dp, ch, tab, config, excl, hits) -> None:
     it, pk, i0, a, b = it[box_ok], pk[box_ok], i0[box_ok], a[box_ok], b[box_ok]
     # Signed distance is 1-Lipschitz: the midpoint's distance minus the half
     # length bounds the segment's from below, so far segments skip the search.
-    mid = _point_distances(tab, pk, 0.5 * (a + b), face_plane=False)
-    near = mid - 0.5 * row_norm(b - a) - dp.radius[i0] < config.clearance
+    half = 0.5 * row_norm(b - a)
+    mid = _point_distances(tab, pk, 0.5 * (a + b), False, config.clearance + half + dp.radius[i0])
+    near = mid - half - dp.radius[i0] < config.clearance
     it, pk, i0, a, b = it[near], pk[near], i0[near], a[near], b[near]
     d = np.full(len(it), np.inf)
     t = np.zeros(len(it))
@@ -1035,7 +1042,7 @@ class Checker:
         excl = self._exclusion_table(names, exclusions)[0]
         keep &= ~_excluded(cab[it], k, dense.m[it], excl)
         it, k, loc, rad = it[keep], k[keep], loc[keep], rad[keep]
-        v = _point_distances(tab, k, loc, config.face_plane) - rad
+        v = _point_distances(tab, k, loc, config.face_plane, rad + config.clearance) - rad
         keep = v < config.clearance
         it, k, v = it[keep], k[keep], v[keep]
         if len(v) == 0:

@@ -111,6 +111,7 @@ class MeshData:
             outside are defined and distances are signed.
         lo, hi: (3,) bounding box corners.
         tri_lo, tri_hi: (F, 3) each triangle's bounding box.
+        bound: the :class:`_BoundGrid` of lower bounds for :func:`signed_distance`'s ``limit``.
     """
 
     a: np.ndarray
@@ -130,6 +131,7 @@ class MeshData:
     hi: np.ndarray
     tri_lo: np.ndarray
     tri_hi: np.ndarray
+    bound: "_BoundGrid" = field(default=None, repr=False)
 
     @staticmethod
     def build(vertices: np.ndarray, faces: np.ndarray) -> "MeshData":
@@ -170,6 +172,7 @@ class MeshData:
             faces=f, vertices=v, centroids=centroids, reach=reach,
             tree=cKDTree(centroids), levels=_reach_levels(centroids, face_reach, reach), closed=closed, lo=v.min(axis=0), hi=v.max(axis=0),
             tri_lo=np.minimum(np.minimum(a, b), c), tri_hi=np.maximum(np.maximum(a, b), c),
+            bound=_BoundGrid(v.min(axis=0), v.max(axis=0)),
         )
 
 
@@ -193,6 +196,58 @@ def _reach_levels(centroids: np.ndarray, face_reach: np.ndarray, reach: float,
             # the class's own largest reach is its bound
             out.append((float(face_reach[idx].max()), idx, cKDTree(centroids[idx])))
     return tuple(out)
+
+
+_GRID_CELLS = 48
+"""Cells of :class:`_BoundGrid` along the mesh's longest side."""
+
+_GRID_PAD = 8
+"""Cells of :class:`_BoundGrid` beyond the mesh's box on every side."""
+
+
+class _BoundGrid:
+    """Lower bounds on a mesh's signed distance from a coarse grid, filled lazily.
+
+    The signed distance to a closed mesh (and the unsigned one to an open
+    mesh) is 1-Lipschitz, so the exact value ``v`` at a cell's centre ``c``
+    bounds it at any point ``p`` from below by ``v - |p - c|``. Centres are
+    evaluated exactly the first time a point falls in their cell and kept
+    (a memo: the bound, and every answer built on it, do not depend on
+    which cells were filled before). Outside the mesh's box the distance to
+    the box is a bound too (and the only one beyond the grid). This lets
+    :func:`signed_distance` with a ``limit`` skip the exact nearest-triangle
+    search for points that provably lie at or beyond it.
+    """
+
+    def __init__(self, lo: np.ndarray, hi: np.ndarray):
+        self.lo, self.hi = lo, hi
+        ext = hi - lo
+        self.h = float(max(ext.max(), np.finfo(float).tiny)) / _GRID_CELLS
+        self.origin = lo - _GRID_PAD * self.h
+        self.dims = (np.ceil(ext / self.h).astype(np.int64) + 2 * _GRID_PAD).clip(1)
+        self.values = np.full(int(np.prod(self.dims)), np.nan)
+
+    def lower(self, m: MeshData, p: np.ndarray) -> np.ndarray:
+        """(n,) lower bounds on the signed distance at points p (-inf where none)."""
+        gap = np.maximum(np.maximum(self.lo - p, p - self.hi), 0.0)
+        box = np.sqrt(np.einsum("ij,ij->i", gap, gap))
+        out = np.where(box > 0.0, box, -np.inf)
+        ijk = np.floor((p - self.origin) / self.h).astype(np.int64)
+        inside = np.all((ijk >= 0) & (ijk < self.dims), axis=1)
+        if not inside.any():
+            return out
+        ijk = ijk[inside]
+        flat = np.ravel_multi_index(ijk.T, self.dims)
+        centre = self.origin + (ijk + 0.5) * self.h
+        todo = np.unique(flat[np.isnan(self.values[flat])])
+        if len(todo):
+            c = self.origin + (np.stack(np.unravel_index(todo, self.dims), axis=1) + 0.5) * self.h
+            self.values[todo] = _sd_mesh(m, c)[0]
+        v = self.values[flat]
+        # rounding: the centre's value and the distance each err by a few ulp
+        lb = v - row_norm(p[inside] - centre) - 1e-9 * (np.abs(v) + self.h)
+        out[inside] = np.maximum(out[inside], lb)
+        return out
 
 
 def _faces_within(m: "MeshData", q: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -548,9 +603,19 @@ def _mesh_sign(m: MeshData, p: np.ndarray, cl: np.ndarray, face: np.ndarray, reg
     return np.where(side < 0.0, -1.0, 1.0)
 
 
-def _sd_mesh(m: MeshData, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _sd_mesh(m: MeshData, p: np.ndarray, limit: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     if len(p) == 0:
         return np.zeros(0), np.zeros((0, 3))
+    if limit is not None:
+        lb = m.bound.lower(m, p)
+        far = lb > limit + 1e-9 * (np.abs(limit) + m.bound.h)   # the caller's own comparison stays safe
+        if far.any():
+            d = lb.copy()
+            cl = np.full((len(p), 3), np.nan)
+            near = np.flatnonzero(~far)
+            if len(near):
+                d[near], cl[near] = _sd_mesh(m, p[near])
+            return d, cl
     d, cl, face, region = _mesh_nearest(m, p, 8)
     sign = _mesh_sign(m, p, cl, face, region)
     return sign * d, cl
@@ -609,12 +674,19 @@ def signed_distance_value_batch(stype: ShapeType, size: np.ndarray, points: np.n
     return signed_distance_batch(stype, s, p)[0]
 
 
-def signed_distance(shape: Shape, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def signed_distance(shape: Shape, points: np.ndarray,
+                    limit: np.ndarray | float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance from points to a shape's surface, negative inside.
 
     Args:
         shape: the shape.
         points: (n, 3) points in the shape's frame.
+        limit: None, or a value per point (or one for all) at and beyond
+            which the caller needs no exact distance: a mesh then answers a
+            point that provably lies at least that far with a lower bound
+            (>= limit) and a NaN closest point instead of searching its
+            nearest triangle (:class:`_BoundGrid`). Points below the limit,
+            and every primitive, get the exact answer.
 
     Returns:
         d: (n,) signed distance (unsigned for open meshes).
@@ -622,7 +694,7 @@ def signed_distance(shape: Shape, points: np.ndarray) -> tuple[np.ndarray, np.nd
     """
     p = np.asarray(points, dtype=float).reshape(-1, 3)
     if shape.type is ShapeType.MESH:
-        return _sd_mesh(shape.mesh, p)
+        return _sd_mesh(shape.mesh, p, None if limit is None else np.broadcast_to(np.asarray(limit, float), len(p)))
     return signed_distance_batch(shape.type, np.broadcast_to(shape.size, (len(p), len(shape.size))), p)
 
 
