@@ -206,48 +206,133 @@ _GRID_PAD = 8
 
 
 class _BoundGrid:
-    """Lower bounds on a mesh's signed distance from a coarse grid, filled lazily.
+    """A coarse grid over a mesh, filled lazily, for bounds and short candidate lists.
 
-    The signed distance to a closed mesh (and the unsigned one to an open
-    mesh) is 1-Lipschitz, so the exact value ``v`` at a cell's centre ``c``
-    bounds it at any point ``p`` from below by ``v - |p - c|``. Centres are
-    evaluated exactly the first time a point falls in their cell and kept
-    (a memo: the bound, and every answer built on it, do not depend on
-    which cells were filled before). Outside the mesh's box the distance to
-    the box is a bound too (and the only one beyond the grid). This lets
-    :func:`signed_distance` with a ``limit`` skip the exact nearest-triangle
-    search for points that provably lie at or beyond it.
+    Lower bounds: the signed distance to a closed mesh (and the unsigned one
+    to an open mesh) is 1-Lipschitz, so the exact value ``v`` at a cell's
+    centre ``c`` bounds it at any point ``p`` from below by ``v - |p - c|``;
+    outside the mesh's box the distance to the box is a bound too (and the
+    only one beyond the grid). :func:`signed_distance` with a ``limit``
+    skips the nearest-triangle search for points that provably lie beyond it.
+
+    Candidates: the triangle nearest to a point p of the cell is within
+    ``|v| + 2 h`` of the centre (``h`` the cell's half diagonal: it is within
+    ``|v| + h`` of p), so the triangles :func:`_faces_within` that radius of
+    the centre hold it; a point's own upper bound (its distance to the
+    centre's nearest triangle) then cuts that list by the triangles' boxes.
+    Used for cells within ``_GRID_NEAR`` cells of the surface (farther ones
+    would list too many triangles).
+
+    Everything is computed exactly the first time a cell is met and kept: a
+    memo, so no answer depends on which cells were filled before.
     """
 
     def __init__(self, lo: np.ndarray, hi: np.ndarray):
         self.lo, self.hi = lo, hi
         ext = hi - lo
         self.h = float(max(ext.max(), np.finfo(float).tiny)) / _GRID_CELLS
+        self.half_diag = 0.5 * np.sqrt(3.0) * self.h
         self.origin = lo - _GRID_PAD * self.h
         self.dims = (np.ceil(ext / self.h).astype(np.int64) + 2 * _GRID_PAD).clip(1)
-        self.values = np.full(int(np.prod(self.dims)), np.nan)
+        n = int(np.prod(self.dims))
+        self.values = np.full(n, np.nan)
+        self.face0 = np.full(n, -1, np.int64)
+        self.start = np.zeros(n, np.int64)
+        self.count = np.full(n, -1, np.int64)
+        self.flat = np.zeros(1024, np.int64)
+        self.used = 0
 
-    def lower(self, m: MeshData, p: np.ndarray) -> np.ndarray:
+    def _cells(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(inside (n,) bool, flat cell index and cell centre of the points inside)."""
+        ijk = np.floor((p - self.origin) / self.h).astype(np.int64)
+        inside = np.all((ijk >= 0) & (ijk < self.dims), axis=1)
+        ijk = ijk[inside]
+        return inside, np.ravel_multi_index(ijk.T, self.dims), self.origin + (ijk + 0.5) * self.h
+
+    def _fill(self, m: "MeshData", flat: np.ndarray) -> None:
+        todo = np.unique(flat[np.isnan(self.values[flat])])
+        if len(todo):
+            c = self.origin + (np.stack(np.unravel_index(todo, self.dims), axis=1) + 0.5) * self.h
+            d, cl, face, region = _mesh_nearest(m, c, 8)
+            self.values[todo] = _mesh_sign(m, c, cl, face, region) * d
+            self.face0[todo] = face
+
+    def _list(self, m: "MeshData", flat: np.ndarray) -> None:
+        todo = np.unique(flat[self.count[flat] < 0])
+        if not len(todo):
+            return
+        c = self.origin + (np.stack(np.unravel_index(todo, self.dims), axis=1) + 0.5) * self.h
+        rows, faces = _faces_within(m, c, np.abs(self.values[todo]) + 2.0 * self.half_diag * (1 + 1e-9))
+        o = np.argsort(rows, kind="stable")
+        cnt = np.bincount(rows, minlength=len(todo))
+        need = self.used + len(faces)
+        if need > len(self.flat):
+            grown = np.zeros(max(need, 2 * len(self.flat)), np.int64)
+            grown[: self.used] = self.flat[: self.used]
+            self.flat = grown
+        self.flat[self.used: need] = faces[o]
+        self.start[todo] = self.used + np.cumsum(cnt) - cnt
+        self.count[todo] = cnt
+        self.used = need
+
+    def lower(self, m: "MeshData", p: np.ndarray) -> np.ndarray:
         """(n,) lower bounds on the signed distance at points p (-inf where none)."""
         gap = np.maximum(np.maximum(self.lo - p, p - self.hi), 0.0)
         box = np.sqrt(np.einsum("ij,ij->i", gap, gap))
         out = np.where(box > 0.0, box, -np.inf)
-        ijk = np.floor((p - self.origin) / self.h).astype(np.int64)
-        inside = np.all((ijk >= 0) & (ijk < self.dims), axis=1)
-        if not inside.any():
+        inside, flat, centre = self._cells(p)
+        if not len(flat):
             return out
-        ijk = ijk[inside]
-        flat = np.ravel_multi_index(ijk.T, self.dims)
-        centre = self.origin + (ijk + 0.5) * self.h
-        todo = np.unique(flat[np.isnan(self.values[flat])])
-        if len(todo):
-            c = self.origin + (np.stack(np.unravel_index(todo, self.dims), axis=1) + 0.5) * self.h
-            self.values[todo] = _sd_mesh(m, c)[0]
+        self._fill(m, flat)
         v = self.values[flat]
         # rounding: the centre's value and the distance each err by a few ulp
         lb = v - row_norm(p[inside] - centre) - 1e-9 * (np.abs(v) + self.h)
         out[inside] = np.maximum(out[inside], lb)
         return out
+
+    def nearest(self, m: "MeshData", p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:func:`_mesh_nearest` for points p (n, 3): through the cells' lists
+        where the point's cell is near the surface, else the k-d tree."""
+        inside, flat, _ = self._cells(p)
+        rows_in = np.flatnonzero(inside)
+        if len(flat):
+            self._fill(m, flat)
+            close = np.abs(self.values[flat]) <= _GRID_NEAR * self.h
+            rows_in, flat = rows_in[close], flat[close]
+        if not len(rows_in):
+            return _mesh_nearest(m, p, 8)
+        self._list(m, flat)
+        q = p[rows_in]
+        f0 = self.face0[flat]
+        ub, _, _ = point_triangle(q, m.a[f0], m.b[f0], m.c[f0])
+        cnt = self.count[flat]
+        rows = np.repeat(np.arange(len(q)), cnt)
+        first = np.cumsum(cnt) - cnt
+        faces = self.flat[self.start[flat][rows] + np.arange(len(rows)) - first[rows]]
+        qr = q[rows]
+        g = np.maximum(np.maximum(m.tri_lo[faces] - qr, qr - m.tri_hi[faces]), 0.0)
+        keep = np.einsum("ij,ij->i", g, g) <= np.square(ub[rows] * (1 + 1e-12) + 1e-300)
+        rows, faces = rows[keep], faces[keep]
+        d, cl, reg = point_triangle(q[rows], m.a[faces], m.b[faces], m.c[faces])
+        # the least per point; ties to the lowest face index
+        o = np.lexsort((faces, d, rows))
+        head = o[np.r_[True, rows[o][1:] != rows[o][:-1]]]
+        out_d = np.empty(len(p))
+        out_cl = np.empty((len(p), 3))
+        out_f = np.empty(len(p), np.int64)
+        out_r = np.empty(len(p), reg.dtype)
+        out_d[rows_in], out_cl[rows_in], out_f[rows_in], out_r[rows_in] = d[head], cl[head], faces[head], reg[head]
+        rest = np.ones(len(p), bool)
+        rest[rows_in] = False
+        rest = np.flatnonzero(rest)
+        if len(rest):
+            out_d[rest], out_cl[rest], out_f[rest], out_r[rest] = _mesh_nearest(m, p[rest], 8)
+        return out_d, out_cl, out_f, out_r
+
+
+_GRID_NEAR = 8
+"""Cells of :class:`_BoundGrid` whose centre lies within this many cell
+sides of the surface answer nearest-triangle queries from their lists."""
 
 
 def _faces_within(m: "MeshData", q: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -616,7 +701,7 @@ def _sd_mesh(m: MeshData, p: np.ndarray, limit: np.ndarray | None = None) -> tup
             if len(near):
                 d[near], cl[near] = _sd_mesh(m, p[near])
             return d, cl
-    d, cl, face, region = _mesh_nearest(m, p, 8)
+    d, cl, face, region = m.bound.nearest(m, p)
     sign = _mesh_sign(m, p, cl, face, region)
     return sign * d, cl
 
