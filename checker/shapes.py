@@ -239,7 +239,8 @@ class _BoundGrid:
         self.face0 = np.full(n, -1, np.int64)
         self.start = np.zeros(n, np.int64)
         self.count = np.full(n, -1, np.int64)
-        self.flat = np.zeros(1024, np.int64)
+        self.flat = np.zeros(1024, np.int64)     # the cells' lists, one after the other
+        self.flat_box = np.zeros(1024)            # each entry's box distance from its cell's centre
         self.used = 0
 
     def _cells(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -262,15 +263,21 @@ class _BoundGrid:
         if not len(todo):
             return
         c = self.origin + (np.stack(np.unravel_index(todo, self.dims), axis=1) + 0.5) * self.h
-        rows, faces = _faces_within(m, c, np.abs(self.values[todo]) + 2.0 * self.half_diag * (1 + 1e-9))
-        o = np.argsort(rows, kind="stable")
+        radius = np.abs(self.values[todo]) + 2.0 * self.half_diag * (1 + 1e-9)
+        rows, faces = _faces_within(m, c, radius)
+        cr = c[rows]
+        g = np.maximum(np.maximum(m.tri_lo[faces] - cr, cr - m.tri_hi[faces]), 0.0)
+        box = np.sqrt(np.einsum("ij,ij->i", g, g))
+        # each list nearest first by the triangles' boxes (seen from the centre)
+        o = np.lexsort((faces, box, rows))
         cnt = np.bincount(rows, minlength=len(todo))
         need = self.used + len(faces)
         if need > len(self.flat):
-            grown = np.zeros(max(need, 2 * len(self.flat)), np.int64)
-            grown[: self.used] = self.flat[: self.used]
-            self.flat = grown
+            size = max(need, 2 * len(self.flat))
+            self.flat = np.concatenate([self.flat[: self.used], np.zeros(size - self.used, np.int64)])
+            self.flat_box = np.concatenate([self.flat_box[: self.used], np.zeros(size - self.used)])
         self.flat[self.used: need] = faces[o]
+        self.flat_box[self.used: need] = box[o]
         self.start[todo] = self.used + np.cumsum(cnt) - cnt
         self.count[todo] = cnt
         self.used = need
@@ -293,19 +300,33 @@ class _BoundGrid:
     def nearest(self, m: "MeshData", p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """:func:`_mesh_nearest` for points p (n, 3): through the cells' lists
         where the point's cell is near the surface, else the k-d tree."""
-        inside, flat, _ = self._cells(p)
+        inside, flat, centre = self._cells(p)
         rows_in = np.flatnonzero(inside)
         if len(flat):
             self._fill(m, flat)
             close = np.abs(self.values[flat]) <= _GRID_NEAR * self.h
-            rows_in, flat = rows_in[close], flat[close]
+            rows_in, flat, centre = rows_in[close], flat[close], centre[close]
         if not len(rows_in):
             return _mesh_nearest(m, p, 8)
         self._list(m, flat)
         q = p[rows_in]
         f0 = self.face0[flat]
         ub, _, _ = point_triangle(q, m.a[f0], m.b[f0], m.c[f0])
-        cnt = self.count[flat]
+        # A triangle within ub of q has its box within ub + |q - c| of the
+        # centre (box distance is 1-Lipschitz): a prefix of the cell's list,
+        # its length found by bisection for all points at once.
+        reach = (ub + row_norm(q - centre)) * (1 + 1e-12) + 1e-300
+        lo = self.start[flat].copy()
+        hi = lo + self.count[flat]
+        while True:
+            open_ = lo < hi
+            if not open_.any():
+                break
+            mid = (lo + hi) >> 1
+            below = open_ & (self.flat_box[np.minimum(mid, len(self.flat_box) - 1)] <= reach)
+            lo = np.where(below, mid + 1, lo)
+            hi = np.where(open_ & ~below, mid, hi)
+        cnt = lo - self.start[flat]
         rows = np.repeat(np.arange(len(q)), cnt)
         first = np.cumsum(cnt) - cnt
         faces = self.flat[self.start[flat][rows] + np.arange(len(rows)) - first[rows]]
@@ -329,6 +350,9 @@ class _BoundGrid:
             out_d[rest], out_cl[rest], out_f[rest], out_r[rest] = _mesh_nearest(m, p[rest], 8)
         return out_d, out_cl, out_f, out_r
 
+
+_GRID_PAIRS = 1 << 20
+"""Cell-triangle pairs :class:`_BoundGrid` measures at a time when it lists cells."""
 
 _GRID_NEAR = 8
 """Cells of :class:`_BoundGrid` whose centre lies within this many cell
