@@ -351,9 +351,6 @@ class _BoundGrid:
         return out_d, out_cl, out_f, out_r
 
 
-_GRID_PAIRS = 1 << 20
-"""Cell-triangle pairs :class:`_BoundGrid` measures at a time when it lists cells."""
-
 _GRID_NEAR = 8
 """Cells of :class:`_BoundGrid` whose centre lies within this many cell
 sides of the surface answer nearest-triangle queries from their lists."""
