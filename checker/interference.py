@@ -65,6 +65,7 @@ from checker.records import Interference, PairType, severity_of
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from checker.shapes import (
     ShapeType,
+    distance_bounds,
     face_plane_distance,
     face_plane_distance_batch,
     segment_signed_distance,
@@ -689,12 +690,16 @@ def _excluded(cable: np.ndarray, part: np.ndarray, s: np.ndarray, excl: tuple) -
 
 
 def _point_distances(tab: _PartTable, pk: np.ndarray, loc: np.ndarray, face_plane: bool,
-                     limit: np.ndarray | None = None) -> np.ndarray:
+                     limit: np.ndarray | None = None, group: np.ndarray | None = None) -> np.ndarray:
     """Signed distance (n,) of local points ``loc`` to parts ``pk``, batched by type.
 
     With ``limit`` (n,): a mesh may answer a point that provably lies beyond
     its limit with a lower bound above it instead (see
-    :func:`checker.shapes.signed_distance`); callers keep only values below."""
+    :func:`checker.shapes.signed_distance`); callers keep only values below.
+    With ``group`` (n,) ids too (each group against one part), the caller
+    wants only each group's least value exact: a mesh point whose lower
+    bound exceeds another point's upper bound in its group may likewise be
+    answered by a bound, above the group's least value."""
     d = np.full(len(pk), np.inf)
     types = list(ShapeType)
     for code in np.unique(tab.type[pk]):
@@ -705,8 +710,23 @@ def _point_distances(tab: _PartTable, pk: np.ndarray, loc: np.ndarray, face_plan
             for g in np.unique(grp):
                 sk = sel[grp == g]
                 shape = tab.mesh_shapes[g]
-                d[sk] = face_plane_distance(shape, loc[sk]) if face_plane else \
-                    signed_distance(shape, loc[sk], None if limit is None else limit[sk])[0]
+                lim = None if limit is None else limit[sk]
+                if lim is not None and group is not None and not face_plane:
+                    # each group's most promising point (least upper bound)
+                    # exactly first: the others then need be exact only below it
+                    _, hi = distance_bounds(shape, loc[sk])
+                    ids, inv = np.unique(group[sk], return_inverse=True)
+                    o = np.lexsort((hi, inv))
+                    lead = o[np.r_[True, inv[o][1:] != inv[o][:-1]]]
+                    lead = lead[hi[lead] < lim[lead]]
+                    d[sk[lead]] = signed_distance(shape, loc[sk[lead]])[0]
+                    least = np.full(len(ids), np.inf)
+                    least[inv[lead]] = d[sk[lead]]
+                    lim = np.minimum(lim, least[inv])
+                    rest = np.ones(len(sk), bool)
+                    rest[lead] = False
+                    sk, lim = sk[rest], lim[rest]
+                d[sk] = face_plane_distance(shape, loc[sk]) if face_plane else signed_distance(shape, loc[sk], lim)[0]
         elif face_plane:
             d[sel] = face_plane_distance_batch(stype, tab.size[pk[sel]], loc[sel])
         else:
@@ -1042,7 +1062,9 @@ class Checker:
         excl = self._exclusion_table(names, exclusions)[0]
         keep &= ~_excluded(cab[it], k, dense.m[it], excl)
         it, k, loc, rad = it[keep], k[keep], loc[keep], rad[keep]
-        v = _point_distances(tab, k, loc, config.face_plane, rad + config.clearance) - rad
+        # only the worst place per (state, cable, part) becomes a record
+        group = (state[it] * n_c + cab[it]) * n_k + k
+        v = _point_distances(tab, k, loc, config.face_plane, rad + config.clearance, group) - rad
         keep = v < config.clearance
         it, k, v = it[keep], k[keep], v[keep]
         if len(v) == 0:

@@ -284,18 +284,27 @@ class _BoundGrid:
 
     def lower(self, m: "MeshData", p: np.ndarray) -> np.ndarray:
         """(n,) lower bounds on the signed distance at points p (-inf where none)."""
+        return self.bounds(m, p)[0]
+
+    def bounds(self, m: "MeshData", p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(n,) lower and upper bounds on the signed distance at points p
+        (-inf and inf where none; the upper bound ``v + |p - c|`` is the
+        same Lipschitz argument)."""
         gap = np.maximum(np.maximum(self.lo - p, p - self.hi), 0.0)
         box = np.sqrt(np.einsum("ij,ij->i", gap, gap))
-        out = np.where(box > 0.0, box, -np.inf)
+        lo = np.where(box > 0.0, box, -np.inf)
+        hi = np.full(len(p), np.inf)
         inside, flat, centre = self._cells(p)
         if not len(flat):
-            return out
+            return lo, hi
         self._fill(m, flat)
         v = self.values[flat]
+        r = row_norm(p[inside] - centre)
         # rounding: the centre's value and the distance each err by a few ulp
-        lb = v - row_norm(p[inside] - centre) - 1e-9 * (np.abs(v) + self.h)
-        out[inside] = np.maximum(out[inside], lb)
-        return out
+        slack = 1e-9 * (np.abs(v) + self.h)
+        lo[inside] = np.maximum(lo[inside], v - r - slack)
+        hi[inside] = v + r + slack
+        return lo, hi
 
     def nearest(self, m: "MeshData", p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """:func:`_mesh_nearest` for points p (n, 3): through the cells' lists
@@ -802,6 +811,17 @@ def signed_distance(shape: Shape, points: np.ndarray,
     if shape.type is ShapeType.MESH:
         return _sd_mesh(shape.mesh, p, None if limit is None else np.broadcast_to(np.asarray(limit, float), len(p)))
     return signed_distance_batch(shape.type, np.broadcast_to(shape.size, (len(p), len(shape.size))), p)
+
+
+def distance_bounds(shape: Shape, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Cheap lower and upper bounds (n,) on :func:`signed_distance` at points
+    (n, 3) in the shape's frame: from a mesh's bound grid (-inf / inf where
+    it has none); a primitive's exact value, which costs no more."""
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    if shape.type is ShapeType.MESH:
+        return shape.mesh.bound.bounds(shape.mesh, p) if len(p) else (np.zeros(0), np.zeros(0))
+    d = signed_distance(shape, p)[0]
+    return d, d
 
 
 def face_plane_distance_batch(stype: ShapeType, size: np.ndarray, points: np.ndarray) -> np.ndarray:
