@@ -198,7 +198,7 @@ def _reach_levels(centroids: np.ndarray, face_reach: np.ndarray, reach: float,
     return tuple(out)
 
 
-_GRID_CELLS = 48
+_GRID_CELLS = 72
 """Cells of :class:`_BoundGrid` along the mesh's longest side."""
 
 _GRID_PAD = 8
@@ -236,9 +236,9 @@ class _BoundGrid:
         self.dims = (np.ceil(ext / self.h).astype(np.int64) + 2 * _GRID_PAD).clip(1)
         n = int(np.prod(self.dims))
         self.values = np.full(n, np.nan)
-        self.face0 = np.full(n, -1, np.int64)
+        self.face0 = np.full(n, -1, np.int32)
         self.start = np.zeros(n, np.int64)
-        self.count = np.full(n, -1, np.int64)
+        self.count = np.full(n, -1, np.int32)
         self.flat = np.zeros(1024, np.int64)     # the cells' lists, one after the other
         self.flat_box = np.zeros(1024)            # each entry's box distance from its cell's centre
         self.used = 0
