@@ -109,8 +109,19 @@ class StateRecheck:
         k = self.owner.index.get(b)
         if k is None or a not in self.cables:
             return None
-        found = self.owner._checker(k, hull, exact).check([self.cables[a]], self.poses[k][None],
-                                                          self.owner.exclusions)
+        checker = self.owner._checker(k, hull, exact)
+        cable = self.cables[a]
+        if exact:
+            found = checker.check([cable], self.poses[k][None], self.owner.exclusions)
+        else:
+            # method points against one part: the full check's cable-structure
+            # record from every discrete point (Checker.structure_many, to the
+            # bit), without the self checks a full check would add
+            n = len(cable.points)
+            dense = checker.densify_many(np.asarray(cable.points, float)[None], np.array([0, n]),
+                                         np.array([cable.radius]), cable.rest_s)
+            found = checker.structure_many([a], np.array([cable.radius]), dense, self.poses[k][None, None],
+                                           self.owner.exclusions, (np.arange(n), np.zeros(n, np.int64)))[0]
         return _distance(found, key)
 
 
