@@ -234,6 +234,9 @@ class _BoundGrid:
         self.half_diag = 0.5 * np.sqrt(3.0) * self.h
         self.origin = lo - _GRID_PAD * self.h
         self.dims = (np.ceil(ext / self.h).astype(np.int64) + 2 * _GRID_PAD).clip(1)
+        self.values = None      # allocated on first use: most meshes of a scene are never near a cable
+
+    def _allocate(self) -> None:
         n = int(np.prod(self.dims))
         self.values = np.full(n, np.nan)
         self.face0 = np.full(n, -1, np.int32)
@@ -245,6 +248,8 @@ class _BoundGrid:
 
     def _cells(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(inside (n,) bool, flat cell index and cell centre of the points inside)."""
+        if self.values is None:
+            self._allocate()
         ijk = np.floor((p - self.origin) / self.h).astype(np.int64)
         inside = np.all((ijk >= 0) & (ijk < self.dims), axis=1)
         ijk = ijk[inside]
