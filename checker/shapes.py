@@ -723,7 +723,10 @@ def _mesh_sign(m: MeshData, p: np.ndarray, cl: np.ndarray, face: np.ndarray, reg
     return np.where(side < 0.0, -1.0, 1.0)
 
 
-def _sd_mesh(m: MeshData, p: np.ndarray, limit: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def _sd_mesh(m: MeshData, p: np.ndarray, limit: np.ndarray | None = None,
+             grid: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Signed distance and closest points of a mesh; ``grid`` False: the
+    k-d tree alone, for one-off queries that would only fill the bound grid."""
     if len(p) == 0:
         return np.zeros(0), np.zeros((0, 3))
     if limit is not None:
@@ -736,7 +739,7 @@ def _sd_mesh(m: MeshData, p: np.ndarray, limit: np.ndarray | None = None) -> tup
             if len(near):
                 d[near], cl[near] = _sd_mesh(m, p[near])
             return d, cl
-    d, cl, face, region = m.bound.nearest(m, p)
+    d, cl, face, region = m.bound.nearest(m, p) if grid else _mesh_nearest(m, p, 8)
     sign = _mesh_sign(m, p, cl, face, region)
     return sign * d, cl
 
@@ -1150,7 +1153,8 @@ def least_signed_distance(shapes: list[Shape], rotations: np.ndarray, positions:
         points: (n, 3) world points.
 
     Every point is taken into every part's frame at once; primitives of one
-    type are answered in one batched call and each mesh in one call. No
+    type are answered in one batched call and each mesh in one call (its
+    k-d tree, not its bound grid: these points are seldom asked again). No
     broad phase (meant for a few parts and points, e.g. placing a cable's
     initial shape; :mod:`checker.interference` prunes for the per-step
     checks). No parts: +inf.
@@ -1170,7 +1174,7 @@ def least_signed_distance(shapes: list[Shape], rotations: np.ndarray, positions:
         sh = shapes[members[0]]
         loc = local[members].reshape(-1, 3)
         if sh.mesh is not None:
-            d = signed_distance(sh, loc)[0]
+            d = _sd_mesh(sh.mesh, loc, grid=False)[0]      # one-off points: no grid to fill
         else:
             size = np.repeat(np.stack([shapes[m].size for m in members]), len(p), axis=0)
             d = signed_distance_value_batch(sh.type, size, loc)
