@@ -65,6 +65,7 @@ from checker.records import Interference, PairType, severity_of
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from checker.shapes import (
     ShapeType,
+    distance_bounds,
     face_plane_distance,
     face_plane_distance_batch,
     segment_signed_distance,
@@ -688,8 +689,17 @@ def _excluded(cable: np.ndarray, part: np.ndarray, s: np.ndarray, excl: tuple) -
     return np.bincount(rows, weights=inside, minlength=len(s)) > 0
 
 
-def _point_distances(tab: _PartTable, pk: np.ndarray, loc: np.ndarray, face_plane: bool) -> np.ndarray:
-    """Signed distance (n,) of local points ``loc`` to parts ``pk``, batched by type."""
+def _point_distances(tab: _PartTable, pk: np.ndarray, loc: np.ndarray, face_plane: bool,
+                     limit: np.ndarray | None = None, group: np.ndarray | None = None) -> np.ndarray:
+    """Signed distance (n,) of local points ``loc`` to parts ``pk``, batched by type.
+
+    With ``limit`` (n,): a mesh may answer a point that provably lies beyond
+    its limit with a lower bound above it instead (see
+    :func:`checker.shapes.signed_distance`); callers keep only values below.
+    With ``group`` (n,) ids too (each group against one part), the caller
+    wants only each group's least value exact: a mesh point whose lower
+    bound exceeds another point's upper bound in its group may likewise be
+    answered by a bound, above the group's least value."""
     d = np.full(len(pk), np.inf)
     types = list(ShapeType)
     for code in np.unique(tab.type[pk]):
@@ -700,7 +710,23 @@ def _point_distances(tab: _PartTable, pk: np.ndarray, loc: np.ndarray, face_plan
             for g in np.unique(grp):
                 sk = sel[grp == g]
                 shape = tab.mesh_shapes[g]
-                d[sk] = face_plane_distance(shape, loc[sk]) if face_plane else signed_distance(shape, loc[sk])[0]
+                lim = None if limit is None else limit[sk]
+                if lim is not None and group is not None and not face_plane:
+                    # each group's most promising point (least upper bound)
+                    # exactly first: the others then need be exact only below it
+                    _, hi = distance_bounds(shape, loc[sk])
+                    ids, inv = np.unique(group[sk], return_inverse=True)
+                    o = np.lexsort((hi, inv))
+                    lead = o[np.r_[True, inv[o][1:] != inv[o][:-1]]]
+                    lead = lead[hi[lead] < lim[lead]]
+                    d[sk[lead]] = signed_distance(shape, loc[sk[lead]])[0]
+                    least = np.full(len(ids), np.inf)
+                    least[inv[lead]] = d[sk[lead]]
+                    lim = np.minimum(lim, least[inv])
+                    rest = np.ones(len(sk), bool)
+                    rest[lead] = False
+                    sk, lim = sk[rest], lim[rest]
+                d[sk] = face_plane_distance(shape, loc[sk]) if face_plane else signed_distance(shape, loc[sk], lim)[0]
         elif face_plane:
             d[sel] = face_plane_distance_batch(stype, tab.size[pk[sel]], loc[sel])
         else:
@@ -725,7 +751,7 @@ def _structure_points(dp, ch, tab, config, excl, hits, limit=None, excl_near=Non
     box_ok &= ~_excluded(dp.cable[it], pk, dp.m[it], excl if excl_near is None else excl_near)
     it, pk, loc = it[box_ok], pk[box_ok], loc[box_ok]
     rec = None if excl_near is None else ~_excluded(dp.cable[it], pk, dp.m[it], excl)
-    d = _point_distances(tab, pk, loc, config.face_plane)
+    d = _point_distances(tab, pk, loc, config.face_plane, dp.radius[it] + limit)
     v = d - dp.radius[it]
     o = v < limit
     it, pk, v = it[o], pk[o], v[o]
@@ -754,8 +780,9 @@ def _structure_exact(dp, ch, tab, config, excl, hits) -> None:
     it, pk, i0, a, b = it[box_ok], pk[box_ok], i0[box_ok], a[box_ok], b[box_ok]
     # Signed distance is 1-Lipschitz: the midpoint's distance minus the half
     # length bounds the segment's from below, so far segments skip the search.
-    mid = _point_distances(tab, pk, 0.5 * (a + b), face_plane=False)
-    near = mid - 0.5 * row_norm(b - a) - dp.radius[i0] < config.clearance
+    half = 0.5 * row_norm(b - a)
+    mid = _point_distances(tab, pk, 0.5 * (a + b), False, config.clearance + half + dp.radius[i0])
+    near = mid - half - dp.radius[i0] < config.clearance
     it, pk, i0, a, b = it[near], pk[near], i0[near], a[near], b[near]
     d = np.full(len(it), np.inf)
     t = np.zeros(len(it))
@@ -1035,7 +1062,9 @@ class Checker:
         excl = self._exclusion_table(names, exclusions)[0]
         keep &= ~_excluded(cab[it], k, dense.m[it], excl)
         it, k, loc, rad = it[keep], k[keep], loc[keep], rad[keep]
-        v = _point_distances(tab, k, loc, config.face_plane) - rad
+        # only the worst place per (state, cable, part) becomes a record
+        group = (state[it] * n_c + cab[it]) * n_k + k
+        v = _point_distances(tab, k, loc, config.face_plane, rad + config.clearance, group) - rad
         keep = v < config.clearance
         it, k, v = it[keep], k[keep], v[keep]
         if len(v) == 0:

@@ -68,6 +68,11 @@ class Recheck:
         """The second opinions at one state: its cables and the parts' poses (K, 4, 4)."""
         return StateRecheck(self, {c.name: c for c in cables}, np.asarray(poses, float))
 
+    def many(self, cables: Sequence[Sequence[CableState]], poses: np.ndarray) -> "BatchRecheck":
+        """The second opinions at S consecutive states: each state's cables
+        and the parts' poses (S, K, 4, 4)."""
+        return BatchRecheck(self, [{c.name: c for c in cs} for cs in cables], np.asarray(poses, float))
+
     def _checker(self, k: int, hull: bool, exact: bool = True) -> Checker:
         key = (k, hull, exact)
         if key not in self._checkers:
@@ -80,13 +85,45 @@ class Recheck:
         return self._checkers[key]
 
 
+class BatchRecheck:
+    """Second opinions at consecutive states (:meth:`Recheck.many`): a pair's
+    hull by discrete points, once asked at one state, is found for every
+    state of the batch in one call (a pair that disagrees at one step mostly
+    does at the next ones too); the answers are those of each state alone."""
+
+    def __init__(self, owner: Recheck, cables: list[dict[str, CableState]], poses: np.ndarray):
+        self.owner, self.cables, self.poses = owner, cables, poses
+        self._hull_points: dict[tuple[str, str, str], list[float | None]] = {}
+
+    def at(self, i: int) -> "StateRecheck":
+        """The second opinions at the batch's state i."""
+        return StateRecheck(self.owner, self.cables[i], self.poses[i], self, i)
+
+    def hull_points(self, key: tuple[str, str, str]) -> list[float | None]:
+        """The pair's distance to the hull by discrete points at every state."""
+        if key not in self._hull_points:
+            _, a, b = key
+            k = self.owner.index[b]
+            first = self.cables[0][a]
+            n = len(first.points)
+            checker = self.owner._checker(k, True, False)
+            pts = np.stack([np.asarray(c[a].points, float) for c in self.cables])
+            dense = checker.densify_many(pts, np.array([0, n]), np.array([first.radius]), first.rest_s)
+            found = checker.structure_many([a], np.array([first.radius]), dense, self.poses[:, k][:, None],
+                                           self.owner.exclusions, (np.arange(n), np.zeros(n, np.int64)))
+            self._hull_points[key] = [_distance(f, key) for f in found]
+        return self._hull_points[key]
+
+
 class StateRecheck:
     """Second opinions at one state (:meth:`Recheck.at`). Each returns the
     pair's signed distance when below the clearance, else None (clear), as
     the checker's records do."""
 
-    def __init__(self, owner: Recheck, cables: dict[str, CableState], poses: np.ndarray):
+    def __init__(self, owner: Recheck, cables: dict[str, CableState], poses: np.ndarray,
+                 batch: BatchRecheck | None = None, index: int = 0):
         self.owner, self.cables, self.poses = owner, cables, poses
+        self.batch, self.index = batch, index
 
     def exact(self, key: tuple[str, str, str]) -> float | None:
         """The pair (type, a, b) with method exact."""
@@ -109,8 +146,21 @@ class StateRecheck:
         k = self.owner.index.get(b)
         if k is None or a not in self.cables:
             return None
-        found = self.owner._checker(k, hull, exact).check([self.cables[a]], self.poses[k][None],
-                                                          self.owner.exclusions)
+        if hull and not exact and self.batch is not None:
+            return self.batch.hull_points(key)[self.index]
+        checker = self.owner._checker(k, hull, exact)
+        cable = self.cables[a]
+        if exact:
+            found = checker.check([cable], self.poses[k][None], self.owner.exclusions)
+        else:
+            # method points against one part: the full check's cable-structure
+            # record from every discrete point (Checker.structure_many, to the
+            # bit), without the self checks a full check would add
+            n = len(cable.points)
+            dense = checker.densify_many(np.asarray(cable.points, float)[None], np.array([0, n]),
+                                         np.array([cable.radius]), cable.rest_s)
+            found = checker.structure_many([a], np.array([cable.radius]), dense, self.poses[k][None, None],
+                                           self.owner.exclusions, (np.arange(n), np.zeros(n, np.int64)))[0]
         return _distance(found, key)
 
 

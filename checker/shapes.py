@@ -111,6 +111,7 @@ class MeshData:
             outside are defined and distances are signed.
         lo, hi: (3,) bounding box corners.
         tri_lo, tri_hi: (F, 3) each triangle's bounding box.
+        bound: the :class:`_BoundGrid` of lower bounds for :func:`signed_distance`'s ``limit``.
     """
 
     a: np.ndarray
@@ -130,6 +131,7 @@ class MeshData:
     hi: np.ndarray
     tri_lo: np.ndarray
     tri_hi: np.ndarray
+    bound: "_BoundGrid" = field(default=None, repr=False)
 
     @staticmethod
     def build(vertices: np.ndarray, faces: np.ndarray) -> "MeshData":
@@ -170,6 +172,7 @@ class MeshData:
             faces=f, vertices=v, centroids=centroids, reach=reach,
             tree=cKDTree(centroids), levels=_reach_levels(centroids, face_reach, reach), closed=closed, lo=v.min(axis=0), hi=v.max(axis=0),
             tri_lo=np.minimum(np.minimum(a, b), c), tri_hi=np.maximum(np.maximum(a, b), c),
+            bound=_BoundGrid(v.min(axis=0), v.max(axis=0)),
         )
 
 
@@ -193,6 +196,178 @@ def _reach_levels(centroids: np.ndarray, face_reach: np.ndarray, reach: float,
             # the class's own largest reach is its bound
             out.append((float(face_reach[idx].max()), idx, cKDTree(centroids[idx])))
     return tuple(out)
+
+
+_GRID_CELLS = 72
+"""Cells of :class:`_BoundGrid` along the mesh's longest side."""
+
+_GRID_PAD = 8
+"""Cells of :class:`_BoundGrid` beyond the mesh's box on every side."""
+
+
+class _BoundGrid:
+    """A coarse grid over a mesh, filled lazily, for bounds and short candidate lists.
+
+    Lower bounds: the signed distance to a closed mesh (and the unsigned one
+    to an open mesh) is 1-Lipschitz, so the exact value ``v`` at a cell's
+    centre ``c`` bounds it at any point ``p`` from below by ``v - |p - c|``;
+    outside the mesh's box the distance to the box is a bound too (and the
+    only one beyond the grid). :func:`signed_distance` with a ``limit``
+    skips the nearest-triangle search for points that provably lie beyond it.
+
+    Candidates: the triangle nearest to a point p of the cell is within
+    ``|v| + 2 h`` of the centre (``h`` the cell's half diagonal: it is within
+    ``|v| + h`` of p), so the triangles :func:`_faces_within` that radius of
+    the centre hold it; a point's own upper bound (its distance to the
+    centre's nearest triangle) then cuts that list by the triangles' boxes.
+    Used for cells within ``_GRID_NEAR`` cells of the surface (farther ones
+    would list too many triangles).
+
+    Everything is computed exactly the first time a cell is met and kept: a
+    memo, so no answer depends on which cells were filled before.
+    """
+
+    def __init__(self, lo: np.ndarray, hi: np.ndarray):
+        self.lo, self.hi = lo, hi
+        ext = hi - lo
+        self.h = float(max(ext.max(), np.finfo(float).tiny)) / _GRID_CELLS
+        self.half_diag = 0.5 * np.sqrt(3.0) * self.h
+        self.origin = lo - _GRID_PAD * self.h
+        self.dims = (np.ceil(ext / self.h).astype(np.int64) + 2 * _GRID_PAD).clip(1)
+        self.values = None      # allocated on first use: most meshes of a scene are never near a cable
+
+    def _allocate(self) -> None:
+        n = int(np.prod(self.dims))
+        self.values = np.full(n, np.nan)
+        self.face0 = np.full(n, -1, np.int32)
+        self.start = np.zeros(n, np.int64)
+        self.count = np.full(n, -1, np.int32)
+        self.flat = np.zeros(1024, np.int64)     # the cells' lists, one after the other
+        self.flat_box = np.zeros(1024)            # each entry's box distance from its cell's centre
+        self.used = 0
+
+    def _cells(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(inside (n,) bool, flat cell index and cell centre of the points inside)."""
+        if self.values is None:
+            self._allocate()
+        ijk = np.floor((p - self.origin) / self.h).astype(np.int64)
+        inside = np.all((ijk >= 0) & (ijk < self.dims), axis=1)
+        ijk = ijk[inside]
+        return inside, np.ravel_multi_index(ijk.T, self.dims), self.origin + (ijk + 0.5) * self.h
+
+    def _fill(self, m: "MeshData", flat: np.ndarray) -> None:
+        todo = np.unique(flat[np.isnan(self.values[flat])])
+        if len(todo):
+            c = self.origin + (np.stack(np.unravel_index(todo, self.dims), axis=1) + 0.5) * self.h
+            d, cl, face, region = _mesh_nearest(m, c, 8)
+            self.values[todo] = _mesh_sign(m, c, cl, face, region) * d
+            self.face0[todo] = face
+
+    def _list(self, m: "MeshData", flat: np.ndarray) -> None:
+        todo = np.unique(flat[self.count[flat] < 0])
+        if not len(todo):
+            return
+        c = self.origin + (np.stack(np.unravel_index(todo, self.dims), axis=1) + 0.5) * self.h
+        radius = np.abs(self.values[todo]) + 2.0 * self.half_diag * (1 + 1e-9)
+        rows, faces = _faces_within(m, c, radius)
+        cr = c[rows]
+        g = np.maximum(np.maximum(m.tri_lo[faces] - cr, cr - m.tri_hi[faces]), 0.0)
+        box = np.sqrt(np.einsum("ij,ij->i", g, g))
+        # each list nearest first by the triangles' boxes (seen from the centre)
+        o = np.lexsort((faces, box, rows))
+        cnt = np.bincount(rows, minlength=len(todo))
+        need = self.used + len(faces)
+        if need > len(self.flat):
+            size = max(need, 2 * len(self.flat))
+            self.flat = np.concatenate([self.flat[: self.used], np.zeros(size - self.used, np.int64)])
+            self.flat_box = np.concatenate([self.flat_box[: self.used], np.zeros(size - self.used)])
+        self.flat[self.used: need] = faces[o]
+        self.flat_box[self.used: need] = box[o]
+        self.start[todo] = self.used + np.cumsum(cnt) - cnt
+        self.count[todo] = cnt
+        self.used = need
+
+    def lower(self, m: "MeshData", p: np.ndarray) -> np.ndarray:
+        """(n,) lower bounds on the signed distance at points p (-inf where none)."""
+        return self.bounds(m, p)[0]
+
+    def bounds(self, m: "MeshData", p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(n,) lower and upper bounds on the signed distance at points p
+        (-inf and inf where none; the upper bound ``v + |p - c|`` is the
+        same Lipschitz argument)."""
+        gap = np.maximum(np.maximum(self.lo - p, p - self.hi), 0.0)
+        box = np.sqrt(np.einsum("ij,ij->i", gap, gap))
+        lo = np.where(box > 0.0, box, -np.inf)
+        hi = np.full(len(p), np.inf)
+        inside, flat, centre = self._cells(p)
+        if not len(flat):
+            return lo, hi
+        self._fill(m, flat)
+        v = self.values[flat]
+        r = row_norm(p[inside] - centre)
+        # rounding: the centre's value and the distance each err by a few ulp
+        slack = 1e-9 * (np.abs(v) + self.h)
+        lo[inside] = np.maximum(lo[inside], v - r - slack)
+        hi[inside] = v + r + slack
+        return lo, hi
+
+    def nearest(self, m: "MeshData", p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:func:`_mesh_nearest` for points p (n, 3): through the cells' lists
+        where the point's cell is near the surface, else the k-d tree."""
+        inside, flat, centre = self._cells(p)
+        rows_in = np.flatnonzero(inside)
+        if len(flat):
+            self._fill(m, flat)
+            close = np.abs(self.values[flat]) <= _GRID_NEAR * self.h
+            rows_in, flat, centre = rows_in[close], flat[close], centre[close]
+        if not len(rows_in):
+            return _mesh_nearest(m, p, 8)
+        self._list(m, flat)
+        q = p[rows_in]
+        f0 = self.face0[flat]
+        ub, _, _ = point_triangle(q, m.a[f0], m.b[f0], m.c[f0])
+        # A triangle within ub of q has its box within ub + |q - c| of the
+        # centre (box distance is 1-Lipschitz): a prefix of the cell's list,
+        # its length found by bisection for all points at once.
+        reach = (ub + row_norm(q - centre)) * (1 + 1e-12) + 1e-300
+        lo = self.start[flat].copy()
+        hi = lo + self.count[flat]
+        while True:
+            open_ = lo < hi
+            if not open_.any():
+                break
+            mid = (lo + hi) >> 1
+            below = open_ & (self.flat_box[np.minimum(mid, len(self.flat_box) - 1)] <= reach)
+            lo = np.where(below, mid + 1, lo)
+            hi = np.where(open_ & ~below, mid, hi)
+        cnt = lo - self.start[flat]
+        rows = np.repeat(np.arange(len(q)), cnt)
+        first = np.cumsum(cnt) - cnt
+        faces = self.flat[self.start[flat][rows] + np.arange(len(rows)) - first[rows]]
+        qr = q[rows]
+        g = np.maximum(np.maximum(m.tri_lo[faces] - qr, qr - m.tri_hi[faces]), 0.0)
+        keep = np.einsum("ij,ij->i", g, g) <= np.square(ub[rows] * (1 + 1e-12) + 1e-300)
+        rows, faces = rows[keep], faces[keep]
+        d, cl, reg = point_triangle(q[rows], m.a[faces], m.b[faces], m.c[faces])
+        # the least per point; ties to the lowest face index
+        o = np.lexsort((faces, d, rows))
+        head = o[np.r_[True, rows[o][1:] != rows[o][:-1]]]
+        out_d = np.empty(len(p))
+        out_cl = np.empty((len(p), 3))
+        out_f = np.empty(len(p), np.int64)
+        out_r = np.empty(len(p), reg.dtype)
+        out_d[rows_in], out_cl[rows_in], out_f[rows_in], out_r[rows_in] = d[head], cl[head], faces[head], reg[head]
+        rest = np.ones(len(p), bool)
+        rest[rows_in] = False
+        rest = np.flatnonzero(rest)
+        if len(rest):
+            out_d[rest], out_cl[rest], out_f[rest], out_r[rest] = _mesh_nearest(m, p[rest], 8)
+        return out_d, out_cl, out_f, out_r
+
+
+_GRID_NEAR = 8
+"""Cells of :class:`_BoundGrid` whose centre lies within this many cell
+sides of the surface answer nearest-triangle queries from their lists."""
 
 
 def _faces_within(m: "MeshData", q: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -548,10 +723,23 @@ def _mesh_sign(m: MeshData, p: np.ndarray, cl: np.ndarray, face: np.ndarray, reg
     return np.where(side < 0.0, -1.0, 1.0)
 
 
-def _sd_mesh(m: MeshData, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _sd_mesh(m: MeshData, p: np.ndarray, limit: np.ndarray | None = None,
+             grid: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Signed distance and closest points of a mesh; ``grid`` False: the
+    k-d tree alone, for one-off queries that would only fill the bound grid."""
     if len(p) == 0:
         return np.zeros(0), np.zeros((0, 3))
-    d, cl, face, region = _mesh_nearest(m, p, 8)
+    if limit is not None:
+        lb = m.bound.lower(m, p)
+        far = lb > limit + 1e-9 * (np.abs(limit) + m.bound.h)   # the caller's own comparison stays safe
+        if far.any():
+            d = lb.copy()
+            cl = np.full((len(p), 3), np.nan)
+            near = np.flatnonzero(~far)
+            if len(near):
+                d[near], cl[near] = _sd_mesh(m, p[near])
+            return d, cl
+    d, cl, face, region = m.bound.nearest(m, p) if grid else _mesh_nearest(m, p, 8)
     sign = _mesh_sign(m, p, cl, face, region)
     return sign * d, cl
 
@@ -609,12 +797,19 @@ def signed_distance_value_batch(stype: ShapeType, size: np.ndarray, points: np.n
     return signed_distance_batch(stype, s, p)[0]
 
 
-def signed_distance(shape: Shape, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def signed_distance(shape: Shape, points: np.ndarray,
+                    limit: np.ndarray | float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance from points to a shape's surface, negative inside.
 
     Args:
         shape: the shape.
         points: (n, 3) points in the shape's frame.
+        limit: None, or a value per point (or one for all) at and beyond
+            which the caller needs no exact distance: a mesh then answers a
+            point that provably lies at least that far with a lower bound
+            (>= limit) and a NaN closest point instead of searching its
+            nearest triangle (:class:`_BoundGrid`). Points below the limit,
+            and every primitive, get the exact answer.
 
     Returns:
         d: (n,) signed distance (unsigned for open meshes).
@@ -622,8 +817,19 @@ def signed_distance(shape: Shape, points: np.ndarray) -> tuple[np.ndarray, np.nd
     """
     p = np.asarray(points, dtype=float).reshape(-1, 3)
     if shape.type is ShapeType.MESH:
-        return _sd_mesh(shape.mesh, p)
+        return _sd_mesh(shape.mesh, p, None if limit is None else np.broadcast_to(np.asarray(limit, float), len(p)))
     return signed_distance_batch(shape.type, np.broadcast_to(shape.size, (len(p), len(shape.size))), p)
+
+
+def distance_bounds(shape: Shape, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Cheap lower and upper bounds (n,) on :func:`signed_distance` at points
+    (n, 3) in the shape's frame: from a mesh's bound grid (-inf / inf where
+    it has none); a primitive's exact value, which costs no more."""
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    if shape.type is ShapeType.MESH:
+        return shape.mesh.bound.bounds(shape.mesh, p) if len(p) else (np.zeros(0), np.zeros(0))
+    d = signed_distance(shape, p)[0]
+    return d, d
 
 
 def face_plane_distance_batch(stype: ShapeType, size: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -947,7 +1153,8 @@ def least_signed_distance(shapes: list[Shape], rotations: np.ndarray, positions:
         points: (n, 3) world points.
 
     Every point is taken into every part's frame at once; primitives of one
-    type are answered in one batched call and each mesh in one call. No
+    type are answered in one batched call and each mesh in one call (its
+    k-d tree, not its bound grid: these points are seldom asked again). No
     broad phase (meant for a few parts and points, e.g. placing a cable's
     initial shape; :mod:`checker.interference` prunes for the per-step
     checks). No parts: +inf.
@@ -967,7 +1174,7 @@ def least_signed_distance(shapes: list[Shape], rotations: np.ndarray, positions:
         sh = shapes[members[0]]
         loc = local[members].reshape(-1, 3)
         if sh.mesh is not None:
-            d = signed_distance(sh, loc)[0]
+            d = _sd_mesh(sh.mesh, loc, grid=False)[0]      # one-off points: no grid to fill
         else:
             size = np.repeat(np.stack([shapes[m].size for m in members]), len(p), axis=0)
             d = signed_distance_value_batch(sh.type, size, loc)

@@ -8,7 +8,8 @@ geometry, for the few records shown, not carried by every record of every
 step:
 
 - against a part: the closest surface point of the part's shape to
-  ``where`` (:func:`checker.shapes.signed_distance`, in the part's frame);
+  ``where`` (:func:`checker.shapes.signed_distance`, in the part's frame;
+  many places of one part in one query);
 - against a cable (another one or a loop of the same): the closest point
   to ``where`` on the elements of cable ``b`` next to arc length ``s_b``.
 
@@ -27,10 +28,17 @@ from checker.shapes import Shape, signed_distance
 def on_part(shape: Shape, pose: np.ndarray, where: np.ndarray) -> np.ndarray:
     """(3,) the point of the part's surface closest to `where` (world), given
     the part's (4, 4) world pose."""
-    pose = np.asarray(pose, float)
-    local = (np.asarray(where, float).reshape(1, 3) - pose[:3, 3]) @ pose[:3, :3]
+    return on_part_many(shape, np.asarray(pose, float)[None], np.asarray(where, float).reshape(1, 3))[0]
+
+
+def on_part_many(shape: Shape, poses: np.ndarray, where: np.ndarray) -> np.ndarray:
+    """(n, 3) :func:`on_part` for n places at once (each with the part's
+    (n, 4, 4) pose at its own time): one query of the shape, not n."""
+    poses = np.asarray(poses, float).reshape(-1, 4, 4)
+    rot, trans = poses[:, :3, :3], poses[:, :3, 3]
+    local = np.einsum("ni,nij->nj", np.asarray(where, float).reshape(-1, 3) - trans, rot)
     _, closest = signed_distance(shape, local)
-    return closest[0] @ pose[:3, :3].T + pose[:3, 3]
+    return np.einsum("nij,nj->ni", rot, closest) + trans
 
 
 def on_cable(points: np.ndarray, s_b: float, where: np.ndarray, reach: int = 1) -> np.ndarray:

@@ -291,7 +291,7 @@ class WearMap:
         hit = np.zeros(len(a), bool)
         moved = np.zeros(len(a))
         if len(cand):
-            d, u = _element_distance(shape, a[cand], b[cand])
+            d, u = _element_distance(shape, a[cand], b[cand], self.radii[c] + self.clearance)
             near = (d - self.radii[c]) < self.clearance
             i, u = cand[near], u[near]
             hit[i] = True
@@ -382,17 +382,20 @@ class WearMap:
         return out
 
 
-def _element_distance(shape: Shape, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _element_distance(shape: Shape, a: np.ndarray, b: np.ndarray,
+                      limit: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance of elements `a b` (n, 3) to a shape in its frame and
     the parameter of the nearest place: exact for primitives
     (:func:`checker.shapes.segment_signed_distance`); for a mesh, the least
     of the element's ends and middle (its exact segment search costs a
     millisecond an element on a CAD mesh; elements are a few radii long, so
-    this errs by at most the element's sag over half its length)."""
+    this errs by at most the element's sag over half its length). With
+    ``limit``, a mesh's sample that provably lies beyond it may be answered
+    by a lower bound above it (the caller keeps elements below it only)."""
     if shape.type is not ShapeType.MESH:
         return segment_signed_distance(shape, a, b)
     n = len(a)
-    d, _ = signed_distance(shape, np.concatenate([a, 0.5 * (a + b), b]))
+    d, _ = signed_distance(shape, np.concatenate([a, 0.5 * (a + b), b]), limit)
     d = d.reshape(3, n)
     k = np.argmin(d, axis=0)
     return d[k, np.arange(n)], 0.5 * k

@@ -249,6 +249,8 @@ class Recorder:
         self._poses: list[np.ndarray] = []
         self._contacts: list[np.ndarray | None] = []
         self._marks: dict[str, list[tuple[int, np.ndarray, np.ndarray, str, str]]] = {}
+        # part index -> (rows of _marks, row, where (world, m), part pose): closest points still to find
+        self._part_spots: dict[int, list[tuple]] = {}
         self._lane: dict[str, str] = {}
         self._near_paths: set[str] = set()
         self._alive: set[str] = set()
@@ -465,8 +467,12 @@ class Recorder:
             now.add(path)
             other = self._other_side(m, cables, poses)
             label = f"{_pair_text(m.a, m.b)}: {m.distance / u:.3g} {units}"
-            self._marks.setdefault(path, []).append((frame, np.asarray(m.where, float) / u,
-                                                     None if other is None else other / u, label, m.a))
+            rows = self._marks.setdefault(path, [])
+            if isinstance(other, int):     # a part: its closest point found with the others at the end
+                self._part_spots.setdefault(other, []).append((rows, len(rows), np.asarray(m.where, float),
+                                                               np.asarray(poses[other], float)))
+                other = None
+            rows.append((frame, np.asarray(m.where, float) / u, None if other is None else other / u, label, m.a))
             self.log_scalar(f"checks/{path}/distance", m.distance / u, label=f"{m.kind}: {_pair_text(m.a, m.b)}")
             if path not in self._lane:
                 self.rec.log(f"lanes/{path}", rr.StateConfiguration(
@@ -479,15 +485,28 @@ class Recorder:
             self.rec.log(f"lanes/{path}", rr.StateChange(state="clear"))
         self._dim(bool(now))
 
-    def _other_side(self, m: Mark, cables: list[np.ndarray], poses: np.ndarray) -> np.ndarray | None:
-        """Closest point on the other side of a clash, metres, or None (bend, taut, part-part)."""
+    def _other_side(self, m: Mark, cables: list[np.ndarray], poses: np.ndarray) -> np.ndarray | int | None:
+        """Closest point on the other side of a clash, metres; for a part,
+        its index (the point is found for all of a part's marks at once, by
+        :meth:`_resolve_part_spots`); None (bend, taut, part-part)."""
         if m.kind in ("self", "cable-cable") and m.s_b is not None and m.b in self._cable_index:
             return spot.on_cable(cables[self._cable_index[m.b]], m.s_b, m.where)
         if m.kind in ("cable-structure", "keepout") and self.shapes is not None:
             k = self._part_index.get(m.b)
             if k is not None:
-                return spot.on_part(self.shapes[k], poses[k], m.where)
+                return int(k)
         return None
+
+    def _resolve_part_spots(self) -> None:
+        """The other side of every part mark: one query per part for the whole run."""
+        u = self.unit
+        for k, spots in self._part_spots.items():
+            found = spot.on_part_many(self.shapes[k], np.stack([s[3] for s in spots]),
+                                      np.stack([s[2] for s in spots])) / u
+            for (rows, i, _, _), other in zip(spots, found):
+                frame, where, _, label, a = rows[i]
+                rows[i] = (frame, where, other, label, a)
+        self._part_spots = {}
 
     def log_twist(self, twist_deg: np.ndarray) -> None:
         """Each cable's twist (degrees) at the current frame; NaN: not measured."""
@@ -568,6 +587,7 @@ class Recorder:
                                      columns=rr.Transform3D.columns(translation=poses[:, j, :3, 3] / u,
                                                                     mat3x3=poses[:, j, :3, :3]))
             self._send_contacts(index)
+            self._resolve_part_spots()
             self._send_marks(index, n_f)
             for path, series in self._series.items():
                 if path in self._labels:

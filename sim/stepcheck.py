@@ -221,13 +221,21 @@ class StepChecks:
         self.lap("sim")
         contacts = self.detector.read_many(raws)
         seen = self._simulator_pairs.many(contacts, self._names, self._radii, pts, self._offsets, self._rest)
-        for state, result, found, pairs in zip(states, results, contacts, seen):
+        batch: list = []
+
+        def opinions():      # the batch's second opinions, built on the first disagreement
+            if not batch:
+                batch.append(self._recheck.many([self._cable_states(s) for s in states],
+                                                np.stack([s.part_poses[self.checked_parts] for s in states])))
+            return batch[0]
+
+        for i, (state, result, found, pairs) in enumerate(zip(states, results, contacts, seen)):
             result.contacts = found
             if self.focus_names is not None:
                 pairs = {k: v for k, v in pairs.items() if k[2] in self.focus_names
                          and k[0] in (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value)}
             result.agreement = self.validation.compare(state.t, result.cable_records, pairs,
-                                                       self._second_opinion(state))
+                                                       self._second_opinion(opinions, i))
         self.lap("validate")
 
     def _proven_clear(self, states: Sequence[StepState], pts: np.ndarray, poses: np.ndarray,
@@ -333,10 +341,10 @@ class StepChecks:
     def _cable_states(self, state: StepState) -> list[CableState]:
         return cable_states(self.built, state.cables)
 
-    def _second_opinion(self, state: StepState):
-        """Builds the second opinions on a disagreement at this state (only
-        when the validation asks: most states have none)."""
-        return lambda: self._recheck.at(self._cable_states(state), state.part_poses[self.checked_parts])
+    def _second_opinion(self, opinions, i: int):
+        """Builds the second opinions on a disagreement at the batch's state i
+        (only when the validation asks: most states have none)."""
+        return lambda: opinions().at(i)
 
 
 def cable_states(built: Built, points: list[np.ndarray]) -> list[CableState]:

@@ -191,6 +191,41 @@ def test_convex_hull_reason_is_checked():
     assert w.disagreements[0].reason is Reason.UNEXPLAINED and w.unexplained == 1
 
 
+def test_hull_opinions_for_a_batch_are_each_state_alone():
+    """The hull by discrete points, found for a batch of states at once, is
+    each state's own opinion and the full check's record against the hull
+    (a cable sliding through the fork's gap, in and out of the hull, with an
+    exclusion window and a moving part)."""
+    from checker.interference import Checker
+    from checker.recheck import Recheck, convex_hull_shape
+    from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+    from checker.shapes import mesh_shape
+    rng = np.random.default_rng(5)
+    shape = mesh_shape(*_fork())
+    fork = PartState("fork", shape, np.eye(4))
+    config = CheckConfig(clearance=0.005)
+    excl = [Exclusion("c", "fork", 0.0, 0.03)]
+    recheck = Recheck([fork], config, excl)
+    key = ("cable-structure", "c", "fork")
+    cables, poses = [], []
+    for x in np.linspace(-0.08, 0.08, 9):
+        pts = np.column_stack([np.full(7, x), np.linspace(-0.2, 0.2, 7), np.zeros(7)]) + rng.normal(0, 0.003, (7, 3))
+        cables.append([CableState("c", pts, 0.005, rest_s=np.linspace(0.0, 0.4, 7))])
+        pose = np.eye(4)
+        pose[:3, 3] = rng.normal(0, 0.002, 3)
+        poses.append(pose[None])
+    batch = recheck.many(cables, np.stack(poses))
+    full = Checker([PartState("fork", convex_hull_shape(shape), np.eye(4))], config)
+    found = []
+    for i, (cs, pose) in enumerate(zip(cables, poses)):
+        alone = recheck.at(cs, pose).hull(key, exact=False)
+        assert batch.at(i).hull(key, exact=False) == alone
+        records = [r for r in full.check(cs, pose, excl) if r.b == "fork"]
+        assert alone == (records[0].min_distance if records else None)
+        found.append(alone)
+    assert any(d is None for d in found) and any(d is not None for d in found)
+
+
 def test_convex_hull_disagreement_in_a_run(tmp_path):
     """End to end: MuJoCo collides the fork as its hull; the run's report
     explains every disagreement (convex hull, verified), none unexplained."""
