@@ -54,6 +54,7 @@ from sim.build import build
 from sim.loop import Simulation
 from sim.scene import load_scene, parse_scene
 from sim.sweep import part_shapes
+from sim.validation import settled
 
 REPO = Path(__file__).resolve().parents[1]
 """The repository root (the example scenes live in ``scenes/``)."""
@@ -222,16 +223,6 @@ def discretisation_table(quick: bool) -> Table:
 
 # -- physics resolution -------------------------------------------------------
 
-def _settle_timed(scene):
-    built = build(scene, detect=False)
-    sim = Simulation(built)
-    sim.reset()
-    t0 = time.perf_counter()
-    sim.settle()
-    wall = time.perf_counter() - t0
-    state = next(sim.steps(contacts=False))
-    return state.cables[0], wall, sim.warnings()
-
 
 def physics_table(quick: bool) -> Table:
     """Elements and timestep against the catenary and the cantilever."""
@@ -250,18 +241,18 @@ def physics_table(quick: bool) -> Table:
     sag_ref = reference.catenary_sag(cat["span"], cat["length"])
     for n, dt in grid["catenary"]:
         scene = reference.catenary_scene(n, timestep=dt, settle=3.0)
-        pts, wall, warn = _settle_timed(scene)
-        sag = cat["height"] - pts[:, 2].min()
+        _, sim, state, wall_per_s = settled(scene)
+        sag = cat["height"] - state.cables[0][:, 2].min()
         table.add("catenary", n, n / cat["length"], 1e3 * dt, 100 * (sag / sag_ref - 1.0),
-                  1e3 * wall / scene.settle, ",".join(warn) or "")
+                  1e3 * wall_per_s, ",".join(sim.warnings()) or "")
     can = reference.CANTILEVER
     tip_ref = reference.cantilever_tip(can["length"], can["radius"], can["density"], can["young"])
     for n, dt in grid["cantilever"]:
         scene = reference.cantilever_scene(n, timestep=dt, settle=1.0)
-        pts, wall, warn = _settle_timed(scene)
-        tip = can["height"] - pts[-1, 2]
+        _, sim, state, wall_per_s = settled(scene)
+        tip = can["height"] - state.cables[0][-1, 2]
         table.add("cantilever", n, n / can["length"], 1e3 * dt, 100 * (tip / tip_ref - 1.0),
-                  1e3 * wall / scene.settle, ",".join(warn) or "")
+                  1e3 * wall_per_s, ",".join(sim.warnings()) or "")
     table.notes += [
         f"catenary: limp cable (young 1 Pa) of {cat['length']} m over a {cat['span']} m span, "
         f"reference sag {sag_ref * 1e3:.2f} mm, 3 s settled; cantilever: {can['length']} m rod, "

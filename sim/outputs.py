@@ -41,14 +41,7 @@ def check_output(path: Path, option: str) -> Path:
         raise OutputPathError(option, path, "is a folder; give a file name")
     if path.name in ("", ".", ".."):
         raise OutputPathError(option, path, "names no file")
-    parent = path.absolute().parent
-    while not parent.exists():
-        parent = parent.parent
-    if not parent.is_dir():
-        raise OutputPathError(option, path, f"{parent} is a file, not a folder")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise OutputPathError(option, path, f"no permission to write in {parent}")
-    return path
+    return _writable_below(path.absolute().parent, path, option)
 
 
 def check_folder(path: Path, option: str) -> Path:
@@ -56,11 +49,16 @@ def check_folder(path: Path, option: str) -> Path:
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise OutputPathError(option, path, "is a file; give a folder")
-    parent = path.absolute()
-    while not parent.exists():
-        parent = parent.parent
-    if not parent.is_dir():
-        raise OutputPathError(option, path, f"{parent} is a file, not a folder")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise OutputPathError(option, path, f"no permission to write in {parent}")
+    return _writable_below(path.absolute(), path, option)
+
+
+def _writable_below(folder: Path, path: Path, option: str) -> Path:
+    """`path` when the deepest existing ancestor of `folder` (itself included)
+    is a folder we may write in (the missing ones below it can be made)."""
+    while not folder.exists():
+        folder = folder.parent
+    if not folder.is_dir():
+        raise OutputPathError(option, path, f"{folder} is a file, not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise OutputPathError(option, path, f"no permission to write in {folder}")
     return path

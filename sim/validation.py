@@ -71,7 +71,7 @@ def _scene(data: dict) -> object:
     return parse_scene(data, Path(f"/virtual/{data['scene']['name']}.toml"))
 
 
-def _settled(scene):
+def settled(scene):
     """Built, settled simulation, its rest state and wall time per settled second."""
     built = build(scene, detect=False)
     sim = Simulation(built)
@@ -91,7 +91,7 @@ def _result(case, elements, measured, ref, wall, built, sim, **extra) -> Result:
 
 def catenary(elements: int = 40) -> Result:
     p = reference.CATENARY
-    built, sim, state, wall = _settled(reference.catenary_scene(elements, settle=3.0))
+    built, sim, state, wall = settled(reference.catenary_scene(elements, settle=3.0))
     pts = state.cables[0]
     sag = p["height"] - pts[:, 2].min()
     strain = float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum() / built.cables[0].length - 1.0)
@@ -102,7 +102,7 @@ def catenary(elements: int = 40) -> Result:
 def cantilever(elements: int | None = 40, large: bool = False) -> Result:
     """`elements` None: the builder's default count."""
     p = reference.ELASTICA if large else reference.CANTILEVER
-    built, sim, state, wall = _settled(reference.cantilever_scene(elements, settle=1.5 if large else 1.0, rod=p))
+    built, sim, state, wall = settled(reference.cantilever_scene(elements, settle=1.5 if large else 1.0, rod=p))
     tip = p["height"] - state.cables[0][-1, 2]
     if large:
         w = p["density"] * reference.G * np.pi * p["radius"] ** 2
@@ -164,7 +164,7 @@ def u_swing(elements: int = 40, damping: float | None = None, duration: float = 
         cable["damping"] = damping
     scene = _scene({"scene": {"name": "uswing", "units": "m", "duration": duration, "settle": 2.0,
                               "timestep": 0.002}, "cables": [cable]})
-    built, sim, state, _ = _settled(scene)
+    built, sim, state, _ = settled(scene)
     c = built.cables[0]
     _start_in_shape(sim, 0.02 * np.sin(np.pi * c.rest_s / c.length), 1)
     low = int(np.argmin(state.cables[0][:, 2]))
@@ -201,7 +201,7 @@ def fast_ends(frequency: float, elements: int | None = None, duration: float = 1
                     "bodies": [{"name": "b", "pos": [1.0, 0, 1]}],
                     "motion": [{"body": "b", "keys": keys, "interpolation": "linear"}],
                     "cables": [cable]})
-    built, sim, state, _ = _settled(scene)
+    built, sim, state, _ = settled(scene)
     c = built.cables[0]
     rest = np.diff(c.rest_s)
     strain, edge = [], []
@@ -226,7 +226,7 @@ def bowed_rod(elements: int | None = None) -> Result:
         cable["segments"] = elements
     scene = _scene({"scene": {"name": "rod", "units": "m", "duration": 0.5, "settle": 1.0, "timestep": 0.002},
                     "cables": [cable]})
-    built, sim, state, _ = _settled(scene)
+    built, sim, state, _ = settled(scene)
     c = built.cables[0]
     strains = []
     t0 = time.perf_counter()
@@ -253,7 +253,7 @@ def plate(speed: float, half_thickness: float = 0.005, timestep: float = 0.002) 
                     "keys": [{"t": 0, "pos": [0.4, 0, z0]}, {"t": duration, "pos": [0.4, 0, z1]}]}],
         "cables": [{"name": "c", "radius": 0.004, "start": {"pos": [0, 0, 1]}, "end": {"pos": [0.8, 0, 1]},
                     "length": 1.0}]})
-    built, sim, state, _ = _settled(scene)
+    built, sim, state, _ = settled(scene)
     t0 = time.perf_counter()
     for s in sim.steps(contacts=False):
         pass
