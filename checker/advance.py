@@ -198,6 +198,9 @@ class Advancement:
     BLOCK = 4
     """Elements per block of the far-pair bound."""
 
+    GROUP = 8
+    """Blocks per group: block pairs are first tested a group pair at a time."""
+
     FAR_HORIZONS = 8.0
     """Block pairs nearer than this many horizons are kept one by one; the
     others share the whole displacement spread as their bound."""
@@ -448,9 +451,23 @@ class Advancement:
             g_blk = np.full(len(bi), horizon)
             self._g_far = np.inf
             self._blk_rad = None
+        # groups of GROUP consecutive blocks: a group pair's box of relative
+        # displacements holds each of its block pairs' boxes, so a group pair
+        # below the least gap of its block pairs clears them all
+        gi, gj = bi // self.GROUP, bj // self.GROUP
+        key = gi * (nb // self.GROUP + 1) + gj
+        o = np.argsort(key, kind="stable")
+        bi, bj, g_blk, key = bi[o], bj[o], g_blk[o], key[o]
+        head = np.nonzero(np.r_[len(key) > 0, key[1:] != key[:-1]][:len(key)])[0]
+        self._grp_start = head
+        self._grp_count = np.diff(np.r_[head, len(key)])
+        self._gi, self._gj = gi[o][head], gj[o][head]
+        self._grp_blocks = np.arange(0, nb, self.GROUP)
         self._bi, self._bj = bi, bj
         self._g_blk = g_blk - mu
         self._g_blk2 = np.where(self._g_blk > 0, self._g_blk, 0.0) ** 2
+        self._g_grp = np.minimum.reduceat(self._g_blk, head) if len(head) else np.zeros(0)
+        self._g_grp2 = np.where(self._g_grp > 0, self._g_grp, 0.0) ** 2
         self._g_min = min(float(self._g_cc.min(initial=np.inf)), float(self._g_blk.min(initial=np.inf)),
                           float(self._g_near.min(initial=np.inf)) if self._near else np.inf)
 
@@ -532,27 +549,65 @@ class Advancement:
         per state (S,) of ``move`` (N, 3, S): ``dcc`` (S,) bounds every
         |d_a - d_b|, ``diag`` (S,) (the bounding box's diagonal) also every
         block pair's box bound; x (N, 3, S) the centres, d and seg the
-        elements and their lengths."""
+        elements and their lengths. Exact for the leading run of states that
+        pass (all :meth:`clear_run` uses); after the first state that fails,
+        every state is reported failing unevaluated. Block pairs are tested a
+        group pair at a time first (a group's box of displacements holds its
+        blocks'), and one by one only in group pairs that do not pass whole;
+        the spheres at this state only for block pairs failing the box."""
         ok = dcc < self._g_far
+        n = _leading(ok)
+        ok[n:] = False
         easy = diag < self._g_min                  # every relative motion is below every gap
         if not (ok & ~easy).any():
             return ok
-        pair_ok = self._near_clear(move, d, seg) if self._near else np.ones(len(ok), bool)
-        if len(self._cc_i):
-            d = move[self._cc_i] - move[self._cc_j]
-            pair_ok &= (np.einsum("mis,mis->ms", d, d) < self._g_cc2[:, None]).all(axis=0)
-        if len(self._bi):
-            box = self._block_boxes(move)
-            rel = np.maximum(np.abs(box[1][self._bi] - box[0][self._bj]), np.abs(box[0][self._bi] - box[1][self._bj]))
-            blk_ok = np.einsum("pis,pis->ps", rel, rel) < self._g_blk2[:, None]
-            if self._blk_rad is not None and not blk_ok.all():
+        x, move, diag, d, seg = x[:, :, :n], move[:, :, :n], diag[:n], d[:, :, :n], seg[:, :n]
+        pair_ok = self._near_clear(move, d, seg) if self._near else np.ones(n, bool)
+        pair_ok[_leading(pair_ok):] = False
+        if len(self._cc_i) and pair_ok.any():
+            m = _leading(pair_ok)
+            dd = move[self._cc_i][:, :, :m] - move[self._cc_j][:, :, :m]
+            cc_ok = (np.einsum("mis,mis->ms", dd, dd) < self._g_cc2[:, None]).all(axis=0)
+            pair_ok[:m] &= cc_ok
+            pair_ok[_leading(pair_ok):] = False
+        if len(self._bi) and pair_ok.any():
+            m = _leading(pair_ok)
+            pair_ok[:m] &= self._blocks_clear(x[:, :, :m], move[:, :, :m], float(diag[:m].max()))
+        ok[:n] &= easy | pair_ok
+        ok[_leading(ok):] = False
+        return ok
+
+    def _blocks_clear(self, x: np.ndarray, move: np.ndarray, diag: float) -> np.ndarray:
+        """The block-pair condition per state (S,) of x and move (N, 3, S);
+        ``diag`` bounds every block pair's box (the largest diagonal)."""
+        s = x.shape[2]
+        # group pairs whose least gap exceeds every box pass whole
+        cand = np.nonzero(self._g_grp <= diag)[0]
+        if not len(cand):
+            return np.ones(s, bool)
+        box = self._block_boxes(move)
+        glo = np.minimum.reduceat(box[0], self._grp_blocks, axis=0)
+        ghi = np.maximum.reduceat(box[1], self._grp_blocks, axis=0)
+        gi, gj = self._gi[cand], self._gj[cand]
+        rel = np.maximum(np.abs(ghi[gi] - glo[gj]), np.abs(glo[gi] - ghi[gj]))
+        grp_ok = np.einsum("pis,pis->ps", rel, rel) < self._g_grp2[cand, None]
+        fail = cand[~grp_ok.all(axis=1)]
+        if not len(fail):
+            return np.ones(s, bool)
+        k = ranges(self._grp_start[fail], self._grp_count[fail])      # their block pairs
+        bi, bj = self._bi[k], self._bj[k]
+        rel = np.maximum(np.abs(box[1][bi] - box[0][bj]), np.abs(box[0][bi] - box[1][bj]))
+        blk_ok = np.einsum("pis,pis->ps", rel, rel) < self._g_blk2[k, None]
+        if self._blk_rad is not None:
+            bad = np.nonzero(~blk_ok.all(axis=1))[0]
+            if len(bad):
                 # or apart now: spheres about the blocks' boxes of centres, at this state
                 lo, hi = self._block_boxes(x)
                 sphere = 0.5 * row_norm3(hi - lo) + self._blk_rad
                 centre = 0.5 * (lo + hi)
-                blk_ok |= row_norm3(centre[self._bi] - centre[self._bj]) > sphere[self._bi] + sphere[self._bj]
-            pair_ok &= blk_ok.all(axis=0)
-        return ok & (easy | pair_ok)
+                a, b = bi[bad], bj[bad]
+                blk_ok[bad] |= row_norm3(centre[a] - centre[b]) > sphere[a] + sphere[b]
+        return blk_ok.all(axis=0)
 
     def _block_boxes(self, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Componentwise least and largest of v (N, 3, S) over each block's
