@@ -11,7 +11,8 @@ run on this machine:
    memory (``ru_maxrss`` of the process, so the interpreter and imports are
    included: the ``import`` row is that baseline).
 2. ``runs``: ``cablecheck run`` of each grid scene in its own process
-   (address space capped by ``--mem-limit-gb``): the report's ``timing``
+   (address space capped by ``--mem-limit-gb``), by this checkout and by
+   ``--before``: the report's ``timing``
    split into simulation / check / validation / recording per simulated
    second, peak resident memory, recording size per simulated second.
 3. ``queries``: the same cable-part state (t = 0) checked by the checker
@@ -224,35 +225,43 @@ def build_table(parts: list[int], before: str | None, mem_gb: float) -> tuple[st
 
 
 def run_table(grid: list[tuple[int, int]], duration: float, segments: int, mem_gb: float, out: Path,
-              validate: bool) -> tuple[str, list[dict]]:
+              validate: bool, before: str | None = None) -> tuple[str, list[dict]]:
+    """Each grid scene run by this checkout and, with ``before``, by that git
+    revision (the same scene file, one process each, rows side by side)."""
     from sim.harness import harness_scene, write_scene
 
+    trees = [("this checkout", REPO)]
+    if before:
+        trees.append((f"before ({before})", _export(before)))
     rows, found = [], []
     for c, p in grid:
         data = harness_scene(c, p, segments=segments, duration=duration)
         data["check"]["validate"] = validate
         scene = write_scene(data, out / f"harness_{c}x{p}.toml")
-        rep, rec = out / f"harness_{c}x{p}.json", out / f"harness_{c}x{p}.rrd"
-        code, wall, rss, so, se = _child(["-m", "sim.cli", "run", str(scene), "--report", str(rep),
-                                          "--record", str(rec)], REPO, mem_gb, 3600)
-        if code in (0, 1) and rep.exists():
-            t = json.loads(rep.read_text())["timing"]
-            per = 1.0 / duration
-            size = rec.stat().st_size / 2 ** 20 if rec.exists() else None
-            row = {"cables": c, "parts": p, "sim_s": t["sim_s"] * per, "check_s": t["check_s"] * per,
-                   "validate_s": t["validate_s"] * per, "record_s": t["record_s"] * per,
-                   "total_s": t["total_s"] * per, "process_s": wall, "peak_rss_mb": rss,
-                   "recording_mb_per_s": None if size is None else size * per}
-            found.append(row)
-            rows.append([c, p, row["sim_s"], row["check_s"], row["validate_s"], row["record_s"], row["total_s"],
-                         wall, rss, row["recording_mb_per_s"]])
-        else:
-            last = (se.strip().splitlines() or ["?"])[-1]
-            rows.append([c, p, None, None, None, None, None, wall, rss, f"failed ({code}): {last[:80]}"])
-            found.append({"cables": c, "parts": p, "failed": last, "peak_rss_mb": rss})
+        for k, (label, path) in enumerate(trees):
+            tag = "" if k == 0 else "_before"
+            rep, rec = out / f"harness_{c}x{p}{tag}.json", out / f"harness_{c}x{p}{tag}.rrd"
+            rep.unlink(missing_ok=True)
+            code, wall, rss, so, se = _child(["-m", "sim.cli", "run", str(scene), "--report", str(rep),
+                                              "--record", str(rec)], path, mem_gb, 3600)
+            if code in (0, 1) and rep.exists():
+                t = json.loads(rep.read_text())["timing"]
+                per = 1.0 / duration
+                size = rec.stat().st_size / 2 ** 20 if rec.exists() else None
+                row = {"code": label, "cables": c, "parts": p, "sim_s": t["sim_s"] * per,
+                       "check_s": t["check_s"] * per, "validate_s": t["validate_s"] * per,
+                       "record_s": t["record_s"] * per, "total_s": t["total_s"] * per, "process_s": wall,
+                       "peak_rss_mb": rss, "recording_mb_per_s": None if size is None else size * per}
+                found.append(row)
+                rows.append([label, c, p, row["sim_s"], row["check_s"], row["validate_s"], row["record_s"],
+                             row["total_s"], wall, rss, row["recording_mb_per_s"]])
+            else:
+                last = (se.strip().splitlines() or ["?"])[-1]
+                rows.append([label, c, p, None, None, None, None, None, wall, rss, f"failed ({code}): {last[:80]}"])
+                found.append({"code": label, "cables": c, "parts": p, "failed": last, "peak_rss_mb": rss})
     title = (f"Runs: seconds per simulated second ({duration} s simulated, {segments} elements per cable, "
              f"validation {'on' if validate else 'off'}), one process per row, address space <= {mem_gb} GB")
-    return _table(title, ["cables", "parts", "sim", "check", "validate", "record", "total", "process_s",
+    return _table(title, ["code", "cables", "parts", "sim", "check", "validate", "record", "total", "process_s",
                           "peak_rss_mb", "rec_mb_per_s"], rows), found
 
 
@@ -289,7 +298,7 @@ def main() -> int:
     ap.add_argument("--duration", type=float, default=None, help="simulated seconds (default 0.5; quick 0.1)")
     ap.add_argument("--harness", action="store_true", help="also run the 64 x 1,000 harness scene")
     ap.add_argument("--no-validate", action="store_true", help="runs without the MuJoCo comparison")
-    ap.add_argument("--before", default=BEFORE, help="git revision for the build table's 'before' rows ('' for none)")
+    ap.add_argument("--before", default=BEFORE, help="git revision for the build and run tables' 'before' rows ('' for none)")
     ap.add_argument("--tables", default="build,runs,queries", help="which tables (comma-separated)")
     ap.add_argument("--mem-limit-gb", type=float, default=8.0)
     ap.add_argument("--profile", nargs=2, type=int, metavar=("CABLES", "PARTS"), help="profile one run instead")
@@ -334,7 +343,7 @@ def main() -> int:
     results, texts = {}, []
     for name, fn in (("build", lambda: build_table(build_parts, a.before or None, a.mem_limit_gb)),
                      ("runs", lambda: run_table(grid, duration, a.segments, a.mem_limit_gb, a.out,
-                                                not a.no_validate)),
+                                                not a.no_validate, a.before or None)),
                      ("queries", lambda: query_table(grid, a.segments, a.mem_limit_gb, a.out))):
         if name not in a.tables.split(","):
             continue

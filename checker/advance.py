@@ -571,8 +571,17 @@ class Advancement:
             pair_ok[:m] &= cc_ok
             pair_ok[_leading(pair_ok):] = False
         if len(self._bi) and pair_ok.any():
-            m = _leading(pair_ok)
-            pair_ok[:m] &= self._blocks_clear(x[:, :, :m], move[:, :, :m], float(diag[:m].max()))
+            # states in runs of doubling length, each only once the ones
+            # before all passed: a failure near the start costs a state or two
+            m, a, b = _leading(pair_ok), 0, 1
+            while a < m:
+                b = min(b, m)
+                blk = self._blocks_clear(x[:, :, a:b], move[:, :, a:b], float(diag[a:b].max()))
+                pair_ok[a:b] &= blk
+                if not blk.all():
+                    pair_ok[a + _leading(blk):] = False
+                    break
+                a, b = b, 2 * b + 1
         ok[:n] &= easy | pair_ok
         ok[_leading(ok):] = False
         return ok
