@@ -201,6 +201,10 @@ class Advancement:
     GROUP = 8
     """Blocks per group: block pairs are first tested a group pair at a time."""
 
+    SPARSE_ENTRIES = 200_000
+    """Above this many centre-part pairs the gaps are kept sparse (only the
+    pairs within ``FAR_HORIZONS`` horizons); below, a dense table."""
+
     FAR_HORIZONS = 8.0
     """Block pairs nearer than this many horizons are kept one by one; the
     others share the whole displacement spread as their bound."""
@@ -276,6 +280,12 @@ class Advancement:
         n, n_p = len(self._pts), len(gap_part)
         # arc length of each centre, as densify_batch computes it
         self._s_c = polyline_arc_lengths(np.where(self._valid, self._seg_raw, 0.0), self._offsets)
+        self._sparse = (candidates is not None and self._box is not None and n > 1 and horizon > 0
+                        and n * n_p > self.SPARSE_ENTRIES)
+        if self._sparse:
+            self._start_sparse(gap_part, float(horizon), candidates, active, mu)
+            self._finish_start(pts, poses, pairs, pair_bound, mu, horizon, cable_candidates, cable_active)
+            return
         u0 = (self._pts[None] - self._pos[:, None]) @ self._rot                  # R^T (x - t)
         if candidates is None:
             g = np.broadcast_to(gap_part, (n, n_p)).copy()
@@ -298,6 +308,14 @@ class Advancement:
             self.active = (rows, a_part[j])
             g[self.active] = np.inf
         self._g_pt = g - mu
+        # fused-pass data: each centre in each part's frame (homogeneous)
+        self._u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
+        self._g_kn = np.ascontiguousarray(self._g_pt.T)
+        self._g2 = np.where(self._g_kn > 0, self._g_kn, 0.0) ** 2
+        self._finish_start(pts, poses, pairs, pair_bound, mu, horizon, cable_candidates, cable_active)
+
+    def _finish_start(self, pts, poses, pairs, pair_bound, mu, horizon, cable_candidates, cable_active) -> None:
+        """The rest of :meth:`start` after the cable-part gaps."""
         self._cable_pairs = cable_candidates is not None
         self.cable_active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         if self._cable_pairs:
@@ -308,13 +326,99 @@ class Advancement:
             cable_ok = self._g_cable > 0
         self.start_pairs(poses, pairs, pair_bound, mu)
         self._stretch = self.stretch - mu
-        # fused-pass data: pieces per element (1 between cables), each centre
-        # in each part's frame (homogeneous)
+        # pieces per element (1 between cables)
         self._pieces_all = np.where(self._valid, self._pieces, 1.0)
-        self._u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
-        self._g_kn = np.ascontiguousarray(self._g_pt.T)
-        self._g2 = np.where(self._g_kn > 0, self._g_kn, 0.0) ** 2
-        self._ok = cable_ok and bool(np.all(self._g_pt > 0)) and self._pairs_ok and self.stretch > mu
+        part_ok = (bool(np.all(self._sp_g > 0)) and self._sp_cap > 0) if self._sparse else bool(np.all(self._g_pt > 0))
+        self._ok = cable_ok and part_ok and self._pairs_ok and self.stretch > mu
+
+    def _start_sparse(self, gap_part: np.ndarray, horizon: float, candidates: tuple[np.ndarray, ...],
+                      active: tuple[np.ndarray, np.ndarray] | None, mu: float) -> None:
+        """The centre-part gaps ``g[i, k]`` of the module docstring kept only
+        where they are below ``cap = FAR_HORIZONS * horizon`` (every other
+        checked pair counts as ``cap``: a smaller gap only proves less), as
+        (centre, part, gap) entries sorted by part.
+
+        Pairs are listed by a k-d tree of the element midpoints queried about
+        each part's frame origin. Why that finds every floor below ``cap``:
+        an element of half-length h lies in its bounding box in the part's
+        frame, and that box lies within ``sqrt(3) h`` of the midpoint; the
+        part's box lies within its bounding radius ``rho`` of the origin; so
+        the boxes' distance is at least ``|mid - origin| - sqrt(3) h - rho``,
+        and ``F[e, k]`` (that minus the cable radius and the clearance) is at
+        least ``cap`` beyond the query radius. Candidates (values at most the
+        horizon, below every floor's ``max(H, F)``) are entries of their own.
+        Planes and other unbounded parts get every centre."""
+        pts, n, n_p = self._pts, len(self._pts), len(gap_part)
+        cap = self.FAR_HORIZONS * horizon
+        checked = np.isfinite(gap_part)
+        box_lo, box_hi = self._box[0][:, 0], self._box[1][:, 0]
+        seg = np.where(self._valid, self._seg_raw, 0.0)
+        elem = np.nonzero(self._valid)[0]
+        mid = 0.5 * (pts[elem] + pts[elem + 1])
+        bounded = checked & np.isfinite(self._rho)
+        e_list, k_list = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
+        if bounded.any() and len(elem):
+            reach = (cap + np.sqrt(3.0) * 0.5 * float(seg.max()) + float(self._rad.max()) + self.clearance
+                     + 1e-9 * (1.0 + float(np.abs(pts).max())))
+            kb = np.nonzero(bounded)[0]
+            found = cKDTree(mid).query_ball_point(self._pos[kb], reach + self._rho[kb])
+            count = np.array([len(f) for f in found], np.int64)
+            if count.sum():
+                e_list.append(elem[np.concatenate([np.asarray(f, np.int64) for f in found if len(f)])])
+                k_list.append(np.repeat(kb, count))
+        unbounded = np.nonzero(checked & ~np.isfinite(self._rho))[0]
+        if len(unbounded) and len(elem):
+            e_list.append(np.tile(elem, len(unbounded)))
+            k_list.append(np.repeat(unbounded, len(elem)))
+        e, k = np.concatenate(e_list), np.concatenate(k_list)
+        # F[e, k] as _floor computes it (the element's ends in the part's frame)
+        rot, pos = self._rot[k], self._pos[k]
+        a = np.einsum("ni,nij->nj", pts[e] - pos, rot)
+        b = np.einsum("ni,nij->nj", pts[e + 1] - pos, rot)
+        sep = np.maximum(np.maximum(np.minimum(a, b) - box_hi[k], box_lo[k] - np.maximum(a, b)), 0.0)
+        f = np.sqrt(np.einsum("ni,ni->n", sep, sep)) - self._rad[e] - self.clearance
+        rows = np.concatenate([e, e + 1])
+        part = np.concatenate([k, k])
+        val = np.maximum(horizon, np.concatenate([f, f]))
+        cab, s, c_part, value = candidates
+        if len(value):
+            lo, hi = self._bracket(cab, s)
+            count = hi - lo + 1
+            rows = np.concatenate([rows, ranges(lo, count)])
+            part = np.concatenate([part, np.repeat(np.asarray(c_part, np.int64), count)])
+            val = np.concatenate([val, np.repeat(np.asarray(value, float), count)])
+        keep = checked[part] & (val < cap)
+        rows, part, val = rows[keep], part[keep], val[keep]
+        key = part * n + rows
+        o = np.lexsort((val, key))
+        key, val = key[o], val[o]
+        first = np.r_[len(key) > 0, key[1:] != key[:-1]][:len(key)]
+        key, val = key[first], val[first]                       # the least per (part, centre)
+        part, rows = key // n, key % n
+        self.active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        if active is not None and len(active[0]):
+            a_cab, a_part = (np.asarray(x, np.int64) for x in active)
+            # (centre, active pair) for every entry of an active part on the pair's cable
+            pair_of = {}
+            for j, (c, q) in enumerate(zip(a_cab.tolist(), a_part.tolist())):
+                pair_of.setdefault(q, []).append((j, c))
+            hit_r, hit_j = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
+            for q, lst in pair_of.items():                         # the few active parts
+                on = part == q
+                for j, c in lst:
+                    r = rows[on & (self._cable[rows] == c)]
+                    hit_r.append(r)
+                    hit_j.append(np.full(len(r), j, np.int64))
+            hr, hj = np.concatenate(hit_r), np.concatenate(hit_j)
+            o = np.lexsort((hj, hr))
+            hr, hj = hr[o], hj[o]
+            self.active = (hr, a_part[hj])
+            drop = np.isin(part * n + rows, a_part[hj] * n + hr)
+            part, rows, val = part[~drop], rows[~drop], val[~drop]
+        self._sp_part, self._sp_row, self._sp_g = part, rows, val - mu
+        self._sp_cap = cap - mu
+        self._sp_default = np.where(checked, self._sp_cap, np.inf)       # an unlisted pair's gap, per part
+        self._sp_cache: dict[bytes, tuple] = {}
 
     def _floor(self, u0: np.ndarray) -> np.ndarray:
         """(P, N): per centre and part, the least over the elements next to
@@ -582,7 +686,7 @@ class Advancement:
                     pair_ok[a + _leading(blk):] = False
                     break
                 a, b = b, 2 * b + 1
-        ok[:n] &= easy | pair_ok
+        ok[:n] &= easy[:n] | pair_ok
         ok[_leading(ok):] = False
         return ok
 
@@ -695,6 +799,8 @@ class Advancement:
         x (N, 3, S) the centres, dq (N, S) their displacements."""
         s = x.shape[2]
         dp = self._part_moves(poses).T                                    # (P, S)
+        if self._sparse:
+            return self._parts_clear_sparse(x, poses, dq, dp)
         # every centre as it would be had it moved rigidly with part k:
         # u0h[k] (N, 4) times the poses' top rows (4, 3 S), one product per part
         top = np.transpose(poses[:, :, :3, :], (1, 3, 2, 0)).reshape(len(dp), 4, 3 * s)
@@ -704,6 +810,43 @@ class Advancement:
         if bad.any():                            # or within the gap by the world displacements
             bad &= (dq + dp[:, None, :]) >= self._g_kn[:, :, None]
         ok = ~bad.reshape(-1, s).any(axis=0)
+        if len(self._pi):
+            ok &= (dp[self._pi] + dp[self._pj] < self._g_pair[:, None]).all(axis=0)
+        return ok
+
+    def _parts_clear_sparse(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray) -> np.ndarray:
+        """:meth:`_parts_clear` on the sparse gaps: parts that did not move in
+        these states (dp 0, so ``rel`` is ``dq``) reduce to one least gap per
+        centre; the parts that moved are tested as the dense table does, on
+        their own columns (both kept per set of moving parts)."""
+        s = x.shape[2]
+        moved = (dp > 0).any(axis=1)
+        tag = moved.tobytes()
+        if tag not in self._sp_cache:
+            n = len(self._pts)
+            still = ~moved[self._sp_part]
+            g_still = np.full(n, float(self._sp_default[~moved].min(initial=np.inf)))
+            np.minimum.at(g_still, self._sp_row[still], self._sp_g[still])
+            mk = np.nonzero(moved)[0]
+            col = np.full(len(moved), -1, np.int64)
+            col[mk] = np.arange(len(mk))
+            g_kn = np.repeat(self._sp_default[mk][:, None], n, axis=1)
+            on = ~still
+            np.minimum.at(g_kn, (col[self._sp_part[on]], self._sp_row[on]), self._sp_g[on])
+            u0 = (self._pts[None] - self._pos[mk, None]) @ self._rot[mk]
+            u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
+            g2 = np.where(g_kn > 0, g_kn, 0.0) ** 2
+            self._sp_cache = {tag: (g_still, mk, u0h, g_kn, g2)}
+        g_still, mk, u0h, g_kn, g2 = self._sp_cache[tag]
+        ok = (dq < g_still[:, None]).all(axis=0)
+        if len(mk):
+            top = np.transpose(poses[:, mk, :3, :], (1, 3, 2, 0)).reshape(len(mk), 4, 3 * s)
+            w = np.matmul(u0h, top).reshape(len(mk), len(x), 3, s)
+            w -= x
+            bad = np.einsum("knis,knis->kns", w, w) >= g2[:, :, None]
+            if bad.any():
+                bad &= (dq + dp[mk][:, None, :]) >= g_kn[:, :, None]
+            ok &= ~bad.reshape(-1, s).any(axis=0)
         if len(self._pi):
             ok &= (dp[self._pi] + dp[self._pj] < self._g_pair[:, None]).all(axis=0)
         return ok
