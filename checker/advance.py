@@ -320,8 +320,7 @@ class Advancement:
         self.cable_active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         if self._cable_pairs:
             self._start_cable_pairs(cable_candidates, float(horizon), mu, cable_active)
-            cable_ok = (bool(np.all(self._g_cc > 0)) and bool(np.all(self._g_blk > 0))
-                        and self._g_far > 0)
+            cable_ok = bool(np.all(self._g_cc > 0))             # the blocks' gaps on first use
         else:
             cable_ok = self._g_cable > 0
         self.start_pairs(poses, pairs, pair_bound, mu)
@@ -512,6 +511,25 @@ class Advancement:
         self._cc_i, self._cc_j = ii, jj
         self._g_cc = np.minimum(gg, horizon) - mu
         self._g_cc2 = np.where(self._g_cc > 0, self._g_cc, 0.0) ** 2
+        # the block pairs are listed on first use (:meth:`_ensure_blocks`):
+        # a run whose states fail the cheaper conditions never needs them
+        self._blk_args = (horizon, mu)
+        self._blocks_ready = False
+        self._g_min_nb = min(float(self._g_cc.min(initial=np.inf)),
+                             float(self._g_near.min(initial=np.inf)) if self._near else np.inf)
+
+    def _ensure_blocks(self) -> bool:
+        """List the block pairs of the last start (once); True when their
+        gaps are all positive."""
+        if not self._blocks_ready:
+            self._start_blocks(*self._blk_args)
+            self._blocks_ready = True
+            self._blk_ok = bool(np.all(self._g_blk > 0)) and self._g_far > 0
+        return self._blk_ok
+
+    def _start_blocks(self, horizon: float, mu: float) -> None:
+        """Block pairs and their gaps (the module docstring's block condition)."""
+        n = len(self._pts)
         # blocks of BLOCK elements: centres [b K, b K + K] (overlapping by one)
         kb = self.BLOCK
         nb = max(1, -(-(n - 1) // kb)) if n else 0
@@ -572,8 +590,6 @@ class Advancement:
         self._g_blk2 = np.where(self._g_blk > 0, self._g_blk, 0.0) ** 2
         self._g_grp = np.minimum.reduceat(self._g_blk, head) if len(head) else np.zeros(0)
         self._g_grp2 = np.where(self._g_grp > 0, self._g_grp, 0.0) ** 2
-        self._g_min = min(float(self._g_cc.min(initial=np.inf)), float(self._g_blk.min(initial=np.inf)),
-                          float(self._g_near.min(initial=np.inf)) if self._near else np.inf)
 
     def _start_near(self, horizon: float, mu: float) -> None:
         """Near element pairs (e, f), e <= f <= e + 2 BLOCK - 1 on one cable,
@@ -655,39 +671,47 @@ class Advancement:
         block pair's box bound; x (N, 3, S) the centres, d and seg the
         elements and their lengths. Exact for the leading run of states that
         pass (all :meth:`clear_run` uses); after the first state that fails,
-        every state is reported failing unevaluated. Block pairs are tested a
-        group pair at a time first (a group's box of displacements holds its
-        blocks'), and one by one only in group pairs that do not pass whole;
-        the spheres at this state only for block pairs failing the box."""
-        ok = dcc < self._g_far
+        every state is reported failing unevaluated.
+
+        Cheapest first: near pairs and candidate centre pairs (skipped for
+        states whose whole spread is below all their gaps), then the far
+        limit and the block pairs, listed on first use. Block pairs are
+        tested a group pair at a time first (a group's box of displacements
+        holds its blocks'; group pairs whose least gap exceeds the spread
+        pass unlooked), one by one only in group pairs that do not pass
+        whole, the spheres at this state only for block pairs failing the
+        box, and over runs of states of doubling length."""
+        n_s = len(dcc)
+        ok = np.ones(n_s, bool)
+        easy = diag < self._g_min_nb               # every relative motion is below every such gap
+        if not easy.all():
+            pair_ok = self._near_clear(move, d, seg) if self._near else np.ones(n_s, bool)
+            pair_ok |= easy
+            m = _leading(pair_ok)
+            if len(self._cc_i) and m:
+                dd = move[self._cc_i][:, :, :m] - move[self._cc_j][:, :, :m]
+                pair_ok[:m] &= (np.einsum("mis,mis->ms", dd, dd) < self._g_cc2[:, None]).all(axis=0) | easy[:m]
+            ok &= pair_ok
         n = _leading(ok)
         ok[n:] = False
-        easy = diag < self._g_min                  # every relative motion is below every gap
-        if not (ok & ~easy).any():
+        if not n:
             return ok
-        x, move, diag, d, seg = x[:, :, :n], move[:, :, :n], diag[:n], d[:, :, :n], seg[:, :n]
-        pair_ok = self._near_clear(move, d, seg) if self._near else np.ones(n, bool)
-        pair_ok[_leading(pair_ok):] = False
-        if len(self._cc_i) and pair_ok.any():
-            m = _leading(pair_ok)
-            dd = move[self._cc_i][:, :, :m] - move[self._cc_j][:, :, :m]
-            cc_ok = (np.einsum("mis,mis->ms", dd, dd) < self._g_cc2[:, None]).all(axis=0)
-            pair_ok[:m] &= cc_ok
-            pair_ok[_leading(pair_ok):] = False
-        if len(self._bi) and pair_ok.any():
+        if not self._ensure_blocks():
+            return np.zeros(n_s, bool)
+        ok[:n] &= dcc[:n] < self._g_far
+        n = _leading(ok)
+        ok[n:] = False
+        if len(self._bi) and n:
             # states in runs of doubling length, each only once the ones
             # before all passed: a failure near the start costs a state or two
-            m, a, b = _leading(pair_ok), 0, 1
-            while a < m:
-                b = min(b, m)
+            a, b = 0, 1
+            while a < n:
+                b = min(b, n)
                 blk = self._blocks_clear(x[:, :, a:b], move[:, :, a:b], float(diag[a:b].max()))
-                pair_ok[a:b] &= blk
                 if not blk.all():
-                    pair_ok[a + _leading(blk):] = False
+                    ok[a + _leading(blk):] = False
                     break
                 a, b = b, 2 * b + 1
-        ok[:n] &= easy[:n] | pair_ok
-        ok[_leading(ok):] = False
         return ok
 
     def _blocks_clear(self, x: np.ndarray, move: np.ndarray, diag: float) -> np.ndarray:
