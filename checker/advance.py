@@ -327,7 +327,8 @@ class Advancement:
         self._stretch = self.stretch - mu
         # pieces per element (1 between cables)
         self._pieces_all = np.where(self._valid, self._pieces, 1.0)
-        part_ok = (bool(np.all(self._sp_g > 0)) and self._sp_cap > 0) if self._sparse else bool(np.all(self._g_pt > 0))
+        # sparse: the entries' gaps are checked on first use
+        part_ok = self._sp_cap > 0 if self._sparse else bool(np.all(self._g_pt > 0))
         self._ok = cable_ok and part_ok and self._pairs_ok and self.stretch > mu
 
     def _start_sparse(self, gap_part: np.ndarray, horizon: float, candidates: tuple[np.ndarray, ...],
@@ -347,53 +348,18 @@ class Advancement:
         least ``cap`` beyond the query radius. Candidates (values at most the
         horizon, below every floor's ``max(H, F)``) are entries of their own.
         Planes and other unbounded parts get every centre."""
-        pts, n, n_p = self._pts, len(self._pts), len(gap_part)
+        n_p = len(gap_part)
         cap = self.FAR_HORIZONS * horizon
-        checked = np.isfinite(gap_part)
-        box_lo, box_hi = self._box[0][:, 0], self._box[1][:, 0]
-        seg = np.where(self._valid, self._seg_raw, 0.0)
-        elem = np.nonzero(self._valid)[0]
-        mid = 0.5 * (pts[elem] + pts[elem + 1])
-        bounded = checked & np.isfinite(self._rho)
-        e_list, k_list = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
-        if bounded.any() and len(elem):
-            reach = (cap + np.sqrt(3.0) * 0.5 * float(seg.max()) + float(self._rad.max()) + self.clearance
-                     + 1e-9 * (1.0 + float(np.abs(pts).max())))
-            kb = np.nonzero(bounded)[0]
-            found = cKDTree(mid).query_ball_point(self._pos[kb], reach + self._rho[kb])
-            count = np.array([len(f) for f in found], np.int64)
-            if count.sum():
-                e_list.append(elem[np.concatenate([np.asarray(f, np.int64) for f in found if len(f)])])
-                k_list.append(np.repeat(kb, count))
-        unbounded = np.nonzero(checked & ~np.isfinite(self._rho))[0]
-        if len(unbounded) and len(elem):
-            e_list.append(np.tile(elem, len(unbounded)))
-            k_list.append(np.repeat(unbounded, len(elem)))
-        e, k = np.concatenate(e_list), np.concatenate(k_list)
-        # F[e, k] as _floor computes it (the element's ends in the part's frame)
-        rot, pos = self._rot[k], self._pos[k]
-        a = np.einsum("ni,nij->nj", pts[e] - pos, rot)
-        b = np.einsum("ni,nij->nj", pts[e + 1] - pos, rot)
-        sep = np.maximum(np.maximum(np.minimum(a, b) - box_hi[k], box_lo[k] - np.maximum(a, b)), 0.0)
-        f = np.sqrt(np.einsum("ni,ni->n", sep, sep)) - self._rad[e] - self.clearance
-        rows = np.concatenate([e, e + 1])
-        part = np.concatenate([k, k])
-        val = np.maximum(horizon, np.concatenate([f, f]))
-        cab, s, c_part, value = candidates
-        if len(value):
-            lo, hi = self._bracket(cab, s)
-            count = hi - lo + 1
-            rows = np.concatenate([rows, ranges(lo, count)])
-            part = np.concatenate([part, np.repeat(np.asarray(c_part, np.int64), count)])
-            val = np.concatenate([val, np.repeat(np.asarray(value, float), count)])
-        keep = checked[part] & (val < cap)
-        rows, part, val = rows[keep], part[keep], val[keep]
-        key = part * n + rows
-        o = np.lexsort((val, key))
-        key, val = key[o], val[o]
-        first = np.r_[len(key) > 0, key[1:] != key[:-1]][:len(key)]
-        key, val = key[first], val[first]                       # the least per (part, centre)
-        part, rows = key // n, key % n
+        self._sp_cap = cap - mu
+        self._sp_default = np.where(np.isfinite(gap_part), self._sp_cap, np.inf)    # an unlisted pair's gap
+        self._sp_cache: dict[bytes, tuple] = {}
+        first = np.zeros(n_p, bool)
+        if active is not None and len(active[0]):
+            first[np.asarray(active[1], np.int64)] = True
+        # the active parts' entries now (the caller reads :attr:`active`), the
+        # others on first use (:meth:`_ensure_sparse`)
+        part, rows, val = self._sparse_entries(gap_part, horizon, candidates, first)
+        n = len(self._pts)
         self.active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         if active is not None and len(active[0]):
             a_cab, a_part = (np.asarray(x, np.int64) for x in active)
@@ -414,10 +380,76 @@ class Advancement:
             self.active = (hr, a_part[hj])
             drop = np.isin(part * n + rows, a_part[hj] * n + hr)
             part, rows, val = part[~drop], rows[~drop], val[~drop]
-        self._sp_part, self._sp_row, self._sp_g = part, rows, val - mu
-        self._sp_cap = cap - mu
-        self._sp_default = np.where(checked, self._sp_cap, np.inf)       # an unlisted pair's gap, per part
-        self._sp_cache: dict[bytes, tuple] = {}
+        self._sp_first = (part, rows, val - mu)
+        self._sp_rest = (gap_part, horizon, candidates, ~first, mu)
+        self._sp_ready = False
+
+    def _ensure_sparse(self) -> bool:
+        """Every sparse entry of the last start (once); True when all gaps are positive."""
+        if not self._sp_ready:
+            gap_part, horizon, candidates, rest, mu = self._sp_rest
+            part, rows, val = self._sparse_entries(gap_part, horizon, candidates, rest)
+            p0, r0, g0 = self._sp_first
+            self._sp_part = np.concatenate([p0, part])
+            self._sp_row = np.concatenate([r0, rows])
+            self._sp_g = np.concatenate([g0, val - mu])
+            self._sp_ready = True
+            self._sp_ok = bool(np.all(self._sp_g > 0)) and self._sp_cap > 0
+        return self._sp_ok
+
+    def _sparse_entries(self, gap_part: np.ndarray, horizon: float, candidates: tuple[np.ndarray, ...],
+                        only: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(part, centre, gap) entries below the cap of the parts ``only`` (P,) bool
+        (see :meth:`_start_sparse`), the least per pair, sorted by part."""
+        pts, n, n_p = self._pts, len(self._pts), len(gap_part)
+        cap = self.FAR_HORIZONS * horizon
+        checked = np.isfinite(gap_part)
+        box_lo, box_hi = self._box[0][:, 0], self._box[1][:, 0]
+        seg = np.where(self._valid, self._seg_raw, 0.0)
+        elem = np.nonzero(self._valid)[0]
+        mid = 0.5 * (pts[elem] + pts[elem + 1])
+        bounded = checked & only & np.isfinite(self._rho)
+        e_list, k_list = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
+        if bounded.any() and len(elem):
+            reach = (cap + np.sqrt(3.0) * 0.5 * float(seg.max()) + float(self._rad.max()) + self.clearance
+                     + 1e-9 * (1.0 + float(np.abs(pts).max())))
+            kb = np.nonzero(bounded)[0]
+            found = cKDTree(mid).query_ball_point(self._pos[kb], reach + self._rho[kb])
+            count = np.array([len(f) for f in found], np.int64)
+            if count.sum():
+                e_list.append(elem[np.concatenate([np.asarray(f, np.int64) for f in found if len(f)])])
+                k_list.append(np.repeat(kb, count))
+        unbounded = np.nonzero(checked & only & ~np.isfinite(self._rho))[0]
+        if len(unbounded) and len(elem):
+            e_list.append(np.tile(elem, len(unbounded)))
+            k_list.append(np.repeat(unbounded, len(elem)))
+        e, k = np.concatenate(e_list), np.concatenate(k_list)
+        # F[e, k] as _floor computes it (the element's ends in the part's frame)
+        rot, pos = self._rot[k], self._pos[k]
+        a = np.einsum("ni,nij->nj", pts[e] - pos, rot)
+        b = np.einsum("ni,nij->nj", pts[e + 1] - pos, rot)
+        sep = np.maximum(np.maximum(np.minimum(a, b) - box_hi[k], box_lo[k] - np.maximum(a, b)), 0.0)
+        f = np.sqrt(np.einsum("ni,ni->n", sep, sep)) - self._rad[e] - self.clearance
+        rows = np.concatenate([e, e + 1])
+        part = np.concatenate([k, k])
+        val = np.maximum(horizon, np.concatenate([f, f]))
+        cab, s, c_part, value = candidates
+        if len(value):
+            lo, hi = self._bracket(cab, s)
+            count = hi - lo + 1
+            rows = np.concatenate([rows, ranges(lo, count)])
+            part = np.concatenate([part, np.repeat(np.asarray(c_part, np.int64), count)])
+            val = np.concatenate([val, np.repeat(np.asarray(value, float), count)])
+        keep = checked[part] & only[part] & (val < cap)
+        rows, part, val = rows[keep], part[keep], val[keep]
+        key = part * n + rows
+        o = np.lexsort((val, key))
+        key, val = key[o], val[o]
+        first = np.r_[len(key) > 0, key[1:] != key[:-1]][:len(key)]
+        key, val = key[first], val[first]                       # the least per (part, centre)
+        part, rows = key // n, key % n
+        return part, rows, val
+
 
     def _floor(self, u0: np.ndarray) -> np.ndarray:
         """(P, N): per centre and part, the least over the elements next to
@@ -844,6 +876,8 @@ class Advancement:
         centre; the parts that moved are tested as the dense table does, on
         their own columns (both kept per set of moving parts)."""
         s = x.shape[2]
+        if not self._ensure_sparse():
+            return np.zeros(s, bool)
         moved = (dp > 0).any(axis=1)
         tag = moved.tobytes()
         if tag not in self._sp_cache:
