@@ -556,11 +556,24 @@ class Advancement:
         if not self._blocks_ready:
             self._start_blocks(*self._blk_args)
             self._blocks_ready = True
-            self._blk_ok = bool(np.all(self._g_blk > 0)) and self._g_far > 0
+            self._blk_ok = bool(np.all(self._g_grp > 0)) and self._g_far > 0
         return self._blk_ok
 
     def _start_blocks(self, horizon: float, mu: float) -> None:
-        """Block pairs and their gaps (the module docstring's block condition)."""
+        """Blocks, their groups and the group pairs to test (the module
+        docstring's block condition).
+
+        Groups of GROUP consecutive blocks: a group pair's box of relative
+        displacements holds each of its block pairs' boxes, so a group pair
+        whose box is below a lower bound of its block pairs' gaps clears them
+        all; the block pairs of the others are formed when tested
+        (:meth:`_block_pairs`), with their own gaps. The lower bound: the
+        distance between spheres about the groups enclosing their blocks'
+        spheres, put through the blocks' rule (``max(H, min(d, far))``, which
+        grows with d). Block pairs listed (one by one) are those whose
+        centres lie within the search radius of the k-d tree (``2 max reach
+        + clearance + far``) when there are more than 64 blocks, else all;
+        the group pairs kept are those that may hold one."""
         n = len(self._pts)
         # blocks of BLOCK elements: centres [b K, b K + K] (overlapping by one)
         kb = self.BLOCK
@@ -568,10 +581,14 @@ class Advancement:
         self._blk_start = np.arange(nb) * kb
         self._blk_last = np.minimum(self._blk_start + kb, max(n - 1, 0))
         far = self.FAR_HORIZONS * horizon
+        self._blk_h, self._blk_far, self._blk_mu = horizon, far, mu
+        self._grp_blocks = np.arange(0, nb, self.GROUP)
+        ng = len(self._grp_blocks)
+        self._gi = self._gj = np.zeros(0, np.int64)
+        self._g_grp = self._g_grp2 = np.zeros(0)
+        self._g_far = np.inf
+        self._blk_rad = None
         if nb == 0:
-            self._bi = self._bj = np.zeros(0, np.int64)
-            self._g_blk = self._g_blk2 = np.zeros(0)
-            self._g_far = np.inf
             return
         lo = np.minimum.reduceat(self._pts, self._blk_start)
         hi = np.maximum.reduceat(self._pts, self._blk_start)
@@ -579,49 +596,66 @@ class Advancement:
         hi = np.maximum(hi, self._pts[self._blk_last])
         centre = 0.5 * (lo + hi)
         big = 0.5 * row_norm(hi - lo)               # encloses the block's centres, so its elements
+        group = np.arange(nb) // self.GROUP
+        self._blk_radius = None                     # the k-d tree's search radius (None: every pair)
         if self._rad is not None:
             rad = np.maximum(np.maximum.reduceat(self._rad, self._blk_start), self._rad[self._blk_last])
             self._blk_rad = rad[:, None] + self.clearance / 2 + mu      # each block's share of a pair's
             reach = big + rad
+            self._blk_centre, self._blk_reach = centre, reach
+            g_lo = np.minimum.reduceat(centre, self._grp_blocks)
+            g_hi = np.maximum.reduceat(centre, self._grp_blocks)
+            g_centre = 0.5 * (g_lo + g_hi)
+            off = row_norm(centre - g_centre[group])
+            g_reach = np.maximum.reduceat(off + reach, self._grp_blocks)
             if nb <= 64:                                # few blocks: every pair
-                bi, bj = np.triu_indices(nb)
-                listed = True
+                gi, gj = np.triu_indices(ng)
             else:
-                rmax = float(reach.max())
-                pairs = cKDTree(centre).query_pairs(2.0 * rmax + self.clearance + far, output_type="ndarray")
-                bi = np.concatenate([np.arange(nb), pairs[:, 0]]).astype(np.int64)
-                bj = np.concatenate([np.arange(nb), pairs[:, 1]]).astype(np.int64)
-                listed = len(pairs) == nb * (nb - 1) // 2
-            dist = row_norm(centre[bi] - centre[bj]) - reach[bi] - reach[bj] - self.clearance
-            g_blk = np.maximum(horizon, np.minimum(dist, far))
-            # a block with itself or the next on one cable: its element pairs are near pairs
-            end = self._blk_last[np.maximum(bi, bj)]
-            near = (np.abs(bj - bi) <= 1) & (self._cable[self._blk_start[np.minimum(bi, bj)]] == self._cable[end])
-            bi, bj, g_blk = bi[~near], bj[~near], g_blk[~near]
-            # block pairs not listed are farther than ``far`` past the clearance
-            self._g_far = (np.inf if listed else far) - mu
+                radius = 2.0 * float(reach.max()) + self.clearance + far
+                self._blk_radius = radius
+                tree = cKDTree(centre)
+                listed = int(tree.count_neighbors(tree, radius)) == nb * nb
+                self._g_far = (np.inf if listed else far) - mu
+                pairs = cKDTree(g_centre).query_pairs(radius + 2.0 * float(off.max()) + 1e-9 * (1.0 + radius),
+                                                      output_type="ndarray")
+                gi = np.concatenate([np.arange(ng), pairs[:, 0]]).astype(np.int64)
+                gj = np.concatenate([np.arange(ng), pairs[:, 1]]).astype(np.int64)
+            dist = row_norm(g_centre[gi] - g_centre[gj]) - g_reach[gi] - g_reach[gj] - self.clearance
+            g_grp = np.maximum(horizon, np.minimum(dist, far))
         else:
-            bi, bj = np.triu_indices(nb)
-            g_blk = np.full(len(bi), horizon)
-            self._g_far = np.inf
-            self._blk_rad = None
-        # groups of GROUP consecutive blocks: a group pair's box of relative
-        # displacements holds each of its block pairs' boxes, so a group pair
-        # below the least gap of its block pairs clears them all
-        gi, gj = bi // self.GROUP, bj // self.GROUP
-        key = gi * (nb // self.GROUP + 1) + gj
-        o = np.argsort(key, kind="stable")
-        bi, bj, g_blk, key = bi[o], bj[o], g_blk[o], key[o]
-        head = np.nonzero(np.r_[len(key) > 0, key[1:] != key[:-1]][:len(key)])[0]
-        self._grp_start = head
-        self._grp_count = np.diff(np.r_[head, len(key)])
-        self._gi, self._gj = gi[o][head], gj[o][head]
-        self._grp_blocks = np.arange(0, nb, self.GROUP)
-        self._bi, self._bj = bi, bj
-        self._g_blk = g_blk - mu
-        self._g_blk2 = np.where(self._g_blk > 0, self._g_blk, 0.0) ** 2
-        self._g_grp = np.minimum.reduceat(self._g_blk, head) if len(head) else np.zeros(0)
+            gi, gj = np.triu_indices(ng)
+            g_grp = np.full(len(gi), horizon)
+        self._gi, self._gj = gi.astype(np.int64), gj.astype(np.int64)
+        self._g_grp = g_grp - mu
         self._g_grp2 = np.where(self._g_grp > 0, self._g_grp, 0.0) ** 2
+        self._nb = nb
+
+    def _block_pairs(self, gp: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The block pairs (a <= b) of group pairs gp and their squared gaps
+        (the module docstring's ``max(H, L[A, B])``, less the rounding
+        margin): those listed, other than a block with itself or the next on
+        one cable (their element pairs are near pairs)."""
+        g, nb = self.GROUP, self._nb
+        k = np.arange(g * g)
+        bi = (self._gi[gp] * g)[:, None] + (k // g)[None, :]
+        bj = (self._gj[gp] * g)[:, None] + (k % g)[None, :]
+        keep = (bi <= bj) & (bj < nb)
+        bi, bj = bi[keep], bj[keep]
+        end = self._blk_last[bj]
+        near = (bj - bi <= 1) & (self._cable[self._blk_start[bi]] == self._cable[end])
+        bi, bj = bi[~near], bj[~near]
+        if self._blk_rad is None:
+            gap = np.full(len(bi), self._blk_h)
+        else:
+            c = self._blk_centre
+            sep = row_norm(c[bi] - c[bj])
+            if self._blk_radius is not None:
+                on = sep <= self._blk_radius
+                bi, bj, sep = bi[on], bj[on], sep[on]
+            dist = sep - self._blk_reach[bi] - self._blk_reach[bj] - self.clearance
+            gap = np.maximum(self._blk_h, np.minimum(dist, self._blk_far))
+        gap = gap - self._blk_mu
+        return bi, bj, np.where(gap > 0, gap, 0.0) ** 2
 
     def _start_near(self, horizon: float, mu: float) -> None:
         """Near element pairs (e, f), e <= f <= e + 2 BLOCK - 1 on one cable,
@@ -733,7 +767,7 @@ class Advancement:
         ok[:n] &= dcc[:n] < self._g_far
         n = _leading(ok)
         ok[n:] = False
-        if len(self._bi) and n:
+        if len(self._gi) and n:
             # states in runs of doubling length, each only once the ones
             # before all passed: a failure near the start costs a state or two
             a, b = 0, 1
@@ -763,10 +797,9 @@ class Advancement:
         fail = cand[~grp_ok.all(axis=1)]
         if not len(fail):
             return np.ones(s, bool)
-        k = ranges(self._grp_start[fail], self._grp_count[fail])      # their block pairs
-        bi, bj = self._bi[k], self._bj[k]
+        bi, bj, g2 = self._block_pairs(fail)                            # their block pairs
         rel = np.maximum(np.abs(box[1][bi] - box[0][bj]), np.abs(box[0][bi] - box[1][bj]))
-        blk_ok = np.einsum("pis,pis->ps", rel, rel) < self._g_blk2[k, None]
+        blk_ok = np.einsum("pis,pis->ps", rel, rel) < g2[:, None]
         if self._blk_rad is not None:
             bad = np.nonzero(~blk_ok.all(axis=1))[0]
             if len(bad):
