@@ -11,9 +11,12 @@ run on this machine:
    memory (``ru_maxrss`` of the process, so the interpreter and imports are
    included: the ``import`` row is that baseline).
 2. ``runs``: ``cablecheck run`` of each grid scene in its own process
-   (address space capped by ``--mem-limit-gb``): the report's ``timing``
+   (address space capped by ``--mem-limit-gb``), by this checkout and by
+   ``--before``: the report's ``timing``
    split into simulation / check / validation / recording per simulated
-   second, peak resident memory, recording size per simulated second.
+   second, peak resident memory, recording size per simulated second (and,
+   with ``--rec-growth``, its growth per simulated second without what is
+   written once: the same run cut at half the duration, subtracted).
 3. ``queries``: the same cable-part state (t = 0) checked by the checker
    (``points`` and ``exact``), by MuJoCo's ``mj_collision`` on the detection
    model and by python-fcl (:func:`checker.benchscene.fcl_queries`), each
@@ -23,6 +26,7 @@ run on this machine:
 
 Run: python benchmarks/bench_scale.py [--quick] [--cables 1,16,64] [--parts 10,100,1000]
        [--duration S] [--harness] [--tables build,runs,queries] [--profile C P] [--out DIR]
+       [--before REV] [--rec-growth]
 
 ``--quick`` runs a small subset (seconds to a minute). Timings depend on the
 machine and its load: compare rows of one run, not runs of different days.
@@ -224,36 +228,68 @@ def build_table(parts: list[int], before: str | None, mem_gb: float) -> tuple[st
 
 
 def run_table(grid: list[tuple[int, int]], duration: float, segments: int, mem_gb: float, out: Path,
-              validate: bool) -> tuple[str, list[dict]]:
+              validate: bool, before: str | None = None, growth_too: bool = False) -> tuple[str, list[dict]]:
+    """Each grid scene run by this checkout and, with ``before``, by that git
+    revision (the same scene file, one process each, rows side by side)."""
     from sim.harness import harness_scene, write_scene
 
+    trees = [("this checkout", REPO)]
+    if before:
+        trees.append((f"before ({before})", _export(before)))
     rows, found = [], []
     for c, p in grid:
         data = harness_scene(c, p, segments=segments, duration=duration)
         data["check"]["validate"] = validate
         scene = write_scene(data, out / f"harness_{c}x{p}.toml")
-        rep, rec = out / f"harness_{c}x{p}.json", out / f"harness_{c}x{p}.rrd"
-        code, wall, rss, so, se = _child(["-m", "sim.cli", "run", str(scene), "--report", str(rep),
-                                          "--record", str(rec)], REPO, mem_gb, 3600)
-        if code in (0, 1) and rep.exists():
-            t = json.loads(rep.read_text())["timing"]
-            per = 1.0 / duration
-            size = rec.stat().st_size / 2 ** 20 if rec.exists() else None
-            row = {"cables": c, "parts": p, "sim_s": t["sim_s"] * per, "check_s": t["check_s"] * per,
-                   "validate_s": t["validate_s"] * per, "record_s": t["record_s"] * per,
-                   "total_s": t["total_s"] * per, "process_s": wall, "peak_rss_mb": rss,
-                   "recording_mb_per_s": None if size is None else size * per}
-            found.append(row)
-            rows.append([c, p, row["sim_s"], row["check_s"], row["validate_s"], row["record_s"], row["total_s"],
-                         wall, rss, row["recording_mb_per_s"]])
-        else:
-            last = (se.strip().splitlines() or ["?"])[-1]
-            rows.append([c, p, None, None, None, None, None, wall, rss, f"failed ({code}): {last[:80]}"])
-            found.append({"cables": c, "parts": p, "failed": last, "peak_rss_mb": rss})
+        for k, (label, path) in enumerate(trees):
+            tag = "" if k == 0 else "_before"
+            rep, rec = out / f"harness_{c}x{p}{tag}.json", out / f"harness_{c}x{p}{tag}.rrd"
+            rep.unlink(missing_ok=True)
+            code, wall, rss, so, se = _child(["-m", "sim.cli", "run", str(scene), "--report", str(rep),
+                                              "--record", str(rec)], path, mem_gb, 3600)
+            if code in (0, 1) and rep.exists():
+                t = json.loads(rep.read_text())["timing"]
+                per = 1.0 / duration
+                size = rec.stat().st_size / 2 ** 20 if rec.exists() else None
+                growth = _growth(data, size, duration, out / f"half_{c}x{p}{tag}", path, mem_gb) \
+                    if (growth_too and size is not None) else None
+                row = {"code": label, "cables": c, "parts": p, "sim_s": t["sim_s"] * per,
+                       "check_s": t["check_s"] * per, "validate_s": t["validate_s"] * per,
+                       "record_s": t["record_s"] * per, "total_s": t["total_s"] * per, "process_s": wall,
+                       "peak_rss_mb": rss, "recording_mb_per_s": None if size is None else size * per,
+                       "recording_growth_mb_per_s": growth}
+                found.append(row)
+                rows.append([label, c, p, row["sim_s"], row["check_s"], row["validate_s"], row["record_s"],
+                             row["total_s"], wall, rss, row["recording_mb_per_s"], growth])
+            else:
+                last = (se.strip().splitlines() or ["?"])[-1]
+                rows.append([label, c, p, None, None, None, None, None, wall, rss, None,
+                             f"failed ({code}): {last[:80]}"])
+                found.append({"code": label, "cables": c, "parts": p, "failed": last, "peak_rss_mb": rss})
     title = (f"Runs: seconds per simulated second ({duration} s simulated, {segments} elements per cable, "
              f"validation {'on' if validate else 'off'}), one process per row, address space <= {mem_gb} GB")
-    return _table(title, ["cables", "parts", "sim", "check", "validate", "record", "total", "process_s",
-                          "peak_rss_mb", "rec_mb_per_s"], rows), found
+    if growth_too:
+        title += ("; rec_growth: the recording's growth per simulated second, (size - size of the same "
+                  "run at half the duration) / (half the duration), without what is written once")
+    return _table(title, ["code", "cables", "parts", "sim", "check", "validate", "record", "total", "process_s",
+                          "peak_rss_mb", "rec_mb_per_s", "rec_growth"], rows), found
+
+
+def _growth(data: dict, size: float, duration: float, stem: Path, path: Path, mem_gb: float) -> float | None:
+    """MB per simulated second by which the recording grows: the same scene
+    run again for half the duration (validation off: it records nothing)."""
+    from sim.harness import write_scene
+
+    half = json.loads(json.dumps(data))
+    half["scene"]["duration"] = 0.5 * duration
+    half["check"]["validate"] = False
+    scene = write_scene(half, stem.with_suffix(".toml"))
+    rec = stem.with_suffix(".rrd")
+    code, *_ = _child(["-m", "sim.cli", "run", str(scene), "--report", str(stem.with_suffix(".json")),
+                       "--record", str(rec)], path, mem_gb, 3600)
+    if code not in (0, 1) or not rec.exists():
+        return None
+    return (size - rec.stat().st_size / 2 ** 20) / (0.5 * duration)
 
 
 def query_table(grid: list[tuple[int, int]], segments: int, mem_gb: float, out: Path) -> tuple[str, list[dict]]:
@@ -288,8 +324,10 @@ def main() -> int:
     ap.add_argument("--segments", type=int, default=40)
     ap.add_argument("--duration", type=float, default=None, help="simulated seconds (default 0.5; quick 0.1)")
     ap.add_argument("--harness", action="store_true", help="also run the 64 x 1,000 harness scene")
+    ap.add_argument("--rec-growth", action="store_true",
+                    help="also run each scene for half the duration: the recording's growth per simulated second")
     ap.add_argument("--no-validate", action="store_true", help="runs without the MuJoCo comparison")
-    ap.add_argument("--before", default=BEFORE, help="git revision for the build table's 'before' rows ('' for none)")
+    ap.add_argument("--before", default=BEFORE, help="git revision for the build and run tables' 'before' rows ('' for none)")
     ap.add_argument("--tables", default="build,runs,queries", help="which tables (comma-separated)")
     ap.add_argument("--mem-limit-gb", type=float, default=8.0)
     ap.add_argument("--profile", nargs=2, type=int, metavar=("CABLES", "PARTS"), help="profile one run instead")
@@ -334,7 +372,7 @@ def main() -> int:
     results, texts = {}, []
     for name, fn in (("build", lambda: build_table(build_parts, a.before or None, a.mem_limit_gb)),
                      ("runs", lambda: run_table(grid, duration, a.segments, a.mem_limit_gb, a.out,
-                                                not a.no_validate)),
+                                                not a.no_validate, a.before or None, a.rec_growth)),
                      ("queries", lambda: query_table(grid, a.segments, a.mem_limit_gb, a.out))):
         if name not in a.tables.split(","):
             continue

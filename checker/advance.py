@@ -198,6 +198,13 @@ class Advancement:
     BLOCK = 4
     """Elements per block of the far-pair bound."""
 
+    GROUP = 8
+    """Blocks per group: block pairs are first tested a group pair at a time."""
+
+    SPARSE_ENTRIES = 200_000
+    """Above this many centre-part pairs the gaps are kept sparse (only the
+    pairs within ``FAR_HORIZONS`` horizons); below, a dense table."""
+
     FAR_HORIZONS = 8.0
     """Block pairs nearer than this many horizons are kept one by one; the
     others share the whole displacement spread as their bound."""
@@ -273,6 +280,12 @@ class Advancement:
         n, n_p = len(self._pts), len(gap_part)
         # arc length of each centre, as densify_batch computes it
         self._s_c = polyline_arc_lengths(np.where(self._valid, self._seg_raw, 0.0), self._offsets)
+        self._sparse = (candidates is not None and self._box is not None and n > 1 and horizon > 0
+                        and n * n_p > self.SPARSE_ENTRIES)
+        if self._sparse:
+            self._start_sparse(gap_part, float(horizon), candidates, active, mu)
+            self._finish_start(pts, poses, pairs, pair_bound, mu, horizon, cable_candidates, cable_active)
+            return
         u0 = (self._pts[None] - self._pos[:, None]) @ self._rot                  # R^T (x - t)
         if candidates is None:
             g = np.broadcast_to(gap_part, (n, n_p)).copy()
@@ -295,23 +308,148 @@ class Advancement:
             self.active = (rows, a_part[j])
             g[self.active] = np.inf
         self._g_pt = g - mu
+        # fused-pass data: each centre in each part's frame (homogeneous)
+        self._u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
+        self._g_kn = np.ascontiguousarray(self._g_pt.T)
+        self._g2 = np.where(self._g_kn > 0, self._g_kn, 0.0) ** 2
+        self._finish_start(pts, poses, pairs, pair_bound, mu, horizon, cable_candidates, cable_active)
+
+    def _finish_start(self, pts, poses, pairs, pair_bound, mu, horizon, cable_candidates, cable_active) -> None:
+        """The rest of :meth:`start` after the cable-part gaps."""
         self._cable_pairs = cable_candidates is not None
         self.cable_active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         if self._cable_pairs:
             self._start_cable_pairs(cable_candidates, float(horizon), mu, cable_active)
-            cable_ok = (bool(np.all(self._g_cc > 0)) and bool(np.all(self._g_blk > 0))
-                        and self._g_far > 0)
+            cable_ok = bool(np.all(self._g_cc > 0))             # the blocks' gaps on first use
         else:
             cable_ok = self._g_cable > 0
         self.start_pairs(poses, pairs, pair_bound, mu)
         self._stretch = self.stretch - mu
-        # fused-pass data: pieces per element (1 between cables), each centre
-        # in each part's frame (homogeneous)
+        # pieces per element (1 between cables)
         self._pieces_all = np.where(self._valid, self._pieces, 1.0)
-        self._u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
-        self._g_kn = np.ascontiguousarray(self._g_pt.T)
-        self._g2 = np.where(self._g_kn > 0, self._g_kn, 0.0) ** 2
-        self._ok = cable_ok and bool(np.all(self._g_pt > 0)) and self._pairs_ok and self.stretch > mu
+        # sparse: the entries' gaps are checked on first use
+        part_ok = self._sp_cap > 0 if self._sparse else bool(np.all(self._g_pt > 0))
+        self._ok = cable_ok and part_ok and self._pairs_ok and self.stretch > mu
+
+    def _start_sparse(self, gap_part: np.ndarray, horizon: float, candidates: tuple[np.ndarray, ...],
+                      active: tuple[np.ndarray, np.ndarray] | None, mu: float) -> None:
+        """The centre-part gaps ``g[i, k]`` of the module docstring kept only
+        where they are below ``cap = FAR_HORIZONS * horizon`` (every other
+        checked pair counts as ``cap``: a smaller gap only proves less), as
+        (centre, part, gap) entries sorted by part.
+
+        Pairs are listed by a k-d tree of the element midpoints queried about
+        each part's frame origin. Why that finds every floor below ``cap``:
+        an element of half-length h lies in its bounding box in the part's
+        frame, and that box lies within ``sqrt(3) h`` of the midpoint; the
+        part's box lies within its bounding radius ``rho`` of the origin; so
+        the boxes' distance is at least ``|mid - origin| - sqrt(3) h - rho``,
+        and ``F[e, k]`` (that minus the cable radius and the clearance) is at
+        least ``cap`` beyond the query radius. Candidates (values at most the
+        horizon, below every floor's ``max(H, F)``) are entries of their own.
+        Planes and other unbounded parts get every centre."""
+        n_p = len(gap_part)
+        cap = self.FAR_HORIZONS * horizon
+        self._sp_cap = cap - mu
+        self._sp_default = np.where(np.isfinite(gap_part), self._sp_cap, np.inf)    # an unlisted pair's gap
+        self._sp_cache: dict[bytes, tuple] = {}
+        first = np.zeros(n_p, bool)
+        if active is not None and len(active[0]):
+            first[np.asarray(active[1], np.int64)] = True
+        # the active parts' entries now (the caller reads :attr:`active`), the
+        # others on first use (:meth:`_ensure_sparse`)
+        part, rows, val = self._sparse_entries(gap_part, horizon, candidates, first)
+        n = len(self._pts)
+        self.active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        if active is not None and len(active[0]):
+            a_cab, a_part = (np.asarray(x, np.int64) for x in active)
+            # (centre, active pair) for every entry of an active part on the pair's cable
+            pair_of = {}
+            for j, (c, q) in enumerate(zip(a_cab.tolist(), a_part.tolist())):
+                pair_of.setdefault(q, []).append((j, c))
+            hit_r, hit_j = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
+            for q, lst in pair_of.items():                         # the few active parts
+                on = part == q
+                for j, c in lst:
+                    r = rows[on & (self._cable[rows] == c)]
+                    hit_r.append(r)
+                    hit_j.append(np.full(len(r), j, np.int64))
+            hr, hj = np.concatenate(hit_r), np.concatenate(hit_j)
+            o = np.lexsort((hj, hr))
+            hr, hj = hr[o], hj[o]
+            self.active = (hr, a_part[hj])
+            drop = np.isin(part * n + rows, a_part[hj] * n + hr)
+            part, rows, val = part[~drop], rows[~drop], val[~drop]
+        self._sp_first = (part, rows, val - mu)
+        self._sp_rest = (gap_part, horizon, candidates, ~first, mu)
+        self._sp_ready = False
+
+    def _ensure_sparse(self) -> bool:
+        """Every sparse entry of the last start (once); True when all gaps are positive."""
+        if not self._sp_ready:
+            gap_part, horizon, candidates, rest, mu = self._sp_rest
+            part, rows, val = self._sparse_entries(gap_part, horizon, candidates, rest)
+            p0, r0, g0 = self._sp_first
+            self._sp_part = np.concatenate([p0, part])
+            self._sp_row = np.concatenate([r0, rows])
+            self._sp_g = np.concatenate([g0, val - mu])
+            self._sp_ready = True
+            self._sp_ok = bool(np.all(self._sp_g > 0)) and self._sp_cap > 0
+        return self._sp_ok
+
+    def _sparse_entries(self, gap_part: np.ndarray, horizon: float, candidates: tuple[np.ndarray, ...],
+                        only: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(part, centre, gap) entries below the cap of the parts ``only`` (P,) bool
+        (see :meth:`_start_sparse`), the least per pair, sorted by part."""
+        pts, n, n_p = self._pts, len(self._pts), len(gap_part)
+        cap = self.FAR_HORIZONS * horizon
+        checked = np.isfinite(gap_part)
+        box_lo, box_hi = self._box[0][:, 0], self._box[1][:, 0]
+        seg = np.where(self._valid, self._seg_raw, 0.0)
+        elem = np.nonzero(self._valid)[0]
+        mid = 0.5 * (pts[elem] + pts[elem + 1])
+        bounded = checked & only & np.isfinite(self._rho)
+        e_list, k_list = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
+        if bounded.any() and len(elem):
+            reach = (cap + np.sqrt(3.0) * 0.5 * float(seg.max()) + float(self._rad.max()) + self.clearance
+                     + 1e-9 * (1.0 + float(np.abs(pts).max())))
+            kb = np.nonzero(bounded)[0]
+            found = cKDTree(mid).query_ball_point(self._pos[kb], reach + self._rho[kb])
+            count = np.array([len(f) for f in found], np.int64)
+            if count.sum():
+                e_list.append(elem[np.concatenate([np.asarray(f, np.int64) for f in found if len(f)])])
+                k_list.append(np.repeat(kb, count))
+        unbounded = np.nonzero(checked & only & ~np.isfinite(self._rho))[0]
+        if len(unbounded) and len(elem):
+            e_list.append(np.tile(elem, len(unbounded)))
+            k_list.append(np.repeat(unbounded, len(elem)))
+        e, k = np.concatenate(e_list), np.concatenate(k_list)
+        # F[e, k] as _floor computes it (the element's ends in the part's frame)
+        rot, pos = self._rot[k], self._pos[k]
+        a = np.einsum("ni,nij->nj", pts[e] - pos, rot)
+        b = np.einsum("ni,nij->nj", pts[e + 1] - pos, rot)
+        sep = np.maximum(np.maximum(np.minimum(a, b) - box_hi[k], box_lo[k] - np.maximum(a, b)), 0.0)
+        f = np.sqrt(np.einsum("ni,ni->n", sep, sep)) - self._rad[e] - self.clearance
+        rows = np.concatenate([e, e + 1])
+        part = np.concatenate([k, k])
+        val = np.maximum(horizon, np.concatenate([f, f]))
+        cab, s, c_part, value = candidates
+        if len(value):
+            lo, hi = self._bracket(cab, s)
+            count = hi - lo + 1
+            rows = np.concatenate([rows, ranges(lo, count)])
+            part = np.concatenate([part, np.repeat(np.asarray(c_part, np.int64), count)])
+            val = np.concatenate([val, np.repeat(np.asarray(value, float), count)])
+        keep = checked[part] & only[part] & (val < cap)
+        rows, part, val = rows[keep], part[keep], val[keep]
+        key = part * n + rows
+        o = np.lexsort((val, key))
+        key, val = key[o], val[o]
+        first = np.r_[len(key) > 0, key[1:] != key[:-1]][:len(key)]
+        key, val = key[first], val[first]                       # the least per (part, centre)
+        part, rows = key // n, key % n
+        return part, rows, val
+
 
     def _floor(self, u0: np.ndarray) -> np.ndarray:
         """(P, N): per centre and part, the least over the elements next to
@@ -405,16 +543,52 @@ class Advancement:
         self._cc_i, self._cc_j = ii, jj
         self._g_cc = np.minimum(gg, horizon) - mu
         self._g_cc2 = np.where(self._g_cc > 0, self._g_cc, 0.0) ** 2
+        # the block pairs are listed on first use (:meth:`_ensure_blocks`):
+        # a run whose states fail the cheaper conditions never needs them
+        self._blk_args = (horizon, mu)
+        self._blocks_ready = False
+        self._g_min_nb = min(float(self._g_cc.min(initial=np.inf)),
+                             float(self._g_near.min(initial=np.inf)) if self._near else np.inf)
+
+    def _ensure_blocks(self) -> bool:
+        """List the block pairs of the last start (once); True when their
+        gaps are all positive."""
+        if not self._blocks_ready:
+            self._start_blocks(*self._blk_args)
+            self._blocks_ready = True
+            self._blk_ok = bool(np.all(self._g_grp > 0)) and self._g_far > 0
+        return self._blk_ok
+
+    def _start_blocks(self, horizon: float, mu: float) -> None:
+        """Blocks, their groups and the group pairs to test (the module
+        docstring's block condition).
+
+        Groups of GROUP consecutive blocks: a group pair's box of relative
+        displacements holds each of its block pairs' boxes, so a group pair
+        whose box is below a lower bound of its block pairs' gaps clears them
+        all; the block pairs of the others are formed when tested
+        (:meth:`_block_pairs`), with their own gaps. The lower bound: the
+        distance between spheres about the groups enclosing their blocks'
+        spheres, put through the blocks' rule (``max(H, min(d, far))``, which
+        grows with d). Block pairs listed (one by one) are those whose
+        centres lie within the search radius of the k-d tree (``2 max reach
+        + clearance + far``) when there are more than 64 blocks, else all;
+        the group pairs kept are those that may hold one."""
+        n = len(self._pts)
         # blocks of BLOCK elements: centres [b K, b K + K] (overlapping by one)
         kb = self.BLOCK
         nb = max(1, -(-(n - 1) // kb)) if n else 0
         self._blk_start = np.arange(nb) * kb
         self._blk_last = np.minimum(self._blk_start + kb, max(n - 1, 0))
         far = self.FAR_HORIZONS * horizon
+        self._blk_h, self._blk_far, self._blk_mu = horizon, far, mu
+        self._grp_blocks = np.arange(0, nb, self.GROUP)
+        ng = len(self._grp_blocks)
+        self._gi = self._gj = np.zeros(0, np.int64)
+        self._g_grp = self._g_grp2 = np.zeros(0)
+        self._g_far = np.inf
+        self._blk_rad = None
         if nb == 0:
-            self._bi = self._bj = np.zeros(0, np.int64)
-            self._g_blk = self._g_blk2 = np.zeros(0)
-            self._g_far = np.inf
             return
         lo = np.minimum.reduceat(self._pts, self._blk_start)
         hi = np.maximum.reduceat(self._pts, self._blk_start)
@@ -422,37 +596,66 @@ class Advancement:
         hi = np.maximum(hi, self._pts[self._blk_last])
         centre = 0.5 * (lo + hi)
         big = 0.5 * row_norm(hi - lo)               # encloses the block's centres, so its elements
+        group = np.arange(nb) // self.GROUP
+        self._blk_radius = None                     # the k-d tree's search radius (None: every pair)
         if self._rad is not None:
             rad = np.maximum(np.maximum.reduceat(self._rad, self._blk_start), self._rad[self._blk_last])
             self._blk_rad = rad[:, None] + self.clearance / 2 + mu      # each block's share of a pair's
             reach = big + rad
+            self._blk_centre, self._blk_reach = centre, reach
+            g_lo = np.minimum.reduceat(centre, self._grp_blocks)
+            g_hi = np.maximum.reduceat(centre, self._grp_blocks)
+            g_centre = 0.5 * (g_lo + g_hi)
+            off = row_norm(centre - g_centre[group])
+            g_reach = np.maximum.reduceat(off + reach, self._grp_blocks)
             if nb <= 64:                                # few blocks: every pair
-                bi, bj = np.triu_indices(nb)
-                listed = True
+                gi, gj = np.triu_indices(ng)
             else:
-                rmax = float(reach.max())
-                pairs = cKDTree(centre).query_pairs(2.0 * rmax + self.clearance + far, output_type="ndarray")
-                bi = np.concatenate([np.arange(nb), pairs[:, 0]]).astype(np.int64)
-                bj = np.concatenate([np.arange(nb), pairs[:, 1]]).astype(np.int64)
-                listed = len(pairs) == nb * (nb - 1) // 2
-            dist = row_norm(centre[bi] - centre[bj]) - reach[bi] - reach[bj] - self.clearance
-            g_blk = np.maximum(horizon, np.minimum(dist, far))
-            # a block with itself or the next on one cable: its element pairs are near pairs
-            end = self._blk_last[np.maximum(bi, bj)]
-            near = (np.abs(bj - bi) <= 1) & (self._cable[self._blk_start[np.minimum(bi, bj)]] == self._cable[end])
-            bi, bj, g_blk = bi[~near], bj[~near], g_blk[~near]
-            # block pairs not listed are farther than ``far`` past the clearance
-            self._g_far = (np.inf if listed else far) - mu
+                radius = 2.0 * float(reach.max()) + self.clearance + far
+                self._blk_radius = radius
+                tree = cKDTree(centre)
+                listed = int(tree.count_neighbors(tree, radius)) == nb * nb
+                self._g_far = (np.inf if listed else far) - mu
+                pairs = cKDTree(g_centre).query_pairs(radius + 2.0 * float(off.max()) + 1e-9 * (1.0 + radius),
+                                                      output_type="ndarray")
+                gi = np.concatenate([np.arange(ng), pairs[:, 0]]).astype(np.int64)
+                gj = np.concatenate([np.arange(ng), pairs[:, 1]]).astype(np.int64)
+            dist = row_norm(g_centre[gi] - g_centre[gj]) - g_reach[gi] - g_reach[gj] - self.clearance
+            g_grp = np.maximum(horizon, np.minimum(dist, far))
         else:
-            bi, bj = np.triu_indices(nb)
-            g_blk = np.full(len(bi), horizon)
-            self._g_far = np.inf
-            self._blk_rad = None
-        self._bi, self._bj = bi, bj
-        self._g_blk = g_blk - mu
-        self._g_blk2 = np.where(self._g_blk > 0, self._g_blk, 0.0) ** 2
-        self._g_min = min(float(self._g_cc.min(initial=np.inf)), float(self._g_blk.min(initial=np.inf)),
-                          float(self._g_near.min(initial=np.inf)) if self._near else np.inf)
+            gi, gj = np.triu_indices(ng)
+            g_grp = np.full(len(gi), horizon)
+        self._gi, self._gj = gi.astype(np.int64), gj.astype(np.int64)
+        self._g_grp = g_grp - mu
+        self._g_grp2 = np.where(self._g_grp > 0, self._g_grp, 0.0) ** 2
+        self._nb = nb
+
+    def _block_pairs(self, gp: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The block pairs (a <= b) of group pairs gp and their squared gaps
+        (the module docstring's ``max(H, L[A, B])``, less the rounding
+        margin): those listed, other than a block with itself or the next on
+        one cable (their element pairs are near pairs)."""
+        g, nb = self.GROUP, self._nb
+        k = np.arange(g * g)
+        bi = (self._gi[gp] * g)[:, None] + (k // g)[None, :]
+        bj = (self._gj[gp] * g)[:, None] + (k % g)[None, :]
+        keep = (bi <= bj) & (bj < nb)
+        bi, bj = bi[keep], bj[keep]
+        end = self._blk_last[bj]
+        near = (bj - bi <= 1) & (self._cable[self._blk_start[bi]] == self._cable[end])
+        bi, bj = bi[~near], bj[~near]
+        if self._blk_rad is None:
+            gap = np.full(len(bi), self._blk_h)
+        else:
+            c = self._blk_centre
+            sep = row_norm(c[bi] - c[bj])
+            if self._blk_radius is not None:
+                on = sep <= self._blk_radius
+                bi, bj, sep = bi[on], bj[on], sep[on]
+            dist = sep - self._blk_reach[bi] - self._blk_reach[bj] - self.clearance
+            gap = np.maximum(self._blk_h, np.minimum(dist, self._blk_far))
+        gap = gap - self._blk_mu
+        return bi, bj, np.where(gap > 0, gap, 0.0) ** 2
 
     def _start_near(self, horizon: float, mu: float) -> None:
         """Near element pairs (e, f), e <= f <= e + 2 BLOCK - 1 on one cable,
@@ -532,27 +735,81 @@ class Advancement:
         per state (S,) of ``move`` (N, 3, S): ``dcc`` (S,) bounds every
         |d_a - d_b|, ``diag`` (S,) (the bounding box's diagonal) also every
         block pair's box bound; x (N, 3, S) the centres, d and seg the
-        elements and their lengths."""
-        ok = dcc < self._g_far
-        easy = diag < self._g_min                  # every relative motion is below every gap
-        if not (ok & ~easy).any():
+        elements and their lengths. Exact for the leading run of states that
+        pass (all :meth:`clear_run` uses); after the first state that fails,
+        every state is reported failing unevaluated.
+
+        Cheapest first: near pairs and candidate centre pairs (skipped for
+        states whose whole spread is below all their gaps), then the far
+        limit and the block pairs, listed on first use. Block pairs are
+        tested a group pair at a time first (a group's box of displacements
+        holds its blocks'; group pairs whose least gap exceeds the spread
+        pass unlooked), one by one only in group pairs that do not pass
+        whole, the spheres at this state only for block pairs failing the
+        box, and over runs of states of doubling length."""
+        n_s = len(dcc)
+        ok = np.ones(n_s, bool)
+        easy = diag < self._g_min_nb               # every relative motion is below every such gap
+        if not easy.all():
+            pair_ok = self._near_clear(move, d, seg) if self._near else np.ones(n_s, bool)
+            pair_ok |= easy
+            m = _leading(pair_ok)
+            if len(self._cc_i) and m:
+                dd = move[self._cc_i][:, :, :m] - move[self._cc_j][:, :, :m]
+                pair_ok[:m] &= (np.einsum("mis,mis->ms", dd, dd) < self._g_cc2[:, None]).all(axis=0) | easy[:m]
+            ok &= pair_ok
+        n = _leading(ok)
+        ok[n:] = False
+        if not n:
             return ok
-        pair_ok = self._near_clear(move, d, seg) if self._near else np.ones(len(ok), bool)
-        if len(self._cc_i):
-            d = move[self._cc_i] - move[self._cc_j]
-            pair_ok &= (np.einsum("mis,mis->ms", d, d) < self._g_cc2[:, None]).all(axis=0)
-        if len(self._bi):
-            box = self._block_boxes(move)
-            rel = np.maximum(np.abs(box[1][self._bi] - box[0][self._bj]), np.abs(box[0][self._bi] - box[1][self._bj]))
-            blk_ok = np.einsum("pis,pis->ps", rel, rel) < self._g_blk2[:, None]
-            if self._blk_rad is not None and not blk_ok.all():
+        if not self._ensure_blocks():
+            return np.zeros(n_s, bool)
+        ok[:n] &= dcc[:n] < self._g_far
+        n = _leading(ok)
+        ok[n:] = False
+        if len(self._gi) and n:
+            # states in runs of doubling length, each only once the ones
+            # before all passed: a failure near the start costs a state or two
+            a, b = 0, 1
+            while a < n:
+                b = min(b, n)
+                blk = self._blocks_clear(x[:, :, a:b], move[:, :, a:b], float(diag[a:b].max()))
+                if not blk.all():
+                    ok[a + _leading(blk):] = False
+                    break
+                a, b = b, 2 * b + 1
+        return ok
+
+    def _blocks_clear(self, x: np.ndarray, move: np.ndarray, diag: float) -> np.ndarray:
+        """The block-pair condition per state (S,) of x and move (N, 3, S);
+        ``diag`` bounds every block pair's box (the largest diagonal)."""
+        s = x.shape[2]
+        # group pairs whose least gap exceeds every box pass whole
+        cand = np.nonzero(self._g_grp <= diag)[0]
+        if not len(cand):
+            return np.ones(s, bool)
+        box = self._block_boxes(move)
+        glo = np.minimum.reduceat(box[0], self._grp_blocks, axis=0)
+        ghi = np.maximum.reduceat(box[1], self._grp_blocks, axis=0)
+        gi, gj = self._gi[cand], self._gj[cand]
+        rel = np.maximum(np.abs(ghi[gi] - glo[gj]), np.abs(glo[gi] - ghi[gj]))
+        grp_ok = np.einsum("pis,pis->ps", rel, rel) < self._g_grp2[cand, None]
+        fail = cand[~grp_ok.all(axis=1)]
+        if not len(fail):
+            return np.ones(s, bool)
+        bi, bj, g2 = self._block_pairs(fail)                            # their block pairs
+        rel = np.maximum(np.abs(box[1][bi] - box[0][bj]), np.abs(box[0][bi] - box[1][bj]))
+        blk_ok = np.einsum("pis,pis->ps", rel, rel) < g2[:, None]
+        if self._blk_rad is not None:
+            bad = np.nonzero(~blk_ok.all(axis=1))[0]
+            if len(bad):
                 # or apart now: spheres about the blocks' boxes of centres, at this state
                 lo, hi = self._block_boxes(x)
                 sphere = 0.5 * row_norm3(hi - lo) + self._blk_rad
                 centre = 0.5 * (lo + hi)
-                blk_ok |= row_norm3(centre[self._bi] - centre[self._bj]) > sphere[self._bi] + sphere[self._bj]
-            pair_ok &= blk_ok.all(axis=0)
-        return ok & (easy | pair_ok)
+                a, b = bi[bad], bj[bad]
+                blk_ok[bad] |= row_norm3(centre[a] - centre[b]) > sphere[a] + sphere[b]
+        return blk_ok.all(axis=0)
 
     def _block_boxes(self, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Componentwise least and largest of v (N, 3, S) over each block's
@@ -631,6 +888,8 @@ class Advancement:
         x (N, 3, S) the centres, dq (N, S) their displacements."""
         s = x.shape[2]
         dp = self._part_moves(poses).T                                    # (P, S)
+        if self._sparse:
+            return self._parts_clear_sparse(x, poses, dq, dp)
         # every centre as it would be had it moved rigidly with part k:
         # u0h[k] (N, 4) times the poses' top rows (4, 3 S), one product per part
         top = np.transpose(poses[:, :, :3, :], (1, 3, 2, 0)).reshape(len(dp), 4, 3 * s)
@@ -640,6 +899,45 @@ class Advancement:
         if bad.any():                            # or within the gap by the world displacements
             bad &= (dq + dp[:, None, :]) >= self._g_kn[:, :, None]
         ok = ~bad.reshape(-1, s).any(axis=0)
+        if len(self._pi):
+            ok &= (dp[self._pi] + dp[self._pj] < self._g_pair[:, None]).all(axis=0)
+        return ok
+
+    def _parts_clear_sparse(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray) -> np.ndarray:
+        """:meth:`_parts_clear` on the sparse gaps: parts that did not move in
+        these states (dp 0, so ``rel`` is ``dq``) reduce to one least gap per
+        centre; the parts that moved are tested as the dense table does, on
+        their own columns (both kept per set of moving parts)."""
+        s = x.shape[2]
+        if not self._ensure_sparse():
+            return np.zeros(s, bool)
+        moved = (dp > 0).any(axis=1)
+        tag = moved.tobytes()
+        if tag not in self._sp_cache:
+            n = len(self._pts)
+            still = ~moved[self._sp_part]
+            g_still = np.full(n, float(self._sp_default[~moved].min(initial=np.inf)))
+            np.minimum.at(g_still, self._sp_row[still], self._sp_g[still])
+            mk = np.nonzero(moved)[0]
+            col = np.full(len(moved), -1, np.int64)
+            col[mk] = np.arange(len(mk))
+            g_kn = np.repeat(self._sp_default[mk][:, None], n, axis=1)
+            on = ~still
+            np.minimum.at(g_kn, (col[self._sp_part[on]], self._sp_row[on]), self._sp_g[on])
+            u0 = (self._pts[None] - self._pos[mk, None]) @ self._rot[mk]
+            u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
+            g2 = np.where(g_kn > 0, g_kn, 0.0) ** 2
+            self._sp_cache = {tag: (g_still, mk, u0h, g_kn, g2)}
+        g_still, mk, u0h, g_kn, g2 = self._sp_cache[tag]
+        ok = (dq < g_still[:, None]).all(axis=0)
+        if len(mk):
+            top = np.transpose(poses[:, mk, :3, :], (1, 3, 2, 0)).reshape(len(mk), 4, 3 * s)
+            w = np.matmul(u0h, top).reshape(len(mk), len(x), 3, s)
+            w -= x
+            bad = np.einsum("knis,knis->kns", w, w) >= g2[:, :, None]
+            if bad.any():
+                bad &= (dq + dp[mk][:, None, :]) >= g_kn[:, :, None]
+            ok &= ~bad.reshape(-1, s).any(axis=0)
         if len(self._pi):
             ok &= (dp[self._pi] + dp[self._pj] < self._g_pair[:, None]).all(axis=0)
         return ok

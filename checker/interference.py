@@ -958,6 +958,7 @@ class Checker:
         self.gaps: tuple[float, np.ndarray] | None = None
         self.part_candidates: tuple[np.ndarray, ...] | None = None
         self.cable_candidates: tuple[np.ndarray, ...] | None = None
+        self._excl_cache: tuple | None = None
 
     @property
     def bounds_gaps(self) -> bool:
@@ -981,17 +982,28 @@ class Checker:
     def _exclusion_table(self, cable_names: Sequence[str], exclusions: Sequence[Exclusion]) -> tuple:
         """Exclusions as arrays: ((key, lo, hi, n_parts) sorted by key =
         cable * n_parts + part, cable, lo, hi) for these cables and parts."""
-        cidx = {n: i for i, n in enumerate(cable_names)}
+        # a run passes the same windows at every full check: built once per
+        # (cables, windows) and kept (with the windows, so their id stays theirs)
+        names = tuple(cable_names)
+        cached = self._excl_cache
+        if cached is not None and cached[0] is exclusions and cached[1] == names and cached[2] == len(exclusions):
+            return cached[3]
+        cidx = {n: i for i, n in enumerate(names)}
         pidx = self._pidx
-        ex = [e for e in exclusions if e.cable in cidx and e.part in pidx]
-        ex_c = np.array([cidx[e.cable] for e in ex], dtype=np.int64)
-        ex_p = np.array([pidx[e.part] for e in ex], dtype=np.int64)
-        ex_lo = np.array([min(e.s_min, e.s_max) for e in ex], dtype=float)
-        ex_hi = np.array([max(e.s_min, e.s_max) for e in ex], dtype=float)
+        ex_c = np.array([cidx.get(e.cable, -1) for e in exclusions], dtype=np.int64)
+        ex_p = np.array([pidx.get(e.part, -1) for e in exclusions], dtype=np.int64)
+        s_min = np.array([e.s_min for e in exclusions], dtype=float)
+        s_max = np.array([e.s_max for e in exclusions], dtype=float)
+        mine = (ex_c >= 0) & (ex_p >= 0)
+        ex_c, ex_p, s_min, s_max = ex_c[mine], ex_p[mine], s_min[mine], s_max[mine]
+        ex_lo, ex_hi = np.minimum(s_min, s_max), np.maximum(s_min, s_max)
         n_parts = max(len(self.parts), 1)
         key = ex_c * n_parts + ex_p
         o = np.argsort(key, kind="stable")
-        return (key[o], ex_lo[o], ex_hi[o], n_parts), ex_c, ex_lo, ex_hi
+        table = (key[o], ex_lo[o], ex_hi[o], n_parts), ex_c, ex_lo, ex_hi
+        if isinstance(exclusions, (list, tuple)):
+            self._excl_cache = (exclusions, names, len(exclusions), table)
+        return table
 
     def densify_many(self, pts: np.ndarray, offsets: np.ndarray, radii: np.ndarray,
                      rest: np.ndarray | None = None) -> DenseStates:

@@ -40,6 +40,7 @@ from typing import Protocol
 
 import numpy as np
 
+from checker.arrays import ranges
 from checker.cable import polyline_arc_lengths, self_pair_excluded, tile_offsets
 from checker.closest import point_segment, row_norm
 from checker.events import AllowList
@@ -97,10 +98,40 @@ class SimulatorPairs:
 
     def __init__(self, exclusions: Sequence[Exclusion], clearance: float):
         self.clearance = float(clearance)
-        self._ex_cable = np.array([e.cable for e in exclusions], dtype=object)
-        self._ex_part = np.array([e.part for e in exclusions], dtype=object)
-        self._ex_lo = np.array([min(e.s_min, e.s_max) for e in exclusions], dtype=float)
-        self._ex_hi = np.array([max(e.s_min, e.s_max) for e in exclusions], dtype=float)
+        # windows sorted by (cable, part) codes: a contact finds its own by a
+        # binary search (memory in proportion to the contacts, not contacts x windows)
+        self._cable_code: dict[str, int] = {}
+        self._part_code: dict[str, int] = {}
+        for e in exclusions:
+            self._cable_code.setdefault(e.cable, len(self._cable_code))
+            self._part_code.setdefault(e.part, len(self._part_code))
+        self._n_part = max(len(self._part_code), 1)
+        key = np.array([self._cable_code[e.cable] * self._n_part + self._part_code[e.part] for e in exclusions],
+                       np.int64)
+        lo = np.array([min(e.s_min, e.s_max) for e in exclusions], dtype=float)
+        hi = np.array([max(e.s_min, e.s_max) for e in exclusions], dtype=float)
+        o = np.argsort(key, kind="stable")
+        self._ex_key, self._ex_lo, self._ex_hi = key[o], lo[o], hi[o]
+
+    def _in_window(self, a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                   slack: np.ndarray) -> np.ndarray:
+        """(n,) True where cable a's span [lo, hi] (material coordinates) lies
+        in a window of cable a against part b (names), each end given
+        ``slack``."""
+        ca = np.array([self._cable_code.get(x, -1) for x in a.tolist()], np.int64)
+        pb = np.array([self._part_code.get(x, -1) for x in b.tolist()], np.int64)
+        key = np.where((ca >= 0) & (pb >= 0), ca * self._n_part + pb, -1)
+        first = np.searchsorted(self._ex_key, key, "left")
+        count = np.searchsorted(self._ex_key, key, "right") - first
+        count[key < 0] = 0
+        out = np.zeros(len(a), bool)
+        if count.sum() == 0:
+            return out
+        row = np.repeat(np.arange(len(a)), count)
+        w = ranges(first, count)
+        hit = (lo[row] >= self._ex_lo[w] - slack[row]) & (hi[row] <= self._ex_hi[w] + slack[row])
+        out[row[hit]] = True
+        return out
 
     def __call__(self, contacts: SimContacts, cables: dict[str, tuple[np.ndarray, float]],
                  rest: dict[str, np.ndarray] | None = None
@@ -171,11 +202,10 @@ class SimulatorPairs:
         drop = (kind == PairType.SELF.value) & self_pair_excluded(s_a, s_b, np.asarray(radii, float)[ca],
                                                                    self.clearance)
         if len(self._ex_lo):
-            slack = (0.25 * (elem_hi - elem_lo))[:, None]
             structure = (kind == PairType.CABLE_STRUCTURE.value) | (kind == PairType.KEEPOUT.value)
-            inside = ((a[:, None] == self._ex_cable) & (b[:, None] == self._ex_part)
-                      & (elem_lo[:, None] >= self._ex_lo - slack) & (elem_hi[:, None] <= self._ex_hi + slack))
-            drop |= structure & inside.any(axis=1)
+            if structure.any():
+                w = np.nonzero(structure)[0]
+                drop[w[self._in_window(a[w], b[w], elem_lo[w], elem_hi[w], 0.25 * (elem_hi[w] - elem_lo[w]))]] = True
         keep = ~drop
         kind, a, b, dist, pos, st = kind[keep], a[keep], b[keep], dist[keep], pos[keep], st[keep]
         if len(dist) == 0:

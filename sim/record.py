@@ -255,6 +255,7 @@ class Recorder:
         self._near_paths: set[str] = set()
         self._alive: set[str] = set()
         self._dimmed = False
+        self._dim_changes: list[tuple[int, bool]] = []
         self._rest: list[np.ndarray] | None = None
         self._poses0: np.ndarray | None = None
         self._bounds: tuple[np.ndarray, np.ndarray] | None = None
@@ -393,14 +394,36 @@ class Recorder:
         if on == self._dimmed:
             return
         self._dimmed = on
+        # kept as (frame, on) and sent in columns when closed: one chunk per
+        # part for the whole run, not one per part at every change
+        self._dim_changes.append((len(self._times) - 1, on))
+
+    def _send_dim(self, index) -> None:
+        """Every part's (and visual geom's) colour at each change of :meth:`_dim`, one column per entity."""
+        if not self._dim_changes:
+            return
+        frames = [f for f, _ in self._dim_changes]
+        on = np.array([o for _, o in self._dim_changes], bool)
+        dimmed, plain = np.array(PART_DIMMED, np.uint8), np.array((*PART_COLOUR, 255), np.uint8)
+        parts_rgba = np.where(on[:, None], dimmed[None], plain[None])
         for part in self.built.parts:
             if part.keepout or part.shape == "plane":
                 continue
-            self.rec.log(part_path(part.name), self._colour(part, PART_DIMMED if on else PART_COLOUR))
+            self.rec.send_columns(part_path(part.name), indexes=index(frames),
+                                  columns=self._colour_columns(part, parts_rgba))
         for vis in getattr(self.built, "visuals", ()):
-            colour = self._visual_colour(vis.geom_id)
-            self.rec.log(visual_paths(vis.body, vis.name)[1],
-                         self._colour(vis, (*colour[:3], min(colour[3], PART_DIMMED[3])) if on else colour))
+            colour = np.array(self._visual_colour(vis.geom_id), np.uint8)
+            faded = np.array([*colour[:3], min(colour[3], PART_DIMMED[3])], np.uint8)
+            rgba = np.where(on[:, None], faded[None], colour[None])
+            self.rec.send_columns(visual_paths(vis.body, vis.name)[1], indexes=index(frames),
+                                  columns=self._colour_columns(vis, rgba))
+
+    @staticmethod
+    def _colour_columns(part, colours: np.ndarray):
+        """:meth:`_colour` as columns, one colour (T, 4) per row."""
+        kind = {"box": rr.Boxes3D, "plane": rr.Boxes3D, "sphere": rr.Ellipsoids3D,
+                "ellipsoid": rr.Ellipsoids3D, "capsule": rr.Capsules3D, "cylinder": rr.Cylinders3D}.get(part.shape)
+        return kind.columns(colors=colours) if kind is not None else rr.Mesh3D.columns(albedo_factor=colours)
 
     def _transform(self, pose: np.ndarray) -> rr.Transform3D:
         return rr.Transform3D(translation=pose[:3, 3] / self.unit, mat3x3=pose[:3, :3])
@@ -588,6 +611,7 @@ class Recorder:
                                                                     mat3x3=poses[:, j, :3, :3]))
             self._send_contacts(index)
             self._resolve_part_spots()
+            self._send_dim(index)
             self._send_marks(index, n_f)
             for path, series in self._series.items():
                 if path in self._labels:

@@ -22,6 +22,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from checker.arrays import ranges
 from checker.cable import TAUT_STRAIN
 from checker.events import AllowList, EventTracker
 from checker.records import PairType, Severity
@@ -340,16 +341,33 @@ class _NearPairs:
         part_index = {n: k for k, n in enumerate(self.parts)}
         rows = [(index[e.cable], part_index[e.part], e.s_min, e.s_max) for e in exclusions
                 if e.cable in index and e.part in part_index]
-        self.excl = np.array(rows, float).reshape(-1, 4)
+        excl = np.array(rows, float).reshape(-1, 4)
+        # windows sorted by (cable, part) key: a candidate finds its own by a
+        # binary search (a harness holds every cable end against every part of its body)
+        self._n_k = max(len(self.parts), 1)
+        key = excl[:, 0].astype(np.int64) * self._n_k + excl[:, 1].astype(np.int64)
+        o = np.argsort(key, kind="stable")
+        self._ex_key, self._ex_lo, self._ex_hi = key[o], excl[o, 2], excl[o, 3]
+
+    def _outside(self, cab: np.ndarray, part: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """(n,) True where a candidate lies in no attachment window of its (cable, part)."""
+        key = np.asarray(cab, np.int64) * self._n_k + np.asarray(part, np.int64)
+        first = np.searchsorted(self._ex_key, key, "left")
+        count = np.searchsorted(self._ex_key, key, "right") - first
+        keep = np.ones(len(key), bool)
+        if count.sum():
+            row = np.repeat(np.arange(len(key)), count)
+            w = ranges(first, count)
+            inside = (s[row] >= self._ex_lo[w]) & (s[row] <= self._ex_hi[w])
+            keep[row[inside]] = False
+        return keep
 
     def distances(self, near: tuple) -> dict[tuple[str, str, str], float]:
         (cab, s, part, value), cable_pairs = near
         clearance = self.clearance     # the candidates' values are relative to it
         out: dict[tuple[str, str, str], float] = {}
         if len(cab):
-            keep = np.ones(len(cab), bool)
-            for c, k, lo, hi in self.excl:    # a few attachment windows per scene
-                keep &= ~((cab == c) & (part == k) & (s >= lo) & (s <= hi))
+            keep = self._outside(cab, part, s)
             n_k = max(len(self.parts), 1)
             key = cab[keep] * n_k + part[keep]
             if len(key):

@@ -614,3 +614,57 @@ def test_door_hinge_pin_never_forces_full_checks(tmp_path):
     assert hard == pin and not any(e["type"] == "part-part" for e in runs["door"]["events"])
     cable = lambda rep: [e for e in rep["events"] if e["type"] != "part-part"]    # noqa: E731
     assert _strip(cable(runs["door"])) == _strip(cable(runs["no_allow"]))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_sparse_part_gaps_change_no_answer(seed: int, tmp_path, monkeypatch):
+    """The sparse centre-part gaps (forced on these small scenes) give the
+    answers of checking every step in full, and skip steps as the dense table
+    does where no centre moved farther than FAR_HORIZONS horizons."""
+    path = tmp_path / "random.toml"
+    path.write_text(_random_scene_text(seed))
+    scene = load_scene(path)
+    dense = run_scene(scene, RunOptions(report=tmp_path / "d.json", record=None))
+    monkeypatch.setattr(Advancement, "SPARSE_ENTRIES", 0)
+    fast = run_scene(scene, RunOptions(report=tmp_path / "a.json", record=None))
+    full = run_scene(scene, RunOptions(report=tmp_path / "b.json", record=None, advance=False))
+    assert _strip(fast["events"]) == _strip(full["events"])
+    assert _strip(fast["pairs"]) == _strip(full["pairs"])
+    a, d = fast["settings"]["advance"], dense["settings"]["advance"]
+    assert a["proven_clear_steps"] <= d["proven_clear_steps"]
+    assert a["proven_clear_steps"] >= 0.9 * d["proven_clear_steps"]
+
+
+def test_sparse_part_gaps_on_the_drawer(tmp_path, monkeypatch):
+    scene = load_scene(SCENES[[p.stem for p in SCENES].index("drawer")])
+    dense = run_scene(scene, RunOptions(report=tmp_path / "d.json", record=None))
+    monkeypatch.setattr(Advancement, "SPARSE_ENTRIES", 0)
+    sparse = run_scene(scene, RunOptions(report=tmp_path / "a.json", record=None))
+    assert _strip(sparse["events"]) == _strip(dense["events"])
+    assert _strip(sparse["pairs"]) == _strip(dense["pairs"])
+    assert sparse["settings"]["advance"] == dense["settings"]["advance"]
+
+
+def test_clear_run_with_many_blocks_counts_what_one_at_a_time_would():
+    """Many cables (block pairs found by the k-d tree, some beyond the far
+    limit, tested a group at a time): clear_run over a batch equals testing
+    the states in order, one at a time, up to the first not proven clear."""
+    rng = np.random.default_rng(5)
+    grid = np.array([(x, y) for x in range(5) for y in range(4)], float) * 0.06
+    grid[:, 1] += np.where(np.arange(len(grid)) >= 12, 1.0, 0.0)        # two bundles far apart
+    cables = [np.stack([np.linspace(0.0, 1.0, 41), np.full(41, x), np.full(41, y)], axis=1) for x, y in grid]
+    counts = set()
+    for trial in range(12):
+        scale = rng.choice([0.0005, 0.002, 0.01, 0.04])
+        moves = np.cumsum(rng.normal(size=(10, 1, 3)) * scale, axis=0)
+        pts = np.concatenate(cables)[None] + moves * np.linspace(0.0, 1.0, len(np.concatenate(cables)))[None, :, None]
+        checker, one, _, offsets = _cable_adv(cables)
+        _, batch, _, _ = _cable_adv(cables)
+        batch._ensure_blocks()
+        assert len(batch._blk_start) > 64 and np.isfinite(batch._g_far)
+        expect = 0
+        while expect < len(pts) and one.proven_clear(pts[expect], _NO_PARTS[None][0]):
+            expect += 1
+        assert batch.clear_run(pts, np.repeat(_NO_PARTS[None], len(pts), axis=0)) == expect
+        counts.add(expect)
+    assert len(counts) > 1
