@@ -126,15 +126,9 @@ class PairWorst:
 
 
 @dataclass(frozen=True)
-class AllowedWorst:
+class AllowedWorst(PairWorst):
     """An allowed pair's worst moment over the whole run, and why it is allowed."""
 
-    type: str
-    a: str
-    b: str
-    min_distance: float
-    t: float
-    where: np.ndarray
     reason: str
 
 
