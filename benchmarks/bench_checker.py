@@ -1,6 +1,6 @@
 """Time one full :func:`checker.interference.check_state` on a large scene.
 
-The scene of issue 3: 100 cables of 200 points (20,000 points), 300 primitive
+The checker benchmark's scene: 100 cables of 200 points (20,000 points), 300 primitive
 parts (boxes, cylinders, capsules, spheres, ellipsoids) and 10 torus meshes of
 2,000 triangles, in metres. It prints the median time of a full check with
 method ``points`` and ``exact`` (with :func:`check_state`, and with a

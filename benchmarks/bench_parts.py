@@ -1,6 +1,6 @@
 """Part-part checks step after step: assembly-box pruning on and off, side by side.
 
-The scene is seed 001's generated assembly of ``benchmarks/bench_sweep.py``
+The scene is the sweep benchmark's generated assembly of ``benchmarks/bench_sweep.py``
 (:func:`bench_sweep.generate`, 2,101 parts in mm: 21 lines x 10 cells x 10
 boxes and hexagonal prisms, ``plant/lineNN/cellK/partK``) with a few parts
 moving, each on its own rigid body: the mover travels 5,000 mm along +x

@@ -1,4 +1,4 @@
-"""Seed 001's scale: one part swept 5,000 mm through a generated assembly of 2,100 parts.
+"""The sweep-verification paper's scale: one part swept 5,000 mm through a generated assembly of 2,100 parts.
 
 The assembly (mm): 21 lines (`plant/lineNN`) on a 7 x 3 grid across the
 direction of travel, each of 10 cells (`.../cellK`) of 10 parts along it:
@@ -15,7 +15,7 @@ inside or well outside) and its near face is within 5,000 mm; the
 first-contact travel is that face's x minus the mover's front face.
 
 Timed: `checker.sweep.sweep` with the parts prepared and placed once
-(hierarchy built and reused; the seed took 0.014 s for hits with reuse and
+(hierarchy built and reused; the paper reports 0.014 s for hits with reuse and
 0.534 s for distances), best and median of repeats; the one-off preparation
 is printed separately. Target: hits plus distances under 0.05 s.
 

@@ -5,7 +5,7 @@ Used by `cablecheck bench` (:mod:`sim.bench`) and by
 
 - :func:`make_scene`: randomised cables (smooth random walks) and parts
   (boxes, cylinders, capsules, spheres, ellipsoids, torus meshes) placed in a
-  room; the defaults are issue 3's scene of 100 cables x 200 points against
+  room; the defaults are the checker benchmark's scene of 100 cables x 200 points against
   300 primitives and 10 meshes.
 - :func:`fcl_queries`: the same close-pair queries done by python-fcl (an
   optional dependency, the ``bench`` extra), timed.
@@ -38,7 +38,7 @@ def make_scene(seed: int = 0, n_cables: int = 100, n_points: int = 200, n_prims:
                radius: float = 0.004):
     """Cables as smooth random walks through a room of parts, in metres.
 
-    Defaults: the scene of issue 3 (100 cables of 200 points at spacing 2r,
+    Defaults: the checker benchmark's scene (100 cables of 200 points at spacing 2r,
     20,000 points; 300 primitives; 10 torus meshes of 2,000 triangles in a
     2 x 2 x 1 m room). `step` is the distance between consecutive cable
     points (default 2r); `room` the box the cables start in and the parts

@@ -1,7 +1,8 @@
 """Bounding-volume hierarchy for rigid parts: assembly boxes, part OBBs, triangle trees.
 
-Three levels, as in the seeds (001: AABB in part frames, OBB in the assembly
-frame, separating-axis tests; 004: assembly boxes, then part boxes, then
+Three levels, as in the papers (translational sweep verification: AABB in
+part frames, OBB in the assembly frame, separating-axis tests; interference
+of lightweight CAD models: assembly boxes, then part boxes, then
 triangles):
 
 - :class:`TriangleForest`: one axis-aligned box tree per part over its

@@ -1,6 +1,6 @@
 """Cable centrelines as dynamic discrete points: resampling, arc length, bends.
 
-The paper (seed 000) represents a cable by ordered points on its centreline at
+The discrete-point paper (Ju et al., 2016) represents a cable by ordered points on its centreline at
 spacing ``l`` that move with the cable. Two constructions are offered:
 
 - :func:`resample` puts points at equal arc-length spacing (at most ``l``)

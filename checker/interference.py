@@ -1,6 +1,6 @@
 """Interference of one scene state: self, cable-cable, cable-structure, keep-out.
 
-:func:`check_state` runs the paper's algorithms (seed 000) on all cables and
+:func:`check_state` runs the discrete-point distance algorithm (Ju et al., 2016) on all cables and
 parts of one instant and returns one :class:`~checker.records.Interference`
 per interfering pair. :class:`Checker` does the same step after step for one
 set of parts, preparing what depends only on the parts once; each call then

@@ -1,4 +1,4 @@
-"""Part-part and keep-out interference between rigid parts (seeds 002 and 004).
+"""Part-part and keep-out interference between rigid parts (the steel-structure and lightweight-CAD papers).
 
 :func:`check_parts` finds every pair of parts that overlaps (hard) or comes
 within the clearance (soft) for one set of poses; :class:`PartChecker` runs it
@@ -7,7 +7,7 @@ and replaying that answer at every later step. ``assemblies=False`` pairs the
 part boxes by one sort and sweep instead, with the same records (to compare;
 ``benchmarks/bench_parts.py`` times both).
 
-Layered filtering, as in 004: assembly boxes grown by the clearance (the
+Layered filtering, as in the lightweight-CAD paper: assembly boxes grown by the clearance (the
 parts' boxes are paired by descending the assembly tree, so two assemblies
 whose boxes do not overlap contribute no pairs; with a ``focus`` assembly,
 the others are first pruned against the focus's box), world boxes of parts,

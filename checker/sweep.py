@@ -1,11 +1,12 @@
-"""Translational sweep verification (seed 001): which parts does a moving part hit, and when?
+"""Translational sweep verification (Fang et al.): which parts does a moving part hit, and when?
 
 :func:`sweep` moves a set of parts (one part or an assembly) from their
 placed poses along a direction ``D`` by a distance ``H`` and returns every
 other part it would hit with the travel at first contact, plus the parts it
 already overlaps at the start.
 
-Method, pruning level by level before any exact test (001 and 004):
+Method, pruning level by level before any exact test (the sweep-verification
+and lightweight-CAD papers):
 
 1. the moving parts' boxes in a frame whose z axis is ``D``, stretched by
    ``H`` along z, form one oriented box (the swept box);

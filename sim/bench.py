@@ -18,12 +18,12 @@ Tables (printed, and written as CSV into the output folder with a PNG plot):
 - ``side_by_side``: the checker beside python-fcl (same cable-part and
   cable-cable close-pair queries) and beside MuJoCo's own ``mj_collision`` on
   the detection model of the same scene, with ratios.
-- ``paper``: paper 000's simple and complex cases in kind, our time beside
+- ``paper``: the discrete-point paper's simple and complex cases in kind, our time beside
   the paper's 0.008-6.3 s (cable-cable) and 0.24-12.4 s (cable-structure).
 - ``example_scenes``: per-step cost of scenes/drawer.toml and scenes/arm.toml
   (check, validation, recording against ``mj_step``) and real-time factor
   with recording on.
-- ``targets``: issue 6's performance targets, met or not, from the numbers
+- ``targets``: the performance targets, met or not, from the numbers
   above.
 
 Timings are medians of repeats measured side by side in the same process;
@@ -61,7 +61,7 @@ REPO = Path(__file__).resolve().parents[1]
 
 PAPER_CABLE_CABLE_S = (0.008, 6.3)
 PAPER_CABLE_STRUCTURE_S = (0.24, 12.4)
-"""Paper 000's reported range of check times (2016 desktop), seconds."""
+"""The discrete-point paper's reported range of check times (2016 desktop), seconds."""
 
 _DISTANCE_TYPES = (PairType.SELF, PairType.CABLE_CABLE, PairType.CABLE_STRUCTURE, PairType.KEEPOUT)
 
@@ -429,13 +429,13 @@ def side_by_side_table(quick: bool) -> tuple[Table, dict]:
     return table, found
 
 
-# -- paper 000 ----------------------------------------------------------------
+# -- the discrete-point paper ---------------------------------------------------
 
 def paper_table(quick: bool) -> Table:
-    """Paper 000's simple and complex cases in kind."""
+    """The discrete-point paper's simple and complex cases in kind."""
     repeat = 3 if quick else 7
     cases = [("simple", 5, 20), ("simple", 50, 100), ("complex", 120, 250), ("complex", 200, 2000)]
-    table = Table("paper", "Paper 000 in kind: our time per check beside the paper's",
+    table = Table("paper", "The discrete-point paper (Ju et al., 2016) in kind: our time per check beside the paper's",
                   ["case", "cables", "points", "parts", "cable_cable_s", "cable_structure_s",
                    "full_check_s", "paper_cable_cable_s", "paper_cable_structure_s"])
     for case, n_c, n_p in cases:
@@ -519,8 +519,8 @@ def example_scenes_table(quick: bool, out: Path) -> tuple[Table, dict]:
 # -- targets and plot ----------------------------------------------------------------
 
 def targets_table(side: dict, examples: dict) -> Table:
-    """Issue 6's performance targets against this run's numbers."""
-    table = Table("targets", "Targets (issue 6) on this machine", ["target", "measured", "met"])
+    """The performance targets against this run's numbers."""
+    table = Table("targets", "Performance targets on this machine", ["target", "measured", "met"])
     tp, te = side["checker_points"], side["checker_exact"]
     table.add("20,000 points x 310 parts, points < 10 ms", f"{tp * 1e3:.2f} ms", tp < 0.010)
     table.add("20,000 points x 310 parts, exact < 30 ms", f"{te * 1e3:.2f} ms", te < 0.030)

@@ -34,7 +34,7 @@ SCHEMA = "cablecheck.sweep/1"
 """The sweep report's schema name."""
 
 DEFAULT_PRECISION_M = 5e-4
-"""Default precision: 0.5 mm (seed 001), in metres."""
+"""Default precision: 0.5 mm (as in the sweep-verification paper), in metres."""
 
 
 class SweepInputError(ValueError):

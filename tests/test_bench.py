@@ -1,4 +1,4 @@
-"""`cablecheck bench --quick`: the tables are produced and sane (issue 6).
+"""`cablecheck bench --quick`: the tables are produced and sane.
 
 Runs the quick benchmark once (module fixture, into a temporary folder) and
 checks the files, columns and the accuracy relations the tables must show.

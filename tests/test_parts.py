@@ -1,4 +1,4 @@
-"""Part-part and keep-out interference: seed 002's boundary cases, containment, clearance, reuse."""
+"""Part-part and keep-out interference: the steel-structure paper's boundary cases, containment, clearance, reuse."""
 
 import numpy as np
 import pytest

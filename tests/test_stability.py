@@ -1,4 +1,4 @@
-"""Physics hard cases from SPEC stay numerically stable (issue 2, item 9).
+"""Physics hard cases from SPEC stay numerically stable.
 
 Each case runs through the real scene parser, builder and step loop
 (timestep 2 ms) and must have:
