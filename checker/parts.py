@@ -93,20 +93,14 @@ def candidate_pairs(parts: PartSet, placed: Placement, clearance: float,
         idx = np.flatnonzero(keep)
         a, b = aabb_pairs(placed.lo[idx], placed.hi[idx], 0.5 * clearance)
         i, j = idx[a], idx[b]
-    i, j = np.minimum(i, j), np.maximum(i, j)
-    order = np.lexsort((j, i))
-    i, j = i[order], j[order]
+    i, j = _sorted(np.minimum(i, j), np.maximum(i, j))
     if focus is not None:
         one = focus[i] != focus[j]
         i, j = i[one], j[one]
     if pair_mask is not None and len(i):
         ok = pair_mask(i, j)
         i, j = i[ok], j[ok]
-    if len(i):
-        half = parts.half() + 0.5 * clearance
-        ok = obb_overlap(placed.centre[i], placed.rot[i], half[i], placed.centre[j], placed.rot[j], half[j])
-        i, j = i[ok], j[ok]
-    return i, j
+    return _boxes_overlap(parts, placed, clearance, i, j)
 
 
 def candidate_pairs_of(parts: PartSet, placed: Placement, clearance: float, focus: np.ndarray | None,
@@ -118,9 +112,19 @@ def candidate_pairs_of(parts: PartSet, placed: Placement, clearance: float, focu
     if focus is not None:
         focus = np.asarray(focus, bool)
         keep &= focus[i] != focus[j]
-    i, j = i[keep], j[keep]
+    i, j = _sorted(i[keep], j[keep])
+    return _boxes_overlap(parts, placed, clearance, i, j)
+
+
+def _sorted(i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs in (i, j) order."""
     order = np.lexsort((j, i))
-    i, j = i[order], j[order]
+    return i[order], j[order]
+
+
+def _boxes_overlap(parts: PartSet, placed: Placement, clearance: float,
+                   i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs whose oriented boxes, grown by half the clearance each, overlap."""
     if len(i):
         half = parts.half() + 0.5 * clearance
         ok = obb_overlap(placed.centre[i], placed.rot[i], half[i], placed.centre[j], placed.rot[j], half[j])
