@@ -401,7 +401,7 @@ class Advancement:
                         only: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(part, centre, gap) entries below the cap of the parts ``only`` (P,) bool
         (see :meth:`_start_sparse`), the least per pair, sorted by part."""
-        pts, n, n_p = self._pts, len(self._pts), len(gap_part)
+        pts, n = self._pts, len(self._pts)
         cap = self.FAR_HORIZONS * horizon
         checked = np.isfinite(gap_part)
         box_lo, box_hi = self._box[0][:, 0], self._box[1][:, 0]

@@ -24,7 +24,7 @@ import numpy as np
 
 from checker.arrays import ranges
 from checker.cable import TAUT_STRAIN
-from checker.events import AllowList, EventTracker
+from checker.events import EventTracker
 from checker.records import PairType, Severity
 from checker.report import SCHEMA, write_report
 from checker.scene_state import CheckConfig
