@@ -15,7 +15,7 @@ import trimesh
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import sim.scene as scene_module
+import sim.scene.format as scene_format
 from sim.scene import (DEFAULT_CLEARANCE, DEFAULT_DAMPING, Anchor, Hold, BodyKey, JointKey, KeyframeKey, Scene, SceneError,
                        euler_matrix, load_scene, parse_scene)
 
@@ -719,18 +719,18 @@ REFERENCE = Path(__file__).resolve().parents[1] / "docs" / "scene-format.md"
 
 # Heading of each table in docs/scene-format.md -> the keys the loader accepts there.
 REFERENCE_TABLES = {
-    "`[scene]`": scene_module._SCENE_KEYS,
-    "`[effects]`": scene_module._EFFECTS_KEYS,
-    "`[check]`": scene_module._CHECK_KEYS,
-    "`[[bodies]]`": scene_module._BODY_KEYS,
-    "`[[parts]]`": scene_module._PART_KEYS,
-    "`[[cables]]`": scene_module._CABLE_KEYS,
-    "`[[cables]]` `start`, `end` and `clips`": scene_module._ANCHOR_KEYS,
-    "`[[motion]]`": scene_module._MOTION_KEYS,
-    "`[[motion]]` keys of a body": scene_module._BODY_KEY_KEYS,
-    "`[[motion]]` keys of a joint": scene_module._JOINT_KEY_KEYS,
-    "`[limits]`": scene_module._LIMIT_KEYS,
-    "`[[allow]]`": scene_module._ALLOW_KEYS,
+    "`[scene]`": scene_format.SCENE_KEYS,
+    "`[effects]`": scene_format.EFFECTS_KEYS,
+    "`[check]`": scene_format.CHECK_KEYS,
+    "`[[bodies]]`": scene_format.BODY_KEYS,
+    "`[[parts]]`": scene_format.PART_KEYS,
+    "`[[cables]]`": scene_format.CABLE_KEYS,
+    "`[[cables]]` `start`, `end` and `clips`": scene_format.ANCHOR_KEYS,
+    "`[[motion]]`": scene_format.MOTION_KEYS,
+    "`[[motion]]` keys of a body": scene_format.BODY_KEY_KEYS,
+    "`[[motion]]` keys of a joint": scene_format.JOINT_KEY_KEYS,
+    "`[limits]`": scene_format.LIMIT_KEYS,
+    "`[[allow]]`": scene_format.ALLOW_KEYS,
 }
 
 
@@ -754,7 +754,7 @@ def test_scene_format_reference_lists_every_accepted_key():
     for heading, accepted in REFERENCE_TABLES.items():
         assert sorted(documented[heading]) == sorted(accepted), heading
     tops = {h.strip("`[]").split("`")[0].strip("[]") for h in documented}
-    assert set(scene_module._TOP_KEYS) <= tops
+    assert set(scene_format.TOP_KEYS) <= tops
 
 
 # -- motion files, keyframes, interpolation ------------------------------------------

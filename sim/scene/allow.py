@@ -1,0 +1,62 @@
+"""`[[allow]]`: contacts that belong to the design, and whether their names
+cover anything.
+
+An allow name must cover a scene part or cable (by name or assembly path
+prefix) or, with an mjcf model, begin with one of its bodies: its geoms'
+part names are the builder's, so those are checked against the built parts
+once the model exists (`check_allow_names`, called by `sim.run`). Applying
+the rules to interference records is the checker's job, not this module's.
+"""
+
+from __future__ import annotations
+
+import difflib
+
+from sim.scene.errors import SceneError
+from sim.scene.format import ALLOW_KEYS
+from sim.scene.reader import Reader
+from sim.scene.records import AllowDef, Scene
+
+
+def read_allow(r: Reader, value: dict, where: str, names: list[str]) -> AllowDef:
+    """An `[[allow]]` pair. Its names must cover a scene part or cable
+    (or, with an mjcf model, begin with one of its bodies: the geoms'
+    names are the builder's, checked against the built parts by
+    :func:`check_allow_names`)."""
+    t = r.table(value, where, ALLOW_KEYS, ("a", "b", "reason"))
+    out = []
+    for key in ("a", "b"):
+        name = r.name(t[key], f"{where}.{key}")
+        bodies = (set(r.mjcf.bodies) | {"world"}) if r.mjcf is not None else set()
+        if not covers(name, names) and name.split("/")[0] not in bodies:
+            raise r.error(f"{where}.{key}", unknown_name(name, names + sorted(bodies)))
+        out.append(name)
+    reason = r.name(t["reason"], f"{where}.reason")
+    return AllowDef(out[0], out[1], reason)
+
+
+def covers(pattern: str, names) -> bool:
+    """True when `pattern` is one of `names` or an assembly path prefix of one."""
+    prefix = pattern + "/"
+    return any(n == pattern or n.startswith(prefix) for n in names)
+
+
+def unknown_name(name: str, names) -> str:
+    """The problem text for an `[[allow]]` name that covers nothing, with the
+    closest part, assembly path or cable name as a hint."""
+    known = sorted({"/".join(n.split("/")[:k]) for n in names for k in range(1, n.count("/") + 2)})
+    close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+    hint = f"did you mean {close[0]!r}?" if close else f"{len(known)} names known, e.g. " + \
+        ", ".join(repr(k) for k in known[:5])
+    return f"no part, assembly path or cable named {name!r} ({hint})"
+
+
+def check_allow_names(scene: Scene, names) -> None:
+    """Raise SceneError when an `[[allow]]` name covers none of `names` (the
+    built parts' and the cables' names): a name taken at load time for a
+    body of the mjcf model whose geoms the builder named otherwise."""
+    names = list(names)
+    for i, rule in enumerate(scene.allow):
+        for key, name in (("a", rule.a), ("b", rule.b)):
+            if not covers(name, names):
+                raise SceneError(scene.path, f"allow[{i}].{key}", unknown_name(name, names))

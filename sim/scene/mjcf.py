@@ -1,0 +1,48 @@
+"""The base MuJoCo model of a scene (`[scene] mjcf`): compiled once, to know
+its bodies, joints and keyframes, and which of its joints a motion drives.
+
+The builder compiles the file again (`sim.build`); nothing here builds a
+simulation or moves the model (the frames at t = 0: `sim.scene.frames`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+
+from sim.scene.errors import SceneError
+
+HINGE = int(mujoco.mjtJoint.mjJNT_HINGE)
+DRIVEN = (HINGE, int(mujoco.mjtJoint.mjJNT_SLIDE))
+"""Joint types a motion drives by a value: hinge and slide."""
+
+
+@dataclass(frozen=True)
+class MjcfInfo:
+    """What the loader needs of the base mjcf model."""
+
+    model: mujoco.MjModel
+    bodies: dict[str, int]   # name -> body id
+    joints: dict[str, int]   # name -> joint id
+    keyframes: dict[str, int]   # name -> keyframe id
+
+    def driven_joints(self) -> list[str]:
+        """Named hinge and slide joints, in model order."""
+        return [name for name, j in sorted(self.joints.items(), key=lambda item: item[1])
+                if int(self.model.jnt_type[j]) in DRIVEN]
+
+
+def compile_mjcf(file: Path, path: Path) -> MjcfInfo:
+    """Compile the model `path` named by scene `file`; a failure is the file's (`scene.mjcf`)."""
+    try:
+        model = mujoco.MjModel.from_xml_path(str(path))
+    except Exception as e:   # MuJoCo raises ValueError; any failure is the file's
+        message = " ".join(str(e).split())
+        raise SceneError(file, "scene.mjcf", f"MuJoCo cannot compile {path.name}: "
+                                             f"{message}") from None
+    bodies = {model.body(i).name: i for i in range(model.nbody) if model.body(i).name}
+    joints = {model.joint(i).name: i for i in range(model.njnt) if model.joint(i).name}
+    keyframes = {model.key(i).name: i for i in range(model.nkey) if model.key(i).name}
+    return MjcfInfo(model=model, bodies=bodies, joints=joints, keyframes=keyframes)
