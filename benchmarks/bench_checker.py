@@ -14,8 +14,9 @@ distance on the same scene.
 Run: ``python benchmarks/bench_checker.py [--repeat N] [--no-fcl]``. Timings
 are single-threaded (set OMP/BLAS threads to 1 for a fair number).
 
-The scene and the fcl queries live in :mod:`checker.benchscene` (shared
-with ``cablecheck bench``, which prints the full accuracy-and-cost tables).
+The scene lives in :mod:`sim.benchscene` and the fcl queries in
+:mod:`sim.benchfcl` (shared with ``cablecheck bench``, which prints the full
+accuracy-and-cost tables).
 
 Deliberately not a test: nothing here asserts a time.
 """
@@ -33,11 +34,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from checker.benchscene import fcl_queries, make_scene  # noqa: E402
 from checker.interference import Checker, check_state  # noqa: E402
 from checker.records import PairType  # noqa: E402
 from checker.scene_state import CheckConfig  # noqa: E402
 from checker.shapes import ShapeType  # noqa: E402
+from sim.benchfcl import FclMissing, fcl_queries, load_fcl  # noqa: E402
+from sim.benchscene import make_scene  # noqa: E402
 
 
 def time_check(cables, parts, config, repeat):
@@ -91,9 +93,9 @@ def main(argv=None):
           f"false alarms {len(fp_pairs - true_pairs)}, misses {len(true_pairs - fp_pairs)}")
     if not args.no_fcl:
         try:
-            import fcl  # noqa: F401
-        except ImportError:
-            print("python-fcl not installed: pip install python-fcl for the comparison")
+            load_fcl()
+        except FclMissing as e:
+            print(f"{e}; no comparison")
             return
         for method in ("points", "exact"):
             upd, qry, n_found = fcl_queries(cables, parts, CheckConfig(method=method), args.repeat)

@@ -19,7 +19,7 @@ run on this machine:
    written once: the same run cut at half the duration, subtracted).
 3. ``queries``: the same cable-part state (t = 0) checked by the checker
    (``points`` and ``exact``), by MuJoCo's ``mj_collision`` on the detection
-   model and by python-fcl (:func:`checker.benchscene.fcl_queries`), each
+   model and by python-fcl (:func:`sim.benchfcl.fcl_queries`), each
    in one process per scene.
 4. ``profile`` (``--profile C P``): cProfile's top functions and
    tracemalloc's top allocation sites of one run.
@@ -94,13 +94,13 @@ def _mode_build(parts_file: str) -> None:
 
 def _mode_queries(scene_path: str, repeat: int) -> None:
     """The checker, mj_collision and python-fcl on the same state; print JSON."""
-    from checker.benchscene import fcl_queries
+    from sim.benchfcl import fcl_queries
     from checker.scene_state import CheckConfig
-    from sim.bench import _mujoco_side
+    from sim.benchsim import mujoco_side
     from sim.scene import load_scene
 
     scene = load_scene(scene_path)
-    out = _mujoco_side(scene, repeat)
+    out = mujoco_side(scene, repeat)
     # python-fcl on the same cable-part (and cable-cable) queries of the same state
     from checker.scene_state import PartState
     from sim.build import build

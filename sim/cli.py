@@ -193,12 +193,12 @@ def _main(args: argparse.Namespace, stop: StopRequest) -> int:
         if args.command == "study":
             return _cmd_study(args, stop)
         if args.command == "bench":
-            from sim.bench import run_bench
+            from sim.bench import FULL, QUICK, run_bench
             from sim.outputs import check_folder
 
             check_folder(args.out, "--out")  # MuJoCo and matplotlib load only when needed
 
-            run_bench(quick=args.quick, out=args.out)
+            run_bench(QUICK if args.quick else FULL, out=args.out)
             return EXIT_OK
     except SceneError as e:
         print(f"cablecheck: error: {e}", file=sys.stderr)

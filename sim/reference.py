@@ -22,7 +22,7 @@ measure against one implementation:
   the cantilevers and the chain have a free end (`hold = "free"`).
 
 This module does not step or measure anything; callers build, settle and
-compare (see `sim.validation`, `sim.bench.physics_table`).
+compare (see `sim.validation`, `sim.benchsim.physics_table`).
 """
 
 from __future__ import annotations

@@ -1,19 +1,38 @@
-"""`cablecheck bench --quick`: the tables are produced and sane.
+"""`cablecheck bench`: the tables are produced and sane.
 
-Runs the quick benchmark once (module fixture, into a temporary folder) and
-checks the files, columns and the accuracy relations the tables must show.
-Nothing here asserts a time: timings only have to be positive and finite.
+Runs the bench once at tiny sizes (`TINY`, module fixture, into a temporary
+folder: seconds, where the quick bench takes a minute) and checks the
+files, columns and the accuracy relations the tables must show; the
+command line's wiring to the quick and full sizes is checked without
+running them. Nothing here asserts a time: timings only have to be
+positive and finite.
 """
 
 from __future__ import annotations
 
 import csv
+import dataclasses
 import math
 from pathlib import Path
 
 import pytest
 
+import sim.bench
+from sim.bench import FULL, QUICK, BenchSizes, run_bench
+from sim.benchsim import example_names
 from sim.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+
+TINY = BenchSizes(
+    name="tiny", repeat=1, disc_scenes=2, large_cables=4,
+    catenary=((20, 0.002), (40, 0.002)), cantilever=((20, 0.002), (40, 0.002)),
+    scale_cables=(1, 2, 4), scale_parts=(10, 20, 40), scale_held_parts=20, scale_held_cables=4,
+    side_scene=(6, 50, 20, 1), side_repeat=1, fcl_repeat=1,
+    synthetic=((3, 10, 10),), side_examples=("drawer",),
+    paper_cases=(("simple", 2, 10), ("complex", 4, 40)),
+    examples=("drawer",), example_seconds=0.2)
+"""Every table at a few seconds' worth of sizes."""
 
 TABLES = {
     "discretisation": ["config", "spacing_r", "ms_per_check", "ms_large", "pairs", "ref_pairs", "ref_hard",
@@ -35,7 +54,9 @@ TABLES = {
 @pytest.fixture(scope="module")
 def bench(tmp_path_factory):
     out = tmp_path_factory.mktemp("bench")
-    assert main(["bench", "--quick", "--out", str(out)]) == 0
+    printed = []
+    run_bench(TINY, out, echo=printed.append)
+    assert printed[0].startswith("cablecheck bench (tiny sizes)")
     tables = {}
     for name in TABLES:
         with open(out / f"{name}.csv", newline="") as f:
@@ -98,36 +119,87 @@ def test_physics_errors_against_references(bench):
 def test_scale_side_by_side_paper_and_examples(bench):
     tables = bench[1]
     _, scale = tables["scale"]
-    cables = [int(r["cables"]) for r in scale if r["axis"] == "cables"]
-    parts = [int(r["parts"]) for r in scale if r["axis"] == "parts"]
-    assert min(cables) == 1 and max(cables) == 200
-    assert min(parts) == 10 and max(parts) == 2000
+    assert [int(r["cables"]) for r in scale if r["axis"] == "cables"] == list(TINY.scale_cables)
+    assert [int(r["parts"]) for r in scale if r["axis"] == "parts"] == list(TINY.scale_parts)
+    assert all(int(r["parts"]) == TINY.scale_held_parts for r in scale if r["axis"] == "cables")
+    assert all(int(r["cables"]) == TINY.scale_held_cables for r in scale if r["axis"] == "parts")
+    assert all(int(r["points"]) == 200 * int(r["cables"]) for r in scale)
     assert all(_positive(r["ms_points"]) and _positive(r["ms_exact"]) for r in scale)
 
     _, side = tables["side_by_side"]
     others = {r["other"] for r in side}
     assert "mj_collision" in others
     assert "fcl update+query" in others or any("not installed" in o for o in others)
-    assert {r["scene"] for r in side} >= {"drawer", "arm"}
+    n_cables, n_points, n_prims, n_meshes = TINY.side_scene
+    assert {r["scene"] for r in side} == {f"random {n_cables}x{n_points}/{n_prims + n_meshes}",
+                                          "synthetic 3 cables/10 parts", "drawer"}
     for r in side:
         if r["other_ms"]:
             assert _positive(r["ratio"]) and _positive(r["other_ms"])
 
     _, paper = tables["paper"]
-    assert {r["case"] for r in paper} == {"simple", "complex"}
-    complex_ = [r for r in paper if r["case"] == "complex"]
-    assert all(int(r["cables"]) > 100 and int(r["parts"]) > 200 for r in complex_)
-    assert all(int(r["cables"]) < 100 for r in paper if r["case"] == "simple")
+    assert [(r["case"], int(r["cables"]), int(r["parts"])) for r in paper] == list(TINY.paper_cases)
 
     _, examples = tables["example_scenes"]
-    scenes = sorted(p.stem for p in (Path(__file__).resolve().parents[1] / "scenes").glob("*.toml"))
-    assert [r["scene"] for r in examples][:2] == ["drawer", "arm"]
-    assert sorted(r["scene"] for r in examples) == scenes
+    assert [r["scene"] for r in examples] == list(TINY.examples)
     for r in examples:
-        assert int(r["steps"]) > 0
+        assert 0 < int(r["steps"]) <= round(TINY.example_seconds / 0.002) + 1
         assert int(r["full_checks"]) >= 1 and int(r["full_checks"]) + int(r["proven_clear"]) <= int(r["steps"]) + 1
         assert _positive(r["mj_step_ms"]) and _positive(r["check_ms"]) and _positive(r["realtime_factor"])
 
     _, targets = tables["targets"]
     assert len(targets) == 6
     assert all(r["met"] in ("True", "False", "") for r in targets)
+    # the check-time targets are stated for 20,000 points x 310 parts: not judged at tiny sizes
+    assert [r["met"] for r in targets[:2]] == ["", ""]
+    assert all("measured on" in r["measured"] for r in targets[:2])
+
+
+def test_quick_and_full_sizes_measure_what_the_tables_state():
+    for sizes in (QUICK, FULL):
+        assert len(sizes.scale_cables) >= 3 and len(sizes.scale_parts) >= 3
+        assert sizes.side_scene == sim.bench.TARGET_SCENE
+        assert sizes.examples == () and "drawer" in sizes.side_examples
+        assert {case for case, _, _ in sizes.paper_cases} == {"simple", "complex"}
+        assert all(n > 100 and p > 200 for case, n, p in sizes.paper_cases if case == "complex")
+        assert all(n < 100 for case, n, _ in sizes.paper_cases if case == "simple")
+    assert QUICK.example_seconds == 1.0 and FULL.example_seconds is None
+
+
+def test_example_names_are_every_scene_drawer_and_arm_first():
+    names = example_names()
+    assert names[:2] == ["drawer", "arm"]
+    assert sorted(names) == sorted(p.stem for p in (ROOT / "scenes").glob("*.toml"))
+
+
+@pytest.mark.parametrize("args, sizes", [(["--quick"], QUICK), ([], FULL)])
+def test_the_command_runs_the_quick_or_full_sizes(tmp_path: Path, monkeypatch, args, sizes):
+    calls = []
+    monkeypatch.setattr(sim.bench, "run_bench", lambda s, out: calls.append((s, out)))
+    assert main(["bench", *args, "--out", str(tmp_path / "b")]) == 0
+    assert calls == [(sizes, tmp_path / "b")]
+
+
+def test_the_command_refuses_an_output_folder_that_is_a_file(tmp_path: Path, monkeypatch, capsys):
+    monkeypatch.setattr(sim.bench, "run_bench", lambda s, out: pytest.fail("ran"))
+    (tmp_path / "f").write_text("")
+    assert main(["bench", "--quick", "--out", str(tmp_path / "f")]) == 2
+    assert "--out" in capsys.readouterr().err
+
+
+def test_sizes_are_frozen():
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        QUICK.repeat = 1  # type: ignore[misc]
+
+
+def test_without_python_fcl_the_comparison_says_how_to_install_it(monkeypatch):
+    import sys
+
+    from checker.scene_state import CheckConfig
+    from sim.benchfcl import FclMissing, fcl_queries
+    from sim.benchscene import make_scene
+
+    monkeypatch.setitem(sys.modules, "fcl", None)   # what an absent package looks like to import
+    cables, parts = make_scene(n_cables=2, n_points=5, n_prims=3, n_meshes=0)
+    with pytest.raises(FclMissing, match=r"pip install 'cablecheck\[bench\]'"):
+        fcl_queries(cables, parts, CheckConfig("points"), 1)

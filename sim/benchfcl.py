@@ -1,17 +1,11 @@
-"""Benchmark scenes and the general-collision-library comparison, shared.
+"""The checker's close-pair queries done by python-fcl, a general collision
+library, timed: the independent yardstick of `cablecheck bench` and
+``benchmarks/``.
 
-Used by `cablecheck bench` (:mod:`sim.bench`) and by
-``benchmarks/bench_checker.py``, so both time the same scenes:
-
-- :func:`make_scene`: randomised cables (smooth random walks) and parts
-  (boxes, cylinders, capsules, spheres, ellipsoids, torus meshes) placed in a
-  room; the defaults are the checker benchmark's scene of 100 cables x 200 points against
-  300 primitives and 10 meshes.
-- :func:`fcl_queries`: the same close-pair queries done by python-fcl (an
-  optional dependency, the ``bench`` extra), timed.
-
-Deliberately not here: timing of the checker itself, tables, printing
-(:mod:`sim.bench`); nothing here is used by a run.
+python-fcl is optional (the ``bench`` and ``test`` extras): it is imported
+only when a comparison runs, and its absence raises `FclMissing` saying how
+to install it. This module times fcl only; the checker's side and the
+ratios are the callers'.
 """
 
 from __future__ import annotations
@@ -19,63 +13,25 @@ from __future__ import annotations
 import time
 
 import numpy as np
-import trimesh
 
-from checker.scene_state import CableState, PartState
-from checker.shapes import Shape, ShapeType, mesh_shape
+from checker.cable import densify_batch
+from checker.shapes import ShapeType
 
-
-def random_rotation(rng: np.random.Generator) -> np.ndarray:
-    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
-    q *= np.sign(np.diag(r))
-    if np.linalg.det(q) < 0:
-        q[:, 0] *= -1
-    return q
+INSTALL = "pip install 'cablecheck[bench]'"
+"""How to get python-fcl."""
 
 
-def make_scene(seed: int = 0, n_cables: int = 100, n_points: int = 200, n_prims: int = 300,
-               n_meshes: int = 10, room=(2.0, 2.0, 1.0), step: float | None = None,
-               radius: float = 0.004):
-    """Cables as smooth random walks through a room of parts, in metres.
+class FclMissing(ImportError):
+    """python-fcl is not installed; the message says how to install it."""
 
-    Defaults: the checker benchmark's scene (100 cables of 200 points at spacing 2r,
-    20,000 points; 300 primitives; 10 torus meshes of 2,000 triangles in a
-    2 x 2 x 1 m room). `step` is the distance between consecutive cable
-    points (default 2r); `room` the box the cables start in and the parts
-    are placed in. Returns (cables, parts): lists of CableState, PartState.
-    """
-    rng = np.random.default_rng(seed)
-    step = 2 * radius if step is None else step
-    room = np.asarray(room, dtype=float)
-    cables = []
-    for c in range(n_cables):
-        d = rng.normal(size=3)
-        p = rng.uniform(0.0, room)
-        pts = [p]
-        for _ in range(n_points - 1):
-            d = d / np.linalg.norm(d) + 0.15 * rng.normal(size=3)
-            d /= np.linalg.norm(d)
-            p = p + step * d
-            pts.append(p)
-        cables.append(CableState(f"cable{c}", np.array(pts), radius))
-    parts = []
-    kinds = [ShapeType.BOX, ShapeType.CYLINDER, ShapeType.CAPSULE, ShapeType.SPHERE, ShapeType.ELLIPSOID]
-    weights = [0.4, 0.25, 0.15, 0.1, 0.1]
-    for k in range(n_prims):
-        kind = kinds[rng.choice(len(kinds), p=weights)]
-        size = rng.uniform(0.01, 0.06, size=3)
-        pose = np.eye(4)
-        pose[:3, :3] = random_rotation(rng)
-        pose[:3, 3] = rng.uniform(0.0, room)
-        parts.append(PartState(f"prim{k}", Shape(kind, size), pose, keepout=bool(k % 10 == 0)))
-    torus = trimesh.creation.torus(0.08, 0.02, major_sections=50, minor_sections=20)
-    shape = mesh_shape(torus.vertices, torus.faces)
-    for k in range(n_meshes):
-        pose = np.eye(4)
-        pose[:3, :3] = random_rotation(rng)
-        pose[:3, 3] = rng.uniform(0.0, room)
-        parts.append(PartState(f"mesh{k}", shape, pose))
-    return cables, parts
+
+def load_fcl():
+    """The `fcl` module, or `FclMissing` when python-fcl is not installed."""
+    try:
+        import fcl
+    except ImportError as e:
+        raise FclMissing(f"python-fcl is not installed ({INSTALL}): {e}") from None
+    return fcl
 
 
 def fcl_queries(cables, parts, config, repeat):
@@ -89,11 +45,9 @@ def fcl_queries(cables, parts, config, repeat):
     per pair would be slower still.
 
     Returns (update seconds, pair query seconds, pieces found), medians over
-    max(1, repeat // 3) runs. Raises ImportError without python-fcl.
+    max(1, repeat // 3) runs. Raises `FclMissing` without python-fcl.
     """
-    import fcl
-
-    from checker.cable import densify_batch
+    fcl = load_fcl()
 
     radii = np.array([c.radius for c in cables])
     pts = np.concatenate([c.points for c in cables])
