@@ -10,8 +10,13 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from sim.cliargs import (_direction, _nonnegative_float, _positive_float, _positive_int,
-                         build_parser)
+from sim.cliargs import (
+    _direction,
+    _nonnegative_float,
+    _positive_float,
+    _positive_int,
+    build_parser,
+)
 
 
 @given(st.floats(min_value=1e-300, max_value=1e300))
