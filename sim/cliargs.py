@@ -56,7 +56,7 @@ def build_parser(version: str) -> argparse.ArgumentParser:
     rec.add_argument("--no-record", action="store_true", help="do not write a recording")
     run.add_argument("--method", choices=("points", "exact"),
                      help="override [check] method: discrete points (paper) or exact segment distances")
-    run.add_argument("--spacing", type=_positive_float, metavar="K",
+    run.add_argument("--spacing", type=positive_float, metavar="K",
                      help="override [check] spacing: discrete-point spacing in cable radii (paper: 2)")
     run.add_argument("--fail-on", choices=("hard", "soft", "never"), default="hard",
                      help="exit 1 when interference of this severity or worse is found (default: hard)")
@@ -77,14 +77,14 @@ def build_parser(version: str) -> argparse.ArgumentParser:
                                     "2 bad input.")
     sw.add_argument("scene", metavar="SCENE", type=Path, help="scene file (TOML)")
     sw.add_argument("--part", required=True, metavar="NAME", help="part name or assembly path prefix")
-    sw.add_argument("--direction", required=True, metavar="X,Y,Z", type=_direction,
+    sw.add_argument("--direction", required=True, metavar="X,Y,Z", type=xyz_direction,
                     help="direction of travel in scene axes (any length, not zero); "
                          "write --direction=-1,0,0 when it starts with a minus sign")
-    sw.add_argument("--distance", required=True, metavar="H", type=_nonnegative_float,
+    sw.add_argument("--distance", required=True, metavar="H", type=nonnegative_float,
                     help="travel in scene units")
     sw.add_argument("--report", type=Path, metavar="PATH",
                     help="JSON report path (default: recordings/<scene name>-sweep.json)")
-    sw.add_argument("--precision", type=_positive_float, metavar="P",
+    sw.add_argument("--precision", type=positive_float, metavar="P",
                     help="precision in scene units (default 0.5 mm)")
     sw.add_argument("--only", metavar="PATH", help="test only the parts of this assembly path")
     sw.add_argument("--quiet", action="store_true", help="print nothing but errors")
@@ -97,7 +97,7 @@ def build_parser(version: str) -> argparse.ArgumentParser:
                                     "for bad input, 130 when interrupted (finished variants are kept).")
     st.add_argument("study", metavar="STUDY", type=Path, help="study file (TOML)")
     where = st.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=_positive_int, metavar="N",
+    where.add_argument("--workers", type=positive_int, metavar="N",
                        help="worker processes of the embedded local cluster (default: the number "
                             "of cores); it listens on 127.0.0.1 only")
     where.add_argument("--scheduler", metavar="ADDRESS",
@@ -121,7 +121,8 @@ def build_parser(version: str) -> argparse.ArgumentParser:
     return parser
 
 
-def _positive_float(text: str) -> float:
+def positive_float(text: str) -> float:
+    """An option value that is a finite number above zero."""
     try:
         value = float(text)
     except ValueError:
@@ -131,7 +132,8 @@ def _positive_float(text: str) -> float:
     return value
 
 
-def _nonnegative_float(text: str) -> float:
+def nonnegative_float(text: str) -> float:
+    """An option value that is a finite number, zero or above."""
     try:
         value = float(text)
     except ValueError:
@@ -141,7 +143,8 @@ def _nonnegative_float(text: str) -> float:
     return value
 
 
-def _positive_int(text: str) -> int:
+def positive_int(text: str) -> int:
+    """An option value that is a whole number, 1 or above."""
     try:
         value = int(text)
     except ValueError:
@@ -151,7 +154,8 @@ def _positive_int(text: str) -> int:
     return value
 
 
-def _direction(text: str) -> tuple[float, float, float]:
+def xyz_direction(text: str) -> tuple[float, float, float]:
+    """``X,Y,Z``: three finite numbers, not all zero."""
     parts = text.split(",")
     try:
         values = tuple(float(p) for p in parts)

@@ -11,49 +11,49 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from sim.cliargs import (
-    _direction,
-    _nonnegative_float,
-    _positive_float,
-    _positive_int,
     build_parser,
+    nonnegative_float,
+    positive_float,
+    positive_int,
+    xyz_direction,
 )
 
 
 @given(st.floats(min_value=1e-300, max_value=1e300))
 def test_positive_float_takes_every_finite_positive_number(x: float):
-    assert _positive_float(repr(x)) == x
+    assert positive_float(repr(x)) == x
 
 
 @pytest.mark.parametrize("text", ["0", "-1", "inf", "nan", "-0.0", "two", ""])
 def test_positive_float_refuses(text: str):
     with pytest.raises(argparse.ArgumentTypeError):
-        _positive_float(text)
+        positive_float(text)
 
 
 def test_nonnegative_float_takes_zero_and_refuses_negative_and_infinite():
-    assert _nonnegative_float("0") == 0.0
+    assert nonnegative_float("0") == 0.0
     for text in ("-1e-9", "inf", "nan", "x"):
         with pytest.raises(argparse.ArgumentTypeError):
-            _nonnegative_float(text)
+            nonnegative_float(text)
 
 
 def test_positive_int():
-    assert _positive_int("3") == 3
+    assert positive_int("3") == 3
     for text in ("0", "-2", "1.5", "x"):
         with pytest.raises(argparse.ArgumentTypeError):
-            _positive_int(text)
+            positive_int(text)
 
 
 @given(st.tuples(*[st.floats(allow_nan=False, allow_infinity=False, width=64)] * 3)
        .filter(lambda v: any(v)))
 def test_direction_reads_any_nonzero_finite_vector(v):
-    assert _direction(",".join(repr(x) for x in v)) == v
+    assert xyz_direction(",".join(repr(x) for x in v)) == v
 
 
 @pytest.mark.parametrize("text", ["0,0,0", "1,0", "1,0,0,0", "1,inf,0", "1,nan,0", "a,b,c", ""])
 def test_direction_refuses(text: str):
     with pytest.raises(argparse.ArgumentTypeError):
-        _direction(text)
+        xyz_direction(text)
 
 
 def test_the_parser_knows_every_sub_command_and_its_defaults():
