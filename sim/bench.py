@@ -1,6 +1,7 @@
 """`cablecheck bench`: what accuracy costs in time, measured in one run.
 
-Tables (printed, and written as CSV into the output folder with a PNG plot):
+Tables (printed, and written as CSV into the output folder with a PNG plot;
+the sizes are those of `FULL`):
 
 - ``discretisation``: method ``points`` at spacing 4r, 2r, r, r/2, the
   paper's face-plane distance (``|BP . N|``, spacing 2r) and method
@@ -20,9 +21,9 @@ Tables (printed, and written as CSV into the output folder with a PNG plot):
   the detection model of the same scene, with ratios.
 - ``paper``: the discrete-point paper's simple and complex cases in kind, our time beside
   the paper's 0.008-6.3 s (cable-cable) and 0.24-12.4 s (cable-structure).
-- ``example_scenes``: per-step cost of scenes/drawer.toml and scenes/arm.toml
-  (check, validation, recording against ``mj_step``) and real-time factor
-  with recording on.
+- ``example_scenes``: per-step cost of every scene in ``scenes/``, drawer
+  and arm first (check, validation, recording against ``mj_step``) and
+  real-time factor with recording on.
 - ``targets``: the performance targets, met or not, from the numbers
   above.
 
@@ -35,6 +36,7 @@ alone) and `sim.benchsim` (with MuJoCo), on the scenes of `sim.benchscene`,
 and drawn by `sim.benchplot`. It does not change any setting of a run and
 is not used by `cablecheck run`.
 """
+
 from __future__ import annotations
 
 import time
