@@ -25,6 +25,7 @@ from sim.scene.records import Anchor, CableDef
 
 
 def read_anchor(r: Reader, value: Any, where: str, with_pos: bool = True) -> Anchor:
+    """A cable end or clip: the body it rides on, its position there, how it holds."""
     t = r.table(value, where, ANCHOR_KEYS if with_pos else ("body", "hold"))
     hold = Hold(r.string(t.get("hold", "clamp"), f"{where}.hold",
                          tuple(h.value for h in Hold)))
@@ -34,6 +35,7 @@ def read_anchor(r: Reader, value: Any, where: str, with_pos: bool = True) -> Anc
 
 
 def read_cable(r: Reader, value: dict, where: str, dynamics: bool = True) -> CableDef:
+    """A `[[cables]]` entry, its route at t = 0 checked against length and elements."""
     t = r.table(value, where, CABLE_KEYS, ("name", "radius"))
     name = r.name(t["name"], f"{where}.name")
     radius = r.length(t["radius"], f"{where}.radius", positive=True)

@@ -63,6 +63,7 @@ def parse_scene(data: dict, path: Path) -> Scene:
 
 
 def read_scene(r: Reader, data: dict) -> Scene:
+    """The whole scene dict, the tables in the order they depend on one another."""
     data = r.table(data, "(top level)", TOP_KEYS, ("scene",))
     head = r.table(data["scene"], "scene", SCENE_KEYS, ("name", "units", "duration"))
     name = r.name(head["name"], "scene.name")

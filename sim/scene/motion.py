@@ -26,6 +26,7 @@ from sim.scene.trajectory import check_ranges, joint_scale, keys_trajectory, mak
 
 
 def read_motion(r: Reader, value: dict, where: str, bodies: dict[str, BodyDef]) -> MotionDef:
+    """A `[[motion]]` entry with its samples as a `Trajectory`."""
     t = r.table(value, where, MOTION_KEYS)
     targets = [k for k in ("body", "joint", "file") if k in t]
     if "file" in t and "keys" in t:
@@ -119,6 +120,7 @@ def motion_joint(r: Reader, value: Any, where: str) -> str:
 
 
 def read_body_key(r: Reader, value: dict, where: str, home: BodyDef) -> BodyKey:
+    """A keyframe of a body; pos and euler default to the body's `[[bodies]]` pose."""
     t = r.table(value, where, BODY_KEY_KEYS, ("t",))
     return BodyKey(t=r.number(t["t"], f"{where}.t", nonnegative=True),
                    pos=r.position(t["pos"], f"{where}.pos") if "pos" in t else home.pos,
@@ -127,6 +129,7 @@ def read_body_key(r: Reader, value: dict, where: str, home: BodyDef) -> BodyKey:
 
 
 def read_joint_key(r: Reader, value: dict, where: str) -> JointKey | KeyframeKey:
+    """A keyframe of a joint: a value, or a keyframe of the mjcf model by name."""
     t = r.table(value, where, JOINT_KEY_KEYS, ("t",))
     time = r.number(t["t"], f"{where}.t", nonnegative=True)
     if ("value" in t) == ("key" in t):

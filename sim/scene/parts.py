@@ -30,6 +30,7 @@ _SIZE_HELP = {"box": "half-extents x, y, z", "sphere": "radius",
 
 
 def read_body(r: Reader, value: dict, where: str) -> BodyDef:
+    """A `[[bodies]]` entry; its frame at t = 0 joins the reader's frames."""
     t = r.table(value, where, BODY_KEYS, ("name",))
     name = r.name(t["name"], f"{where}.name")
     if name == "world":
@@ -61,6 +62,7 @@ def body_ref(r: Reader, value: Any, where: str) -> str:
 
 
 def read_part(r: Reader, value: dict, where: str) -> PartDef:
+    """A `[[parts]]` entry: shape and size in metres, the mesh file checked."""
     t = r.table(value, where, PART_KEYS, ("name", "shape"))
     name = r.name(t["name"], f"{where}.name")
     if any(not level.strip() for level in name.split("/")):

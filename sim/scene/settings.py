@@ -21,6 +21,7 @@ from sim.scene.records import CableDef, CheckSettings, Effects, Limits
 
 
 def read_effects(r: Reader, value: Any) -> Effects:
+    """The `[effects]` table."""
     t = r.table(value, "effects", EFFECTS_KEYS)
     contact = t.get("contact", [])
     if not isinstance(contact, list):
@@ -34,6 +35,7 @@ def read_effects(r: Reader, value: Any) -> Effects:
 
 
 def read_check(r: Reader, value: Any) -> CheckSettings:
+    """The `[check]` table (clearance in metres)."""
     t = r.table(value, "check", CHECK_KEYS)
     clearance = (r.length(t["clearance"], "check.clearance", nonnegative=True)
                  if "clearance" in t else DEFAULT_CLEARANCE)
@@ -49,6 +51,7 @@ def read_check(r: Reader, value: Any) -> CheckSettings:
 
 
 def read_limits(r: Reader, value: Any) -> Limits:
+    """The `[limits]` table."""
     t = r.table(value, "limits", LIMIT_KEYS)
     return Limits(**{k: r.integer(t[k], f"limits.{k}", 1) for k in LIMIT_KEYS if k in t})
 

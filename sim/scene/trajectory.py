@@ -58,6 +58,7 @@ def joint_scale(r: Reader, joint: str, angles: str) -> float:
 
 def keys_trajectory(r: Reader, keys: tuple, body: str | None, joint: str | None, where: str,
                     angles: str, interpolation: str, time_scale: float) -> Trajectory:
+    """The samples of a motion's keys, in MuJoCo units on scene time."""
     times = np.array([k.t for k in keys], float) / time_scale
     none = np.zeros((len(keys), 0))
     if body is not None:
