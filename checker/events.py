@@ -3,8 +3,10 @@
 `EventTracker.update` takes each checked step's interference records and
 keeps, per (type, a, b) pair, the interval it has stayed below the
 clearance. An event is a maximal such interval; its severity is the worst it
-reached, its `phase` is static when it contains t = 0 (the settled rest state
-before motion) and dynamic otherwise.
+reached (a record's severity is decided by `checker.records.severity_of`;
+an event is hard once any of its records is), its `phase` (:class:`Phase`)
+is static when it contains t = 0 (the settled rest state before motion) and
+dynamic otherwise.
 
 Flicker: a pair grazing the clearance can drop out for a step or two as the
 cable vibrates. An open event is closed only after the pair has been clear
@@ -29,15 +31,28 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from enum import StrEnum
 
 import numpy as np
 
 from checker.records import Interference, PairType, Severity
 
-PairKey = tuple[str, str, str]
-"""(type, a, b) of a pair."""
+PairKey = tuple[PairType, str, str]
+"""(type, a, b) of a pair (a string enum: a key of plain strings finds it too)."""
 
-_NEVER_ALLOWED = (PairType.BEND.value, PairType.TAUT.value)
+_NEVER_ALLOWED = (PairType.BEND, PairType.TAUT)
+
+
+class Phase(StrEnum):
+    """When an event happened; the values are the report's ``phase``."""
+
+    STATIC = "static"      # the event contains t = 0: the settled rest state, before any motion
+    DYNAMIC = "dynamic"    # it started once the motion was under way
+
+
+def phase_of(t_start: float) -> Phase:
+    """The phase of an event that started at `t_start` (s)."""
+    return Phase.STATIC if t_start <= 0.0 else Phase.DYNAMIC
 
 
 @dataclass(frozen=True)
@@ -90,9 +105,9 @@ class Event:
     """A maximal interval in which a pair stayed below the clearance.
 
     Attributes:
-      type, a, b: the pair (type value as in the report).
+      type, a, b: the pair.
       severity: worst severity reached.
-      phase: "static" when the interval contains t = 0, else "dynamic".
+      phase: static when the interval contains t = 0, else dynamic.
       t_start, t_end: first and last checked time below the clearance, s.
       t_worst: time of the smallest distance, s.
       min_distance: smallest signed distance (units of the records).
@@ -100,11 +115,11 @@ class Event:
       s: arc length along cable a at the worst point.
     """
 
-    type: str
+    type: PairType
     a: str
     b: str
-    severity: str
-    phase: str
+    severity: Severity
+    phase: Phase
     t_start: float
     t_end: float
     t_worst: float
@@ -117,7 +132,7 @@ class Event:
 class PairWorst:
     """A pair's worst moment over the whole run."""
 
-    type: str
+    type: PairType
     a: str
     b: str
     min_distance: float
@@ -138,7 +153,7 @@ class _Open:
     t_last: float
     worst: Interference
     t_worst: float
-    hard: bool = False
+    severity: Severity
 
 
 @dataclass
@@ -159,7 +174,7 @@ class EventTracker:
 
     @staticmethod
     def key(record: Interference) -> PairKey:
-        return (PairType(record.type).value, record.a, record.b)
+        return (PairType(record.type), record.a, record.b)
 
     def update(self, t: float, records: Iterable[Interference]) -> tuple[list[PairKey], list[Event]]:
         """Take the records of the step at time t; return (pairs that started
@@ -177,14 +192,15 @@ class EventTracker:
                                                        np.asarray(r.where), rule.reason)
                     continue
             seen.add(k)
-            hard = Severity(r.severity) == Severity.HARD
+            severity = Severity(r.severity)
             ev = self._open.get(k)
             if ev is None:
-                ev = self._open[k] = _Open(t, t, r, t, hard)
+                ev = self._open[k] = _Open(t, t, r, t, severity)
                 started.append(k)
             else:
                 ev.t_last = t
-                ev.hard |= hard
+                if severity is Severity.HARD:
+                    ev.severity = severity
                 if r.min_distance < ev.worst.min_distance:
                     ev.worst, ev.t_worst = r, t
             best = self.pairs.get(k)
@@ -194,14 +210,20 @@ class EventTracker:
                   if k not in seen and t - ev.t_last >= self.hold - 1e-12]
         return started, closed
 
-    def _close(self, k: PairKey) -> Event:
-        ev = self._open.pop(k)
+    @staticmethod
+    def _event(k: PairKey, ev: _Open) -> Event:
         w = ev.worst
-        event = Event(k[0], w.a, w.b, Severity.HARD.value if ev.hard else Severity.SOFT.value,
-                      "static" if ev.t_start <= 0.0 else "dynamic", ev.t_start, ev.t_last,
-                      ev.t_worst, float(w.min_distance), np.asarray(w.where), float(w.s))
+        return Event(k[0], w.a, w.b, ev.severity, phase_of(ev.t_start), ev.t_start, ev.t_last,
+                     ev.t_worst, float(w.min_distance), np.asarray(w.where), float(w.s))
+
+    def _close(self, k: PairKey) -> Event:
+        event = self._event(k, self._open.pop(k))
         self.events.append(event)
         return event
+
+    def standing(self, k: PairKey) -> Event:
+        """The open event of pair `k` as it stands (its worst and severity so far)."""
+        return self._event(k, self._open[k])
 
     def finish(self) -> list[Event]:
         """Close every open event (end of run); return all events by start time."""

@@ -29,7 +29,7 @@ from checker.records import PairType
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from checker.shapes import Shape, ShapeType, mesh_shape
 
-_PART_TYPES = (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value)
+_PART_TYPES = (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)
 
 
 def convex_hull_shape(shape: Shape) -> Shape:
@@ -130,7 +130,7 @@ class StateRecheck:
         kind, a, b = key
         if kind in _PART_TYPES:
             return self._part(key, hull=False)
-        names = [a] if kind == PairType.SELF.value else [a, b]
+        names = [a] if kind == PairType.SELF else [a, b]
         if any(n not in self.cables for n in names):
             return None
         found = self.owner._cables.check([self.cables[n] for n in names])
@@ -168,6 +168,6 @@ def _distance(records, key: tuple[str, str, str]) -> float | None:
     kind, a, b = key
     for r in records:
         ra, rb = (r.a, r.b) if not (r.type == PairType.CABLE_CABLE and r.a > r.b) else (r.b, r.a)
-        if PairType(r.type).value == kind and ra == a and rb == b:
+        if PairType(r.type) == kind and ra == a and rb == b:
             return float(r.min_distance)
     return None

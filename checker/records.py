@@ -3,7 +3,10 @@
 One :class:`Interference` per (type, a, b) pair that came below the clearance,
 with the SPEC's signed distance (negative means overlap), its severity and the
 worst place along cable ``a``. The enums name the pair types and severities
-used throughout the report.
+used throughout the report (string enums: their text is the report's), and
+:func:`severity_of` is the one place a distance is classed hard, soft or
+clear against the clearance: records, events and the comparison with the
+simulator all take their severity from it.
 
 Deliberately not here: events over time, MuJoCo comparison, JSON writing;
 those consume these records.
@@ -12,12 +15,12 @@ those consume these records.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import Enum
+from enum import StrEnum
 
 import numpy as np
 
 
-class PairType(str, Enum):
+class PairType(StrEnum):
     """What kind of pair interferes; the values are the report's ``type``."""
 
     SELF = "self"
@@ -29,15 +32,18 @@ class PairType(str, Enum):
     TAUT = "taut"
 
 
-class Severity(str, Enum):
+class Severity(StrEnum):
     """``hard``: min_distance < 0; ``soft``: 0 <= min_distance < clearance."""
 
     HARD = "hard"
     SOFT = "soft"
 
 
-def severity_of(min_distance: float, clearance: float) -> Severity | None:
-    """Severity of a signed distance against the clearance, None when clear."""
+def severity_of(min_distance: float | None, clearance: float) -> Severity | None:
+    """Severity of a signed distance against the clearance, None when clear
+    (a distance of None, a pair not seen at all, is clear)."""
+    if min_distance is None:
+        return None
     if min_distance < 0.0:
         return Severity.HARD
     if min_distance < clearance:

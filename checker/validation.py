@@ -2,7 +2,8 @@
 
 At each checked step both sides are reduced to one signed distance per pair
 (type, a, b) below the clearance, and every pair either side saw is classed
-hard (< 0), soft (< clearance) or clear by each side, exactly as events are.
+hard (< 0), soft (< clearance) or clear by each side with the records' own
+rule (`checker.records.severity_of`), so exactly as events are.
 Simulator contacts are first filtered with the checker's own rules: contacts
 of elements inside an attachment window (`Exclusion`, aligned to elements by
 the caller so both sides leave out the same piece of cable) are expected, and
@@ -35,7 +36,7 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
-from enum import Enum
+from enum import StrEnum
 from typing import Protocol
 
 import numpy as np
@@ -44,19 +45,11 @@ from checker.arrays import ranges
 from checker.cable import polyline_arc_lengths, self_pair_excluded, tile_offsets
 from checker.closest import point_segment, row_norm
 from checker.events import AllowList
-from checker.records import Interference, PairType
+from checker.records import Interference, PairType, severity_of
 from checker.scene_state import Exclusion
 
-COMPARED_TYPES = (PairType.SELF.value, PairType.CABLE_CABLE.value,
-                  PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value)
+COMPARED_TYPES = (PairType.SELF, PairType.CABLE_CABLE, PairType.CABLE_STRUCTURE, PairType.KEEPOUT)
 """Pair types both sides report (bend and taut are the checker's alone)."""
-
-
-def classify(distance: float | None, clearance: float) -> str:
-    """"hard", "soft" or "clear" for a signed distance (None: clear)."""
-    if distance is None or distance >= clearance:
-        return "clear"
-    return "hard" if distance < 0.0 else "soft"
 
 
 @dataclass(frozen=True)
@@ -169,7 +162,7 @@ class SimulatorPairs:
         elem_a, elem_b, dist = cat("elem_a"), cat("elem_b"), cat("dist")
         pos = np.concatenate([np.asarray(c.pos, float).reshape(-1, 3) for c in contacts])
         st = np.repeat(np.arange(n_s), counts)
-        keep = (elem_a != -1) & np.logical_or.reduce([kind == k for k in COMPARED_TYPES])
+        keep = (elem_a != -1) & np.logical_or.reduce([kind == k.value for k in COMPARED_TYPES])
         if not keep.any():
             return out
         kind, a, b, elem_a, elem_b, dist, pos, st = (x[keep] for x in (kind, a, b, elem_a, elem_b, dist, pos, st))
@@ -222,7 +215,7 @@ class SimulatorPairs:
         return out
 
 
-class Reason(str, Enum):
+class Reason(StrEnum):
     """Why the two sides class a pair differently; each one checked before it
     is given (:meth:`Validation.explain`). The values are the report's.
 
@@ -267,7 +260,7 @@ class Disagreement:
       steps: compared steps in the run.
     """
 
-    type: str
+    type: PairType
     a: str
     b: str
     t_start: float
@@ -285,9 +278,41 @@ class Disagreement:
         return self.t_worst
 
 
-def _severity(dc: float | None, dm: float | None) -> float:
+def _least(dc: float | None, dm: float | None) -> float:
     """The smaller of the two distances (inf when both are clear)."""
     return min(np.inf if dc is None else dc, np.inf if dm is None else dm)
+
+
+@dataclass(frozen=True)
+class ValidationSummary:
+    """A run's comparison as it stood at the end (:meth:`Validation.summary`).
+
+    Attributes:
+      compared_steps: steps compared.
+      pair_steps: (step, pair) classifications compared; ``agree`` of them
+        matched, ``checker_only`` / ``mujoco_only`` were seen by one side
+        only, ``severity_differs`` were classed hard by one and soft by the
+        other.
+      agreement: agree / pair_steps (1.0 when none).
+      max_distance_error: largest distance difference on pairs both sides saw.
+      unexplained: (step, pair) disagreements no check explains.
+      allowed_pair_steps: (step, pair) classifications left out as allowed.
+      reasons: (step, pair) disagreements per reason, in the order first given.
+      disagreements: the disagreement intervals by start time and pair.
+    """
+
+    compared_steps: int
+    pair_steps: int
+    agree: int
+    checker_only: int
+    mujoco_only: int
+    severity_differs: int
+    agreement: float
+    max_distance_error: float
+    unexplained: int
+    allowed_pair_steps: int
+    reasons: tuple[tuple[Reason, int], ...]
+    disagreements: tuple[Disagreement, ...]
 
 
 @dataclass
@@ -331,9 +356,9 @@ class Validation:
         but the distances themselves."""
         mine = {}
         for r in records:
-            kind = PairType(r.type).value
+            kind = PairType(r.type)
             if kind in COMPARED_TYPES:
-                a, b = (r.a, r.b) if not (kind == PairType.CABLE_CABLE.value and r.a > r.b) else (r.b, r.a)
+                a, b = (r.a, r.b) if not (kind is PairType.CABLE_CABLE and r.a > r.b) else (r.b, r.a)
                 mine[(kind, a, b)] = float(r.min_distance)
         self.compared_steps += 1
         agree = 0
@@ -355,20 +380,20 @@ class Validation:
         for k in sorted(keys):
             dc = mine.get(k)
             dm = sim[k][0] if k in sim else None
-            cc, cm = classify(dc, self.clearance), classify(dm, self.clearance)
+            cc, cm = severity_of(dc, self.clearance), severity_of(dm, self.clearance)
             if dc is not None and dm is not None:
                 self.max_distance_error = max(self.max_distance_error, abs(dc - dm))
             if cc == cm:
                 agree += 1
                 continue
-            if cm == "clear":
+            if cm is None:
                 self.checker_only += 1
-            elif cc == "clear":
+            elif cc is None:
                 self.mujoco_only += 1
             else:
                 self.severity_differs += 1
             reason, value = self.explain(k, dc, dm, second)
-            self.reasons[reason.value] += 1
+            self.reasons[reason] += 1
             self.unexplained += reason is Reason.UNEXPLAINED
             self._extend(k, t, dc, dm, reason, value)
             now.add(k)
@@ -384,9 +409,9 @@ class Validation:
             self._closed.append(self._open.pop(k))
             run = None
         if run is None:
-            self._open[k] = Disagreement(k[0], k[1], k[2], t, t, t, dc, dm, reason, value, 1)
+            self._open[k] = Disagreement(PairType(k[0]), k[1], k[2], t, t, t, dc, dm, reason, value, 1)
             return
-        worse = _severity(dc, dm) < _severity(run.checker, run.mujoco)
+        worse = _least(dc, dm) < _least(run.checker, run.mujoco)
         self._open[k] = replace(run, t_end=t, steps=run.steps + 1,
                                 **({"t_worst": t, "checker": dc, "mujoco": dm, "second": value} if worse else {}))
 
@@ -403,20 +428,20 @@ class Validation:
           MuJoCo does;
         - else unexplained."""
         c = self.clearance
-        cm = classify(dm, c)
+        cm = severity_of(dm, c)
         kind, _, b = key
         if dc is not None and dm is not None and abs(dc - dm) <= 0.02 * max(c, 1e-12):
             return Reason.AT_BOUNDARY, None
         opinion = second()
         if opinion is not None:
-            if kind in (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value) and b in self.mesh_parts:
+            if kind in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) and b in self.mesh_parts:
                 for exact in (False, True):        # discrete points first: cheaper, often enough
                     d = opinion.hull(key, exact)
-                    if classify(d, c) == cm:
+                    if severity_of(d, c) == cm:
                         return Reason.CONVEX_HULL, d
             if self.method == "points":
                 d = opinion.exact(key)
-                if classify(d, c) == cm:
+                if severity_of(d, c) == cm:
                     return Reason.BETWEEN_POINTS, d
         return Reason.UNEXPLAINED, None
 
@@ -430,3 +455,13 @@ class Validation:
     def agreement(self) -> float:
         """Fraction of (step, pair) classifications that match (1.0 when none)."""
         return self.agree / self.pair_steps if self.pair_steps else 1.0
+
+    def summary(self) -> ValidationSummary:
+        """The comparison so far as a frozen record (open intervals as they stand)."""
+        return ValidationSummary(
+            compared_steps=self.compared_steps, pair_steps=self.pair_steps, agree=self.agree,
+            checker_only=self.checker_only, mujoco_only=self.mujoco_only,
+            severity_differs=self.severity_differs, agreement=self.agreement,
+            max_distance_error=self.max_distance_error, unexplained=self.unexplained,
+            allowed_pair_steps=self.allowed_pair_steps, reasons=tuple(self.reasons.items()),
+            disagreements=tuple(self.disagreements))

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from checker.records import Interference, PairType, Severity
+from checker.records import Interference, PairType, Severity, severity_of
 from checker.scene_state import Exclusion
-from checker.validation import Reason, SimContacts, Validation, classify, simulator_pairs
+from checker.validation import Reason, SimContacts, Validation, simulator_pairs
 
 # a straight cable along x, 10 elements of 0.1 m
 CABLE = np.stack([np.linspace(0.0, 1.0, 11), np.zeros(11), np.zeros(11)], axis=1)
@@ -82,7 +82,9 @@ def test_compare_counts_and_reasons():
     w.compare(0.5, rec, sim)
     assert {(d.a, d.b): d.reason for d in w.disagreements}[("c", "d")] is Reason.UNEXPLAINED
     assert w.unexplained == 1 and w.reasons == {"unexplained": 1, "at a boundary": 1}
-    assert classify(None, 0.005) == "clear" and classify(0.0, 0.005) == "soft" and classify(-1e-9, 0.005) == "hard"
+    # the comparison classes a distance as the records do: None (not seen) is clear
+    assert severity_of(None, 0.005) is None and severity_of(0.005, 0.005) is None
+    assert severity_of(0.0, 0.005) is Severity.SOFT and severity_of(-1e-9, 0.005) is Severity.HARD
 
 
 def test_many_states_at_once_is_each_state_alone():
