@@ -26,7 +26,7 @@ import statistics
 import tempfile
 from pathlib import Path
 
-from checker.report import plain
+from sim.report import plain
 from sim.run import RunOptions, run_scene
 from sim.scene import load_scene
 

@@ -7,7 +7,7 @@ written at this path?" without writing it: the path must not be a folder,
 every existing ancestor must be a folder, and the deepest existing one must
 be writable (missing folders are created when the output is written).
 
-This module does not write outputs (see `checker.report.write_report` and
+This module does not write outputs (see `sim.report.write_report` and
 `sim.record.Recorder`, which write atomically).
 """
 

@@ -6,10 +6,13 @@ a batch of consecutive steps at a time) -> events, report and recording.
 `run_scene` owns the order of those stages, their timing, and what happens
 on Ctrl-C: the loop stops after the step being simulated (its batch is
 checked first), the recording is finished and moved into place, and the
-report is written with `"complete": false`.
+report is written with `"complete": false`. The run hands on what it found
+as one frozen record (`sim.report.RunOutcome`), which `sim.report` turns
+into the report and writes.
 
-This module does not parse arguments or print (see `cli`), and holds no
-geometry of its own: distances come from `checker`.
+This module does not parse arguments or print (see `cli`), holds no
+geometry of its own (distances come from `checker`) and does not lay out
+the report.
 """
 
 from __future__ import annotations
@@ -24,17 +27,16 @@ import numpy as np
 
 from checker.arrays import ranges
 from checker.cable import TAUT_STRAIN
-from checker.events import EventTracker
+from checker.events import Event, EventTracker
 from checker.records import PairType, Severity
-from checker.report import SCHEMA, write_report
 from checker.scene_state import CheckConfig
 from checker.twist import TwistMeter
-from checker.validation import Validation
 from checker.wear import CableWear, WearMap
 from sim.build import Built, build
 from sim.jointspace import JointLog
 from sim.loop import Simulation
 from sim.record import Mark, Recorder, Settings, summary_text
+from sim.report import STAGES, AdvanceOutcome, CableOutcome, RunOutcome, Timing, report_of, write_report
 from sim.scene import Scene, check_allow_names
 from sim.stepcheck import BATCH, StepChecks
 from sim.stop import StopRequest
@@ -79,7 +81,7 @@ class _Timer:
     """Wall-clock seconds per stage."""
 
     def __init__(self):
-        self.total = {"sim": 0.0, "check": 0.0, "validate": 0.0, "record": 0.0, "wear": 0.0}
+        self.total = dict.fromkeys(STAGES, 0.0)
         self._t = time.perf_counter()
 
     def skip(self) -> None:
@@ -94,7 +96,8 @@ class _Timer:
 
 def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = None,
               stop: StopRequest | None = None, warn: Callable[[str], None] | None = None) -> dict:
-    """Run `scene`; write the report (and recording); return the report dict.
+    """Run `scene`; write the report (and recording); return the report dict
+    (`sim.report.report_of` of the run's outcome).
 
     SIGINT (Ctrl-C) and SIGTERM at any moment stop the run cleanly: what was
     simulated is checked, the recording is finished and the report is written
@@ -147,7 +150,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     timer.skip()          # opening the recording is no step's cost (it was never timed)
     tracker = EventTracker(hold=3 * every * scene.timestep, allow=checks.allow)
     joints = JointLog(built, sim.motion)
-    out = _Outcome(built, tracker, recorder, timer, progress, record_stride, sim.total_steps, joints, wear,
+    out = _Checked(built, tracker, recorder, timer, progress, record_stride, sim.total_steps, joints, wear,
                    checks.exclusions)
     complete = False
     batch: list = []
@@ -168,37 +171,36 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         complete = False    # a second Ctrl-C: the batch being checked is left out
     finally:
         closed = {id(ev) for ev in tracker.events}
-        events = tracker.finish()
+        events = tuple(tracker.finish())
         worn = wear.result()
+        # where the mjcf model's joints move: their values per event
+        event_joints = (tuple(joints.event_fields(e.t_start, e.t_end, e.t_worst, e.a, e.b) for e in events)
+                        if joints else None)
         if recorder:
             timer.lap("check")
             for ev in events:  # each event still open at the end gets its one end entry
                 if id(ev) not in closed:
                     _log_end(recorder, ev, scene.scale, scene.units, at_end=True)
-            joint_values = ([joints.event_fields(e.t_start, e.t_end, e.t_worst, e.a, e.b)["joints"] for e in events]
-                            if joints else None)
-            recorder.finish(events, worn, summary_text(scene.name, settings, events, worn, scene.scale, complete),
-                            joint_values)
+            recorder.finish(list(events), worn,
+                            summary_text(scene.name, settings, events, worn, scene.scale, complete),
+                            None if event_joints is None else [f["joints"] for f in event_joints])
             recorder.close()
             timer.lap("record")
-    total = time.perf_counter() - start
-    report = _report(scene, built, config, complete, out.steps, out.checked, out.t_last,
-                     (out.max_strain, out.max_stretch),
-                     out.min_bend, out.rest_points, out.final_points, timer, total, sim, events, tracker,
-                     checks.validation, options, worn, settings)
-    if joints:   # where the mjcf model's joints move: their values per event
-        report["joint_units"] = dict(zip(joints.names, joints.units))
-        for row, e in zip(report["events"], events):
-            row.update(joints.event_fields(e.t_start, e.t_end, e.t_worst, e.a, e.b))
-    _report_twist(report, built, out.twist)
     advance = checks.advance
-    report["settings"]["advance"] = None if advance is None else {
-        "horizon": checks.horizon / scene.scale, "stretch": checks.stretch / scene.scale,
-        "full_checks": advance.full, "proven_clear_steps": advance.skipped}
-    report["part_warnings"] = list(checks.rigid.warnings)
-    report["interrupted"] = stop.signal_name
-    report["physics_warnings"] = list(built.warnings)
-    report["settings"]["substeps"] = built.substeps.count if built.substeps else 1
+    outcome = RunOutcome(
+        scene=scene, config=config, scene_file=settings.scene_file, version=settings.version,
+        mujoco=mujoco.__version__, complete=complete, interrupted=stop.signal_name,
+        steps=out.steps, checked=out.checked, t_end=out.t_last, cables=out.cables(worn),
+        events=events, event_joints=event_joints,
+        joint_units=dict(zip(joints.names, joints.units)) if joints else None,
+        pairs=tuple(tracker.pairs.values()), allowed=tuple(tracker.allowed.values()), event_hold=tracker.hold,
+        validation=checks.validation.summary() if scene.check.validate else None,
+        advance=None if advance is None else AdvanceOutcome(checks.horizon, checks.stretch, advance.full,
+                                                            advance.skipped),
+        warnings=sim.warnings(), part_warnings=tuple(checks.rigid.warnings),
+        physics_warnings=tuple(built.warnings), substeps=built.substeps.count if built.substeps else 1,
+        timing=Timing(time.perf_counter() - start, dict(timer.total)), recording=options.record)
+    report = report_of(outcome)
     write_report(report, options.report)
     return report
 
@@ -208,10 +210,10 @@ def _clamped(anchor) -> bool:
     return getattr(anchor, "hold", "clamp") == "clamp"
 
 
-class _Outcome:
+class _Checked:
     """What the run keeps of its checked steps, taken in order: events,
-    strain and bend extremes, first and last cable shapes, the recording
-    and progress."""
+    strain and bend extremes, first and last cable shapes, twist, the
+    recording and progress."""
 
     def __init__(self, built: Built, tracker: EventTracker, recorder: Recorder | None, timer: _Timer,
                  progress: Progress | None, record_stride: int, total_steps: int, joints: JointLog,
@@ -290,6 +292,36 @@ class _Outcome:
             if self.progress:
                 self.progress("run", state.step, self.total_steps)
 
+    def cables(self, wear: list[CableWear]) -> tuple[CableOutcome, ...]:
+        """Each cable over the checked steps, with its wear map."""
+        checked = self.checked > 0
+        out = []
+        for i, (c, defn) in enumerate(zip(self.built.cables, self.built.scene.cables)):
+            limit = c.min_bend_radius
+            meter = self.twist[i]
+            out.append(CableOutcome(
+                name=c.name, length=c.length, radius=c.radius,
+                segments=c.count - 1,   # every element, a clamp's short held edge included
+                max_strain=self.max_strain[i] if checked else None,
+                taut=bool(checked and self.max_stretch[i] > TAUT_STRAIN),
+                min_bend_radius=self.min_bend[i] if checked else None,
+                bend_violation=bool(limit is not None and checked and self.min_bend[i] < limit),
+                rest_points=np.asarray(self.rest_points[i]) if self.rest_points else None,
+                final_points=np.asarray(self.final_points[i]) if self.final_points else None,
+                wear=wear[i],
+                max_twist=None if meter is None else float(meter.max_abs),
+                max_twist_moment=None if meter is None else _twist_moment(defn, c.radius, c.length, meter.max_abs)))
+        return tuple(out)
+
+
+def _twist_moment(defn, radius: float, length: float, twist: float) -> float:
+    """N m: G J twist / L, the torsional moment a straight cable of that
+    twist (radians over the cable) carries, G the scene's `twist_stiffness`
+    or E / 2 (docs/twist.md)."""
+    shear = defn.twist_stiffness if defn.twist_stiffness is not None else defn.young / 2.0
+    polar = np.pi * radius ** 4 / 2.0
+    return float(shear * polar * twist / length)
+
 
 def _record_step(recorder: Recorder, state, res, started, closed, tracker: EventTracker,
                  near: "_NearPairs", pending, unit: float, units: str) -> None:
@@ -304,15 +336,14 @@ def _record_step(recorder: Recorder, state, res, started, closed, tracker: Event
     if res.agreement is not None:
         recorder.log_scalar("validation/agreement", res.agreement, label="agreement with MuJoCo")
     for key in started:
-        worst = tracker.pairs[key]
-        sev = Severity.HARD if worst.min_distance < 0.0 else Severity.SOFT   # below the clearance
-        recorder.log_event(state.t, f"{key[0]} {_pair(key[1], key[2])} starts: distance "
-                           f"{worst.min_distance / unit:.4g} {units}", _LEVEL[sev.value])
+        ev = tracker.standing(key)
+        recorder.log_event(state.t, f"{ev.type} {_pair(ev.a, ev.b)} starts: distance "
+                           f"{ev.min_distance / unit:.4g} {units}", _LEVEL[ev.severity])
     for ev in closed:
         _log_end(recorder, ev, unit, units, at_end=False)
 
 
-_LEVEL = {"hard": "ERROR", "soft": "WARN"}
+_LEVEL = {Severity.HARD: "ERROR", Severity.SOFT: "WARN"}
 """Text log level of an event's entries by severity."""
 
 
@@ -320,7 +351,7 @@ def _pair(a: str, b: str) -> str:
     return a if a == b else f"{a} / {b}"
 
 
-def _log_end(recorder: Recorder, ev, unit: float, units: str, at_end: bool) -> None:
+def _log_end(recorder: Recorder, ev: Event, unit: float, units: str, at_end: bool) -> None:
     how = "still present at the end of the run" if at_end else "ends"
     recorder.log_event(ev.t_end, f"{ev.type} {_pair(ev.a, ev.b)} {how}: {ev.severity} {ev.phase}, "
                        f"{ev.t_start:.3f}-{ev.t_end:.3f} s, worst {ev.min_distance / unit:.4g} {units} "
@@ -396,136 +427,3 @@ def _settings(scene: Scene) -> Settings:
     from sim.cli import version   # the product version (the command line owns it)
 
     return Settings(scene.units, scene.check.clearance, str(scene.path), version())
-
-
-def _wear_row(w: CableWear, u: float) -> dict:
-    worn = w.most_worn()
-    return {
-        "s": w.s / u, "contact_time": w.contact_time, "sliding": w.sliding / u, "bend_cycles": w.bend_cycles,
-        "most_worn": None if worn is None else {
-            "s": w.s[worn] / u, "touches": w.touches[worn], "contact_time": w.contact_time[worn],
-            "sliding": w.sliding[worn] / u},
-    }
-
-
-def _report_twist(report: dict, built: Built, meters: list) -> None:
-    """Each cable's `max_twist` (degrees over the cable, largest absolute
-    value over the run) and `max_twist_moment` (N m: G J twist / L, the
-    torsional moment a straight cable of that twist carries), None for a
-    cable not clamped at both ends (docs/twist.md)."""
-    for row, cable, defn, meter in zip(report["cables"], built.cables, built.scene.cables, meters):
-        if meter is None:
-            row["max_twist"] = row["max_twist_moment"] = None
-            continue
-        shear = defn.twist_stiffness if defn.twist_stiffness is not None else defn.young / 2.0
-        polar = np.pi * cable.radius ** 4 / 2.0
-        row["max_twist"] = float(np.degrees(meter.max_abs))
-        row["max_twist_moment"] = float(shear * polar * meter.max_abs / cable.length)
-
-
-def _report(scene: Scene, built: Built, config: CheckConfig, complete: bool, steps: int,
-            checked: int, t_last: float, max_strain: tuple, min_bend, rest_points, final_points,
-            timer: _Timer, total: float, sim: Simulation, events, tracker: EventTracker,
-            validation: Validation, options: RunOptions, wear: list[CableWear], settings: Settings) -> dict:
-    u = scene.scale
-    strain, stretch = max_strain  # signed largest |strain|; largest stretch
-    radii = [c.radius for c in built.cables]
-    cables = []
-    for i, c in enumerate(built.cables):
-        limit = c.min_bend_radius
-        cables.append({
-            "name": c.name,
-            "length": c.length / u,
-            "segments": c.count - 1,   # every element, a clamp's short held edge included
-            "max_strain": strain[i] if checked else None,
-            "taut": bool(checked and stretch[i] > TAUT_STRAIN),
-            "min_bend_radius": min_bend[i] / u if checked else None,
-            "bend_violation": bool(limit is not None and checked and min_bend[i] < limit),
-            "rest_points": (np.asarray(rest_points[i]) / u) if rest_points else [],
-            "final_points": (np.asarray(final_points[i]) / u) if final_points else [],
-            "wear": _wear_row(wear[i], u),
-        })
-    check_steps = max(checked, 1)
-    event_rows = [{
-        "type": e.type, "a": e.a, "b": e.b, "severity": e.severity, "phase": e.phase,
-        "t_start": e.t_start, "t_end": e.t_end, "t_worst": e.t_worst,
-        "min_distance": e.min_distance / u, "where": np.asarray(e.where) / u, "s": e.s / u,
-    } for e in events]
-    pair_rows = [{"type": p.type, "a": p.a, "b": p.b, "min_distance": p.min_distance / u, "t": p.t}
-                 for p in sorted(tracker.pairs.values(), key=lambda p: (p.min_distance, p.type, p.a, p.b))]
-    summary = {
-        "hard": sum(e.severity == "hard" for e in events),
-        "soft": sum(e.severity == "soft" for e in events),
-        "static": sum(e.phase == "static" for e in events),
-        "dynamic": sum(e.phase == "dynamic" for e in events),
-    }
-    report = {
-        "schema": SCHEMA,
-        "scene": scene.name,
-        "units": scene.units,
-        "complete": complete,
-        "mujoco": mujoco.__version__,
-        "settings": {
-            "method": config.method,
-            # discrete-point spacing in scene units for the thinnest cable
-            "spacing": (config.spacing * min(radii) / u) if radii else None,
-            "spacing_radii": config.spacing,
-            "clearance": scene.check.clearance / u,
-            "attach_zone_radii": scene.check.attach_zone,
-            "event_hold_s": tracker.hold,
-            "timestep": scene.timestep,
-            "settle": scene.settle,
-            "duration": scene.duration,
-            "dynamics": scene.effects.dynamics,
-            "gravity": scene.effects.gravity,
-            "contact": sorted(scene.effects.contact),
-            "steps": steps,
-            "checked_steps": checked,
-            "t_end": t_last,
-            "units": settings.units,
-            "scene_file": settings.scene_file,
-            "version": settings.version,
-        },
-        "summary": summary,
-        "events": event_rows,
-        "pairs": pair_rows,
-        "allowed": [{"type": p.type, "a": p.a, "b": p.b, "min_distance": p.min_distance / u, "t": p.t,
-                     "reason": p.reason}
-                    for p in sorted(tracker.allowed.values(), key=lambda p: (p.min_distance, p.type, p.a, p.b))],
-    }
-    if scene.check.validate:
-        v = validation
-        report["validation"] = {
-            "compared_steps": v.compared_steps, "pair_steps": v.pair_steps, "agree": v.agree,
-            "checker_only": v.checker_only, "mujoco_only": v.mujoco_only,
-            "severity_differs": v.severity_differs, "agreement": v.agreement,
-            "max_distance_error": v.max_distance_error / u,
-            "unexplained": v.unexplained, "allowed_pair_steps": v.allowed_pair_steps,
-            "reasons": dict(v.reasons),
-            "disagreements": [{"type": d.type, "a": d.a, "b": d.b, "t": d.t_worst, "t_start": d.t_start,
-                               "t_end": d.t_end, "t_worst": d.t_worst, "steps": d.steps,
-                               "checker": None if d.checker is None else d.checker / u,
-                               "mujoco": None if d.mujoco is None else d.mujoco / u,
-                               "reason": d.reason.value,
-                               "second": None if d.second is None else d.second / u}
-                              for d in v.disagreements],
-        }
-    report.update({
-        "cables": cables,
-        "warnings": sim.warnings(),
-        "timing": {
-            "total_s": total,
-            "sim_s": timer.total["sim"],
-            "check_s": timer.total["check"],
-            "validate_s": timer.total["validate"],
-            "record_s": timer.total["record"],
-            "wear_s": timer.total["wear"],
-            "check_ms_per_step": 1e3 * timer.total["check"] / check_steps,
-            "validate_ms_per_step": 1e3 * timer.total["validate"] / check_steps,
-            "record_ms_per_step": 1e3 * timer.total["record"] / check_steps,
-            "wear_ms_per_step": 1e3 * timer.total["wear"] / check_steps,
-            "sim_ms_per_step": 1e3 * timer.total["sim"] / max(steps, 1),
-        },
-        "recording": str(options.record) if options.record else None,
-    })
-    return report

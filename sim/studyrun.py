@@ -193,7 +193,7 @@ def _collect(future, task: VariantTask, values: tuple, folder: Path) -> Row:
     except Exception as e:   # its own error, its worker's death (KilledWorker), or cancelled
         return Row(id=task.id, values=values, status=Status.FAILED,
                    error=f"{type(e).__name__}: {e}".strip())
-    from checker.report import write_report
+    from sim.report import write_report
 
     folder.mkdir(parents=True, exist_ok=True)
     report = json.loads(output.report)

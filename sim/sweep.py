@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from checker.partset import PartSet
-from checker.report import write_report
+from sim.report import write_report
 from checker.shapes import Shape, ShapeType, mesh_shape
 from checker.sweep import sweep
 from sim.build import Built, build

@@ -1,0 +1,344 @@
+"""The JSON report of a run: its outcome record, the report dict, an atomic write.
+
+A run hands on everything its report says as one frozen record,
+:class:`RunOutcome` (in metres, seconds and radians, as measured), and
+:func:`report_of` turns that record into the report dict (schema
+``cablecheck.report/1``, lengths in scene units, the SPEC's keys in their
+order): the same record always gives the same dict. :func:`write_report`
+writes a report dict (the run's, or the sweep's and the study's) as JSON to
+a temporary file in the target folder, flushes and fsyncs it, then renames
+it over the target, so a reader never sees a half-written report and an
+earlier report is replaced only by a complete one. Numbers become plain
+floats rounded to 1e-12, and non-finite values become null: JSON has no NaN.
+
+This module does not run, measure or decide anything: what is hard, taut or
+bent too far is in the record already. It does not import MuJoCo.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from checker.events import Phase
+from checker.records import Severity
+
+if TYPE_CHECKING:
+    from checker.events import AllowedWorst, Event, PairWorst
+    from checker.scene_state import CheckConfig
+    from checker.validation import ValidationSummary
+    from checker.wear import CableWear
+    from sim.scene import Scene
+
+SCHEMA = "cablecheck.report/1"
+
+STAGES = ("sim", "check", "validate", "record", "wear")
+"""The timed stages of a run, in the report's order."""
+
+
+@dataclass(frozen=True)
+class CableOutcome:
+    """One cable over the run (metres; None where no step was checked).
+
+    Attributes:
+      name: the cable.
+      length: rest length.
+      radius: the cable's radius.
+      segments: elements, a clamp's short held edge included.
+      max_strain: the largest absolute strain, signed (compression negative).
+      taut: stretched past `checker.cable.TAUT_STRAIN` at some checked step.
+      min_bend_radius: the least bend radius.
+      bend_violation: the bend radius went below the cable's limit.
+      rest_points, final_points: (n, 3) body centres at the first and last
+        checked step, or None.
+      wear: the cable's wear map.
+      max_twist: largest absolute twist over the cable, radians; None for a
+        cable not clamped at both ends (twist is not defined).
+      max_twist_moment: the torsional moment of that twist, N m, or None.
+    """
+
+    name: str
+    length: float
+    radius: float
+    segments: int
+    max_strain: float | None
+    taut: bool
+    min_bend_radius: float | None
+    bend_violation: bool
+    rest_points: np.ndarray | None
+    final_points: np.ndarray | None
+    wear: CableWear
+    max_twist: float | None
+    max_twist_moment: float | None
+
+
+@dataclass(frozen=True)
+class AdvanceOutcome:
+    """How the skip rule (`checker.advance`) spared full checks.
+
+    Attributes:
+      horizon, stretch: the rule's distances, metres.
+      full_checks: steps checked in full.
+      proven_clear_steps: steps proven clear without a full check.
+    """
+
+    horizon: float
+    stretch: float
+    full_checks: int
+    proven_clear_steps: int
+
+
+@dataclass(frozen=True)
+class Timing:
+    """Wall-clock seconds: the whole run and each of `STAGES`."""
+
+    total: float
+    stages: dict[str, float]
+
+
+@dataclass(frozen=True)
+class RunOutcome:
+    """Everything one run's report says, as the run found it.
+
+    Attributes:
+      scene: the scene run (name, units, settings, effects).
+      config: the check settings used (method, spacing in radii, clearance).
+      scene_file, version: the scene file's path and the product version.
+      mujoco: MuJoCo's version.
+      complete: the run reached its end; `interrupted` names the signal
+        that stopped it, or None.
+      steps, checked, t_end: the last step simulated, the steps checked and
+        the time of the last checked step.
+      cables: per cable, in scene order.
+      events: the events by start time; `event_joints`: per event, the
+        joint fields (`sim.jointspace.JointLog.event_fields`) where the
+        scene moves joints of an mjcf model, else None; `joint_units` then
+        maps each moving joint to its unit.
+      pairs, allowed: every pair that came below the clearance / allowed
+        pair, with its worst moment.
+      event_hold: seconds a pair must stay clear before its event closes.
+      validation: the comparison with MuJoCo's contacts, or None when the
+        scene does not validate.
+      advance: the skip rule's counts, or None when every step was checked
+        in full.
+      warnings: MuJoCo's warnings by name and count.
+      part_warnings, physics_warnings: what the part checks and the model
+        builder warned about.
+      substeps: simulation substeps per timestep.
+      timing: wall-clock seconds.
+      recording: the recording's path, or None.
+    """
+
+    scene: Scene
+    config: CheckConfig
+    scene_file: str
+    version: str
+    mujoco: str
+    complete: bool
+    interrupted: str | None
+    steps: int
+    checked: int
+    t_end: float
+    cables: tuple[CableOutcome, ...]
+    events: tuple[Event, ...]
+    event_joints: tuple[dict, ...] | None
+    joint_units: dict[str, str] | None
+    pairs: tuple[PairWorst, ...]
+    allowed: tuple[AllowedWorst, ...]
+    event_hold: float
+    validation: ValidationSummary | None
+    advance: AdvanceOutcome | None
+    warnings: dict[str, int]
+    part_warnings: tuple[str, ...]
+    physics_warnings: tuple[str, ...]
+    substeps: int
+    timing: Timing
+    recording: Path | None
+
+
+def _worst_first(rows):
+    return sorted(rows, key=lambda p: (p.min_distance, p.type, p.a, p.b))
+
+
+def _scaled(x, u: float):
+    return None if x is None else x / u
+
+
+def _wear_row(w: CableWear, u: float) -> dict:
+    worn = w.most_worn()
+    return {
+        "s": w.s / u, "contact_time": w.contact_time, "sliding": w.sliding / u, "bend_cycles": w.bend_cycles,
+        "most_worn": None if worn is None else {
+            "s": w.s[worn] / u, "touches": w.touches[worn], "contact_time": w.contact_time[worn],
+            "sliding": w.sliding[worn] / u},
+    }
+
+
+def _cable_row(c: CableOutcome, u: float) -> dict:
+    return {
+        "name": c.name,
+        "length": c.length / u,
+        "segments": c.segments,
+        "max_strain": c.max_strain,
+        "taut": c.taut,
+        "min_bend_radius": _scaled(c.min_bend_radius, u),
+        "bend_violation": c.bend_violation,
+        "rest_points": [] if c.rest_points is None else np.asarray(c.rest_points) / u,
+        "final_points": [] if c.final_points is None else np.asarray(c.final_points) / u,
+        "wear": _wear_row(c.wear, u),
+        "max_twist": None if c.max_twist is None else float(np.degrees(c.max_twist)),
+        "max_twist_moment": c.max_twist_moment,
+    }
+
+
+def _validation(v: ValidationSummary, u: float) -> dict:
+    return {
+        "compared_steps": v.compared_steps, "pair_steps": v.pair_steps, "agree": v.agree,
+        "checker_only": v.checker_only, "mujoco_only": v.mujoco_only,
+        "severity_differs": v.severity_differs, "agreement": v.agreement,
+        "max_distance_error": v.max_distance_error / u,
+        "unexplained": v.unexplained, "allowed_pair_steps": v.allowed_pair_steps,
+        "reasons": dict(v.reasons),
+        "disagreements": [{"type": d.type, "a": d.a, "b": d.b, "t": d.t_worst, "t_start": d.t_start,
+                           "t_end": d.t_end, "t_worst": d.t_worst, "steps": d.steps,
+                           "checker": _scaled(d.checker, u), "mujoco": _scaled(d.mujoco, u),
+                           "reason": d.reason, "second": _scaled(d.second, u)}
+                          for d in v.disagreements],
+    }
+
+
+def _timing(t: Timing, steps: int, checked: int) -> dict:
+    per_check = max(checked, 1)
+    out = {"total_s": t.total}
+    out.update({f"{k}_s": t.stages[k] for k in STAGES})
+    out.update({f"{k}_ms_per_step": 1e3 * t.stages[k] / per_check for k in ("check", "validate", "record", "wear")})
+    out["sim_ms_per_step"] = 1e3 * t.stages["sim"] / max(steps, 1)
+    return out
+
+
+def report_of(o: RunOutcome) -> dict:
+    """The report dict of a run's outcome (lengths in scene units; numpy
+    values and enums as they are: :func:`write_report` makes them plain)."""
+    scene = o.scene
+    u = scene.scale
+    radii = [c.radius for c in o.cables]
+    events = []
+    for k, e in enumerate(o.events):
+        row = {"type": e.type, "a": e.a, "b": e.b, "severity": e.severity, "phase": e.phase,
+               "t_start": e.t_start, "t_end": e.t_end, "t_worst": e.t_worst,
+               "min_distance": e.min_distance / u, "where": np.asarray(e.where) / u, "s": e.s / u}
+        if o.event_joints is not None:
+            row.update(o.event_joints[k])
+        events.append(row)
+    report = {
+        "schema": SCHEMA,
+        "scene": scene.name,
+        "units": scene.units,
+        "complete": o.complete,
+        "mujoco": o.mujoco,
+        "settings": {
+            "method": o.config.method,
+            # discrete-point spacing in scene units for the thinnest cable
+            "spacing": (o.config.spacing * min(radii) / u) if radii else None,
+            "spacing_radii": o.config.spacing,
+            "clearance": scene.check.clearance / u,
+            "attach_zone_radii": scene.check.attach_zone,
+            "event_hold_s": o.event_hold,
+            "timestep": scene.timestep,
+            "settle": scene.settle,
+            "duration": scene.duration,
+            "dynamics": scene.effects.dynamics,
+            "gravity": scene.effects.gravity,
+            "contact": sorted(scene.effects.contact),
+            "steps": o.steps,
+            "checked_steps": o.checked,
+            "t_end": o.t_end,
+            "units": scene.units,
+            "scene_file": o.scene_file,
+            "version": o.version,
+            "advance": None if o.advance is None else {
+                "horizon": o.advance.horizon / u, "stretch": o.advance.stretch / u,
+                "full_checks": o.advance.full_checks, "proven_clear_steps": o.advance.proven_clear_steps},
+            "substeps": o.substeps,
+        },
+        "summary": {
+            "hard": sum(e.severity is Severity.HARD for e in o.events),
+            "soft": sum(e.severity is Severity.SOFT for e in o.events),
+            "static": sum(e.phase is Phase.STATIC for e in o.events),
+            "dynamic": sum(e.phase is Phase.DYNAMIC for e in o.events),
+        },
+        "events": events,
+        "pairs": [{"type": p.type, "a": p.a, "b": p.b, "min_distance": p.min_distance / u, "t": p.t}
+                  for p in _worst_first(o.pairs)],
+        "allowed": [{"type": p.type, "a": p.a, "b": p.b, "min_distance": p.min_distance / u, "t": p.t,
+                     "reason": p.reason} for p in _worst_first(o.allowed)],
+    }
+    if o.validation is not None:
+        report["validation"] = _validation(o.validation, u)
+    report.update({
+        "cables": [_cable_row(c, u) for c in o.cables],
+        "warnings": dict(o.warnings),
+        "timing": _timing(o.timing, o.steps, o.checked),
+        "recording": str(o.recording) if o.recording else None,
+    })
+    if o.joint_units is not None:
+        report["joint_units"] = dict(o.joint_units)
+    report.update({
+        "part_warnings": list(o.part_warnings),
+        "interrupted": o.interrupted,
+        "physics_warnings": list(o.physics_warnings),
+    })
+    return report
+
+
+def plain(value: Any) -> Any:
+    """`value` with numpy scalars/arrays, tuples, paths and enums made JSON-ready."""
+    if isinstance(value, dict):
+        return {str(k): plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return plain(value.tolist())
+    if isinstance(value, (np.bool_, bool)):
+        return bool(value)
+    if isinstance(value, (np.integer, int)):
+        return int(value)
+    if isinstance(value, (np.floating, float)):
+        f = float(value)
+        return round(f, 12) if math.isfinite(f) else None
+    if isinstance(value, Path):
+        return str(value)
+    if hasattr(value, "value") and isinstance(getattr(value, "value"), str):  # str enums
+        return value.value
+    return value
+
+
+def write_report(report: dict, path: Path) -> None:
+    """Write `report` as JSON to `path` atomically (no temporary file is left)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    text = json.dumps(plain(report), indent=1, allow_nan=False)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+            f.write("\n")
+            f.flush()
+            os.fsync(f.fileno())
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it private; a report is not
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
