@@ -107,6 +107,24 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     `warn` is given each physics warning (`sim.build.Built.warnings`: a part
     too fast for the timestep, ...) before the simulation starts."""
     start = time.perf_counter()
+
+    def reported(stop: StopRequest) -> dict:
+        report = report_of(_run(scene, options, progress, stop, start, warn))
+        write_report(report, options.report)   # still under the stop request: a first signal waits
+        return report
+
+    if stop is not None:
+        return reported(stop)
+    with StopRequest() as stop:
+        return reported(stop)
+
+
+def run_outcome(scene: Scene, options: RunOptions, progress: Progress | None = None,
+                stop: StopRequest | None = None, warn: Callable[[str], None] | None = None) -> RunOutcome:
+    """`run_scene` without the report: run `scene`, write its recording (when
+    `options.record`) and return the run's outcome record (`options.report`
+    is not written)."""
+    start = time.perf_counter()
     if stop is not None:
         return _run(scene, options, progress, stop, start, warn)
     with StopRequest() as stop:
@@ -114,7 +132,7 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
 
 
 def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: StopRequest,
-         start: float, warn: Callable[[str], None] | None) -> dict:
+         start: float, warn: Callable[[str], None] | None) -> RunOutcome:
     validate = scene.check.validate
     built = build(scene, detect=validate)
     check_allow_names(scene, [p.name for p in built.parts] + [c.name for c in built.cables])
@@ -187,7 +205,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
             recorder.close()
             timer.lap("record")
     advance = checks.advance
-    outcome = RunOutcome(
+    return RunOutcome(
         scene=scene, config=config, scene_file=settings.scene_file, version=settings.version,
         mujoco=mujoco.__version__, complete=complete, interrupted=stop.signal_name,
         steps=out.steps, checked=out.checked, t_end=out.t_last, cables=out.cables(worn),
@@ -200,9 +218,6 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         warnings=sim.warnings(), part_warnings=tuple(checks.rigid.warnings),
         physics_warnings=tuple(built.warnings), substeps=built.substeps.count if built.substeps else 1,
         timing=Timing(time.perf_counter() - start, dict(timer.total)), recording=options.record)
-    report = report_of(outcome)
-    write_report(report, options.report)
-    return report
 
 
 def _clamped(anchor) -> bool:

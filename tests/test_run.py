@@ -1,0 +1,172 @@
+"""One run end to end (sim.run): the report of small scenes with analytic
+answers, complete and interrupted runs, the outputs left behind, and the
+outcome record behind the report."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from sim.report import plain, report_of
+from sim.run import RunOptions, run_outcome, run_scene
+from sim.scene import load_scene
+from sim.stop import StopRequest
+
+# A block on a body moving straight down at SPEED onto a straight cable
+# routed along x (no dynamics: the cable stays as routed). The block's bottom
+# face starts at BOTTOM and spans x in [0.05, 0.15]; the cable's surface is
+# at height + radius, so the surface distance is
+#   d(t) = BOTTOM - SPEED t - (height + radius)
+# while the bottom face is the block's nearest (a centreline below 0.02 m:
+# the block is 0.02 m thick and ends 0.03 m lower).
+PRESS = """
+[scene]
+name = "press"
+units = "m"
+duration = 0.2
+settle = 0.0
+
+[effects]
+dynamics = false
+contact = []
+
+[check]
+method = "{method}"
+clearance = 0.005
+
+[[bodies]]
+name = "press"
+
+[[parts]]
+name = "press/block"
+body = "press"
+shape = "box"
+size = [0.05, 0.05, 0.01]
+pos = [0.1, 0, 0.05]
+
+[[cables]]
+name = "lead"
+radius = {radius}
+start = {{ pos = [0, 0, {height}] }}
+end = {{ pos = [0.2, 0, {height}] }}
+length = 0.2
+segments = 20
+
+[[motion]]
+body = "press"
+interpolation = "linear"
+keys = [ {{ t = 0.0, pos = [0, 0, 0] }}, {{ t = 0.2, pos = [0, 0, -0.03] }} ]
+"""
+BOTTOM, SPEED, CLEARANCE, DT, STEPS = 0.04, 0.15, 0.005, 0.002, 100
+
+
+def _press(tmp_path: Path, method: str = "points", height: float = 0.02, radius: float = 0.002):
+    path = tmp_path / f"press-{method}.toml"
+    path.write_text(PRESS.format(method=method, height=height, radius=radius))
+    return load_scene(path)
+
+
+def _text(report: dict) -> str:
+    return json.dumps(plain({k: v for k, v in report.items() if k != "timing"}), indent=1)
+
+
+def _first_step_below(value: float) -> float:
+    """The first checked time at which d(t) < value (steps of DT)."""
+    k = int(np.floor((BOTTOM - value) / SPEED / DT + 1e-9)) + 1
+    return k * DT
+
+
+@pytest.mark.parametrize("method", ["points", "exact"])
+def test_block_pressing_on_a_cable_gives_the_analytic_event(tmp_path: Path, method: str):
+    height, radius = 0.02, 0.002
+    report = run_scene(_press(tmp_path, method, height, radius),
+                       RunOptions(report=tmp_path / "r.json", record=None))
+    assert report["complete"] is True and report["interrupted"] is None
+    s = report["settings"]
+    assert s["method"] == method and s["steps"] == STEPS and s["checked_steps"] == STEPS + 1
+    assert s["t_end"] == pytest.approx(0.2) and s["spacing"] == pytest.approx(2 * radius)
+    (event,) = report["events"]
+    gap = BOTTOM - height - radius
+    assert (event["type"], event["a"], event["b"]) == ("cable-structure", "lead", "press/block")
+    assert (event["severity"], event["phase"]) == ("hard", "dynamic")
+    assert event["t_start"] == pytest.approx(_first_step_below(height + radius + CLEARANCE))
+    assert event["t_end"] == event["t_worst"] == pytest.approx(0.2)
+    assert event["min_distance"] == pytest.approx(gap - SPEED * 0.2, abs=1e-9)
+    assert 0.05 - 1e-9 <= event["where"][0] <= 0.15 + 1e-9 and event["where"][2] == pytest.approx(height)
+    assert report["summary"] == {"hard": 1, "soft": 0, "static": 0, "dynamic": 1}
+    assert [(p["type"], p["min_distance"]) for p in report["pairs"]] == [
+        ("cable-structure", pytest.approx(gap - SPEED * 0.2, abs=1e-9))]
+    cable = report["cables"][0]
+    assert cable["length"] == pytest.approx(0.2) and cable["segments"] == 22   # 20 + a held edge per clamp
+    assert cable["max_strain"] == pytest.approx(0.0, abs=1e-9) and not cable["taut"]
+    assert np.allclose(cable["rest_points"], cable["final_points"])            # routed, not stepped
+    assert report["validation"]["agreement"] == 1.0
+    # the file says what the run returned
+    assert (tmp_path / "r.json").read_text() == json.dumps(plain(report), indent=1) + "\n"
+
+
+@settings(max_examples=5, deadline=None)
+@given(height=st.floats(0.005, 0.018), radius=st.floats(0.0005, 0.003))
+def test_event_start_and_depth_follow_the_drawn_geometry(tmp_path_factory, height, radius):
+    """Any cable height and radius under the press: the event starts at the
+    first step within the clearance and ends as deep as the geometry says;
+    hard from the step the surfaces meet."""
+    tmp = tmp_path_factory.mktemp("press")
+    report = run_scene(_press(tmp, "exact", height, radius), RunOptions(report=tmp / "r.json", record=None))
+    (event,) = report["events"]
+    gap = BOTTOM - height - radius
+    assert event["t_start"] == pytest.approx(_first_step_below(height + radius + CLEARANCE), abs=1e-9)
+    assert event["min_distance"] == pytest.approx(gap - SPEED * 0.2, abs=1e-9)
+    assert event["severity"] == ("hard" if gap - SPEED * 0.2 < 0.0 else "soft")
+    assert event["phase"] == ("static" if gap < CLEARANCE else "dynamic")
+
+
+def test_stopped_run_reports_incomplete_and_leaves_no_temp_files(tmp_path: Path):
+    """A stop asked (SIGTERM) after 30 steps: what was simulated is checked,
+    the report says incomplete and names the signal, the recording is in
+    place and nothing else is left in the folder."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "r.json").write_text('{"old": true}')
+    stop = StopRequest()
+
+    def progress(stage, done, total):
+        if stage == "run" and done >= 30 and not stop.asked:
+            stop.asked, stop.signal_name = True, "SIGTERM"
+
+    report = run_scene(_press(tmp_path), RunOptions(report=out / "r.json", record=out / "r.rrd"),
+                       progress=progress, stop=stop)
+    written = json.loads((out / "r.json").read_text())
+    assert written["complete"] is False and written["interrupted"] == "SIGTERM"
+    assert 30 <= written["settings"]["steps"] < STEPS and written["events"] == []   # stopped before the press
+    assert written["recording"] == str(out / "r.rrd")
+    assert sorted(p.name for p in out.iterdir()) == ["r.json", "r.rrd"]
+    assert _text(written) == _text(json.loads(json.dumps(plain(report))))
+
+
+def test_stop_asked_before_the_start_runs_nothing_but_the_report(tmp_path: Path):
+    stop = StopRequest()
+    stop.asked, stop.signal_name = True, "SIGINT"
+    report = run_scene(_press(tmp_path), RunOptions(report=tmp_path / "r.json", record=None), stop=stop)
+    assert report["complete"] is False and report["interrupted"] == "SIGINT"
+    assert report["settings"]["checked_steps"] == 0 and report["events"] == []
+    cable = json.loads((tmp_path / "r.json").read_text())["cables"][0]
+    assert cable["max_strain"] is None and cable["rest_points"] == [] and cable["final_points"] == []
+
+
+def test_outcome_record_gives_the_report(tmp_path: Path):
+    """`run_outcome` writes no report; its record gives the same report every
+    time, and the same as `run_scene` on the same scene apart from timing."""
+    scene = _press(tmp_path)
+    outcome = run_outcome(scene, RunOptions(report=tmp_path / "never.json", record=None))
+    assert not (tmp_path / "never.json").exists()
+    first = json.dumps(plain(report_of(outcome)), indent=1)
+    assert first == json.dumps(plain(report_of(outcome)), indent=1)
+    assert outcome.complete and len(outcome.events) == 1 and outcome.checked == STEPS + 1
+    report = run_scene(scene, RunOptions(report=tmp_path / "r.json", record=None))
+    assert _text(report) == _text(report_of(outcome))
