@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
+import pytest
 
 from checker.records import Interference, PairType, Severity, severity_of
 from checker.scene_state import Exclusion
@@ -260,3 +263,23 @@ end = { pos = [0.0, 0.2, 0.0] }
     (d,) = val["disagreements"]
     assert d["reason"] == "convex hull" and d["steps"] == val["compared_steps"] and d["mujoco"] < 0
     assert d["t_start"] == 0.0 and d["t_end"] == rep["settings"]["t_end"] and d["second"] < 0
+
+
+def test_summary_is_a_frozen_record_of_the_counts():
+    """The run's comparison as the report takes it: the live counts, reasons
+    keyed by their enum (the report's strings), the intervals by start."""
+    v = Validation(clearance=0.005, method="exact")
+    key = ("cable-structure", "c", "box")
+    for k, (dc, dm) in enumerate([(-0.001, 0.003), (0.00497, 0.00503), (0.001, 0.0012)]):
+        rec = [Interference(PairType.CABLE_STRUCTURE, "c", "box", dc, severity_of(dc, 0.005), np.zeros(3), 0.1)]
+        v.compare(0.1 * k, rec, {key: (dm, np.zeros(3))})
+    s = v.summary()
+    assert (s.compared_steps, s.pair_steps, s.agree, s.severity_differs, s.checker_only, s.mujoco_only) == (
+        3, 3, 1, 1, 1, 0)
+    assert s.agreement == v.agreement == pytest.approx(1 / 3) and s.unexplained == 1
+    assert s.reasons == ((Reason.UNEXPLAINED, 1), (Reason.AT_BOUNDARY, 1))
+    assert dict(s.reasons) == {"unexplained": 1, "at a boundary": 1}
+    assert [d.type for d in s.disagreements] == [PairType.CABLE_STRUCTURE] * 2
+    assert s.disagreements == tuple(v.disagreements)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        s.agree = 0
