@@ -133,13 +133,34 @@ This module holds only the bound; it takes arrays and knows no simulator.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.spatial import cKDTree
 
 from checker.arrays import ranges
 from checker.cable import polyline_arc_lengths, self_pair_window
 from checker.closest import row_norm
+from checker.interference.hits import Gaps
 from checker.partset import PartSet, Placement
+
+
+@dataclass(frozen=True)
+class Active:
+    """The pairs a start of :class:`Advancement` leaves to the caller.
+
+    The caller evaluates them itself at every state proven clear, until the
+    next start: they were inside or near the clearance at the full check.
+
+    Attributes:
+        structure: (centre, part) arrays: body centres and the parts
+            (numbered as in the poses) they are evaluated against.
+        cable: (centre, centre) arrays: pairs of body centres whose discrete
+            places are evaluated against each other.
+    """
+
+    structure: tuple[np.ndarray, np.ndarray]
+    cable: tuple[np.ndarray, np.ndarray]
 
 
 def part_pair_bounds(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray) -> np.ndarray:
@@ -239,35 +260,39 @@ class Advancement:
         # the same arithmetic as checker.cable.densify_batch
         return np.where(self._valid, np.maximum(1, np.ceil(seg / self._lim * (1.0 - 1e-12))), 0)
 
-    def start(self, pts: np.ndarray, poses: np.ndarray, gap_cable: float, gap_part: np.ndarray,
-              pairs: tuple[np.ndarray, np.ndarray], pair_bound: np.ndarray,
-              candidates: tuple[np.ndarray, ...] | None = None, horizon: float = 0.0,
-              cable_candidates: tuple[np.ndarray, ...] | None = None,
-              active: tuple[np.ndarray, np.ndarray] | None = None,
-              cable_active: np.ndarray | None = None) -> None:
+    def start(self, pts: np.ndarray, poses: np.ndarray, gaps: Gaps, pairs: tuple[np.ndarray, np.ndarray],
+              pair_bound: np.ndarray, active: tuple[np.ndarray, np.ndarray] | None = None,
+              cable_active: np.ndarray | None = None) -> Active:
         """A full check ran at this state: cable body centres (N, 3) and part
-        poses (P, 4, 4); the checker's gaps (cable, per part (P,), inf for
-        parts it does not check) and part pairs with their distance bounds.
+        poses (P, 4, 4); the check's gaps (:class:`~checker.interference.hits.Gaps`,
+        parts numbered as in ``poses``, inf for parts it does not check) and
+        part pairs with their distance bounds.
 
-        ``candidates``: the checker's cable-structure and keep-out candidates
-        (cable, arc length, part index in ``poses``, value - clearance) found
-        up to ``horizon`` past the clearance; with them the part gaps are
-        kept per body centre (the smallest over the elements next to it,
-        ``horizon`` where there is none), else every centre gets the part's gap.
-        ``cable_candidates``: the checker's self and cable-cable candidates
-        (cable a, s_a, cable b, s_b, value - clearance) found up to
-        ``horizon``; with them cable pairs are bounded per pair of body
-        centres and per pair of blocks, else all by ``gap_cable``.
-        ``active``: (cable, part index in ``poses``) pairs the caller
-        evaluates itself at every step (those inside or near the clearance
-        at this state) where they may come close: the cable's body centres
-        whose gap to the part is below ``FAR_HORIZONS * horizon`` are left
-        out of the bound against it and listed in :attr:`active` as
-        (centre, part) arrays; its farther centres still bound the step.
-        ``cable_active``: (P, 2) self and cable-cable pairs (a <= b) the
-        caller evaluates itself at every step where they came near: the
-        pairs of body centres their candidates are charged to bound nothing
-        and are listed in :attr:`cable_active` as (centre, centre) arrays."""
+        With ``gaps.part_candidates`` (found up to ``gaps.horizon`` past the
+        clearance) the part gaps are kept per body centre (the smallest over
+        the elements next to it, the horizon where there is none), else every
+        centre gets the part's gap. With ``gaps.cable_candidates`` cable pairs
+        are bounded per pair of body centres and per pair of blocks, else all
+        by ``gaps.cable``.
+
+        Args:
+            active: (cable, part index in ``poses``) pairs the caller
+                evaluates itself at every step (those inside or near the
+                clearance at this state) where they may come close: the
+                cable's body centres whose gap to the part is below
+                ``FAR_HORIZONS * horizon`` are left out of the bound against
+                it; its farther centres still bound the step.
+            cable_active: (P, 2) self and cable-cable pairs (a <= b) the
+                caller evaluates itself at every step where they came near:
+                the pairs of body centres their candidates are charged to
+                bound nothing.
+
+        Returns:
+            the (centre, part) and (centre, centre) pairs the caller must
+            evaluate itself at every step proven clear until the next start.
+        """
+        gap_cable, gap_part, horizon = gaps.cable, gaps.part, gaps.horizon
+        candidates, cable_candidates = gaps.part_candidates, gaps.cable_candidates
         self.full += 1
         self._pts = np.array(pts, float)
         self._rot = np.array(poses[:, :3, :3], float)
@@ -283,9 +308,9 @@ class Advancement:
         self._sparse = (candidates is not None and self._box is not None and n > 1 and horizon > 0
                         and n * n_p > self.SPARSE_ENTRIES)
         if self._sparse:
-            self._start_sparse(gap_part, float(horizon), candidates, active, mu)
-            self._finish_start(pts, poses, pairs, pair_bound, mu, horizon, cable_candidates, cable_active)
-            return
+            structure = self._start_sparse(gap_part, float(horizon), candidates, active, mu)
+            return Active(structure, self._finish_start(poses, pairs, pair_bound, mu, horizon, cable_candidates,
+                                                        cable_active))
         u0 = (self._pts[None] - self._pos[:, None]) @ self._rot                  # R^T (x - t)
         if candidates is None:
             g = np.broadcast_to(gap_part, (n, n_p)).copy()
@@ -300,26 +325,29 @@ class Advancement:
                 count = hi - lo + 1
                 rows = ranges(lo, count)
                 np.minimum.at(g, (rows, np.repeat(part, count)), np.repeat(value, count))
-        self.active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        structure = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         if active is not None and len(active[0]):
             a_cab, a_part = (np.asarray(x, np.int64) for x in active)
             near = (self._cable[:, None] == a_cab[None, :]) & (g[:, a_part] < self.FAR_HORIZONS * horizon)
             rows, j = np.nonzero(near)
-            self.active = (rows, a_part[j])
-            g[self.active] = np.inf
+            structure = (rows, a_part[j])
+            g[structure] = np.inf
         self._g_pt = g - mu
         # fused-pass data: each centre in each part's frame (homogeneous)
         self._u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
         self._g_kn = np.ascontiguousarray(self._g_pt.T)
         self._g2 = np.where(self._g_kn > 0, self._g_kn, 0.0) ** 2
-        self._finish_start(pts, poses, pairs, pair_bound, mu, horizon, cable_candidates, cable_active)
+        return Active(structure, self._finish_start(poses, pairs, pair_bound, mu, horizon, cable_candidates,
+                                                    cable_active))
 
-    def _finish_start(self, pts, poses, pairs, pair_bound, mu, horizon, cable_candidates, cable_active) -> None:
-        """The rest of :meth:`start` after the cable-part gaps."""
+    def _finish_start(self, poses, pairs, pair_bound, mu, horizon, cable_candidates,
+                      cable_active) -> tuple[np.ndarray, np.ndarray]:
+        """The rest of :meth:`start` after the cable-part gaps; returns the
+        active (centre, centre) pairs."""
         self._cable_pairs = cable_candidates is not None
-        self.cable_active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         if self._cable_pairs:
-            self._start_cable_pairs(cable_candidates, float(horizon), mu, cable_active)
+            active = self._start_cable_pairs(cable_candidates, float(horizon), mu, cable_active)
             cable_ok = bool(np.all(self._g_cc > 0))             # the blocks' gaps on first use
         else:
             cable_ok = self._g_cable > 0
@@ -330,9 +358,11 @@ class Advancement:
         # sparse: the entries' gaps are checked on first use
         part_ok = self._sp_cap > 0 if self._sparse else bool(np.all(self._g_pt > 0))
         self._ok = cable_ok and part_ok and self._pairs_ok and self.stretch > mu
+        return active
 
     def _start_sparse(self, gap_part: np.ndarray, horizon: float, candidates: tuple[np.ndarray, ...],
-                      active: tuple[np.ndarray, np.ndarray] | None, mu: float) -> None:
+                      active: tuple[np.ndarray, np.ndarray] | None,
+                      mu: float) -> tuple[np.ndarray, np.ndarray]:
         """The centre-part gaps ``g[i, k]`` of the module docstring kept only
         where they are below ``cap = FAR_HORIZONS * horizon`` (every other
         checked pair counts as ``cap``: a smaller gap only proves less), as
@@ -347,7 +377,8 @@ class Advancement:
         and ``F[e, k]`` (that minus the cable radius and the clearance) is at
         least ``cap`` beyond the query radius. Candidates (values at most the
         horizon, below every floor's ``max(H, F)``) are entries of their own.
-        Planes and other unbounded parts get every centre."""
+        Planes and other unbounded parts get every centre. Returns the
+        active (centre, part) pairs."""
         n_p = len(gap_part)
         cap = self.FAR_HORIZONS * horizon
         self._sp_cap = cap - mu
@@ -356,11 +387,11 @@ class Advancement:
         first = np.zeros(n_p, bool)
         if active is not None and len(active[0]):
             first[np.asarray(active[1], np.int64)] = True
-        # the active parts' entries now (the caller reads :attr:`active`), the
+        # the active parts' entries now (the caller needs the active pairs), the
         # others on first use (:meth:`_ensure_sparse`)
         part, rows, val = self._sparse_entries(gap_part, horizon, candidates, first)
         n = len(self._pts)
-        self.active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        structure = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         if active is not None and len(active[0]):
             a_cab, a_part = (np.asarray(x, np.int64) for x in active)
             # (centre, active pair) for every entry of an active part on the pair's cable
@@ -377,12 +408,13 @@ class Advancement:
             hr, hj = np.concatenate(hit_r), np.concatenate(hit_j)
             o = np.lexsort((hj, hr))
             hr, hj = hr[o], hj[o]
-            self.active = (hr, a_part[hj])
+            structure = (hr, a_part[hj])
             drop = np.isin(part * n + rows, a_part[hj] * n + hr)
             part, rows, val = part[~drop], rows[~drop], val[~drop]
         self._sp_first = (part, rows, val - mu)
         self._sp_rest = (gap_part, horizon, candidates, ~first, mu)
         self._sp_ready = False
+        return structure
 
     def _ensure_sparse(self) -> bool:
         """Every sparse entry of the last start (once); True when all gaps are positive."""
@@ -479,11 +511,11 @@ class Advancement:
         return lo, hi
 
     def _start_cable_pairs(self, cand: tuple[np.ndarray, ...], horizon: float, mu: float,
-                           active: np.ndarray | None = None) -> None:
+                           active: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Gaps of cable pairs per pair of body centres (candidates) and per
         pair of blocks (everything else): the module docstring's second list.
         ``active``: (P, 2) cable pairs (a <= b) the caller evaluates itself
-        near their candidates (see :attr:`cable_active`)."""
+        near their candidates; returns the (centre, centre) pairs left to it."""
         n = len(self._pts)
         ca, sa, cb, sb, value = (np.asarray(x) for x in cand)
         ca, cb = ca.astype(np.int64), cb.astype(np.int64)
@@ -493,7 +525,7 @@ class Advancement:
         if self._near:
             self._start_near(horizon, mu)
         pairs = np.zeros((0, 2), np.int64) if active is None else np.asarray(active, np.int64).reshape(-1, 2)
-        self.cable_active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        cable_active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         member = np.zeros(0, np.int64)
         if len(value) and n:
             lo_a, hi_a = self._bracket(ca, sa)
@@ -535,7 +567,7 @@ class Advancement:
                 c_i, c_j = self._cable[ii], self._cable[jj]
                 p_ij = pid[np.minimum(c_i, c_j) * n_c + np.maximum(c_i, c_j)]
                 both = (p_ij >= 0) & np.isin(p_ij * n + ii, member) & np.isin(p_ij * n + jj, member)
-                self.cable_active = (ii[both], jj[both])
+                cable_active = (ii[both], jj[both])
                 ii, jj, gg = ii[~both], jj[~both], gg[~both]
         if self._near:
             self._g_near = np.minimum(self._g_near, horizon) - mu
@@ -549,6 +581,7 @@ class Advancement:
         self._blocks_ready = False
         self._g_min_nb = min(float(self._g_cc.min(initial=np.inf)),
                              float(self._g_near.min(initial=np.inf)) if self._near else np.inf)
+        return cable_active
 
     def _ensure_blocks(self) -> bool:
         """List the block pairs of the last start (once); True when their

@@ -7,12 +7,14 @@ the fully checked steps. Unit tests of the bound itself follow.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from checker.advance import Advancement
+from checker.interference.hits import Gaps, PartCandidates
 from sim.run import RunOptions, run_scene
 from sim.scene import load_scene
 
@@ -55,7 +57,7 @@ def _adv(gap_cable=1.0, gap_part=1.0, bound=10.0):
     pts = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]])
     poses = np.tile(np.eye(4), (2, 1, 1))
     a = Advancement(np.array([0, 3]), np.array([5.0]), np.array([1.0, 1.0]), 0.5, 0.1)
-    a.start(pts, poses, gap_cable, np.array([gap_part, gap_part]), (np.array([0]), np.array([1])),
+    a.start(pts, poses, Gaps(0.0, gap_cable, np.array([gap_part, gap_part])), (np.array([0]), np.array([1])),
             np.array([bound]))
     return a, pts, poses
 
@@ -94,8 +96,8 @@ def test_gaps_per_centre():
     poses = np.tile(np.eye(4), (1, 1, 1))
     a = Advancement(np.array([0, 4]), np.array([5.0]), np.array([1.0]), 0.5, 1.0)
     # one candidate at s = 0.25 (element 0: centres 0 and 1), 0.2 past the clearance
-    a.start(pts, poses, 1.0, np.array([0.2]), (np.zeros(0, int), np.zeros(0, int)), np.zeros(0),
-            (np.array([0]), np.array([0.25]), np.array([0]), np.array([0.2])), 3.0)
+    cand = PartCandidates(np.array([0]), np.array([0.25]), np.array([0]), np.array([0.2]))
+    a.start(pts, poses, Gaps(3.0, 1.0, np.array([0.2]), cand), (np.zeros(0, int), np.zeros(0, int)), np.zeros(0))
     far = pts.copy()
     far[3] += [0.0, 0.0, 0.9]                 # centre 3: horizon 3; spread 0.9 < 1
     assert a.proven_clear(far, poses)
@@ -118,16 +120,16 @@ def test_part_gap_floor_from_boxes():
     poses = np.tile(np.eye(4), (1, 1, 1))
     box = (np.array([[-0.5, -0.5, -0.5]]), np.array([[0.5, 0.5, 0.5]]))
     none = (np.zeros(0, int), np.zeros(0, int))
-    kw = dict(candidates=(np.zeros(0, int), np.zeros(0), np.zeros(0, int), np.zeros(0)), horizon=1.0)
+    gaps = Gaps(1.0, 100.0, np.array([1.0]), PartCandidates(np.zeros(0, int), np.zeros(0), np.zeros(0, int), np.zeros(0)))
     a = Advancement(np.array([0, 4]), np.array([5.0]), np.array([1.0]), 0.5, 1.0,
                     np.array([0.1]), box)
-    a.start(pts, poses, 100.0, np.array([1.0]), none, np.zeros(0), **kw)
+    a.start(pts, poses, gaps, none, np.zeros(0))
     # centres 0 and 1: elements' boxes 9.5 from the part's box; gap 9.5 - 0.1 - 0.5 = 8.9
     assert a.proven_clear(pts - [0.0, 8.8, 0.0], poses)
     assert not a.proven_clear(pts - [0.0, 9.0, 0.0], poses)
     # without the boxes every centre has the horizon (1)
     b = Advancement(np.array([0, 4]), np.array([5.0]), np.array([1.0]), 0.5, 1.0, np.array([0.1]))
-    b.start(pts, poses, 100.0, np.array([1.0]), none, np.zeros(0), **kw)
+    b.start(pts, poses, gaps, none, np.zeros(0))
     assert b.proven_clear(pts - [0.0, 0.9, 0.0], poses)
     assert not b.proven_clear(pts - [0.0, 1.1, 0.0], poses)
     # a plane (half-space z < 0 in its frame) 10 below: gap 10 - 0.6
@@ -135,7 +137,7 @@ def test_part_gap_floor_from_boxes():
     flat = pts[:, [0, 2, 1]]                                     # z = 10
     c = Advancement(np.array([0, 4]), np.array([5.0]), np.array([np.inf]), 0.5, 1.0,
                     np.array([0.1]), plane)
-    c.start(flat, poses, 100.0, np.array([1.0]), none, np.zeros(0), **kw)
+    c.start(flat, poses, gaps, none, np.zeros(0))
     assert c.proven_clear(flat - [0.0, 0.0, 9.3], poses)
     assert not c.proven_clear(flat - [0.0, 0.0, 9.5], poses)
 
@@ -148,13 +150,14 @@ def test_active_places_leave_the_bound():
     else still bounds the step."""
     pts = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]])
     poses = np.tile(np.eye(4), (2, 1, 1))
-    cand = (np.array([0]), np.array([0.5]), np.array([0]), np.array([-0.2]))    # element 0 in part 0
+    cand = PartCandidates(np.array([0]), np.array([0.5]), np.array([0]), np.array([-0.2]))    # element 0 in part 0
+    gaps = Gaps(2.0, 1.0, np.array([-0.2, 2.0]), cand)
     z = np.zeros(0, np.int64)
     for active, expect in ((None, False), ((np.array([0]), np.array([0])), True)):
         a = Advancement(np.array([0, 3]), np.array([5.0]), np.array([1.0, 1.0]), 0.5, 0.1)
-        a.start(pts, poses, 1.0, np.array([-0.2, 2.0]), (z, z), np.zeros(0), cand, 2.0, active=active)
+        left = a.start(pts, poses, gaps, (z, z), np.zeros(0), active=active)
         assert a.proven_clear(pts + [0.0, 0.1, 0.0], poses) is expect
-    assert a.active[0].tolist() == [0, 1, 2] and a.active[1].tolist() == [0, 0, 0]
+    assert left.structure[0].tolist() == [0, 1, 2] and left.structure[1].tolist() == [0, 0, 0]
     moved = pts.copy()
     moved[0] += [0.0, 2.1, 0.0]
     assert not a.proven_clear(moved, poses)          # part 1 still bounds it (gap: the horizon, 2)
@@ -162,9 +165,9 @@ def test_active_places_leave_the_bound():
     far = np.array([[0.0, 0, 0], [1, 0, 0], [20, 0, 0], [21, 0, 0]])
     box = (np.array([[-0.5, -0.5, -0.5], [-0.5, -0.5, -0.5]]), np.array([[0.5, 0.5, 0.5], [0.5, 0.5, 0.5]]))
     b = Advancement(np.array([0, 4]), np.array([50.0]), np.array([1.0, 1.0]), 0.5, 0.1, np.array([0.1]), box)
-    b.start(far, poses, 100.0, np.array([-0.2, 2.0]), (z, z), np.zeros(0), cand, 2.0,
-            active=(np.array([0]), np.array([0])))
-    assert b.active[0].tolist() == [0, 1, 2]         # centre 3's element is 19.5 from the box
+    left = b.start(far, poses, Gaps(2.0, 100.0, np.array([-0.2, 2.0]), cand), (z, z), np.zeros(0),
+                   active=(np.array([0]), np.array([0])))
+    assert left.structure[0].tolist() == [0, 1, 2]         # centre 3's element is 19.5 from the box
     moved = far.copy()
     moved[3] -= [17.0, 0.0, 0.0]
     assert not b.proven_clear(moved, poses)
@@ -231,18 +234,15 @@ def _cable_adv(cables):
     config = CheckConfig(clearance=_CLEAR)
     checker = Checker([], config, horizon=_H, stretch=_STRETCH)
     states = [CableState(f"c{k}", c, _R) for k, c in enumerate(cables)]
-    records = checker.check(states)
-    assert not [r for r in records if r.type in (PairType.SELF, PairType.CABLE_CABLE)]
+    checked = checker.check_with_gaps(states)
+    assert not [r for r in checked.records if r.type in (PairType.SELF, PairType.CABLE_CABLE)]
     offsets = np.concatenate([[0], np.cumsum([len(c) for c in cables])])
     radii = np.full(len(cables), _R)
     adv = Advancement(offsets, config.spacing * radii, np.zeros(0), _CLEAR, _STRETCH, radii)
-    gap_cable, _ = checker.gaps
     z = np.zeros(0, np.int64)
-    adv.start(np.concatenate(cables), _NO_PARTS, gap_cable, np.zeros(0), (z, z), np.zeros(0),
-              (z, np.zeros(0), z, np.zeros(0)), _H, checker.cable_candidates)
+    adv.start(np.concatenate(cables), _NO_PARTS, checked.gaps, (z, z), np.zeros(0))
     old = Advancement(offsets, config.spacing * radii, np.zeros(0), _CLEAR, _STRETCH, radii)
-    old.start(np.concatenate(cables), _NO_PARTS, gap_cable, np.zeros(0), (z, z), np.zeros(0),
-              (z, np.zeros(0), z, np.zeros(0)), _H)
+    old.start(np.concatenate(cables), _NO_PARTS, replace(checked.gaps, cable_candidates=None), (z, z), np.zeros(0))
     return checker, adv, old, offsets
 
 
@@ -378,16 +378,14 @@ def test_clear_run_counts_the_leading_states_one_at_a_time_would():
     poses0[0, :3, 3] = [0.0, 0.0, -0.05]                  # a slab 25 mm under the cable's surface
     checker = Checker([PartState("slab", Shape(ShapeType.BOX, [1.0, 1.0, 0.015]), np.eye(4))],
                       config, horizon=_H, stretch=_STRETCH)
-    checker.check([CableState("c0", hp, _R)], poses0)
+    gaps = checker.check_with_gaps([CableState("c0", hp, _R)], poses0).gaps
     offsets = np.array([0, len(hp)])
     z = np.zeros(0, np.int64)
 
     def fresh():
         a = Advancement(offsets, config.spacing * np.array([_R]), np.array([1.5]), _CLEAR, _STRETCH,
                         np.array([_R]), checker.part_bounds())
-        gap_cable, gap_part = checker.gaps
-        a.start(hp, poses0, gap_cable, gap_part, (z, z), np.zeros(0), checker.part_candidates, _H,
-                checker.cable_candidates)
+        a.start(hp, poses0, gaps, (z, z), np.zeros(0))
         return a
 
     rng = np.random.default_rng(3)
@@ -466,18 +464,17 @@ def test_active_cable_pairs_leave_the_bound():
     config = CheckConfig(clearance=_CLEAR)
     checker = Checker([], config, horizon=_H, stretch=_STRETCH)
     states = [CableState("c0", a, _R), CableState("c1", b, _R)]
-    assert [r.type for r in checker.check(states)] == [PairType.CABLE_CABLE]
+    checked = checker.check_with_gaps(states)
+    assert [r.type for r in checked.records] == [PairType.CABLE_CABLE]
     offsets = np.array([0, 41, 82])
     radii = np.full(2, _R)
     pts = np.concatenate([a, b])
     z = np.zeros(0, np.int64)
     for active, expect in ((None, False), (np.array([[0, 1]]), True)):
         adv = Advancement(offsets, config.spacing * radii, np.zeros(0), _CLEAR, _STRETCH, radii)
-        gap_cable, _ = checker.gaps
-        adv.start(pts, _NO_PARTS, gap_cable, np.zeros(0), (z, z), np.zeros(0),
-                  (z, np.zeros(0), z, np.zeros(0)), _H, checker.cable_candidates, cable_active=active)
+        left = adv.start(pts, _NO_PARTS, checked.gaps, (z, z), np.zeros(0), cable_active=active)
         assert adv.proven_clear(pts + [0.0, 0.0, 0.001], _NO_PARTS) is expect
-    i, j = adv.cable_active
+    i, j = left.cable
     near = set(range(14, 27))                                # within the horizon (20 mm) of x = 0.2
     assert len(i) and set(i.tolist()) <= near and set((j - 41).tolist()) <= near
     moved = pts.copy()

@@ -37,8 +37,8 @@ from checker.cable import self_pair_excluded, self_pair_window
 from checker.closest import row_norm, segment_segment
 from checker.interference.broad import NEAR, SLACK, Chunks, within_reach, within_reach_t
 from checker.interference.discrete import DenseStates, Discrete
-from checker.interference.hits import TYPE_ORDER, Hits
-from checker.records import Interference, PairType, severity_of
+from checker.interference.hits import TYPE_ORDER, Hits, worst_records
+from checker.records import Interference, PairType
 
 
 def _near_windows(p, s, cab, reach, lim) -> np.ndarray:
@@ -142,28 +142,51 @@ def cable_pairs_points(dp: Discrete, ch: Chunks, clearance: float, hits: Hits,
             ok = has_next[e] & within_reach(p[q], mid(np.minimum(e, n - 2)), lim_self[q])
             sq.append(q[ok])
             se.append(e[ok])
-    if len(ci):
-        d = row_norm(p[ci] - p[cj])
-        v = d - rad[ci] - rad[cj]
-        o = v < limit
-        ci, cj = ci[o], cj[o]
-        hits.add(PairType.CABLE_CABLE, cab[ci], cab[cj], v[o], p[ci], s[ci], s[cj])
-    si, sj = np.concatenate(fi), np.concatenate(fj)
-    if len(si):
-        v = row_norm(p[si] - p[sj]) - 2 * rad[si]
-        o = (v < limit) & ~(np.abs(s[si] - s[sj]) < reach[si])
-        si, sj = si[o], sj[o]
-        rec = ~self_pair_excluded(s[si], s[sj], rad[si], clearance)
-        hits.add(PairType.SELF, cab[si], cab[si], v[o], p[si], s[si], s[sj], rec)
-    q, e0 = np.concatenate(sq), np.concatenate(se)
-    if len(q):
-        m = mid(e0)
-        sm = 0.5 * (s[e0] + s[e0 + 1])
-        v = row_norm(p[q] - m) - 2 * rad[q]
-        o = (v < limit) & ~(np.abs(s[q] - sm) < reach[q])
-        q = q[o]
-        rec = ~self_pair_excluded(s[q], sm[o], rad[q], clearance)
-        hits.add(PairType.SELF, cab[q], cab[q], v[o], p[q], s[q], sm[o], rec)
+    rows = point_pair_rows(p, s, cab, rad, reach, clearance, limit, (ci, cj),
+                           (np.concatenate(fi), np.concatenate(fj)), (np.concatenate(sq), np.concatenate(se)))
+    for kind, a, b, v, i, s_b, rec in rows:
+        hits.add(kind, a, b, v, p[i], s[i], s_b, rec)
+
+
+def point_pair_rows(p: np.ndarray, s: np.ndarray, cab: np.ndarray, rad: np.ndarray, reach: np.ndarray,
+                    clearance: float, limit: float, cable_cable: tuple[np.ndarray, np.ndarray],
+                    self_points: tuple[np.ndarray, np.ndarray],
+                    self_mids: tuple[np.ndarray, np.ndarray]) -> list[tuple]:
+    """Values of candidate pairs of discrete places: the one kernel of
+    :func:`cable_pairs_points` and :func:`cable_pairs_many`.
+
+    Three kinds of candidates, each (n,) index arrays into the points
+    ``p`` (with arc lengths ``s``, cables ``cab``, radii ``rad``):
+    ``cable_cable`` (i, j), i < j on two cables, valued ``|p_i - p_j| - r_i
+    - r_j``; ``self_points`` (i, j), i < j on one cable, and ``self_mids``
+    (q, e), point q against the midpoint of element (e, e + 1) of its
+    cable, valued ``|p_i - x| - 2 r_i``. Candidates at or above ``limit``,
+    and self pairs less than ``reach`` (per point) apart along the cable,
+    are dropped; a self candidate is a record only outside the self rule's
+    window (:func:`~checker.cable.self_pair_excluded` at ``clearance``).
+
+    Returns:
+        per kind, (type, cable a, cable b, value, place index i (the place
+        on a: where and s), arc length on b, record mask or None for all).
+    """
+    i, j = cable_cable
+    v = row_norm(p[i] - p[j]) - rad[i] - rad[j]
+    o = v < limit
+    i, j = i[o], j[o]
+    rows = [(PairType.CABLE_CABLE, cab[i], cab[j], v[o], i, s[j], None)]
+    i, j = self_points
+    v = row_norm(p[i] - p[j]) - 2 * rad[i]
+    o = (v < limit) & ~(np.abs(s[i] - s[j]) < reach[i])
+    i, j = i[o], j[o]
+    rows.append((PairType.SELF, cab[i], cab[i], v[o], i, s[j], ~self_pair_excluded(s[i], s[j], rad[i], clearance)))
+    q, e = self_mids
+    mid = 0.5 * (p[e] + p[e + 1])
+    sm = 0.5 * (s[e] + s[e + 1])
+    v = row_norm(p[q] - mid) - 2 * rad[q]
+    o = (v < limit) & ~(np.abs(s[q] - sm) < reach[q])
+    q, sm = q[o], sm[o]
+    rows.append((PairType.SELF, cab[q], cab[q], v[o], q, sm, ~self_pair_excluded(s[q], sm, rad[q], clearance)))
+    return rows
 
 
 def cable_pairs_exact(dp: Discrete, ch: Chunks, clearance: float, hits: Hits) -> None:
@@ -310,45 +333,22 @@ def cable_pairs_many(clearance: float, names: Sequence[str], radii: np.ndarray, 
     lo, hi = tiled(np.minimum(x, y), np.maximum(x, y))
     keep = lo != hi
     lo, hi = lo[keep], hi[keep]
-    clear = clearance
     same = cab[lo] == cab[hi]
-    # cable-cable: the lower index is cable a (the full check's order)
-    d = row_norm(p[lo] - p[hi]) - rad[lo] - rad[hi]
-    o = ~same & (d < clear)
-    rows = [(PairType.CABLE_CABLE, lo[o], hi[o], d[o], s[hi[o]])]
-    # self, point against point
-    d = row_norm(p[lo] - p[hi]) - 2 * rad[lo]
-    o = same & (d < clear) & ~self_pair_excluded(s[lo], s[hi], rad[lo], clear)
-    rows.append((PairType.SELF, lo[o], lo[o], d[o], s[hi[o]]))
-    # self, a point against the midpoint of a piece not touching it
+    # a point against the midpoint of a piece not touching it
     pa, qa = around(ci, pc_c, pc_i)
     pb, qb = around(cj, pc_c, pc_i)
     q1, e1 = product(ia, xa, pb, qb)
     q2, e2 = product(ib, xb, pa, qa)
     q, e = tiled(np.r_[q1, q2], np.r_[e1, e2])
     keep = (cab[q] == cab[e]) & (q != e) & (q != e + 1)
-    q, e = q[keep], e[keep]
-    mid = 0.5 * (p[e] + p[e + 1])
-    sm = 0.5 * (s[e] + s[e + 1])
-    d = row_norm(p[q] - mid) - 2 * rad[q]
-    o = (d < clear) & ~self_pair_excluded(s[q], sm, rad[q], clear)
-    rows.append((PairType.SELF, q[o], q[o], d[o], sm[o]))
-    t = np.concatenate([np.full(len(r[1]), TYPE_ORDER.index(r[0])) for r in rows])
-    w, wb, v, sb = (np.concatenate([r[k] for r in rows]) for k in (1, 2, 3, 4))
-    if len(v) == 0:
-        return out
-    st, a, b, sa = w // m, cab[w], cab[wb], s[w]
-    # the worst per (state, type, a, b); ties to the smallest arc lengths (Hits.reduce)
-    o = np.lexsort((sb, sa, v, b, a, t, st))
-    head = np.r_[True, (st[o][1:] != st[o][:-1]) | (t[o][1:] != t[o][:-1]) | (a[o][1:] != a[o][:-1])
-                 | (b[o][1:] != b[o][:-1])]
-    o = o[head]
-    for st_i, t_i, a_i, b_i, d_i, s_i, sb_i, where in zip(st[o].tolist(), t[o].tolist(), a[o].tolist(),
-                                                         b[o].tolist(), v[o].tolist(), sa[o].tolist(),
-                                                         sb[o].tolist(), p[w[o]]):
-        out[st_i].append(Interference(type=TYPE_ORDER[t_i], a=names[a_i], b=names[b_i], min_distance=d_i,
-                                      severity=severity_of(d_i, clear), where=where, s=s_i, s_b=sb_i))
-    for recs in out:
-        recs.sort(key=lambda r: (r.min_distance, TYPE_ORDER.index(r.type), r.a, r.b))
-    return out
+    rows = point_pair_rows(p, s, cab, rad, self_pair_window(rad, clearance), clearance, clearance,
+                           (lo[~same], hi[~same]), (lo[same], hi[same]), (q[keep], e[keep]))
+    t, a, b, v, w, sb = ([] for _ in range(6))
+    for kind, a_k, b_k, v_k, w_k, sb_k, rec in rows:
+        o = slice(None) if rec is None else rec
+        t.append(np.full(len(v_k[o]), TYPE_ORDER.index(kind)))
+        for acc, x in zip((a, b, v, w, sb), (a_k, b_k, v_k, w_k, sb_k)):
+            acc.append(x[o])
+    t, a, b, v, w, sb = (np.concatenate(x) for x in (t, a, b, v, w, sb))
+    return worst_records(n_s, w // m, t, a, b, v, p[w], s[w], sb, clearance, names, lambda _: names)
 

@@ -18,6 +18,7 @@ interference, events over time and comparison with MuJoCo.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -25,13 +26,29 @@ from checker.interference import cablepairs, discrete, structure
 from checker.interference.broad import Chunks
 from checker.interference.cablepairs import cable_pairs_exact, cable_pairs_points
 from checker.interference.discrete import DenseStates, discretise
-from checker.interference.hits import TYPE_ORDER, Hits
+from checker.interference.hits import Gaps, Hits
 from checker.interference.single import single_cable
 from checker.interference.structure import PartTable, structure_exact, structure_points
 from checker.records import Interference, PairType
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 
 _EYE3 = np.eye(3)
+
+
+@dataclass(frozen=True)
+class Checked:
+    """What one check found.
+
+    Attributes:
+        records: one record per interfering (type, a, b) pair, worst first.
+        gaps: with a horizon, how far every pair stayed from the clearance
+            (what the skip rule of :mod:`checker.advance` starts from);
+            None when not available (method ``exact``, face-plane, or no
+            horizon).
+    """
+
+    records: list[Interference]
+    gaps: Gaps | None
 
 
 class Checker:
@@ -50,26 +67,12 @@ class Checker:
         horizon: with method ``points`` (not face-plane), candidates are also
             evaluated up to ``clearance + horizon`` (and self pairs and
             attachment windows up to ``stretch`` of arc length inside their
-            exclusion), only to leave in :attr:`gaps` how far every pair
-            stays from the clearance; the records do not change (severity
-            and the exclusion windows stay tied to the clearance). See
-            :mod:`checker.advance` for the use.
+            exclusion), only to return with :meth:`check_with_gaps` how far
+            every pair stays from the clearance (a
+            :class:`~checker.interference.hits.Gaps` record); the records do
+            not change (severity and the exclusion windows stay tied to the
+            clearance). See :mod:`checker.advance` for the use.
         stretch: see ``horizon``.
-
-    Attributes:
-        gaps: after a :meth:`check` with a horizon, (cable, parts): the least
-            value minus the clearance over self and cable-cable candidates,
-            and per part (K,) over cable-structure and keep-out candidates,
-            each at most ``horizon``; None when not available (method
-            ``exact``, face-plane, or no horizon).
-        part_candidates: with :attr:`gaps`, every cable-structure and
-            keep-out candidate behind them: (cable, arc length s, part,
-            value - clearance) arrays; a point not among them is at least
-            ``horizon`` beyond the clearance from that part.
-        cable_candidates: with :attr:`gaps`, every self and cable-cable
-            candidate behind them: (cable a, s_a, cable b, s_b, value -
-            clearance) arrays; a checked pair of places not among them is at
-            least ``horizon`` beyond the clearance (or deep in its exclusion).
     """
 
     def __init__(self, parts: Sequence[PartState], config: CheckConfig = CheckConfig(),
@@ -80,14 +83,11 @@ class Checker:
         self._pidx = {p.name: i for i, p in enumerate(self.parts)}
         self.horizon = float(horizon)
         self.stretch = float(stretch)
-        self.gaps: tuple[float, np.ndarray] | None = None
-        self.part_candidates: tuple[np.ndarray, ...] | None = None
-        self.cable_candidates: tuple[np.ndarray, ...] | None = None
         self._excl_cache: tuple | None = None
 
     @property
     def bounds_gaps(self) -> bool:
-        """True when :meth:`check` leaves :attr:`gaps` (points, not face-plane, horizon > 0)."""
+        """True when :meth:`check_with_gaps` returns gaps (points, not face-plane, horizon > 0)."""
         return self.config.method == "points" and not self.config.face_plane and self.horizon > 0.0
 
     def part_bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -154,7 +154,17 @@ class Checker:
         exclusions: Sequence[Exclusion] = (),
         horizon: float | None = None,
     ) -> list[Interference]:
-        """Check one scene state; see :func:`check_state`.
+        """Check one scene state; see :func:`check_state` and :meth:`check_with_gaps`."""
+        return self.check_with_gaps(cables, poses, exclusions, horizon).records
+
+    def check_with_gaps(
+        self,
+        cables: Sequence[CableState],
+        poses: np.ndarray | Sequence[np.ndarray] | None = None,
+        exclusions: Sequence[Exclusion] = (),
+        horizon: float | None = None,
+    ) -> Checked:
+        """Check one scene state: its records and, with a horizon, its gaps.
 
         Args:
             cables: the cables' centrelines.
@@ -168,7 +178,7 @@ class Checker:
         """
         config = self.config
         horizon = self.horizon if horizon is None else float(horizon)
-        bounds = self.bounds_gaps and horizon > 0.0
+        bounded = self.bounds_gaps and horizon > 0.0
         parts = self.parts
         tab = None
         if self._tab is not None:
@@ -194,36 +204,28 @@ class Checker:
                 else (np.zeros(0, np.int64), np.zeros(0))
             dp = discretise(cables, config, cuts)
             has_next = np.concatenate([dp.cable[:-1] == dp.cable[1:], [False]])
-            gaps = bounds
-            limit = config.clearance + (horizon if gaps else 0.0)
+            limit = config.clearance + (horizon if bounded else 0.0)
             if exact:
                 ch = Chunks(dp.p, dp.s, dp.cable, has_next, dp.seg)
                 cable_pairs_exact(dp, ch, config.clearance, hits)
             else:
                 ch = Chunks(dp.p, dp.s, dp.cable, has_next, np.arange(len(dp.p)))
-                cable_pairs_points(dp, ch, config.clearance, hits, limit, self.stretch if gaps else 0.0)
+                cable_pairs_points(dp, ch, config.clearance, hits, limit, self.stretch if bounded else 0.0)
             if tab is not None:
                 if exact:
                     structure_exact(dp, ch, tab, config, excl, hits)
                 else:
                     # windows narrowed by the stretch: points that may enter
                     # or leave a window bound the gaps too
-                    near = (excl[0], excl[1] + self.stretch, excl[2] - self.stretch, excl[3]) if gaps else None
+                    near = (excl[0], excl[1] + self.stretch, excl[2] - self.stretch, excl[3]) if bounded else None
                     structure_points(dp, ch, tab, config, excl, hits, limit, near)
             single_cable(cables, config.clearance, hits)
-            self.gaps = hits.gaps(config.clearance, horizon, len(parts)) if gaps else None
-            self.part_candidates = hits.part_candidates(config.clearance) if gaps else None
-            self.cable_candidates = hits.cable_candidates(config.clearance) if gaps else None
-        else:
-            self.gaps = (horizon, np.full(len(parts), horizon)) if bounds else None
-            self.part_candidates = self.cable_candidates = None
+        found = hits.gaps(config.clearance, horizon, len(parts)) if bounded else None
 
         def names(ptype: PairType) -> list[str]:
             return part_names if ptype in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) else cable_names
 
-        out = hits.reduce(config.clearance, cable_names, names)
-        out.sort(key=lambda r: (r.min_distance, TYPE_ORDER.index(r.type), r.a, r.b))
-        return out
+        return Checked(hits.records(config.clearance, cable_names, names), found)
 
 
 def check_state(

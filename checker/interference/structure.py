@@ -29,8 +29,8 @@ import numpy as np
 from checker.closest import row_norm
 from checker.interference.broad import chunk_part_pairs
 from checker.interference.discrete import DenseStates
-from checker.interference.hits import TYPE_ORDER
-from checker.records import Interference, PairType, severity_of
+from checker.interference.hits import TYPE_ORDER, worst_records
+from checker.records import Interference, PairType
 from checker.scene_state import CheckConfig, PartState
 from checker.shapes import (
     ShapeType,
@@ -44,6 +44,7 @@ from checker.shapes import (
 )
 
 TYPE_CODE = {t: n for n, t in enumerate(ShapeType)}
+_STRUCTURE, _KEEPOUT = TYPE_ORDER.index(PairType.CABLE_STRUCTURE), TYPE_ORDER.index(PairType.KEEPOUT)
 
 
 class PartTable:
@@ -104,7 +105,12 @@ class PartTable:
 
     def to_local(self, k: np.ndarray, x: np.ndarray) -> np.ndarray:
         """World points x (n, 3) into the frames of parts k (n,)."""
-        return np.einsum("ni,nij->nj", x - self.trans[k], self.rot[k])
+        return to_local(x, self.trans[k], self.rot[k])
+
+
+def to_local(x: np.ndarray, trans: np.ndarray, rot: np.ndarray) -> np.ndarray:
+    """World points x (n, 3) into frames of translations (n, 3) and rotations (n, 3, 3): R^T (x - t)."""
+    return np.einsum("ni,nij->nj", x - trans, rot)
 
 
 def excluded(cable: np.ndarray, part: np.ndarray, s: np.ndarray, excl: tuple) -> np.ndarray:
@@ -171,6 +177,32 @@ def point_distances(tab: PartTable, pk: np.ndarray, loc: np.ndarray, face_plane:
     return d
 
 
+def point_values(tab: PartTable, k: np.ndarray, loc: np.ndarray, rad: np.ndarray, cable: np.ndarray,
+                 m: np.ndarray, excl: tuple, limit: float, face_plane: bool, group: np.ndarray | None = None,
+                 excl_record: tuple | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Values of points against parts: the one kernel of :func:`structure_points` and :func:`structure_many`.
+
+    A point (local coordinates ``loc`` in part k, its cable's radius, cable
+    and material coordinate m) is kept when it lies within ``rad + limit``
+    of the part's local box and outside the exclusion windows ``excl``;
+    its value is the signed distance to the part minus the radius
+    (:func:`point_distances`, with ``group`` as there), kept below ``limit``.
+
+    Returns:
+        (index of the points kept, their values, and with ``excl_record``
+        whether each lies outside those windows too, else None).
+    """
+    thr = (rad + limit)[:, None]
+    keep = np.all((loc >= tab.lo[k] - thr) & (loc <= tab.hi[k] + thr), axis=1)
+    keep &= ~excluded(cable, k, m, excl)
+    idx = np.flatnonzero(keep)
+    k, loc, rad = k[idx], loc[idx], rad[idx]
+    rec = None if excl_record is None else ~excluded(cable[idx], k, m[idx], excl_record)
+    v = point_distances(tab, k, loc, face_plane, rad + limit, None if group is None else group[idx]) - rad
+    o = v < limit
+    return idx[o], v[o], None if rec is None else rec[o]
+
+
 def structure_points(dp, ch, tab, config, excl, hits, limit=None, excl_near=None) -> None:
     """Signed distance of every candidate point to its part, minus r.
 
@@ -183,16 +215,10 @@ def structure_points(dp, ch, tab, config, excl, hits, limit=None, excl_near=None
     if len(it) == 0:
         return
     loc = tab.to_local(pk, dp.p[it])
-    thr = (dp.radius[it] + limit)[:, None]
-    box_ok = np.all((loc >= tab.lo[pk] - thr) & (loc <= tab.hi[pk] + thr), axis=1)
-    box_ok &= ~excluded(dp.cable[it], pk, dp.m[it], excl if excl_near is None else excl_near)
-    it, pk, loc = it[box_ok], pk[box_ok], loc[box_ok]
-    rec = None if excl_near is None else ~excluded(dp.cable[it], pk, dp.m[it], excl)
-    d = point_distances(tab, pk, loc, config.face_plane, dp.radius[it] + limit)
-    v = d - dp.radius[it]
-    o = v < limit
-    it, pk, v = it[o], pk[o], v[o]
-    rec = None if rec is None else rec[o]
+    o, v, rec = point_values(tab, pk, loc, dp.radius[it], dp.cable[it], dp.m[it],
+                             excl if excl_near is None else excl_near, limit, config.face_plane,
+                             excl_record=None if excl_near is None else excl)
+    it, pk = it[o], pk[o]
     _add_structure(hits, tab, dp.cable[it], pk, v, dp.p[it], dp.s[it], rec)
 
 
@@ -287,31 +313,13 @@ def structure_many(tab: PartTable | None, config: CheckConfig, excl: tuple, name
     q = state[it] * n_k + k
     rot = np.ascontiguousarray(poses[:, :, :3, :3]).reshape(-1, 3, 3)
     trans = np.ascontiguousarray(poses[:, :, :3, 3]).reshape(-1, 3)
-    loc = np.einsum("ni,nij->nj", p[it] - trans[q], rot[q])      # PartTable.to_local's arithmetic
-    rad = radii[cab[it]]
-    thr = (rad + config.clearance)[:, None]
-    keep = np.all((loc >= tab.lo[k] - thr) & (loc <= tab.hi[k] + thr), axis=1)
-    keep &= ~excluded(cab[it], k, dense.m[it], excl)
-    it, k, loc, rad = it[keep], k[keep], loc[keep], rad[keep]
+    loc = to_local(p[it], trans[q], rot[q])
     # only the worst place per (state, cable, part) becomes a record
     group = (state[it] * n_c + cab[it]) * n_k + k
-    v = point_distances(tab, k, loc, config.face_plane, rad + config.clearance, group) - rad
-    keep = v < config.clearance
-    it, k, v = it[keep], k[keep], v[keep]
-    if len(v) == 0:
-        return out
-    # the worst place per (state, cable, part); ties to the smallest arc length
-    o = np.lexsort((s[it], v, k, cab[it], state[it]))
-    it, k, v = it[o], k[o], v[o]
-    head = np.r_[True, (state[it][1:] != state[it][:-1]) | (cab[it][1:] != cab[it][:-1]) | (k[1:] != k[:-1])]
-    it, k = it[head], k[head]
-    rows = zip(state[it].tolist(), cab[it].tolist(), k.tolist(), v[head].tolist(), s[it].tolist(), p[it])
-    for st_i, c, part, d, s_i, where in rows:
-        kind = PairType.KEEPOUT if tab.keepout[part] else PairType.CABLE_STRUCTURE
-        out[st_i].append(Interference(type=kind, a=names[c], b=tab.names[part], min_distance=d,
-                                      severity=severity_of(d, config.clearance), where=where,
-                                      s=s_i, s_b=None))
-    for recs in out:
-        recs.sort(key=lambda r: (r.min_distance, TYPE_ORDER.index(r.type), r.a, r.b))
-    return out
+    o, v, _ = point_values(tab, k, loc, radii[cab[it]], cab[it], dense.m[it], excl, config.clearance,
+                           config.face_plane, group)
+    it, k = it[o], k[o]
+    kind = np.where(tab.keepout[k], _KEEPOUT, _STRUCTURE)
+    return worst_records(n_s, state[it], kind, cab[it], k, v, p[it], s[it], np.full(len(v), np.nan),
+                         config.clearance, names, lambda _: tab.names)
 
