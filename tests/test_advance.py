@@ -657,8 +657,8 @@ def test_clear_run_with_many_blocks_counts_what_one_at_a_time_would():
         pts = np.concatenate(cables)[None] + moves * np.linspace(0.0, 1.0, len(np.concatenate(cables)))[None, :, None]
         checker, one, _, offsets = _cable_adv(cables)
         _, batch, _, _ = _cable_adv(cables)
-        batch._ensure_blocks()
-        assert len(batch._blk_start) > 64 and np.isfinite(batch._g_far)
+        batch._cable_gaps._ensure_blocks()
+        assert len(batch._cable_gaps._blk_start) > 64 and np.isfinite(batch._cable_gaps._g_far)
         expect = 0
         while expect < len(pts) and one.proven_clear(pts[expect], _NO_PARTS[None][0]):
             expect += 1
