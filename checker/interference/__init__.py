@@ -27,7 +27,9 @@ events over time and comparison with MuJoCo.
 """
 
 from checker.interference.discrete import DenseStates
-from checker.interference.pipeline import Checker, check_state
+from checker.interference.hits import CableCandidates, Gaps, PartCandidates
+from checker.interference.pipeline import Checked, Checker, check_state
 from checker.interference.single import single_records_many
 
-__all__ = ["Checker", "DenseStates", "check_state", "single_records_many"]
+__all__ = ["CableCandidates", "Checked", "Checker", "DenseStates", "Gaps", "PartCandidates", "check_state",
+           "single_records_many"]
