@@ -156,6 +156,16 @@ class ArcLayout:
         return out
 
 
+def element_pieces(length: np.ndarray, spacing: np.ndarray) -> np.ndarray:
+    """Pieces (as floats, at least 1) an element of this length is split into
+    so none is longer than ``spacing``: ``ceil(length / spacing)``, less a
+    relative 1e-12 so an element of exactly k spacings is not split in k + 1.
+    The one formula of :func:`densify_batch` and of the skip rule's test that
+    an element still splits alike (:mod:`checker.advance`). An infinite
+    spacing gives 1 piece."""
+    return np.maximum(np.ceil(length / spacing * (1.0 - 1e-12)), 1.0)
+
+
 def densify_batch(
     points: np.ndarray, offsets: np.ndarray, spacing: np.ndarray, source: bool = False
 ) -> tuple[np.ndarray, ...]:
@@ -185,7 +195,7 @@ def densify_batch(
     # Element i joins point i to i+1 when both are on the same polyline.
     valid = cable_of_pt[:-1] == cable_of_pt[1:]
     lim = np.asarray(spacing, dtype=float)[cable_of_pt[:-1]]
-    pieces = np.where(valid, np.maximum(1, np.ceil(seg_len / lim * (1.0 - 1e-12))).astype(np.int64), 0)
+    pieces = np.where(valid, element_pieces(seg_len, lim).astype(np.int64), 0)
     step = np.where(valid, seg_len, 0.0)
     s_pt = polyline_arc_lengths(step, offsets)
     if np.all(pieces <= 1):  # nothing to split

@@ -152,7 +152,6 @@ class StepChecks:
             self.advance = Advancement(offsets, config.spacing * radii, rho, config.clearance,
                                        self.stretch, radii, (box_lo, box_hi))
             self._moving_pairs = self.part_checker.moving_pairs()
-            self._gap_part = np.full(len(built.parts), np.inf)
             self._checked_index = np.nonzero(checked)[0]
             self._checker_index = np.cumsum(checked) - 1          # built part -> checker part
         # (centre, checker part) entries of the active pairs (see ACTIVE_HORIZONS)
@@ -281,7 +280,8 @@ class StepChecks:
         cables = self._cable_states(state)
         adv = self.advance
         near = None
-        cable_records = self.checker.check(cables, poses[self.checked_parts], self.exclusions)
+        checked = self.checker.check_with_gaps(cables, poses[self.checked_parts], self.exclusions)
+        cable_records = checked.records
         # moving part pairs still provably apart: only same-body records and
         # the active pairs, checked on their own
         if adv is not None and state.step > 0 and adv.part_pairs_clear(poses):
@@ -296,30 +296,27 @@ class StepChecks:
             mi, mj = self._moving_pairs
             self._part_active = (mi[active], mj[active])
             pairs, bound = (mi[~active], mj[~active]), bound[~active]
-            if self.checker.gaps is not None:
-                gap_cable, gap_checked = self.checker.gaps
-                self._gap_part[self.checked_parts] = gap_checked
-                cab, s_c, part, value = self.checker.part_candidates
+            if checked.gaps is not None:
+                gaps = checked.gaps.on_parts(self._checked_index, len(self.built.parts))   # built part indices
+                parts, cable_pairs = gaps.part_candidates, gaps.cable_candidates
+                near = (parts, cable_pairs)
                 # pairs within ACTIVE_HORIZONS of the clearance (records, and a
                 # cable held in a part just inside its attachment window) would
                 # stop the skipping at once: evaluated on their own wherever
                 # the cable comes near the part (so a contact may slide along)
-                part = self._checked_index[part]
-                near = ((cab, s_c, part, value), self.checker.cable_candidates)
-                close = value < ACTIVE_HORIZONS * self.horizon
+                close = parts.value < ACTIVE_HORIZONS * self.horizon
                 n_k = max(len(self.built.parts), 1)
-                key = np.unique(cab[close] * n_k + part[close])
+                key = np.unique(parts.cable[close] * n_k + parts.part[close])
                 # self and cable-cable pairs likewise, near their candidates
-                ca, _, cb, _, c_value = self.checker.cable_candidates
+                ca, cb = cable_pairs.cable_a, cable_pairs.cable_b
                 n_c = max(len(self.built.cables), 1)
-                close = c_value < ACTIVE_HORIZONS * self.horizon
+                close = cable_pairs.value < ACTIVE_HORIZONS * self.horizon
                 c_key = np.unique(np.minimum(ca, cb)[close] * n_c + np.maximum(ca, cb)[close])
-                adv.start(pts, poses, gap_cable, self._gap_part, pairs, bound,
-                          (cab, s_c, part, value), self.horizon, self.checker.cable_candidates,
-                          (key // n_k, key % n_k), np.stack([c_key // n_c, c_key % n_c], axis=1))
-                centre, built_part = adv.active
+                left = adv.start(pts, poses, gaps, pairs, bound, (key // n_k, key % n_k),
+                                 np.stack([c_key // n_c, c_key % n_c], axis=1))
+                centre, built_part = left.structure
                 self._active = (centre, self._checker_index[built_part])   # (centre, checker part)
-                self._cable_active = adv.cable_active
+                self._cable_active = left.cable
             else:
                 adv.stop()
                 adv.start_pairs(poses, pairs, bound)

@@ -126,3 +126,18 @@ def test_arc_lengths_do_not_depend_on_the_polylines_batched_before():
     _, s, cab, new_off = densify_batch(np.concatenate(polys), off, np.full(len(polys), np.inf))
     for c, p in enumerate(polys):
         assert np.array_equal(s[new_off[c]:new_off[c + 1]], arc_length(p))
+
+
+@settings(max_examples=50, deadline=None)
+@given(arrays(float, 6, elements=st.floats(0.0, 5.0)), st.floats(0.1, 2.0))
+def test_element_pieces_is_densify_batchs_split(lengths, spacing):
+    """element_pieces gives the number of pieces densify_batch cuts each
+    element into (at least one, none longer than the spacing)."""
+    from checker.cable import element_pieces
+    pts = np.stack([np.concatenate([[0.0], np.cumsum(lengths)]), np.zeros(7), np.zeros(7)], axis=1)
+    _, _, _, offsets, src, _, _ = densify_batch(pts, np.array([0, 7]), np.array([spacing]), source=True)
+    made = np.bincount(src, minlength=7)[:-1]
+    want = element_pieces(np.linalg.norm(np.diff(pts, axis=0), axis=1), spacing)
+    assert np.array_equal(made, want) and np.all(want >= 1)
+    assert np.all(np.linalg.norm(np.diff(pts, axis=0), axis=1) / want <= spacing * (1 + 1e-9))
+    assert element_pieces(np.array([3.0]), np.inf)[0] == 1.0

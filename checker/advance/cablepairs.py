@@ -1,0 +1,401 @@
+"""The skip rule's bound on self and cable-cable pairs (the package docstring's second list).
+
+After a full check, the gaps of cable pairs are kept per near element pair
+(one cable, within ``2 BLOCK`` elements: also proven apart by the chord
+bound at the state itself), per pair of body centres that candidates are
+charged to, and per pair of blocks of ``BLOCK`` elements for everything
+else (their spheres at the start, and at the state itself). :meth:`CablePairGaps.clear`
+tests many states at once.
+
+Deliberately not here: cables against parts, part pairs, the run of states
+(:class:`checker.advance.skip.Advancement`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from checker.advance.common import (
+    FAR_HORIZONS,
+    Layout,
+    Start,
+    bracket,
+    leading,
+    row_norm3,
+)
+from checker.cable import self_pair_window
+from checker.closest import row_norm
+from checker.interference.hits import CableCandidates
+
+
+class CablePairGaps:
+    """The cable-pair gaps of one start.
+
+    Args:
+        layout: the run's layout.
+        start: the state of the full check.
+    """
+
+    BLOCK = 4
+    """Elements per block of the far-pair bound."""
+
+    GROUP = 8
+    """Blocks per group: block pairs are first tested a group pair at a time."""
+
+    FAR_HORIZONS = FAR_HORIZONS
+
+    def __init__(self, layout: Layout, start: Start):
+        # the names the bound's arithmetic reads
+        self._pts, self._s_c = start.pts, start.s_c
+        self._rad, self._offsets, self._cable, self._valid = layout.rad, layout.offsets, layout.cable, layout.valid
+        self.clearance, self.stretch = layout.clearance, layout.stretch
+
+    def ok_at_start(self) -> bool:
+        """True when every centre-pair gap is positive (the blocks' on first use)."""
+        return bool(np.all(self._g_cc > 0))
+
+    def start(self, cand: CableCandidates, horizon: float, mu: float,
+                           active: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Gaps of cable pairs per pair of body centres (candidates) and per
+        pair of blocks (everything else): the package docstring's second list.
+        ``active``: (P, 2) cable pairs (a <= b) the caller evaluates itself
+        near their candidates; returns the (centre, centre) pairs left to it."""
+        n = len(self._pts)
+        ca, sa, cb, sb, value = (np.asarray(x) for x in cand)
+        ca, cb = ca.astype(np.int64), cb.astype(np.int64)
+        ii = jj = np.zeros(0, np.int64)
+        gg = np.zeros(0)
+        self._near = self._rad is not None and n > 1
+        if self._near:
+            self._start_near(horizon, mu)
+        pairs = np.zeros((0, 2), np.int64) if active is None else np.asarray(active, np.int64).reshape(-1, 2)
+        cable_active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        member = np.zeros(0, np.int64)
+        if len(value) and n:
+            lo_a, hi_a = self._bracket(ca, sa)
+            lo_b, hi_b = self._bracket(cb, sb)
+            n_c = len(self._offsets) - 1
+            if len(pairs):
+                # the centres of every candidate of an active pair, on either side
+                pid = np.full(n_c * n_c, -1, np.int64)
+                pid[pairs[:, 0] * n_c + pairs[:, 1]] = np.arange(len(pairs))
+                cand_pid = pid[np.minimum(ca, cb) * n_c + np.maximum(ca, cb)]
+                on = cand_pid >= 0
+                k = np.arange(3)
+                rows = np.concatenate([(lo[:, None] + k[None, :])[on] for lo in (lo_a, lo_b)])
+                ok = rows <= np.concatenate([np.broadcast_to(hi[:, None], (len(hi), 3))[on] for hi in (hi_a, hi_b)])
+                owner = np.concatenate([np.broadcast_to(cand_pid[:, None], (len(ca), 3))[on]] * 2)
+                member = np.unique(owner[ok] * n + rows[ok])
+            if self._near:                       # near pairs carry their own candidates
+                far_c = ~self._charge_near(ca, lo_a, hi_a, cb, lo_b, hi_b, value)
+                lo_a, hi_a, lo_b, hi_b, value = lo_a[far_c], hi_a[far_c], lo_b[far_c], hi_b[far_c], value[far_c]
+            # every centre pair of the two brackets (at most 3 x 3 each)
+            k = np.arange(3)
+            i = lo_a[:, None, None] + k[None, :, None]
+            j = lo_b[:, None, None] + k[None, None, :]
+            ok = (i <= hi_a[:, None, None]) & (j <= hi_b[:, None, None])
+            i, j = np.broadcast_to(i, ok.shape)[ok], np.broadcast_to(j, ok.shape)[ok]
+            v = np.broadcast_to(value[:, None, None], ok.shape)[ok]
+            key = np.minimum(i, j) * n + np.maximum(i, j)
+            o = np.argsort(key, kind="stable")
+            key, v = key[o], v[o]
+            first = np.r_[len(key) > 0, key[1:] != key[:-1]][:len(key)]
+            start = np.nonzero(first)[0]
+            gg = np.minimum.reduceat(v, start) if len(start) else np.zeros(0)
+            key = key[first]
+            ii, jj = key // n, key % n
+            same = ii != jj                      # a centre against itself: no relative motion
+            ii, jj, gg = ii[same], jj[same], gg[same]
+            if len(member):
+                # centre pairs both of whose centres are evaluated by the caller
+                c_i, c_j = self._cable[ii], self._cable[jj]
+                p_ij = pid[np.minimum(c_i, c_j) * n_c + np.maximum(c_i, c_j)]
+                both = (p_ij >= 0) & np.isin(p_ij * n + ii, member) & np.isin(p_ij * n + jj, member)
+                cable_active = (ii[both], jj[both])
+                ii, jj, gg = ii[~both], jj[~both], gg[~both]
+        if self._near:
+            self._g_near = np.minimum(self._g_near, horizon) - mu
+            self._g_near2 = np.where(self._g_near > 0, self._g_near, 0.0) ** 2
+        self._cc_i, self._cc_j = ii, jj
+        self._g_cc = np.minimum(gg, horizon) - mu
+        self._g_cc2 = np.where(self._g_cc > 0, self._g_cc, 0.0) ** 2
+        # the block pairs are listed on first use (:meth:`_ensure_blocks`):
+        # a run whose states fail the cheaper conditions never needs them
+        self._blk_args = (horizon, mu)
+        self._blocks_ready = False
+        self._g_min_nb = min(float(self._g_cc.min(initial=np.inf)),
+                             float(self._g_near.min(initial=np.inf)) if self._near else np.inf)
+        return cable_active
+
+    def _bracket(self, cab: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`~checker.advance.common.bracket` at the start's arc lengths."""
+        return bracket(self._s_c, self._cable, self._offsets, cab, s)
+
+    def _ensure_blocks(self) -> bool:
+        """List the block pairs of the last start (once); True when their
+        gaps are all positive."""
+        if not self._blocks_ready:
+            self._start_blocks(*self._blk_args)
+            self._blocks_ready = True
+            self._blk_ok = bool(np.all(self._g_grp > 0)) and self._g_far > 0
+        return self._blk_ok
+
+    def _start_blocks(self, horizon: float, mu: float) -> None:
+        """Blocks, their groups and the group pairs to test (the module
+        docstring's block condition).
+
+        Groups of GROUP consecutive blocks: a group pair's box of relative
+        displacements holds each of its block pairs' boxes, so a group pair
+        whose box is below a lower bound of its block pairs' gaps clears them
+        all; the block pairs of the others are formed when tested
+        (:meth:`_block_pairs`), with their own gaps. The lower bound: the
+        distance between spheres about the groups enclosing their blocks'
+        spheres, put through the blocks' rule (``max(H, min(d, far))``, which
+        grows with d). Block pairs listed (one by one) are those whose
+        centres lie within the search radius of the k-d tree (``2 max reach
+        + clearance + far``) when there are more than 64 blocks, else all;
+        the group pairs kept are those that may hold one."""
+        n = len(self._pts)
+        # blocks of BLOCK elements: centres [b K, b K + K] (overlapping by one)
+        kb = self.BLOCK
+        nb = max(1, -(-(n - 1) // kb)) if n else 0
+        self._blk_start = np.arange(nb) * kb
+        self._blk_last = np.minimum(self._blk_start + kb, max(n - 1, 0))
+        far = self.FAR_HORIZONS * horizon
+        self._blk_h, self._blk_far, self._blk_mu = horizon, far, mu
+        self._grp_blocks = np.arange(0, nb, self.GROUP)
+        ng = len(self._grp_blocks)
+        self._gi = self._gj = np.zeros(0, np.int64)
+        self._g_grp = self._g_grp2 = np.zeros(0)
+        self._g_far = np.inf
+        self._blk_rad = None
+        if nb == 0:
+            return
+        lo = np.minimum.reduceat(self._pts, self._blk_start)
+        hi = np.maximum.reduceat(self._pts, self._blk_start)
+        lo = np.minimum(lo, self._pts[self._blk_last])
+        hi = np.maximum(hi, self._pts[self._blk_last])
+        centre = 0.5 * (lo + hi)
+        big = 0.5 * row_norm(hi - lo)               # encloses the block's centres, so its elements
+        group = np.arange(nb) // self.GROUP
+        self._blk_radius = None                     # the k-d tree's search radius (None: every pair)
+        if self._rad is not None:
+            rad = np.maximum(np.maximum.reduceat(self._rad, self._blk_start), self._rad[self._blk_last])
+            self._blk_rad = rad[:, None] + self.clearance / 2 + mu      # each block's share of a pair's
+            reach = big + rad
+            self._blk_centre, self._blk_reach = centre, reach
+            g_lo = np.minimum.reduceat(centre, self._grp_blocks)
+            g_hi = np.maximum.reduceat(centre, self._grp_blocks)
+            g_centre = 0.5 * (g_lo + g_hi)
+            off = row_norm(centre - g_centre[group])
+            g_reach = np.maximum.reduceat(off + reach, self._grp_blocks)
+            if nb <= 64:                                # few blocks: every pair
+                gi, gj = np.triu_indices(ng)
+            else:
+                radius = 2.0 * float(reach.max()) + self.clearance + far
+                self._blk_radius = radius
+                tree = cKDTree(centre)
+                listed = int(tree.count_neighbors(tree, radius)) == nb * nb
+                self._g_far = (np.inf if listed else far) - mu
+                pairs = cKDTree(g_centre).query_pairs(radius + 2.0 * float(off.max()) + 1e-9 * (1.0 + radius),
+                                                      output_type="ndarray")
+                gi = np.concatenate([np.arange(ng), pairs[:, 0]]).astype(np.int64)
+                gj = np.concatenate([np.arange(ng), pairs[:, 1]]).astype(np.int64)
+            dist = row_norm(g_centre[gi] - g_centre[gj]) - g_reach[gi] - g_reach[gj] - self.clearance
+            g_grp = np.maximum(horizon, np.minimum(dist, far))
+        else:
+            gi, gj = np.triu_indices(ng)
+            g_grp = np.full(len(gi), horizon)
+        self._gi, self._gj = gi.astype(np.int64), gj.astype(np.int64)
+        self._g_grp = g_grp - mu
+        self._g_grp2 = np.where(self._g_grp > 0, self._g_grp, 0.0) ** 2
+        self._nb = nb
+
+    def _block_pairs(self, gp: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The block pairs (a <= b) of group pairs gp and their squared gaps
+        (the package docstring's ``max(H, L[A, B])``, less the rounding
+        margin): those listed, other than a block with itself or the next on
+        one cable (their element pairs are near pairs)."""
+        g, nb = self.GROUP, self._nb
+        k = np.arange(g * g)
+        bi = (self._gi[gp] * g)[:, None] + (k // g)[None, :]
+        bj = (self._gj[gp] * g)[:, None] + (k % g)[None, :]
+        keep = (bi <= bj) & (bj < nb)
+        bi, bj = bi[keep], bj[keep]
+        end = self._blk_last[bj]
+        near = (bj - bi <= 1) & (self._cable[self._blk_start[bi]] == self._cable[end])
+        bi, bj = bi[~near], bj[~near]
+        if self._blk_rad is None:
+            gap = np.full(len(bi), self._blk_h)
+        else:
+            c = self._blk_centre
+            sep = row_norm(c[bi] - c[bj])
+            if self._blk_radius is not None:
+                on = sep <= self._blk_radius
+                bi, bj, sep = bi[on], bj[on], sep[on]
+            dist = sep - self._blk_reach[bi] - self._blk_reach[bj] - self.clearance
+            gap = np.maximum(self._blk_h, np.minimum(dist, self._blk_far))
+        gap = gap - self._blk_mu
+        return bi, bj, np.where(gap > 0, gap, 0.0) ** 2
+
+    def _start_near(self, horizon: float, mu: float) -> None:
+        """Near element pairs (e, f), e <= f <= e + 2 BLOCK - 1 on one cable,
+        their arc-length window, the distance their places must exceed, and
+        their gaps (the horizon until candidates are charged)."""
+        n, span = len(self._pts), 2 * self.BLOCK
+        e = np.repeat(np.arange(n - 1), span)
+        f = e + np.tile(np.arange(span), n - 1)
+        keep = f < n - 1
+        e, f = e[keep], f[keep]
+        keep = self._valid[e] & self._valid[f] & (self._cable[e] == self._cable[f])
+        self._ne, self._nf = e[keep], f[keep]
+        self._near_index = np.full((n - 1) * span, -1, np.int64)
+        self._near_index[self._ne * span + (self._nf - self._ne)] = np.arange(len(self._ne))
+        r = self._rad[self._ne]
+        # the chord bound as a turning limit: places checked are at least
+        # max(w, S) apart along the cable, with S the arc length from centre
+        # e + 1 to f, which can shrink by at most ``stretch`` while skipping
+        arc = self._s_c
+        window = self_pair_window(r, self.clearance) - mu
+        ds = np.maximum(window, arc[self._nf] - arc[self._ne + 1] - self.stretch - mu)
+        ratio = (2.0 * r + self.clearance + mu) / ds
+        self._near_turn = np.where(ratio < 1.0, 2.0 * np.arccos(np.minimum(ratio, 1.0)) - 1e-9, -1.0)
+        self._g_near = np.full(len(self._ne), float(horizon))
+        # the four centre pairs (e or e + 1, f or f + 1) of each near pair
+        self._near_a = np.concatenate([self._ne, self._ne, self._ne + 1, self._ne + 1])
+        self._near_b = np.concatenate([self._nf, self._nf + 1, self._nf, self._nf + 1])
+
+    def _charge_near(self, ca, lo_a, hi_a, cb, lo_b, hi_b, value) -> np.ndarray:
+        """Charge the candidates whose places lie on near element pairs to
+        those pairs' gaps; returns which candidates were (n,) bool."""
+        span = 2 * self.BLOCK
+        first, last = self._offsets[ca], self._offsets[ca + 1] - 2          # the cable's elements
+        ea0, ea1 = np.clip(lo_a, first, last), np.clip(np.maximum(hi_a - 1, lo_a), first, last)
+        first_b, last_b = self._offsets[cb], self._offsets[cb + 1] - 2
+        eb0, eb1 = np.clip(lo_b, first_b, last_b), np.clip(np.maximum(hi_b - 1, lo_b), first_b, last_b)
+        near = (ca == cb) & (np.maximum(ea1, eb1) - np.minimum(ea0, eb0) < span)
+        if near.any():
+            k = np.arange(3)
+            ea = ea0[near][:, None, None] + k[None, :, None]
+            eb = eb0[near][:, None, None] + k[None, None, :]
+            ok = (ea <= ea1[near][:, None, None]) & (eb <= eb1[near][:, None, None])
+            ea, eb = np.broadcast_to(ea, ok.shape)[ok], np.broadcast_to(eb, ok.shape)[ok]
+            v = np.broadcast_to(value[near][:, None, None], ok.shape)[ok]
+            e, f = np.minimum(ea, eb), np.maximum(ea, eb)
+            np.minimum.at(self._g_near, self._near_index[e * span + (f - e)], v)
+        return near
+
+    def _near_clear(self, move: np.ndarray, d: np.ndarray, seg: np.ndarray) -> np.ndarray:
+        """Near element pairs per state (S,): each either provably apart by
+        the chord bound at this state (module docstring) or within its gap
+        of relative motion since the start. d (N - 1, 3, S) the elements,
+        seg (N - 1, S) their lengths."""
+        s = move.shape[2]
+        # turning at each centre, rounded up (arccos loses ~1e-8 near 0); a
+        # zero-length element turns by pi (proves nothing)
+        den = seg[:-1] * seg[1:]
+        cos = np.divide(np.einsum("eis,eis->es", d[:-1], d[1:]), den, out=np.full(den.shape, -1.0),
+                        where=den > 0)
+        turn = np.zeros((len(move), s))
+        turn[1:-1] = np.arccos(np.clip(cos, -1.0, 1.0)) + 1e-6
+        turn = np.cumsum(turn, axis=0)
+        bad = turn[self._nf] - turn[self._ne] >= self._near_turn[:, None]     # (E, S)
+        rows = np.nonzero(bad.any(axis=1))[0]
+        if len(rows):                            # the relative motion only where the chord fails
+            m = len(self._ne)
+            a = (self._near_a.reshape(4, m)[:, rows]).ravel()
+            b = (self._near_b.reshape(4, m)[:, rows]).ravel()
+            dd = move[a] - move[b]
+            rel2 = np.einsum("pis,pis->ps", dd, dd).reshape(4, len(rows), s).max(axis=0)
+            bad[rows] &= rel2 >= self._g_near2[rows, None]
+        return ~bad.any(axis=0)
+
+    def clear(self, x: np.ndarray, move: np.ndarray, dcc: np.ndarray, diag: np.ndarray,
+                           d: np.ndarray, seg: np.ndarray) -> np.ndarray:
+        """The cable-pair conditions of the package docstring (second list),
+        per state (S,) of ``move`` (N, 3, S): ``dcc`` (S,) bounds every
+        |d_a - d_b|, ``diag`` (S,) (the bounding box's diagonal) also every
+        block pair's box bound; x (N, 3, S) the centres, d and seg the
+        elements and their lengths. Exact for the leading run of states that
+        pass (all :meth:`clear_run` uses); after the first state that fails,
+        every state is reported failing unevaluated.
+
+        Cheapest first: near pairs and candidate centre pairs (skipped for
+        states whose whole spread is below all their gaps), then the far
+        limit and the block pairs, listed on first use. Block pairs are
+        tested a group pair at a time first (a group's box of displacements
+        holds its blocks'; group pairs whose least gap exceeds the spread
+        pass unlooked), one by one only in group pairs that do not pass
+        whole, the spheres at this state only for block pairs failing the
+        box, and over runs of states of doubling length."""
+        n_s = len(dcc)
+        ok = np.ones(n_s, bool)
+        easy = diag < self._g_min_nb               # every relative motion is below every such gap
+        if not easy.all():
+            pair_ok = self._near_clear(move, d, seg) if self._near else np.ones(n_s, bool)
+            pair_ok |= easy
+            m = leading(pair_ok)
+            if len(self._cc_i) and m:
+                dd = move[self._cc_i][:, :, :m] - move[self._cc_j][:, :, :m]
+                pair_ok[:m] &= (np.einsum("mis,mis->ms", dd, dd) < self._g_cc2[:, None]).all(axis=0) | easy[:m]
+            ok &= pair_ok
+        n = leading(ok)
+        ok[n:] = False
+        if not n:
+            return ok
+        if not self._ensure_blocks():
+            return np.zeros(n_s, bool)
+        ok[:n] &= dcc[:n] < self._g_far
+        n = leading(ok)
+        ok[n:] = False
+        if len(self._gi) and n:
+            # states in runs of doubling length, each only once the ones
+            # before all passed: a failure near the start costs a state or two
+            a, b = 0, 1
+            while a < n:
+                b = min(b, n)
+                blk = self._blocks_clear(x[:, :, a:b], move[:, :, a:b], float(diag[a:b].max()))
+                if not blk.all():
+                    ok[a + leading(blk):] = False
+                    break
+                a, b = b, 2 * b + 1
+        return ok
+
+    def _blocks_clear(self, x: np.ndarray, move: np.ndarray, diag: float) -> np.ndarray:
+        """The block-pair condition per state (S,) of x and move (N, 3, S);
+        ``diag`` bounds every block pair's box (the largest diagonal)."""
+        s = x.shape[2]
+        # group pairs whose least gap exceeds every box pass whole
+        cand = np.nonzero(self._g_grp <= diag)[0]
+        if not len(cand):
+            return np.ones(s, bool)
+        box = self._block_boxes(move)
+        glo = np.minimum.reduceat(box[0], self._grp_blocks, axis=0)
+        ghi = np.maximum.reduceat(box[1], self._grp_blocks, axis=0)
+        gi, gj = self._gi[cand], self._gj[cand]
+        rel = np.maximum(np.abs(ghi[gi] - glo[gj]), np.abs(glo[gi] - ghi[gj]))
+        grp_ok = np.einsum("pis,pis->ps", rel, rel) < self._g_grp2[cand, None]
+        fail = cand[~grp_ok.all(axis=1)]
+        if not len(fail):
+            return np.ones(s, bool)
+        bi, bj, g2 = self._block_pairs(fail)                            # their block pairs
+        rel = np.maximum(np.abs(box[1][bi] - box[0][bj]), np.abs(box[0][bi] - box[1][bj]))
+        blk_ok = np.einsum("pis,pis->ps", rel, rel) < g2[:, None]
+        if self._blk_rad is not None:
+            bad = np.nonzero(~blk_ok.all(axis=1))[0]
+            if len(bad):
+                # or apart now: spheres about the blocks' boxes of centres, at this state
+                lo, hi = self._block_boxes(x)
+                sphere = 0.5 * row_norm3(hi - lo) + self._blk_rad
+                centre = 0.5 * (lo + hi)
+                a, b = bi[bad], bj[bad]
+                blk_ok[bad] |= row_norm3(centre[a] - centre[b]) > sphere[a] + sphere[b]
+        return blk_ok.all(axis=0)
+
+    def _block_boxes(self, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Componentwise least and largest of v (N, 3, S) over each block's
+        centres: ((B, 3, S), (B, 3, S))."""
+        last = v[self._blk_last]
+        return (np.minimum(np.minimum.reduceat(v, self._blk_start, axis=0), last),
+                np.maximum(np.maximum.reduceat(v, self._blk_start, axis=0), last))

@@ -1,0 +1,278 @@
+"""The skip rule's bound on cables against parts (cable-structure, keep-out).
+
+After a full check every body centre gets a gap to every part: the least
+value minus the clearance of the part's candidates on the elements next to
+it, or where there is none the larger of the horizon and the elements'
+floor (their boxes' distance from the part's box in its frame). Kept as a
+dense (centres x parts) table, or for large scenes as sparse entries below
+``FAR_HORIZONS`` horizons found through a k-d tree. :meth:`CentrePartGaps.clear`
+tests many states at once, in each part's own frame and in the world.
+
+Deliberately not here: cable pairs, part pairs, the run of states
+(:class:`checker.advance.skip.Advancement`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from checker.advance.common import FAR_HORIZONS, Layout, Start, bracket
+from checker.arrays import ranges
+from checker.interference.hits import PartCandidates
+
+
+class CentrePartGaps:
+    """The centre-part gaps of one start.
+
+    Args:
+        layout: the run's layout.
+        start: the state of the full check.
+    """
+
+    FAR_HORIZONS = FAR_HORIZONS
+
+    def __init__(self, layout: Layout, start: Start):
+        # the names the bound's arithmetic reads
+        self._pts, self._rot, self._pos, self._seg_raw, self._s_c = start.pts, start.rot, start.pos, start.seg, start.s_c
+        self._horizon, self._mu = start.horizon, start.mu
+        self._cable, self._valid, self._offsets = layout.cable, layout.valid, layout.offsets
+        self._rad, self._box, self._rho, self.clearance = layout.rad, layout.box, layout.rho, layout.clearance
+
+    def ok_at_start(self) -> bool:
+        """True when every gap is positive (sparse: the cap; the entries on first use)."""
+        return self._sp_cap > 0 if self._sparse else bool(np.all(self._g_pt > 0))
+
+    def start(self, gap_part: np.ndarray, candidates: PartCandidates | None,
+              active: tuple[np.ndarray, np.ndarray] | None, sparse: bool) -> tuple[np.ndarray, np.ndarray]:
+        """The gaps ``g[i, k]`` of the package docstring (a dense table, or
+        ``sparse`` entries: :meth:`_start_sparse`) from the check's gaps per
+        part (inf for parts it does not check) and its candidates (None:
+        every centre gets its part's gap); ``active`` as for
+        :meth:`checker.advance.skip.Advancement.start`. Returns the active
+        (centre, part) pairs."""
+        self._sparse = sparse
+        horizon, mu = self._horizon, self._mu
+        if sparse:
+            return self._start_sparse(gap_part, horizon, candidates, active, mu)
+        n, n_p = len(self._pts), len(gap_part)
+        u0 = (self._pts[None] - self._pos[:, None]) @ self._rot                  # R^T (x - t)
+        if candidates is None:
+            g = np.broadcast_to(gap_part, (n, n_p)).copy()
+        else:
+            base = np.full((n, n_p), float(horizon))
+            if self._box is not None and n > 1:
+                base = np.maximum(base, self._floor(u0).T)
+            g = np.where(np.isfinite(gap_part)[None, :], base, np.inf)
+            cab, s, part, value = candidates
+            if len(value):
+                lo, hi = self._bracket(cab, s)
+                count = hi - lo + 1
+                rows = ranges(lo, count)
+                np.minimum.at(g, (rows, np.repeat(part, count)), np.repeat(value, count))
+        structure = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        if active is not None and len(active[0]):
+            a_cab, a_part = (np.asarray(x, np.int64) for x in active)
+            near = (self._cable[:, None] == a_cab[None, :]) & (g[:, a_part] < self.FAR_HORIZONS * horizon)
+            rows, j = np.nonzero(near)
+            structure = (rows, a_part[j])
+            g[structure] = np.inf
+        self._g_pt = g - mu
+        # fused-pass data: each centre in each part's frame (homogeneous)
+        self._u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
+        self._g_kn = np.ascontiguousarray(self._g_pt.T)
+        self._g2 = np.where(self._g_kn > 0, self._g_kn, 0.0) ** 2
+        return structure
+
+    def _start_sparse(self, gap_part: np.ndarray, horizon: float, candidates: tuple[np.ndarray, ...],
+                      active: tuple[np.ndarray, np.ndarray] | None,
+                      mu: float) -> tuple[np.ndarray, np.ndarray]:
+        """The centre-part gaps ``g[i, k]`` of the package docstring kept only
+        where they are below ``cap = FAR_HORIZONS * horizon`` (every other
+        checked pair counts as ``cap``: a smaller gap only proves less), as
+        (centre, part, gap) entries sorted by part.
+
+        Pairs are listed by a k-d tree of the element midpoints queried about
+        each part's frame origin. Why that finds every floor below ``cap``:
+        an element of half-length h lies in its bounding box in the part's
+        frame, and that box lies within ``sqrt(3) h`` of the midpoint; the
+        part's box lies within its bounding radius ``rho`` of the origin; so
+        the boxes' distance is at least ``|mid - origin| - sqrt(3) h - rho``,
+        and ``F[e, k]`` (that minus the cable radius and the clearance) is at
+        least ``cap`` beyond the query radius. Candidates (values at most the
+        horizon, below every floor's ``max(H, F)``) are entries of their own.
+        Planes and other unbounded parts get every centre. Returns the
+        active (centre, part) pairs."""
+        n_p = len(gap_part)
+        cap = self.FAR_HORIZONS * horizon
+        self._sp_cap = cap - mu
+        self._sp_default = np.where(np.isfinite(gap_part), self._sp_cap, np.inf)    # an unlisted pair's gap
+        self._sp_cache: dict[bytes, tuple] = {}
+        first = np.zeros(n_p, bool)
+        if active is not None and len(active[0]):
+            first[np.asarray(active[1], np.int64)] = True
+        # the active parts' entries now (the caller needs the active pairs), the
+        # others on first use (:meth:`_ensure_sparse`)
+        part, rows, val = self._sparse_entries(gap_part, horizon, candidates, first)
+        n = len(self._pts)
+        structure = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        if active is not None and len(active[0]):
+            a_cab, a_part = (np.asarray(x, np.int64) for x in active)
+            # (centre, active pair) for every entry of an active part on the pair's cable
+            pair_of = {}
+            for j, (c, q) in enumerate(zip(a_cab.tolist(), a_part.tolist())):
+                pair_of.setdefault(q, []).append((j, c))
+            hit_r, hit_j = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
+            for q, lst in pair_of.items():                         # the few active parts
+                on = part == q
+                for j, c in lst:
+                    r = rows[on & (self._cable[rows] == c)]
+                    hit_r.append(r)
+                    hit_j.append(np.full(len(r), j, np.int64))
+            hr, hj = np.concatenate(hit_r), np.concatenate(hit_j)
+            o = np.lexsort((hj, hr))
+            hr, hj = hr[o], hj[o]
+            structure = (hr, a_part[hj])
+            drop = np.isin(part * n + rows, a_part[hj] * n + hr)
+            part, rows, val = part[~drop], rows[~drop], val[~drop]
+        self._sp_first = (part, rows, val - mu)
+        self._sp_rest = (gap_part, horizon, candidates, ~first, mu)
+        self._sp_ready = False
+        return structure
+
+    def _ensure_sparse(self) -> bool:
+        """Every sparse entry of the last start (once); True when all gaps are positive."""
+        if not self._sp_ready:
+            gap_part, horizon, candidates, rest, mu = self._sp_rest
+            part, rows, val = self._sparse_entries(gap_part, horizon, candidates, rest)
+            p0, r0, g0 = self._sp_first
+            self._sp_part = np.concatenate([p0, part])
+            self._sp_row = np.concatenate([r0, rows])
+            self._sp_g = np.concatenate([g0, val - mu])
+            self._sp_ready = True
+            self._sp_ok = bool(np.all(self._sp_g > 0)) and self._sp_cap > 0
+        return self._sp_ok
+
+    def _sparse_entries(self, gap_part: np.ndarray, horizon: float, candidates: tuple[np.ndarray, ...],
+                        only: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(part, centre, gap) entries below the cap of the parts ``only`` (P,) bool
+        (see :meth:`_start_sparse`), the least per pair, sorted by part."""
+        pts, n = self._pts, len(self._pts)
+        cap = self.FAR_HORIZONS * horizon
+        checked = np.isfinite(gap_part)
+        box_lo, box_hi = self._box[0][:, 0], self._box[1][:, 0]
+        seg = np.where(self._valid, self._seg_raw, 0.0)
+        elem = np.nonzero(self._valid)[0]
+        mid = 0.5 * (pts[elem] + pts[elem + 1])
+        bounded = checked & only & np.isfinite(self._rho)
+        e_list, k_list = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
+        if bounded.any() and len(elem):
+            reach = (cap + np.sqrt(3.0) * 0.5 * float(seg.max()) + float(self._rad.max()) + self.clearance
+                     + 1e-9 * (1.0 + float(np.abs(pts).max())))
+            kb = np.nonzero(bounded)[0]
+            found = cKDTree(mid).query_ball_point(self._pos[kb], reach + self._rho[kb])
+            count = np.array([len(f) for f in found], np.int64)
+            if count.sum():
+                e_list.append(elem[np.concatenate([np.asarray(f, np.int64) for f in found if len(f)])])
+                k_list.append(np.repeat(kb, count))
+        unbounded = np.nonzero(checked & only & ~np.isfinite(self._rho))[0]
+        if len(unbounded) and len(elem):
+            e_list.append(np.tile(elem, len(unbounded)))
+            k_list.append(np.repeat(unbounded, len(elem)))
+        e, k = np.concatenate(e_list), np.concatenate(k_list)
+        # F[e, k] as _floor computes it (the element's ends in the part's frame)
+        rot, pos = self._rot[k], self._pos[k]
+        a = np.einsum("ni,nij->nj", pts[e] - pos, rot)
+        b = np.einsum("ni,nij->nj", pts[e + 1] - pos, rot)
+        sep = np.maximum(np.maximum(np.minimum(a, b) - box_hi[k], box_lo[k] - np.maximum(a, b)), 0.0)
+        f = np.sqrt(np.einsum("ni,ni->n", sep, sep)) - self._rad[e] - self.clearance
+        rows = np.concatenate([e, e + 1])
+        part = np.concatenate([k, k])
+        val = np.maximum(horizon, np.concatenate([f, f]))
+        cab, s, c_part, value = candidates
+        if len(value):
+            lo, hi = self._bracket(cab, s)
+            count = hi - lo + 1
+            rows = np.concatenate([rows, ranges(lo, count)])
+            part = np.concatenate([part, np.repeat(np.asarray(c_part, np.int64), count)])
+            val = np.concatenate([val, np.repeat(np.asarray(value, float), count)])
+        keep = checked[part] & only[part] & (val < cap)
+        rows, part, val = rows[keep], part[keep], val[keep]
+        key = part * n + rows
+        o = np.lexsort((val, key))
+        key, val = key[o], val[o]
+        first = np.r_[len(key) > 0, key[1:] != key[:-1]][:len(key)]
+        key, val = key[first], val[first]                       # the least per (part, centre)
+        part, rows = key // n, key % n
+        return part, rows, val
+
+    def _floor(self, u0: np.ndarray) -> np.ndarray:
+        """(P, N): per centre and part, the least over the elements next to
+        the centre of ``F[e, k]`` (module docstring); u0 (P, N, 3) the
+        centres in the parts' frames."""
+        a, b = u0[:, :-1], u0[:, 1:]
+        box_lo, box_hi = self._box
+        sep = np.maximum(np.maximum(np.minimum(a, b) - box_hi, box_lo - np.maximum(a, b)), 0.0)
+        f = np.sqrt(np.einsum("kei,kei->ke", sep, sep)) - self._rad[:-1] - self.clearance
+        f = np.where(self._valid, f, np.inf)
+        out = np.full(u0.shape[:2], np.inf)
+        out[:, :-1] = f
+        out[:, 1:] = np.minimum(out[:, 1:], f)
+        return out
+
+    def _bracket(self, cab: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`~checker.advance.common.bracket` at the start's arc lengths."""
+        return bracket(self._s_c, self._cable, self._offsets, cab, s)
+
+    def clear(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray) -> np.ndarray:
+        """Cable-structure and keep-out conditions per state (S,); x (N, 3, S)
+        the centres, dq (N, S) their displacements, dp (P, S) the parts'."""
+        s = x.shape[2]
+        if self._sparse:
+            return self._parts_clear_sparse(x, poses, dq, dp)
+        # every centre as it would be had it moved rigidly with part k:
+        # u0h[k] (N, 4) times the poses' top rows (4, 3 S), one product per part
+        top = np.transpose(poses[:, :, :3, :], (1, 3, 2, 0)).reshape(len(dp), 4, 3 * s)
+        w = np.matmul(self._u0h, top).reshape(len(dp), len(x), 3, s)
+        w -= x
+        bad = np.einsum("knis,knis->kns", w, w) >= self._g2[:, :, None]
+        if bad.any():                            # or within the gap by the world displacements
+            bad &= (dq + dp[:, None, :]) >= self._g_kn[:, :, None]
+        return ~bad.reshape(-1, s).any(axis=0)
+
+    def _parts_clear_sparse(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray) -> np.ndarray:
+        """:meth:`clear` on the sparse gaps: parts that did not move in
+        these states (dp 0, so ``rel`` is ``dq``) reduce to one least gap per
+        centre; the parts that moved are tested as the dense table does, on
+        their own columns (both kept per set of moving parts)."""
+        s = x.shape[2]
+        if not self._ensure_sparse():
+            return np.zeros(s, bool)
+        moved = (dp > 0).any(axis=1)
+        tag = moved.tobytes()
+        if tag not in self._sp_cache:
+            n = len(self._pts)
+            still = ~moved[self._sp_part]
+            g_still = np.full(n, float(self._sp_default[~moved].min(initial=np.inf)))
+            np.minimum.at(g_still, self._sp_row[still], self._sp_g[still])
+            mk = np.nonzero(moved)[0]
+            col = np.full(len(moved), -1, np.int64)
+            col[mk] = np.arange(len(mk))
+            g_kn = np.repeat(self._sp_default[mk][:, None], n, axis=1)
+            on = ~still
+            np.minimum.at(g_kn, (col[self._sp_part[on]], self._sp_row[on]), self._sp_g[on])
+            u0 = (self._pts[None] - self._pos[mk, None]) @ self._rot[mk]
+            u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
+            g2 = np.where(g_kn > 0, g_kn, 0.0) ** 2
+            self._sp_cache = {tag: (g_still, mk, u0h, g_kn, g2)}
+        g_still, mk, u0h, g_kn, g2 = self._sp_cache[tag]
+        ok = (dq < g_still[:, None]).all(axis=0)
+        if len(mk):
+            top = np.transpose(poses[:, mk, :3, :], (1, 3, 2, 0)).reshape(len(mk), 4, 3 * s)
+            w = np.matmul(u0h, top).reshape(len(mk), len(x), 3, s)
+            w -= x
+            bad = np.einsum("knis,knis->kns", w, w) >= g2[:, :, None]
+            if bad.any():
+                bad &= (dq + dp[mk][:, None, :]) >= g_kn[:, :, None]
+            ok &= ~bad.reshape(-1, s).any(axis=0)
+        return ok

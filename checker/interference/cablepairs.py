@@ -1,0 +1,354 @@
+"""Cables against cables: self and cable-cable pairs, one state or many.
+
+Method ``points`` (the discrete-point distance method, Ju et al., 2016):
+two points of one cable closer than ``2r`` interfere unless
+:func:`checker.cable.self_pair_excluded` says they are neighbours along the
+cable; second pass, a point against the midpoint of every element it is not
+a neighbour of. Two cables: the least distance over all point pairs, against
+``r1 + r2``. Method ``exact``: element pairs as capsules, exact
+segment-segment distances, the exclusion rule applied at the closest
+points' arc lengths.
+
+Pairs along one cable within a few places of each other (the near field)
+are taken by shifting the point arrays against themselves, one offset at a
+time, after cuts that drop what cannot be a hit (the self rule's arc-length
+reach; with points, whole windows whose arc exceeds their chord too little
+to fold back within the hit distance; with elements, a chord-minus-arc bound
+per pair). Everything farther apart (other cables, loops of the same cable)
+comes from chunk pairs of :mod:`checker.interference.broad`. A plain tree
+over the points would mostly return each point's own neighbours along its
+cable, all of which the self rule then drops. Both halves keep only
+candidates that can be below the clearance and compute their values
+exactly as a direct pair loop would. :func:`cable_pairs_many` takes given
+pairs of body centres over many states at once and shares
+:func:`point_pair_rows` with the single-state pass.
+
+Deliberately not here: parts, bend and taut, the reduction to records.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from checker.arrays import ranges, within
+from checker.cable import self_pair_excluded, self_pair_window
+from checker.closest import row_norm, segment_segment
+from checker.interference.broad import NEAR, SLACK, Chunks, within_reach, within_reach_t
+from checker.interference.discrete import DenseStates, Discrete
+from checker.interference.hits import TYPE_ORDER, Hits, worst_records
+from checker.records import Interference, PairType
+
+
+def _near_windows(p, s, cab, reach, lim) -> np.ndarray:
+    """Points that start a window of ``NEAR + 1`` elements which may hold a self hit.
+
+    In a window from point i to point j (``NEAR + 1`` places on, or the
+    cable's end) two places x, y of the polyline are at least as far apart
+    as the chord of the window minus the arc length outside them:
+    ``|x - y| >= |p_j - p_i| - (s_j - s_i) + |s_x - s_y|``. A self hit needs
+    ``|s_x - s_y| >= reach`` (the self rule) and ``|x - y| < lim``, so a
+    window whose arc exceeds its chord by no more than ``reach - lim`` holds
+    none. Every near-field pair (first pass, or a point against an element's
+    midpoint) lies in the window starting at its lower index.
+    """
+    n = len(p)
+    w = NEAR + 1
+    if n <= w:
+        return np.arange(n)
+    # Windows reaching past their cable's end end there instead.
+    j = np.arange(w, n + w)
+    j[n - w:] = n - 1
+    cut = np.nonzero(cab[j] != cab)[0]
+    j[cut] = np.searchsorted(cab, cab[cut], side="right") - 1
+    d = np.empty_like(p)
+    d[: n - w] = p[w:] - p[: n - w]
+    d[cut] = p[j[cut]] - p[cut]
+    d[n - w:] = p[j[n - w:]] - p[n - w:]
+    chord = np.sqrt(np.einsum("ij,ij->i", d, d))
+    arc = s[j] - s
+    slack = SLACK * (np.abs(s[j]) + reach + lim)
+    return np.nonzero(arc - chord > reach - lim - slack)[0]
+
+
+def cable_pairs_points(dp: Discrete, ch: Chunks, clearance: float, hits: Hits,
+                        limit: float | None = None, stretch: float = 0.0) -> None:
+    """Point-point pairs (self and cable-cable) and the self midpoint pass.
+
+    Candidates: cable-cable point pairs within ``r1 + r2 + clearance``; self
+    point pairs within ``2r + clearance``; a point against the midpoint of an
+    element not touching it within ``2r + clearance``. Self candidates the
+    rule of :func:`~checker.cable.self_pair_excluded` drops are dropped.
+
+    With ``limit`` (>= clearance) candidates are found up to ``limit``
+    instead of the clearance, and self pairs up to ``stretch`` of arc length
+    inside the exclusion window are kept too; those only bound the gaps
+    (:meth:`Hits.gaps`): records are still the pairs below the clearance
+    outside the window tied to the clearance.
+    """
+    p, s, cab, rad = dp.p, dp.s, dp.cable, dp.radius
+    limit = clearance if limit is None else limit
+    n = len(p)
+    has_next = ch.has_next
+
+    def mid(e):  # midpoints of elements e (e + 1 on the same cable)
+        return 0.5 * (p[e] + p[e + 1])
+
+    lim_self = 2.0 * rad + limit
+    e0 = np.zeros(0, np.int64)
+    fi, fj, sq, se = [e0], [e0], [e0], [e0]  # self first pass (i < j); second pass (point q, element e)
+    # Near field: offsets 1..NEAR along one cable, from the window starts
+    # that can hold a hit at all (see _near_windows).
+    reach = self_pair_window(rad, clearance) - stretch
+    start = _near_windows(p, s, cab, reach, lim_self)
+    if len(start):
+        k = np.tile(np.arange(1, NEAR + 1), len(start))
+        a = np.repeat(start, NEAR)
+        b = a + k
+        ok = b < n
+        a, b, k = a[ok], b[ok], k[ok]
+        ok = cab[b] == cab[a]
+        a, b, k = a[ok], b[ok], k[ok]
+        tol = SLACK * (reach[a] + np.abs(s[b]))
+        # First pass (a, b); second pass a against element b (when b + 1 is
+        # on the cable) and b against element a (two or more places apart).
+        o = (s[b] - s[a] > reach[a] - tol) & within_reach(p[a], p[b], lim_self[a])
+        fi.append(a[o])
+        fj.append(b[o])
+        e_ok = has_next[b]
+        eb = np.minimum(b, n - 2)
+        o = e_ok & (0.5 * (s[eb] + s[eb + 1]) - s[a] > reach[a] - tol) & within_reach(p[a], mid(eb), lim_self[a])
+        sq.append(a[o])
+        se.append(b[o])
+        o = (k >= 2) & (s[b] - 0.5 * (s[a] + s[a + 1]) > reach[b] - tol) & within_reach(p[b], mid(a), lim_self[b])
+        sq.append(b[o])
+        se.append(a[o])
+    # Far field: chunk pairs.
+    ca, cb = ch.pairs(2.0 * float(rad.max()) + limit)
+    ci, cj = np.zeros(0, np.int64), np.zeros(0, np.int64)
+    if len(ca):
+        same = ch.cable[ca] == ch.cable[cb]
+        i, j = ch.expand(ca[~same], cb[~same])
+        ok = within_reach(p[i], p[j], rad[i] + rad[j] + limit)
+        ci, cj = np.minimum(i[ok], j[ok]), np.maximum(i[ok], j[ok])
+        i, j = ch.expand(ca[same], cb[same])
+        far = np.abs(i - j) > NEAR
+        i, j = i[far], j[far]
+        ok = within_reach(p[i], p[j], lim_self[i])
+        fi.append(np.minimum(i[ok], j[ok]))
+        fj.append(np.maximum(i[ok], j[ok]))
+        for q, e in ((i, j), (j, i)):
+            ok = has_next[e] & within_reach(p[q], mid(np.minimum(e, n - 2)), lim_self[q])
+            sq.append(q[ok])
+            se.append(e[ok])
+    rows = point_pair_rows(p, s, cab, rad, reach, clearance, limit, (ci, cj),
+                           (np.concatenate(fi), np.concatenate(fj)), (np.concatenate(sq), np.concatenate(se)))
+    for kind, a, b, v, i, s_b, rec in rows:
+        hits.add(kind, a, b, v, p[i], s[i], s_b, rec)
+
+
+def point_pair_rows(p: np.ndarray, s: np.ndarray, cab: np.ndarray, rad: np.ndarray, reach: np.ndarray,
+                    clearance: float, limit: float, cable_cable: tuple[np.ndarray, np.ndarray],
+                    self_points: tuple[np.ndarray, np.ndarray],
+                    self_mids: tuple[np.ndarray, np.ndarray]) -> list[tuple]:
+    """Values of candidate pairs of discrete places: the one kernel of
+    :func:`cable_pairs_points` and :func:`cable_pairs_many`.
+
+    Three kinds of candidates, each (n,) index arrays into the points
+    ``p`` (with arc lengths ``s``, cables ``cab``, radii ``rad``):
+    ``cable_cable`` (i, j), i < j on two cables, valued ``|p_i - p_j| - r_i
+    - r_j``; ``self_points`` (i, j), i < j on one cable, and ``self_mids``
+    (q, e), point q against the midpoint of element (e, e + 1) of its
+    cable, valued ``|p_i - x| - 2 r_i``. Candidates at or above ``limit``,
+    and self pairs less than ``reach`` (per point) apart along the cable,
+    are dropped; a self candidate is a record only outside the self rule's
+    window (:func:`~checker.cable.self_pair_excluded` at ``clearance``).
+
+    Returns:
+        per kind, (type, cable a, cable b, value, place index i (the place
+        on a: where and s), arc length on b, record mask or None for all).
+    """
+    i, j = cable_cable
+    v = row_norm(p[i] - p[j]) - rad[i] - rad[j]
+    o = v < limit
+    i, j = i[o], j[o]
+    rows = [(PairType.CABLE_CABLE, cab[i], cab[j], v[o], i, s[j], None)]
+    i, j = self_points
+    v = row_norm(p[i] - p[j]) - 2 * rad[i]
+    o = (v < limit) & ~(np.abs(s[i] - s[j]) < reach[i])
+    i, j = i[o], j[o]
+    rows.append((PairType.SELF, cab[i], cab[i], v[o], i, s[j], ~self_pair_excluded(s[i], s[j], rad[i], clearance)))
+    q, e = self_mids
+    mid = 0.5 * (p[e] + p[e + 1])
+    sm = 0.5 * (s[e] + s[e + 1])
+    v = row_norm(p[q] - mid) - 2 * rad[q]
+    o = (v < limit) & ~(np.abs(s[q] - sm) < reach[q])
+    q, sm = q[o], sm[o]
+    rows.append((PairType.SELF, cab[q], cab[q], v[o], q, sm, ~self_pair_excluded(s[q], sm, rad[q], clearance)))
+    return rows
+
+
+def cable_pairs_exact(dp: Discrete, ch: Chunks, clearance: float, hits: Hits) -> None:
+    """Element-element pairs (capsule chains), self and cable-cable.
+
+    Element pairs are pruned by lower bounds on their distance before the
+    exact segment-segment distance: the midpoints' distance minus the half
+    lengths; along one cable also the chord between the pair's outer ends
+    minus the arc length between them, plus the arc-length separation the
+    self rule requires (closest points nearer along the cable are excluded).
+    """
+    p, s, cab, rad, seg = dp.p, dp.s, dp.cable, dp.radius, dp.seg
+    if len(seg) == 0:
+        return
+    n = len(p)
+    mid = 0.5 * (p[:-1] + p[1:])
+    half = 0.5 * (s[1:] - s[:-1])  # half element lengths (arc = chord per element)
+    lim_self = 2.0 * rad + clearance
+    reach = self_pair_window(rad, clearance)
+
+    def self_ok(e, f):
+        """Element pairs e < f of one cable that may hold a self hit."""
+        lim = lim_self[e] + half[e] + half[f]
+        arc = s[f + 1] - s[e]
+        tol = SLACK * (np.abs(s[f + 1]) + reach[e] + lim_self[e])
+        bound = lim_self[e] + arc - reach[e] + tol
+        return ((arc > reach[e] - tol) & (bound > 0) & within_reach(mid[e], mid[f], lim)
+                & within_reach(p[e], p[f + 1], np.maximum(bound, 0.0)))
+
+    ea, eb = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
+    pt = np.ascontiguousarray(p.T)
+    for k in range(1, min(NEAR, n - 2) + 1):
+        # Elements e and e + k: the cheap arc-length test and the chord bound
+        # on whole slices, the rest on the few survivors.
+        m = n - k - 1
+        arc = s[k + 1:] - s[:m]
+        tol = SLACK * (np.abs(s[k + 1:]) + reach[:m] + lim_self[:m])
+        bound = lim_self[:m] + arc - reach[:m] + tol
+        ok = (cab[:m] == cab[k + 1:]) & (arc > reach[:m] - tol) & (bound > 0)
+        if not ok.any():
+            continue
+        e = np.nonzero(ok & within_reach_t(pt[:, :m], pt[:, k + 1:], np.maximum(bound, 0.0)))[0]
+        e = e[self_ok(e, e + k)]
+        ea.append(e)
+        eb.append(e + k)
+    ca, cb = ch.pairs(2.0 * float(rad.max()) + clearance)
+    if len(ca):
+        same = ch.cable[ca] == ch.cable[cb]
+        i, j = ch.expand(ca[~same], cb[~same])
+        ok = within_reach(mid[i], mid[j], rad[i] + rad[j] + clearance + half[i] + half[j])
+        ea.append(np.minimum(i[ok], j[ok]))
+        eb.append(np.maximum(i[ok], j[ok]))
+        i, j = ch.expand(ca[same], cb[same])
+        i, j = np.minimum(i, j), np.maximum(i, j)
+        o = j - i > NEAR
+        i, j = i[o], j[o]
+        o = self_ok(i, j)
+        ea.append(i[o])
+        eb.append(j[o])
+    ia, ib = np.concatenate(ea), np.concatenate(eb)
+    if len(ia) == 0:
+        return
+    d, ta, tb, ca_, _ = segment_segment(p[ia], p[ia + 1], p[ib], p[ib + 1])
+    sa = s[ia] + ta * (s[ia + 1] - s[ia])
+    sb = s[ib] + tb * (s[ib + 1] - s[ib])
+    same = cab[ia] == cab[ib]
+    o = ~same
+    hits.add(PairType.CABLE_CABLE, cab[ia[o]], cab[ib[o]], d[o] - rad[ia[o]] - rad[ib[o]], ca_[o], sa[o], sb[o])
+    o = same & ~self_pair_excluded(sa, sb, rad[ia], clearance)
+    hits.add(PairType.SELF, cab[ia[o]], cab[ia[o]], d[o] - 2 * rad[ia[o]], ca_[o], sa[o], sb[o])
+
+
+def cable_pairs_many(clearance: float, names: Sequence[str], radii: np.ndarray, dense: DenseStates,
+                     active: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
+    """The full check's self and cable-cable records at many states at
+    once, from the discrete places next to given pairs of body centres
+    (method ``points``; to the bit).
+
+    For each active pair of centres (i, j) every discrete point next to
+    i (i itself, the points inside its two elements) is paired with
+    every one next to j, and on one cable also with the midpoint of
+    every piece next to j (and the other way round); a record is the
+    worst of those (the caller knows the others to be clear). Every
+    state must split each element into as many pieces as the first.
+
+    Args:
+        names, radii: the cables' names and radii (C,).
+        dense: the states' discrete points (:meth:`densify_many`).
+        active: (centre i, centre j) arrays.
+
+    Returns:
+        per state, its records (worst first).
+    """
+    n_s, n, n_c = dense.states, dense.centres, dense.cables
+    out: list[list[Interference]] = [[] for _ in range(n_s)]
+    ci, cj = (np.asarray(x, np.int64) for x in active)
+    if n_s == 0 or len(ci) == 0:
+        return out
+    radii = np.asarray(radii, float)
+    p, s, poly, src, own = dense.p, dense.s, dense.poly, dense.src, dense.own
+    cab, rad = poly % n_c, radii[poly % n_c]
+    m = len(p) // n_s                                  # points per state (the same in each)
+    if m * n_s != len(p) or not np.all(src.reshape(n_s, m) - n * np.arange(n_s)[:, None] == src[:m]):
+        raise ValueError("every state must split its elements into as many pieces as the first")
+    # one state's layout: the points next to each centre (its own point,
+    # the points inside its two elements) and the pieces inside them
+    c0, own0 = src[:m], own[:m]
+    piece0 = np.r_[poly[1:m] == poly[:m - 1], False]
+    pt_c = np.concatenate([c0[own0], c0[~own0], c0[~own0] + 1])           # centre each point is next to
+    pt_i = np.concatenate([np.flatnonzero(own0), np.flatnonzero(~own0), np.flatnonzero(~own0)])
+    pc_c = np.concatenate([c0[piece0], c0[piece0] + 1])                  # centre each piece is next to
+    pc_i = np.concatenate([np.flatnonzero(piece0)] * 2)
+
+    def around(centres, of_c, of_i):
+        """(which entry, item index) for the items next to each centre."""
+        o = np.argsort(of_c, kind="stable")
+        of_c, of_i = of_c[o], of_i[o]
+        lo = np.searchsorted(of_c, centres, "left")
+        cnt = np.searchsorted(of_c, centres, "right") - lo
+        entry = np.repeat(np.arange(len(centres)), cnt)
+        return entry, of_i[ranges(lo, cnt)]
+
+    def product(ea, xa, eb, xb):
+        """Every (x, y) with x from side a and y from side b of one entry."""
+        oa, ob = np.argsort(ea, kind="stable"), np.argsort(eb, kind="stable")
+        ea, xa, eb, xb = ea[oa], xa[oa], eb[ob], xb[ob]
+        na = np.bincount(ea, minlength=len(ci))
+        nb = np.bincount(eb, minlength=len(ci))
+        fa, fb = np.cumsum(na) - na, np.cumsum(nb) - nb
+        per = na * nb
+        e = np.repeat(np.arange(len(ci)), per)
+        r = within(per)
+        return xa[fa[e] + r // np.maximum(nb[e], 1)], xb[fb[e] + r % np.maximum(nb[e], 1)]
+
+    def tiled(x, y):
+        """Unique (x, y) of one state, for every state."""
+        key = np.unique(x * m + y)
+        off = (m * np.arange(n_s))[:, None]
+        return ((key // m)[None] + off).ravel(), ((key % m)[None] + off).ravel()
+
+    ia, xa = around(ci, pt_c, pt_i)
+    ib, xb = around(cj, pt_c, pt_i)
+    x, y = product(ia, xa, ib, xb)
+    lo, hi = tiled(np.minimum(x, y), np.maximum(x, y))
+    keep = lo != hi
+    lo, hi = lo[keep], hi[keep]
+    same = cab[lo] == cab[hi]
+    # a point against the midpoint of a piece not touching it
+    pa, qa = around(ci, pc_c, pc_i)
+    pb, qb = around(cj, pc_c, pc_i)
+    q1, e1 = product(ia, xa, pb, qb)
+    q2, e2 = product(ib, xb, pa, qa)
+    q, e = tiled(np.r_[q1, q2], np.r_[e1, e2])
+    keep = (cab[q] == cab[e]) & (q != e) & (q != e + 1)
+    rows = point_pair_rows(p, s, cab, rad, self_pair_window(rad, clearance), clearance, clearance,
+                           (lo[~same], hi[~same]), (lo[same], hi[same]), (q[keep], e[keep]))
+    t, a, b, v, w, sb = ([] for _ in range(6))
+    for kind, a_k, b_k, v_k, w_k, sb_k, rec in rows:
+        o = slice(None) if rec is None else rec
+        t.append(np.full(len(v_k[o]), TYPE_ORDER.index(kind)))
+        for acc, x in zip((a, b, v, w, sb), (a_k, b_k, v_k, w_k, sb_k)):
+            acc.append(x[o])
+    t, a, b, v, w, sb = (np.concatenate(x) for x in (t, a, b, v, w, sb))
+    return worst_records(n_s, w // m, t, a, b, v, p[w], s[w], sb, clearance, names, lambda _: names)
+

@@ -1,0 +1,253 @@
+"""The interference check of one scene state, step after step: :class:`Checker`.
+
+:func:`check_state` runs the discrete-point distance method (Ju et al., 2016)
+on all cables and parts of one instant and returns one
+:class:`~checker.records.Interference` per interfering pair. :class:`Checker`
+does the same step after step for one set of parts, preparing what depends
+only on the parts once; each call then takes the cables and the parts'
+poses. The check is a pipeline of the package's modules: discretise
+(:mod:`~checker.interference.discrete`), chunk (:mod:`~checker.interference.broad`),
+cable pairs (:mod:`~checker.interference.cablepairs`), cables against parts
+(:mod:`~checker.interference.structure`), bend and taut
+(:mod:`~checker.interference.single`), reduce (:mod:`~checker.interference.hits`).
+
+Deliberately not here: any distance arithmetic of its own, part-part
+interference, events over time and comparison with MuJoCo.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from checker.interference import cablepairs, discrete, structure
+from checker.interference.broad import Chunks
+from checker.interference.cablepairs import cable_pairs_exact, cable_pairs_points
+from checker.interference.discrete import DenseStates, discretise
+from checker.interference.hits import Gaps, Hits
+from checker.interference.single import single_cable
+from checker.interference.structure import PartTable, structure_exact, structure_points
+from checker.records import Interference, PairType
+from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+
+_EYE3 = np.eye(3)
+
+
+@dataclass(frozen=True)
+class Checked:
+    """What one check found.
+
+    Attributes:
+        records: one record per interfering (type, a, b) pair, worst first.
+        gaps: with a horizon, how far every pair stayed from the clearance
+            (what the skip rule of :mod:`checker.advance` starts from);
+            None when not available (method ``exact``, face-plane, or no
+            horizon).
+    """
+
+    records: list[Interference]
+    gaps: Gaps | None
+
+
+class Checker:
+    """A reusable checker for one set of parts: :func:`check_state` step after step.
+
+    What depends only on the parts (their shapes, bounds, keep-out flags,
+    mesh grouping) is prepared once; each :meth:`check` takes the cables and
+    the parts' poses of one instant. ``Checker(parts, config).check(cables,
+    None, exclusions)`` is exactly ``check_state(cables, parts, config,
+    exclusions)``.
+
+    Args:
+        parts: the parts (names, shapes, keep-out flags; their poses are the
+            default for :meth:`check`).
+        config: method, spacing, clearance.
+        horizon: with method ``points`` (not face-plane), candidates are also
+            evaluated up to ``clearance + horizon`` (and self pairs and
+            attachment windows up to ``stretch`` of arc length inside their
+            exclusion), only to return with :meth:`check_with_gaps` how far
+            every pair stays from the clearance (a
+            :class:`~checker.interference.hits.Gaps` record); the records do
+            not change (severity and the exclusion windows stay tied to the
+            clearance). See :mod:`checker.advance` for the use.
+        stretch: see ``horizon``.
+    """
+
+    def __init__(self, parts: Sequence[PartState], config: CheckConfig = CheckConfig(),
+                 horizon: float = 0.0, stretch: float = 0.0):
+        self.parts = list(parts)
+        self.config = config
+        self._tab = PartTable(self.parts) if self.parts else None
+        self._pidx = {p.name: i for i, p in enumerate(self.parts)}
+        self.horizon = float(horizon)
+        self.stretch = float(stretch)
+        self._excl_cache: tuple | None = None
+
+    @property
+    def bounds_gaps(self) -> bool:
+        """True when :meth:`check_with_gaps` returns gaps (points, not face-plane, horizon > 0)."""
+        return self.config.method == "points" and not self.config.face_plane and self.horizon > 0.0
+
+    def part_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """((K, 3), (K, 3)): each part's axis-aligned bounds in its own frame
+        (a plane: lo -inf, hi (inf, inf, 0))."""
+        if self._tab is None:
+            return np.zeros((0, 3)), np.zeros((0, 3))
+        return self._tab.lo.copy(), self._tab.hi.copy()
+
+    def part_radius(self) -> np.ndarray:
+        """(K,) largest distance of any point of each part from its frame's
+        origin (inf for planes): a rotation by R moves it at most ||R - R0|| times this."""
+        lo, hi = self.part_bounds()
+        corner = np.maximum(np.abs(lo), np.abs(hi))
+        return np.sqrt(np.einsum("ij,ij->i", corner, corner))
+
+    def _exclusion_table(self, cable_names: Sequence[str], exclusions: Sequence[Exclusion]) -> tuple:
+        """Exclusions as arrays: ((key, lo, hi, n_parts) sorted by key =
+        cable * n_parts + part, cable, lo, hi) for these cables and parts."""
+        # a run passes the same windows at every full check: built once per
+        # (cables, windows) and kept (with the windows, so their id stays theirs)
+        names = tuple(cable_names)
+        cached = self._excl_cache
+        if cached is not None and cached[0] is exclusions and cached[1] == names and cached[2] == len(exclusions):
+            return cached[3]
+        cidx = {n: i for i, n in enumerate(names)}
+        pidx = self._pidx
+        ex_c = np.array([cidx.get(e.cable, -1) for e in exclusions], dtype=np.int64)
+        ex_p = np.array([pidx.get(e.part, -1) for e in exclusions], dtype=np.int64)
+        s_min = np.array([e.s_min for e in exclusions], dtype=float)
+        s_max = np.array([e.s_max for e in exclusions], dtype=float)
+        mine = (ex_c >= 0) & (ex_p >= 0)
+        ex_c, ex_p, s_min, s_max = ex_c[mine], ex_p[mine], s_min[mine], s_max[mine]
+        ex_lo, ex_hi = np.minimum(s_min, s_max), np.maximum(s_min, s_max)
+        n_parts = max(len(self.parts), 1)
+        key = ex_c * n_parts + ex_p
+        o = np.argsort(key, kind="stable")
+        table = (key[o], ex_lo[o], ex_hi[o], n_parts), ex_c, ex_lo, ex_hi
+        if isinstance(exclusions, (list, tuple)):
+            self._excl_cache = (exclusions, names, len(exclusions), table)
+        return table
+
+    def densify_many(self, pts: np.ndarray, offsets: np.ndarray, radii: np.ndarray,
+                     rest: np.ndarray | None = None) -> DenseStates:
+        """:func:`checker.interference.discrete.densify_many` at this checker's spacing."""
+        return discrete.densify_many(pts, offsets, radii, self.config.spacing, rest)
+
+    def structure_many(self, names: Sequence[str], radii: np.ndarray, dense: DenseStates,
+                       poses: np.ndarray, exclusions: Sequence[Exclusion],
+                       active: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
+        """:func:`checker.interference.structure.structure_many` on this checker's parts."""
+        excl = self._exclusion_table(names, exclusions)[0] if self._tab is not None else None
+        return structure.structure_many(self._tab, self.config, excl, names, radii, dense, poses, active)
+
+    def cable_pairs_many(self, names: Sequence[str], radii: np.ndarray, dense: DenseStates,
+                         active: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
+        """:func:`checker.interference.cablepairs.cable_pairs_many` at this checker's clearance."""
+        return cablepairs.cable_pairs_many(self.config.clearance, names, radii, dense, active)
+
+    def check(
+        self,
+        cables: Sequence[CableState],
+        poses: np.ndarray | Sequence[np.ndarray] | None = None,
+        exclusions: Sequence[Exclusion] = (),
+        horizon: float | None = None,
+    ) -> list[Interference]:
+        """Check one scene state; see :func:`check_state` and :meth:`check_with_gaps`."""
+        return self.check_with_gaps(cables, poses, exclusions, horizon).records
+
+    def check_with_gaps(
+        self,
+        cables: Sequence[CableState],
+        poses: np.ndarray | Sequence[np.ndarray] | None = None,
+        exclusions: Sequence[Exclusion] = (),
+        horizon: float | None = None,
+    ) -> Checked:
+        """Check one scene state: its records and, with a horizon, its gaps.
+
+        Args:
+            cables: the cables' centrelines.
+            poses: (K, 4, 4) part -> world transforms in the order of the
+                parts, or None for the parts' own poses. Rotations must be
+                orthonormal (as :class:`~checker.scene_state.PartState`
+                requires).
+            exclusions: arc-length windows where a cable may touch a part.
+            horizon: this call's horizon instead of the checker's (0: no
+                gaps, the plain check).
+        """
+        config = self.config
+        horizon = self.horizon if horizon is None else float(horizon)
+        bounded = self.bounds_gaps and horizon > 0.0
+        parts = self.parts
+        tab = None
+        if self._tab is not None:
+            if poses is not None:
+                poses = np.asarray(poses, dtype=float).reshape(-1, 4, 4)
+                if len(poses) != len(parts) or not np.all(np.isfinite(poses)):
+                    raise ValueError(f"poses must be {len(parts)} finite 4x4 matrices")
+                rot = poses[:, :3, :3]
+                # np.allclose(R^T R, I, atol=1e-9) without its per-call overhead
+                err = np.abs(np.einsum("kji,kjl->kil", rot, rot) - _EYE3)
+                if not np.all(err <= 1e-9 + 1e-5 * _EYE3):
+                    raise ValueError("a pose rotation is not orthonormal")
+            tab = self._tab.posed(poses)
+        hits = Hits()
+        cable_names = [c.name for c in cables]
+        part_names = [p.name for p in parts]
+        if len(set(cable_names)) != len(cable_names):
+            raise ValueError("cable names must be unique")
+        if cables:
+            excl, ex_c, ex_lo, ex_hi = self._exclusion_table(cable_names, exclusions)
+            exact = config.method == "exact"
+            cuts = (np.concatenate([ex_c, ex_c]), np.concatenate([ex_lo, ex_hi])) if exact \
+                else (np.zeros(0, np.int64), np.zeros(0))
+            dp = discretise(cables, config, cuts)
+            has_next = np.concatenate([dp.cable[:-1] == dp.cable[1:], [False]])
+            limit = config.clearance + (horizon if bounded else 0.0)
+            if exact:
+                ch = Chunks(dp.p, dp.s, dp.cable, has_next, dp.seg)
+                cable_pairs_exact(dp, ch, config.clearance, hits)
+            else:
+                ch = Chunks(dp.p, dp.s, dp.cable, has_next, np.arange(len(dp.p)))
+                cable_pairs_points(dp, ch, config.clearance, hits, limit, self.stretch if bounded else 0.0)
+            if tab is not None:
+                if exact:
+                    structure_exact(dp, ch, tab, config, excl, hits)
+                else:
+                    # windows narrowed by the stretch: points that may enter
+                    # or leave a window bound the gaps too
+                    near = (excl[0], excl[1] + self.stretch, excl[2] - self.stretch, excl[3]) if bounded else None
+                    structure_points(dp, ch, tab, config, excl, hits, limit, near)
+            single_cable(cables, config.clearance, hits)
+        found = hits.gaps(config.clearance, horizon, len(parts)) if bounded else None
+
+        def names(ptype: PairType) -> list[str]:
+            return part_names if ptype in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) else cable_names
+
+        return Checked(hits.records(config.clearance, cable_names, names), found)
+
+
+def check_state(
+    cables: Sequence[CableState],
+    parts: Sequence[PartState],
+    config: CheckConfig = CheckConfig(),
+    exclusions: Sequence[Exclusion] = (),
+) -> list[Interference]:
+    """Check one scene state; one record per interfering (type, a, b) pair.
+
+    A pair interferes when its signed ``min_distance`` (SPEC "Report") is
+    below ``config.clearance``: hard below 0, soft from 0 up to the
+    clearance. Records are sorted worst first. To check many states of the
+    same parts, :class:`Checker` prepares the parts once.
+
+    Args:
+        cables: the cables' centrelines.
+        parts: posed parts (keep-out parts give ``keepout`` records).
+        config: method, spacing, clearance.
+        exclusions: arc-length windows where a cable may touch a part.
+
+    Returns:
+        list of :class:`~checker.records.Interference`.
+    """
+    return Checker(parts, config).check(cables, None, exclusions)

@@ -1,0 +1,325 @@
+"""Cables against parts (cable-structure and keep-out), one state or many.
+
+Method ``points`` (the discrete-point distance method, Ju et al., 2016): a
+point's signed distance to the part's surface (negative inside, so
+containment comes for free), minus the cable radius. Method ``exact``: the
+least signed distance along each element (:mod:`checker.shapes`), so contact
+between two discrete points is never missed.
+
+The parts are prepared once as arrays (:class:`PartTable`); the broad phase
+(:func:`checker.interference.broad.chunk_part_pairs`) gives (item, part)
+candidates, cut to the part's inflated local box and the exclusion windows
+before any exact work. Narrow phases are batched per shape type (all
+primitives' segment searches in one call); meshes per mesh, the parts
+sharing one mesh in one call through the mesh's own tree.
+:func:`structure_many` takes given (body centre, part) pairs over many states
+at once and shares :func:`point_values` with the single-state pass.
+
+Deliberately not here: part-part interference (:mod:`checker.parts`), cable
+pairs, the reduction to records (:mod:`checker.interference.hits`).
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Sequence
+
+import numpy as np
+
+from checker.closest import row_norm
+from checker.interference.broad import chunk_part_pairs
+from checker.interference.discrete import DenseStates
+from checker.interference.hits import TYPE_ORDER, worst_records
+from checker.records import Interference, PairType
+from checker.scene_state import CheckConfig, PartState
+from checker.shapes import (
+    ShapeType,
+    distance_bounds,
+    face_plane_distance,
+    face_plane_distance_batch,
+    segment_signed_distance,
+    segment_signed_distance_mixed,
+    signed_distance,
+    signed_distance_value_batch,
+)
+
+TYPE_CODE = {t: n for n, t in enumerate(ShapeType)}
+_STRUCTURE, _KEEPOUT = TYPE_ORDER.index(PairType.CABLE_STRUCTURE), TYPE_ORDER.index(PairType.KEEPOUT)
+
+
+class PartTable:
+    """Parts as arrays: what does not change between calls (shapes, bounds,
+    keep-out flags) is built once; :meth:`posed` adds rotations and
+    translations for one call."""
+
+    def __init__(self, parts: Sequence[PartState]):
+        k = len(parts)
+        self.parts = parts
+        self.names = [pt.name for pt in parts]
+        self.size = np.zeros((k, 3))
+        for n, pt in enumerate(parts):
+            sz = pt.shape.size[:3]
+            self.size[n, : len(sz)] = sz
+        self.type = np.array([TYPE_CODE[pt.shape.type] for pt in parts], dtype=np.int64).reshape(k)
+        # Shape.local_bounds for all parts at once (the same arithmetic).
+        sz, t = self.size, self.type
+        half = sz.copy()
+        half[t == TYPE_CODE[ShapeType.SPHERE]] = sz[t == TYPE_CODE[ShapeType.SPHERE], :1]
+        for st, extra in ((ShapeType.CYLINDER, False), (ShapeType.CAPSULE, True)):
+            o = t == TYPE_CODE[st]
+            half[o, 1] = sz[o, 0]
+            half[o, 2] = sz[o, 1] + sz[o, 0] if extra else sz[o, 1]
+        self.lo, self.hi = -half, half.copy()
+        o = t == TYPE_CODE[ShapeType.PLANE]
+        self.lo[o] = -np.inf
+        self.hi[o] = [np.inf, np.inf, 0.0]
+        for n in np.nonzero(t == TYPE_CODE[ShapeType.MESH])[0]:
+            self.lo[n], self.hi[n] = parts[n].shape.local_bounds()
+        self.keepout = np.array([pt.keepout for pt in parts], dtype=bool)
+        # Parts sharing one mesh are answered in one call: group id per part.
+        groups: dict[int, int] = {}
+        self.mesh_group = np.array([groups.setdefault(id(pt.shape.mesh), len(groups)) if pt.shape.mesh is not None
+                                    else -1 for pt in parts], dtype=np.int64).reshape(k)
+        self.mesh_shapes = [None] * len(groups)
+        for pt in parts:
+            if pt.shape.mesh is not None:
+                self.mesh_shapes[groups[id(pt.shape.mesh)]] = pt.shape
+        self.is_plane = self.type == TYPE_CODE[ShapeType.PLANE]
+        # Bounding spheres of the finite parts, in their own frames.
+        self.finite = np.nonzero(~self.is_plane)[0]
+        self.planes = np.nonzero(self.is_plane)[0]
+        fin = self.finite
+        self.c_loc = 0.5 * (self.lo[fin] + self.hi[fin])
+        self.half_diag = 0.5 * row_norm(self.hi[fin] - self.lo[fin])
+        self.rot = np.array([pt.pose[:3, :3] for pt in parts]).reshape(k, 3, 3)
+        self.trans = np.array([pt.pose[:3, 3] for pt in parts]).reshape(k, 3)
+
+    def posed(self, poses: np.ndarray | None) -> PartTable:
+        """This table with poses (K, 4, 4) (None: the parts' own poses)."""
+        if poses is None:
+            return self
+        out = copy.copy(self)
+        out.rot = np.ascontiguousarray(poses[:, :3, :3])
+        out.trans = np.ascontiguousarray(poses[:, :3, 3])
+        return out
+
+    def to_local(self, k: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """World points x (n, 3) into the frames of parts k (n,)."""
+        return to_local(x, self.trans[k], self.rot[k])
+
+
+def to_local(x: np.ndarray, trans: np.ndarray, rot: np.ndarray) -> np.ndarray:
+    """World points x (n, 3) into frames of translations (n, 3) and rotations (n, 3, 3): R^T (x - t)."""
+    return np.einsum("ni,nij->nj", x - trans, rot)
+
+
+def excluded(cable: np.ndarray, part: np.ndarray, s: np.ndarray, excl: tuple) -> np.ndarray:
+    """True where (cable, part, material coordinate s) falls in an exclusion window."""
+    key_e, smin, smax, n_parts = excl
+    out = np.zeros(len(s), dtype=bool)
+    if len(key_e) == 0 or len(s) == 0:
+        return out
+    key = cable * n_parts + part
+    lo = np.searchsorted(key_e, key, side="left")
+    hi = np.searchsorted(key_e, key, side="right")
+    cnt = hi - lo
+    if cnt.sum() == 0:
+        return out
+    rows = np.repeat(np.arange(len(s)), cnt)
+    first = np.cumsum(cnt) - cnt
+    w = lo[rows] + np.arange(len(rows)) - first[rows]
+    inside = (s[rows] >= smin[w]) & (s[rows] <= smax[w])
+    return np.bincount(rows, weights=inside, minlength=len(s)) > 0
+
+
+def point_distances(tab: PartTable, pk: np.ndarray, loc: np.ndarray, face_plane: bool,
+                     limit: np.ndarray | None = None, group: np.ndarray | None = None) -> np.ndarray:
+    """Signed distance (n,) of local points ``loc`` to parts ``pk``, batched by type.
+
+    With ``limit`` (n,): a mesh may answer a point that provably lies beyond
+    its limit with a lower bound above it instead (see
+    :func:`checker.shapes.signed_distance`); callers keep only values below.
+    With ``group`` (n,) ids too (each group against one part), the caller
+    wants only each group's least value exact: a mesh point whose lower
+    bound exceeds another point's upper bound in its group may likewise be
+    answered by a bound, above the group's least value."""
+    d = np.full(len(pk), np.inf)
+    types = list(ShapeType)
+    for code in np.unique(tab.type[pk]):
+        stype = types[code]
+        sel = np.nonzero(tab.type[pk] == code)[0]
+        if stype is ShapeType.MESH:
+            grp = tab.mesh_group[pk[sel]]
+            for g in np.unique(grp):
+                sk = sel[grp == g]
+                shape = tab.mesh_shapes[g]
+                lim = None if limit is None else limit[sk]
+                if lim is not None and group is not None and not face_plane:
+                    # each group's most promising point (least upper bound)
+                    # exactly first: the others then need be exact only below it
+                    _, hi = distance_bounds(shape, loc[sk])
+                    ids, inv = np.unique(group[sk], return_inverse=True)
+                    o = np.lexsort((hi, inv))
+                    lead = o[np.r_[True, inv[o][1:] != inv[o][:-1]]]
+                    lead = lead[hi[lead] < lim[lead]]
+                    d[sk[lead]] = signed_distance(shape, loc[sk[lead]])[0]
+                    least = np.full(len(ids), np.inf)
+                    least[inv[lead]] = d[sk[lead]]
+                    lim = np.minimum(lim, least[inv])
+                    rest = np.ones(len(sk), bool)
+                    rest[lead] = False
+                    sk, lim = sk[rest], lim[rest]
+                d[sk] = face_plane_distance(shape, loc[sk]) if face_plane else signed_distance(shape, loc[sk], lim)[0]
+        elif face_plane:
+            d[sel] = face_plane_distance_batch(stype, tab.size[pk[sel]], loc[sel])
+        else:
+            d[sel] = signed_distance_value_batch(stype, tab.size[pk[sel]], loc[sel])
+    return d
+
+
+def point_values(tab: PartTable, k: np.ndarray, loc: np.ndarray, rad: np.ndarray, cable: np.ndarray,
+                 m: np.ndarray, excl: tuple, limit: float, face_plane: bool, group: np.ndarray | None = None,
+                 excl_record: tuple | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Values of points against parts: the one kernel of :func:`structure_points` and :func:`structure_many`.
+
+    A point (local coordinates ``loc`` in part k, its cable's radius, cable
+    and material coordinate m) is kept when it lies within ``rad + limit``
+    of the part's local box and outside the exclusion windows ``excl``;
+    its value is the signed distance to the part minus the radius
+    (:func:`point_distances`, with ``group`` as there), kept below ``limit``.
+
+    Returns:
+        (index of the points kept, their values, and with ``excl_record``
+        whether each lies outside those windows too, else None).
+    """
+    thr = (rad + limit)[:, None]
+    keep = np.all((loc >= tab.lo[k] - thr) & (loc <= tab.hi[k] + thr), axis=1)
+    keep &= ~excluded(cable, k, m, excl)
+    idx = np.flatnonzero(keep)
+    k, loc, rad = k[idx], loc[idx], rad[idx]
+    rec = None if excl_record is None else ~excluded(cable[idx], k, m[idx], excl_record)
+    v = point_distances(tab, k, loc, face_plane, rad + limit, None if group is None else group[idx]) - rad
+    o = v < limit
+    return idx[o], v[o], None if rec is None else rec[o]
+
+
+def structure_points(dp, ch, tab, config, excl, hits, limit=None, excl_near=None) -> None:
+    """Signed distance of every candidate point to its part, minus r.
+
+    With ``limit`` (>= clearance), candidates up to ``limit``; with
+    ``excl_near`` (narrower windows), points inside ``excl`` but outside
+    ``excl_near`` are kept too: both only bound the gaps, never records."""
+    limit = config.clearance if limit is None else limit
+    margin = float(dp.radius.max()) + limit
+    it, pk = chunk_part_pairs(tab, ch, margin)
+    if len(it) == 0:
+        return
+    loc = tab.to_local(pk, dp.p[it])
+    o, v, rec = point_values(tab, pk, loc, dp.radius[it], dp.cable[it], dp.m[it],
+                             excl if excl_near is None else excl_near, limit, config.face_plane,
+                             excl_record=None if excl_near is None else excl)
+    it, pk = it[o], pk[o]
+    _add_structure(hits, tab, dp.cable[it], pk, v, dp.p[it], dp.s[it], rec)
+
+
+def structure_exact(dp, ch, tab, config, excl, hits) -> None:
+    """Least signed distance along every candidate element to its part, minus r."""
+    p, s, seg = dp.p, dp.s, dp.seg
+    if len(seg) == 0:
+        return
+    # Chunk spheres hold whole elements: the margin needs no half length.
+    margin = float(dp.radius.max()) + config.clearance
+    i0, pk = chunk_part_pairs(tab, ch, margin)
+    it = i0
+    if len(it) == 0:
+        return
+    a = tab.to_local(pk, p[i0])
+    b = tab.to_local(pk, p[i0 + 1])
+    thr = (dp.radius[i0] + config.clearance)[:, None]
+    box_ok = np.all((np.maximum(a, b) >= tab.lo[pk] - thr) & (np.minimum(a, b) <= tab.hi[pk] + thr), axis=1)
+    # Cuts were inserted at the window ends, so an element is in a window
+    # exactly when its midpoint is.
+    box_ok &= ~excluded(dp.cable[i0], pk, 0.5 * (dp.m[i0] + dp.m[i0 + 1]), excl)
+    it, pk, i0, a, b = it[box_ok], pk[box_ok], i0[box_ok], a[box_ok], b[box_ok]
+    # Signed distance is 1-Lipschitz: the midpoint's distance minus the half
+    # length bounds the segment's from below, so far segments skip the search.
+    half = 0.5 * row_norm(b - a)
+    mid = point_distances(tab, pk, 0.5 * (a + b), False, config.clearance + half + dp.radius[i0])
+    near = mid - half - dp.radius[i0] < config.clearance
+    it, pk, i0, a, b = it[near], pk[near], i0[near], a[near], b[near]
+    d = np.full(len(it), np.inf)
+    t = np.zeros(len(it))
+    is_mesh = tab.type[pk] == TYPE_CODE[ShapeType.MESH]
+    sel = np.nonzero(is_mesh)[0]
+    grp = tab.mesh_group[pk[sel]]
+    for g in np.unique(grp):
+        sk = sel[grp == g]
+        d[sk], t[sk] = segment_signed_distance(tab.mesh_shapes[g], a[sk], b[sk])
+    # All primitives in one call (box and cylinder share one line search).
+    sel = np.nonzero(~is_mesh)[0]
+    if len(sel):
+        d[sel], t[sel] = segment_signed_distance_mixed(
+            tab.type[pk[sel]], tab.size[pk[sel]], a[sel], b[sel])
+    where = p[i0] + t[:, None] * (p[i0 + 1] - p[i0])
+    s_at = s[i0] + t * (s[i0 + 1] - s[i0])
+    _add_structure(hits, tab, dp.cable[i0], pk, d - dp.radius[i0], where, s_at)
+
+
+def _add_structure(hits, tab, cable, part, value, where, s, record=None) -> None:
+    ko = tab.keepout[part]
+    for kind, o in ((PairType.CABLE_STRUCTURE, ~ko), (PairType.KEEPOUT, ko)):
+        hits.add(kind, cable[o], part[o], value[o], where[o], s[o], None, None if record is None else record[o])
+
+
+def structure_many(tab: PartTable | None, config: CheckConfig, excl: tuple, names: Sequence[str],
+                   radii: np.ndarray, dense: DenseStates, poses: np.ndarray,
+                   active: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
+    """The full check's cable-structure and keep-out records at many
+    states at once, from the discrete points next to given body centres
+    (method ``points``; to the bit).
+
+    Against part k only the points on elements next to an active
+    (centre, k) entry are evaluated: the centre itself and the points
+    inside its two elements. A record is the worst of those places (the
+    caller knows the others to be clear).
+
+    Args:
+        names, radii: the cables' names and radii (C,).
+        dense: the states' discrete points (:meth:`densify_many`).
+        poses: (S, K, 4, 4) the parts' poses at every state.
+        excl: the exclusion table (:meth:`Checker._exclusion_table`).
+        active: (centre index in a state, part index) arrays.
+
+    Returns:
+        per state, its records (worst first).
+    """
+    n_s, n, n_c, n_k = dense.states, dense.centres, dense.cables, (0 if tab is None else len(tab.names))
+    out: list[list[Interference]] = [[] for _ in range(n_s)]
+    ci, pi = (np.asarray(x, np.int64) for x in active)
+    if n_s == 0 or len(ci) == 0 or tab is None:
+        return out
+    radii = np.asarray(radii, float)
+    p, s, src, own = dense.p, dense.s, dense.src, dense.own
+    state, cab = dense.poly // n_c, dense.poly % n_c
+    # each point against the parts it is active for: its own centre's, or
+    # (inside an element) either end's
+    parts, row = np.unique(pi, return_inverse=True)
+    mark = np.zeros((len(parts), n + 1), bool)
+    mark[row, ci] = True
+    centre = src % n
+    need = mark[:, centre] | (~own & mark[:, centre + 1])
+    kk, it = np.nonzero(need)
+    k = parts[kk]
+    q = state[it] * n_k + k
+    rot = np.ascontiguousarray(poses[:, :, :3, :3]).reshape(-1, 3, 3)
+    trans = np.ascontiguousarray(poses[:, :, :3, 3]).reshape(-1, 3)
+    loc = to_local(p[it], trans[q], rot[q])
+    # only the worst place per (state, cable, part) becomes a record
+    group = (state[it] * n_c + cab[it]) * n_k + k
+    o, v, _ = point_values(tab, k, loc, radii[cab[it]], cab[it], dense.m[it], excl, config.clearance,
+                           config.face_plane, group)
+    it, k = it[o], k[o]
+    kind = np.where(tab.keepout[k], _KEEPOUT, _STRUCTURE)
+    return worst_records(n_s, state[it], kind, cab[it], k, v, p[it], s[it], np.full(len(v), np.nan),
+                         config.clearance, names, lambda _: tab.names)
+

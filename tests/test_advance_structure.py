@@ -1,0 +1,93 @@
+"""The skip rule's centre-part bound (checker.advance.structure): per-centre gaps, box floors, active pairs."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from checker.advance import Advancement
+from checker.interference.hits import Gaps, PartCandidates
+
+
+def test_gaps_per_centre():
+    """Candidates give each body centre its own gap: a centre far from the
+    part may move further than the part's (smallest) gap."""
+    pts = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]])
+    poses = np.tile(np.eye(4), (1, 1, 1))
+    a = Advancement(np.array([0, 4]), np.array([5.0]), np.array([1.0]), 0.5, 1.0)
+    # one candidate at s = 0.25 (element 0: centres 0 and 1), 0.2 past the clearance
+    cand = PartCandidates(np.array([0]), np.array([0.25]), np.array([0]), np.array([0.2]))
+    a.start(pts, poses, Gaps(3.0, 1.0, np.array([0.2]), cand), (np.zeros(0, int), np.zeros(0, int)), np.zeros(0))
+    far = pts.copy()
+    far[3] += [0.0, 0.0, 0.9]                 # centre 3: horizon 3; spread 0.9 < 1
+    assert a.proven_clear(far, poses)
+    near = pts.copy()
+    near[1] += [0.0, 0.0, 0.21]               # centre 1 borders the candidate's element
+    assert not a.proven_clear(near, poses)
+    far[3] += [0.0, 0.0, 0.2]                 # spread 1.1 > gap_cable 1
+    assert not a.proven_clear(far, poses)
+    far[3] -= [0.0, 0.0, 0.2]
+    far[0] -= [0.0, 0.0, 0.2]                 # spread 1.1 again, and centre 0 past 0.2
+    assert not a.proven_clear(far, poses)
+
+
+def test_part_gap_floor_from_boxes():
+    """A centre with no candidate for a part gets the larger of the horizon
+    and its elements' distance from the part's box (minus radius and
+    clearance) as its gap: far centres may move further than the horizon,
+    and never past the box."""
+    pts = np.array([[0.0, 10, 0], [1, 10, 0], [2, 10, 0], [3, 10, 0]])   # 10 above the unit box's centre
+    poses = np.tile(np.eye(4), (1, 1, 1))
+    box = (np.array([[-0.5, -0.5, -0.5]]), np.array([[0.5, 0.5, 0.5]]))
+    none = (np.zeros(0, int), np.zeros(0, int))
+    gaps = Gaps(1.0, 100.0, np.array([1.0]), PartCandidates(np.zeros(0, int), np.zeros(0), np.zeros(0, int), np.zeros(0)))
+    a = Advancement(np.array([0, 4]), np.array([5.0]), np.array([1.0]), 0.5, 1.0,
+                    np.array([0.1]), box)
+    a.start(pts, poses, gaps, none, np.zeros(0))
+    # centres 0 and 1: elements' boxes 9.5 from the part's box; gap 9.5 - 0.1 - 0.5 = 8.9
+    assert a.proven_clear(pts - [0.0, 8.8, 0.0], poses)
+    assert not a.proven_clear(pts - [0.0, 9.0, 0.0], poses)
+    # without the boxes every centre has the horizon (1)
+    b = Advancement(np.array([0, 4]), np.array([5.0]), np.array([1.0]), 0.5, 1.0, np.array([0.1]))
+    b.start(pts, poses, gaps, none, np.zeros(0))
+    assert b.proven_clear(pts - [0.0, 0.9, 0.0], poses)
+    assert not b.proven_clear(pts - [0.0, 1.1, 0.0], poses)
+    # a plane (half-space z < 0 in its frame) 10 below: gap 10 - 0.6
+    plane = (np.full((1, 3), -np.inf), np.array([[np.inf, np.inf, 0.0]]))
+    flat = pts[:, [0, 2, 1]]                                     # z = 10
+    c = Advancement(np.array([0, 4]), np.array([5.0]), np.array([np.inf]), 0.5, 1.0,
+                    np.array([0.1]), plane)
+    c.start(flat, poses, gaps, none, np.zeros(0))
+    assert c.proven_clear(flat - [0.0, 0.0, 9.3], poses)
+    assert not c.proven_clear(flat - [0.0, 0.0, 9.5], poses)
+
+
+def test_active_places_leave_the_bound():
+    """A place inside a part's clearance (a candidate below 0) proves
+    nothing, unless its (cable, part) pair is active (the run checks the
+    points near the part itself at every step): then the centres within
+    FAR_HORIZONS horizons of the part are free against it, and everything
+    else still bounds the step."""
+    pts = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]])
+    poses = np.tile(np.eye(4), (2, 1, 1))
+    cand = PartCandidates(np.array([0]), np.array([0.5]), np.array([0]), np.array([-0.2]))    # element 0 in part 0
+    gaps = Gaps(2.0, 1.0, np.array([-0.2, 2.0]), cand)
+    z = np.zeros(0, np.int64)
+    for active, expect in ((None, False), ((np.array([0]), np.array([0])), True)):
+        a = Advancement(np.array([0, 3]), np.array([5.0]), np.array([1.0, 1.0]), 0.5, 0.1)
+        left = a.start(pts, poses, gaps, (z, z), np.zeros(0), active=active)
+        assert a.proven_clear(pts + [0.0, 0.1, 0.0], poses) is expect
+    assert left.structure[0].tolist() == [0, 1, 2] and left.structure[1].tolist() == [0, 0, 0]
+    moved = pts.copy()
+    moved[0] += [0.0, 2.1, 0.0]
+    assert not a.proven_clear(moved, poses)          # part 1 still bounds it (gap: the horizon, 2)
+    # a far centre (no box: gap the horizon; 8 horizons = 16 away) stays bounded
+    far = np.array([[0.0, 0, 0], [1, 0, 0], [20, 0, 0], [21, 0, 0]])
+    box = (np.array([[-0.5, -0.5, -0.5], [-0.5, -0.5, -0.5]]), np.array([[0.5, 0.5, 0.5], [0.5, 0.5, 0.5]]))
+    b = Advancement(np.array([0, 4]), np.array([50.0]), np.array([1.0, 1.0]), 0.5, 0.1, np.array([0.1]), box)
+    left = b.start(far, poses, Gaps(2.0, 100.0, np.array([-0.2, 2.0]), cand), (z, z), np.zeros(0),
+                   active=(np.array([0]), np.array([0])))
+    assert left.structure[0].tolist() == [0, 1, 2]         # centre 3's element is 19.5 from the box
+    moved = far.copy()
+    moved[3] -= [17.0, 0.0, 0.0]
+    assert not b.proven_clear(moved, poses)
+    assert b.proven_clear(far + [0.0, 0.0, 1.9], poses)

@@ -1,0 +1,55 @@
+"""Broad phase (checker.interference.broad): chunk pairs and part candidates miss nothing a brute-force search finds."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from strategies import cable_sets, part_sets
+
+from checker.interference.broad import CHUNK, Chunks, chunk_part_pairs
+from checker.interference.discrete import discretise
+from checker.interference.structure import PartTable
+from checker.scene_state import CheckConfig
+
+pytestmark = pytest.mark.filterwarnings("error")
+
+
+def _chunks(cables):
+    dp = discretise(cables, CheckConfig(), (np.zeros(0, np.int64), np.zeros(0)))
+    has_next = np.r_[dp.cable[:-1] == dp.cable[1:], False]
+    return dp, Chunks(dp.p, dp.s, dp.cable, has_next, np.arange(len(dp.p)))
+
+
+@settings(max_examples=40, deadline=None)
+@given(cable_sets(max_cables=3, max_points=12), st.floats(0.0, 0.05))
+def test_chunk_pairs_hold_every_close_point_pair(cables, reach):
+    """Every pair of points nearer than ``reach`` whose chunks are neither the
+    same nor neighbours on one cable lies in a chunk pair the tree returns."""
+    dp, ch = _chunks(cables)
+    chunk_of = np.full(len(dp.p), -1)
+    rows, cols = np.nonzero(ch.idx >= 0)
+    chunk_of[ch.idx[rows, cols]] = rows
+    a, b = ch.pairs(reach)
+    found = set(zip(a.tolist(), b.tolist()))
+    d = np.linalg.norm(dp.p[:, None] - dp.p[None], axis=2)
+    i, j = np.nonzero(d < reach)
+    for x, y in zip(chunk_of[i], chunk_of[j]):
+        x, y = min(x, y), max(x, y)
+        if ch.cable[x] == ch.cable[y] and y - x <= 1:
+            continue                                     # the near field's, not the tree's
+        assert (x, y) in found
+
+
+@settings(max_examples=40, deadline=None)
+@given(cable_sets(max_cables=3, max_points=12), part_sets(max_parts=4), st.floats(0.0, 0.05))
+def test_part_candidates_hold_every_point_near_a_part(cables, parts, margin):
+    """Every point nearer than ``margin`` to a part's bounding sphere is a candidate for that part."""
+    dp, ch = _chunks(cables)
+    tab = PartTable(parts)
+    items, pk = chunk_part_pairs(tab, ch, margin)
+    found = set(zip(items.tolist(), pk.tolist()))
+    centre = np.einsum("nij,nj->ni", tab.rot[tab.finite], tab.c_loc) + tab.trans[tab.finite]
+    d = np.linalg.norm(dp.p[:, None] - centre[None], axis=2) - tab.half_diag[None] - margin
+    for i, k in zip(*np.nonzero(d < 0)):
+        assert (i, tab.finite[k]) in found
+    assert ch.idx.shape[1] == CHUNK

@@ -1,0 +1,102 @@
+"""Cables against parts (checker.interference.structure): the batched pass is the single-state check's, bit for bit."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from strategies import cable_sets, coords, part_sets, poses
+from test_interference import pose, random_scene, rot
+
+from checker.interference import Checker
+from checker.records import PairType
+from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+from checker.shapes import Shape, ShapeType
+
+pytestmark = pytest.mark.filterwarnings("error")
+
+
+def test_structure_many_is_each_states_check():
+    """structure_many over a run of states, every centre of some cables
+    active for some parts: per state, exactly the full check's records of
+    those pairs (values, places, bits)."""
+    seen = 0
+    for seed in range(25):
+        rng = np.random.default_rng(100 + seed)
+        cables, parts = random_scene(seed, n_cables=3, n_parts=5)
+        cfg = CheckConfig(clearance=0.01)
+        checker = Checker(parts, cfg)
+        ex = [Exclusion(cables[1].name, parts[2].name, 0.01, 0.05)]
+        n_s = int(rng.integers(1, 6))
+        moves = [[c.points + rng.normal(size=c.points.shape) * 0.01 for c in cables] for _ in range(n_s)]
+        poses = np.stack([[p.pose @ pose(rot(rng) if rng.random() < 0.5 else None, rng.normal(size=3) * 0.01)
+                           for p in parts] for _ in range(n_s)])
+        pc = rng.integers(0, 3, 4)
+        pk = rng.integers(0, len(parts), 4)
+        offsets = np.concatenate([[0], np.cumsum([len(c.points) for c in cables])])
+        centres = np.concatenate([np.arange(offsets[c], offsets[c + 1]) for c in pc])
+        owners = np.concatenate([np.full(offsets[c + 1] - offsets[c], k) for c, k in zip(pc, pk)])
+        radii = np.array([c.radius for c in cables])
+        dense = checker.densify_many(np.stack([np.concatenate(m) for m in moves]), offsets, radii)
+        got = checker.structure_many([c.name for c in cables], radii, dense, poses, ex, (centres, owners))
+        wanted = {(cables[c].name, parts[k].name) for c, k in zip(pc, pk)}
+        for state, recs in zip(range(n_s), got):
+            states = [CableState(c.name, m, c.radius) for c, m in zip(cables, moves[state])]
+            full = checker.check(states, poses[state], ex)
+            want = [r for r in full if (r.a, r.b) in wanted
+                    and r.type in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)]
+            assert [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in recs] == \
+                [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in want]
+            assert all(np.array_equal(a.where, b.where) for a, b in zip(recs, want))
+            seen += len(want)
+    assert seen > 10
+
+
+def test_structure_many_evaluates_only_next_to_active_centres():
+    """One active centre: the record is the worst over the points of its two
+    elements (the caller knows the rest to be clear); elsewhere nothing is
+    looked at."""
+    box = PartState("box", Shape(ShapeType.BOX, [0.05, 0.05, 0.05]), pose())
+    # along x, 0.1 above the box top except centre 4, 2 mm above it (r 1 mm: value 1 mm)
+    pts = np.stack([np.linspace(-0.2, 0.2, 9), np.zeros(9), np.full(9, 0.15)], axis=1)
+    pts[4, 2] = 0.052
+    checker = Checker([box], CheckConfig(clearance=0.005))
+    names, radii, off = ["c"], np.array([0.001]), np.array([0, 9])
+    full = [r for r in checker.check([CableState("c", pts, 0.001)]) if r.type is PairType.CABLE_STRUCTURE]
+    assert len(full) == 1 and abs(full[0].min_distance - 0.001) < 1e-12
+    dense = checker.densify_many(pts[None], off, radii)
+    got = checker.structure_many(names, radii, dense, np.eye(4)[None, None], (),
+                                 (np.array([4]), np.array([0])))[0]
+    assert [(r.min_distance, r.s) for r in got] == [(full[0].min_distance, full[0].s)]
+    far = checker.structure_many(names, radii, dense, np.eye(4)[None, None], (),
+                                 (np.array([0]), np.array([0])))[0]
+    assert far == []                    # centre 0's elements stay 0.1 m above
+
+
+@settings(max_examples=40, deadline=None)
+@given(cable_sets(max_cables=3, max_points=10), part_sets(max_parts=4), st.data())
+def test_structure_kernel_batched_equals_single_state(cables, parts, data):
+    """point_values through structure_many (every centre active for every
+    part, many states and poses at once) and through Checker.check (one
+    state): the same cable-structure and keep-out records, bits and places
+    included, on drawn cables, parts, moves and an exclusion window."""
+    cfg = CheckConfig(clearance=data.draw(st.floats(0.0, 0.02)))
+    checker = Checker(parts, cfg)
+    lo = data.draw(st.floats(0.0, 0.05))
+    ex = [Exclusion(cables[-1].name, parts[0].name, lo, lo + data.draw(st.floats(0.0, 0.05)))]
+    n_s = data.draw(st.integers(1, 3))
+    moves = [[c.points + data.draw(coords(c.points.shape, -0.01, 0.01)) for c in cables] for _ in range(n_s)]
+    pose_sets = np.stack([[data.draw(poses()) @ p.pose if data.draw(st.booleans()) else p.pose for p in parts]
+                          for _ in range(n_s)])
+    offsets = np.concatenate([[0], np.cumsum([len(c.points) for c in cables])])
+    centres = np.repeat(np.arange(offsets[-1]), len(parts))
+    owners = np.tile(np.arange(len(parts)), offsets[-1])
+    radii = np.array([c.radius for c in cables])
+    dense = checker.densify_many(np.stack([np.concatenate(m) for m in moves]), offsets, radii)
+    got = checker.structure_many([c.name for c in cables], radii, dense, pose_sets, ex, (centres, owners))
+    for state, recs in enumerate(got):
+        now = [CableState(c.name, m, c.radius) for c, m in zip(cables, moves[state])]
+        want = [r for r in checker.check(now, pose_sets[state], ex)
+                if r.type in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)]
+        assert [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in recs] == \
+            [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in want]
+        assert all(np.array_equal(a.where, b.where) for a, b in zip(recs, want))
