@@ -106,7 +106,7 @@ def _mode_queries(scene_path: str, repeat: int) -> None:
     from sim.build import build
     from sim.loop import Simulation
     from sim.stepcheck import cable_states
-    from sim.sweep import part_shapes
+    from sim.checkview import part_shapes
 
     built = build(scene, detect=False)
     sim = Simulation(built)

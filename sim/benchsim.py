@@ -25,9 +25,9 @@ from sim.benchfcl import INSTALL, FclMissing, fcl_queries
 from sim.benchscene import make_scene, synthetic_scene
 from sim.benchtable import Table, median_time
 from sim.build import build
+from sim.checkview import part_shapes
 from sim.loop import Simulation
 from sim.scene import load_scene
-from sim.sweep import part_shapes
 from sim.validation import settled
 
 if TYPE_CHECKING:   # the sizes live with the bench that orders the tables

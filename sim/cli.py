@@ -207,8 +207,8 @@ def _main(args: argparse.Namespace, stop: StopRequest) -> int:
         print(f"cablecheck: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except ValueError as e:
-        from sim.sweep import SweepInputError
-        if not isinstance(e, SweepInputError):
+        from sim.checkview import OptionError   # --only of a run, the sweep's options
+        if not isinstance(e, OptionError):
             raise
         print(f"cablecheck: error: {args.scene}: {e.option}: {e.problem}", file=sys.stderr)
         return EXIT_BAD_INPUT

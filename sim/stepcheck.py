@@ -41,9 +41,9 @@ from checker.records import Interference, PairType
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from checker.validation import SimulatorPairs, Validation
 from sim.build import Built
+from sim.checkview import DEFAULT_PRECISION_M, part_set, part_shapes, selection
 from sim.contacts import Contacts, RawContacts
 from sim.loop import StepState
-from sim.sweep import DEFAULT_PRECISION_M, part_set, part_shapes, selection
 
 
 BATCH = 32

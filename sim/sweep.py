@@ -2,8 +2,9 @@
 
 `sweep_scene` builds the scene's MuJoCo model (without the detection model),
 reads every part's geometry and its pose at t = 0 from it (so parts of an
-mjcf base model work like `[[parts]]`), prepares the parts once
-(`checker.partset.PartSet`) and runs `checker.sweep.sweep`. It returns the
+mjcf base model work like `[[parts]]`), prepares the parts once through the
+checker's view of the scene (`sim.checkview`, as a run does) and runs
+`checker.sweep.sweep`. It returns the
 report dict (schema ``cablecheck.sweep/1``) and writes it atomically.
 
 Units: the geometry is in metres inside; the report and the options are in
@@ -22,28 +23,19 @@ from pathlib import Path
 
 import numpy as np
 
-from checker.partset import PartSet
-from sim.report import write_report
-from checker.shapes import Shape, ShapeType, mesh_shape
 from checker.sweep import sweep
 from sim.build import Built, build
+from sim.checkview import DEFAULT_PRECISION_M, OptionError, part_set, selection
 from sim.loop import Simulation
+from sim.report import write_report
 from sim.scene import Scene
 
 SCHEMA = "cablecheck.sweep/1"
 """The sweep report's schema name."""
 
-DEFAULT_PRECISION_M = 5e-4
-"""Default precision: 0.5 mm (as in the sweep-verification paper), in metres."""
 
-
-class SweepInputError(ValueError):
+class SweepInputError(OptionError):
     """A sweep option that cannot be used; `option` names it (e.g. ``--part``)."""
-
-    def __init__(self, option: str, problem: str):
-        super().__init__(f"{option}: {problem}")
-        self.option = option
-        self.problem = problem
 
 
 @dataclass(frozen=True)
@@ -67,17 +59,6 @@ class SweepOptions:
     report: Path | None = None
 
 
-def part_shapes(built: Built) -> list[Shape]:
-    """The checker's shape of every built part (geom frame, metres)."""
-    out = []
-    for p in built.parts:
-        if p.shape == "mesh":
-            out.append(mesh_shape(p.vertices, p.faces))
-        else:
-            out.append(Shape(ShapeType(p.shape), p.size))
-    return out
-
-
 def start_poses(built: Built) -> np.ndarray:
     """(P, 4, 4) world poses of the parts at t = 0 (motion's first keys, no settling needed)."""
     sim = Simulation(built)
@@ -85,34 +66,12 @@ def start_poses(built: Built) -> np.ndarray:
     return sim.state(0, contacts=False).part_poses
 
 
-def rigid_groups(built: Built) -> list[str]:
-    """Per part, the rigid group it moves with: the top body of its weld group
-    (MuJoCo's ``body_weldid``: bodies joined without a joint move as one)."""
-    m = built.model
-    out = []
-    for p in built.parts:
-        weld = int(m.body_weldid[int(m.geom_bodyid[p.geom_id])])
-        out.append(m.body(weld).name or "world")
-    return out
-
-
-def part_set(built: Built, tolerance: float, shapes: list[Shape] | None = None) -> PartSet:
-    """The built parts prepared for sweeps and part-part checks (``shapes``: already built ones)."""
-    return PartSet.build([p.name for p in built.parts], shapes or part_shapes(built),
-                         groups=rigid_groups(built),
-                         keepout=[p.keepout for p in built.parts], tolerance=tolerance)
-
-
-def selection(parts: PartSet, path: str, option: str) -> np.ndarray:
-    """(P,) bool of the parts at ``path`` (a part name or assembly prefix), or SweepInputError."""
-    sel = parts.select(path)
-    if not sel.any():
-        import difflib
-        close = difflib.get_close_matches(path, list(parts.names), n=3, cutoff=0.5)
-        hint = f" (did you mean {', '.join(map(repr, close))}?)" if close else \
-            f" (parts: {', '.join(list(parts.names)[:8])}{', ...' if len(parts.names) > 8 else ''})"
-        raise SweepInputError(option, f"no part or assembly named {path!r}{hint}")
-    return sel
+def _selection(parts, path: str, option: str) -> np.ndarray:
+    """`sim.checkview.selection`, its error as the sweep's."""
+    try:
+        return selection(parts, path, option)
+    except OptionError as e:
+        raise SweepInputError(e.option, e.problem) from None
 
 
 def sweep_scene(scene: Scene, options: SweepOptions) -> dict:
@@ -128,12 +87,10 @@ def sweep_scene(scene: Scene, options: SweepOptions) -> dict:
         raise SweepInputError("--precision", f"must be a positive number, got {options.precision}")
     built = build(scene, detect=False)
     parts = part_set(built, tolerance=0.25 * precision_m)
-    moving = selection(parts, options.part, "--part")
+    moving = _selection(parts, options.part, "--part")
     if (moving & parts.plane).any():
         raise SweepInputError("--part", f"{options.part!r} includes an infinite plane, which cannot move")
-    against = None
-    if options.only is not None:
-        against = selection(parts, options.only, "--only")
+    against = None if options.only is None else _selection(parts, options.only, "--only")
     placed = parts.place(start_poses(built))
     result = sweep(parts, placed, moving, d, options.distance * u, against=against,
                    step=0.25 * precision_m)

@@ -1,0 +1,80 @@
+"""The checker's view of a built scene: part shapes, the rigid part set, assembly selections.
+
+A built scene (:class:`sim.build.Built`) names its parts in MuJoCo's terms
+(geom types, sizes, MuJoCo's own mesh vertices, bodies); the checker takes
+:class:`checker.shapes.Shape` objects and a prepared
+:class:`checker.partset.PartSet`. Both the run's checks (`sim.stepcheck`)
+and the sweep command (`sim.sweep`) translate through here, so they see the
+same parts, grouped into the same rigid groups, at the same precision.
+
+`selection` turns an assembly path (a part name or a "/"-separated prefix)
+into the parts it covers; a path that covers none raises `OptionError`
+naming the command-line option it came from.
+
+This module does not check, step, move or report anything, and parses no
+options of its own: the commands (`sim.run`, `sim.sweep`) do.
+"""
+
+from __future__ import annotations
+
+import difflib
+
+import numpy as np
+
+from checker.partset import PartSet
+from checker.shapes import Shape, ShapeType, mesh_shape
+from sim.build import Built
+
+DEFAULT_PRECISION_M = 5e-4
+"""Default precision: 0.5 mm (as in the sweep-verification paper), in metres."""
+
+
+class OptionError(ValueError):
+    """A command-line option that cannot be used with this scene; `option`
+    names it (e.g. ``--only``), `problem` says why."""
+
+    def __init__(self, option: str, problem: str):
+        super().__init__(f"{option}: {problem}")
+        self.option = option
+        self.problem = problem
+
+
+def part_shapes(built: Built) -> list[Shape]:
+    """The checker's shape of every built part (geom frame, metres)."""
+    out = []
+    for p in built.parts:
+        if p.shape == "mesh":
+            out.append(mesh_shape(p.vertices, p.faces))
+        else:
+            out.append(Shape(ShapeType(p.shape), p.size))
+    return out
+
+
+def rigid_groups(built: Built) -> list[str]:
+    """Per part, the rigid group it moves with: the top body of its weld group
+    (MuJoCo's ``body_weldid``: bodies joined without a joint move as one)."""
+    m = built.model
+    out = []
+    for p in built.parts:
+        weld = int(m.body_weldid[int(m.geom_bodyid[p.geom_id])])
+        out.append(m.body(weld).name or "world")
+    return out
+
+
+def part_set(built: Built, tolerance: float, shapes: list[Shape] | None = None) -> PartSet:
+    """The built parts prepared for sweeps and part-part checks (``shapes``: already built ones)."""
+    return PartSet.build([p.name for p in built.parts], shapes or part_shapes(built),
+                         groups=rigid_groups(built),
+                         keepout=[p.keepout for p in built.parts], tolerance=tolerance)
+
+
+def selection(parts: PartSet, path: str, option: str) -> np.ndarray:
+    """(P,) bool of the parts at ``path`` (a part name or assembly prefix);
+    OptionError for ``option`` when it names none."""
+    sel = parts.select(path)
+    if not sel.any():
+        close = difflib.get_close_matches(path, list(parts.names), n=3, cutoff=0.5)
+        hint = f" (did you mean {', '.join(map(repr, close))}?)" if close else \
+            f" (parts: {', '.join(list(parts.names)[:8])}{', ...' if len(parts.names) > 8 else ''})"
+        raise OptionError(option, f"no part or assembly named {path!r}{hint}")
+    return sel
