@@ -70,7 +70,7 @@ def physics_table(sizes: BenchSizes) -> Table:
         f"reference sag {sag_ref * 1e3:.2f} mm, 3 s settled; cantilever: {can['length']} m rod, "
         f"r {can['radius'] * 1e3:g} mm, E {can['young']:.0e} Pa, w L^4/8EI = {tip_ref * 1e3:.3f} mm, 1 s settled.",
         "error_pct: signed, measured minus reference over reference. Clamps hold a short edge "
-        "(sim.build._clamp_edges); docs/physics.md has the full validation table.",
+        "(sim.cableplan.clamp_edges); docs/physics.md has the full validation table.",
         "ms_per_sim_s: wall time of settling divided by simulated seconds (mj_step only).",
     ]
     return table

@@ -70,7 +70,7 @@ def test_run_writes_report_and_recording(small_scene: Path, tmp_path: Path, caps
     cable = report["cables"][0]
     assert cable["name"] == "lead"
     assert cable["length"] == pytest.approx(260.0, rel=1e-3)
-    # 12 elements and, at each clamped end, the short held edge (sim.build._clamp_edges)
+    # 12 elements and, at each clamped end, the short held edge (sim.cableplan.clamp_edges)
     assert len(cable["rest_points"]) == 15 and len(cable["final_points"]) == 15
     # the end rides the slider: it moved 20 mm in x
     assert cable["final_points"][-1][0] - cable["rest_points"][-1][0] == pytest.approx(20.0, abs=0.5)

@@ -68,7 +68,7 @@ def test_kinds_and_names(tmp_path):
     part = [i for i, (a, b) in enumerate(zip(c.a, c.b)) if {a, b} == {"frame/block", "slider/zone"}]
     assert part and all(c.kind[i] == "keepout" and c.elem_a[i] == -1 and c.elem_b[i] == -1 for i in part)
     cable = [i for i, a in enumerate(c.a) if a == "lead"]
-    # 12 elements and the short held edge at each clamped end (sim.build._clamp_edges)
+    # 12 elements and the short held edge at each clamped end (sim.cableplan.clamp_edges)
     assert all(0 <= c.elem_a[i] < 14 and c.elem_b[i] == -1 for i in cable)
     assert abs(c.dist[cable].min() + 0.001) < 1e-6       # 2 mm above the tops minus the 3 mm radius
 

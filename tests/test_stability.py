@@ -216,7 +216,7 @@ def test_taut_cable_stretches_boundedly_and_settles():
     11.7 % (edges next to the ends at 41 %, the middle at 0.8 %), peak kinetic
     energy 0.024 J. Before the edge impedance yielded (d = 0.99 rising to 0.999)
     the cable vibrated chaotically: edges to 46 %, 0.7 J still at t = 2 s;
-    see `sim.build._edge_solimp`."""
+    see `sim.cablephysics.edge_solimp`."""
     # at_rest False: the forced stretch stores energy in the edge constraints,
     # which the cable's mechanical energy here does not count
     case = Case("taut", _cable(), bodies=[{"name": "b", "pos": [0.8, 0, 1]}],
@@ -230,5 +230,5 @@ def test_taut_cable_stretches_boundedly_and_settles():
     assert forced - 0.005 < run.strain[-1] < forced + 0.03, f"taut: rest strain {run.strain[-1]:.3%}"
     assert run.strain.max() < forced + 0.05, f"taut: max strain {run.strain.max():.3%}"
     # At rest the stretch sits in the edges next to the held ends (the edge
-    # impedance yields past 4 %, see `sim.build._edge_solimp`): measured 41 %.
+    # impedance yields past 4 %, see `sim.cablephysics.edge_solimp`): measured 41 %.
     assert run.edge_strain[-1] < 0.6, f"taut: an edge at {run.edge_strain[-1]:.0%}"

@@ -1,0 +1,191 @@
+"""Where each cable lies at t = 0 and which of its vertices are held.
+
+A cable's routed shape (`sim.route`) has every route point and clip as a
+vertex and droops to make up the cable's length, clear of the parts it
+collides with when those are handed in (`sim.obstacles`). A clamp holds a
+short edge (`clamp_edges`), a pin one vertex, a free anchor nothing. The
+rest shape is straight along the route's first element: MuJoCo's rod keeps
+as rest curvature whatever bend its qpos0 has, so the cable is built
+straight and put into the routed shape through qpos, and bending energy is
+stored where a real cable would have it.
+
+This module is numpy on the scene alone: it neither builds nor reads a
+MuJoCo model (see `sim.mjspec`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from sim.route import initial_shape, polyline_length, run_elements
+from sim.scene import Anchor, CableDef, Hold, Scene, SceneError
+from sim.startframes import Frames
+
+if TYPE_CHECKING:
+    from sim.obstacles import Obstacles
+
+
+CLAMP_EDGE = 0.05
+"""Length of the held edge a clamp puts at its end or clip, as a fraction of
+the cable's element length (see `clamp_edges`): short enough that the rigid
+piece it adds changes a cantilever's deflection by about 4 x 0.05 / N."""
+
+
+def default_segments(length: float, radius: float) -> int:
+    """Elements for a cable: about 25 mm each, at least 4 radii, 8 to 80 elements.
+
+    Elements longer than 2 r keep MuJoCo's self-collision from touching
+    elements two apart along a straight cable (SPEC); 80 bounds the cost of
+    long cables (the flex costs about 0.2 ms per step at 40 points)."""
+    target = max(0.025, 4.0 * radius)
+    return int(np.clip(round(length / target), 8, 80))
+
+
+@dataclass(frozen=True)
+class Held:
+    """One held vertex: which end or clip, the body, the vertex, the hold kind."""
+
+    kind: str      # "start", "end" or "clip"
+    body: str
+    vertex: int
+    hold: Hold
+
+
+@dataclass
+class CablePlan:
+    cable: CableDef
+    routed: np.ndarray    # (n, 3) routed shape at t = 0, model coordinates
+    straight: np.ndarray  # (n, 3) rest shape: straight along the first element
+    held: list[Held]     # held vertices, by vertex
+
+
+def _closest_arc(route: np.ndarray, point: np.ndarray) -> tuple[int, float]:
+    """(segment index, arc length) of the point of `route` closest to `point`."""
+    a, b = route[:-1], route[1:]
+    ab = b - a
+    denom = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+    t = np.clip(np.einsum("ij,ij->i", point - a, ab) / denom, 0.0, 1.0)
+    dist = np.linalg.norm(a + t[:, None] * ab - point, axis=1)
+    k = int(np.argmin(dist))
+    seglen = np.sqrt(denom)
+    return k, float(seglen[:k].sum() + t[k] * seglen[k])
+
+
+def plan_cable(cable: CableDef, frames: Frames, where: str, scene: Scene,
+                depth: Obstacles | None = None) -> CablePlan:
+    """Routed shape through start, via or points, clips and end, with the cable's length.
+
+    Every waypoint (start, each via or given point, each clip, end) is a
+    vertex (`sim.route`): each clip is inserted where the route passes
+    closest to it, the elements are shared among the straight runs between
+    waypoints in proportion to their lengths (`segments`, or the default
+    element count raised to one element per run; with slack and no run of
+    two elements, two per run), and the runs droop to make up the length,
+    away from the parts the cable collides with when `depth` is given."""
+    route = np.asarray(cable.route if cable.route is not None else cable.points, float) - frames.origin
+    route[0] = frames.to_world(cable.start.body, cable.start.pos)
+    route[-1] = frames.to_world(cable.end.body, cable.end.pos)
+    clips = []
+    for clip in cable.clips:
+        point = frames.to_world(clip.body, clip.pos)
+        k, s = _closest_arc(route, point)
+        clips.append((s, k, point, clip))
+    clips.sort(key=lambda c: c[0])
+    # Insert clip points (from the last, so earlier segment indices stay valid).
+    for s, k, point, clip in sorted(clips, key=lambda c: (c[1], c[0]), reverse=True):
+        route = np.insert(route, k + 1, point, axis=0)
+    keep = np.concatenate([[True], np.linalg.norm(np.diff(route, axis=0), axis=1) > 0])
+    route = route[keep]
+    runs = np.linalg.norm(np.diff(route, axis=0), axis=1)
+    total = float(runs.sum())
+    length = max(cable.length if cable.length is not None else total, total)
+    slack = length > total * (1.0 + 1e-9)
+    if cable.segments is not None:
+        if cable.segments < len(runs) + (1 if slack else 0):
+            need = len(runs) + (1 if slack else 0)
+            raise SceneError(scene.path, f"{where}.segments",
+                             f"{cable.segments} elements cannot pass through all {len(runs) + 1} "
+                             f"route points and clips{' and droop to the length' if slack else ''}; "
+                             f"give at least {need}")
+        counts = run_elements(runs, cable.segments)
+    else:
+        counts = run_elements(runs, max(default_segments(length, cable.radius), len(runs)))
+        if slack and counts.max() < 2:
+            counts = np.full(len(runs), 2)
+    measure = None if (depth is None or not slack) else depth.measure(cable.radius)
+    cuts = [int(np.argmin(np.linalg.norm(route - c[2], axis=1))) for c in clips]
+    clip_vertices = np.concatenate([[0], np.cumsum(counts)])[cuts]
+    anchors = ([(0, "start", cable.start)] + [(int(v), "clip", c[3]) for c, v in zip(clips, clip_vertices)]
+               + [(int(counts.sum()), "end", cable.end)])
+    droop = length
+    for _ in range(2):
+        # A clip's held edge along the corner's bisector leaves the route by a
+        # little; with slack the second pass droops that much less, so the
+        # cable keeps its length (to second order in the clamp edge).
+        drooped = initial_shape(route, droop, counts, depth=measure)
+        shortest = float(np.linalg.norm(np.diff(drooped, axis=0), axis=1).min())
+        routed, held = clamp_edges(drooped, anchors, CLAMP_EDGE * shortest)
+        excess = polyline_length(routed) - length
+        if not slack or abs(excess) <= 1e-12 * length or droop - excess < total:
+            break
+        droop -= excess
+    seg = np.linalg.norm(np.diff(routed, axis=0), axis=1)
+    tangent = (routed[1] - routed[0]) / seg[0]
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    straight = routed[0] + s[:, None] * tangent[None, :]
+    return CablePlan(cable, routed, straight, held)
+
+
+def clamp_edges(routed: np.ndarray, anchors: list[tuple[int, str, Anchor]],
+                 edge: float) -> tuple[np.ndarray, list[Held]]:
+    """Insert a short held edge at every clamp; list the held vertices.
+
+    A clamp holds position and tangent. In MuJoCo's discrete elastic rod
+    the bending energy of a vertex stands for the rod within half an element
+    either side, so holding a whole element (its two vertices) leaves the
+    first half element rigid and clamps the rod half an element too far in:
+    measured, a cantilever deflected 1.6 / N too little with N elements.
+    Instead a clamp holds an edge of length `edge` (CLAMP_EDGE of an
+    element) along the route's tangent at the held point, inside the cable:
+    the next vertex's bending then stands for the rod from the clamp on.
+    At the end the edge leads into the end point, at a clip it leaves the
+    clip point along the bisector of the route's corner there (so a route
+    turning at a clip bends by half the turn on either side of the clamp,
+    not all of it on one). A pin holds the one vertex, a free anchor
+    nothing."""
+    points = [p for p in routed]
+    held: list[Held] = []
+    shift = 0
+    for vertex, kind, anchor in anchors:
+        v = vertex + shift
+        if anchor.hold == Hold.FREE:
+            continue
+        if anchor.hold == Hold.PIN:
+            held.append(Held(kind, anchor.body, v, anchor.hold))
+            continue
+        if kind == "end":
+            t = points[v] - points[v - 1]
+            points.insert(v, points[v] - edge * t / np.linalg.norm(t))
+            held += [Held(kind, anchor.body, v, anchor.hold), Held(kind, anchor.body, v + 1, anchor.hold)]
+        else:
+            out = points[v + 1] - points[v]
+            t = out / np.linalg.norm(out)
+            if kind == "clip":  # along the route's bisector, so the route's corner splits both sides
+                into = points[v] - points[v - 1]
+                bisector = t + into / np.linalg.norm(into)
+                if np.linalg.norm(bisector) > 1e-9 and np.dot(bisector, out) > edge * np.linalg.norm(bisector):
+                    t = bisector / np.linalg.norm(bisector)
+            points.insert(v + 1, points[v] + edge * t)
+            held += [Held(kind, anchor.body, v, anchor.hold), Held(kind, anchor.body, v + 1, anchor.hold)]
+        shift += 1
+    return np.array(points), held
+
+
+def has_slack(cable: CableDef) -> bool:
+    """The cable is longer than its route (clips aside), so its initial shape droops."""
+    route = np.asarray(cable.route if cable.route is not None else cable.points, float)
+    total = float(np.linalg.norm(np.diff(route, axis=0), axis=1).sum())
+    return cable.length is not None and cable.length > total * (1.0 + 1e-9)
