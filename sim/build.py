@@ -20,6 +20,8 @@ This module does not step, move or read the simulation; see `sim.loop`.
 
 from __future__ import annotations
 
+import numpy as np
+
 from sim.built import (
     CABLE_PREFIX,
     Attachment,
@@ -38,7 +40,7 @@ from sim.cablephysics import (
     first_bending_frequency,
     rayleigh_damping,
 )
-from sim.cableplan import CLAMP_EDGE, default_segments, has_slack, plan_cable
+from sim.cableplan import CLAMP_EDGE, CablePlan, default_segments, has_slack, plan_cable
 from sim.contactbits import ContactBits
 from sim.mjspec import SIM_MARGIN_FRACTION, compile_model, move_held, set_step
 from sim.modelread import read_built
@@ -58,21 +60,28 @@ __all__ = [
     "Attachment", "Built", "CABLE_PREFIX", "CLAMP_EDGE", "CONTACT_SOLIMP", "CableModel", "ContactBits",
     "EDGE_IMPEDANCE", "EDGE_YIELD", "JointDrive", "MAX_SUBSTEPS", "PartModel", "SIM_MARGIN_FRACTION",
     "Substeps", "bending_step", "build", "choose_substeps", "contact_time_constant", "default_segments",
-    "edge_time_constant", "first_bending_frequency", "held_speeds", "rayleigh_damping", "scene_origin",
+    "edge_time_constant", "first_bending_frequency", "held_speeds", "plan_cables", "rayleigh_damping", "scene_origin",
     "tunnel_warnings",
 ]
 
 
-def build(scene: Scene, detect: bool = True) -> Built:
-    """Compile the simulation model (and, if `detect`, the detection model),
-    then choose its step (`choose_substeps`)."""
-    origin = scene_origin(scene)
-    frames = Frames(scene, origin)
+def plan_cables(scene: Scene) -> tuple[Frames, dict[str, tuple[np.ndarray, np.ndarray]], list[CablePlan]]:
+    """The scene placed at t = 0 (body frames in model coordinates), its mesh
+    parts read (name -> vertices, faces) and every cable planned."""
+    frames = Frames(scene, scene_origin(scene))
     meshes = part_meshes(scene)
     obstacles = None
     if "cable-structure" in scene.effects.contact and any(has_slack(c) for c in scene.cables):
         obstacles = Obstacles(scene, frames, meshes)
     plans = [plan_cable(c, frames, f"cables[{i}]", scene, obstacles) for i, c in enumerate(scene.cables)]
+    return frames, meshes, plans
+
+
+def build(scene: Scene, detect: bool = True) -> Built:
+    """Compile the simulation model (and, if `detect`, the detection model),
+    then choose its step (`choose_substeps`)."""
+    frames, meshes, plans = plan_cables(scene)
+    origin = frames.origin
     sim, own_bits = compile_model(scene, plans, meshes, detect=False, frames=frames, rest=True)
     move_held(sim, plans, frames)
     det = compile_model(scene, plans, meshes, detect=True, frames=frames)[0] if detect else None

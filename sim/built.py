@@ -15,6 +15,7 @@ write or read a MuJoCo model.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import mujoco
 import numpy as np
@@ -129,13 +130,68 @@ class JointDrive:
     scale: float
 
 
+class Named(NamedTuple):
+    """A body or joint of a `BodyTree`, as `MjModel.body(i)` / `.joint(j)` give it."""
+
+    id: int
+    name: str
+
+
+@dataclass(frozen=True, eq=False)
+class BodyTree:
+    """The bodies of a scene built without MuJoCo (`sim.staticbuild`): the
+    world, then each `[[bodies]]` body on its free joint, and the body of
+    every part, numbered as MuJoCo would number them.
+
+    The arrays are named as `mujoco.MjModel`'s and hold the same numbers, so
+    what reads a built scene's tree (the pair filters and attachment windows
+    of `sim.stepcheck`, rigid groups in `sim.checkview`, the recorder, the
+    joint log, the script) reads either. Nothing else of a model is here.
+
+    Attributes:
+      body_names: per body, its name ("world" first).
+      body_parentid, body_weldid, body_jntnum: (nbody,) int.
+      jnt_bodyid: (njnt,) int; joint_names: per joint, its name.
+      geom_bodyid: (ngeom,) int, the body of each part (by `PartModel.geom_id`).
+      qpos0: the bodies' free joints at their `[[bodies]]` pose.
+    """
+
+    body_names: tuple[str, ...]
+    body_parentid: np.ndarray
+    body_weldid: np.ndarray
+    body_jntnum: np.ndarray
+    jnt_bodyid: np.ndarray
+    joint_names: tuple[str, ...]
+    geom_bodyid: np.ndarray
+    qpos0: np.ndarray
+
+    @property
+    def nbody(self) -> int:
+        return len(self.body_names)
+
+    @property
+    def njnt(self) -> int:
+        return len(self.joint_names)
+
+    @property
+    def ngeom(self) -> int:
+        return len(self.geom_bodyid)
+
+    def body(self, i: int) -> Named:
+        return Named(i, self.body_names[i])
+
+    def joint(self, j: int) -> Named:
+        return Named(j, self.joint_names[j])
+
+
 @dataclass(eq=False)
 class Built:
     """Everything the run loop needs about the compiled models.
 
     Attributes:
       scene: the scene.
-      model: simulation model.
+      model: simulation model; for a scene built without MuJoCo
+        (`sim.staticbuild`), its bodies' tree (`BodyTree`).
       detect: detection model (same dofs), or None when not requested.
       cables, parts: in scene order (parts: scene parts, then mjcf geoms).
       free: scene body name -> (qpos address, dof address) of its free joint.
@@ -151,7 +207,7 @@ class Built:
     """
 
     scene: Scene
-    model: mujoco.MjModel
+    model: mujoco.MjModel | BodyTree
     detect: mujoco.MjModel | None
     cables: list[CableModel]
     parts: list[PartModel]

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from sim.built import Attachment, CableModel
 from sim.route import initial_shape, polyline_length, run_elements
 from sim.scene import Anchor, CableDef, Hold, Scene, SceneError
 from sim.startframes import Frames
@@ -189,3 +190,16 @@ def has_slack(cable: CableDef) -> bool:
     route = np.asarray(cable.route if cable.route is not None else cable.points, float)
     total = float(np.linalg.norm(np.diff(route, axis=0), axis=1).sum())
     return cable.length is not None and cable.length > total * (1.0 + 1e-9)
+
+
+def cable_model(plan: CablePlan, flex_id: int, vert_adr: int, origin: np.ndarray) -> CableModel:
+    """The built cable of `plan`, whose flex is `flex_id` with its vertices from
+    `vert_adr` on; `origin`: the model's origin in the scene's world."""
+    c = plan.cable
+    n = len(plan.routed)
+    seg = np.linalg.norm(np.diff(plan.straight, axis=0), axis=1)
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    attachments = [Attachment(h.kind, h.body, h.vertex, float(s[h.vertex]), h.hold) for h in plan.held]
+    return CableModel(c.name, c.radius, flex_id, vert_adr, n, float(s[-1]), float(seg.max()),
+                      plan.routed + origin, tuple(sorted(attachments, key=lambda a: a.vertex)),
+                      c.min_bend_radius, s, n - 1 - sum(h.hold == Hold.CLAMP for h in plan.held) // 2)

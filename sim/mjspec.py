@@ -45,7 +45,7 @@ from sim.cablephysics import (
 )
 from sim.cableplan import CablePlan
 from sim.contactbits import ContactBits, cable_bits, model_bits, part_bits
-from sim.scene import CableDef, Scene, SceneError, euler_matrix
+from sim.scene import CableDef, PartDef, Scene, SceneError, euler_matrix
 from sim.startframes import Frames
 
 BASE_ARMATURE = 100.0
@@ -64,6 +64,17 @@ def euler_quat(euler_deg) -> np.ndarray:
     q = np.zeros(4)
     mujoco.mju_mat2Quat(q, euler_matrix(euler_deg).ravel())
     return q
+
+
+def part_size(part: PartDef) -> list[float]:
+    """MuJoCo's three size numbers of a primitive part, metres (unused ones 0)."""
+    size = [float(x) for x in part.size] + [0.0] * (3 - len(part.size))
+    if part.shape == "plane":
+        # MuJoCo's plane is infinite whatever its size: x, y half-sizes
+        # are for drawing (0: infinite), the third, the drawn grid's
+        # spacing, must be positive
+        size[2] = size[2] or max(size[0], size[1]) / 10.0 or PLANE_GRID
+    return size
 
 
 def base_spec(scene: Scene) -> mujoco.MjSpec:
@@ -162,14 +173,8 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
                           userface=faces.ravel().tolist())
             parent.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"mesh:{part.name}", **common)
         else:
-            size = list(part.size) + [0.0] * (3 - len(part.size))
-            if part.shape == "plane":
-                # MuJoCo's plane is infinite whatever its size: x, y half-sizes
-                # are for drawing (0: infinite), the third, the drawn grid's
-                # spacing, must be positive
-                size[2] = size[2] or max(size[0], size[1]) / 10.0 or PLANE_GRID
             gtype = getattr(mujoco.mjtGeom, f"mjGEOM_{part.shape.upper()}")
-            parent.add_geom(type=gtype, size=size, **common)
+            parent.add_geom(type=gtype, size=part_size(part), **common)
 
     if plans:
         child = mujoco.MjSpec.from_string(_cables_xml(plans, scene, bits, detect, margin))

@@ -16,9 +16,9 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from sim.built import CABLE_PREFIX, Attachment, Built, CableModel, JointDrive, PartModel
-from sim.cableplan import CablePlan
-from sim.scene import Hold, Scene, SceneError
+from sim.built import CABLE_PREFIX, Built, JointDrive, PartModel
+from sim.cableplan import CablePlan, cable_model
+from sim.scene import Scene, SceneError
 
 SHAPES = {int(mujoco.mjtGeom.mjGEOM_PLANE): "plane", int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere",
            int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule", int(mujoco.mjtGeom.mjGEOM_ELLIPSOID): "ellipsoid",
@@ -141,13 +141,7 @@ def read_built(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
             ja = int(m.body_jntadr[bid])
             # The three slides run along the parent's (the world's) x, y, z axes.
             qpos0[m.jnt_qposadr[ja:ja + 3]] += plan.routed[v] - plan.straight[v]
-        seg = np.linalg.norm(np.diff(plan.straight, axis=0), axis=1)
-        s = np.concatenate([[0.0], np.cumsum(seg)])
-        attachments = [Attachment(h.kind, h.body, h.vertex, float(s[h.vertex]), h.hold) for h in plan.held]
-        cables.append(CableModel(c.name, c.radius, fid, int(m.flex_vertadr[fid]), n, float(s[-1]),
-                                 float(seg.max()), plan.routed + origin,
-                                 tuple(sorted(attachments, key=lambda a: a.vertex)), c.min_bend_radius, s,
-                                 n - 1 - sum(h.hold == Hold.CLAMP for h in plan.held) // 2))
+        cables.append(cable_model(plan, fid, int(m.flex_vertadr[fid]), origin))
 
     scene_bodies = {b.name for b in scene.bodies}
     free = {}

@@ -34,10 +34,12 @@ from checker.twist import TwistMeter
 from checker.wear import CableWear, WearMap
 from sim.build import Built, build
 from sim.jointspace import JointLog
+from sim.kinematic import KinematicSimulation
 from sim.loop import Simulation
 from sim.record import Mark, Recorder, Settings, summary_text
 from sim.report import STAGES, AdvanceOutcome, CableOutcome, RunOutcome, Timing, report_of, write_report
 from sim.scene import Scene, check_allow_names
+from sim.staticbuild import build_static, needs_model
 from sim.stepcheck import BATCH, StepChecks
 from sim.stop import StopRequest
 
@@ -134,12 +136,13 @@ def run_outcome(scene: Scene, options: RunOptions, progress: Progress | None = N
 def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: StopRequest,
          start: float, warn: Callable[[str], None] | None) -> RunOutcome:
     validate = scene.check.validate
-    built = build(scene, detect=validate)
+    static = not needs_model(scene)     # nothing calls for MuJoCo: no model is built (sim.staticbuild)
+    built = build_static(scene) if static else build(scene, detect=validate)
     check_allow_names(scene, [p.name for p in built.parts] + [c.name for c in built.cables])
     if warn is not None:
         for w in built.warnings:
             warn(w)
-    sim = Simulation(built)
+    sim = KinematicSimulation(built) if static else Simulation(built)
     sim.reset()
     if progress:
         progress("settle", 0, max(sim.settle_steps, 1))
