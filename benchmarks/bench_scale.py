@@ -2,7 +2,7 @@
 
 Scenes come from :func:`sim.harness.harness_scene` (cables of ``--segments``
 elements threaded through non-overlapping parts, a few within the
-clearance, one carriage moving). Four tables, every number measured in this
+clearance, one carriage moving). Four tables and a profile, every number measured in this
 run on this machine:
 
 1. ``build``: the part set (surfaces, trees, probes) of N harness parts,
@@ -21,12 +21,19 @@ run on this machine:
    (``points`` and ``exact``), by MuJoCo's ``mj_collision`` on the detection
    model and by python-fcl (:func:`sim.benchfcl.fcl_queries`), each
    in one process per scene.
-4. ``profile`` (``--profile C P``): cProfile's top functions and
+4. ``static``: a static check (dynamics and validation off, ``--static C,P``
+   cables x parts, default 100 x 300) run by ``cablecheck run``, which then
+   builds no MuJoCo model (every way into one raises in that process),
+   beside the same scene run through a MuJoCo build, each in its own
+   process; in the first process, on the same state, the checker's
+   cable-part and cable-cable queries (``points``) beside python-fcl's
+   (update + query), and their ratio.
+5. ``profile`` (``--profile C P``): cProfile's top functions and
    tracemalloc's top allocation sites of one run.
 
 Run: python benchmarks/bench_scale.py [--quick] [--cables 1,16,64] [--parts 10,100,1000]
-       [--duration S] [--harness] [--tables build,runs,queries] [--profile C P] [--out DIR]
-       [--before REV] [--rec-growth]
+       [--duration S] [--harness] [--tables build,runs,queries,static] [--static C,P]
+       [--profile C P] [--out DIR] [--before REV] [--rec-growth]
 
 ``--quick`` runs a small subset (seconds to a minute). Timings depend on the
 machine and its load: compare rows of one run, not runs of different days.
@@ -122,6 +129,64 @@ def _mode_queries(scene_path: str, repeat: int) -> None:
             out[f"fcl_{method}"] = upd + qry
     except ImportError:
         out["fcl_points"] = out["fcl_exact"] = None
+    print(json.dumps(out))
+
+
+def _mode_static(scene_path: str, with_model: bool, repeat: int) -> None:
+    """One static run; without ``with_model`` every way into a MuJoCo model
+    raises, and the checker and python-fcl then answer the same queries on
+    the run's state; print JSON."""
+    import mujoco
+    import numpy as np
+
+    import sim.run
+    from checker.interference import Checker
+    from checker.scene_state import CheckConfig, PartState
+    from sim.checkview import part_shapes
+    from sim.run import RunOptions, run_scene
+    from sim.scene import load_scene
+
+    def refuse(*args, **kwargs):
+        raise RuntimeError("a MuJoCo model was built for a static check")
+
+    if with_model:
+        sim.run.needs_model = lambda scene: True      # the run as it was: a MuJoCo build
+    else:
+        for owner, name in ((mujoco.MjSpec, "compile"), (mujoco.MjSpec, "from_string"),
+                            (mujoco.MjSpec, "from_file"), (mujoco.MjModel, "from_xml_string"),
+                            (mujoco.MjModel, "from_xml_path")):
+            setattr(owner, name, refuse)
+    scene = load_scene(scene_path)
+    folder = Path(tempfile.mkdtemp(prefix="bench_scale_static_"))
+    report = run_scene(scene, RunOptions(report=folder / "r.json", record=None))
+    out = {"timing": report["timing"], "events": len(report["events"]), "pairs": len(report["pairs"])}
+    if not with_model:
+        from checker.benchscene import fcl_queries
+        from sim.kinematic import KinematicSimulation
+        from sim.staticbuild import build_static
+        from sim.stepcheck import cable_states
+
+        built = build_static(scene)
+        run = KinematicSimulation(built)
+        run.reset()
+        state = run.state(0)
+        cables = cable_states(built, state.cables)
+        parts = [PartState(p.name, sh, pose, p.keepout)
+                 for p, sh, pose in zip(built.parts, part_shapes(built), state.part_poses)]
+        config = CheckConfig("points", scene.check.spacing, scene.check.clearance)
+        checker = Checker(parts, config)
+        times = []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            checker.check(cables, state.part_poses)
+            times.append(time.perf_counter() - t0)
+        out["checker_points"] = float(np.median(times))
+        out["n_points"] = int(sum(len(c.points) for c in cables))
+        try:
+            upd, qry, _ = fcl_queries(cables, parts, config, repeat)
+            out["fcl_points"] = upd + qry
+        except ImportError:
+            out["fcl_points"] = None
     print(json.dumps(out))
 
 
@@ -315,6 +380,42 @@ def query_table(grid: list[tuple[int, int]], segments: int, mem_gb: float, out: 
                    "mj_detect", "fcl_points", "fcl_exact", "fcl/exact"], rows), found
 
 
+def static_table(cases: list[tuple[int, int]], segments: int, mem_gb: float, out: Path) -> tuple[str, list[dict]]:
+    """Static checks (dynamics and validation off) without and with a MuJoCo
+    model, and the checker beside python-fcl on the same state (see the
+    module docstring)."""
+    from sim.harness import harness_scene, write_scene
+
+    rows, found = [], []
+    me = str(Path(__file__).resolve())
+    for c, p in cases:
+        data = harness_scene(c, p, segments=segments, duration=0.0, dynamics=False)
+        data["check"]["validate"] = False
+        scene = write_scene(data, out / f"static_{c}x{p}.toml")
+        res = {}
+        for label, extra in (("no model", []), ("MuJoCo model", ["--with-model"])):
+            code, wall, rss, so, se = _child([me, "--mode-static", str(scene), *extra], REPO, mem_gb, 3600)
+            if code != 0:
+                rows.append([c, p, label, None, None, None, None, None, None, None, wall, rss,
+                             f"failed: {(se.strip().splitlines() or ['?'])[-1][:80]}"])
+                continue
+            r = json.loads(so.strip().splitlines()[-1])
+            res[label] = r
+            t = r["timing"]
+            fcl, chk = r.get("fcl_points"), r.get("checker_points")
+            rows.append([c, p, label, t["total_s"], t["sim_s"], t["check_s"], r["events"],
+                         None if chk is None else 1e3 * chk, None if fcl is None else 1e3 * fcl,
+                         None if (fcl is None or chk is None) else fcl / chk, wall, rss, None])
+        found.append({"cables": c, "parts": p, **{k.replace(" ", "_"): v for k, v in res.items()}})
+    return _table("Static checks (dynamics and validation off, t = 0 only): the run with no MuJoCo model "
+                  "beside the run through a MuJoCo build, one process each; total / sim (build and "
+                  "preparing the checks) / check: the report's seconds; checker_ms: the checker's "
+                  "cable-part and cable-cable queries (points) on the run's state, fcl_ms: python-fcl's "
+                  "(update + query) on the same state, in the same process",
+                  ["cables", "parts", "run", "total_s", "sim_s", "check_s", "events", "checker_ms",
+                   "fcl_ms", "fcl/checker", "process_s", "peak_rss_mb", "note"], rows), found
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="a small subset")
@@ -328,7 +429,8 @@ def main() -> int:
                     help="also run each scene for half the duration: the recording's growth per simulated second")
     ap.add_argument("--no-validate", action="store_true", help="runs without the MuJoCo comparison")
     ap.add_argument("--before", default=BEFORE, help="git revision for the build and run tables' 'before' rows ('' for none)")
-    ap.add_argument("--tables", default="build,runs,queries", help="which tables (comma-separated)")
+    ap.add_argument("--tables", default="build,runs,queries,static", help="which tables (comma-separated)")
+    ap.add_argument("--static", default="100,300", help="cables,parts of the static table's scene")
     ap.add_argument("--mem-limit-gb", type=float, default=8.0)
     ap.add_argument("--profile", nargs=2, type=int, metavar=("CABLES", "PARTS"), help="profile one run instead")
     ap.add_argument("--out", type=Path, default=REPO / "recordings" / "bench_scale")
@@ -336,12 +438,17 @@ def main() -> int:
     ap.add_argument("--mode-build", help=argparse.SUPPRESS)
     ap.add_argument("--mode-queries", help=argparse.SUPPRESS)
     ap.add_argument("--mode-profile", help=argparse.SUPPRESS)
+    ap.add_argument("--mode-static", help=argparse.SUPPRESS)
+    ap.add_argument("--with-model", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.mode_build:
         _mode_build(a.mode_build)
         return 0
     if a.mode_queries:
         _mode_queries(a.mode_queries, 3)
+        return 0
+    if a.mode_static:
+        _mode_static(a.mode_static, a.with_model, 9)
         return 0
     if a.mode_profile:
         _mode_profile(a.mode_profile, 40)
@@ -373,7 +480,8 @@ def main() -> int:
     for name, fn in (("build", lambda: build_table(build_parts, a.before or None, a.mem_limit_gb)),
                      ("runs", lambda: run_table(grid, duration, a.segments, a.mem_limit_gb, a.out,
                                                 not a.no_validate, a.before or None, a.rec_growth)),
-                     ("queries", lambda: query_table(grid, a.segments, a.mem_limit_gb, a.out))):
+                     ("queries", lambda: query_table(grid, a.segments, a.mem_limit_gb, a.out)),
+                     ("static", lambda: static_table([tuple(ints(a.static))], a.segments, a.mem_limit_gb, a.out))):
         if name not in a.tables.split(","):
             continue
         text, found = fn()
