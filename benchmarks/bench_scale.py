@@ -111,9 +111,9 @@ def _mode_queries(scene_path: str, repeat: int) -> None:
     # python-fcl on the same cable-part (and cable-cable) queries of the same state
     from checker.scene_state import PartState
     from sim.build import build
+    from sim.checkview import part_shapes
     from sim.loop import Simulation
     from sim.stepcheck import cable_states
-    from sim.checkview import part_shapes
 
     built = build(scene, detect=False)
     sim = Simulation(built)
@@ -161,7 +161,7 @@ def _mode_static(scene_path: str, with_model: bool, repeat: int) -> None:
     report = run_scene(scene, RunOptions(report=folder / "r.json", record=None))
     out = {"timing": report["timing"], "events": len(report["events"]), "pairs": len(report["pairs"])}
     if not with_model:
-        from checker.benchscene import fcl_queries
+        from sim.benchfcl import fcl_queries
         from sim.kinematic import KinematicSimulation
         from sim.staticbuild import build_static
         from sim.stepcheck import cable_states
