@@ -1143,7 +1143,7 @@ def segment_signed_distance(shape: Shape, a: np.ndarray, b: np.ndarray) -> tuple
 
 
 def least_signed_distance(shapes: list[Shape], rotations: np.ndarray, positions: np.ndarray,
-                          points: np.ndarray) -> np.ndarray:
+                          points: np.ndarray, limit: float | None = None) -> np.ndarray:
     """Least signed distance (n,) from world points to shapes placed in the world.
 
     Args:
@@ -1151,6 +1151,11 @@ def least_signed_distance(shapes: list[Shape], rotations: np.ndarray, positions:
         rotations: (P, 3, 3) part-to-world rotations.
         positions: (P, 3) part origins in the world.
         points: (n, 3) world points.
+        limit: None, or a distance at and beyond which the caller needs no
+            exact value: a point whose distance to a mesh's bounding box
+            exceeds it is answered with that box distance (a lower bound,
+            above the limit) for that mesh instead of searching its
+            triangles. Values below the limit are always exact.
 
     Every point is taken into every part's frame at once; primitives of one
     type are answered in one batched call and each mesh in one call (its
@@ -1174,9 +1179,23 @@ def least_signed_distance(shapes: list[Shape], rotations: np.ndarray, positions:
         sh = shapes[members[0]]
         loc = local[members].reshape(-1, 3)
         if sh.mesh is not None:
-            d = _sd_mesh(sh.mesh, loc, grid=False)[0]      # one-off points: no grid to fill
+            d = _mesh_least(sh.mesh, loc, limit)
         else:
             size = np.repeat(np.stack([shapes[m].size for m in members]), len(p), axis=0)
             d = signed_distance_value_batch(sh.type, size, loc)
         out = np.minimum(out, d.reshape(len(members), len(p)).min(axis=0))
     return out
+
+
+def _mesh_least(m: MeshData, p: np.ndarray, limit: float | None) -> np.ndarray:
+    """Signed distance (n,) of one-off points to a mesh by its k-d tree (no
+    grid to fill), points beyond ``limit`` of its box answered by the box
+    distance (see :func:`least_signed_distance`)."""
+    if limit is None:
+        return _sd_mesh(m, p, grid=False)[0]
+    gap = np.maximum(np.maximum(m.lo - p, p - m.hi), 0.0)
+    d = np.sqrt(np.einsum("ij,ij->i", gap, gap))
+    near = np.flatnonzero(~(d > limit))
+    if len(near):
+        d[near] = _sd_mesh(m, p[near], grid=False)[0]
+    return d

@@ -80,10 +80,12 @@ class Obstacles:
 
     def measure(self, radius: float):
         """depth(points) for a cable of `radius`: radius less the signed
-        distance (-inf where no part's box comes within the radius)."""
+        distance, exact where a vertex reaches into a part; a vertex clear
+        of every part gets some value of 0 or less (-inf where no part's box
+        comes within the radius), which is all `sim.route` asks."""
         def depth(points: np.ndarray) -> np.ndarray:
             lo, hi = points.min(axis=0) - radius, points.max(axis=0) + radius
             near = np.flatnonzero(np.all((self.lo <= hi) & (self.hi >= lo), axis=1))
             shapes = [self.shapes[k] for k in near]
-            return radius - least_signed_distance(shapes, self.rot[near], self.pos[near], points)
+            return radius - least_signed_distance(shapes, self.rot[near], self.pos[near], points, limit=radius)
         return depth
