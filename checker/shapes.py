@@ -201,8 +201,11 @@ def _reach_levels(centroids: np.ndarray, face_reach: np.ndarray, reach: float,
 _GRID_CELLS = 72
 """Cells of :class:`_BoundGrid` along the mesh's longest side."""
 
-_GRID_PAD = 8
-"""Cells of :class:`_BoundGrid` beyond the mesh's box on every side."""
+_GRID_PAD = 16
+"""Cells of :class:`_BoundGrid` beyond the mesh's box on every side (a
+quarter of the mesh's longest side: a cable's radius, clearance and skip
+horizon together stay within it on arm links, so their queries need not
+fall back to the k-d tree)."""
 
 
 class _BoundGrid:
@@ -218,8 +221,9 @@ class _BoundGrid:
     Candidates: the triangle nearest to a point p of the cell is within
     ``|v| + 2 h`` of the centre (``h`` the cell's half diagonal: it is within
     ``|v| + h`` of p), so the triangles :func:`_faces_within` that radius of
-    the centre hold it; a point's own upper bound (its distance to the
-    centre's nearest triangle) then cuts that list by the triangles' boxes.
+    the centre hold it, listed nearest first by their boxes; a point's own
+    upper bound (the centre's value plus its way to the centre) takes a
+    prefix of that list and cuts it by the triangles' boxes.
     Used for cells within ``_GRID_NEAR`` cells of the surface (farther ones
     would list too many triangles).
 
@@ -239,11 +243,13 @@ class _BoundGrid:
     def _allocate(self) -> None:
         n = int(np.prod(self.dims))
         self.values = np.full(n, np.nan)
-        self.face0 = np.full(n, -1, np.int32)
         self.start = np.zeros(n, np.int64)
         self.count = np.full(n, -1, np.int32)
+        self.list_id = np.zeros(n, np.int32)
+        self.quantum = self.h * 2.0 ** -20
         self.flat = np.zeros(1024, np.int64)     # the cells' lists, one after the other
-        self.flat_box = np.zeros(1024)            # each entry's box distance from its cell's centre
+        self.flat_key = np.zeros(1024, np.int64)  # each entry's list and quantised box distance
+        self.lists = 0                            # lists made so far (their keys' high bits)
         self.used = 0
 
     def _cells(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -256,17 +262,18 @@ class _BoundGrid:
         return inside, np.ravel_multi_index(ijk.T, self.dims), self.origin + (ijk + 0.5) * self.h
 
     def _fill(self, m: "MeshData", flat: np.ndarray) -> None:
-        todo = np.unique(flat[np.isnan(self.values[flat])])
-        if len(todo):
+        missing = np.isnan(self.values[flat])
+        if missing.any():
+            todo = np.unique(flat[missing])
             c = self.origin + (np.stack(np.unravel_index(todo, self.dims), axis=1) + 0.5) * self.h
             d, cl, face, region = _mesh_nearest(m, c, 8)
             self.values[todo] = _mesh_sign(m, c, cl, face, region) * d
-            self.face0[todo] = face
 
     def _list(self, m: "MeshData", flat: np.ndarray) -> None:
-        todo = np.unique(flat[self.count[flat] < 0])
-        if not len(todo):
+        missing = self.count[flat] < 0
+        if not missing.any():
             return
+        todo = np.unique(flat[missing])
         c = self.origin + (np.stack(np.unravel_index(todo, self.dims), axis=1) + 0.5) * self.h
         radius = np.abs(self.values[todo]) + 2.0 * self.half_diag * (1 + 1e-9)
         rows, faces = _faces_within(m, c, radius)
@@ -280,12 +287,22 @@ class _BoundGrid:
         if need > len(self.flat):
             size = max(need, 2 * len(self.flat))
             self.flat = np.concatenate([self.flat[: self.used], np.zeros(size - self.used, np.int64)])
-            self.flat_box = np.concatenate([self.flat_box[: self.used], np.zeros(size - self.used)])
+            self.flat_key = np.concatenate([self.flat_key[: self.used], np.zeros(size - self.used, np.int64)])
         self.flat[self.used: need] = faces[o]
-        self.flat_box[self.used: need] = box[o]
+        # keys ascend along the lists (list number, then box): one
+        # searchsorted finds every point's prefix (see `nearest`)
+        ids = self.lists + np.arange(len(todo), dtype=np.int64)
+        self.flat_key[self.used: need] = (ids[rows[o]] << _KEY_BITS) | self._quantise(box[o])
         self.start[todo] = self.used + np.cumsum(cnt) - cnt
         self.count[todo] = cnt
+        self.list_id[todo] = ids
+        self.lists += len(todo)
         self.used = need
+
+    def _quantise(self, x: np.ndarray) -> np.ndarray:
+        """floor(x / quantum), clipped to the key's low bits: monotone, so
+        x <= y implies quantise(x) <= quantise(y)."""
+        return np.minimum(np.floor(x / self.quantum), float(_KEY_MAX)).astype(np.int64)
 
     def lower(self, m: "MeshData", p: np.ndarray) -> np.ndarray:
         """(n,) lower bounds on the signed distance at points p (-inf where none)."""
@@ -324,26 +341,21 @@ class _BoundGrid:
             return _mesh_nearest(m, p, 8)
         self._list(m, flat)
         q = p[rows_in]
-        f0 = self.face0[flat]
-        ub, _, _ = point_triangle(q, m.a[f0], m.b[f0], m.c[f0])
+        # An upper bound on the distance at q: the centre's (exact) plus the
+        # way to it (1-Lipschitz), with the rounding slack of `bounds`.
+        r = row_norm(q - centre)
+        v = np.abs(self.values[flat])
+        ub = v + r + 1e-9 * (v + self.h)
         # A triangle within ub of q has its box within ub + |q - c| of the
         # centre (box distance is 1-Lipschitz): a prefix of the cell's list,
-        # its length found by bisection for all points at once.
-        reach = (ub + row_norm(q - centre)) * (1 + 1e-12) + 1e-300
-        lo = self.start[flat].copy()
-        hi = lo + self.count[flat]
-        while True:
-            open_ = lo < hi
-            if not open_.any():
-                break
-            mid = (lo + hi) >> 1
-            below = open_ & (self.flat_box[np.minimum(mid, len(self.flat_box) - 1)] <= reach)
-            lo = np.where(below, mid + 1, lo)
-            hi = np.where(open_ & ~below, mid, hi)
-        cnt = lo - self.start[flat]
+        # found for all points at once by the lists' sorted keys.
+        reach = (ub + r) * (1 + 1e-12) + 1e-300
+        key = (self.list_id[flat].astype(np.int64) << _KEY_BITS) | self._quantise(reach)
+        start = self.start[flat]
+        cnt = np.searchsorted(self.flat_key[: self.used], key, side="right") - start
         rows = np.repeat(np.arange(len(q)), cnt)
         first = np.cumsum(cnt) - cnt
-        faces = self.flat[self.start[flat][rows] + np.arange(len(rows)) - first[rows]]
+        faces = self.flat[start[rows] + np.arange(len(rows)) - first[rows]]
         qr = q[rows]
         g = np.maximum(np.maximum(m.tri_lo[faces] - qr, qr - m.tri_hi[faces]), 0.0)
         keep = np.einsum("ij,ij->i", g, g) <= np.square(ub[rows] * (1 + 1e-12) + 1e-300)
@@ -365,7 +377,13 @@ class _BoundGrid:
         return out_d, out_cl, out_f, out_r
 
 
-_GRID_NEAR = 8
+_KEY_BITS = 40
+"""Low bits of a :class:`_BoundGrid` list entry's key: its box distance in
+units of 2^-20 cell sides (clipped: far entries share the largest key)."""
+
+_KEY_MAX = (1 << _KEY_BITS) - 1
+
+_GRID_NEAR = 16
 """Cells of :class:`_BoundGrid` whose centre lies within this many cell
 sides of the surface answer nearest-triangle queries from their lists."""
 

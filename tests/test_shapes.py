@@ -358,6 +358,25 @@ def test_least_signed_distance_over_posed_shapes_matches_one_by_one():
     assert np.all(np.isinf(least_signed_distance([], np.zeros((0, 3, 3)), np.zeros((0, 3)), pts)))
 
 
+def test_least_signed_distance_with_a_limit_is_exact_below_it():
+    """Values below the limit are the exact ones; beyond it a mesh may
+    answer with a lower bound, still beyond the limit."""
+    from checker.shapes import least_signed_distance
+    rng = np.random.default_rng(11)
+    torus = trimesh.creation.torus(0.3, 0.08)
+    shapes = [mesh_shape(torus.vertices, torus.faces), Shape(ShapeType.SPHERE, [0.1])]
+    rot = np.array([np.eye(3), np.eye(3)])
+    pos = np.array([[0.0, 0.0, 0.0], [0.8, 0.0, 0.0]])
+    pts = rng.uniform(-1.0, 1.0, (400, 3))
+    exact = least_signed_distance(shapes, rot, pos, pts)
+    limit = 0.1
+    got = least_signed_distance(shapes, rot, pos, pts, limit=limit)
+    below = exact < limit
+    assert below.any() and (~below).any()
+    assert np.array_equal(got[below], exact[below])
+    assert np.all(got[~below] >= limit) and np.all(got[~below] <= exact[~below])
+
+
 def test_sliver_mesh_nearest_and_segment_distance_are_the_brute_force_ones():
     """A CAD-style tessellation: a finely meshed cylinder wall plus long slivers
     (flat caps fanned from one corner). The reach classes must still find
