@@ -315,26 +315,26 @@ def test_translation_and_scale_invariance_of_point_distances():
 
 
 def test_small_mesh_nearest_is_the_brute_force_nearest(monkeypatch):
-    """Low-poly meshes take the triangle-box road in _mesh_nearest: the same
+    """Low-poly meshes take the triangle-box road in mesh_nearest: the same
     distances as every triangle tried, and the same as the centroid-tree road."""
-    from checker import shapes
+    from checker import meshnearest
     from checker.closest import point_triangle
     rng = np.random.default_rng(4)
     for mesh in (trimesh.creation.box([0.04, 0.03, 0.05]), trimesh.creation.icosphere(0, 0.02),
                  trimesh.load(Path(__file__).resolve().parents[1] / "scenes" / "meshes" / "l_bracket.stl")):
         md = mesh_shape(mesh.vertices, mesh.faces).mesh
-        assert len(md.faces) <= shapes._BOX_FACES
+        assert len(md.faces) <= meshnearest.BOX_FACES
         p = rng.uniform(mesh.bounds[0] - 0.5 * mesh.extents, mesh.bounds[1] + 0.5 * mesh.extents, (300, 3))
         p[:20] = mesh.vertices[rng.integers(0, len(mesh.vertices), 20)]          # on corners
-        d, cl, face, _ = shapes._mesh_nearest(md, p)
+        d, cl, face, _ = meshnearest.mesh_nearest(md, p)
         rows = np.repeat(np.arange(len(p)), len(md.faces))
         fi = np.tile(np.arange(len(md.faces)), len(p))
         brute = point_triangle(p[rows], md.a[fi], md.b[fi], md.c[fi])[0].reshape(len(p), -1).min(axis=1)
         assert np.array_equal(d, brute)
         assert np.allclose(np.linalg.norm(p - cl, axis=1), d, rtol=1e-12, atol=1e-15)
         with monkeypatch.context() as mp:
-            mp.setattr(shapes, "_BOX_FACES", 0)                                  # the centroid-tree road
-            assert np.array_equal(d, shapes._mesh_nearest(md, p)[0])
+            mp.setattr(meshnearest, "BOX_FACES", 0)                                  # the centroid-tree road
+            assert np.array_equal(d, meshnearest.mesh_nearest(md, p)[0])
 
 
 def test_least_signed_distance_over_posed_shapes_matches_one_by_one():
@@ -381,7 +381,7 @@ def test_sliver_mesh_nearest_and_segment_distance_are_the_brute_force_ones():
     """A CAD-style tessellation: a finely meshed cylinder wall plus long slivers
     (flat caps fanned from one corner). The reach classes must still find
     the nearest triangle of every point and segment that every triangle tried finds."""
-    from checker import shapes
+    from checker import meshnearest, segments
     from checker.closest import point_triangle, segment_triangle
     rng = np.random.default_rng(7)
     wall = trimesh.creation.cylinder(0.04, 0.2, sections=96)
@@ -400,13 +400,13 @@ def test_sliver_mesh_nearest_and_segment_distance_are_the_brute_force_ones():
     reaches = [b for b, _, _ in md.levels]
     assert len(md.levels) >= 3 and max(reaches) == md.reach and min(reaches) < md.reach / 8
     p = rng.uniform([-0.08, -0.08, -0.15], [0.08, 0.08, 0.15], (200, 3))
-    d = shapes._mesh_nearest(md, p)[0]
+    d = meshnearest.mesh_nearest(md, p)[0]
     rows = np.repeat(np.arange(len(p)), len(md.faces))
     fi = np.tile(np.arange(len(md.faces)), len(p))
     brute = point_triangle(p[rows], md.a[fi], md.b[fi], md.c[fi])[0].reshape(len(p), -1).min(axis=1)
     assert np.array_equal(d, brute)
     a, b = p[:60], p[:60] + rng.normal(size=(60, 3)) * 0.01
-    ds = shapes._mesh_segment_unsigned(md, a, b)[0]
+    ds = segments.mesh_segment_unsigned(md, a, b)[0]
     rows = np.repeat(np.arange(len(a)), len(md.faces))
     fi = np.tile(np.arange(len(md.faces)), len(a))
     brute_s = segment_triangle(a[rows], b[rows], md.a[fi], md.b[fi], md.c[fi])[0].reshape(len(a), -1).min(axis=1)
