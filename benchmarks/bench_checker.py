@@ -11,7 +11,12 @@ it is installed, with the ratio. It also counts the false alarms of the
 paper's face-plane distance (``face_plane=True``) against true surface
 distance on the same scene.
 
-Run: ``python benchmarks/bench_checker.py [--repeat N] [--no-fcl]``. Timings
+It also times MuJoCo's ``mj_collision`` on the same capsules (one per
+cable element, radius r, margin the clearance) and parts, interleaved call
+by call with the checker's ``points`` check so both see the same load
+(``--no-mujoco`` skips it).
+
+Run: ``python benchmarks/bench_checker.py [--repeat N] [--no-fcl] [--no-mujoco]``. Timings
 are single-threaded (set OMP/BLAS threads to 1 for a fair number).
 
 The scene lives in :mod:`sim.benchscene` and the fcl queries in
@@ -59,11 +64,72 @@ def time_check(cables, parts, config, repeat):
     return float(np.median(ts)), float(np.median(tc)), out
 
 
+def mujoco_model(cables, parts, margin: float):
+    """The same scene for MuJoCo: every cable a free body of capsules (one
+    per element, so MuJoCo tests cable-part and cable-cable pairs, not a
+    cable against itself), every part a world geom (a mesh as MuJoCo collides
+    it: its convex hull), every geom with `margin` (contacts within the
+    clearance, as the checker reports pairs within it)."""
+    import mujoco
+
+    def num(x):
+        return " ".join(f"{v:.17g}" for v in np.ravel(x))
+
+    sizes = {ShapeType.BOX: 3, ShapeType.SPHERE: 1, ShapeType.CYLINDER: 2, ShapeType.CAPSULE: 2,
+             ShapeType.ELLIPSOID: 3}
+    assets, geoms, meshes = [], [], {}
+    for part in parts:
+        sh, pose = part.shape, part.pose
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, np.ascontiguousarray(pose[:3, :3]).ravel())
+        where = f'pos="{num(pose[:3, 3])}" quat="{num(quat)}" margin="{margin}"'
+        if sh.type is ShapeType.MESH:
+            if id(sh) not in meshes:
+                meshes[id(sh)] = f"mesh{len(meshes)}"
+                assets.append(f'<mesh name="{meshes[id(sh)]}" vertex="{num(sh.vertices)}"/>')
+            geoms.append(f'<geom type="mesh" mesh="{meshes[id(sh)]}" {where}/>')
+        else:
+            geoms.append(f'<geom type="{sh.type.value}" size="{num(sh.size[:sizes[sh.type]])}" {where}/>')
+    bodies = []
+    for c in cables:
+        caps = "".join(f'<geom type="capsule" size="{c.radius}" fromto="{num(np.r_[a, b])}" margin="{margin}"/>'
+                       for a, b in zip(c.points[:-1], c.points[1:]))
+        bodies.append(f'<body name="{c.name}"><freejoint/>{caps}</body>')
+    return mujoco.MjModel.from_xml_string(
+        f'<mujoco><asset>{"".join(assets)}</asset><worldbody>{"".join(geoms)}{"".join(bodies)}</worldbody></mujoco>')
+
+
+def side_by_side_mujoco(cables, parts, config, repeat):
+    """Seconds (min, median) of a reused Checker's check and of MuJoCo's
+    mj_collision on the same capsules and parts, interleaved call by call
+    (so both see the same machine load), and MuJoCo's contact count."""
+    import mujoco
+
+    model = mujoco_model(cables, parts, config.clearance)
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    checker = Checker(parts, config)
+    poses = np.array([p.pose for p in parts])
+    checker.check(cables, poses)
+    mujoco.mj_collision(model, data)
+    tc, tm = [], []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        checker.check(cables, poses)
+        t1 = time.perf_counter()
+        mujoco.mj_collision(model, data)
+        t2 = time.perf_counter()
+        tc.append(t1 - t0)
+        tm.append(t2 - t1)
+    return (min(tc), float(np.median(tc))), (min(tm), float(np.median(tm))), int(data.ncon)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=15)
     ap.add_argument("--no-fcl", action="store_true")
     ap.add_argument("--profile", action="store_true", help="print where the time goes")
+    ap.add_argument("--no-mujoco", action="store_true", help="skip the mj_collision comparison")
     args = ap.parse_args(argv)
     cables, parts = make_scene()
     n_pts = sum(len(c.points) for c in cables)
@@ -85,6 +151,13 @@ def main(argv=None):
                 check_state(cables, parts, cfg)
             pr.disable()
             pstats.Stats(pr).sort_stats("tottime").print_stats(12)
+    if not args.no_mujoco:
+        (c_min, c_med), (m_min, m_med), ncon = side_by_side_mujoco(cables, parts, CheckConfig("points"),
+                                                                   max(args.repeat, 15))
+        print(f"side by side (interleaved): points {c_min * 1e3:.2f} ms (median {c_med * 1e3:.2f}), MuJoCo "
+              f"mj_collision on the same {n_pts - len(cables)} capsules and {len(parts)} parts "
+              f"{m_min * 1e3:.2f} ms (median {m_med * 1e3:.2f}, {ncon} contacts); points / mj_collision = "
+              f"{c_min / m_min:.2f} (min), {c_med / m_med:.2f} (median)")
     # The paper's face-plane distance against true distance on the same scene.
     t_fp, _, out_fp = time_check(cables, parts, CheckConfig(method="points", face_plane=True), 3)
     true_pairs = {(r.type, r.a, r.b) for r in results["points"][1] if r.type is PairType.CABLE_STRUCTURE}
