@@ -102,23 +102,32 @@ def support(kind: np.ndarray, size: np.ndarray, u: np.ndarray) -> tuple[np.ndarr
         s: (n, 3) a point of the shape reaching it.
     """
     s = np.zeros_like(u)
-    nu = np.linalg.norm(u, axis=1)
-    nu = np.where(nu > 0, nu, 1.0)
-    box = kind == 0
-    s[box] = np.sign(u[box]) * size[box]
-    sph = kind == 1
-    s[sph] = size[sph, :1] * u[sph] / nu[sph, None]
-    cap = kind == 2
-    s[cap] = size[cap, :1] * u[cap] / nu[cap, None]
-    s[cap, 2] += np.sign(u[cap, 2]) * size[cap, 1]
-    cyl = kind == 3
-    rad = np.linalg.norm(u[cyl, :2], axis=1)
-    s[cyl, :2] = size[cyl, :1] * u[cyl, :2] / np.where(rad > 0, rad, 1.0)[:, None]
-    s[cyl, 2] = np.sign(u[cyl, 2]) * size[cyl, 1]
-    ell = kind == 4
-    e2u = size[ell] ** 2 * u[ell]
-    den = np.sqrt(np.einsum("ij,ij->i", e2u, u[ell]))
-    s[ell] = e2u / np.where(den > 0, den, 1.0)[:, None]
+    # only the kinds present are computed (the same arithmetic row by row:
+    # an iteration of a few pairs is dominated by the calls, not the rows)
+    count = np.bincount(kind, minlength=len(CONVEX))
+    if count[1] or count[2]:
+        nu = np.linalg.norm(u, axis=1)
+        nu = np.where(nu > 0, nu, 1.0)
+    if count[0]:
+        box = kind == 0
+        s[box] = np.sign(u[box]) * size[box]
+    if count[1]:
+        sph = kind == 1
+        s[sph] = size[sph, :1] * u[sph] / nu[sph, None]
+    if count[2]:
+        cap = kind == 2
+        s[cap] = size[cap, :1] * u[cap] / nu[cap, None]
+        s[cap, 2] += np.sign(u[cap, 2]) * size[cap, 1]
+    if count[3]:
+        cyl = kind == 3
+        rad = np.linalg.norm(u[cyl, :2], axis=1)
+        s[cyl, :2] = size[cyl, :1] * u[cyl, :2] / np.where(rad > 0, rad, 1.0)[:, None]
+        s[cyl, 2] = np.sign(u[cyl, 2]) * size[cyl, 1]
+    if count[4]:
+        ell = kind == 4
+        e2u = size[ell] ** 2 * u[ell]
+        den = np.sqrt(np.einsum("ij,ij->i", e2u, u[ell]))
+        s[ell] = e2u / np.where(den > 0, den, 1.0)[:, None]
     return np.einsum("ij,ij->i", s, u), s
 
 
