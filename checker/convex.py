@@ -74,6 +74,13 @@ MULTI_STARTS = 6
 """Descents from the best starts of an overlapping pair of the general rule."""
 
 
+def _norm(x: np.ndarray, axis: int = 1, keepdims: bool = False) -> np.ndarray:
+    """``np.linalg.norm(x, axis=axis, keepdims=keepdims)`` for real arrays:
+    its formula and bits, without its Python-level dispatch (a few
+    microseconds a call, in loops of a few pairs)."""
+    return np.sqrt(np.add.reduce(x * x, axis=axis, keepdims=keepdims))
+
+
 def _fibonacci(n: int) -> np.ndarray:
     """n directions spread evenly over the sphere (a Fibonacci lattice)."""
     k = np.arange(n) + 0.5
@@ -89,6 +96,39 @@ PROJECTION_ITERS = 30
 """Alternating projections of the general rule."""
 
 
+def _support_box(size: np.ndarray, u: np.ndarray) -> np.ndarray:
+    return np.sign(u) * size
+
+
+def _support_sphere(size: np.ndarray, u: np.ndarray) -> np.ndarray:
+    nu = _norm(u, axis=1)
+    return size[:, :1] * u / np.where(nu > 0, nu, 1.0)[:, None]
+
+
+def _support_capsule(size: np.ndarray, u: np.ndarray) -> np.ndarray:
+    s = _support_sphere(size, u)
+    s[:, 2] += np.sign(u[:, 2]) * size[:, 1]
+    return s
+
+
+def _support_cylinder(size: np.ndarray, u: np.ndarray) -> np.ndarray:
+    s = np.empty_like(u)
+    rad = _norm(u[:, :2], axis=1)
+    s[:, :2] = size[:, :1] * u[:, :2] / np.where(rad > 0, rad, 1.0)[:, None]
+    s[:, 2] = np.sign(u[:, 2]) * size[:, 1]
+    return s
+
+
+def _support_ellipsoid(size: np.ndarray, u: np.ndarray) -> np.ndarray:
+    e2u = size ** 2 * u
+    den = np.sqrt(np.einsum("ij,ij->i", e2u, u))
+    return e2u / np.where(den > 0, den, 1.0)[:, None]
+
+
+_SUPPORT = (_support_box, _support_sphere, _support_capsule, _support_cylinder, _support_ellipsoid)
+"""Support points per kind of :data:`CONVEX`, for rows of one kind."""
+
+
 def support(kind: np.ndarray, size: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Support function and a support point of primitives in their own frames.
 
@@ -101,33 +141,18 @@ def support(kind: np.ndarray, size: np.ndarray, u: np.ndarray) -> tuple[np.ndarr
         h: (n,) ``max over x in the shape of x . u``.
         s: (n, 3) a point of the shape reaching it.
     """
-    s = np.zeros_like(u)
-    # only the kinds present are computed (the same arithmetic row by row:
-    # an iteration of a few pairs is dominated by the calls, not the rows)
+    # one call per kind present (rows of one kind without any selection: an
+    # iteration of a few pairs costs its calls, not its rows); the same
+    # arithmetic row by row either way
     count = np.bincount(kind, minlength=len(CONVEX))
-    if count[1] or count[2]:
-        nu = np.linalg.norm(u, axis=1)
-        nu = np.where(nu > 0, nu, 1.0)
-    if count[0]:
-        box = kind == 0
-        s[box] = np.sign(u[box]) * size[box]
-    if count[1]:
-        sph = kind == 1
-        s[sph] = size[sph, :1] * u[sph] / nu[sph, None]
-    if count[2]:
-        cap = kind == 2
-        s[cap] = size[cap, :1] * u[cap] / nu[cap, None]
-        s[cap, 2] += np.sign(u[cap, 2]) * size[cap, 1]
-    if count[3]:
-        cyl = kind == 3
-        rad = np.linalg.norm(u[cyl, :2], axis=1)
-        s[cyl, :2] = size[cyl, :1] * u[cyl, :2] / np.where(rad > 0, rad, 1.0)[:, None]
-        s[cyl, 2] = np.sign(u[cyl, 2]) * size[cyl, 1]
-    if count[4]:
-        ell = kind == 4
-        e2u = size[ell] ** 2 * u[ell]
-        den = np.sqrt(np.einsum("ij,ij->i", e2u, u[ell]))
-        s[ell] = e2u / np.where(den > 0, den, 1.0)[:, None]
+    present = np.flatnonzero(count)
+    if len(present) == 1:
+        s = _SUPPORT[present[0]](size, u)
+    else:
+        s = np.zeros_like(u)
+        for k in present:
+            rows = kind == k
+            s[rows] = _SUPPORT[k](size[rows], u[rows])
     return np.einsum("ij,ij->i", s, u), s
 
 
@@ -146,9 +171,9 @@ def _axes(ra: np.ndarray, rb: np.ndarray, offset: np.ndarray) -> np.ndarray:
     a = np.swapaxes(ra, 1, 2)                                   # rows: A's axes
     b = np.swapaxes(rb, 1, 2)
     cr = np.cross(a[:, :, None, :], b[:, None, :, :]).reshape(len(ra), 9, 3)
-    off = offset / np.maximum(np.linalg.norm(offset, axis=1), 1e-300)[:, None]
-    off = np.where(np.linalg.norm(off, axis=1, keepdims=True) > 0, off, a[:, 2])
-    ln = np.linalg.norm(cr, axis=2, keepdims=True)
+    off = offset / np.maximum(_norm(offset, axis=1), 1e-300)[:, None]
+    off = np.where(_norm(off, axis=1, keepdims=True) > 0, off, a[:, 2])
+    ln = _norm(cr, axis=2, keepdims=True)
     cr = np.where(ln > 1e-9, cr / np.maximum(ln, 1e-300), off[:, None, :])
     u = np.concatenate([a, b, cr, off[:, None, :]], axis=1)
     return np.concatenate([u, -u], axis=1)
@@ -179,7 +204,7 @@ def _gilbert(u: np.ndarray, f: np.ndarray, args, scale: np.ndarray) -> tuple[np.
     x = wa - wb
     for act, sub in _rows(len(u), args, GILBERT_ITERS):
         xa = x[act]
-        ln = np.linalg.norm(xa, axis=1)
+        ln = _norm(xa, axis=1)
         live = ln > 0
         d = -xa / np.where(live, ln, 1.0)[:, None]
         d = np.where(live[:, None], d, best_u[act])
@@ -258,10 +283,10 @@ def _alternate(u: np.ndarray, f: np.ndarray, args, scale: np.ndarray) -> tuple[n
         ka, sa, ra, pa, kb, sb, rb, pb = sub
         p_new = _project(ka, sa, ra, pa, q[act])
         q_new = _project(kb, sb, rb, pb, p_new)
-        step = np.linalg.norm(p_new - p[act], axis=1) + np.linalg.norm(q_new - q[act], axis=1)
+        step = _norm(p_new - p[act], axis=1) + _norm(q_new - q[act], axis=1)
         p[act], q[act] = p_new, q_new
         v = q_new - p_new
-        ln = np.linalg.norm(v, axis=1)
+        ln = _norm(v, axis=1)
         d = np.where(ln[:, None] > 0, v / np.where(ln > 0, ln, 1.0)[:, None], u[act])
         h, _, _ = _h_d(*sub, d)
         better = h < f[act]
@@ -281,9 +306,9 @@ def _descend(u: np.ndarray, f: np.ndarray, args, scale: np.ndarray) -> tuple[np.
         _, wa, wb = _h_d(*sub, ua)
         g = wa - wb
         g -= np.einsum("ij,ij->i", g, ua)[:, None] * ua
-        turn = step[act] * np.linalg.norm(g, axis=1)
+        turn = step[act] * _norm(g, axis=1)
         trial = ua - step[act, None] * g
-        trial /= np.maximum(np.linalg.norm(trial, axis=1), 1e-300)[:, None]
+        trial /= np.maximum(_norm(trial, axis=1), 1e-300)[:, None]
         ft, _, _ = _h_d(*sub, trial)
         better = ft < f[act]
         u[act] = np.where(better[:, None], trial, ua)
@@ -341,7 +366,7 @@ def convex_pairs(kind_a: np.ndarray, size_a: np.ndarray, rot_a: np.ndarray, pos_
         qw = np.einsum("nij,nj->ni", rb[rows], q) + pb[rows]
         cw = pa[rows]
         v = qw - cw
-        ln = np.linalg.norm(v, axis=1)
+        ln = _norm(v, axis=1)
         # the sphere's own point nearest the other surface
         u = np.where(ln[:, None] > 0, v / np.maximum(ln, 1e-300)[:, None], 0.0) * np.sign(d)[:, None]
         sd[rows] = d - sa[rows, 0]
@@ -364,7 +389,7 @@ def convex_pairs(kind_a: np.ndarray, size_a: np.ndarray, rot_a: np.ndarray, pos_
             b1 = np.einsum("nij,nj->ni", rb[rows], e[:, 1]) + pb[rows]
             d, _, _, cp, cq = segment_segment(a0[two], a1[two], b0, b1)
             v = cq - cp
-            u = v / np.maximum(np.linalg.norm(v, axis=1), 1e-300)[:, None]
+            u = v / np.maximum(_norm(v, axis=1), 1e-300)[:, None]
             sd[rows] = d - sa[rows, 0] - sb[rows, 0]
             where[rows] = 0.5 * ((cp + sa[rows, :1] * u) + (cq - sb[rows, :1] * u))
             exact[rows] = done[rows] = True
@@ -383,7 +408,7 @@ def convex_pairs(kind_a: np.ndarray, size_a: np.ndarray, rot_a: np.ndarray, pos_
             pw = np.einsum("nij,nj->ni", rb[r_out], p) + pb[r_out]
             qw = np.einsum("nij,nj->ni", rb[r_out], q) + pb[r_out]
             v = qw - pw
-            u = v / np.maximum(np.linalg.norm(v, axis=1), 1e-300)[:, None]
+            u = v / np.maximum(_norm(v, axis=1), 1e-300)[:, None]
             sd[r_out] = m[out] - sa[r_out, 0]
             where[r_out] = 0.5 * (pw + sa[r_out, :1] * u + qw)
             exact[r_out] = done[r_out] = True
