@@ -43,8 +43,9 @@ class BoundGrid:
     ``|v| + 2 h`` of the centre (``h`` the cell's half diagonal: it is within
     ``|v| + h`` of p), so the triangles :func:`faces_within` that radius of
     the centre hold it, listed nearest first by their boxes; a point's own
-    upper bound (the centre's value plus its way to the centre) takes a
-    prefix of that list and cuts it by the triangles' boxes.
+    upper bound (its distance to the centre's closest surface point, kept
+    with the cell) takes a prefix of that list and cuts it by the
+    triangles' boxes.
     Used for cells within ``_GRID_NEAR`` cells of the surface (farther ones
     would list too many triangles).
 
@@ -64,6 +65,7 @@ class BoundGrid:
     def _allocate(self) -> None:
         n = int(np.prod(self.dims))
         self.values = np.full(n, np.nan)
+        self.closest = np.zeros((n, 3))          # each centre's closest surface point
         self.start = np.zeros(n, np.int64)
         self.count = np.full(n, -1, np.int32)
         self.list_id = np.zeros(n, np.int32)
@@ -89,6 +91,7 @@ class BoundGrid:
             c = self.origin + (np.stack(np.unravel_index(todo, self.dims), axis=1) + 0.5) * self.h
             d, cl, face, region = mesh_nearest(m, c, 8)
             self.values[todo] = mesh_sign(m, c, cl, face, region) * d
+            self.closest[todo] = cl
 
     def _list(self, m: MeshData, flat: np.ndarray) -> None:
         missing = self.count[flat] < 0
@@ -162,11 +165,10 @@ class BoundGrid:
             return mesh_nearest(m, p, 8)
         self._list(m, flat)
         q = p[rows_in]
-        # An upper bound on the distance at q: the centre's (exact) plus the
-        # way to it (1-Lipschitz), with the rounding slack of `bounds`.
+        # An upper bound on the distance at q: its way to the centre's
+        # closest surface point (with the rounding slack of `bounds`).
         r = row_norm(q - centre)
-        v = np.abs(self.values[flat])
-        ub = v + r + 1e-9 * (v + self.h)
+        ub = row_norm(q - self.closest[flat]) + 1e-9 * (np.abs(self.values[flat]) + self.h)
         # A triangle within ub of q has its box within ub + |q - c| of the
         # centre (box distance is 1-Lipschitz): a prefix of the cell's list,
         # found for all points at once by the lists' sorted keys.
