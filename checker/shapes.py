@@ -43,6 +43,8 @@ re-exported here.
 
 from __future__ import annotations
 
+import hashlib
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -154,12 +156,34 @@ def mesh_shape(vertices: np.ndarray, faces: np.ndarray) -> Shape:
     signed distance, negative inside. An open mesh is a surface without an
     inside: its distance is unsigned (never negative), so a cable can only
     touch it, never be inside it.
+
+    The last few meshes made are kept by content (``MESH_MEMO`` of them): a
+    run asks for each part's mesh more than once (routing, checks), and the
+    same shape then shares its search structures and bound grid (a memo of
+    exact values, so sharing changes no answer).
     """
-    tm = trimesh.Trimesh(vertices=np.asarray(vertices, dtype=float), faces=np.asarray(faces), process=True)
-    tm.update_faces(tm.nondegenerate_faces())
-    tm.update_faces(tm.unique_faces())
-    tm.remove_unreferenced_vertices()
-    return Shape(ShapeType.MESH, np.zeros(0), vertices=np.asarray(tm.vertices), faces=np.asarray(tm.faces))
+    v = np.ascontiguousarray(vertices, dtype=float)
+    f = np.ascontiguousarray(faces)
+    key = (v.shape, f.shape, f.dtype.str, hashlib.blake2b(v.tobytes() + f.tobytes(), digest_size=20).digest())
+    shape = _MESH_MEMO.get(key)
+    if shape is None:
+        tm = trimesh.Trimesh(vertices=v, faces=f, process=True)
+        tm.update_faces(tm.nondegenerate_faces())
+        tm.update_faces(tm.unique_faces())
+        tm.remove_unreferenced_vertices()
+        shape = Shape(ShapeType.MESH, np.zeros(0), vertices=np.asarray(tm.vertices), faces=np.asarray(tm.faces))
+        if len(_MESH_MEMO) >= MESH_MEMO:
+            _MESH_MEMO.popitem(last=False)
+    else:
+        _MESH_MEMO.move_to_end(key)
+    _MESH_MEMO[key] = shape
+    return shape
+
+
+MESH_MEMO = 8
+"""Meshes :func:`mesh_shape` keeps, least recently asked for dropped first."""
+
+_MESH_MEMO: OrderedDict = OrderedDict()
 
 
 def signed_distance(shape: Shape, points: np.ndarray,

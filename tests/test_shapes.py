@@ -456,3 +456,21 @@ def test_grid_nearest_and_limit_bounds_are_the_brute_force_ones(seed, scale, shi
     assert np.array_equal(dl[~skipped], d[~skipped])
     assert np.all(dl[skipped] > limit[skipped]) and np.all(dl[skipped] <= d[skipped])
     assert np.all(~skipped[d < limit])
+
+
+def test_mesh_shape_is_kept_by_content_and_bounded():
+    """The same vertices and faces give the same shape (its grid shared);
+    other content gives another; only the last MESH_MEMO are kept."""
+    from checker import shapes
+    box = trimesh.creation.box([0.2, 0.3, 0.4])
+    a = mesh_shape(box.vertices, box.faces)
+    assert mesh_shape(box.vertices.copy(), box.faces.copy()) is a
+    moved = mesh_shape(box.vertices + 1.0, box.faces)
+    assert moved is not a
+    for k in range(shapes.MESH_MEMO):
+        mesh_shape(box.vertices * (2.0 + k), box.faces)
+    assert len(shapes._MESH_MEMO) == shapes.MESH_MEMO
+    again = mesh_shape(box.vertices, box.faces)
+    assert again is not a
+    p = np.array([[0.5, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    assert np.array_equal(signed_distance(again, p)[0], signed_distance(a, p)[0])
