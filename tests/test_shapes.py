@@ -443,14 +443,15 @@ def test_grid_nearest_and_limit_bounds_are_the_brute_force_ones(seed, scale, shi
     assert shape.closed is not open_mesh
     d, _ = signed_distance(shape, p)
     assert np.allclose(d, exact, rtol=0, atol=1e-13 * scale * (1 + abs(shift)))
-    again = mesh_shape(v, f)            # a fresh memo, filled in another order
+    # a fresh memo (mesh_shape would hand back the same shape), filled in another order
+    again = Shape(ShapeType.MESH, np.zeros(0), vertices=shape.vertices, faces=shape.faces)
     order = rng.permutation(len(p))
     d2 = np.empty(len(p))
     for part in np.array_split(order, 4):
         d2[part] = signed_distance(again, p[part])[0]
     assert np.array_equal(d, d2)
     limit = rng.uniform(0.0, 0.03, len(p)) * scale
-    fresh = mesh_shape(v, f)
+    fresh = Shape(ShapeType.MESH, np.zeros(0), vertices=shape.vertices, faces=shape.faces)
     dl, cl = signed_distance(fresh, p, limit)
     skipped = np.isnan(cl[:, 0])
     assert np.array_equal(dl[~skipped], d[~skipped])
