@@ -44,6 +44,7 @@ re-exported here.
 from __future__ import annotations
 
 import hashlib
+import threading
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
@@ -157,33 +158,38 @@ def mesh_shape(vertices: np.ndarray, faces: np.ndarray) -> Shape:
     inside: its distance is unsigned (never negative), so a cable can only
     touch it, never be inside it.
 
-    The last few meshes made are kept by content (``MESH_MEMO`` of them): a
-    run asks for each part's mesh more than once (routing, checks), and the
-    same shape then shares its search structures and bound grid (a memo of
-    exact values, so sharing changes no answer).
+    The last few meshes made are kept by content (``MESH_MEMO`` of them, per
+    thread: a bound grid fills itself as it is asked, so a shape is never
+    shared between threads): a run asks for each part's mesh more than once
+    (routing, checks), and the same shape then shares its search structures
+    and bound grid (a memo of exact values, so sharing changes no answer).
     """
     v = np.ascontiguousarray(vertices, dtype=float)
     f = np.ascontiguousarray(faces)
     key = (v.shape, f.shape, f.dtype.str, hashlib.blake2b(v.tobytes() + f.tobytes(), digest_size=20).digest())
-    shape = _MESH_MEMO.get(key)
+    memo = getattr(_MESH_MEMO, "shapes", None)
+    if memo is None:
+        memo = _MESH_MEMO.shapes = OrderedDict()
+    shape = memo.get(key)
     if shape is None:
         tm = trimesh.Trimesh(vertices=v, faces=f, process=True)
         tm.update_faces(tm.nondegenerate_faces())
         tm.update_faces(tm.unique_faces())
         tm.remove_unreferenced_vertices()
         shape = Shape(ShapeType.MESH, np.zeros(0), vertices=np.asarray(tm.vertices), faces=np.asarray(tm.faces))
-        if len(_MESH_MEMO) >= MESH_MEMO:
-            _MESH_MEMO.popitem(last=False)
+        if len(memo) >= MESH_MEMO:
+            memo.popitem(last=False)
     else:
-        _MESH_MEMO.move_to_end(key)
-    _MESH_MEMO[key] = shape
+        memo.move_to_end(key)
+    memo[key] = shape
     return shape
 
 
 MESH_MEMO = 8
 """Meshes :func:`mesh_shape` keeps, least recently asked for dropped first."""
 
-_MESH_MEMO: OrderedDict = OrderedDict()
+_MESH_MEMO = threading.local()
+"""``shapes``: this thread's meshes by content, an OrderedDict (least recent first)."""
 
 
 def signed_distance(shape: Shape, points: np.ndarray,

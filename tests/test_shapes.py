@@ -470,8 +470,15 @@ def test_mesh_shape_is_kept_by_content_and_bounded():
     assert moved is not a
     for k in range(shapes.MESH_MEMO):
         mesh_shape(box.vertices * (2.0 + k), box.faces)
-    assert len(shapes._MESH_MEMO) == shapes.MESH_MEMO
+    assert len(shapes._MESH_MEMO.shapes) == shapes.MESH_MEMO
     again = mesh_shape(box.vertices, box.faces)
     assert again is not a
     p = np.array([[0.5, 0.0, 0.0], [0.0, 0.0, 0.0]])
     assert np.array_equal(signed_distance(again, p)[0], signed_distance(a, p)[0])
+    # another thread makes its own (a bound grid fills itself as it is asked)
+    import threading
+    seen = []
+    worker = threading.Thread(target=lambda: seen.append(mesh_shape(box.vertices, box.faces)))
+    worker.start()
+    worker.join()
+    assert seen[0] is not again and mesh_shape(box.vertices, box.faces) is again
