@@ -185,7 +185,7 @@ def test_robot_cell_visual_geoms_are_drawn_where_mujoco_puts_them(robot_cell, tm
     mujoco.mj_kinematics(m, d)
     for v in built.visuals:
         body = int(m.geom_bodyid[v.geom_id])
-        pose = rec._body_poses(qpos, np.array([body]))[0]
+        pose = rec.scene.body_poses(qpos, np.array([body]))[0]
         mat = np.zeros(9)
         mujoco.mju_quat2Mat(mat, m.geom_quat[v.geom_id])
         assert np.allclose(pose[:3, :3] @ m.geom_pos[v.geom_id] + pose[:3, 3],

@@ -1,0 +1,38 @@
+"""The rerun recording of a run: a clash review on a `sim_time` timeline.
+
+Entity tree (mirrors the scene, in the scene's units, z up), and the
+module of this package that writes each part:
+- `world/parts/<assembly path>`, `world/visual/<body>/<geom>`: the parts
+  and the mjcf model's visual geoms, translucent while a clash is shown
+  (:mod:`.scene`);
+- `world/cables/<name>`: each cable's centreline at its true radius, only
+  the elements near a clash's worst place in its state colour (:mod:`.cables`);
+- `world/interference/<type>/<a>/<b>` (and `.../gap`): the spot, and
+  `lanes/<type>/<a>/<b>`: the pair's state (:mod:`.marks`);
+  `world/mujoco_contacts`: MuJoCo's contact points;
+- `checks/...`, `cables/{strain,bend_radius,twist}/<name>`,
+  `validation/agreement`, `joints/<name>`: time series (:mod:`.series`);
+- `clashes`, `events`, `summary`: the clash list, the event log and the
+  summary (:mod:`.clashes`);
+- `wear_map/<cable>`, `wear/<cable>/<measure>`: the wear map (:mod:`.wearview`);
+- the blueprint: views, a saved viewpoint per clash, plot ranges (:mod:`.layout`).
+
+:class:`Recorder` (:mod:`.recorder`) buffers each frame and sends
+everything in columns when closed: recording costs a fraction of a step.
+
+This package does not decide what is interference or wear; it shows what it
+is given.
+"""
+
+from sim.record.clashes import Settings, summary_text
+from sim.record.layout import CLASH_COLUMNS, VIEWPOINTS
+from sim.record.marks import Mark
+from sim.record.recorder import Recorder
+from sim.record.scene import plane_half_sizes
+from sim.record.style import (CLEAR, CONTACT_COLOUR, HARD, KEEPOUT_COLOUR, PART_COLOUR, PART_DIMMED, SOFT, SPOT,
+                                  STATE_COLOURS, STATES, pair_path, part_path, visual_paths)
+from sim.record.wearview import wear_colours
+
+__all__ = ["CLASH_COLUMNS", "CLEAR", "CONTACT_COLOUR", "HARD", "KEEPOUT_COLOUR", "Mark", "PART_COLOUR",
+           "PART_DIMMED", "Recorder", "SOFT", "SPOT", "STATES", "STATE_COLOURS", "Settings", "VIEWPOINTS",
+           "pair_path", "part_path", "plane_half_sizes", "summary_text", "visual_paths", "wear_colours"]

@@ -1,0 +1,98 @@
+"""The review recording's lists: the clash list, the event log and the summary.
+
+`clashes`: one row per event at its worst time (type, pair, severity,
+phase, start, end, worst distance and time, joint values where given), so
+selecting a row's time jumps there. `events`: one text entry at the start
+and one at the end of each event, level by severity. `summary`: a markdown
+document at t = 0 (settings, the clashes worst first, the most worn place
+of each cable and what it touches). The log is buffered and sent, like the
+list, in columns when the recording is closed.
+
+Not here: deciding events (`checker.events`) or wear (`checker.wear`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import rerun as rr
+
+from sim.record.style import pair_text
+
+
+@dataclass(frozen=True)
+class Settings:
+    """What the recording's properties and summary say about the run.
+
+    Attributes:
+      units: the scene's units ("m" or "mm").
+      clearance: metres.
+      scene_file: the scene file's path.
+      version: the product version.
+    """
+
+    units: str
+    clearance: float
+    scene_file: str
+    version: str
+
+
+def send_log(rec: rr.RecordingStream, entries: list[tuple[float, str, str]]) -> None:
+    """The event log: (time s, text, level) entries, one column, in time order."""
+    if not entries:
+        return
+    entries = sorted(entries, key=lambda e: e[0])
+    rec.send_columns("events", indexes=[rr.TimeColumn("sim_time", duration=[e[0] for e in entries])],
+                     columns=rr.TextLog.columns(text=[e[1] for e in entries], level=[e[2] for e in entries]))
+
+
+def send_clash_list(rec: rr.RecordingStream, events: list, joints: list[dict], unit: float, units: str) -> None:
+    """The clash list: one row per event at its worst time, one column per field."""
+    if not events:
+        return
+    rows = sorted(zip(events, joints), key=lambda r: float(r[0].t_worst))
+    ev = [e for e, _ in rows]
+    rec.send_columns("clashes", indexes=[rr.TimeColumn("sim_time", duration=[float(e.t_worst) for e in ev])],
+                     columns=rr.AnyValues.columns(
+                         type=[e.type for e in ev], pair=[pair_text(e.a, e.b) for e in ev],
+                         severity=[e.severity for e in ev], phase=[e.phase for e in ev],
+                         start_s=np.array([e.t_start for e in ev], float), end_s=np.array([e.t_end for e in ev], float),
+                         worst_distance=np.array([e.min_distance / unit for e in ev], float),
+                         worst_time_s=np.array([e.t_worst for e in ev], float), units=[units] * len(ev),
+                         joints=[", ".join(f"{k} {v:.4g}" for k, v in j.items()) or "-" for _, j in rows]))
+
+
+def summary_text(scene: str, settings: Settings, events: list, wear: list, unit: float,
+                 complete: bool = True) -> str:
+    """The run's summary as markdown: settings, the clashes worst first, the
+    most worn place of each cable and what it touches."""
+    units = settings.units
+    lines = [f"# {scene}", "",
+             f"- scene file: `{settings.scene_file}`", f"- units: {units}, clearance "
+             f"{settings.clearance / unit:.4g} {units}", f"- cablecheck {settings.version}"
+             + ("" if complete else " (run interrupted: incomplete)"), ""]
+    if events:
+        hard = sum(e.severity == "hard" for e in events)
+        lines += [f"## {len(events)} clash(es): {hard} hard, {len(events) - hard} soft", "",
+                  "| # | severity | type | pair | phase | start s | end s | worst | at s |",
+                  "|---|---|---|---|---|---|---|---|---|"]
+        for n, e in enumerate(sorted(events, key=lambda e: (e.severity != "hard", e.min_distance)), 1):
+            lines.append(f"| {n} | {e.severity} | {e.type} | {pair_text(e.a, e.b)} | {e.phase} | "
+                         f"{e.t_start:.3f} | {e.t_end:.3f} | {e.min_distance / unit:.4g} {units} | "
+                         f"{e.t_worst:.3f} |")
+    else:
+        lines.append("## No interference")
+    lines += ["", "## Wear (per arc-length bin of each cable)", ""]
+    for w in wear:
+        k = w.most_worn()
+        cyc = int(np.argmax(w.bend_cycles)) if w.bend_cycles.size else None
+        bend = ("" if cyc is None or w.bend_cycles[cyc] == 0 else
+                f"; most bending cycles {w.bend_cycles[cyc]:g} at s = {w.s[cyc] / unit:.4g} {units}")
+        if k is None:
+            lines.append(f"- {w.name}: touches nothing" + bend)
+        else:
+            lines.append(f"- {w.name}: most worn at s = {w.s[k] / unit:.4g} {units} (of "
+                         f"{w.length / unit:.4g}), touching {w.touches[k]}: in contact "
+                         f"{w.contact_time[k]:.3g} s, slid {w.sliding[k] / unit:.3g} {units}" + bend)
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,123 @@
+"""The review recording's blueprint: views, viewpoints and plot ranges.
+
+The 3D scene framed on the whole scene and, for the worst clashes, a saved
+viewpoint on each spot (opening on the worst); the pair state lanes below;
+the plots (distances with a range round the clearance, bend radius, strain,
+twist, agreement, joints, the wear profiles) beside the clash list, the
+event log and the summary. Written when the recording is closed, when the
+run's extent is known.
+
+Not here: the data the views show (the other modules of `sim.record`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import rerun.blueprint as rrb
+
+from sim.build import Built
+from sim.record.style import escape, pair_text
+
+CLASH_COLUMNS = ("type", "pair", "severity", "phase", "start_s", "end_s", "worst_distance", "worst_time_s",
+                 "units", "joints")
+"""The clash list's columns, in order."""
+VIEWPOINTS = 6
+"""Clashes (worst first) that get a saved viewpoint of their own."""
+
+
+@dataclass(frozen=True)
+class Extent:
+    """What the layout needs to know of a finished run.
+
+    Attributes:
+      bounds: (lo, hi) of the scene at t = 0, metres.
+      lowest_distance: the lowest pair distance plotted (scene units), or None.
+      series_roots: the first levels of every series path (`checks`, `joints`, ...).
+      twist: whether any cable's twist is plotted.
+    """
+
+    bounds: tuple[np.ndarray, np.ndarray]
+    lowest_distance: float | None
+    series_roots: frozenset[str]
+    twist: bool
+
+
+def _eye(bounds, target: np.ndarray, distance: float, unit: float) -> rrb.EyeControls3D:
+    lo, hi = bounds
+    away = target - 0.5 * (lo + hi)
+    away[2] = 0.0
+    n = float(np.linalg.norm(away))
+    side = away / n if n > 1e-9 * max(distance, 1e-12) else np.array([0.6, -0.8, 0.0])
+    direction = side + np.array([0.0, 0.0, 0.6]) + np.array([0.3, -0.5, 0.0])
+    direction /= np.linalg.norm(direction)
+    return rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(target + distance * direction) / unit,
+                             look_target=target / unit, eye_up=[0.0, 0.0, 1.0])
+
+
+def _scene_eye(bounds, unit: float) -> rrb.EyeControls3D:
+    lo, hi = bounds
+    centre = 0.5 * (lo + hi)
+    diag = float(np.linalg.norm(hi - lo)) or 1.0
+    direction = np.array([0.55, -0.75, 0.45])
+    direction /= np.linalg.norm(direction)
+    return rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(centre + 0.85 * diag * direction) / unit,
+                             look_target=centre / unit, eye_up=[0.0, 0.0, 1.0])
+
+
+def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance: float, unit: float,
+              units: str) -> rrb.Blueprint:
+    """The layout of a finished run (`clearance` in metres)."""
+    bounds = extent.bounds
+    hide = ["- /world/wear_map/**"]
+    tabs = [rrb.Spatial3DView(name="Scene", origin="world", eye_controls=_scene_eye(bounds, unit),
+                              contents=["$origin/**", *hide])]
+    radius = {c.name: c.radius for c in built.cables}
+    worst = sorted(events, key=lambda e: (e.severity != "hard", e.min_distance))[:VIEWPOINTS]
+    for n, ev in enumerate(worst, 1):
+        reach = max(12.0 * (radius.get(ev.a, 0.01) + clearance), 0.25 * float(np.linalg.norm(bounds[1] - bounds[0])))
+        tabs.append(rrb.Spatial3DView(
+            name=f"#{n} {ev.severity} {pair_text(ev.a, ev.b)} @ {ev.t_worst:.3f} s", origin="world",
+            eye_controls=_eye(bounds, np.asarray(ev.where, float), reach, unit), contents=["$origin/**", *hide]))
+    if wear:
+        tabs.append(rrb.Spatial3DView(name="Wear map (sliding; grey: no contact)", origin="wear_map"))
+    clear = clearance / unit
+    low = min(extent.lowest_distance if extent.lowest_distance is not None else 0.0, 0.0)
+    limits = [c.min_bend_radius for c in built.cables if c.min_bend_radius is not None]
+    titles = {"joints": "Joint values (deg, or scene units for slides)"}
+    plots = [
+        rrb.TimeSeriesView(name=f"Pair distances ({units})", origin="checks",
+                           axis_y=rrb.ScalarAxis(range=(min(low * 1.1, -0.1 * clear), 4.0 * clear), zoom_lock=False),
+                           plot_legend=rrb.PlotLegend(corner="LeftTop", visible=True)),
+        rrb.TimeSeriesView(name=f"Min bend radius ({units})", origin="cables/bend_radius",
+                           axis_y=rrb.ScalarAxis(range=(0.0, 5.0 * max(limits) / unit)) if limits else None),
+        rrb.TimeSeriesView(name="Strain (%)", origin="cables/strain"),
+        *([rrb.TimeSeriesView(name="Twist (deg)", origin="cables/twist")] if extent.twist else []),
+        rrb.TimeSeriesView(name="Agreement with MuJoCo (fraction of pairs)", origin="validation",
+                           axis_y=rrb.ScalarAxis(range=(0.0, 1.05))),
+        # a plot for every other series root (e.g. joint values logged by the run)
+        *[rrb.TimeSeriesView(name=titles.get(root, root), origin=root)
+          for root in sorted(extent.series_roots - {"checks", "cables", "validation"})],
+        *[rrb.BarChartView(name=f"Wear {w.name}: {m} per bin ({unit_})", origin=f"wear/{escape(w.name)}/{m}")
+          for w in wear for m, unit_ in (("contact_time", "s"), ("sliding", units), ("bend_cycles", "cycles"))],
+    ]
+    lists = rrb.Tabs(
+        rrb.DataframeView(name="Clash list (select a row's time to jump)", origin="clashes",
+                          query=rrb.archetypes.DataframeQuery(
+                              timeline="sim_time", select=["sim_time", *[f"/clashes:{c}" for c in CLASH_COLUMNS]])),
+        rrb.TextLogView(name="Events", origin="events"),
+        rrb.TextDocumentView(name="Summary", origin="summary"),
+    )
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Vertical(rrb.Tabs(*tabs, active_tab=1 if worst else 0),   # opens on the worst clash
+                         rrb.StateTimelineView(name="Pair states (clear / soft / hard)", origin="lanes"),
+                         row_shares=[5, 1]),
+            rrb.Vertical(rrb.Tabs(*plots), lists, row_shares=[3, 2]),
+            column_shares=[3, 2],
+        ),
+        rrb.BlueprintPanel(state="collapsed"),
+        rrb.SelectionPanel(state="collapsed"),
+        rrb.TimePanel(state="collapsed", timeline="sim_time"),
+    )

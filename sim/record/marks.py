@@ -1,0 +1,183 @@
+"""The clashes in the review recording: the spot of each pair and its state lane.
+
+`world/interference/<type>/<a>/<b>`: a wire sphere round the worst place on
+cable a, labelled with the pair and its distance, in a colour no cable or
+part uses, and (`.../gap`) the segment to the closest point on the other
+side (`checker.spot`); both shown from the frame a clash is seen and
+emptied at the frame after each run of such frames. `lanes/<type>/<a>/<b>`:
+the pair's state (clear / soft / hard) as state changes, one lane per pair.
+Everything is buffered per frame and sent in columns, one chunk per entity
+(its style in the first row), when the recording is closed.
+
+Not here: which pairs clash (the checker and the event tracker decide).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import rerun as rr
+
+from checker import spot
+from checker.shapes import Shape
+from sim.build import Built
+from sim.record.style import SPOT, STATE_COLOURS, STATES, pair_path, pair_text
+
+
+@dataclass(frozen=True)
+class Mark:
+    """One clash shown at a frame: the pair and where.
+
+    Attributes:
+      kind, a, b: the pair (type value, names).
+      distance: signed distance, metres.
+      state: "soft" or "hard".
+      where: (3,) worst place on cable a, metres.
+      s: arc length there on cable a, metres.
+      s_b: arc length on cable b (self, cable-cable) or None.
+    """
+
+    kind: str
+    a: str
+    b: str
+    distance: float
+    state: str
+    where: np.ndarray
+    s: float
+    s_b: float | None
+
+
+class ClashMarks:
+    """Spots and state lanes of the clashes, frame by frame.
+
+    Args:
+      built: the built scene.
+      unit: metres per scene unit.
+      units: the scene's unit name (labels).
+      shapes: the checker's shape of every built part (the other side of a
+        spot on a part), or None (no segment to parts).
+    """
+
+    def __init__(self, built: Built, unit: float, units: str, shapes: list[Shape] | None):
+        self.built, self.unit, self.units, self.shapes = built, unit, units, shapes
+        self._cable_index = {c.name: i for i, c in enumerate(built.cables)}
+        self._part_index = {p.name: k for k, p in enumerate(built.parts)}
+        # pair path -> rows (frame, where, other side or None, label, cable a), scene units
+        self._rows: dict[str, list[tuple[int, np.ndarray, np.ndarray | None, str, str]]] = {}
+        # part index -> (rows of a pair, row, where (world, m), part pose): closest points still to find
+        self._part_spots: dict[int, list[tuple]] = {}
+        self._lane: dict[str, str] = {}
+        self._lanes: dict[str, tuple[list[int], list[str]]] = {}
+
+    def add(self, frame: int, marks: list[Mark], cables: list[np.ndarray], poses: np.ndarray) -> bool:
+        """The frame's clashes; True if any is shown."""
+        u = self.unit
+        now = set()
+        for m in marks:
+            path = pair_path(m.kind, m.a, m.b)
+            now.add(path)
+            other = self._other_side(m, cables)
+            rows = self._rows.setdefault(path, [])
+            if isinstance(other, int):     # a part: its closest point found with the others at the end
+                self._part_spots.setdefault(other, []).append((rows, len(rows), np.asarray(m.where, float),
+                                                               np.asarray(poses[other], float)))
+                other = None
+            rows.append((frame, np.asarray(m.where, float) / u, None if other is None else other / u,
+                         f"{pair_text(m.a, m.b)}: {m.distance / u:.3g} {self.units}", m.a))
+            if self._lane.get(path) != m.state:
+                self._set_lane(path, frame, m.state)
+        for path in [p for p, s in self._lane.items() if p not in now and s != "clear"]:
+            self._set_lane(path, frame, "clear")
+        return bool(now)
+
+    def _set_lane(self, path: str, frame: int, state: str) -> None:
+        self._lane[path] = state
+        frames, states = self._lanes.setdefault(path, ([], []))
+        frames.append(frame)
+        states.append(state)
+
+    def _other_side(self, m: Mark, cables: list[np.ndarray]) -> np.ndarray | int | None:
+        """Closest point on the other side of a clash, metres; for a part,
+        its index (the point is found for all of a part's marks at once, by
+        :meth:`_resolve_part_spots`); None (bend, taut, part-part)."""
+        if m.kind in ("self", "cable-cable") and m.s_b is not None and m.b in self._cable_index:
+            return spot.on_cable(cables[self._cable_index[m.b]], m.s_b, m.where)
+        if m.kind in ("cable-structure", "keepout") and self.shapes is not None:
+            k = self._part_index.get(m.b)
+            if k is not None:
+                return int(k)
+        return None
+
+    def _resolve_part_spots(self) -> None:
+        """The other side of every part mark: one query per part for the whole run."""
+        u = self.unit
+        for k, spots in self._part_spots.items():
+            found = spot.on_part_many(self.shapes[k], np.stack([s[3] for s in spots]),
+                                      np.stack([s[2] for s in spots])) / u
+            for (rows, i, _, _), other in zip(spots, found):
+                frame, where, _, label, a = rows[i]
+                rows[i] = (frame, where, other, label, a)
+        self._part_spots = {}
+
+    def send(self, rec: rr.RecordingStream, times: np.ndarray, bounds: tuple[np.ndarray, np.ndarray],
+             clearance: float) -> None:
+        """Every pair's spot, gap and lane, one column per entity (`times`: each frame's, seconds)."""
+        self._resolve_part_spots()
+        n_f = len(times)
+        index = lambda frames: [rr.TimeColumn("sim_time", duration=times[np.asarray(frames, int)])]
+        config = rr.StateConfiguration(values=list(STATES), colors=[STATE_COLOURS[x] for x in STATES])
+        for path, (frames, states) in self._lanes.items():
+            rec.log(f"lanes/{path}", config, static=True)
+            rec.send_columns(f"lanes/{path}", indexes=index(frames), columns=rr.StateChange.columns(state=states))
+        lo, hi = bounds
+        for path, rows in self._rows.items():
+            self._send_spot(rec, path, rows, n_f, index, max(
+                2.5 * self._radius(rows[0][4]) + 0.5 * clearance, 0.01 * float(np.linalg.norm(hi - lo))) / self.unit)
+
+    def _radius(self, cable: str) -> float:
+        i = self._cable_index.get(cable)
+        return 0.0 if i is None else self.built.cables[i].radius
+
+    @staticmethod
+    def _send_spot(rec: rr.RecordingStream, path: str, rows: list, n_f: int, index, radius: float) -> None:
+        """One pair's spot (a wire sphere of `radius`, scene units, standing out of
+        the cable; the cable, the gap and the part stay visible inside it) and gap."""
+        frames, centres, labels, segs = [], [], [], []
+        last = -2
+        for frame, where, other, label, _ in rows:
+            if frame > last + 1 and last >= 0 and last + 1 < n_f:
+                frames.append(last + 1)
+                centres.append(None)
+                labels.append(None)
+                segs.append(None)
+            frames.append(frame)
+            centres.append(where)
+            labels.append(label)
+            segs.append(None if other is None else np.stack([where, other]))
+            last = frame
+        if last + 1 < n_f:
+            frames.append(last + 1)
+            centres.append(None)
+            labels.append(None)
+            segs.append(None)
+        lengths = [0 if c is None else 1 for c in centres]
+        pts = np.array([c for c in centres if c is not None]).reshape(-1, 3)
+        text = [x for x in labels if x is not None]
+        rec.log(f"world/interference/{path}",
+                rr.Ellipsoids3D.from_fields(colors=[SPOT], line_radii=[-2.5], fill_mode="MajorWireframe",
+                                            show_labels=True), static=True)
+        # the sizes go with the centres: an empty row has no sphere at all (a size
+        # without a centre would draw one at the origin)
+        rec.send_columns(f"world/interference/{path}", indexes=index(frames),
+                         columns=[*rr.Ellipsoids3D.columns(centers=pts, half_sizes=np.full((len(pts), 3), radius))
+                                  .partition(lengths),
+                                  *rr.Ellipsoids3D.columns(labels=text).partition(lengths)])
+        # the segment to the other side, emptied with the marker
+        seg_rows = [s for s in segs if s is not None]
+        if seg_rows:
+            rec.log(f"world/interference/{path}/gap",
+                    rr.LineStrips3D.from_fields(radii=[0.35 * radius], colors=[SPOT]), static=True)
+            rec.send_columns(f"world/interference/{path}/gap", indexes=index(frames),
+                             columns=rr.LineStrips3D.columns(strips=np.stack(seg_rows))
+                             .partition([0 if s is None else 1 for s in segs]))

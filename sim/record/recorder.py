@@ -1,0 +1,235 @@
+"""The recorder: one run's review recording, frame by frame, written when closed.
+
+The run hands each recorded frame to :meth:`Recorder.log_step` (and the
+other `log_*` calls of that time), and at the end its events, wear and
+summary to :meth:`Recorder.finish`. Per frame the recorder only copies
+arrays into buffers; :meth:`Recorder.close` sends everything in columns
+(`send_columns`, one chunk per entity for the whole run), then the
+blueprint, and moves the file into place.
+
+The recording id is new for every run (the scene name is the application
+id and the recording name), the `log_time` timeline is not written, and
+the recording's properties hold the units, clearance, scene file and
+product version. The `.rrd` is written to a temporary file beside the
+target and moved into place when the recorder is closed, so an interrupted
+run still leaves a complete, readable recording and never a half-written
+one.
+
+Not here: what is shown where (`sim.record.scene`, `.cables`, `.marks`,
+`.series`, `.clashes`, `.wearview`, `.layout`); what is interference.
+"""
+
+from __future__ import annotations
+
+import os
+import uuid
+from pathlib import Path
+
+import numpy as np
+import rerun as rr
+
+from checker.shapes import Shape
+from sim.build import Built
+from sim.record.cables import CableFrames
+from sim.record.clashes import Settings, send_clash_list, send_log
+from sim.record.layout import Extent, blueprint
+from sim.record.marks import ClashMarks, Mark
+from sim.record.scene import SceneGeometry
+from sim.record.series import SeriesSet, send_limit_lines
+from sim.record.style import CONTACT_COLOUR, escape, pair_path, pair_text
+from sim.record.wearview import send_wear
+
+
+class Recorder:
+    """Writes one run's recording to `path` (see the module docstring).
+
+    Args:
+      built: the built scene.
+      path: the .rrd to write.
+      shapes: the checker's shape of every built part (for the other side of a spot).
+      settings: units, clearance, scene file and version (properties and summary).
+    """
+
+    def __init__(self, built: Built, path: Path, shapes: list[Shape] | None = None,
+                 settings: Settings | None = None):
+        scene = built.scene
+        self.built = built
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
+        self.unit = scene.scale  # metres per scene unit
+        self.settings = settings or Settings(scene.units, scene.check.clearance, str(scene.path), "unknown")
+        self.rec = rr.RecordingStream(application_id=scene.name, recording_id=uuid.uuid4())
+        self.rec.set_log_time_enabled(False)
+        self.rec.set_log_tick_enabled(False)
+        self.rec.save(str(self.tmp))
+        self.rec.send_recording_name(scene.name)
+        s = self.settings
+        self.rec.send_property("cablecheck", rr.AnyValues(
+            units=s.units, clearance=s.clearance / self.unit, scene_file=s.scene_file, version=s.version))
+        self.scene = SceneGeometry(built, self.unit)
+        self.cables = CableFrames(built, self.unit)
+        self.marks = ClashMarks(built, self.unit, s.units, shapes)
+        self.series = SeriesSet()
+        self._closed = False
+        self._times: list[float] = []
+        self._poses: list[np.ndarray] = []
+        self._vis_poses: list[np.ndarray] = []
+        self._contacts: list[np.ndarray | None] = []
+        self._near_paths: set[str] = set()
+        self._alive: set[str] = set()
+        self._dimmed = False
+        self._dim_changes: list[tuple[int, bool]] = []
+        self._log: list[tuple[float, str, str]] = []
+        self._rest: list[np.ndarray] | None = None
+        self._events: list = []
+        self._event_joints: list[dict] = []
+        self._wear: list = []
+        self._summary = ""
+
+    @property
+    def moving_parts(self) -> np.ndarray:
+        """(P,) whether each part rides a moving body (its pose is logged per frame)."""
+        return self.scene.moving_parts
+
+    # -- static content ---------------------------------------------------
+    def log_static(self, part_poses: np.ndarray, cables: list[np.ndarray] | None = None,
+                   qpos: np.ndarray | None = None) -> None:
+        """Parts' and visual geoms' shapes (and poses of those that never
+        move), once; `cables` (the rest state's body centres, metres) size the
+        floor and frame the camera; `qpos` (the simulation's, at t = 0) poses
+        the visual geoms."""
+        self._rest = [np.asarray(c, float) for c in cables] if cables is not None else None
+        self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        self.scene.log_static(self.rec, np.asarray(part_poses, float), self._rest, qpos)
+        self.cables.log_static(self.rec)
+        self.rec.log("world/mujoco_contacts", rr.Points3D.from_fields(radii=[-3.0], colors=[CONTACT_COLOUR]),
+                     static=True)
+
+    # -- per frame --------------------------------------------------------
+    def log_step(self, t: float, cables: list[np.ndarray], part_poses: np.ndarray,
+                 marks: list[Mark], strain: np.ndarray, bend: np.ndarray,
+                 near: dict[tuple[str, str, str], float] | None = None,
+                 qpos: np.ndarray | None = None) -> None:
+        """One frame: moving parts' poses, cables (coloured near the clashes),
+        the clashes' spots, per-cable series and pair distances. `near`: the
+        pairs a full check since the last frame evaluated up to its horizon,
+        (type, a, b) -> distance in metres (a pair's distance line runs while
+        it is below the clearance or in the last full check's list, and breaks
+        when it leaves both). Starts the frame the other `log_*` calls of
+        this time add to."""
+        u = self.unit
+        frame = len(self._times)
+        self._times.append(float(t))
+        self._poses.append(np.asarray(part_poses)[self.scene.moving_parts])
+        vis = self.scene.visual_body_poses(qpos)
+        if vis is not None:
+            self._vis_poses.append(vis)
+        self._contacts.append(None)
+        self.cables.add(cables, marks)
+        add = self.series.add
+        for i, cable in enumerate(self.built.cables):
+            name = escape(cable.name)
+            add(f"cables/strain/{name}", frame, 100.0 * float(strain[i]), f"{cable.name} strain (%)")
+            if np.isfinite(bend[i]):
+                add(f"cables/bend_radius/{name}", frame, float(bend[i] / u),
+                    f"{cable.name} min bend radius ({self.settings.units})")
+        shown = self.marks.add(frame, marks, cables, part_poses)
+        if shown != self._dimmed:      # parts translucent while a clash is shown
+            self._dimmed = shown
+            self._dim_changes.append((frame, shown))
+        known = {f"checks/{pair_path(m.kind, m.a, m.b)}/distance" for m in marks}
+        for m in marks:
+            add(f"checks/{pair_path(m.kind, m.a, m.b)}/distance", frame, m.distance / u,
+                f"{m.kind}: {pair_text(m.a, m.b)}")
+        if near is not None:
+            self._near_paths = set()
+            for (kind, a, b), d in near.items():
+                path = f"checks/{pair_path(kind, a, b)}/distance"
+                self._near_paths.add(path)
+                add(path, frame, d / u, f"{kind}: {pair_text(a, b)}")
+        known |= self._near_paths
+        for path in self._alive - known:
+            self.series.series[path].gap(frame)
+        self._alive = known
+
+    def log_twist(self, twist_deg: np.ndarray) -> None:
+        """Each cable's twist (degrees) at the current frame; NaN: not measured."""
+        for cable, value in zip(self.built.cables, twist_deg):
+            if np.isfinite(value):
+                self.log_scalar(f"cables/twist/{escape(cable.name)}", float(value), label=f"{cable.name} twist (deg)")
+
+    def log_joints(self, names: list[str], units: list[str], values: np.ndarray) -> None:
+        """The moving joints' values at the current frame, one series each."""
+        for name, unit, value in zip(names, units, values):
+            self.log_scalar(f"joints/{escape(name)}", value, label=f"{name} ({unit})")
+
+    def log_contacts(self, points: np.ndarray) -> None:
+        """MuJoCo's contact points at this frame."""
+        self._contacts[-1] = np.asarray(points, float).reshape(-1, 3) / self.unit
+
+    def log_scalar(self, path: str, value: float, label: str | None = None) -> None:
+        """A time series value at the current frame; `label` names the series
+        in plot legends (the first one given)."""
+        self.series.add(path, max(len(self._times) - 1, 0), value, label)
+
+    def log_event(self, t: float, text: str, level: str) -> None:
+        """An event as a text log entry at time t."""
+        self._log.append((float(t), text, level))
+
+    # -- at the end -------------------------------------------------------
+    def finish(self, events: list, wear: list, summary: str, joints: list[dict] | None = None) -> None:
+        """The run's events (clash list and viewpoints), wear map
+        (:class:`checker.wear.CableWear` per cable), summary text and, where
+        the mjcf model's joints move, each event's joint values at its worst
+        time (name -> value, in the events' order)."""
+        self._events = list(events)
+        self._wear = list(wear)
+        self._summary = summary
+        self._event_joints = joints or [{} for _ in self._events]
+
+    def close(self) -> None:
+        """Send the buffered columns and the blueprint, finish the file and
+        move it into place (safe to call twice)."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self._send()
+        finally:
+            self.rec.flush()
+            self.rec.disconnect()
+            os.replace(self.tmp, self.path)
+
+    def _send(self) -> None:
+        rec = self.rec
+        times = np.asarray(self._times, float)
+        bounds = self.scene.bounds if self.scene.bounds is not None else (np.zeros(3), np.ones(3))
+        if len(times):
+            every = [rr.TimeColumn("sim_time", duration=times)]
+            self.cables.send(rec, every)
+            self.scene.send_motion(rec, every, self._poses, self._vis_poses)
+            self._send_contacts(times)
+            dim = [(0.0, False)] + [(times[f], on) for f, on in self._dim_changes]
+            self.scene.send_colours(rec, np.array([t for t, _ in dim]), np.array([on for _, on in dim]))
+            self.marks.send(rec, times, bounds, self.settings.clearance)
+            self.series.send(rec, times)
+            send_limit_lines(rec, self.built, times, self.settings.clearance, self.unit, self.settings.units)
+        send_log(rec, self._log)
+        send_clash_list(rec, self._events, self._event_joints, self.unit, self.settings.units)
+        send_wear(rec, self.built, self._wear, self._rest, self.unit)
+        rec.set_time("sim_time", duration=0.0)
+        rec.log("summary", rr.TextDocument(self._summary, media_type="text/markdown"))
+        extent = Extent(bounds, self.series.lowest("checks/"), frozenset(p.split("/")[0] for p in self.series.series),
+                        any(p.startswith("cables/twist/") for p in self.series.series))
+        rec.send_blueprint(blueprint(self.built, self._events, self._wear, extent, self.settings.clearance,
+                                     self.unit, self.settings.units), make_active=True, make_default=True)
+
+    def _send_contacts(self, times: np.ndarray) -> None:
+        found = [(f, c) for f, c in enumerate(self._contacts) if c is not None]
+        if not found:
+            return
+        self.rec.send_columns("world/mujoco_contacts",
+                              indexes=[rr.TimeColumn("sim_time", duration=times[[f for f, _ in found]])],
+                              columns=rr.Points3D.columns(positions=np.concatenate([c for _, c in found]))
+                              .partition([len(c) for _, c in found]))

@@ -1,0 +1,88 @@
+"""The time series of the review recording: pair distances and per-cable measures.
+
+`checks/<type>/<a>/<b>/distance` (scene units): every pair below the
+clearance, and, at full checks, every pair the checker evaluated up to its
+horizon (the approach before a clash); a pair's line breaks (NaN) where it
+is not known. `checks/limits/{clearance,zero}`: reference lines.
+`cables/strain/<name>` (percent), `cables/bend_radius/<name>` (scene
+units, with `<name>_limit` lines), `cables/twist/<name>` (degrees),
+`validation/agreement`, `joints/<name>`. Values are buffered by frame and
+sent in one column per series when the recording is closed.
+
+Not here: what the values are (the run measures them).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import rerun as rr
+
+from sim.build import Built
+from sim.record.style import HARD, escape
+
+
+class Series:
+    """A scalar series buffered by frame; a NaN breaks its line."""
+
+    def __init__(self):
+        self.frames: list[int] = []
+        self.values: list[float] = []
+
+    def add(self, frame: int, value: float) -> None:
+        if self.frames and self.frames[-1] == frame:
+            self.values[-1] = min(self.values[-1], value)
+            return
+        self.frames.append(frame)
+        self.values.append(value)
+
+    def gap(self, frame: int) -> None:
+        """Not known from this frame on: the line stops here."""
+        if self.frames and self.frames[-1] < frame and not np.isnan(self.values[-1]):
+            self.frames.append(frame)
+            self.values.append(np.nan)
+
+
+class SeriesSet:
+    """Every series of a run by entity path, with its legend label."""
+
+    def __init__(self):
+        self.series: dict[str, Series] = {}
+        self.labels: dict[str, str] = {}
+
+    def add(self, path: str, frame: int, value: float, label: str | None = None) -> None:
+        """A value at `frame`; `label` names the series in legends (the first one given)."""
+        if label is not None and path not in self.labels:
+            self.labels[path] = label
+        series = self.series.get(path)
+        if series is None:
+            series = self.series[path] = Series()
+        series.add(frame, float(value))
+
+    def lowest(self, prefix: str) -> float | None:
+        """The lowest finite value of the series under `prefix`, or None."""
+        lows = [np.nanmin(s.values) for p, s in self.series.items()
+                if p.startswith(prefix) and s.values and np.isfinite(s.values).any()]
+        return float(min(lows)) if lows else None
+
+    def send(self, rec: rr.RecordingStream, times: np.ndarray) -> None:
+        """Every series, one column each, its label static."""
+        for path, series in self.series.items():
+            if path in self.labels:
+                rec.log(path, rr.SeriesLines(names=[self.labels[path]]), static=True)
+            rec.send_columns(path, indexes=[rr.TimeColumn("sim_time", duration=times[series.frames])],
+                             columns=rr.Scalars.columns(scalars=np.asarray(series.values, float)))
+
+
+def send_limit_lines(rec: rr.RecordingStream, built: Built, times: np.ndarray, clearance: float, unit: float,
+                     units: str) -> None:
+    """Clearance and zero lines on the distance plot, bend-radius limits on the bend plot."""
+    ends = [rr.TimeColumn("sim_time", duration=[times[0], times[-1]])]
+    lines = [("checks/limits/clearance", clearance / unit, f"clearance ({units})", (120, 120, 120)),
+             ("checks/limits/zero", 0.0, "touching", (60, 60, 60))]
+    for cable in built.cables:
+        if cable.min_bend_radius is not None:
+            lines.append((f"cables/bend_radius/{escape(cable.name)}_limit", cable.min_bend_radius / unit,
+                          f"{cable.name} bend limit ({units})", HARD))
+    for path, value, name, colour in lines:
+        rec.log(path, rr.SeriesLines(names=[name], colors=[colour], widths=[1.0]), static=True)
+        rec.send_columns(path, indexes=ends, columns=rr.Scalars.columns(scalars=[value, value]))

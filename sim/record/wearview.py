@@ -1,0 +1,75 @@
+"""The wear map in the review recording.
+
+`wear_map/<cable>`: each cable's rest shape coloured per arc-length bin
+(grey where nothing touched, else viridis over sliding, or over contact time
+when nothing slid); `wear/<cable>/<measure>`: a bar chart per measure
+(`contact_time`, `sliding`, `bend_cycles`) over the bins.
+
+Not here: measuring wear (`checker.wear`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pyarrow as pa
+import rerun as rr
+from rerun.components import TensorDataBatch
+
+from sim.build import Built
+from sim.record.style import escape
+
+_VIRIDIS = np.array([(68, 1, 84), (59, 82, 139), (33, 145, 140), (94, 201, 98), (253, 231, 37)], float)
+_UNWORN = (200, 200, 200)
+
+
+def wear_colours(sliding: np.ndarray, contact_time: np.ndarray) -> np.ndarray:
+    """(B, 3) uint8 colours of wear bins: grey where nothing touched, else
+    viridis over sliding (or over contact time when nothing slid)."""
+    values = np.asarray(sliding, float)
+    touched = np.asarray(contact_time, float) > 0.0
+    if not (values[touched] > 0).any():
+        values = np.asarray(contact_time, float)
+    top = float(values.max()) if values.size else 0.0
+    x = np.clip(values / top, 0.0, 1.0) if top > 0 else np.zeros_like(values)
+    pos = x * (len(_VIRIDIS) - 1)
+    lo = np.minimum(np.floor(pos).astype(int), len(_VIRIDIS) - 2)
+    f = (pos - lo)[:, None]
+    rgb = (1 - f) * _VIRIDIS[lo] + f * _VIRIDIS[lo + 1]
+    rgb[~touched] = _UNWORN
+    return np.round(rgb).astype(np.uint8)
+
+
+def tensor_1d(values: np.ndarray) -> pa.StructArray:
+    """A 1-D float64 vector as rerun's tensor component (`TensorDataBatch`'s
+    arrow type), built directly: rerun's own converter casts its arrays,
+    and the first cast of a process imports `pyarrow.compute` (tens of ms)."""
+    v = np.ascontiguousarray(values, np.float64).ravel()
+    dt = TensorDataBatch._ARROW_DATATYPE
+    shape = pa.ListArray.from_arrays(pa.array([0, 1], pa.int32()), pa.array([len(v)], pa.uint64()),
+                                     type=dt.field("shape").type)
+    union = dt.field("buffer").type
+    k = [f.name for f in union].index("F64")
+    children = [pa.nulls(0, type=f.type) for f in union]
+    children[k] = pa.ListArray.from_arrays(pa.array([0, len(v)], pa.int32()), pa.array(v), type=union[k].type)
+    buffer = pa.Array.from_buffers(type=union, length=1, children=children,
+                                   buffers=[None, pa.array([k], pa.int8()).buffers()[1],
+                                            pa.array([0], pa.int32()).buffers()[1]])
+    return pa.StructArray.from_arrays([shape, pa.nulls(1, dt.field("names").type), buffer], fields=list(dt))
+
+
+def send_wear(rec: rr.RecordingStream, built: Built, wear: list, rest: list[np.ndarray] | None,
+              unit: float) -> None:
+    """Each cable's wear (:class:`checker.wear.CableWear`): colour along its rest
+    shape (`rest`, metres; else as routed) and a bar chart per measure."""
+    for i, w in enumerate(wear):
+        name = escape(w.name)
+        edges = np.append(w.s, w.length) / unit
+        at, widths = tensor_1d(edges[:-1]), np.diff(edges)
+        for measure, values in (("contact_time", w.contact_time), ("sliding", w.sliding / unit),
+                                ("bend_cycles", w.bend_cycles)):
+            rec.log(f"wear/{name}/{measure}", rr.BarChart(tensor_1d(values), abscissa=at, widths=widths),
+                    static=True)
+        pts = np.asarray(rest[i] if rest is not None else built.cables[i].routed, float) / unit
+        rec.log(f"wear_map/{name}", rr.LineStrips3D(np.stack([pts[:-1], pts[1:]], axis=1),
+                                                    radii=[built.cables[i].radius / unit],
+                                                    colors=wear_colours(w.sliding, w.contact_time)), static=True)
