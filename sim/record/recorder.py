@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import os
 import uuid
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -38,6 +39,11 @@ from sim.record.scene import SceneGeometry
 from sim.record.series import SeriesSet, send_limit_lines
 from sim.record.style import CONTACT_COLOUR, escape, pair_path, pair_text
 from sim.record.wearview import send_wear
+
+
+@lru_cache(maxsize=None)
+def _distance_path(kind: str, a: str, b: str) -> str:
+    return f"checks/{pair_path(kind, a, b)}/distance"
 
 
 class Recorder:
@@ -71,6 +77,12 @@ class Recorder:
         self.cables = CableFrames(built, self.unit)
         self.marks = ClashMarks(built, self.unit, s.units, shapes)
         self.series = SeriesSet()
+        units = s.units
+        # per cable: (strain path, label, bend path, label), and twist's (path, label)
+        self._cable_series = [(f"cables/strain/{escape(c.name)}", f"{c.name} strain (%)",
+                               f"cables/bend_radius/{escape(c.name)}", f"{c.name} min bend radius ({units})")
+                              for c in built.cables]
+        self._twist_series = [(f"cables/twist/{escape(c.name)}", f"{c.name} twist (deg)") for c in built.cables]
         self._closed = False
         self._times: list[float] = []
         self._poses: list[np.ndarray] = []
@@ -128,24 +140,23 @@ class Recorder:
         self._contacts.append(None)
         self.cables.add(cables, marks)
         add = self.series.add
-        for i, cable in enumerate(self.built.cables):
-            name = escape(cable.name)
-            add(f"cables/strain/{name}", frame, 100.0 * float(strain[i]), f"{cable.name} strain (%)")
-            if np.isfinite(bend[i]):
-                add(f"cables/bend_radius/{name}", frame, float(bend[i] / u),
-                    f"{cable.name} min bend radius ({self.settings.units})")
+        for (strain_path, strain_label, bend_path, bend_label), e, b in zip(self._cable_series, strain, bend):
+            add(strain_path, frame, 100.0 * float(e), strain_label)
+            if np.isfinite(b):
+                add(bend_path, frame, float(b / u), bend_label)
         shown = self.marks.add(frame, marks, cables, part_poses)
         if shown != self._dimmed:      # parts translucent while a clash is shown
             self._dimmed = shown
             self._dim_changes.append((frame, shown))
-        known = {f"checks/{pair_path(m.kind, m.a, m.b)}/distance" for m in marks}
+        known = set()
         for m in marks:
-            add(f"checks/{pair_path(m.kind, m.a, m.b)}/distance", frame, m.distance / u,
-                f"{m.kind}: {pair_text(m.a, m.b)}")
+            path = _distance_path(m.kind, m.a, m.b)
+            known.add(path)
+            add(path, frame, m.distance / u, f"{m.kind}: {pair_text(m.a, m.b)}")
         if near is not None:
             self._near_paths = set()
             for (kind, a, b), d in near.items():
-                path = f"checks/{pair_path(kind, a, b)}/distance"
+                path = _distance_path(kind, a, b)
                 self._near_paths.add(path)
                 add(path, frame, d / u, f"{kind}: {pair_text(a, b)}")
         known |= self._near_paths
@@ -155,9 +166,9 @@ class Recorder:
 
     def log_twist(self, twist_deg: np.ndarray) -> None:
         """Each cable's twist (degrees) at the current frame; NaN: not measured."""
-        for cable, value in zip(self.built.cables, twist_deg):
+        for (path, label), value in zip(self._twist_series, twist_deg):
             if np.isfinite(value):
-                self.log_scalar(f"cables/twist/{escape(cable.name)}", float(value), label=f"{cable.name} twist (deg)")
+                self.log_scalar(path, float(value), label=label)
 
     def log_joints(self, names: list[str], units: list[str], values: np.ndarray) -> None:
         """The moving joints' values at the current frame, one series each."""
@@ -197,8 +208,7 @@ class Recorder:
         try:
             self._send()
         finally:
-            self.rec.flush()
-            self.rec.disconnect()
+            self.rec.disconnect()       # sends what is buffered and closes the file
             os.replace(self.tmp, self.path)
 
     def _send(self) -> None:
