@@ -11,7 +11,8 @@ step:
   ``where`` (:func:`checker.shapes.signed_distance`, in the part's frame;
   many places of one part in one query);
 - against a cable (another one or a loop of the same): the closest point
-  to ``where`` on the elements of cable ``b`` next to arc length ``s_b``.
+  to ``where`` on the elements of cable ``b`` next to arc length ``s_b``
+  (many places, each on its own copy of the cable, in one query).
 
 This module does not decide what interferes and does not know MuJoCo.
 """
@@ -21,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from checker.cable import arc_length
-from checker.closest import point_segment
+from checker.closest import point_segment, row_norm
 from checker.shapes import Shape, signed_distance
 
 
@@ -53,3 +54,23 @@ def on_cable(points: np.ndarray, s_b: float, where: np.ndarray, reach: int = 1) 
     q = np.broadcast_to(np.asarray(where, float), (hi - lo, 3))
     d, _, closest = point_segment(q, p[lo:hi], p[lo + 1:hi + 1])
     return closest[int(np.argmin(d))]
+
+
+def on_cable_many(points: np.ndarray, s_b: np.ndarray, where: np.ndarray, reach: int = 1) -> np.ndarray:
+    """(m, 3) :func:`on_cable` for m places at once, each on its own (n, 3)
+    centreline of `points` (m, n, 3) (the cable at its own time): one
+    vectorised pass, not m."""
+    p = np.asarray(points, float)
+    m, n = p.shape[:2]
+    if n < 2:
+        return p[:, 0].copy()
+    s = np.zeros((m, n))
+    np.cumsum(row_norm(p[:, 1:] - p[:, :-1]), axis=1, out=s[:, 1:])
+    j = np.clip((s <= np.asarray(s_b, float)[:, None]).sum(axis=1) - 1, 0, n - 2)
+    # the elements within `reach` of j (clipped at the ends: a repeated element changes no minimum)
+    k = np.clip(j[:, None] + np.arange(-reach, reach + 1)[None], 0, n - 2)            # (m, 2 reach + 1)
+    rows = np.arange(m)[:, None]
+    q = np.repeat(np.asarray(where, float).reshape(m, 3), k.shape[1], axis=0)
+    d, _, closest = point_segment(q, p[rows, k].reshape(-1, 3), p[rows, k + 1].reshape(-1, 3))
+    best = np.argmin(d.reshape(m, -1), axis=1)
+    return closest.reshape(m, -1, 3)[np.arange(m), best]

@@ -65,8 +65,10 @@ class ClashMarks:
         self._part_index = {p.name: k for k, p in enumerate(built.parts)}
         # pair path -> rows (frame, where, other side or None, label, cable a), scene units
         self._rows: dict[str, list[tuple[int, np.ndarray, np.ndarray | None, str, str]]] = {}
-        # part index -> (rows of a pair, row, where (world, m), part pose): closest points still to find
+        # part index -> (rows of a pair, row, where (world, m), part pose), and cable index ->
+        # (rows, row, where, s_b, the cable's centres): closest points still to find
         self._part_spots: dict[int, list[tuple]] = {}
+        self._cable_spots: dict[int, list[tuple]] = {}
         self._lane: dict[str, str] = {}
         self._lanes: dict[str, tuple[list[int], list[str]]] = {}
 
@@ -77,14 +79,17 @@ class ClashMarks:
         for m in marks:
             path = pair_path(m.kind, m.a, m.b)
             now.add(path)
-            other = self._other_side(m, cables)
             rows = self._rows.setdefault(path, [])
-            if isinstance(other, int):     # a part: its closest point found with the others at the end
-                self._part_spots.setdefault(other, []).append((rows, len(rows), np.asarray(m.where, float),
-                                                               np.asarray(poses[other], float)))
-                other = None
-            rows.append((frame, np.asarray(m.where, float) / u, None if other is None else other / u,
-                         f"{pair_text(m.a, m.b)}: {m.distance / u:.3g} {self.units}", m.a))
+            # the other side's closest point is found with the others of its part or cable at the end
+            where = np.asarray(m.where, float)
+            if m.kind in ("self", "cable-cable") and m.s_b is not None and m.b in self._cable_index:
+                i = self._cable_index[m.b]
+                self._cable_spots.setdefault(i, []).append((rows, len(rows), where, m.s_b,
+                                                            np.array(cables[i], float)))
+            elif m.kind in ("cable-structure", "keepout") and self.shapes is not None and m.b in self._part_index:
+                k = self._part_index[m.b]
+                self._part_spots.setdefault(k, []).append((rows, len(rows), where, np.asarray(poses[k], float)))
+            rows.append((frame, where / u, None, f"{pair_text(m.a, m.b)}: {m.distance / u:.3g} {self.units}", m.a))
             if self._lane.get(path) != m.state:
                 self._set_lane(path, frame, m.state)
         for path in [p for p, s in self._lane.items() if p not in now and s != "clear"]:
@@ -97,33 +102,27 @@ class ClashMarks:
         frames.append(frame)
         states.append(state)
 
-    def _other_side(self, m: Mark, cables: list[np.ndarray]) -> np.ndarray | int | None:
-        """Closest point on the other side of a clash, metres; for a part,
-        its index (the point is found for all of a part's marks at once, by
-        :meth:`_resolve_part_spots`); None (bend, taut, part-part)."""
-        if m.kind in ("self", "cable-cable") and m.s_b is not None and m.b in self._cable_index:
-            return spot.on_cable(cables[self._cable_index[m.b]], m.s_b, m.where)
-        if m.kind in ("cable-structure", "keepout") and self.shapes is not None:
-            k = self._part_index.get(m.b)
-            if k is not None:
-                return int(k)
-        return None
-
-    def _resolve_part_spots(self) -> None:
-        """The other side of every part mark: one query per part for the whole run."""
+    def _resolve_spots(self) -> None:
+        """The other side of every mark on a part or a cable (`checker.spot`):
+        one query per part or cable for the whole run. Bend, taut and
+        part-part marks have none."""
         u = self.unit
-        for k, spots in self._part_spots.items():
-            found = spot.on_part_many(self.shapes[k], np.stack([s[3] for s in spots]),
-                                      np.stack([s[2] for s in spots])) / u
-            for (rows, i, _, _), other in zip(spots, found):
+        found = [(spots, spot.on_part_many(self.shapes[k], np.stack([s[3] for s in spots]),
+                                           np.stack([s[2] for s in spots])))
+                 for k, spots in self._part_spots.items()]
+        found += [(spots, spot.on_cable_many(np.stack([s[4] for s in spots]), np.array([s[3] for s in spots]),
+                                             np.stack([s[2] for s in spots])))
+                  for spots in self._cable_spots.values()]
+        for spots, points in found:
+            for (rows, i, *_), other in zip(spots, points / u):
                 frame, where, _, label, a = rows[i]
                 rows[i] = (frame, where, other, label, a)
-        self._part_spots = {}
+        self._part_spots, self._cable_spots = {}, {}
 
     def send(self, rec: rr.RecordingStream, times: np.ndarray, bounds: tuple[np.ndarray, np.ndarray],
              clearance: float) -> None:
         """Every pair's spot, gap and lane, one column per entity (`times`: each frame's, seconds)."""
-        self._resolve_part_spots()
+        self._resolve_spots()
         n_f = len(times)
         index = lambda frames: [rr.TimeColumn("sim_time", duration=times[np.asarray(frames, int)])]
         config = rr.StateConfiguration(values=list(STATES), colors=[STATE_COLOURS[x] for x in STATES])
