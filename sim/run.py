@@ -292,13 +292,13 @@ class _Checked:
             if res.near is not None:
                 self.pending_near = res.near     # a full check's candidates, shown at the next frame
             self.timer.lap("check")
-            if recorder and (self.checked % self.record_stride == 0 or started or closed
-                             or state.step == self.total_steps):
+            sampled = self.checked % self.record_stride == 0 or state.step == self.total_steps
+            if recorder and (sampled or started or closed):
                 allow = self.tracker.allow   # allowed pairs are drawn as clear
                 shown = (replace(res, records=[r for r in res.records if not allow.match(self.tracker.key(r))])
                          if allow else res)
                 _record_step(recorder, state, shown, started, closed, self.tracker, self.near,
-                             self.pending_near, scale, self.built.scene.units)
+                             self.pending_near, scale, self.built.scene.units, sampled)
                 self.pending_near = None
                 if self.joints:
                     recorder.log_joints(self.joints.names, self.joints.units, self.joints.values(state.t)[0])
@@ -342,13 +342,13 @@ def _twist_moment(defn, radius: float, length: float, twist: float) -> float:
 
 
 def _record_step(recorder: Recorder, state, res, started, closed, tracker: EventTracker,
-                 near: "_NearPairs", pending, unit: float, units: str) -> None:
+                 near: "_NearPairs", pending, unit: float, units: str, sampled: bool = True) -> None:
     """One recorded frame: the step's clashes as marks, the pairs evaluated
     near the clearance (approach history), contacts, agreement, event entries."""
     marks = [Mark(PairType(r.type).value, r.a, r.b, float(r.min_distance), Severity(r.severity).value,
                   np.asarray(r.where), float(r.s), r.s_b) for r in res.records]
     recorder.log_step(state.t, state.cables, state.part_poses, marks, strain=res.strain, bend=res.bend,
-                      near=None if pending is None else near.distances(pending), qpos=state.qpos)
+                      near=None if pending is None else near.distances(pending), qpos=state.qpos, sampled=sampled)
     if res.contacts is not None:
         recorder.log_contacts(res.contacts.pos)
     if res.agreement is not None:

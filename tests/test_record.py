@@ -287,3 +287,21 @@ def test_a_cable_lying_on_a_plate_with_one_end_sliding_wears_only_where_it_touch
     grey = int.from_bytes(bytes([200, 200, 200, 255]), "big")
     colours = np.array(strip["LineStrips3D:colors"], np.uint32)
     assert (colours[never] == grey).all() and not (colours[contact > 0] == grey).any()
+
+
+def test_frames_recorded_for_an_event_alone_keep_only_what_changes(pinch):
+    """Frames between the run's samples (every 10 ms here) are recorded where an
+    event starts or ends: there a cable's shape is kept only if its state
+    colours change, and the cable's measures (strain, bend, twist) not at all."""
+    report, record = pinch
+    on_grid = lambda t: abs(t / 0.01 - round(t / 0.01)) < 1e-6 or t == pytest.approx(report["settings"]["t_end"])
+    strain = [r["t"] for r in _rows(record, "/cables/strain/loop") if r["t"] is not None]
+    assert strain and all(on_grid(t) for t in strain)
+    rows = [r for r in _rows(record, "/world/cables/loop") if r["t"] is not None]
+    off = [k for k, r in enumerate(rows) if not on_grid(r["t"])]
+    (ev,) = report["events"]
+    assert rows[off[0]]["t"] == pytest.approx(ev["t_start"])          # the clash shows when it starts
+    for k in off:
+        assert rows[k]["LineStrips3D:colors"] != rows[k - 1]["LineStrips3D:colors"]
+    events = {round(r["t"], 6) for r in _rows(record, "/events")}
+    assert any(not on_grid(t) for t in events)                          # there are event-only frames

@@ -4,7 +4,11 @@
 strip per run of elements in one state, so only the elements near a
 clash's worst place take its state colour (soft, hard); the rest stays the
 clear colour. Buffered per frame and sent in one column per cable when the
-recording is closed.
+recording is closed. At a frame recorded only because an event starts or
+ends there (not one of the run's regular samples) a cable's shape is kept
+only if its state colours change there: the colours change exactly when
+the clash does, and a harness of many cables does not store every shape at
+every step.
 
 Not here: the clashes themselves (`sim.record.marks`), the wear map
 (`sim.record.wearview`).
@@ -70,6 +74,7 @@ class CableFrames:
         self._near = [max(2.0 * c.element_length, 3.0 * c.radius) for c in built.cables]
         self._points: list[list[np.ndarray]] = [[] for _ in built.cables]
         self._states: list[list[np.ndarray]] = [[] for _ in built.cables]
+        self._frames: list[list[int]] = [[] for _ in built.cables]
 
     def log_static(self, rec: rr.RecordingStream) -> None:
         """Each cable's radius, once."""
@@ -77,8 +82,10 @@ class CableFrames:
             rec.log(f"world/cables/{escape(cable.name)}",
                     rr.LineStrips3D.from_fields(radii=[cable.radius / self.unit]), static=True)
 
-    def add(self, cables: list[np.ndarray], marks: list[Mark]) -> None:
-        """One frame: body centres (metres) and the clashes that colour them."""
+    def add(self, frame: int, cables: list[np.ndarray], marks: list[Mark], sampled: bool = True) -> None:
+        """One frame: body centres (metres) and the clashes that colour them.
+        A frame that is not `sampled` (recorded only because an event starts
+        or ends there) keeps a cable's shape only where its states change."""
         state = [np.zeros(len(c.rest_s) - 1, np.uint8) for c in self.built.cables]
         for m in marks:
             self._state_near(state, m.a, m.s, _RANK[m.state], whole=(m.kind == "taut"))
@@ -86,6 +93,9 @@ class CableFrames:
                 self._state_near(state, m.b, m.s_b, _RANK[m.state], whole=False)
         u = self.unit
         for i, pts in enumerate(cables):
+            if not sampled and self._states[i] and np.array_equal(self._states[i][-1], state[i]):
+                continue
+            self._frames[i].append(frame)
             self._points[i].append(np.asarray(pts, float) / u)
             self._states[i].append(state[i])
 
@@ -96,13 +106,14 @@ class CableFrames:
         near = np.ones(len(state[i]), bool) if whole else np.abs(self._element_s[i] - s) <= self._near[i]
         state[i][near] = np.maximum(state[i][near], rank)
 
-    def send(self, rec: rr.RecordingStream, index: list) -> None:
-        """Every cable's frames, one column per cable."""
+    def send(self, rec: rr.RecordingStream, times: np.ndarray) -> None:
+        """Every cable's frames, one column per cable (`times`: each frame's, seconds)."""
         rgba = np.array([int.from_bytes(bytes([*STATE_COLOURS[s], 255]), "big") for s in STATES], np.uint32)
         for i, cable in enumerate(self.built.cables):
             if not self._points[i]:
                 continue
             strips, states, counts = runs(np.stack(self._points[i]), np.stack(self._states[i]))
-            rec.send_columns(f"world/cables/{escape(cable.name)}", indexes=index,
+            rec.send_columns(f"world/cables/{escape(cable.name)}",
+                             indexes=[rr.TimeColumn("sim_time", duration=times[self._frames[i]])],
                              columns=rr.LineStrips3D.columns(strips=strips, colors=pa.array(rgba[states]))
                              .partition(counts))

@@ -84,6 +84,7 @@ class Recorder:
                               for c in built.cables]
         self._twist_series = [(f"cables/twist/{escape(c.name)}", f"{c.name} twist (deg)") for c in built.cables]
         self._closed = False
+        self._sampled = True
         self._times: list[float] = []
         self._poses: list[np.ndarray] = []
         self._vis_poses: list[np.ndarray] = []
@@ -122,9 +123,13 @@ class Recorder:
     def log_step(self, t: float, cables: list[np.ndarray], part_poses: np.ndarray,
                  marks: list[Mark], strain: np.ndarray, bend: np.ndarray,
                  near: dict[tuple[str, str, str], float] | None = None,
-                 qpos: np.ndarray | None = None) -> None:
+                 qpos: np.ndarray | None = None, sampled: bool = True) -> None:
         """One frame: moving parts' poses, cables (coloured near the clashes),
-        the clashes' spots, per-cable series and pair distances. `near`: the
+        the clashes' spots, per-cable series and pair distances. `sampled`:
+        one of the run's regular samples; False for a frame recorded only
+        because an event starts or ends there, where a cable's shape is kept
+        only if its state colours change and its measures (strain, bend
+        radius, twist) are not kept. `near`: the
         pairs a full check since the last frame evaluated up to its horizon,
         (type, a, b) -> distance in metres (a pair's distance line runs while
         it is below the clearance or in the last full check's list, and breaks
@@ -138,11 +143,13 @@ class Recorder:
         if vis is not None:
             self._vis_poses.append(vis)
         self._contacts.append(None)
-        self.cables.add(cables, marks)
+        self.cables.add(frame, cables, marks, sampled)
+        self._sampled = sampled
         add = self.series.add
         for (strain_path, strain_label, bend_path, bend_label), e, b in zip(self._cable_series, strain, bend):
-            add(strain_path, frame, 100.0 * float(e), strain_label)
-            if np.isfinite(b):
+            if sampled:
+                add(strain_path, frame, 100.0 * float(e), strain_label)
+            if sampled and np.isfinite(b):
                 add(bend_path, frame, float(b / u), bend_label)
         shown = self.marks.add(frame, marks, cables, part_poses)
         if shown != self._dimmed:      # parts translucent while a clash is shown
@@ -165,7 +172,9 @@ class Recorder:
         self._alive = known
 
     def log_twist(self, twist_deg: np.ndarray) -> None:
-        """Each cable's twist (degrees) at the current frame; NaN: not measured."""
+        """Each cable's twist (degrees) at the current frame (if sampled); NaN: not measured."""
+        if not self._sampled:
+            return
         for (path, label), value in zip(self._twist_series, twist_deg):
             if np.isfinite(value):
                 self.log_scalar(path, float(value), label=label)
@@ -217,7 +226,7 @@ class Recorder:
         bounds = self.scene.bounds if self.scene.bounds is not None else (np.zeros(3), np.ones(3))
         if len(times):
             every = [rr.TimeColumn("sim_time", duration=times)]
-            self.cables.send(rec, every)
+            self.cables.send(rec, times)
             self.scene.send_motion(rec, every, self._poses, self._vis_poses)
             self._send_contacts(times)
             dim = [(0.0, False)] + [(times[f], on) for f, on in self._dim_changes]
