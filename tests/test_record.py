@@ -175,6 +175,9 @@ def test_distances_have_limit_lines_and_break_where_unknown(pinch):
     dist = [r for r in _rows(record, "/checks/cable-structure/loop/drawer_back/distance") if r["t"] is not None]
     values = np.array([r["Scalars:scalars"][0] for r in dist])
     assert np.isnan(values).any()                          # the line stops after the event
+    # the legend's label rides in the series' first row (one chunk per series)
+    assert dist[0]["SeriesLines:names"] == ["cable-structure: loop / drawer/back"]
+    assert not any(r.get("SeriesLines:names") for r in dist[1:])
     assert np.nanmin(values) == pytest.approx(report["events"][0]["min_distance"])
     # the loop has no min_bend_radius in the scene: no limit line
     assert "/cables/bend_radius/loop_limit" not in _entities(record)

@@ -65,12 +65,16 @@ class SeriesSet:
         return float(min(lows)) if lows else None
 
     def send(self, rec: rr.RecordingStream, times: np.ndarray) -> None:
-        """Every series, one column each, its label static."""
+        """Every series, one column each, its label in the first row (the
+        plots query the whole timeline, so the legend finds it; one chunk per
+        series, not two)."""
         for path, series in self.series.items():
+            columns = rr.Scalars.columns(scalars=np.asarray(series.values, float))
             if path in self.labels:
-                rec.log(path, rr.SeriesLines(names=[self.labels[path]]), static=True)
-            rec.send_columns(path, indexes=[rr.TimeColumn("sim_time", duration=times[series.frames])],
-                             columns=rr.Scalars.columns(scalars=np.asarray(series.values, float)))
+                first = np.zeros(len(series.frames), np.int64)
+                first[0] = 1
+                columns = [*columns, *rr.SeriesLines.columns(names=[self.labels[path]]).partition(first)]
+            rec.send_columns(path, indexes=[rr.TimeColumn("sim_time", duration=times[series.frames])], columns=columns)
 
 
 def send_limit_lines(rec: rr.RecordingStream, built: Built, times: np.ndarray, clearance: float, unit: float,
