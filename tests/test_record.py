@@ -96,12 +96,16 @@ def test_the_spot_is_labelled_with_pair_and_distance_in_its_own_colour(pinch):
     report, record = pinch
     (event,) = report["events"]
     path = "/world/interference/cable-structure/loop/drawer_back"
-    static = [r for r in _rows(record, path) if r["t"] is None][0]
-    rgba = static["Ellipsoids3D:colors"][0]
-    assert (rgba >> 24, (rgba >> 16) & 255, (rgba >> 8) & 255) == SPOT
+    rows = _rows(record, path)
+    assert all(r["t"] is not None for r in rows)           # style and data in one chunk
+    shown = [r for r in rows if r["Ellipsoids3D:centers"]]
+    # every row that shows a sphere carries its style (an empty row none)
+    for r in shown:
+        rgba = r["Ellipsoids3D:colors"][0]
+        assert (rgba >> 24, (rgba >> 16) & 255, (rgba >> 8) & 255) == SPOT
+        assert r["Ellipsoids3D:show_labels"] == [True] and r["Ellipsoids3D:line_radii"] == [-2.5]
     assert SPOT not in (*STATE_COLOURS.values(), PART_COLOUR, KEEPOUT_COLOUR[:3])
-    assert static["Ellipsoids3D:show_labels"] == [True]
-    shown = [r for r in _rows(record, path) if r["t"] is not None]
+    shown = [r for r in rows if r["t"] is not None]
     # every row holds as many sizes as centres: an emptied row draws nothing (not a sphere at the origin)
     assert all(len(r["Ellipsoids3D:half_sizes"]) == len(r["Ellipsoids3D:centers"]) for r in shown)
     worst = min(shown, key=lambda r: abs(r["t"] - event["t_worst"]))
@@ -110,6 +114,7 @@ def test_the_spot_is_labelled_with_pair_and_distance_in_its_own_colour(pinch):
     assert shown[0]["t"] == pytest.approx(event["t_start"]) and shown[-1]["Ellipsoids3D:labels"] == []
     # the gap: from the worst place on the centreline (radius 3 mm) to the panel's surface
     gaps = [r for r in _rows(record, path + "/gap") if r["t"] is not None and r["LineStrips3D:strips"]]
+    assert all(r["LineStrips3D:colors"] == [int.from_bytes(bytes([*SPOT, 255]), "big")] for r in gaps)
     seg = np.array([r for r in gaps if r["t"] == pytest.approx(event["t_worst"])][0]["LineStrips3D:strips"][0])
     assert np.linalg.norm(seg[1] - seg[0]) == pytest.approx(abs(event["min_distance"] + 3.0), abs=1e-3)
 
@@ -160,7 +165,10 @@ def test_the_event_log_has_one_start_and_one_end_per_event_levelled_by_severity(
 def test_pair_state_lanes_follow_the_event(pinch):
     report, record = pinch
     (ev,) = report["events"]
-    lane = [r for r in _rows(record, "/lanes/cable-structure/loop/drawer_back") if r["t"] is not None]
+    lane = _rows(record, "/lanes/cable-structure/loop/drawer_back")
+    assert all(r["t"] is not None for r in lane)
+    # every state change carries the lane's configuration (one chunk per lane)
+    assert all(r["StateConfiguration:values"] == ["clear", "soft", "hard"] for r in lane)
     states = [(r["t"], r["StateChange:state"][0]) for r in lane]
     assert states[0] == (pytest.approx(ev["t_start"]), "soft")
     assert "hard" in [s for _, s in states] and states[-1][1] == "clear"

@@ -7,7 +7,8 @@ side (`checker.spot`); both shown from the frame a clash is seen and
 emptied at the frame after each run of such frames. `lanes/<type>/<a>/<b>`:
 the pair's state (clear / soft / hard) as state changes, one lane per pair.
 Everything is buffered per frame and sent in columns, one chunk per entity
-(its style in the first row), when the recording is closed.
+(its style in every row: a harness has thousands of pairs, and a chunk
+costs kilobytes), when the recording is closed.
 
 Not here: which pairs clash (the checker and the event tracker decide).
 """
@@ -125,10 +126,13 @@ class ClashMarks:
         self._resolve_spots()
         n_f = len(times)
         index = lambda frames: [rr.TimeColumn("sim_time", duration=times[np.asarray(frames, int)])]
-        config = rr.StateConfiguration(values=list(STATES), colors=[STATE_COLOURS[x] for x in STATES])
+        colours = [STATE_COLOURS[x] for x in STATES]
         for path, (frames, states) in self._lanes.items():
-            rec.log(f"lanes/{path}", config, static=True)
-            rec.send_columns(f"lanes/{path}", indexes=index(frames), columns=rr.StateChange.columns(state=states))
+            # the lane's configuration in every row (a few per pair): one chunk per lane, not two
+            n = len(states)
+            config = rr.StateConfiguration.columns(values=list(STATES) * n, colors=colours * n)
+            rec.send_columns(f"lanes/{path}", indexes=index(frames),
+                             columns=[*rr.StateChange.columns(state=states), *config.partition([len(STATES)] * n)])
         lo, hi = bounds
         for path, rows in self._rows.items():
             self._send_spot(rec, path, rows, n_f, index, max(
@@ -163,20 +167,20 @@ class ClashMarks:
         lengths = [0 if c is None else 1 for c in centres]
         pts = np.array([c for c in centres if c is not None]).reshape(-1, 3)
         text = [x for x in labels if x is not None]
-        rec.log(f"world/interference/{path}",
-                rr.Ellipsoids3D.from_fields(colors=[SPOT], line_radii=[-2.5], fill_mode="MajorWireframe",
-                                            show_labels=True), static=True)
-        # the sizes go with the centres: an empty row has no sphere at all (a size
-        # without a centre would draw one at the origin)
-        rec.send_columns(f"world/interference/{path}", indexes=index(frames),
-                         columns=[*rr.Ellipsoids3D.columns(centers=pts, half_sizes=np.full((len(pts), 3), radius))
-                                  .partition(lengths),
-                                  *rr.Ellipsoids3D.columns(labels=text).partition(lengths)])
+        # the sizes and the style go with the centres: an empty row has no sphere at all
+        # (a size without a centre would draw one at the origin); the style rides in
+        # every row: one chunk per pair, not two
+        k = len(pts)
+        rec.send_columns(f"world/interference/{path}", indexes=index(frames), columns=[
+            *rr.Ellipsoids3D.columns(centers=pts, half_sizes=np.full((k, 3), radius)).partition(lengths),
+            *rr.Ellipsoids3D.columns(labels=text, colors=np.tile(np.array([*SPOT, 255], np.uint8), (k, 1)),
+                                     line_radii=np.full(k, -2.5, np.float32)).partition(lengths),
+            *rr.Ellipsoids3D.columns(fill_mode=["MajorWireframe"] * k, show_labels=[True] * k).partition(lengths)])
         # the segment to the other side, emptied with the marker
         seg_rows = [s for s in segs if s is not None]
         if seg_rows:
-            rec.log(f"world/interference/{path}/gap",
-                    rr.LineStrips3D.from_fields(radii=[0.35 * radius], colors=[SPOT]), static=True)
+            k = len(seg_rows)
             rec.send_columns(f"world/interference/{path}/gap", indexes=index(frames),
-                             columns=rr.LineStrips3D.columns(strips=np.stack(seg_rows))
+                             columns=rr.LineStrips3D.columns(strips=np.stack(seg_rows), radii=np.full(k, 0.35 * radius),
+                                                             colors=np.tile(np.array([*SPOT, 255], np.uint8), (k, 1)))
                              .partition([0 if s is None else 1 for s in segs]))
