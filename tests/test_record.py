@@ -113,7 +113,7 @@ def test_the_spot_is_labelled_with_pair_and_distance_in_its_own_colour(pinch):
     # shown from the event's start, emptied at the frame after its last
     assert shown[0]["t"] == pytest.approx(event["t_start"]) and shown[-1]["Ellipsoids3D:labels"] == []
     # the gap: from the worst place on the centreline (radius 3 mm) to the panel's surface
-    gaps = [r for r in _rows(record, path + "/gap") if r["t"] is not None and r["LineStrips3D:strips"]]
+    gaps = [r for r in rows if r.get("LineStrips3D:strips")]
     assert all(r["LineStrips3D:colors"] == [int.from_bytes(bytes([*SPOT, 255]), "big")] for r in gaps)
     seg = np.array([r for r in gaps if r["t"] == pytest.approx(event["t_worst"])][0]["LineStrips3D:strips"][0])
     assert np.linalg.norm(seg[1] - seg[0]) == pytest.approx(abs(event["min_distance"] + 3.0), abs=1e-3)
@@ -316,3 +316,23 @@ def test_frames_recorded_for_an_event_alone_keep_only_what_changes(pinch):
         assert rows[k]["LineStrips3D:colors"] != rows[k - 1]["LineStrips3D:colors"]
     events = {round(r["t"], 6) for r in _rows(record, "/events")}
     assert any(not on_grid(t) for t in events)                          # there are event-only frames
+
+
+def test_a_series_keeps_only_what_changes_and_its_line_stays_within_a_bin():
+    from sim.record.series import RESOLUTION, changes
+    rng = np.random.default_rng(7)
+    t = np.linspace(0.0, 1.0, 400)
+    v = np.where(t < 0.3, 5.0, 5.0 - 8.0 * (t - 0.3) ** 2) + 1e-7 * rng.standard_normal(400)
+    v[250:260] = np.nan                                     # the pair left the check for a while
+    keep = changes(v)
+    assert keep.sum() < 0.5 * len(v)                        # the still part costs two rows
+    assert keep[0] and keep[-1] and keep[np.nanargmin(v)] and keep[np.nanargmax(v)]
+    assert keep[249:261].all()                              # the break and its ends are kept
+    ok = np.isfinite(v)
+    span = np.nanmax(v) - np.nanmin(v)
+    for part in (slice(0, 250), slice(260, 400)):         # the drawn line, run by run
+        tt, vv, kk = t[part], v[part], keep[part]
+        drawn = np.interp(tt, tt[kk], vv[kk])
+        assert np.abs(drawn - vv).max() <= RESOLUTION * span + 1e-12
+    assert changes(np.full(5, 2.0)).tolist() == [True, False, False, False, True]
+    assert changes(np.array([np.nan, np.nan])).all() and ok.sum() == 390

@@ -7,7 +7,7 @@ module of this package that writes each part:
   (:mod:`.scene`);
 - `world/cables/<name>`: each cable's centreline at its true radius, only
   the elements near a clash's worst place in its state colour (:mod:`.cables`);
-- `world/interference/<type>/<a>/<b>` (and `.../gap`): the spot, and
+- `world/interference/<type>/<a>/<b>`: the spot and its gap, and
   `lanes/<type>/<a>/<b>`: the pair's state (:mod:`.marks`);
   `world/mujoco_contacts`: MuJoCo's contact points;
 - `checks/...`, `cables/{strain,bend_radius,twist}/<name>`,

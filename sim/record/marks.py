@@ -2,7 +2,7 @@
 
 `world/interference/<type>/<a>/<b>`: a wire sphere round the worst place on
 cable a, labelled with the pair and its distance, in a colour no cable or
-part uses, and (`.../gap`) the segment to the closest point on the other
+part uses, and the segment (the gap) to the closest point on the other
 side (`checker.spot`); both shown from the frame a clash is seen and
 emptied at the frame after each run of such frames. `lanes/<type>/<a>/<b>`:
 the pair's state (clear / soft / hard) as state changes, one lane per pair.
@@ -169,18 +169,18 @@ class ClashMarks:
         text = [x for x in labels if x is not None]
         # the sizes and the style go with the centres: an empty row has no sphere at all
         # (a size without a centre would draw one at the origin); the style rides in
-        # every row: one chunk per pair, not two
+        # every row, and the segment to the other side (emptied with the marker) in the
+        # same entity: one chunk per pair, where a style and a gap entity would make four
         k = len(pts)
-        rec.send_columns(f"world/interference/{path}", indexes=index(frames), columns=[
-            *rr.Ellipsoids3D.columns(centers=pts, half_sizes=np.full((k, 3), radius)).partition(lengths),
-            *rr.Ellipsoids3D.columns(labels=text, colors=np.tile(np.array([*SPOT, 255], np.uint8), (k, 1)),
-                                     line_radii=np.full(k, -2.5, np.float32)).partition(lengths),
-            *rr.Ellipsoids3D.columns(fill_mode=["MajorWireframe"] * k, show_labels=[True] * k).partition(lengths)])
-        # the segment to the other side, emptied with the marker
+        spot = np.tile(np.array([*SPOT, 255], np.uint8), (k, 1))
+        columns = [*rr.Ellipsoids3D.columns(centers=pts, half_sizes=np.full((k, 3), radius)).partition(lengths),
+                   *rr.Ellipsoids3D.columns(labels=text, colors=spot,
+                                            line_radii=np.full(k, -2.5, np.float32)).partition(lengths),
+                   *rr.Ellipsoids3D.columns(fill_mode=["MajorWireframe"] * k, show_labels=[True] * k).partition(lengths)]
         seg_rows = [s for s in segs if s is not None]
         if seg_rows:
-            k = len(seg_rows)
-            rec.send_columns(f"world/interference/{path}/gap", indexes=index(frames),
-                             columns=rr.LineStrips3D.columns(strips=np.stack(seg_rows), radii=np.full(k, 0.35 * radius),
-                                                             colors=np.tile(np.array([*SPOT, 255], np.uint8), (k, 1)))
-                             .partition([0 if s is None else 1 for s in segs]))
+            g = len(seg_rows)
+            columns += rr.LineStrips3D.columns(strips=np.stack(seg_rows), radii=np.full(g, 0.35 * radius),
+                                               colors=spot[:1].repeat(g, axis=0)).partition(
+                [0 if s is None else 1 for s in segs])
+        rec.send_columns(f"world/interference/{path}", indexes=index(frames), columns=columns)

@@ -7,7 +7,9 @@ is not known. `checks/limits/{clearance,zero}`: reference lines.
 `cables/strain/<name>` (percent), `cables/bend_radius/<name>` (scene
 units, with `<name>_limit` lines), `cables/twist/<name>` (degrees),
 `validation/agreement`, `joints/<name>`. Values are buffered by frame and
-sent in one column per series when the recording is closed.
+sent in one column per series when the recording is closed, each series
+only where it changes (:func:`changes`: a pair that sits still costs two
+rows, not one per frame).
 
 Not here: what the values are (the run measures them).
 """
@@ -42,6 +44,40 @@ class Series:
             self.values.append(np.nan)
 
 
+RESOLUTION = 1e-3
+"""A series keeps a value only where it moves by more than this fraction of
+its own range (:func:`changes`): the plot's line then runs within that of
+every value, at a thousandth of the plot's height or finer."""
+
+
+def changes(values: np.ndarray, resolution: float = RESOLUTION) -> np.ndarray:
+    """(n,) mask of the values of a series worth keeping: with the values
+    binned by `resolution` times their range, the first and last of each run
+    in one bin, the NaNs that break the line and their neighbours, and the
+    lowest and highest value. The line through the kept values (rerun draws
+    straight lines between points) stays within one bin of every value."""
+    v = np.asarray(values, float)
+    n = len(v)
+    keep = np.zeros(n, bool)
+    if n <= 2:
+        keep[:] = True
+        return keep
+    finite = np.isfinite(v)
+    if not finite.any():
+        keep[[0, -1]] = True
+        return keep
+    lo, hi = float(v[finite].min()), float(v[finite].max())
+    step = resolution * (hi - lo)
+    q = np.where(finite, np.floor((v - lo) / step) if step > 0 else 0.0, np.nan)
+    new = np.ones(n, bool)
+    new[1:] = ~(q[1:] == q[:-1])                  # a new bin (NaN never equals: kept)
+    keep |= new
+    keep[:-1] |= new[1:]                          # the last of each run
+    keep[[0, -1]] = True
+    keep[np.flatnonzero(finite)[[np.argmin(v[finite]), np.argmax(v[finite])]]] = True
+    return keep
+
+
 class SeriesSet:
     """Every series of a run by entity path, with its legend label."""
 
@@ -69,12 +105,15 @@ class SeriesSet:
         plots query the whole timeline, so the legend finds it; one chunk per
         series, not two)."""
         for path, series in self.series.items():
-            columns = rr.Scalars.columns(scalars=np.asarray(series.values, float))
+            values = np.asarray(series.values, float)
+            keep = changes(values)
+            columns = rr.Scalars.columns(scalars=values[keep])
             if path in self.labels:
-                first = np.zeros(len(series.frames), np.int64)
+                first = np.zeros(int(keep.sum()), np.int64)
                 first[0] = 1
                 columns = [*columns, *rr.SeriesLines.columns(names=[self.labels[path]]).partition(first)]
-            rec.send_columns(path, indexes=[rr.TimeColumn("sim_time", duration=times[series.frames])], columns=columns)
+            rec.send_columns(path, indexes=[rr.TimeColumn("sim_time", duration=times[series.frames][keep])],
+                             columns=columns)
 
 
 def send_limit_lines(rec: rr.RecordingStream, built: Built, times: np.ndarray, clearance: float, unit: float,
