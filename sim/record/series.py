@@ -45,36 +45,43 @@ class Series:
 
 
 RESOLUTION = 1e-3
-"""A series keeps a value only where it moves by more than this fraction of
-its own range (:func:`changes`): the plot's line then runs within that of
-every value, at a thousandth of the plot's height or finer."""
+"""A series keeps a value only where its line bends by more than this
+fraction of its own range (:func:`changes`): the line drawn through the
+kept values runs within that of every value, a thousandth of the plot's
+height or finer."""
 
 
-def changes(values: np.ndarray, resolution: float = RESOLUTION) -> np.ndarray:
-    """(n,) mask of the values of a series worth keeping: with the values
-    binned by `resolution` times their range, the first and last of each run
-    in one bin, the NaNs that break the line and their neighbours, and the
-    lowest and highest value. The line through the kept values (rerun draws
-    straight lines between points) stays within one bin of every value."""
-    v = np.asarray(values, float)
+def changes(times: np.ndarray, values: np.ndarray, resolution: float = RESOLUTION) -> np.ndarray:
+    """(n,) mask of the values of a series worth keeping: the line through
+    the kept ones (rerun draws straight lines between points) passes within
+    `resolution` times the series' range of every value. NaNs (where the
+    line breaks) and their neighbours, the ends, and the lowest and highest
+    value are always kept.
+
+    Pairwise merging, coarse to fine in log2(n) passes: at pass k each
+    point at an odd multiple of 2^(k-1) goes if every value between its
+    neighbours on the coarser grid lies within half the tolerance of their
+    chord (the line through what is kept then strays at most twice that)."""
+    t, v = np.asarray(times, float), np.asarray(values, float)
     n = len(v)
-    keep = np.zeros(n, bool)
-    if n <= 2:
-        keep[:] = True
-        return keep
+    keep = np.ones(n, bool)
     finite = np.isfinite(v)
-    if not finite.any():
-        keep[[0, -1]] = True
+    if n <= 2 or not finite.any():
         return keep
-    lo, hi = float(v[finite].min()), float(v[finite].max())
-    step = resolution * (hi - lo)
-    q = np.where(finite, np.floor((v - lo) / step) if step > 0 else 0.0, np.nan)
-    new = np.ones(n, bool)
-    new[1:] = ~(q[1:] == q[:-1])                  # a new bin (NaN never equals: kept)
-    keep |= new
-    keep[:-1] |= new[1:]                          # the last of each run
-    keep[[0, -1]] = True
-    keep[np.flatnonzero(finite)[[np.argmin(v[finite]), np.argmax(v[finite])]]] = True
+    must = np.zeros(n, bool)
+    where = np.flatnonzero(finite)
+    must[where[[np.argmin(v[finite]), np.argmax(v[finite])]]] = True
+    tol = 0.5 * resolution * (v[finite].max() - v[finite].min())
+    half = 1
+    while half < n - 1:
+        i = np.arange(half, n - 1, 2 * half)                   # candidates of this pass
+        lo, hi = i - half, np.minimum(i + half, n - 1)
+        w = np.minimum(lo[:, None] + np.arange(2 * half + 1)[None], hi[:, None])   # each window
+        f = (t[w] - t[lo][:, None]) / (t[hi] - t[lo])[:, None]
+        dev = np.abs(v[w] - (v[lo][:, None] + f * (v[hi] - v[lo])[:, None]))
+        ok = (dev <= tol).all(axis=1) & ~must[i]               # a NaN in the window keeps it
+        keep[i[ok]] = False
+        half *= 2
     return keep
 
 
@@ -106,7 +113,7 @@ class SeriesSet:
         series, not two)."""
         for path, series in self.series.items():
             values = np.asarray(series.values, float)
-            keep = changes(values)
+            keep = changes(times[series.frames], values)
             columns = rr.Scalars.columns(scalars=values[keep])
             if path in self.labels:
                 first = np.zeros(int(keep.sum()), np.int64)
