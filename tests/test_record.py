@@ -338,3 +338,14 @@ def test_a_series_keeps_only_what_changes_and_its_line_stays_within_a_bin():
         assert np.abs(drawn - vv).max() <= RESOLUTION * span
     assert changes(np.arange(5.0), np.full(5, 2.0)).tolist() == [True, False, False, False, True]
     assert changes(np.arange(3.0), np.array([np.nan, 1.0, np.nan])).all()
+
+
+def test_many_series_at_once_are_each_on_its_own():
+    from sim.record.series import changes, changes_many
+    rng = np.random.default_rng(11)
+    ts = [np.sort(rng.uniform(0, 1, n)) for n in (1, 2, 7, 64, 300)]
+    vs = [np.cumsum(rng.standard_normal(len(t))) * s for t, s in zip(ts, (1.0, 0.0, 1e3, 1e-6, 1.0))]
+    vs[3][10:12] = np.nan
+    for k, t, v in zip(changes_many(ts, vs), ts, vs):
+        one = changes(t, v)
+        assert k.tolist() == one.tolist()

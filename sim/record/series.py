@@ -56,33 +56,49 @@ def changes(times: np.ndarray, values: np.ndarray, resolution: float = RESOLUTIO
     the kept ones (rerun draws straight lines between points) passes within
     `resolution` times the series' range of every value. NaNs (where the
     line breaks) and their neighbours, the ends, and the lowest and highest
-    value are always kept.
+    value are always kept (:func:`changes_many` for one series)."""
+    return changes_many([times], [values], resolution)[0]
 
-    Pairwise merging, coarse to fine in log2(n) passes: at pass k each
-    point at an odd multiple of 2^(k-1) goes if every value between its
-    neighbours on the coarser grid lies within half the tolerance of their
-    chord (the line through what is kept then strays at most twice that)."""
-    t, v = np.asarray(times, float), np.asarray(values, float)
+
+def changes_many(times: list[np.ndarray], values: list[np.ndarray],
+                 resolution: float = RESOLUTION) -> list[np.ndarray]:
+    """:func:`changes` of many series in one vectorised pass.
+
+    Pairwise merging, coarse to fine in log2(n) passes over the series laid
+    end to end (a NaN between two series, so no window spans both): at pass
+    k each point at an odd multiple of 2^(k-1) goes if every value between
+    its neighbours on the coarser grid lies within half the tolerance of
+    their chord (the line through what is kept then strays at most twice
+    that)."""
+    sizes = np.array([len(v) for v in values], int)
+    if not len(sizes):
+        return []
+    gap = np.array([np.nan])
+    t = np.concatenate([x for tv in times for x in (np.asarray(tv, float), gap)])
+    v = np.concatenate([x for vv in values for x in (np.asarray(vv, float), gap)])
     n = len(v)
+    series = np.repeat(np.arange(len(sizes)), sizes + 1)
+    starts = np.r_[0, np.cumsum(sizes + 1)[:-1]]
+    lo_v = np.fmin.reduceat(v, starts)                       # NaN-ignoring (all-NaN series: NaN)
+    hi_v = np.fmax.reduceat(v, starts)
+    tol = (0.5 * resolution * (hi_v - lo_v))[series]
+    must = ~np.isfinite(v)
+    for extreme in (lo_v, hi_v):                              # each series' first lowest and highest
+        at = np.flatnonzero(v == extreme[series])
+        must[at[np.unique(series[at], return_index=True)[1]]] = True
     keep = np.ones(n, bool)
-    finite = np.isfinite(v)
-    if n <= 2 or not finite.any():
-        return keep
-    must = np.zeros(n, bool)
-    where = np.flatnonzero(finite)
-    must[where[[np.argmin(v[finite]), np.argmax(v[finite])]]] = True
-    tol = 0.5 * resolution * (v[finite].max() - v[finite].min())
     half = 1
     while half < n - 1:
         i = np.arange(half, n - 1, 2 * half)                   # candidates of this pass
         lo, hi = i - half, np.minimum(i + half, n - 1)
         w = np.minimum(lo[:, None] + np.arange(2 * half + 1)[None], hi[:, None])   # each window
-        f = (t[w] - t[lo][:, None]) / (t[hi] - t[lo])[:, None]
-        dev = np.abs(v[w] - (v[lo][:, None] + f * (v[hi] - v[lo])[:, None]))
-        ok = (dev <= tol).all(axis=1) & ~must[i]               # a NaN in the window keeps it
+        with np.errstate(invalid="ignore", divide="ignore"):
+            f = (t[w] - t[lo][:, None]) / (t[hi] - t[lo])[:, None]
+            dev = np.abs(v[w] - (v[lo][:, None] + f * (v[hi] - v[lo])[:, None]))
+        ok = (dev <= tol[i][:, None]).all(axis=1) & ~must[i]    # a NaN in the window keeps it
         keep[i[ok]] = False
         half *= 2
-    return keep
+    return [k[:-1] for k in np.split(keep, np.cumsum(sizes + 1))[:-1]]
 
 
 class SeriesSet:
@@ -111,9 +127,10 @@ class SeriesSet:
         """Every series, one column each, its label in the first row (the
         plots query the whole timeline, so the legend finds it; one chunk per
         series, not two)."""
-        for path, series in self.series.items():
+        every = list(self.series.items())
+        kept = changes_many([times[s.frames] for _, s in every], [s.values for _, s in every])
+        for (path, series), keep in zip(every, kept):
             values = np.asarray(series.values, float)
-            keep = changes(times[series.frames], values)
             columns = rr.Scalars.columns(scalars=values[keep])
             if path in self.labels:
                 first = np.zeros(int(keep.sum()), np.int64)
