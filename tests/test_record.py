@@ -47,6 +47,18 @@ def _rows(record: Path, entity: str) -> list[dict]:
     return sorted(rows, key=lambda r: (r["t"] is not None, r["t"] or 0.0))
 
 
+def _view_defaults(record: Path) -> list[dict]:
+    """The views' component defaults in the recording's blueprint, one {column: values} per entry."""
+    reader = RrdReader(record)
+    (store,) = reader.blueprints()
+    found = []
+    for chunk in reader.stream(store=store):
+        if chunk.entity_path.endswith("/defaults"):
+            batch = chunk.to_record_batch()
+            found.append({k: batch.column(k).to_pylist() for k in batch.schema.names if ":" in k})
+    return found
+
+
 def _entities(record: Path) -> set[str]:
     return {c.entity_path for c in RrdReader(record).stream()}
 
@@ -97,13 +109,17 @@ def test_the_spot_is_labelled_with_pair_and_distance_in_its_own_colour(pinch):
     (event,) = report["events"]
     path = "/world/interference/cable-structure/loop/drawer_back"
     rows = _rows(record, path)
-    assert all(r["t"] is not None for r in rows)           # style and data in one chunk
-    shown = [r for r in rows if r["Ellipsoids3D:centers"]]
-    # every row that shows a sphere carries its style (an empty row none)
-    for r in shown:
-        rgba = r["Ellipsoids3D:colors"][0]
+    assert all(r["t"] is not None for r in rows)           # spot and gap in one chunk, no style entry
+    # the style is every 3D view's default (the blueprint), so a pair costs one chunk
+    styles = _view_defaults(record)
+    spheres = [d for d in styles if "Ellipsoids3D:colors" in d]
+    assert len(spheres) >= 2                                # the scene and the worst clash's viewpoint
+    for d in spheres:
+        rgba = d["Ellipsoids3D:colors"][0][0]
         assert (rgba >> 24, (rgba >> 16) & 255, (rgba >> 8) & 255) == SPOT
-        assert r["Ellipsoids3D:show_labels"] == [True] and r["Ellipsoids3D:line_radii"] == [-2.5]
+        assert d["Ellipsoids3D:show_labels"] == [[True]] and d["Ellipsoids3D:line_radii"] == [[-2.5]]
+    spot = int.from_bytes(bytes([*SPOT, 255]), "big")
+    assert [d["LineStrips3D:colors"] for d in styles if "LineStrips3D:colors" in d] == [[[spot]]] * len(spheres)
     assert SPOT not in (*STATE_COLOURS.values(), PART_COLOUR, KEEPOUT_COLOUR[:3])
     shown = [r for r in rows if r["t"] is not None]
     # every row holds as many sizes as centres: an emptied row draws nothing (not a sphere at the origin)
@@ -114,7 +130,6 @@ def test_the_spot_is_labelled_with_pair_and_distance_in_its_own_colour(pinch):
     assert shown[0]["t"] == pytest.approx(event["t_start"]) and shown[-1]["Ellipsoids3D:labels"] == []
     # the gap: from the worst place on the centreline (radius 3 mm) to the panel's surface
     gaps = [r for r in rows if r.get("LineStrips3D:strips")]
-    assert all(r["LineStrips3D:colors"] == [int.from_bytes(bytes([*SPOT, 255]), "big")] for r in gaps)
     seg = np.array([r for r in gaps if r["t"] == pytest.approx(event["t_worst"])][0]["LineStrips3D:strips"][0])
     assert np.linalg.norm(seg[1] - seg[0]) == pytest.approx(abs(event["min_distance"] + 3.0), abs=1e-3)
 
@@ -167,8 +182,11 @@ def test_pair_state_lanes_follow_the_event(pinch):
     (ev,) = report["events"]
     lane = _rows(record, "/lanes/cable-structure/loop/drawer_back")
     assert all(r["t"] is not None for r in lane)
-    # every state change carries the lane's configuration (one chunk per lane)
-    assert all(r["StateConfiguration:values"] == ["clear", "soft", "hard"] for r in lane)
+    # the lanes' configuration is the state timeline's default (one chunk per lane)
+    (config,) = [d for d in _view_defaults(record) if "StateConfiguration:values" in d]
+    assert config["StateConfiguration:values"] == [["clear", "soft", "hard"]]
+    assert config["StateConfiguration:colors"] == [[int.from_bytes(bytes([*STATE_COLOURS[x], 255]), "big")
+                                                    for x in ("clear", "soft", "hard")]]
     states = [(r["t"], r["StateChange:state"][0]) for r in lane]
     assert states[0] == (pytest.approx(ev["t_start"]), "soft")
     assert "hard" in [s for _, s in states] and states[-1][1] == "clear"

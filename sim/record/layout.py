@@ -15,16 +15,32 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import rerun as rr
 import rerun.blueprint as rrb
 
 from sim.build import Built
-from sim.record.style import escape, pair_text
+from sim.record.style import SPOT, STATE_COLOURS, STATES, escape, pair_text
 
 CLASH_COLUMNS = ("type", "pair", "severity", "phase", "start_s", "end_s", "worst_distance", "worst_time_s",
                  "units", "joints")
 """The clash list's columns, in order."""
 VIEWPOINTS = 6
 """Clashes (worst first) that get a saved viewpoint of their own."""
+
+
+def spot_style() -> list:
+    """The 3D views' defaults that style the spots (`sim.record.marks`): a
+    labelled wire sphere and its gap in the spot's colour. Every other
+    ellipsoid and line strip (parts, cables, the wear map) carries its own
+    fill, colour and radius, which a default never overrides."""
+    return [rr.Ellipsoids3D.from_fields(colors=[SPOT], line_radii=[-2.5], fill_mode="MajorWireframe",
+                                        show_labels=True),
+            rr.LineStrips3D.from_fields(colors=[SPOT])]
+
+
+def lane_style() -> rr.StateConfiguration:
+    """The state timeline's default: the pair states' names and colours."""
+    return rr.StateConfiguration(values=list(STATES), colors=[STATE_COLOURS[x] for x in STATES])
 
 
 @dataclass(frozen=True)
@@ -72,14 +88,15 @@ def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance:
     bounds = extent.bounds
     hide = ["- /world/wear_map/**"]
     tabs = [rrb.Spatial3DView(name="Scene", origin="world", eye_controls=_scene_eye(bounds, unit),
-                              contents=["$origin/**", *hide])]
+                              contents=["$origin/**", *hide], defaults=spot_style())]
     radius = {c.name: c.radius for c in built.cables}
     worst = sorted(events, key=lambda e: (e.severity != "hard", e.min_distance))[:VIEWPOINTS]
     for n, ev in enumerate(worst, 1):
         reach = max(12.0 * (radius.get(ev.a, 0.01) + clearance), 0.25 * float(np.linalg.norm(bounds[1] - bounds[0])))
         tabs.append(rrb.Spatial3DView(
             name=f"#{n} {ev.severity} {pair_text(ev.a, ev.b)} @ {ev.t_worst:.3f} s", origin="world",
-            eye_controls=_eye(bounds, np.asarray(ev.where, float), reach, unit), contents=["$origin/**", *hide]))
+            eye_controls=_eye(bounds, np.asarray(ev.where, float), reach, unit), contents=["$origin/**", *hide],
+            defaults=spot_style()))
     if wear:
         tabs.append(rrb.Spatial3DView(name="Wear map (sliding; grey: no contact)", origin="wear_map"))
     clear = clearance / unit
@@ -112,7 +129,8 @@ def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance:
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Vertical(rrb.Tabs(*tabs, active_tab=1 if worst else 0),   # opens on the worst clash
-                         rrb.StateTimelineView(name="Pair states (clear / soft / hard)", origin="lanes"),
+                         rrb.StateTimelineView(name="Pair states (clear / soft / hard)", origin="lanes",
+                                               defaults=[lane_style()]),
                          row_shares=[5, 1]),
             rrb.Vertical(rrb.Tabs(*plots), lists, row_shares=[3, 2]),
             column_shares=[3, 2],

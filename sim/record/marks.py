@@ -6,9 +6,11 @@ part uses, and the segment (the gap) to the closest point on the other
 side (`checker.spot`); both shown from the frame a clash is seen and
 emptied at the frame after each run of such frames. `lanes/<type>/<a>/<b>`:
 the pair's state (clear / soft / hard) as state changes, one lane per pair.
-Everything is buffered per frame and sent in columns, one chunk per entity
-(its style in every row: a harness has thousands of pairs, and a chunk
-costs kilobytes), when the recording is closed.
+Everything is buffered per frame and sent in columns, one chunk per entity,
+when the recording is closed; the style (the spot's colour, wire sphere,
+labels; the lanes' state colours) is the views' default in the blueprint
+(`sim.record.layout`), not data: a harness has thousands of pairs, and a
+chunk costs kilobytes.
 
 Not here: which pairs clash (the checker and the event tracker decide).
 """
@@ -23,7 +25,7 @@ import rerun as rr
 from checker import spot
 from checker.shapes import Shape
 from sim.build import Built
-from sim.record.style import SPOT, STATE_COLOURS, STATES, pair_path, pair_text
+from sim.record.style import pair_path, pair_text
 
 
 @dataclass(frozen=True)
@@ -126,13 +128,10 @@ class ClashMarks:
         self._resolve_spots()
         n_f = len(times)
         index = lambda frames: [rr.TimeColumn("sim_time", duration=times[np.asarray(frames, int)])]
-        colours = [STATE_COLOURS[x] for x in STATES]
         for path, (frames, states) in self._lanes.items():
-            # the lane's configuration in every row (a few per pair): one chunk per lane, not two
-            n = len(states)
-            config = rr.StateConfiguration.columns(values=list(STATES) * n, colors=colours * n)
-            rec.send_columns(f"lanes/{path}", indexes=index(frames),
-                             columns=[*rr.StateChange.columns(state=states), *config.partition([len(STATES)] * n)])
+            # the lanes' configuration (state names and colours) is the view's default
+            # (`sim.record.layout`): one chunk per lane, not two
+            rec.send_columns(f"lanes/{path}", indexes=index(frames), columns=rr.StateChange.columns(state=states))
         lo, hi = bounds
         for path, rows in self._rows.items():
             self._send_spot(rec, path, rows, n_f, index, max(
@@ -167,20 +166,16 @@ class ClashMarks:
         lengths = [0 if c is None else 1 for c in centres]
         pts = np.array([c for c in centres if c is not None]).reshape(-1, 3)
         text = [x for x in labels if x is not None]
-        # the sizes and the style go with the centres: an empty row has no sphere at all
-        # (a size without a centre would draw one at the origin); the style rides in
-        # every row, and the segment to the other side (emptied with the marker) in the
-        # same entity: one chunk per pair, where a style and a gap entity would make four
+        # the sizes go with the centres: an empty row has no sphere at all (a size without
+        # a centre would draw one at the origin); the segment to the other side (emptied
+        # with the marker) rides in the same entity, and the style is the views' default
+        # (`sim.record.layout`): one chunk per pair, where a style and a gap entity would
+        # make four
         k = len(pts)
-        spot = np.tile(np.array([*SPOT, 255], np.uint8), (k, 1))
         columns = [*rr.Ellipsoids3D.columns(centers=pts, half_sizes=np.full((k, 3), radius)).partition(lengths),
-                   *rr.Ellipsoids3D.columns(labels=text, colors=spot,
-                                            line_radii=np.full(k, -2.5, np.float32)).partition(lengths),
-                   *rr.Ellipsoids3D.columns(fill_mode=["MajorWireframe"] * k, show_labels=[True] * k).partition(lengths)]
+                   *rr.Ellipsoids3D.columns(labels=text).partition(lengths)]
         seg_rows = [s for s in segs if s is not None]
         if seg_rows:
-            g = len(seg_rows)
-            columns += rr.LineStrips3D.columns(strips=np.stack(seg_rows), radii=np.full(g, 0.35 * radius),
-                                               colors=spot[:1].repeat(g, axis=0)).partition(
-                [0 if s is None else 1 for s in segs])
+            columns += rr.LineStrips3D.columns(strips=np.stack(seg_rows), radii=np.full(len(seg_rows), 0.35 * radius)) \
+                .partition([0 if s is None else 1 for s in segs])
         rec.send_columns(f"world/interference/{path}", indexes=index(frames), columns=columns)
