@@ -74,9 +74,11 @@ def _run(scene: Path, tree: Path, out: Path) -> dict | None:
     """One recorded run of `scene` by the code in `tree`: its timing and recording size, or None."""
     report, record = out / f"{scene.stem}.json", out / f"{scene.stem}.rrd"
     report.unlink(missing_ok=True)
-    proc = subprocess.run([sys.executable, "-c", _CHILD, "run", str(scene), "--report", str(report),
+    # -P and the tree as the working folder: `sim` comes from PYTHONPATH, never from the
+    # folder the benchmark was started in
+    proc = subprocess.run([sys.executable, "-P", "-c", _CHILD, "run", str(scene), "--report", str(report),
                            "--record", str(record), "--quiet", "--fail-on", "never"],
-                          cwd=REPO, env=dict(os.environ, PYTHONPATH=str(tree)), capture_output=True, text=True)
+                          cwd=tree, env=dict(os.environ, PYTHONPATH=str(tree)), capture_output=True, text=True)
     if proc.returncode != 0 or not report.exists():
         print(f"{scene.stem} failed ({proc.returncode}): {(proc.stderr.strip().splitlines() or ['?'])[-1]}")
         return None
