@@ -86,17 +86,15 @@ def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance:
               units: str) -> rrb.Blueprint:
     """The layout of a finished run (`clearance` in metres)."""
     bounds = extent.bounds
-    hide = ["- /world/wear_map/**"]
     tabs = [rrb.Spatial3DView(name="Scene", origin="world", eye_controls=_scene_eye(bounds, unit),
-                              contents=["$origin/**", *hide], defaults=spot_style())]
+                              defaults=spot_style())]
     radius = {c.name: c.radius for c in built.cables}
     worst = sorted(events, key=lambda e: (e.severity != "hard", e.min_distance))[:VIEWPOINTS]
     for n, ev in enumerate(worst, 1):
         reach = max(12.0 * (radius.get(ev.a, 0.01) + clearance), 0.25 * float(np.linalg.norm(bounds[1] - bounds[0])))
         tabs.append(rrb.Spatial3DView(
             name=f"#{n} {ev.severity} {pair_text(ev.a, ev.b)} @ {ev.t_worst:.3f} s", origin="world",
-            eye_controls=_eye(bounds, np.asarray(ev.where, float), reach, unit), contents=["$origin/**", *hide],
-            defaults=spot_style()))
+            eye_controls=_eye(bounds, np.asarray(ev.where, float), reach, unit), defaults=spot_style()))
     if wear:
         tabs.append(rrb.Spatial3DView(name="Wear map (sliding; grey: no contact)", origin="wear_map"))
     clear = clearance / unit
