@@ -78,7 +78,8 @@ def _run(scene: Path, tree: Path, out: Path) -> dict | None:
     # folder the benchmark was started in
     proc = subprocess.run([sys.executable, "-P", "-c", _CHILD, "run", str(scene), "--report", str(report),
                            "--record", str(record), "--quiet", "--fail-on", "never"],
-                          cwd=tree, env=dict(os.environ, PYTHONPATH=str(tree)), capture_output=True, text=True)
+                          cwd=tree, env=dict(os.environ, PYTHONPATH=str(tree)), capture_output=True, text=True,
+                          check=False)
     if proc.returncode != 0 or not report.exists():
         print(f"{scene.stem} failed ({proc.returncode}): {(proc.stderr.strip().splitlines() or ['?'])[-1]}")
         return None

@@ -16,7 +16,7 @@ import pytest
 from rerun.chunk import RrdReader
 
 from sim.cli import main, version
-from sim.record import SPOT, STATE_COLOURS, PART_COLOUR, KEEPOUT_COLOUR, wear_colours
+from sim.record import KEEPOUT_COLOUR, PART_COLOUR, SPOT, STATE_COLOURS, wear_colours
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -130,7 +130,7 @@ def test_the_spot_is_labelled_with_pair_and_distance_in_its_own_colour(pinch):
     assert shown[0]["t"] == pytest.approx(event["t_start"]) and shown[-1]["Ellipsoids3D:labels"] == []
     # the gap: from the worst place on the centreline (radius 3 mm) to the panel's surface
     gaps = [r for r in rows if r.get("LineStrips3D:strips")]
-    seg = np.array([r for r in gaps if r["t"] == pytest.approx(event["t_worst"])][0]["LineStrips3D:strips"][0])
+    seg = np.array(next(r for r in gaps if r["t"] == pytest.approx(event["t_worst"]))["LineStrips3D:strips"][0])
     assert np.linalg.norm(seg[1] - seg[0]) == pytest.approx(abs(event["min_distance"] + 3.0), abs=1e-3)
 
 

@@ -29,10 +29,10 @@ from sim.record.layout import CLASH_COLUMNS, VIEWPOINTS
 from sim.record.marks import Mark
 from sim.record.recorder import Recorder
 from sim.record.scene import plane_half_sizes
-from sim.record.style import (CLEAR, CONTACT_COLOUR, HARD, KEEPOUT_COLOUR, PART_COLOUR, PART_DIMMED, SOFT, SPOT,
-                                  STATE_COLOURS, STATES, pair_path, part_path, visual_paths)
+from sim.record.style import CLEAR, CONTACT_COLOUR, HARD, KEEPOUT_COLOUR, PART_COLOUR, PART_DIMMED, SOFT, SPOT
+from sim.record.style import STATE_COLOURS, STATES, pair_path, part_path, visual_paths
 from sim.record.wearview import wear_colours
 
-__all__ = ["CLASH_COLUMNS", "CLEAR", "CONTACT_COLOUR", "HARD", "KEEPOUT_COLOUR", "Mark", "PART_COLOUR",
-           "PART_DIMMED", "Recorder", "SOFT", "SPOT", "STATES", "STATE_COLOURS", "Settings", "VIEWPOINTS",
-           "pair_path", "part_path", "plane_half_sizes", "summary_text", "visual_paths", "wear_colours"]
+__all__ = ["CLASH_COLUMNS", "CLEAR", "CONTACT_COLOUR", "HARD", "KEEPOUT_COLOUR", "PART_COLOUR", "PART_DIMMED", "SOFT",
+           "SPOT", "STATES", "STATE_COLOURS", "VIEWPOINTS", "Mark", "Recorder", "Settings", "pair_path", "part_path",
+           "plane_half_sizes", "summary_text", "visual_paths", "wear_colours"]

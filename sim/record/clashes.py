@@ -69,9 +69,9 @@ def summary_text(scene: str, settings: Settings, events: list, wear: list, unit:
     most worn place of each cable and what it touches."""
     units = settings.units
     lines = [f"# {scene}", "",
-             f"- scene file: `{settings.scene_file}`", f"- units: {units}, clearance "
-             f"{settings.clearance / unit:.4g} {units}", f"- cablecheck {settings.version}"
-             + ("" if complete else " (run interrupted: incomplete)"), ""]
+             f"- scene file: `{settings.scene_file}`",
+             f"- units: {units}, clearance {settings.clearance / unit:.4g} {units}",
+             f"- cablecheck {settings.version}" + ("" if complete else " (run interrupted: incomplete)"), ""]
     if events:
         hard = sum(e.severity == "hard" for e in events)
         lines += [f"## {len(events)} clash(es): {hard} hard, {len(events) - hard} soft", "",

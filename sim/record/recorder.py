@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import os
 import uuid
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -41,7 +41,7 @@ from sim.record.style import CONTACT_COLOUR, escape, pair_path, pair_text
 from sim.record.wearview import send_wear
 
 
-@lru_cache(maxsize=None)
+@cache
 def _distance_path(kind: str, a: str, b: str) -> str:
     return f"checks/{pair_path(kind, a, b)}/distance"
 

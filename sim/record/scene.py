@@ -170,7 +170,7 @@ class SceneGeometry:
         m = self.built.model
         mat = int(m.geom_matid[g])
         rgba = m.mat_rgba[mat] if mat >= 0 else m.geom_rgba[g]
-        return tuple(int(round(255 * float(c))) for c in np.clip(rgba, 0.0, 1.0))
+        return tuple(round(255 * float(c)) for c in np.clip(rgba, 0.0, 1.0))
 
     def send_motion(self, rec: rr.RecordingStream, index: list, poses: list[np.ndarray],
                     vis_poses: list[np.ndarray]) -> None:

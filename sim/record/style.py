@@ -9,7 +9,7 @@ Not here: what is logged where (the other modules of `sim.record`).
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 CLEAR = (70, 160, 255)
 SOFT = (255, 190, 40)
@@ -24,7 +24,7 @@ KEEPOUT_COLOUR = (255, 140, 0, 90)
 CONTACT_COLOUR = (40, 220, 120)
 
 
-@lru_cache(maxsize=None)
+@cache
 def escape(level: str) -> str:
     """One level of an entity path: rerun separates levels with "/" and
     treats a few characters specially."""
@@ -44,7 +44,7 @@ def visual_paths(body: str, name: str) -> tuple[str, str]:
     return body_path, body_path + "/" + "/".join(escape(p) for p in rest.split("/"))
 
 
-@lru_cache(maxsize=None)
+@cache
 def pair_path(kind: str, a: str, b: str) -> str:
     """Entity path of a checked pair."""
     return f"{kind}/{escape(a)}/{escape(b)}"
