@@ -100,11 +100,6 @@ class Recorder:
         self._wear: list = []
         self._summary = ""
 
-    @property
-    def moving_parts(self) -> np.ndarray:
-        """(P,) whether each part rides a moving body (its pose is logged per frame)."""
-        return self.scene.moving_parts
-
     # -- static content ---------------------------------------------------
     def log_static(self, part_poses: np.ndarray, cables: list[np.ndarray] | None = None,
                    qpos: np.ndarray | None = None) -> None:
