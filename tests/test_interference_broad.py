@@ -2,14 +2,14 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from strategies import cable_sets, part_sets
 
 from checker.interference.broad import CHUNK, Chunks, chunk_part_pairs
 from checker.interference.discrete import discretise
 from checker.interference.structure import PartTable
-from checker.scene_state import CheckConfig
+from checker.scene_state import CableState, CheckConfig
 
 pytestmark = pytest.mark.filterwarnings("error")
 
@@ -22,6 +22,7 @@ def _chunks(cables):
 
 @settings(max_examples=40, deadline=None)
 @given(cable_sets(max_cables=3, max_points=12), st.floats(0.0, 0.05))
+@example([CableState("c0", np.zeros((12, 3)), 0.002), CableState("c1", np.zeros((12, 3)), 0.002)], 5e-324)
 def test_chunk_pairs_hold_every_close_point_pair(cables, reach):
     """Every pair of points nearer than ``reach`` whose chunks are neither the
     same nor neighbours on one cable lies in a chunk pair the tree returns."""

@@ -119,7 +119,7 @@ def within_reach(x: np.ndarray, y: np.ndarray, lim: np.ndarray) -> np.ndarray:
     """|x - y| < lim for rows of (n, 3) arrays, with a margin (pruning only)."""
     t = x - y
     lim = lim * (1 + SLACK)
-    return np.einsum("ij,ij->i", t, t) < lim * lim
+    return np.einsum("ij,ij->i", t, t) < _square(lim)
 
 
 def within_reach_t(x: np.ndarray, y: np.ndarray, lim: np.ndarray) -> np.ndarray:
@@ -127,7 +127,13 @@ def within_reach_t(x: np.ndarray, y: np.ndarray, lim: np.ndarray) -> np.ndarray:
     t = x - y
     t *= t
     lim = lim * (1 + SLACK)
-    return t[0] + t[1] + t[2] < lim * lim
+    return t[0] + t[1] + t[2] < _square(lim)
+
+
+def _square(lim: np.ndarray) -> np.ndarray:
+    """lim squared, never below the least subnormal: a reach under 1e-162
+    squares to 0 and would drop coincident points (pruning stays conservative)."""
+    return np.maximum(lim * lim, np.finfo(np.float64).smallest_subnormal)
 
 
 def chunk_part_pairs(tab: PartTable, ch: Chunks, margin: float) -> tuple[np.ndarray, np.ndarray]:
