@@ -21,6 +21,7 @@ import numpy as np
 
 from checker.validation import SimContacts
 from sim.build import Built
+from sim.detection_mesh import surface_geoms
 
 
 Contacts = SimContacts
@@ -44,7 +45,7 @@ class ContactReader:
     _KINDS = np.array(["part-part", "cable-structure", "keepout", "cable-cable", "self"], dtype=object)
 
     def __init__(self, built: Built):
-        m = built.model
+        m = built.detect if built.detect is not None else built.model
         self._nflex = max(m.nflex, 1)
         names = np.full(self._nflex + max(m.ngeom, 1), "", dtype=object)
         for c in built.cables:
@@ -53,7 +54,15 @@ class ContactReader:
         for p in built.parts:
             names[self._nflex + p.geom_id] = p.name
             keepout[self._nflex + p.geom_id] = p.keepout
+        # a concave mesh part's surface flex (sim.detection_mesh) is that part
+        surface = np.zeros(len(names), bool)
+        extra = np.zeros(len(names))
+        flexes, geoms = surface_geoms(m)
+        names[flexes], keepout[flexes] = names[self._nflex + geoms], keepout[self._nflex + geoms]
+        surface[flexes] = True
+        extra[flexes] = m.flex_radius[flexes] if len(flexes) else 0.0
         self._names, self._keepout, self._named = names, keepout, names != ""
+        self._surface, self._radius = surface, extra
         self._empty = Contacts(np.zeros(0, dtype=object), np.zeros(0, dtype=object), np.zeros(0, dtype=object),
                                np.zeros(0, int), np.zeros(0, int), np.zeros(0), np.zeros((0, 3)))
 
@@ -80,13 +89,14 @@ class ContactReader:
         elem = np.concatenate([r.elem for r in raws])
         dist = np.concatenate([r.dist for r in raws])
         pos = np.concatenate([r.pos for r in raws]) + origin
-        # Put the flex side first so a is always the cable.
-        swap = (flex[:, 0] < 0) & (flex[:, 1] >= 0)
+        code = np.where(flex >= 0, flex, self._nflex + np.maximum(geom, 0))   # (n, 2) into the name table
+        is_flex = (flex >= 0) & ~self._surface[code]                         # a cable's flex
+        # Put the cable side first so a is always the cable.
+        swap = ~is_flex[:, 0] & is_flex[:, 1]
         if swap.any():
-            for arr in (geom, flex, elem):
+            for arr in (code, is_flex, flex, elem):
                 arr[swap] = arr[swap][:, ::-1]
-        is_flex = flex >= 0
-        code = np.where(is_flex, flex, self._nflex + np.maximum(geom, 0))     # (n, 2) into the name table
+        dist = dist + self._radius[code].sum(axis=1)                          # a surface's triangles are the mesh
         ko = self._keepout[code]
         kind = np.where(is_flex[:, 0], np.where(is_flex[:, 1], 3 + (flex[:, 0] == flex[:, 1]), 1 + ko[:, 1]),
                         2 * (ko[:, 0] | ko[:, 1]))                           # codes into _KINDS

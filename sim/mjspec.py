@@ -23,7 +23,9 @@ Two models come out of one scene (`compile_model`'s `detect`):
   margins set from the clearance. It is never stepped: `mj_kinematics` +
   `mj_collision` on the simulated positions give MuJoCo's own view of every
   pair the checker may report, exact (a large contact `gap` in the simulation
-  model would make MuJoCo's general convex collider inexact, see SPEC).
+  model would make MuJoCo's general convex collider inexact, see SPEC); a
+  concave mesh is seen there as its own triangles, not as the convex hull
+  MuJoCo collides a mesh geom with (`sim.detection_mesh`).
 
 This module does not plan the cables' shapes (see `sim.cableplan`), choose
 the step (see `sim.substeps`) nor read the compiled model back (see
@@ -45,6 +47,7 @@ from sim.cablephysics import (
 )
 from sim.cableplan import CablePlan
 from sim.contactbits import ContactBits, cable_bits, model_bits, part_bits
+from sim.detection_mesh import add_surfaces
 from sim.scene import CableDef, PartDef, Scene, SceneError, euler_matrix
 from sim.startframes import Frames
 
@@ -184,6 +187,8 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
             _hold_vertices(spec, plan, placed, rest)
     try:
         model = spec.compile()
+        if detect:  # concave meshes as their true surface, not MuJoCo's hull (sim.detection_mesh)
+            model = add_surfaces(spec, model, bits.cable)
     except Exception as e:  # MuJoCo's compiler raises ValueError with its message
         raise SceneError(scene.path, "(model)", f"MuJoCo cannot compile the scene: {e}") from None
     own_bits = np.zeros((model.ngeom, 2), np.int64)

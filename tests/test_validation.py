@@ -231,12 +231,20 @@ def test_hull_opinions_for_a_batch_are_each_state_alone():
     assert any(d is None for d in found) and any(d is not None for d in found)
 
 
-def test_convex_hull_disagreement_in_a_run(tmp_path):
-    """End to end: MuJoCo collides the fork as its hull; the run's report
-    explains every disagreement (convex hull, verified), none unexplained."""
+@pytest.mark.parametrize("surfaces", [True, False])
+def test_convex_hull_disagreement_in_a_run(tmp_path, monkeypatch, surfaces):
+    """End to end, a cable through the gap of a fork. The detection model
+    sees the fork's own surface (sim.detection_mesh): MuJoCo and the checker
+    agree at every step. Where MuJoCo collides the fork as its hull (the
+    surface left out), the run's report explains every disagreement (convex
+    hull, verified), none unexplained."""
     import trimesh
+
+    import sim.mjspec
     from sim.run import RunOptions, run_scene
     from sim.scene import load_scene
+    if not surfaces:
+        monkeypatch.setattr(sim.mjspec, "add_surfaces", lambda spec, model, cable_bit: model)
     v, f = _fork()
     trimesh.Trimesh(v, f).export(tmp_path / "fork.stl")
     (tmp_path / "fork.toml").write_text("""
@@ -258,6 +266,10 @@ end = { pos = [0.0, 0.2, 0.0] }
 """)
     rep = run_scene(load_scene(tmp_path / "fork.toml"), RunOptions(report=tmp_path / "r.json", record=None))
     val = rep["validation"]
+    if surfaces:
+        assert rep["events"] == [] and val["agree"] == val["pair_steps"] and val["compared_steps"] > 0
+        assert val["agreement"] == 1.0 and val["disagreements"] == [] and val["reasons"] == {}
+        return
     assert rep["events"] == [] and val["mujoco_only"] == val["compared_steps"] > 0
     assert val["reasons"] == {"convex hull": val["compared_steps"]} and val["unexplained"] == 0
     (d,) = val["disagreements"]

@@ -1,0 +1,112 @@
+"""Concave mesh parts seen by the detection model as their true surface.
+
+MuJoCo collides a mesh geom as its convex hull (computation chapter,
+"Convex decomposition"), so a cable in a concave mesh's pocket or notch
+touches the hull where the checker, which checks the mesh itself, finds it
+clear. The detection model (see `sim.build`) is never stepped: it only has
+to see the geometry the checker checks. There, each colliding mesh geom
+that is not convex is joined by a rigid flex of its triangles (every vertex
+on the geom's body: MuJoCo's documented way to collide a general
+non-convex mesh, XMLreference "flex/body"), and the geom itself stops
+meeting the cables, so a cable's contacts with that part are flex-flex
+contacts with the mesh's own triangles, margin contacts included. The
+geom keeps its other bits (part-part contacts stay the hull's; the
+checker does not compare them).
+
+Why a rigid flex and not a convex decomposition (CoACD, V-HACD): the flex
+is the mesh itself, to MuJoCo's float precision, with no tolerance, no
+parameters and no cache; a decomposition approximates the surface (by a
+concavity tolerance), takes seconds to minutes per mesh and would need a
+cache on disk. Measured on the robot cell: see the README's validation
+section.
+
+A 2D flex element is a triangle with a radius that must be positive:
+`SURFACE_RADIUS` is tiny, and `ContactReader` adds it back to MuJoCo's
+distance, so the distance is the triangle's. The flex is a surface: a
+cable buried deeper than the margin inside a closed mesh touches no
+triangle (the hull geom would have reported it); the checker decides
+containment itself.
+
+This module does not step or read the simulation; `sim.contacts` names
+the contacts (`surface_geoms`).
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import trimesh
+
+SURFACE_PREFIX = "detect/surface:"
+"""Name prefix of the rigid flexes; the geom id follows (`surface_geoms`)."""
+
+SURFACE_RADIUS = 1e-6
+"""Radius of the surface flexes' triangles, metres (MuJoCo needs a positive
+one in 2D); added back to MuJoCo's distances by `sim.contacts`."""
+
+
+def is_convex(vertices: np.ndarray, faces: np.ndarray) -> bool:
+    """The mesh is a closed convex surface (trimesh: watertight, and every
+    vertex behind every face's plane): its hull is itself."""
+    mesh = trimesh.Trimesh(np.asarray(vertices, float), np.asarray(faces, int), process=False)
+    return bool(mesh.is_convex)
+
+
+def _surface_meshes(spec: mujoco.MjSpec, model: mujoco.MjModel) -> list[tuple[mujoco.MjsGeom, np.ndarray, np.ndarray]]:
+    """(spec geom, vertices in its body's frame, faces) of each colliding,
+    non-convex mesh geom of `model`, compiled from `spec`."""
+    out = []
+    for g in spec.geoms:
+        gid = g.id
+        if gid < 0 or int(model.geom_type[gid]) != int(mujoco.mjtGeom.mjGEOM_MESH):
+            continue
+        if not (model.geom_contype[gid] or model.geom_conaffinity[gid]):
+            continue  # visual
+        mid = int(model.geom_dataid[gid])
+        va, vn = int(model.mesh_vertadr[mid]), int(model.mesh_vertnum[mid])
+        fa, fn = int(model.mesh_faceadr[mid]), int(model.mesh_facenum[mid])
+        verts = model.mesh_vert[va:va + vn].astype(float)
+        faces = model.mesh_face[fa:fa + fn].astype(int)
+        if is_convex(verts, faces):
+            continue
+        rot = np.zeros(9)
+        mujoco.mju_quat2Mat(rot, model.geom_quat[gid])
+        out.append((g, verts @ rot.reshape(3, 3).T + model.geom_pos[gid], faces))
+    return out
+
+
+def add_surfaces(spec: mujoco.MjSpec, model: mujoco.MjModel, cable_bit: int) -> mujoco.MjModel:
+    """The detection model with each colliding non-convex mesh geom's surface
+    as a rigid flex meeting the cables (and the geom no longer meeting
+    them); `model` itself when there is none. `spec` was compiled into
+    `model`; `cable_bit` is the cables' contype bit."""
+    found = _surface_meshes(spec, model)
+    if not found:
+        return model
+    for g, verts, faces in found:
+        body = g.parent
+        if not body.name:  # a flex names its body; the detection model's body names are not read
+            body.name = f"{SURFACE_PREFIX}body{body.id}"
+        f = spec.add_flex()
+        f.name = f"{SURFACE_PREFIX}{g.id}"
+        f.dim = 2
+        f.radius = SURFACE_RADIUS
+        f.vertbody = [body.name]
+        f.vert = verts.ravel().tolist()
+        f.elem = faces.ravel().tolist()
+        f.contype, f.conaffinity = 0, cable_bit
+        f.margin = 0.0  # MuJoCo adds the two flexes' margins; the cable's is the clearance
+        f.selfcollide = mujoco.mjtFlexSelf.mjFLEXSELF_NONE
+        g.conaffinity = int(g.conaffinity) & ~cable_bit
+    return spec.compile()
+
+
+def surface_geoms(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
+    """(flex ids, geom ids) of the surface flexes of a detection model."""
+    flexes, geoms = [], []
+    for f in range(model.nflex):
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_FLEX, f) or ""
+        if name.startswith(SURFACE_PREFIX):
+            flexes.append(f)
+            geoms.append(int(name[len(SURFACE_PREFIX):]))
+    return np.array(flexes, np.int64), np.array(geoms, np.int64)

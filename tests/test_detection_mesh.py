@@ -1,0 +1,146 @@
+"""Concave mesh parts in the detection model (sim.detection_mesh): MuJoCo
+sees the mesh's own surface, not its convex hull."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from sim.build import build
+from sim.detection_mesh import SURFACE_RADIUS, is_convex, surface_geoms
+from sim.loop import Simulation
+from sim.run import RunOptions, run_scene
+from sim.scene import load_scene
+
+# A U in the x-z plane (cm): a base 8 wide, 2 thick, and two prongs 2 wide
+# rising 6 above it, with a 4 wide pocket between them; extruded 10 along y.
+_U = np.array([(-4, -4), (4, -4), (4, -2), (4, 4), (2, 4), (2, -2), (-2, -2), (-2, 4), (-4, 4), (-4, -2)],
+              float) / 100.0
+_U_CAP = [(0, 1, 2), (0, 2, 5), (0, 5, 6), (0, 6, 9), (5, 2, 3), (5, 3, 4), (9, 6, 7), (9, 7, 8)]
+POCKET_FLOOR = -0.02
+"""z of the pocket's floor (the base's top face), metres."""
+POCKET_HALF = 0.02
+"""Half-width of the pocket along x (the prongs' inner faces), metres."""
+
+
+def u_mesh(depth: float = 0.1) -> trimesh.Trimesh:
+    """The U extruded along y: a closed, non-convex mesh."""
+    n = len(_U)
+    # the outline and every cap triangle run counter-clockwise in (x, z)
+    front = np.column_stack([_U[:, 0], np.full(n, -depth / 2), _U[:, 1]])
+    back = front + [0.0, depth, 0.0]
+    faces = [(a + n, b + n, c + n) for a, b, c in _U_CAP] + [(a, c, b) for a, b, c in _U_CAP]
+    for i in range(n):
+        j = (i + 1) % n
+        faces += [(i, j, j + n), (i, j + n, i + n)]
+    mesh = trimesh.Trimesh(np.vstack([front, back]), np.array(faces), process=True)
+    if mesh.volume < 0:
+        mesh.invert()
+    assert mesh.is_watertight and mesh.is_winding_consistent and mesh.volume == pytest.approx(0.1 * 0.004)
+    return mesh
+
+
+def _scene(tmp_path, z_end: float, keepout: bool = False):
+    """A straight cable (r 5 mm, held by the world) coming down the middle of
+    the U's pocket, its end at height z_end; the U on a body of its own (MuJoCo
+    never collides a flex element with a body holding one of its vertices);
+    clearance 5 mm."""
+    u_mesh().export(tmp_path / "u.stl")
+    (tmp_path / "u.toml").write_text(f"""
+[scene]
+name = "pocket"
+units = "m"
+duration = 0.004
+[effects]
+dynamics = false
+[check]
+clearance = 0.005
+[[bodies]]
+name = "fixture"
+[[parts]]
+name = "u"
+body = "fixture"
+shape = "mesh"
+file = "u.stl"
+keepout = {str(keepout).lower()}
+[[cables]]
+name = "c"
+radius = 0.005
+start = {{ pos = [0.0, 0.0, 0.3] }}
+end = {{ pos = [0.0, 0.0, {z_end!r}] }}
+segments = 10
+""")
+    return load_scene(tmp_path / "u.toml")
+
+
+def _mujoco(scene):
+    built = build(scene)
+    sim = Simulation(built)
+    sim.reset()
+    return built, sim.detect_qpos(built.qpos0)
+
+
+def test_the_u_is_concave_and_a_box_is_convex():
+    u = u_mesh()
+    assert not is_convex(u.vertices, u.faces)
+    box = trimesh.creation.box(extents=[0.1, 0.2, 0.3])
+    assert is_convex(box.vertices, box.faces)
+
+
+def test_only_non_convex_mesh_geoms_get_a_surface_and_cable_flexes_keep_their_ids(tmp_path):
+    scene = _scene(tmp_path, 0.0)
+    built = build(scene)
+    flexes, geoms = surface_geoms(built.detect)
+    (part,) = built.parts
+    assert geoms.tolist() == [part.geom_id] and flexes.tolist() == [1]
+    assert built.detect.flex_rigid[flexes].all() and built.detect.nq == built.model.nq
+    assert built.cables[0].flex_id == 0 and surface_geoms(built.model)[0].size == 0   # physics untouched
+    # the hull geom no longer meets the cable in the detection model, only the surface does
+    cable_bit = int(built.detect.flex_contype[0]) & ~int(built.detect.flex_conaffinity[0])
+    assert not built.detect.geom_conaffinity[part.geom_id] & cable_bit
+    box = trimesh.creation.box(extents=[0.04, 0.04, 0.04])
+    box.apply_translation([0.2, 0, 0])
+    box.export(tmp_path / "u.stl")                                                   # a convex mesh part
+    assert surface_geoms(build(load_scene(tmp_path / "u.toml")).detect)[0].size == 0
+
+
+@pytest.mark.parametrize("gap", [0.003, 0.0005, -0.002])
+def test_mujoco_distance_is_the_mesh_surface_distance(tmp_path, gap):
+    """The cable's end `gap` above the pocket's floor (negative: into it):
+    MuJoCo's distance is the mesh's, to 1e-7 m apart (the surface's radius
+    added back) and 1e-6 m in overlap (a depth from MuJoCo's EPA), not the
+    hull's (about -0.02 - gap: the end is inside the hull)."""
+    built, found = _mujoco(_scene(tmp_path, POCKET_FLOOR + 0.005 + gap))
+    mine = found.b == "u"
+    assert mine.any() and set(found.kind[mine]) == {"cable-structure"} and (found.elem_b[mine] == -1).all()
+    assert abs(found.dist[mine].min() - gap) < (1e-7 if gap > 0 else 1e-6), (found.dist[mine].min(), gap)
+    assert SURFACE_RADIUS < 1e-5
+
+
+def test_a_keepout_mesh_is_read_as_keepout(tmp_path):
+    _, found = _mujoco(_scene(tmp_path, POCKET_FLOOR + 0.008, keepout=True))
+    mine = found.b == "u"
+    assert set(found.kind[mine]) == {"keepout"} and abs(found.dist[mine].min() - 0.003) < 1e-7
+
+
+def test_end_in_the_pocket_clear_of_the_mesh_inside_the_hull(tmp_path):
+    """The cable's end 15 mm from the floor and from each prong: clear of the
+    mesh (clearance 5 mm), deep inside its hull. MuJoCo now reports nothing
+    and agrees with the checker at every step."""
+    scene = _scene(tmp_path, 0.0)
+    _, found = _mujoco(scene)
+    assert not (found.b == "u").any()
+    rep = run_scene(scene, RunOptions(report=tmp_path / "r.json", record=None))
+    val = rep["validation"]
+    assert rep["events"] == [] and val["compared_steps"] > 0
+    assert val["agreement"] == 1.0 and val["disagreements"] == [] and val["reasons"] == {}
+
+
+def test_end_within_the_clearance_of_the_floor_agrees(tmp_path):
+    """3 mm above the floor: both sides class it soft, at the same distance."""
+    rep = run_scene(_scene(tmp_path, POCKET_FLOOR + 0.008), RunOptions(report=tmp_path / "r.json", record=None))
+    val = rep["validation"]
+    assert [(e["b"], e["severity"]) for e in rep["events"]] == [("u", "soft")]
+    assert val["agreement"] == 1.0 and val["agree"] == val["pair_steps"] > 0
+    assert val["max_distance_error"] < 1e-6
