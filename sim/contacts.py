@@ -1,9 +1,11 @@
 """MuJoCo's contacts mapped back to the scene's names.
 
 Each contact in `mjData.contact` names two geoms, or a flex element and a
-geom, or two flex elements. `ContactReader.read_many` turns the contact arrays of
-each step into one `Contacts` record of parallel arrays (no per-contact Python
-objects): the kind of pair, the cable or part names on both sides, the
+geom, or two flex elements; a flex is a cable, or in the detection model
+the surface of a concave mesh part (`sim.detection_mesh`), named as that
+part with its triangles' radius added back to the distance.
+`ContactReader.read_many` turns the contact arrays of each step into one
+`Contacts` record of parallel arrays (no per-contact Python objects): the kind of pair, the cable or part names on both sides, the
 element index along a cable (-1 for a part), MuJoCo's signed distance and the
 contact point.
 

@@ -17,8 +17,10 @@ Why a rigid flex and not a convex decomposition (CoACD, V-HACD): the flex
 is the mesh itself, to MuJoCo's float precision, with no tolerance, no
 parameters and no cache; a decomposition approximates the surface (by a
 concavity tolerance), takes seconds to minutes per mesh and would need a
-cache on disk. Measured on the robot cell: see the README's validation
-section.
+cache on disk. The price is MuJoCo's time: every step it places each
+surface's vertices and boxes (in proportion to the triangles) and tests the
+cable elements against the triangles near them, where a hull is one convex
+test; `benchmarks/bench_detection_mesh.py` measures both side by side.
 
 A 2D flex element is a triangle with a radius that must be positive:
 `SURFACE_RADIUS` is tiny, and `ContactReader` adds it back to MuJoCo's
