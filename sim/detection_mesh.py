@@ -112,3 +112,12 @@ def surface_geoms(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
             flexes.append(f)
             geoms.append(int(name[len(SURFACE_PREFIX):]))
     return np.array(flexes, np.int64), np.array(geoms, np.int64)
+
+
+def hull_parts(parts, detect: mujoco.MjModel | None) -> frozenset[str]:
+    """Names of the mesh parts (`sim.build.PartModel`) that MuJoCo's
+    detection collides with the cables as their convex hull: those without a
+    surface flex in `detect` (every mesh part when there is no detection
+    model). Only for these can the hull explain a disagreement."""
+    surfaced = set(surface_geoms(detect)[1].tolist()) if detect is not None else set()
+    return frozenset(p.name for p in parts if p.shape == "mesh" and p.geom_id not in surfaced)

@@ -43,6 +43,7 @@ from checker.validation import SimulatorPairs, Validation
 from sim.build import Built
 from sim.checkview import DEFAULT_PRECISION_M, part_set, part_shapes, selection
 from sim.contacts import Contacts, RawContacts
+from sim.detection_mesh import hull_parts
 from sim.loop import StepState
 
 
@@ -170,7 +171,7 @@ class StepChecks:
         self.allow = AllowList(AllowRule(r.a, r.b, r.reason) for r in scene.allow)
         self._simulator_pairs = SimulatorPairs(self.exclusions, config.clearance)
         self.validation = Validation(scene.check.clearance, config.method,
-                                     frozenset(p.name for p in built.parts if p.shape == "mesh"),
+                                     hull_parts(built.parts, built.detect),
                                      allow=self.allow)
         self._recheck = Recheck(self.checker.parts, config, self.exclusions)
         self._measures = CableMeasures(offsets)

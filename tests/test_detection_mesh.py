@@ -8,7 +8,7 @@ import pytest
 import trimesh
 
 from sim.build import build
-from sim.detection_mesh import SURFACE_RADIUS, is_convex, surface_geoms
+from sim.detection_mesh import SURFACE_RADIUS, hull_parts, is_convex, surface_geoms
 from sim.loop import Simulation
 from sim.run import RunOptions, run_scene
 from sim.scene import load_scene
@@ -99,10 +99,13 @@ def test_only_non_convex_mesh_geoms_get_a_surface_and_cable_flexes_keep_their_id
     # the hull geom no longer meets the cable in the detection model, only the surface does
     cable_bit = int(built.detect.flex_contype[0]) & ~int(built.detect.flex_conaffinity[0])
     assert not built.detect.geom_conaffinity[part.geom_id] & cable_bit
+    # so the hull can explain no disagreement on it (without a detection model, any mesh part's may)
+    assert hull_parts(built.parts, built.detect) == frozenset() and hull_parts(built.parts, None) == {"u"}
     box = trimesh.creation.box(extents=[0.04, 0.04, 0.04])
     box.apply_translation([0.2, 0, 0])
     box.export(tmp_path / "u.stl")                                                   # a convex mesh part
-    assert surface_geoms(build(load_scene(tmp_path / "u.toml")).detect)[0].size == 0
+    convex = build(load_scene(tmp_path / "u.toml"))
+    assert surface_geoms(convex.detect)[0].size == 0 and hull_parts(convex.parts, convex.detect) == {"u"}
 
 
 @pytest.mark.parametrize("gap", [0.003, 0.0005, -0.002])
