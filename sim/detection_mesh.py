@@ -71,6 +71,10 @@ def _surface_meshes(spec: mujoco.MjSpec, model: mujoco.MjModel) -> list[tuple[mu
         faces = model.mesh_face[fa:fa + fn].astype(int)
         if is_convex(verts, faces):
             continue
+        # a face naming one vertex twice (MuJoCo merges an STL's repeated
+        # vertices) is a segment or a point: a flex refuses it, and it adds
+        # nothing its neighbours do not cover
+        faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])]
         rot = np.zeros(9)
         mujoco.mju_quat2Mat(rot, model.geom_quat[gid])
         out.append((g, verts @ rot.reshape(3, 3).T + model.geom_pos[gid], faces))

@@ -147,3 +147,20 @@ def test_end_within_the_clearance_of_the_floor_agrees(tmp_path):
     assert [(e["b"], e["severity"]) for e in rep["events"]] == [("u", "soft")]
     assert val["agreement"] == 1.0 and val["agree"] == val["pair_steps"] > 0
     assert val["max_distance_error"] < 1e-6
+
+
+def test_a_face_naming_one_vertex_twice_is_left_out_of_the_surface(tmp_path):
+    """An STL with a degenerate triangle (two corners the same point): MuJoCo
+    keeps it in the mesh with a repeated index, which a flex refuses; the
+    surface leaves it out and MuJoCo's distance is still the mesh's."""
+    scene = _scene(tmp_path, POCKET_FLOOR + 0.008)
+    u = u_mesh()
+    a, b = u.faces[0, :2]
+    trimesh.Trimesh(u.vertices, np.vstack([u.faces, [[a, b, a]]]), process=False).export(tmp_path / "u.stl")
+    built, found = _mujoco(scene)
+    m, g = built.detect, built.parts[0].geom_id
+    faces = m.mesh_face[m.mesh_faceadr[m.geom_dataid[g]]:][:m.mesh_facenum[m.geom_dataid[g]]]
+    assert (faces[:, 0] == faces[:, 2]).any()                              # MuJoCo kept it
+    (flex,) = surface_geoms(m)[0]
+    assert m.flex_elemnum[flex] == len(faces) - 1
+    assert abs(found.dist[found.b == "u"].min() - 0.003) < 1e-7
