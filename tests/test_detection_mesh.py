@@ -41,23 +41,27 @@ def u_mesh(depth: float = 0.1) -> trimesh.Trimesh:
     return mesh
 
 
-def _scene(tmp_path, z_end: float, keepout: bool = False):
+def _scene(tmp_path, z_end: float, keepout: bool = False, units: str = "m", shift=(0.0, 0.0, 0.0)):
     """A straight cable (r 5 mm, held by the world) coming down the middle of
     the U's pocket, its end at height z_end; the U on a body of its own (MuJoCo
     never collides a flex element with a body holding one of its vertices);
-    clearance 5 mm."""
-    u_mesh().export(tmp_path / "u.stl")
+    clearance 5 mm. `units` "mm" writes the same scene in millimetres; `shift`
+    (metres) moves all of it."""
+    k = {"m": 1.0, "mm": 1000.0}[units]
+    u_mesh().apply_scale(k).export(tmp_path / "u.stl")
+    x, y, z = (k * np.asarray(shift, float)).tolist()
     (tmp_path / "u.toml").write_text(f"""
 [scene]
 name = "pocket"
-units = "m"
+units = "{units}"
 duration = 0.004
 [effects]
 dynamics = false
 [check]
-clearance = 0.005
+clearance = {0.005 * k!r}
 [[bodies]]
 name = "fixture"
+pos = [{x!r}, {y!r}, {z!r}]
 [[parts]]
 name = "u"
 body = "fixture"
@@ -66,9 +70,9 @@ file = "u.stl"
 keepout = {str(keepout).lower()}
 [[cables]]
 name = "c"
-radius = 0.005
-start = {{ pos = [0.0, 0.0, 0.3] }}
-end = {{ pos = [0.0, 0.0, {z_end!r}] }}
+radius = {0.005 * k!r}
+start = {{ pos = [{x!r}, {y!r}, {z + 0.3 * k!r}] }}
+end = {{ pos = [{x!r}, {y!r}, {z + z_end * k!r}] }}
 segments = 10
 """)
     return load_scene(tmp_path / "u.toml")
@@ -109,12 +113,14 @@ def test_only_non_convex_mesh_geoms_get_a_surface_and_cable_flexes_keep_their_id
 
 
 @pytest.mark.parametrize("gap", [0.003, 0.0005, -0.002])
-def test_mujoco_distance_is_the_mesh_surface_distance(tmp_path, gap):
+@pytest.mark.parametrize("units, shift", [("m", (0.0, 0.0, 0.0)), ("mm", (400.0, -250.0, 120.0))])
+def test_mujoco_distance_is_the_mesh_surface_distance(tmp_path, gap, units, shift):
     """The cable's end `gap` above the pocket's floor (negative: into it):
     MuJoCo's distance is the mesh's, to 1e-7 m apart (the surface's radius
     added back) and 1e-6 m in overlap (a depth from MuJoCo's EPA), not the
-    hull's (about -0.02 - gap: the end is inside the hull)."""
-    built, found = _mujoco(_scene(tmp_path, POCKET_FLOOR + 0.005 + gap))
+    hull's (about -0.02 - gap: the end is inside the hull); the same in
+    millimetres, 500 m from the origin."""
+    built, found = _mujoco(_scene(tmp_path, POCKET_FLOOR + 0.005 + gap, units=units, shift=shift))
     mine = found.b == "u"
     assert mine.any() and set(found.kind[mine]) == {"cable-structure"} and (found.elem_b[mine] == -1).all()
     assert abs(found.dist[mine].min() - gap) < (1e-7 if gap > 0 else 1e-6), (found.dist[mine].min(), gap)
