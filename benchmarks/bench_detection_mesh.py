@@ -22,7 +22,8 @@ from unittest import mock
 
 import numpy as np
 
-import sim.build
+import sim.mjspec
+from sim.build import build
 from sim.loop import Simulation
 from sim.scene import load_scene
 
@@ -37,9 +38,9 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
 
     scene = load_scene(SCENE)
-    surfaces = sim.build.build(scene)
-    with mock.patch.object(sim.build, "add_surfaces", lambda spec, model, cable_bit: model):
-        hulls = sim.build.build(scene)
+    surfaces = build(scene)
+    with mock.patch.object(sim.mjspec, "add_surfaces", lambda spec, model, cable_bit: model):
+        hulls = build(scene)
     run = Simulation(surfaces)
     run.reset()
     run.settle()
