@@ -120,6 +120,8 @@ def print_summary(report: dict, report_path: Path) -> None:
         print(f"  MuJoCo warnings: {report['warnings']}")
     for w in report.get("part_warnings", ()):
         print(f"  warning: {w}")
+    for w in report.get("physics_warnings", ()):
+        print(f"  warning: {w}")
     t = report["timing"]
     print(f"  time {t['total_s']:.2f} s (simulation {t['sim_s']:.2f} s, checks {t['check_s']:.2f} s, "
           f"MuJoCo comparison {t['validate_s']:.2f} s, recording {t['record_s']:.2f} s)")

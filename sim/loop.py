@@ -24,6 +24,7 @@ import numpy as np
 
 from sim.build import Built
 from sim.contacts import ContactReader, Contacts, RawContacts
+from sim.hullgap import HullReader, HullRows
 from sim.motion import Motion
 
 
@@ -41,6 +42,8 @@ class StepState:
       qpos: the simulation's generalized positions (for detecting later).
       end_rot: (C, 2, 3, 3) world rotation of the bodies each cable's start
         and end ride on (the frames clamped ends hold; `checker.twist`).
+      hull: the simulation's contacts of cables with concave parts' hulls
+        (`sim.hullgap`), or None when no part is watched.
     """
 
     step: int
@@ -51,6 +54,7 @@ class StepState:
     energy: np.ndarray
     qpos: np.ndarray
     end_rot: np.ndarray | None = None
+    hull: HullRows | None = None
 
 
 class Simulation:
@@ -64,6 +68,7 @@ class Simulation:
         self.motion = Motion(built)
         self.detect_data = mujoco.MjData(built.detect) if built.detect is not None else None
         self.reader = ContactReader(built)
+        self.hull = HullReader.of(built)
         self._part_geoms = np.array([p.geom_id for p in built.parts], int)
         self._verts = [np.arange(c.vert_adr, c.vert_adr + c.count) for c in built.cables]
         self._end_bodies = np.array([[built.body_ids[c.start.body], built.body_ids[c.end.body]]
@@ -158,8 +163,9 @@ class Simulation:
         poses[:, 3, 3] = 1.0
         found = self.detect(d) if (contacts and self.detect_data is not None) else None
         end_rot = d.xmat[self._end_bodies].reshape(-1, 2, 3, 3)
+        hull = self.hull.rows(d) if self.hull is not None else None   # the last step's contacts
         return StepState(step, step * self.timestep, cables, poses, found, d.energy.copy(), d.qpos.copy(),
-                         end_rot)
+                         end_rot, hull)
 
     def detect(self, d: mujoco.MjData) -> Contacts:
         """MuJoCo's contacts for the positions in `d`, from the detection model."""

@@ -219,7 +219,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         advance=None if advance is None else AdvanceOutcome(checks.horizon, checks.stretch, advance.full,
                                                             advance.skipped),
         warnings=sim.warnings(), part_warnings=tuple(checks.rigid.warnings),
-        physics_warnings=tuple(built.warnings), substeps=built.substeps.count if built.substeps else 1,
+        physics_warnings=tuple(built.warnings) + tuple(checks.hull_gaps.warnings() if checks.hull_gaps else ()),
+        substeps=built.substeps.count if built.substeps else 1,
         timing=Timing(time.perf_counter() - start, dict(timer.total)), recording=options.record)
 
 

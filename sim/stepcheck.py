@@ -44,6 +44,7 @@ from sim.build import Built
 from sim.checkview import DEFAULT_PRECISION_M, part_set, part_shapes, selection
 from sim.contacts import Contacts, RawContacts
 from sim.detection_mesh import hull_parts
+from sim.hullgap import HullGaps
 from sim.loop import StepState
 
 
@@ -173,6 +174,7 @@ class StepChecks:
         self.validation = Validation(scene.check.clearance, config.method,
                                      hull_parts(built.parts, built.detect),
                                      allow=self.allow)
+        self.hull_gaps = HullGaps(built) if detector is not None else None   # cables held on a hull
         self._recheck = Recheck(self.checker.parts, config, self.exclusions)
         self._measures = CableMeasures(offsets)
         self._rest_length = np.array([c.length for c in built.cables], float)
@@ -220,6 +222,8 @@ class StepChecks:
         # MuJoCo's collision pass on the detection model is validation work, timed as such
         raws = [self.detector.collide(state.qpos) for state in states]
         contacts = self.detector.read_many(raws)
+        if self.hull_gaps is not None:
+            self.hull_gaps.take(np.array([s.t for s in states]), [s.hull for s in states], contacts)
         seen = self._simulator_pairs.many(contacts, self._names, self._radii, pts, self._offsets, self._rest)
         batch: list = []
 

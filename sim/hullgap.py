@@ -1,0 +1,220 @@
+"""Cables the simulation holds on a concave part's convex hull, off its surface.
+
+MuJoCo collides a mesh geom as its convex hull, in the simulation model as
+anywhere: a cable pressed towards a concave part's pocket or notch rests on
+the hull, where the real cable would go on towards the surface. The
+detection model sees such a part's own triangles (`sim.detection_mesh`), so
+MuJoCo's contacts there agree with the checker, and neither shows that the
+simulated cable lies where the real one would not. `HullGaps` does: at every
+checked state it compares the simulation model's contacts of each cable with
+the hulls of those parts against the detection model's distances to their
+surfaces, element by element, and names each (cable, part) where the
+surface lies farther than the hull by more than `GAP_TOLERANCE`.
+
+In contact means a simulation contact with `dist <= includemargin`. Since
+MuJoCo 4 a contact's margin is the inflation of the surfaces (changelog,
+"margin and gap"): contact forces act, on `dist - margin`, once the distance
+is below the margin, and only contacts in the `margin + gap` buffer beyond
+are passive; `includemargin` is the pair's margin as MuJoCo sums it. So a
+cable resting on a hull sits at about the margin, and it is that contact,
+not a zero distance, that holds it up.
+
+The simulation's contacts are those of its last collision pass (the start
+of the state's last substep) while the detection model sees the state
+itself; the tolerance covers that step and MuJoCo's convex collider. A
+cable element whose surface is beyond the detection model's margin (the
+clearance) has no detection contact: its gap is then known only to exceed
+the clearance minus the hull distance, and is reported as "at least" that.
+
+Only with validation on (the detection model exists) and cable-structure
+contact in the simulation; this module neither changes the simulation (a
+convex decomposition of the part would, with physics of its own) nor
+decides interference (the checker does).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from sim.built import Built
+from sim.contacts import Contacts
+from sim.detection_mesh import surface_geoms
+
+GAP_TOLERANCE = 0.1
+"""Hull-to-surface gaps up to this fraction of the clearance are not
+reported: smaller ones move the cable by less than the check resolves, and
+cover one substep of relative motion and MuJoCo's convex tolerance."""
+
+
+@dataclass(frozen=True)
+class HullRows:
+    """One state's simulation contacts of cable elements with concave parts'
+    hulls (`HullReader.rows`): cable and part indices into `HullGaps`' names,
+    the cable's element, and MuJoCo's distance (metres)."""
+
+    cable: np.ndarray
+    part: np.ndarray
+    elem: np.ndarray
+    dist: np.ndarray
+
+
+@dataclass(frozen=True)
+class HullGap:
+    """A (cable, part) the simulation held on the part's hull: the largest
+    gap to the surface (metres; `bounded`: the surface was beyond the
+    clearance there, the gap at least this) and the first and last time."""
+
+    cable: str
+    part: str
+    gap: float
+    bounded: bool
+    t_start: float
+    t_end: float
+
+
+class HullReader:
+    """Reads a state's simulation contacts of cables with the watched
+    parts' hulls (`rows`); the parts are `watched(built)`, in that order."""
+
+    def __init__(self, flex_cable: np.ndarray, geom_part: np.ndarray):
+        self._flex_cable, self._geom_part = flex_cable, geom_part
+
+    @classmethod
+    def of(cls, built: Built) -> HullReader | None:
+        """The reader for `built`'s simulation model, or None when no part is
+        watched (`watched`)."""
+        parts = watched(built)
+        if not parts:
+            return None
+        m = built.model
+        flex_cable = np.full(m.nflex + 1, -1, np.int64)          # the last entry: "no flex" (-1)
+        flex_cable[[c.flex_id for c in built.cables]] = np.arange(len(built.cables))
+        geom_part = np.full(m.ngeom + 1, -1, np.int64)           # the last entry: "no geom" (-1)
+        geom_part[[p.geom_id for p in parts]] = np.arange(len(parts))
+        return cls(flex_cable, geom_part)
+
+    def rows(self, data: mujoco.MjData) -> HullRows:
+        """The active contacts (dist <= includemargin) of `data` between a
+        cable element and a watched part's geom (its hull)."""
+        n = int(data.ncon)
+        con = data.contact
+        flex = np.asarray(con.flex[:n], np.int64).reshape(n, 2)
+        geom = np.asarray(con.geom[:n], np.int64).reshape(n, 2)
+        elem = np.asarray(con.elem[:n], np.int64).reshape(n, 2)
+        dist = np.asarray(con.dist[:n], float)
+        cable = self._flex_cable[flex]                # -1 indexes the "no flex" entry
+        part = self._geom_part[np.where(flex >= 0, -1, geom)]
+        side = (cable[:, 0] < 0).astype(np.int64)    # the cable's side
+        row = np.arange(n)
+        c, p, e = cable[row, side], part[row, 1 - side], elem[row, side]
+        keep = (c >= 0) & (p >= 0) & (e >= 0) & (dist <= np.asarray(con.includemargin[:n], float))
+        return HullRows(c[keep], p[keep], e[keep], dist[keep])
+
+
+def watched(built: Built) -> list:
+    """The parts (`sim.built.PartModel`) whose hull can hold a cable off
+    their surface: those the detection model sees as their surface, when
+    the simulation is stepped with cable-structure contact; none without a
+    detection model (validation off) or without cables."""
+    scene = built.scene
+    if (built.detect is None or not built.cables or not scene.effects.dynamics
+            or "cable-structure" not in scene.effects.contact):
+        return []
+    geoms = set(surface_geoms(built.detect)[1].tolist())
+    return [p for p in built.parts if p.geom_id in geoms]
+
+
+class HullGaps:
+    """The run's hull-held cables, gathered batch by batch (`take`)."""
+
+    def __init__(self, built: Built):
+        self._scene = built.scene
+        self.cables = [c.name for c in built.cables]
+        self.parts = [p.name for p in watched(built)]
+        self._cable_names, self._cable_ids = _table(self.cables)
+        self._part_names, self._part_ids = _table(self.parts)
+        self.clearance = built.scene.check.clearance
+        self.tolerance = GAP_TOLERANCE * self.clearance
+        self._elems = max([c.count for c in built.cables], default=1)
+        n = len(self.cables) * len(self.parts)     # per (cable, part): the largest gap, ...
+        self._gap = np.full(n, -np.inf)
+        self._bounded = np.zeros(n, bool)
+        self._t0, self._t1 = np.full(n, np.inf), np.full(n, -np.inf)
+
+    def take(self, times: np.ndarray, hulls: list[HullRows], detected: list[Contacts]) -> None:
+        """Compare a batch of states: their simulation hull contacts
+        (`rows`) with the detection model's named contacts at the same states."""
+        if not self.parts or not any(h is not None and len(h.dist) for h in hulls):
+            return
+        none = HullRows(*(np.zeros(0, np.int64),) * 3, np.zeros(0))
+        hulls = [none if h is None else h for h in hulls]
+        ncab, npart, nel = len(self.cables), len(self.parts), self._elems + 1
+
+        def keys(state, cable, part, elem):
+            return ((state * ncab + cable) * npart + part) * nel + elem
+
+        # the detection model's least surface distance per (state, cable, part, element)
+        state = np.repeat(np.arange(len(detected)), [len(c.dist) for c in detected])
+        cable = _lookup(self._cable_names, self._cable_ids, np.concatenate([c.a for c in detected]))
+        part = _lookup(self._part_names, self._part_ids, np.concatenate([c.b for c in detected]))
+        elem = np.concatenate([c.elem_a for c in detected]).astype(np.int64)
+        dist = np.concatenate([c.dist for c in detected]).astype(float)
+        ok = (cable >= 0) & (part >= 0) & (elem >= 0)
+        k, dist = keys(state[ok], cable[ok], part[ok], elem[ok]), dist[ok]
+        order = np.lexsort((dist, k))
+        k, dist = k[order], dist[order]
+        first = np.r_[True, k[1:] != k[:-1]] if len(k) else np.zeros(0, bool)
+        k, surface = np.r_[k[first], -1], np.r_[dist[first], np.nan]   # a sentinel: found by none
+
+        hs = np.repeat(np.arange(len(hulls)), [len(h.dist) for h in hulls])
+        hc, hp, he, hd = (np.concatenate([getattr(h, f) for h in hulls]) for f in ("cable", "part", "elem", "dist"))
+        hk = keys(hs, hc, hp, he)
+        at = np.minimum(np.searchsorted(k[:-1], hk), len(k) - 1)
+        seen = k[at] == hk
+        gap = np.where(seen, surface[at], self.clearance) - hd
+        held = gap > self.tolerance
+        if not held.any():
+            return
+        pair = hc[held] * npart + hp[held]
+        gap, bounded, t = gap[held], ~seen[held], np.asarray(times, float)[hs[held]]
+        np.minimum.at(self._t0, pair, t)
+        np.maximum.at(self._t1, pair, t)
+        best = np.full(len(self._gap), -np.inf)
+        np.maximum.at(best, pair, gap)
+        top = (gap == best[pair])                     # the batch's largest gap of each pair
+        bigger = best > self._gap
+        self._bounded[bigger] = False
+        np.logical_or.at(self._bounded, pair[top & bigger[pair]], bounded[top & bigger[pair]])
+        self._gap = np.maximum(self._gap, best)
+
+    def found(self) -> list[HullGap]:
+        """The (cable, part) pairs held on a hull so far, in cable then part order."""
+        npart = len(self.parts)
+        return [HullGap(self.cables[i // npart], self.parts[i % npart], float(self._gap[i]), bool(self._bounded[i]),
+                        float(self._t0[i]), float(self._t1[i])) for i in np.flatnonzero(np.isfinite(self._gap))]
+
+    def warnings(self) -> list[str]:
+        """One physics warning per (cable, part) held on a hull (scene units)."""
+        unit, k = self._scene.units, self._scene.scale
+        return [f"cable {g.cable!r} rests on the convex hull of part {g.part!r} in the simulation "
+                f"(MuJoCo collides a mesh as its hull) from t = {g.t_start:.3f} to {g.t_end:.3f} s, where the "
+                f"part's surface lies {'more than' if g.bounded else 'up to'} {g.gap / k:.4g} {unit} beyond "
+                f"the hull: the simulated cable is held off where the real one could come closer to the part"
+                for g in self.found()]
+
+
+def _table(names: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Names sorted, and each one's index in `names` (for `_lookup`)."""
+    order = np.argsort(np.array(names, dtype=object)) if names else np.zeros(0, np.int64)
+    return np.array(names, dtype=object)[order], order.astype(np.int64)
+
+
+def _lookup(names: np.ndarray, ids: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Index of each of `x` in the table (`_table`), -1 for a name not in it."""
+    if len(x) == 0 or len(names) == 0:
+        return np.full(len(x), -1, np.int64)
+    at = np.minimum(np.searchsorted(names, x), len(names) - 1)
+    return np.where(names[at] == x, ids[at], -1)

@@ -1,0 +1,159 @@
+"""Cables the simulation holds on a concave part's convex hull (sim.hullgap)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_detection_mesh import u_mesh
+
+from sim.build import build
+from sim.contacts import Contacts
+from sim.hullgap import GAP_TOLERANCE, HullGaps, HullReader, HullRows, watched
+from sim.mjspec import SIM_MARGIN_FRACTION
+from sim.run import RunOptions, run_scene
+from sim.scene import load_scene
+
+# the U of test_detection_mesh: prongs x in [-0.04, -0.02] and [0.02, 0.04]
+# rising to z = 0.04 over a pocket whose floor is z = -0.02, 0.1 long in y;
+# its hull's top face is z = 0.04 over the whole x in [-0.04, 0.04]
+R = 0.005
+"""Cable radius, metres (also the clearance)."""
+
+
+def _scene(tmp_path, dynamics: bool = True, validate: bool = True):
+    """Two straight cables (r 5 mm) along y, held at y = +-0.1 (past the
+    U's ends) 1 mm above the hull's top, within the simulation's contact
+    margin, so each lies on the U's top: `over` in the middle, above the
+    pocket (the hull's top face spans it there: the surface is the pocket's
+    walls and floor, 15 mm and more away); `flat` at x = 0.03, on a prong's
+    top face, which the hull shares."""
+    u_mesh().export(tmp_path / "u.stl")
+    z = 0.04 + R + 0.001
+    cables = "".join(f"""
+[[cables]]
+name = "{name}"
+radius = {R}
+start = {{ pos = [{x}, -0.1, {z}] }}
+end = {{ pos = [{x}, 0.1, {z}] }}
+segments = 20
+""" for name, x in (("over", 0.0), ("flat", 0.03)))
+    (tmp_path / "u.toml").write_text(f"""
+[scene]
+name = "hull"
+units = "m"
+duration = 0.02
+settle = 0.4
+[effects]
+dynamics = {str(dynamics).lower()}
+contact = ["cable-structure"]
+[check]
+clearance = {R}
+validate = {str(validate).lower()}
+[[bodies]]
+name = "fixture"
+[[parts]]
+name = "u"
+body = "fixture"
+shape = "mesh"
+file = "u.stl"
+""" + cables)
+    return load_scene(tmp_path / "u.toml")
+
+
+def test_a_cable_on_the_hull_over_the_pocket_is_named_and_one_on_a_flat_face_is_not(tmp_path, capsys):
+    rep = run_scene(_scene(tmp_path), RunOptions(report=tmp_path / "r.json", record=None))
+    hull = [w for w in rep["physics_warnings"] if "convex hull" in w]
+    (w,) = hull
+    assert "cable 'over'" in w and "part 'u'" in w and "from t = 0.000 to 0.020 s" in w
+    # the pocket's surface is beyond the clearance there: the gap is the
+    # clearance less the hull distance, a bound; the cable rests on the hull
+    # at about the simulation's contact margin (the geom's and the cable's,
+    # summed), less the contact's give
+    margin = 2 * SIM_MARGIN_FRACTION * R
+    gap = float(w.split("more than ")[1].split(" m ")[0])
+    assert R - margin < gap < R - 0.5 * margin
+    # the checker and MuJoCo's detection agree: `over` is clear of the U's
+    # surface, `flat` lies within the clearance of the prong's top, as far
+    # from it as `over` from the hull (both rest on the hull's top plane)
+    assert [(e["a"], e["b"]) for e in rep["events"]] == [("flat", "u")]
+    assert rep["events"][0]["min_distance"] == pytest.approx(R - gap, abs=0.02 * margin)
+    assert rep["validation"]["agreement"] == 1.0
+    from sim.cliprint import print_summary
+    print_summary(rep, tmp_path / "r.json")
+    assert f"  warning: {w}" in capsys.readouterr().out
+
+
+def test_no_watch_without_a_detection_model_or_a_stepped_simulation(tmp_path):
+    assert [p.name for p in watched(build(_scene(tmp_path)))] == ["u"]
+    assert watched(build(_scene(tmp_path, dynamics=False))) == []
+    assert watched(build(_scene(tmp_path, validate=False), detect=False)) == []
+    assert HullReader.of(build(_scene(tmp_path, dynamics=False))) is None
+
+
+def _contacts(rows):
+    """rows: (cable, part, element, dist) of the detection model, named."""
+    if not rows:
+        return Contacts(*(np.zeros(0, object),) * 3, np.zeros(0, int), np.zeros(0, int), np.zeros(0),
+                        np.zeros((0, 3)))
+    a, b, e, d = zip(*rows)
+    n = len(rows)
+    return Contacts(np.full(n, "cable-structure", object), np.array(a, object), np.array(b, object),
+                    np.array(e), np.full(n, -1), np.array(d, float), np.zeros((n, 3)))
+
+
+def _hulls(rows):
+    """rows: (cable index, part index, element, dist) of the simulation."""
+    c, p, e, d = (np.array(x) for x in zip(*rows)) if rows else ([],) * 4
+    return HullRows(np.asarray(c, np.int64), np.asarray(p, np.int64), np.asarray(e, np.int64),
+                    np.asarray(d, float))
+
+
+@pytest.fixture(scope="module")
+def gaps_built(tmp_path_factory):
+    return build(_scene(tmp_path_factory.mktemp("hull")))
+
+
+def test_gaps_are_element_by_element_the_surface_less_the_hull(gaps_built):
+    g = HullGaps(gaps_built)
+    over, flat = g.cables.index("over"), g.cables.index("flat")
+    tol = GAP_TOLERANCE * R
+    # state 0: `over` element 3 on the hull 1 mm, its surface 3 mm (a gap of 2 mm);
+    # element 4 on the hull, no surface within the clearance (more than 4 mm);
+    # `flat` element 5 on the hull 1 mm, the surface 1 mm + tol / 2 (within the tolerance);
+    # a surface contact of another element and another cable's hull contact do not pair up
+    g.take(np.array([0.5]),
+           [_hulls([(over, 0, 3, 0.001), (over, 0, 4, 0.001), (flat, 0, 5, 0.001)])],
+           [_contacts([("over", "u", 3, 0.003), ("over", "u", 3, 0.0045), ("flat", "u", 5, 0.001 + tol / 2),
+                       ("flat", "u", 6, 0.004)])])
+    (found,) = g.found()
+    assert (found.cable, found.part, found.t_start, found.t_end) == ("over", "u", 0.5, 0.5)
+    assert found.gap == pytest.approx(R - 0.001) and found.bounded
+    # later states: a larger measured gap wins and clears the bound; the span grows
+    g.take(np.array([0.6, 0.7, 0.8]),
+           [_hulls([(over, 0, 3, 0.0)]), None, _hulls([(over, 0, 7, 0.0005)])],
+           [_contacts([("over", "u", 3, 0.0045)]), _contacts([]), _contacts([("over", "u", 7, 0.0006)])])
+    (found,) = g.found()
+    assert found.gap == pytest.approx(0.0045) and not found.bounded and (found.t_start, found.t_end) == (0.5, 0.6)
+    (w,) = g.warnings()
+    assert "up to 0.0045 m beyond the hull" in w and "from t = 0.500 to 0.600 s" in w
+
+
+def test_only_active_simulation_contacts_of_cables_with_watched_hulls_are_read(gaps_built):
+    """The reader keeps contacts within their margin (MuJoCo's force
+    threshold), either side order, and drops contacts of other geoms."""
+    import mujoco
+
+    from sim.loop import Simulation
+    sim = Simulation(gaps_built)
+    sim.reset()
+    sim.settle()
+    d = sim.data
+    rows = sim.hull.rows(d)
+    n = int(d.ncon)
+    con = d.contact
+    part = gaps_built.parts[0].geom_id
+    mine = [(i, con.flex[i], con.dist[i], con.includemargin[i]) for i in range(n)
+            if part in con.geom[i] and max(con.flex[i]) >= 0]
+    assert len(rows.dist) == sum(dist <= margin for _, _, dist, margin in mine) > 0
+    assert set(rows.cable.tolist()) == {0, 1} and (rows.part == 0).all()
+    assert mujoco.mjtGeom(int(gaps_built.model.geom_type[part])) == mujoco.mjtGeom.mjGEOM_MESH
