@@ -200,9 +200,9 @@ def example_scenes_table(sizes: BenchSizes, out: Path) -> tuple[Table, dict]:
                     else (rep["settings"]["checked_steps"], 0)))
     table.notes += [
         "mj_step_ms: median of mj_step alone on the simulation model; sim_ms: the run's simulation "
-        "stage per step (mj_step, positions and the detection model's mj_collision for validation).",
-        "check: cable and part-part checks, strain and bend per step; validate: comparing with MuJoCo's "
-        "contacts; record: rerun logging (sampled at 100 frames per simulated second).",
+        "stage per step (mj_step and positions).",
+        "check: cable and part-part checks, strain and bend per step; validate: the detection model's "
+        "collision pass (mj_kinematics, mj_flex, mj_collision) and comparing its contacts; record: rerun logging (sampled at 100 frames per simulated second).",
         "realtime_factor: simulated seconds over the step loop's wall time (the wear map's too); _total adds "
         "building and settling.",
         "full_checks / proven_clear: checked steps run in full and steps the skip rule (checker.advance) "
