@@ -67,8 +67,8 @@ from checker.segments import (
 )
 
 __all__ = [
-    "MeshData", "Shape", "ShapeType", "distance_bounds", "face_plane_distance", "face_plane_distance_batch",
-    "least_signed_distance", "mesh_shape", "segment_signed_distance", "segment_signed_distance_batch",
+    "SHAPE_CODE", "MeshData", "Shape", "ShapeType", "distance_bounds", "face_plane_distance", "face_plane_distance_batch",
+    "least_signed_distance", "mesh_shape", "primitive_bounds", "segment_signed_distance", "segment_signed_distance_batch",
     "segment_signed_distance_mixed", "signed_distance", "signed_distance_batch", "signed_distance_value_batch",
 ]
 
@@ -132,20 +132,36 @@ class Shape:
 
     def local_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """(lo, hi) (3,) axis-aligned bounds in the part frame (infinite for a plane)."""
-        s = self.size
         if self.type is ShapeType.MESH:
             return self.mesh.lo, self.mesh.hi
-        if self.type is ShapeType.PLANE:
-            return np.array([-np.inf, -np.inf, -np.inf]), np.array([np.inf, np.inf, 0.0])
-        if self.type is ShapeType.SPHERE:
-            half = np.repeat(s[0], 3)
-        elif self.type is ShapeType.CYLINDER:
-            half = np.array([s[0], s[0], s[1]])
-        elif self.type is ShapeType.CAPSULE:
-            half = np.array([s[0], s[0], s[1] + s[0]])
-        else:  # box, ellipsoid
-            half = s[:3].copy()
-        return -half, half
+        lo, hi = primitive_bounds(np.array([SHAPE_CODE[self.type]]), self.size[None, :3])
+        return lo[0], hi[0]
+
+
+SHAPE_CODE = {t: n for n, t in enumerate(ShapeType)}
+"""Each shape type's integer code, for shape types held in arrays."""
+
+
+def primitive_bounds(codes: np.ndarray, sizes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) (K, 3) part-frame bounds of primitives from their type codes
+    (K,) and sizes (K, <=3); a plane's are infinite but for its top at z = 0.
+    Mesh rows get zeros: their bounds are the mesh's own (``Shape.local_bounds``)."""
+    k = len(codes)
+    sz = np.zeros((k, 3))
+    sz[:, : sizes.shape[1]] = sizes[:, :3]
+    half = sz.copy()
+    o = codes == SHAPE_CODE[ShapeType.SPHERE]
+    half[o] = sz[o, :1]
+    for kind, cap in ((ShapeType.CYLINDER, False), (ShapeType.CAPSULE, True)):
+        o = codes == SHAPE_CODE[kind]
+        half[o, 1] = sz[o, 0]
+        half[o, 2] = sz[o, 1] + sz[o, 0] if cap else sz[o, 1]
+    half[codes == SHAPE_CODE[ShapeType.MESH]] = 0.0
+    lo, hi = -half, half.copy()
+    o = codes == SHAPE_CODE[ShapeType.PLANE]
+    lo[o] = -np.inf
+    hi[o] = [np.inf, np.inf, 0.0]
+    return lo, hi
 
 
 def mesh_shape(vertices: np.ndarray, faces: np.ndarray) -> Shape:

@@ -482,3 +482,18 @@ def test_mesh_shape_is_kept_by_content_and_bounded():
     worker.start()
     worker.join()
     assert seen[0] is not again and mesh_shape(box.vertices, box.faces) is again
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.sampled_from([ShapeType.BOX, ShapeType.SPHERE, ShapeType.CYLINDER, ShapeType.CAPSULE, ShapeType.ELLIPSOID]),
+       st.lists(st.floats(1e-4, 10.0), min_size=3, max_size=3))
+def test_primitive_bounds_touch_the_surface_on_every_axis(kind, size):
+    """primitive_bounds (the one bounds formula, for arrays of parts) is tight:
+    the extreme point on each axis lies on the surface, as Shape.local_bounds says."""
+    from checker.shapes import SHAPE_CODE, primitive_bounds, signed_distance
+    shape = Shape(kind, np.array(size))
+    lo, hi = primitive_bounds(np.array([SHAPE_CODE[kind]]), shape.size[None, :3])
+    assert np.array_equal(lo[0], shape.local_bounds()[0]) and np.array_equal(hi[0], shape.local_bounds()[1])
+    extremes = np.concatenate([np.diag(hi[0]), np.diag(lo[0])])
+    d = signed_distance(shape, extremes)[0]
+    assert np.all(np.abs(d) <= 1e-9 * (1 + np.max(size)))

@@ -33,17 +33,19 @@ from checker.interference.hits import TYPE_ORDER, worst_records
 from checker.records import Interference, PairType
 from checker.scene_state import CheckConfig, PartState
 from checker.shapes import (
+    SHAPE_CODE,
     ShapeType,
     distance_bounds,
     face_plane_distance,
     face_plane_distance_batch,
+    primitive_bounds,
     segment_signed_distance,
     segment_signed_distance_mixed,
     signed_distance,
     signed_distance_value_batch,
 )
 
-TYPE_CODE = {t: n for n, t in enumerate(ShapeType)}
+TYPE_CODE = SHAPE_CODE
 _STRUCTURE, _KEEPOUT = TYPE_ORDER.index(PairType.CABLE_STRUCTURE), TYPE_ORDER.index(PairType.KEEPOUT)
 
 
@@ -61,19 +63,8 @@ class PartTable:
             sz = pt.shape.size[:3]
             self.size[n, : len(sz)] = sz
         self.type = np.array([TYPE_CODE[pt.shape.type] for pt in parts], dtype=np.int64).reshape(k)
-        # Shape.local_bounds for all parts at once (the same arithmetic).
-        sz, t = self.size, self.type
-        half = sz.copy()
-        half[t == TYPE_CODE[ShapeType.SPHERE]] = sz[t == TYPE_CODE[ShapeType.SPHERE], :1]
-        for st, extra in ((ShapeType.CYLINDER, False), (ShapeType.CAPSULE, True)):
-            o = t == TYPE_CODE[st]
-            half[o, 1] = sz[o, 0]
-            half[o, 2] = sz[o, 1] + sz[o, 0] if extra else sz[o, 1]
-        self.lo, self.hi = -half, half.copy()
-        o = t == TYPE_CODE[ShapeType.PLANE]
-        self.lo[o] = -np.inf
-        self.hi[o] = [np.inf, np.inf, 0.0]
-        for n in np.nonzero(t == TYPE_CODE[ShapeType.MESH])[0]:
+        self.lo, self.hi = primitive_bounds(self.type, self.size)
+        for n in np.nonzero(self.type == TYPE_CODE[ShapeType.MESH])[0]:
             self.lo[n], self.hi[n] = parts[n].shape.local_bounds()
         self.keepout = np.array([pt.keepout for pt in parts], dtype=bool)
         # Parts sharing one mesh are answered in one call: group id per part.
