@@ -1,0 +1,55 @@
+"""A mesh's acceleration data (checker.meshdata): closure decides the sign,
+and the reach classes still find every point's and segment's nearest triangle."""
+
+import numpy as np
+import pytest
+import trimesh
+
+from checker.shapes import mesh_shape, signed_distance
+
+pytestmark = pytest.mark.filterwarnings("error")
+
+
+def test_open_mesh_is_unsigned():
+    m = trimesh.creation.box(extents=[1.0, 1.0, 1.0])
+    faces = m.faces[2:]  # drop one side
+    shape = mesh_shape(m.vertices, faces)
+    assert not shape.closed
+    d, _ = signed_distance(shape, np.array([[0.0, 0, 0], [0.1, 0.1, 0.1]]))
+    assert np.all(d > 0)
+
+
+def test_sliver_mesh_nearest_and_segment_distance_are_the_brute_force_ones():
+    """A CAD-style tessellation: a finely meshed cylinder wall plus long slivers
+    (flat caps fanned from one corner). The reach classes must still find
+    the nearest triangle of every point and segment that every triangle tried finds."""
+    from checker import meshnearest, segments
+    from checker.closest import point_triangle, segment_triangle
+    rng = np.random.default_rng(7)
+    wall = trimesh.creation.cylinder(0.04, 0.2, sections=96)
+    fine = wall.subdivide()
+    # fan caps: long slivers from one rim vertex (reach ~ the diameter)
+    rim = np.stack([0.04 * np.cos(np.linspace(0, 2 * np.pi, 97)[:-1]),
+                    0.04 * np.sin(np.linspace(0, 2 * np.pi, 97)[:-1])], axis=1)
+    verts = [fine.vertices]
+    faces = [fine.faces]
+    for z in (-0.1, 0.1):
+        base = sum(len(v) for v in verts)
+        verts.append(np.column_stack([rim, np.full(96, z)]))
+        faces.append(np.array([[base, base + k, base + k + 1] for k in range(1, 95)]))
+    v, f = np.concatenate(verts), np.concatenate(faces)
+    md = mesh_shape(v, f).mesh
+    reaches = [b for b, _, _ in md.levels]
+    assert len(md.levels) >= 3 and max(reaches) == md.reach and min(reaches) < md.reach / 8
+    p = rng.uniform([-0.08, -0.08, -0.15], [0.08, 0.08, 0.15], (200, 3))
+    d = meshnearest.mesh_nearest(md, p)[0]
+    rows = np.repeat(np.arange(len(p)), len(md.faces))
+    fi = np.tile(np.arange(len(md.faces)), len(p))
+    brute = point_triangle(p[rows], md.a[fi], md.b[fi], md.c[fi])[0].reshape(len(p), -1).min(axis=1)
+    assert np.array_equal(d, brute)
+    a, b = p[:60], p[:60] + rng.normal(size=(60, 3)) * 0.01
+    ds = segments.mesh_segment_unsigned(md, a, b)[0]
+    rows = np.repeat(np.arange(len(a)), len(md.faces))
+    fi = np.tile(np.arange(len(md.faces)), len(a))
+    brute_s = segment_triangle(a[rows], b[rows], md.a[fi], md.b[fi], md.c[fi])[0].reshape(len(a), -1).min(axis=1)
+    assert np.allclose(ds, brute_s, rtol=0, atol=1e-15)
