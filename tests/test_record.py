@@ -367,3 +367,15 @@ def test_many_series_at_once_are_each_on_its_own():
     for k, t, v in zip(changes_many(ts, vs), ts, vs):
         one = changes(t, v)
         assert k.tolist() == one.tolist()
+
+
+def test_plane_is_drawn_sized_to_the_scene_or_as_given():
+    from sim.record import plane_half_sizes
+    pose = np.eye(4)
+    pose[:3, 3] = [1.0, 0.0, 0.0]
+    pts = np.array([[0.0, -0.5, 0.3], [3.0, 0.2, 0.1]])
+    assert np.allclose(plane_half_sizes(np.zeros(3), pose, pts), [2.4, 0.6])
+    tilted = np.eye(4)
+    tilted[:3, :3] = [[0, 0, 1], [0, 1, 0], [-1, 0, 0]]     # normal along +x: local x is world -z
+    assert np.allclose(plane_half_sizes(np.zeros(3), tilted, pts), [0.36, 0.6])
+    assert np.allclose(plane_half_sizes(np.array([0.5, 0.25, 0.1]), pose, pts), [0.5, 0.25])

@@ -1,0 +1,71 @@
+"""Reading the compiled model back (sim.modelread): mesh parts, visual geoms
+(drawn, never parts, names stable), the model's own excluded pairs."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import trimesh
+from buildscenes import arm_built, arm_scene, run_steps, slider_scene
+
+from sim.build import build
+from sim.loop import Simulation
+from sim.scene import parse_scene
+
+
+def test_mesh_part_matches_box_part(tmp_path):
+    box = trimesh.creation.box(extents=[0.04, 0.04, 0.4])
+    box.export(tmp_path / "post.stl")
+    a = slider_scene(tmp_path)
+    b = copy.deepcopy(a)
+    b["parts"][0] = {"name": "frame/post", "shape": "mesh", "file": "post.stl", "pos": [0.36, 0.0, 0.2]}
+    built_a = build(parse_scene(a, tmp_path / "s.toml"))
+    built_b = build(parse_scene(b, tmp_path / "s.toml"))
+    pa, pb = built_a.parts[0], built_b.parts[0]
+    assert pb.shape == "mesh" and pb.vertices.shape == (8, 3)
+    sa, sb = Simulation(built_a), Simulation(built_b)
+    sa.reset(), sb.reset()
+    ta, tb = sa.state(0, False).part_poses[0], sb.state(0, False).part_poses[0]
+    world_b = pb.vertices @ tb[:3, :3].T + tb[:3, 3]
+    assert np.allclose(np.sort(world_b, axis=0),
+                       np.sort(np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+                               * pa.size + ta[:3, 3], axis=0), atol=1e-6)  # MuJoCo stores mesh vertices as float32
+
+
+def test_visual_geoms_are_drawn_never_parts_and_names_do_not_move(tmp_path):
+    """A model with and without its visual geoms gives the same parts, names
+    and skipped pairs; the visual geoms are listed to be drawn."""
+    from sim.stepcheck import part_pairs_skipped
+    bare, dressed = arm_built(tmp_path, visuals=False), arm_built(tmp_path, visuals=True)
+    names = [p.name for p in bare.parts]
+    assert names == [p.name for p in dressed.parts]
+    assert set(names) == {"cell/table", "stand/column", "link/capsule0", "link/lug", "link/sphere2", "post/rod"}
+    assert [v.name for v in dressed.visuals] == ["stand/box0", "link/lug", "link/shell"] and not bare.visuals
+    assert np.array_equal(part_pairs_skipped(bare), part_pairs_skipped(dressed))
+    for built in (bare, dressed):
+        for m in (built.model, built.detect):
+            for v in built.visuals:
+                assert m.geom_contype[v.geom_id] == 0 and m.geom_conaffinity[v.geom_id] == 0
+
+
+def test_model_exclude_pairs_are_honoured(tmp_path):
+    from sim.stepcheck import part_pairs_skipped
+    plain = arm_built(tmp_path, visuals=False)
+    excluded = arm_built(tmp_path, visuals=False, contact='<contact><exclude body1="link" body2="post"/></contact>')
+    for built, expect in ((plain, False), (excluded, True)):
+        idx = {p.name: k for k, p in enumerate(built.parts)}
+        skip = part_pairs_skipped(built)
+        assert skip[idx["link/sphere2"], idx["post/rod"]] == expect
+        assert skip[idx["post/rod"], idx["link/sphere2"]] == expect
+        assert not skip[idx["cell/table"], idx["post/rod"]]
+
+
+def test_visual_geoms_make_no_contacts_nor_events(tmp_path):
+    """A visual shell the cable runs through is never a contact, part or event."""
+    data = arm_scene(tmp_path, visuals=True)
+    sim, states = run_steps(data, tmp_path)
+    visual_ids = {v.geom_id for v in sim.built.visuals}
+    raw = sim.collide(states[-1].qpos)
+    assert not (set(raw.geom.ravel()) & visual_ids)
+    assert all(not str(n).startswith(("link/shell", "stand/box0")) for s in states for n in s.contacts.b)
