@@ -19,7 +19,6 @@ import pytest
 
 import sim.bench
 from sim.bench import FULL, QUICK, BenchSizes, run_bench
-from sim.benchsim import example_names
 from sim.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -166,12 +165,6 @@ def test_quick_and_full_sizes_measure_what_the_tables_state():
     assert QUICK.example_seconds == 1.0 and FULL.example_seconds is None
 
 
-def test_example_names_are_every_scene_drawer_and_arm_first():
-    names = example_names()
-    assert names[:2] == ["drawer", "arm"]
-    assert sorted(names) == sorted(p.stem for p in (ROOT / "scenes").glob("*.toml"))
-
-
 @pytest.mark.parametrize("args, sizes", [(["--quick"], QUICK), ([], FULL)])
 def test_the_command_runs_the_quick_or_full_sizes(tmp_path: Path, monkeypatch, args, sizes):
     calls = []
@@ -192,14 +185,3 @@ def test_sizes_are_frozen():
         QUICK.repeat = 1  # type: ignore[misc]
 
 
-def test_without_python_fcl_the_comparison_says_how_to_install_it(monkeypatch):
-    import sys
-
-    from checker.scene_state import CheckConfig
-    from sim.benchfcl import FclMissing, fcl_queries
-    from sim.benchscene import make_scene
-
-    monkeypatch.setitem(sys.modules, "fcl", None)   # what an absent package looks like to import
-    cables, parts = make_scene(n_cables=2, n_points=5, n_prims=3, n_meshes=0)
-    with pytest.raises(FclMissing, match=r"pip install 'cablecheck\[bench\]'"):
-        fcl_queries(cables, parts, CheckConfig("points"), 1)

@@ -1,4 +1,5 @@
-"""Scripted motion: interpolation (sim.curves), what Motion hands to MuJoCo, joint values in events."""
+"""Scripted motion: what Motion hands to MuJoCo, joint values in events.
+Interpolation (sim.curves) is tested in test_curves."""
 
 from __future__ import annotations
 
@@ -9,67 +10,15 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
 from sim.build import build
 from sim.cli import main
-from sim.curves import interpolant, merge
 from sim.motion import Motion, body_rate
 from sim.scene import euler_matrix, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 ARM_XML = ROOT / "scenes" / "arm.xml"
 
-
-# -- curves ---------------------------------------------------------------------
-
-def test_linear_is_exact_and_holds_outside():
-    curve = merge([interpolant(np.array([1.0, 3.0]), np.array([[0.0], [-2.0]]), "linear")])
-    assert np.allclose(curve.at(2.0), ([-1.0], [-1.0]))
-    assert np.allclose(curve.at(0.0), ([0.0], [0.0])) and np.allclose(curve.at(5.0), ([-2.0], [0.0]))
-
-
-def test_cubic_has_continuous_velocity_equal_to_the_derivative():
-    times = np.array([0.0, 0.4, 1.0, 1.7, 2.0])
-    values = np.array([[0.0, 1.0], [0.3, -1.0], [1.0, 0.5], [0.2, 0.5], [-0.5, 2.0]])
-    curve = merge([interpolant(times, values, "cubic")])
-    h = 1e-7
-    for knot in times:
-        left, right = curve.at(knot - h)[1], curve.at(knot + h)[1]
-        assert np.allclose(left, right, atol=1e-5)                      # no jump at a sample
-    for t in np.linspace(0.01, 1.99, 37):
-        fd = (curve.at(t + h)[0] - curve.at(t - h)[0]) / (2 * h)
-        assert np.allclose(curve.at(t)[1], fd, atol=1e-5)               # rate = d value / dt
-    assert np.allclose(curve.at(0.0)[1], 0.0) and np.allclose(curve.at(2.0)[1], 0.0)
-    assert np.allclose(curve.sample(times), values)
-
-
-@settings(max_examples=60)
-@given(st.lists(st.floats(-100, 100), min_size=2, max_size=8), st.sampled_from(["cubic", "linear"]))
-def test_interpolants_stay_between_neighbouring_samples(ys, kind):
-    """No overshoot: the joint-range check of the samples bounds the whole motion."""
-    times = np.arange(len(ys), dtype=float)
-    values = np.array(ys)[:, None]
-    poly = interpolant(times, values, kind)
-    fine = np.linspace(0.0, len(ys) - 1.0, 40 * len(ys))
-    got = poly(fine)[:, 0]
-    i = np.minimum(fine.astype(int), len(ys) - 2)
-    lo = np.minimum(values[i, 0], values[i + 1, 0])
-    hi = np.maximum(values[i, 0], values[i + 1, 0])
-    assert np.all(got >= lo - 1e-9) and np.all(got <= hi + 1e-9)
-
-
-def test_merge_keeps_each_motion_on_its_own_times():
-    a = interpolant(np.array([0.0, 1.0, 3.0]), np.array([[0.0, 0.0], [1.0, 2.0], [1.0, 5.0]]), "cubic")
-    b = interpolant(np.array([0.5, 2.0]), np.array([[3.0], [4.0]]), "linear")
-    c = interpolant(np.array([4.0]), np.array([[7.0]]), "cubic")
-    curve = merge([a, b, c])
-    ts = np.linspace(-1.0, 5.0, 601)
-    got = curve.sample(ts)
-    assert np.allclose(got[:, :2], a(np.clip(ts, 0.0, 3.0)), atol=1e-12)
-    assert np.allclose(got[:, 2], b(np.clip(ts, 0.5, 2.0))[:, 0], atol=1e-12)
-    assert np.allclose(got[:, 3], 7.0)
 
 
 def test_body_rates_integrate_the_euler_path():

@@ -1,7 +1,8 @@
 """Tests of `cablecheck study`: the study file (paths, ranges, grid and zip, bad
-input named by study file and key), the files that travel with a task, the
-answer (free variants, length window), and execution on an embedded local
-cluster and on a scheduler with two workers started here on 127.0.0.1."""
+input named by study file and key), free variants, and execution
+(sim.studyrun, sim.studyplot) on an embedded local cluster and on a
+scheduler with two workers started here on 127.0.0.1. The files that travel
+with a task are tested in test_bundle, the length window in test_studyresult."""
 
 from __future__ import annotations
 
@@ -19,11 +20,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import write_text
 
 from checker.cable import TAUT_STRAIN
-from sim.bundle import make_bundle, materialise
+from sim.bundle import make_bundle
 from sim.cli import main
-from sim.scene import load_scene, parse_scene
+from sim.scene import load_scene
 from sim.study import Mode, StudyError, check_variants, load_study, resolve, variants
 from sim.studyresult import Row, Status, length_window, row_from_report
 
@@ -32,16 +34,10 @@ SCENES = ROOT / "scenes"
 EXAMPLE = SCENES / "studies" / "drawer_length_study.toml"
 
 
-def _write(path: Path, text: str) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text)
-    return path
-
-
 def _study(tmp: Path, vary: str, head: str = "", scene: str = "drawer.toml") -> Path:
     """A study file in `tmp` on a copy of the drawer scene."""
     shutil.copy(SCENES / "drawer.toml", tmp / "drawer.toml")
-    return _write(tmp / "s.toml", f'[study]\nname = "s"\nscene = "{scene}"\n{head}\n{vary}')
+    return write_text(tmp / "s.toml", f'[study]\nname = "s"\nscene = "{scene}"\n{head}\n{vary}')
 
 
 # -- the study file -----------------------------------------------------------------------------
@@ -143,111 +139,6 @@ def test_bad_value_names_study_key_value_and_scene_problem(tmp_path, capsys):
     assert "vary[0] motion.drawer.tiem_scale = 2" in err and "motion[0].tiem_scale: unknown key" in err
 
 
-# -- files that travel --------------------------------------------------------------------------
-
-def test_bundle_carries_meshes_and_mjcf_files(tmp_path):
-    """A scene's files, unpacked elsewhere, load as the original: a mesh part,
-    an mjcf model with an <include> and a mesh under the compiler's meshdir."""
-    src = tmp_path / "src"
-    shutil.copy(SCENES / "meshes" / "l_bracket.stl", _write(src / "robot" / "assets" / "x", "").parent
-                / "bracket.stl")
-    _write(src / "robot" / "arm.xml",
-           '<mujoco><compiler meshdir="assets"/><include file="parts.xml"/>'
-           '<worldbody><body name="b"><geom type="mesh" mesh="m"/></body></worldbody></mujoco>')
-    _write(src / "robot" / "parts.xml", '<mujoco><asset><mesh name="m" file="bracket.stl"'
-                                        ' scale="0.001 0.001 0.001"/></asset></mujoco>')
-    _write(src / "unrelated.bin", "not needed")
-    shutil.copy(SCENES / "meshes" / "l_bracket.stl", src / "l_bracket.stl")
-    scene = _write(src / "cell" / "scene.toml", """
-[scene]
-name = "cell"
-units = "m"
-duration = 0.0
-mjcf = "../robot/arm.xml"
-[[parts]]
-name = "bracket"
-shape = "mesh"
-file = "%s"
-scale = 0.001
-""" % (src / "l_bracket.stl"))   # an absolute name: rewritten relative
-    base = load_scene(scene)
-    import tomllib
-    bundle, (data,) = make_bundle(scene, [tomllib.loads(scene.read_text())])
-    names = {rel for rel, _ in bundle.files}
-    assert names == {"robot/arm.xml", "robot/parts.xml", "robot/assets/bracket.stl", "l_bracket.stl"}
-    assert bundle.scene == "cell/scene.toml" and data["parts"][0]["file"] == "../l_bracket.stl"
-    shutil.rmtree(src)
-    moved = parse_scene(data, materialise(bundle, tmp_path / "elsewhere"))
-    assert moved.mjcf == (tmp_path / "elsewhere" / "robot" / "arm.xml").resolve()
-    assert moved.parts[0].file == (tmp_path / "elsewhere" / "l_bracket.stl").resolve()
-    assert [p.name for p in moved.parts] == [p.name for p in base.parts]
-
-
-@pytest.mark.parametrize("name", ["arm.toml", "robot_cell.toml", "bracket_static.toml"])
-def test_example_scenes_travel(name, tmp_path):
-    """The example scenes with files (an mjcf model and its meshes, a motion
-    CSV, a mesh part), unpacked elsewhere, load with the same parts and
-    motions; nothing else of their folders travels."""
-    import tomllib
-
-    path = SCENES / name
-    bundle, (data,) = make_bundle(path, [tomllib.loads(path.read_text())])
-    moved = parse_scene(data, materialise(bundle, tmp_path))
-    base = load_scene(path)
-    assert [p.name for p in moved.parts] == [p.name for p in base.parts]
-    assert len(moved.motions) == len(base.motions)
-    assert all(str(p.file).startswith(str(tmp_path)) for p in moved.parts if p.file is not None)
-    assert moved.mjcf is None or str(moved.mjcf).startswith(str(tmp_path))
-    assert all(m.file is None or str(m.file).startswith(str(tmp_path)) for m in moved.motions)
-    assert not any(n.endswith((".md", "LICENSE")) or n.endswith("_study.toml") for n, _ in bundle.files)
-
-
-# -- the answer ---------------------------------------------------------------------------------
-
-def _row(length, taut=False, hard=0, bend=False, soft=0):
-    return Row(id=str(length), values=(length,), status=Status.DONE, hard=hard, soft=soft,
-               taut=taut, bend_violation=bend)
-
-
-def test_length_window_bounds_and_recommendation():
-    rows = [_row(540, taut=True, hard=1), _row(580, taut=True, hard=1), _row(620), _row(660),
-            _row(700), _row(740, hard=1), _row(780, bend=True),
-            Row(id="x", values=(800,), status=Status.FAILED, error="boom")]
-    w = length_window(rows)
-    assert (w.shortest, w.below, w.longest, w.above) == (620, 580, 700, 740)
-    assert w.clean == (620, 660, 700) and w.recommended == 660
-    # soft contact at the long end: the recommendation keeps to the lengths with no event
-    w = length_window([_row(600, taut=True, hard=1), _row(650), _row(700), _row(750),
-                       _row(800, soft=2), _row(850, soft=1), _row(900, hard=1)])
-    assert (w.shortest, w.longest, w.quiet) == (650, 850, (650, 700, 750))
-    assert w.recommended == 750
-    w = length_window([_row(600), _row(700), _row(800)])
-    assert w.recommended == 700 and w.below is None and w.above is None
-    w = length_window([_row(600), _row(700)])
-    assert w.recommended == 600   # two as near: the shorter
-    assert length_window([_row(600, taut=True), _row(700, taut=True)]).shortest is None
-    w = length_window([_row(600, taut=True, hard=1), _row(700, hard=1)])
-    assert w.shortest == 700 and w.longest is None and not w.exists
-
-
-def test_row_from_report_reduces_the_report():
-    report = {"summary": {"hard": 1, "soft": 2},
-              "pairs": [{"type": "taut", "min_distance": -30.0},
-                        {"type": "cable-structure", "min_distance": -2.5},
-                        {"type": "self", "min_distance": 1.0}],
-              "cables": [{"max_strain": 0.01, "min_bend_radius": 40.0, "taut": False,
-                          "bend_violation": False},
-                         {"max_strain": -0.03, "min_bend_radius": None, "taut": True,
-                          "bend_violation": False}],
-              "validation": {"agreement": 0.99}, "timing": {"total_s": 1.5}}
-    r = row_from_report("007", (650,), report)
-    assert (r.exit_status, r.hard, r.soft, r.worst_distance) == (1, 1, 2, -2.5)
-    assert (r.max_strain, r.min_bend_radius, r.taut, r.bend_violation) == (-0.03, 40.0, True, False)
-    assert (r.agreement, r.run_time_s, r.status) == (0.99, 1.5, Status.DONE)
-    r = row_from_report("008", (650,), {**report, "complete": False, "interrupted": "SIGINT"})
-    assert r.status is Status.FAILED and "SIGINT" in r.error and r.exit_status is None
-
-
 # -- execution ----------------------------------------------------------------------------------
 
 TINY_VALUES = (600.0, 700.0)
@@ -262,10 +153,10 @@ def tiny(tmp_path_factory):
     text = text.replace("duration = 4.0", "duration = 0.3").replace("settle = 1.0", "settle = 0.1")
     text += ('\n[[parts]]\nname = "bracket"\nshape = "mesh"\nfile = "meshes/l_bracket.stl"\n'
              'pos = [200, -150, 20]\n')
-    _write(folder / "scene" / "tiny.toml", text)
+    write_text(folder / "scene" / "tiny.toml", text)
     shutil.copytree(SCENES / "meshes", folder / "scene" / "meshes")
     values = ", ".join(f"{v:g}" for v in TINY_VALUES)
-    study = _write(folder / "tiny_study.toml", '[study]\nname = "tiny"\nscene = "scene/tiny.toml"\n'
+    study = write_text(folder / "tiny_study.toml", '[study]\nname = "tiny"\nscene = "scene/tiny.toml"\n'
                    f'[[vary]]\nkey = "cables.power.length"\nvalues = [{values}]\n')
     return study
 
@@ -436,7 +327,7 @@ def test_ctrl_c_keeps_finished_variants(tiny, tmp_path):
     """SIGINT to the whole process group (as a terminal's Ctrl-C) once the
     first variant is in: the study cancels the rest, closes its cluster and
     writes the tables with what finished, marked incomplete; exit 130."""
-    study = _write(tmp_path / "s.toml", f'[study]\nname = "int"\nscene = "{tiny.parent}/scene/tiny.toml"\n'
+    study = write_text(tmp_path / "s.toml", f'[study]\nname = "int"\nscene = "{tiny.parent}/scene/tiny.toml"\n'
                    'mode = "zip"\n[[vary]]\nkey = "scene.duration"\nvalues = [0.1, 60.0, 60.0]\n'
                    '[[vary]]\nkey = "cables.power.length"\nvalues = [650, 651, 652]\n')
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
