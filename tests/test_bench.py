@@ -6,6 +6,11 @@ files, columns and the accuracy relations the tables must show; the
 command line's wiring to the quick and full sizes is checked without
 running them. Nothing here asserts a time: timings only have to be
 positive and finite.
+
+The tables of sim.benchcheck and sim.benchsim and the figure of
+sim.benchplot are tested here, through that one tiny run; their small
+pieces have their own files (test_benchtable, test_benchscene,
+test_benchcheck, test_benchsim, test_benchfcl).
 """
 
 from __future__ import annotations
