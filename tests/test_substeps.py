@@ -1,0 +1,75 @@
+"""How finely the simulation steps (sim.substeps): held points' speeds
+against the script's closed form, the step divided to meet the fastest
+cable's need, and a part fast enough to pass through a cable named."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from buildscenes import slider_scene
+
+from sim.build import build
+from sim.scene import parse_scene
+from sim.substeps import MAX_SUBSTEPS, SPEED_FRACTION, bending_step, choose_substeps, held_speeds, tunnel_warnings
+
+
+def _built(tmp_path, travel: float, interpolation: str = "cubic", **cable):
+    data = slider_scene(tmp_path)
+    data["motion"][0]["keys"][1]["pos"] = [travel, 0, 0]
+    data["motion"][0]["interpolation"] = interpolation
+    data["cables"][0].update(cable)
+    return build(parse_scene(data, tmp_path / "s.toml"))
+
+
+def test_held_speed_is_the_scripts_fastest(tmp_path):
+    """The slider moves 0.02 m in 0.2 s: 0.1 m/s throughout when linear; a
+    cubic from rest to rest peaks at 1.5 times the mean halfway."""
+    assert held_speeds(_built(tmp_path, 0.02, "linear"))["c"] == pytest.approx(0.1, rel=1e-9)
+    assert held_speeds(_built(tmp_path, 0.02))["c"] == pytest.approx(0.15, rel=1e-4)
+
+
+@pytest.mark.parametrize("travel", [0.02, 0.6, 6.0])
+def test_the_scene_step_is_divided_to_meet_the_fastest_cables_need(tmp_path, travel):
+    built = _built(tmp_path, travel, "linear")
+    cable, cable_def = built.cables[0], built.scene.cables[0]
+    v = travel / 0.2
+    need = min(bending_step(cable, cable_def), SPEED_FRACTION * cable.element_length / v)
+    sub = choose_substeps(built)
+    assert sub.needed["c"] == pytest.approx(need, rel=1e-9)
+    assert sub.reasons["c"][0] == "speed" and sub.reasons["c"][1] == pytest.approx(v, rel=1e-9)
+    dt = built.scene.timestep
+    assert sub.count == min(MAX_SUBSTEPS, int(np.ceil(dt / need)))
+    assert sub.step * sub.count == pytest.approx(dt, rel=1e-12)
+    assert sub.capped is (dt / need > MAX_SUBSTEPS)
+    assert sub.capped or sub.step <= need * (1 + 1e-9)
+
+
+def test_a_stiff_cable_is_stepped_for_its_bending(tmp_path):
+    built = _built(tmp_path, 0.02, young=2.0e11, density=7800.0)
+    sub = choose_substeps(built)
+    assert sub.reasons["c"][0] == "bending"
+    assert sub.needed["c"] == pytest.approx(bending_step(built.cables[0], built.scene.cables[0]), rel=1e-12)
+    # the bending step shrinks with the square of the element: a quarter for half the elements' length
+    finer = _built(tmp_path, 0.02, young=2.0e11, density=7800.0, segments=40)
+    ratio = (finer.cables[0].element_length / built.cables[0].element_length) ** 2
+    assert choose_substeps(finer).needed["c"] == pytest.approx(sub.needed["c"] * ratio, rel=1e-12)
+
+
+def test_a_thin_plate_fast_enough_to_pass_through_the_cable_is_named(tmp_path):
+    """A plate on its own body (the cable's held points stay slow, so the
+    step stays the scene's 2 ms) at 1.5 x 2 m / 0.2 s = 15 m/s moves 30 mm a
+    step, more than the cable's radius plus half its thickness (5 mm)."""
+    data = slider_scene(tmp_path)
+    data["bodies"].append({"name": "shuttle"})
+    data["parts"].append({"name": "shuttle/plate", "body": "shuttle", "shape": "box",
+                          "size": [0.001, 0.05, 0.05], "pos": [0.5, 0.0, 0.3]})
+    data["motion"].append({"body": "shuttle", "keys": [{"t": 0, "pos": [0, 0, 0]}, {"t": 0.2, "pos": [0.02, 0, 0]}]})
+    assert tunnel_warnings(build(parse_scene(data, tmp_path / "s.toml"))) == []
+    data["motion"][1]["keys"][1]["pos"] = [2.0, 0, 0]
+    built = build(parse_scene(data, tmp_path / "s.toml"))
+    assert built.model.opt.timestep == built.scene.timestep
+    (warning,) = tunnel_warnings(built)
+    assert warning.startswith("part 'shuttle/plate' moves at up to 15 m/s")
+    assert "(0.004 + 0.001 m)" in warning and "scene.timestep <= 0.000333 s would do" in warning
+    data["effects"]["contact"] = []
+    assert tunnel_warnings(build(parse_scene(data, tmp_path / "s.toml"))) == []
