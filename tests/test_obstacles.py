@@ -3,7 +3,11 @@ plane, starts and stays on it."""
 
 from __future__ import annotations
 
-from buildscenes import floor_scene, run_steps
+import pytest
+from buildscenes import floor_scene, run_steps, slider_scene
+
+from sim.build import build
+from sim.scene import parse_scene
 
 
 def test_cable_along_a_floor_starts_and_stays_on_it(tmp_path):
@@ -15,3 +19,15 @@ def test_cable_along_a_floor_starts_and_stays_on_it(tmp_path):
         for state in (states[0], states[-1]):                          # settled, and at the end
             assert state.cables[0][:, 2].min() > 0.9 * r, shape
         assert not sim.warnings()
+
+
+@pytest.mark.xfail(strict=True, raises=ValueError,
+                   reason="sim.obstacles gives a plane the scene's size (2 numbers) or zeros(3) when it has "
+                          "none; checker.shapes.least_signed_distance np.stack-s the sizes of all "
+                          "planes in one call, which refuses lengths 2 and 3 together")
+def test_two_planes_of_different_size_lengths_build(tmp_path):
+    data = slider_scene(tmp_path)
+    data["parts"] += [{"name": "floor", "shape": "plane", "pos": [0, 0, -0.1]},
+                      {"name": "mat", "shape": "plane", "size": [0.4, 0.2], "pos": [0, 0, -0.05]}]
+    built = build(parse_scene(data, tmp_path / "s.toml"))
+    assert [p.name for p in built.parts][-2:] == ["floor", "mat"]

@@ -1,0 +1,65 @@
+"""The scene written as MuJoCo models (sim.mjspec): euler angles as
+quaternions, parts placed and sized as the scene says (relative to the
+model's origin), planes drawn with a positive grid, the two models' margins,
+and the step's time constants set together."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+from buildscenes import slider_scene
+from hypothesis import given
+from strategies import coords
+
+from sim.build import build
+from sim.cablephysics import contact_time_constant, edge_time_constant
+from sim.mjspec import PLANE_GRID, SIM_MARGIN_FRACTION, euler_quat, part_size, set_step
+from sim.scene import euler_matrix, parse_scene
+
+
+@given(coords(3, -720.0, 720.0))
+def test_euler_quaternion_is_a_unit_quaternion_of_the_scene_rotation(euler):
+    q = euler_quat(euler)
+    assert abs(np.linalg.norm(q) - 1.0) < 1e-12
+    mat = np.zeros(9)
+    mujoco.mju_quat2Mat(mat, q)
+    assert np.allclose(mat.reshape(3, 3), euler_matrix(euler), rtol=0, atol=1e-12)
+
+
+def test_parts_are_placed_and_sized_as_the_scene_says(tmp_path):
+    data = slider_scene(tmp_path)
+    data["parts"] += [
+        {"name": "tilted", "shape": "cylinder", "size": [0.03, 0.1], "pos": [1e4, -2e4, 5.0], "euler": [30, -45, 60]},
+        {"name": "floor", "shape": "plane", "pos": [0, 0, -0.1]}]
+    built = build(parse_scene(data, tmp_path / "s.toml"))
+    d = mujoco.MjData(built.model)
+    mujoco.mj_kinematics(built.model, d)
+    by = {p.name: p for p in built.parts}
+    g = by["tilted"].geom_id
+    assert np.allclose(d.geom_xpos[g] + built.origin, [1e4, -2e4, 5.0], rtol=0, atol=1e-9)
+    assert np.allclose(d.geom_xmat[g].reshape(3, 3), euler_matrix([30, -45, 60]), atol=1e-12)
+    assert np.allclose(built.model.geom_size[g][:2], [0.03, 0.1])
+    assert np.allclose(built.model.geom_size[by["floor"].geom_id], [0.0, 0.0, PLANE_GRID])
+    data["parts"][-1] = {"name": "mat", "shape": "plane", "size": [0.4, 0.2], "pos": [0, 0, -0.05]}
+    mat = build(parse_scene(data, tmp_path / "s.toml"))
+    assert np.allclose(mat.model.geom_size[mat.parts[-1].geom_id], [0.4, 0.2, 0.04])   # a tenth of the larger
+    margin = built.model.geom_margin[g]
+    assert margin == pytest.approx(SIM_MARGIN_FRACTION * 0.004)
+    assert built.detect.geom_margin[g] == pytest.approx(built.scene.check.clearance)
+
+
+def test_part_size_pads_to_three_numbers(tmp_path):
+    scene = parse_scene(slider_scene(tmp_path) | {"parts": [
+        {"name": "ball", "shape": "sphere", "size": [0.05], "pos": [0, 0, 0]}]}, tmp_path / "s.toml")
+    assert part_size(scene.parts[0]) == [0.05, 0.0, 0.0]
+
+
+def test_set_step_moves_the_time_constants_with_the_step(tmp_path):
+    built = build(parse_scene(slider_scene(tmp_path), tmp_path / "s.toml"))
+    m = built.model
+    set_step(m, 2.5e-4)
+    assert m.opt.timestep == 2.5e-4
+    assert np.all(m.flex_solref[:, 0] == contact_time_constant(2.5e-4))
+    edges = m.eq_type == int(mujoco.mjtEq.mjEQ_FLEX)
+    assert edges.any() and np.all(m.eq_solref[edges, 0] == edge_time_constant(2.5e-4))
