@@ -1,0 +1,80 @@
+"""Second opinions on one pair (checker.recheck), against closed forms: a
+sparse straight cable past a sphere and across another cable measured
+exactly; a cable through the pocket of an L bracket clear of the mesh but
+inside its convex hull; a batch's answers those of each state alone."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from checker.recheck import Recheck, convex_hull_shape
+from checker.records import PairType
+from checker.scene_state import CableState, CheckConfig, PartState
+from checker.shapes import Shape, ShapeType, mesh_shape, signed_distance
+
+BRACKET = trimesh.load(Path(__file__).resolve().parents[1] / "scenes" / "meshes" / "l_bracket.stl")  # mm
+CS, CC = PairType.CABLE_STRUCTURE, PairType.CABLE_CABLE
+
+
+def _pose(x=0.0, y=0.0, z=0.0):
+    pose = np.eye(4)
+    pose[:3, 3] = [x, y, z]
+    return pose
+
+
+@pytest.fixture(scope="module")
+def recheck():
+    parts = [PartState("bracket", mesh_shape(BRACKET.vertices, BRACKET.faces), np.eye(4)),
+             PartState("ball", Shape(ShapeType.SPHERE, [10.0]), _pose(100.0))]
+    return Recheck(parts, CheckConfig("points", clearance=5.0), [])
+
+
+def _cable(name, a, b, radius=1.0):
+    return CableState(name, np.array([a, b], float), radius)
+
+
+def test_convex_hull_is_closed_and_fills_the_pocket():
+    mesh = mesh_shape(BRACKET.vertices, BRACKET.faces)
+    hull = convex_hull_shape(mesh)
+    assert hull.closed and len(hull.vertices) <= len(BRACKET.vertices)
+    pocket = np.array([[20.0, 0.0, 25.0]])
+    assert signed_distance(mesh, pocket)[0][0] > 0 > signed_distance(hull, pocket)[0][0]
+    on = BRACKET.vertices
+    assert np.all(signed_distance(hull, on)[0] <= 1e-9)                 # the mesh lies within its hull
+
+
+def test_exact_distances_of_sparse_straight_cables(recheck):
+    """Two points per cable: no discrete point comes near, the segments do."""
+    past_ball = _cable("d", [100.0, -50.0, 13.0], [100.0, 50.0, 13.0])
+    e, f = _cable("e", [-50.0, 0, 200.0], [50.0, 0, 200.0]), _cable("f", [0, -50.0, 203.0], [0, 50.0, 203.0])
+    state = recheck.at([past_ball, e, f], np.array([np.eye(4), _pose(100.0)]))
+    assert state.exact((CS, "d", "ball")) == pytest.approx(13.0 - 10.0 - 1.0, abs=1e-9)
+    assert state.exact((CC, "e", "f")) == pytest.approx(3.0 - 2.0, abs=1e-9)
+    far = recheck.at([_cable("d", [100.0, -50.0, 30.0], [100.0, 50.0, 30.0])], np.array([np.eye(4), _pose(100.0)]))
+    assert far.exact((CS, "d", "ball")) is None                          # 19 beyond the clearance of 5
+    assert state.exact((CS, "d", "nothing")) is None and state.exact((CS, "gone", "ball")) is None
+    assert state.hull((CC, "e", "f")) is None
+
+
+def test_a_cable_through_the_pocket_is_clear_of_the_mesh_but_not_its_hull(recheck):
+    through = _cable("c", [20.0, -40.0, 25.0], [20.0, 40.0, 25.0])
+    state = recheck.at([through], np.array([np.eye(4), _pose(100.0)]))
+    assert recheck.is_mesh("bracket") and not recheck.is_mesh("ball") and not recheck.is_mesh("nothing")
+    assert state.exact((CS, "c", "bracket")) is None
+    depth = signed_distance(convex_hull_shape(recheck.parts[0].shape), np.array([[20.0, 0.0, 25.0]]))[0][0]
+    assert state.hull((CS, "c", "bracket")) == pytest.approx(depth - 1.0, abs=1e-9)
+    assert state.hull((CS, "c", "bracket"), exact=False) < 0
+
+
+def test_a_batchs_answers_are_each_states_alone(recheck):
+    states = [[_cable("c", [20.0 + dx, -40.0, 25.0], [20.0 + dx, 40.0, 25.0])] for dx in (0.0, 7.0, 30.0)]
+    poses = np.array([[np.eye(4), _pose(100.0)]] * 3)
+    batch = recheck.many(states, poses)
+    key = (CS, "c", "bracket")
+    alone = [recheck.at(s, p).hull(key, exact=False) for s, p in zip(states, poses)]
+    assert [batch.at(i).hull(key, exact=False) for i in range(3)] == alone
+    assert alone[0] < 0 and alone[2] is None
