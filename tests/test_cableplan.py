@@ -1,13 +1,19 @@
 """Cable plans (sim.cableplan): a points route starts exactly on its points,
 is checked as given without dynamics, runs through every point with slack;
-routes the plan cannot keep are refused."""
+routes the plan cannot keep are refused; the default element count and
+what counts as slack."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 from buildscenes import run_steps, slider_scene
+from hypothesis import given
+from hypothesis import strategies as st
 
 from sim.build import build
+from sim.cableplan import default_segments, has_slack
 from sim.scene import parse_scene
 
 
@@ -79,3 +85,27 @@ def test_too_few_segments_for_the_points_is_refused(tmp_path):
     with pytest.raises(SceneError, match="at least 8") as e:
         parse_scene(data, tmp_path / "s.toml")
     assert e.value.key == "cables[0].segments"
+
+
+@given(st.floats(1e-3, 1e3), st.floats(1e-5, 1.0))
+def test_default_segments_are_about_25_mm_or_4_radii_within_8_to_80(length, radius):
+    """Elements of the target length (25 mm, or 4 radii for a thick cable)
+    to within half an element, unless 8 or 80 bound the count."""
+    n = default_segments(length, radius)
+    target = max(0.025, 4.0 * radius)
+    assert 8 <= n <= 80
+    if 8 < n < 80:
+        assert abs(length / target - n) <= 0.5
+    elif n == 8:
+        assert length / target <= 8.5
+    else:
+        assert length / target >= 79.5
+
+
+def test_slack_is_a_length_beyond_the_route(tmp_path):
+    data, points = _points_scene(dynamics=True, length=0.8)
+    cable = parse_scene(data, tmp_path / "s.toml").cables[0]
+    route = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+    assert has_slack(cable)
+    assert not has_slack(dataclasses.replace(cable, length=route))             # exactly as long: taut
+    assert not has_slack(dataclasses.replace(cable, length=None))
