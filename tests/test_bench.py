@@ -10,7 +10,7 @@ positive and finite.
 The tables of sim.benchcheck and sim.benchsim and the figure of
 sim.benchplot are tested here, through that one tiny run; their small
 pieces have their own files (test_benchtable, test_benchscene,
-test_benchcheck, test_benchsim, test_benchfcl).
+test_benchcheck, test_benchsim, test_benchfcl, test_benchplot).
 """
 
 from __future__ import annotations
