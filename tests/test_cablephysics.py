@@ -29,7 +29,9 @@ def cable(tmp_path):
 
 
 def test_first_mode_is_the_first_root_of_the_clamped_beam_equation():
-    f = lambda x: np.cos(x) * np.cosh(x) - 1.0  # noqa: E731
+    def f(x):
+        return np.cos(x) * np.cosh(x) - 1.0
+
     assert FIRST_BENDING_MODE == pytest.approx(brentq(f, 4.0, 5.5, xtol=1e-15), abs=1e-13)
     inner = np.linspace(0.1, 4.7, 2000)
     assert np.all(f(inner) < 0)                     # no root between 0 and it

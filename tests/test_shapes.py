@@ -6,6 +6,8 @@ test_meshgrid, test_segments)."""
 import numpy as np
 import pytest
 import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from checker.shapes import (
     Shape,

@@ -10,7 +10,14 @@ from buildscenes import slider_scene
 
 from sim.build import build
 from sim.scene import parse_scene
-from sim.substeps import MAX_SUBSTEPS, SPEED_FRACTION, bending_step, choose_substeps, held_speeds, tunnel_warnings
+from sim.substeps import (
+    MAX_SUBSTEPS,
+    SPEED_FRACTION,
+    bending_step,
+    choose_substeps,
+    held_speeds,
+    tunnel_warnings,
+)
 
 
 def _built(tmp_path, travel: float, interpolation: str = "cubic", **cable):
