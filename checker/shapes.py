@@ -310,7 +310,11 @@ def least_signed_distance(shapes: list[Shape], rotations: np.ndarray, positions:
         if sh.mesh is not None:
             d = _mesh_least(sh.mesh, loc, limit)
         else:
-            size = np.repeat(np.stack([shapes[m].size for m in members]), len(p), axis=0)
+            # sizes padded to three columns: one kind may be given with 2 or 3 numbers (a plane)
+            rows = np.zeros((len(members), 3))
+            for r, m in enumerate(members):
+                rows[r, : min(3, len(shapes[m].size))] = shapes[m].size[:3]
+            size = np.repeat(rows, len(p), axis=0)
             d = signed_distance_value_batch(sh.type, size, loc)
         out = np.minimum(out, d.reshape(len(members), len(p)).min(axis=0))
     return out

@@ -3,7 +3,6 @@ plane, starts and stays on it."""
 
 from __future__ import annotations
 
-import pytest
 from buildscenes import floor_scene, run_steps, slider_scene
 
 from sim.build import build
@@ -21,10 +20,6 @@ def test_cable_along_a_floor_starts_and_stays_on_it(tmp_path):
         assert not sim.warnings()
 
 
-@pytest.mark.xfail(strict=True, raises=ValueError,
-                   reason="sim.obstacles gives a plane the scene's size (2 numbers) or zeros(3) when it has "
-                          "none; checker.shapes.least_signed_distance np.stack-s the sizes of all "
-                          "planes in one call, which refuses lengths 2 and 3 together")
 def test_two_planes_of_different_size_lengths_build(tmp_path):
     data = slider_scene(tmp_path)
     data["parts"] += [{"name": "floor", "shape": "plane", "pos": [0, 0, -0.1]},
