@@ -37,7 +37,7 @@ from sim.jointspace import JointLog
 from sim.kinematic import KinematicSimulation
 from sim.loop import Simulation
 from sim.record import Mark, Recorder, Settings, summary_text
-from sim.report import STAGES, AdvanceOutcome, CableOutcome, RunOutcome, Timing, report_of, write_report
+from sim.report import STAGES, CableOutcome, RunOutcome, Timing, report_of, write_report
 from sim.scene import Scene, check_allow_names
 from sim.staticbuild import build_static, needs_model
 from sim.stepcheck import BATCH, StepChecks
@@ -207,7 +207,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
                             None if event_joints is None else [f["joints"] for f in event_joints])
             recorder.close()
             timer.lap("record")
-    advance = checks.advance
+    ends = checks.outcome(validated=scene.check.validate)
     return RunOutcome(
         scene=scene, config=config, scene_file=settings.scene_file, version=settings.version,
         mujoco=mujoco.__version__, complete=complete, interrupted=stop.signal_name,
@@ -215,11 +215,9 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         events=events, event_joints=event_joints,
         joint_units=dict(zip(joints.names, joints.units)) if joints else None,
         pairs=tuple(tracker.pairs.values()), allowed=tuple(tracker.allowed.values()), event_hold=tracker.hold,
-        validation=checks.validation.summary() if scene.check.validate else None,
-        advance=None if advance is None else AdvanceOutcome(checks.horizon, checks.stretch, advance.full,
-                                                            advance.skipped),
-        warnings=sim.warnings(), part_warnings=tuple(checks.rigid.warnings),
-        physics_warnings=tuple(built.warnings) + tuple(checks.hull_gaps.warnings() if checks.hull_gaps else ()),
+        validation=ends.validation, advance=ends.advance,
+        warnings=sim.warnings(), part_warnings=ends.part_warnings,
+        physics_warnings=tuple(built.warnings) + ends.hull_warnings,
         substeps=built.substeps.count if built.substeps else 1,
         timing=Timing(time.perf_counter() - start, dict(timer.total)), recording=options.record)
 

@@ -39,13 +39,14 @@ from checker.parts import PartChecker
 from checker.recheck import Recheck
 from checker.records import Interference, PairType
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
-from checker.validation import SimulatorPairs, Validation
+from checker.validation import SimulatorPairs, Validation, ValidationSummary
 from sim.build import Built
 from sim.checkview import DEFAULT_PRECISION_M, part_set, part_shapes, selection
 from sim.contacts import Contacts, RawContacts
 from sim.detection_mesh import hull_parts
 from sim.hullgap import HullGaps
 from sim.loop import StepState
+from sim.report import AdvanceOutcome
 
 
 BATCH = 32
@@ -100,6 +101,23 @@ class StepResult:
     contacts: Contacts | None = None
     agreement: float | None = None
     near: tuple | None = None
+
+
+@dataclass(frozen=True)
+class ChecksOutcome:
+    """What a run's checks say at its end, beside their events.
+
+    Attributes:
+      advance: the skip rule's distances and counts, or None when it was off.
+      validation: the comparison with MuJoCo's contacts, or None when off.
+      part_warnings: what preparing the parts found (open meshes, ...).
+      hull_warnings: cables the simulation held on a concave part's convex hull.
+    """
+
+    advance: AdvanceOutcome | None
+    validation: ValidationSummary | None
+    part_warnings: tuple[str, ...]
+    hull_warnings: tuple[str, ...]
 
 
 class StepChecks:
@@ -342,6 +360,15 @@ class StepChecks:
 
     def _cable_states(self, state: StepState) -> list[CableState]:
         return cable_states(self.built, state.cables)
+
+    def outcome(self, validated: bool) -> ChecksOutcome:
+        """The checks' end-of-run record (call after the last batch)."""
+        adv = self.advance
+        return ChecksOutcome(
+            advance=None if adv is None else AdvanceOutcome(self.horizon, self.stretch, adv.full, adv.skipped),
+            validation=self.validation.summary() if validated else None,
+            part_warnings=tuple(self.rigid.warnings),
+            hull_warnings=tuple(self.hull_gaps.warnings()) if self.hull_gaps else ())
 
     def _second_opinion(self, opinions, i: int):
         """Builds the second opinions on a disagreement at the batch's state i
