@@ -19,7 +19,8 @@ built on first use and kept. This module decides nothing: the comparison
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
 
 import numpy as np
 import trimesh
@@ -76,6 +77,18 @@ class Recheck:
         and the parts' poses (S, K, 4, 4)."""
         return BatchRecheck(self, [{c.name: c for c in cs} for cs in cables], np.asarray(poses, float))
 
+    def many_points(self, cables: Sequence[CableState], points: np.ndarray, poses: np.ndarray) -> "BatchRecheck":
+        """:meth:`many` from arrays: the cables as at any one state (names,
+        radii, rest coordinates), every state's body centres (S, N, 3), the
+        cables' concatenated, and the parts' poses (S, K, 4, 4). A state's
+        cable is made only when a second opinion asks for it."""
+        points = np.asarray(points, float)
+        ends = np.cumsum([len(c.points) for c in cables])
+        spans = {c.name: (int(e) - len(c.points), int(e)) for c, e in zip(cables, ends)}
+        template = {c.name: c for c in cables}
+        states = [_StateCables(template, spans, x) for x in points]
+        return BatchRecheck(self, states, np.asarray(poses, float), (points, spans))
+
     def _checker(self, k: int, hull: bool, exact: bool = True) -> Checker:
         key = (k, hull, exact)
         if key not in self._checkers:
@@ -94,8 +107,10 @@ class BatchRecheck:
     state of the batch in one call (a pair that disagrees at one step mostly
     does at the next ones too); the answers are those of each state alone."""
 
-    def __init__(self, owner: Recheck, cables: list[dict[str, CableState]], poses: np.ndarray):
+    def __init__(self, owner: Recheck, cables: list[Mapping[str, CableState]], poses: np.ndarray,
+                 points: tuple[np.ndarray, dict[str, tuple[int, int]]] | None = None):
         self.owner, self.cables, self.poses = owner, cables, poses
+        self._points = points
         self._hull_points: dict[tuple[str, str, str], list[float | None]] = {}
         self._exact: dict[tuple[str, str, str], list[float | None]] = {}
 
@@ -123,7 +138,11 @@ class BatchRecheck:
             first = self.cables[0][a]
             n = len(first.points)
             checker = self.owner._checker(k, True, False)
-            pts = np.stack([np.asarray(c[a].points, float) for c in self.cables])
+            if self._points is not None:
+                all_pts, spans = self._points
+                pts = all_pts[:, spans[a][0]:spans[a][1]]
+            else:
+                pts = np.stack([np.asarray(c[a].points, float) for c in self.cables])
             dense = checker.densify_many(pts, np.array([0, n]), np.array([first.radius]), first.rest_s)
             found = checker.structure_many([a], np.array([first.radius]), dense, self.poses[:, k][:, None],
                                            self.owner.exclusions, (np.arange(n), np.zeros(n, np.int64)))
@@ -131,12 +150,36 @@ class BatchRecheck:
         return self._hull_points[key]
 
 
+class _StateCables(Mapping):
+    """One state's cables by name, each made from the state's body centres
+    when first asked for (:meth:`Recheck.many_points`)."""
+
+    def __init__(self, template: dict[str, CableState], spans: dict[str, tuple[int, int]], points: np.ndarray):
+        self._template, self._spans, self._points = template, spans, points
+        self._made: dict[str, CableState] = {}
+
+    def __getitem__(self, name: str) -> CableState:
+        if name not in self._made:
+            lo, hi = self._spans[name]
+            self._made[name] = replace(self._template[name], points=self._points[lo:hi])
+        return self._made[name]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._template
+
+    def __iter__(self):
+        return iter(self._template)
+
+    def __len__(self) -> int:
+        return len(self._template)
+
+
 class StateRecheck:
     """Second opinions at one state (:meth:`Recheck.at`). Each returns the
     pair's signed distance when below the clearance, else None (clear), as
     the checker's records do."""
 
-    def __init__(self, owner: Recheck, cables: dict[str, CableState], poses: np.ndarray,
+    def __init__(self, owner: Recheck, cables: Mapping[str, CableState], poses: np.ndarray,
                  batch: BatchRecheck | None = None, index: int = 0):
         self.owner, self.cables, self.poses = owner, cables, poses
         self.batch, self.index = batch, index

@@ -229,8 +229,8 @@ class StepChecks:
 
         def opinions():      # the batch's second opinions, built on the first disagreement
             if not batch:
-                batch.append(self._recheck.many([self._cable_states(s) for s in states],
-                                                np.stack([s.part_poses[self.checked_parts] for s in states])))
+                batch.append(self._recheck.many_points(self._cable_states(states[0]), pts,
+                                                       np.stack([s.part_poses[self.checked_parts] for s in states])))
             return batch[0]
 
         for i, (state, result, found, pairs) in enumerate(zip(states, results, contacts, seen)):

@@ -220,11 +220,14 @@ def test_hull_opinions_for_a_batch_are_each_state_alone():
         pose[:3, 3] = rng.normal(0, 0.002, 3)
         poses.append(pose[None])
     batch = recheck.many(cables, np.stack(poses))
+    arrays = recheck.many_points(cables[0], np.stack([cs[0].points for cs in cables]), np.stack(poses))
     full = Checker([PartState("fork", convex_hull_shape(shape), np.eye(4))], config)
     found = []
     for i, (cs, pose) in enumerate(zip(cables, poses)):
         alone = recheck.at(cs, pose).hull(key, exact=False)
         assert batch.at(i).hull(key, exact=False) == alone
+        assert arrays.at(i).hull(key, exact=False) == alone
+        assert arrays.at(i).exact(key) == recheck.at(cs, pose).exact(key)
         records = [r for r in full.check(cs, pose, excl) if r.b == "fork"]
         assert alone == (records[0].min_distance if records else None)
         found.append(alone)
