@@ -19,12 +19,16 @@ built on first use and kept. This module decides nothing: the comparison
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
 
 import numpy as np
 import trimesh
 
 from checker.interference import Checker
+from checker.interference.discrete import discretise
+from checker.interference.hits import Hits, worst_records
+from checker.interference.structure import PartTable, structure_exact_pairs
 from checker.records import PairType
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from checker.shapes import Shape, ShapeType, mesh_shape
@@ -73,6 +77,18 @@ class Recheck:
         and the parts' poses (S, K, 4, 4)."""
         return BatchRecheck(self, [{c.name: c for c in cs} for cs in cables], np.asarray(poses, float))
 
+    def many_points(self, cables: Sequence[CableState], points: np.ndarray, poses: np.ndarray) -> "BatchRecheck":
+        """:meth:`many` from arrays: the cables as at any one state (names,
+        radii, rest coordinates), every state's body centres (S, N, 3), the
+        cables' concatenated, and the parts' poses (S, K, 4, 4). A state's
+        cable is made only when a second opinion asks for it."""
+        points = np.asarray(points, float)
+        ends = np.cumsum([len(c.points) for c in cables])
+        spans = {c.name: (int(e) - len(c.points), int(e)) for c, e in zip(cables, ends)}
+        template = {c.name: c for c in cables}
+        states = [_StateCables(template, spans, x) for x in points]
+        return BatchRecheck(self, states, np.asarray(poses, float), (points, spans))
+
     def _checker(self, k: int, hull: bool, exact: bool = True) -> Checker:
         key = (k, hull, exact)
         if key not in self._checkers:
@@ -91,13 +107,28 @@ class BatchRecheck:
     state of the batch in one call (a pair that disagrees at one step mostly
     does at the next ones too); the answers are those of each state alone."""
 
-    def __init__(self, owner: Recheck, cables: list[dict[str, CableState]], poses: np.ndarray):
+    def __init__(self, owner: Recheck, cables: list[Mapping[str, CableState]], poses: np.ndarray,
+                 points: tuple[np.ndarray, dict[str, tuple[int, int]]] | None = None):
         self.owner, self.cables, self.poses = owner, cables, poses
+        self._points = points
         self._hull_points: dict[tuple[str, str, str], list[float | None]] = {}
+        self._exact: dict[tuple[str, str, str], list[float | None]] = {}
 
     def at(self, i: int) -> "StateRecheck":
         """The second opinions at the batch's state i."""
         return StateRecheck(self.owner, self.cables[i], self.poses[i], self, i)
+
+    def exact_part(self, key: tuple[str, str, str]) -> list[float | None]:
+        """The cable-part pair's distance with method exact at every state:
+        the batch's copies of the cable, each against its own state's pose
+        of the part, in one pass (each element against its own state's part
+        only; the same distances as each state's check alone)."""
+        if key not in self._exact:
+            _, a, b = key
+            k = self.owner.index[b]
+            self._exact[key] = exact_many(self.owner._checker(k, False, True), [c.get(a) for c in self.cables],
+                                          self.poses[:, k], self.owner.exclusions, key)
+        return self._exact[key]
 
     def hull_points(self, key: tuple[str, str, str]) -> list[float | None]:
         """The pair's distance to the hull by discrete points at every state."""
@@ -107,7 +138,11 @@ class BatchRecheck:
             first = self.cables[0][a]
             n = len(first.points)
             checker = self.owner._checker(k, True, False)
-            pts = np.stack([np.asarray(c[a].points, float) for c in self.cables])
+            if self._points is not None:
+                all_pts, spans = self._points
+                pts = all_pts[:, spans[a][0]:spans[a][1]]
+            else:
+                pts = np.stack([np.asarray(c[a].points, float) for c in self.cables])
             dense = checker.densify_many(pts, np.array([0, n]), np.array([first.radius]), first.rest_s)
             found = checker.structure_many([a], np.array([first.radius]), dense, self.poses[:, k][:, None],
                                            self.owner.exclusions, (np.arange(n), np.zeros(n, np.int64)))
@@ -115,12 +150,36 @@ class BatchRecheck:
         return self._hull_points[key]
 
 
+class _StateCables(Mapping):
+    """One state's cables by name, each made from the state's body centres
+    when first asked for (:meth:`Recheck.many_points`)."""
+
+    def __init__(self, template: dict[str, CableState], spans: dict[str, tuple[int, int]], points: np.ndarray):
+        self._template, self._spans, self._points = template, spans, points
+        self._made: dict[str, CableState] = {}
+
+    def __getitem__(self, name: str) -> CableState:
+        if name not in self._made:
+            lo, hi = self._spans[name]
+            self._made[name] = replace(self._template[name], points=self._points[lo:hi])
+        return self._made[name]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._template
+
+    def __iter__(self):
+        return iter(self._template)
+
+    def __len__(self) -> int:
+        return len(self._template)
+
+
 class StateRecheck:
     """Second opinions at one state (:meth:`Recheck.at`). Each returns the
     pair's signed distance when below the clearance, else None (clear), as
     the checker's records do."""
 
-    def __init__(self, owner: Recheck, cables: dict[str, CableState], poses: np.ndarray,
+    def __init__(self, owner: Recheck, cables: Mapping[str, CableState], poses: np.ndarray,
                  batch: BatchRecheck | None = None, index: int = 0):
         self.owner, self.cables, self.poses = owner, cables, poses
         self.batch, self.index = batch, index
@@ -148,6 +207,8 @@ class StateRecheck:
             return None
         if hull and not exact and self.batch is not None:
             return self.batch.hull_points(key)[self.index]
+        if not hull and exact and self.batch is not None:
+            return self.batch.exact_part(key)[self.index]
         checker = self.owner._checker(k, hull, exact)
         cable = self.cables[a]
         if exact:
@@ -162,6 +223,39 @@ class StateRecheck:
             found = checker.structure_many([a], np.array([cable.radius]), dense, self.poses[k][None, None],
                                            self.owner.exclusions, (np.arange(n), np.zeros(n, np.int64)))[0]
         return _distance(found, key)
+
+
+def exact_many(checker: Checker, cables: Sequence[CableState | None], poses: np.ndarray,
+                exclusions: Sequence[Exclusion], key: tuple[str, str, str]) -> list[float | None]:
+    """A cable against a one-part exact checker's part at S states (poses
+    (S, 4, 4)), as ``checker.check([cable], pose, exclusions)`` classes the
+    pair at each (None: clear, or no cable there), in one pass: the S
+    cables discretised together (each on its own, the same bits), every
+    element of cable s paired with part s only."""
+    out: list[float | None] = [None] * len(cables)
+    rows = [i for i, c in enumerate(cables) if c is not None]
+    if not rows or checker._tab is None:
+        return out
+    n = len(rows)
+    part = checker.parts[0]
+    tab = PartTable([part] * n).posed(np.ascontiguousarray(poses[rows], dtype=float))
+    # the cable's windows against the part, once per copy (copy s against part s)
+    one = checker._exclusion_table([key[1]], exclusions)
+    key_e, lo, hi, _ = one.excl
+    copy = np.repeat(np.arange(n), len(key_e))
+    excl = (copy * n + copy, np.tile(lo, n), np.tile(hi, n), n)
+    cut_c = np.repeat(np.arange(n), len(one.cable))
+    cuts = (np.concatenate([cut_c, cut_c]), np.concatenate([np.tile(one.lo, n), np.tile(one.hi, n)]))
+    dp = discretise([cables[i] for i in rows], checker.config, cuts)
+    hits = Hits()
+    structure_exact_pairs(dp, tab, checker.config, excl, hits, dp.seg, dp.cable[dp.seg])
+    if hits.parts:
+        t, a, _, v, w, s_at, sb = (np.concatenate(x) for x in zip(*hits.parts))
+        found = worst_records(n, a, t, np.zeros_like(a), np.zeros_like(a), v, w, s_at, sb,
+                              checker.config.clearance, [key[1]], lambda _: [key[2]])
+        for i, recs in zip(rows, found):
+            out[i] = _distance(recs, key)
+    return out
 
 
 def _distance(records, key: tuple[str, str, str]) -> float | None:

@@ -247,8 +247,8 @@ class StepChecks:
 
         def opinions():      # the batch's second opinions, built on the first disagreement
             if not batch:
-                batch.append(self._recheck.many([self._cable_states(s) for s in states],
-                                                np.stack([s.part_poses[self.checked_parts] for s in states])))
+                batch.append(self._recheck.many_points(self._cable_states(states[0]), pts,
+                                                       np.stack([s.part_poses[self.checked_parts] for s in states])))
             return batch[0]
 
         for i, (state, result, found, pairs) in enumerate(zip(states, results, contacts, seen)):
@@ -294,10 +294,6 @@ class StepChecks:
             out.append(StepResult(cable_records + part_records, cable_records, st, bd, False))
         return out
 
-    def _active_part_records(self, poses: np.ndarray) -> list[Interference]:
-        """The records of the active part pairs, checked on their own."""
-        return self.part_checker.check_pairs(poses, *self._part_active) if len(self._part_active[0]) else []
-
     def _full(self, state: StepState, pts: np.ndarray, poses: np.ndarray, strain: np.ndarray,
               bend: np.ndarray) -> StepResult:
         cables = self._cable_states(state)
@@ -307,8 +303,15 @@ class StepChecks:
         cable_records = checked.records
         # moving part pairs still provably apart: only same-body records and
         # the active pairs, checked on their own
-        if adv is not None and state.step > 0 and adv.part_pairs_clear(poses):
-            part_records = self._same_body_records(poses) + self._active_part_records(poses)
+        # moving part pairs still provably apart but the few whose bound
+        # failed: same-body records, those pairs and the active pairs, checked
+        # on their own (the full part-part check's records, pairs being disjoint)
+        failing = adv.part_pairs_failing(poses) if adv is not None and state.step > 0 else None
+        if failing is not None:
+            fi, fj = failing
+            ai, aj = self._part_active
+            part_records = self._same_body_records(poses) + self.part_checker.check_pairs(
+                poses, np.concatenate([fi, ai]), np.concatenate([fj, aj]))
         else:
             part_records = self.part_checker.check(poses)
         if adv is not None:

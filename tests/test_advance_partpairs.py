@@ -56,3 +56,21 @@ def test_pairs_clear_while_the_moves_stay_below_the_bound(move_a, move_b):
     assert gaps.clear_at(now) == (move_a + move_b < 0.9)
     gaps.stop()
     assert not gaps.clear_at(start)
+
+
+@given(st.floats(0.0, 1.5), st.floats(0.0, 1.5))
+def test_failing_pairs_are_the_pairs_whose_bound_fails(move_a, move_c):
+    """Three parts, pairs (0, 1) and (1, 2) bound 1 apart (clearance 0.1):
+    a pair is failing exactly when its moves reach 0.9; no pairs after a stop."""
+    gaps = PartPairGaps(np.array([0.5, 0.5, 0.5]), 0.1)
+    start = np.tile(np.eye(4), (3, 1, 1))
+    gaps.start(start, (np.array([0, 1]), np.array([1, 2])), np.array([1.0, 1.0]), mu=0.0)
+    now = start.copy()
+    now[0, 0, 3] += move_a
+    now[2, 1, 3] -= move_c
+    fi, fj = gaps.failing_at(now)
+    want = [(0, 1)] * (move_a >= 0.9) + [(1, 2)] * (move_c >= 0.9)
+    assert list(zip(fi.tolist(), fj.tolist())) == want
+    assert gaps.clear_at(now) == (not want)
+    gaps.stop()
+    assert gaps.failing_at(start) is None

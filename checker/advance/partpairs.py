@@ -108,3 +108,15 @@ class PartPairGaps:
             return False
         dp = self.moves(poses)
         return not len(self._pi) or bool(np.all(dp[self._pi] + dp[self._pj] < self._g_pair))
+
+    def failing_at(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """The moving part pairs (i, j) whose bound fails at poses (every
+        other pair is provably outside the clearance), or None when no pair
+        is bounded (before a start, or the part count changed)."""
+        if not self.ok or len(poses) != len(self._poses):
+            return None
+        if not len(self._pi):
+            return self._pi[:0], self._pj[:0]
+        dp = self.moves(poses)
+        fail = ~(dp[self._pi] + dp[self._pj] < self._g_pair)
+        return self._pi[fail], self._pj[fail]

@@ -183,6 +183,11 @@ class Advancement:
         whose cable checks run in full."""
         return self._pairs.clear_at(poses)
 
+    def part_pairs_failing(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """The moving part pairs whose bound fails at poses (the others
+        provably outside the clearance), or None when no bound holds."""
+        return self._pairs.failing_at(poses)
+
     def proven_clear(self, pts: np.ndarray, poses: np.ndarray) -> bool:
         """True when no pair can be within the clearance at one state (body
         centres (N, 3), part poses (P, 4, 4)); counts it as skipped then."""

@@ -26,6 +26,7 @@ from checker.interference import cablepairs, discrete, structure
 from checker.interference.broad import Chunks
 from checker.interference.cablepairs import cable_pairs_exact, cable_pairs_points
 from checker.interference.discrete import DenseStates, discretise
+from checker.interference.exclusions import ExclusionTable, exclusion_arrays
 from checker.interference.hits import Gaps, Hits
 from checker.interference.single import single_cable
 from checker.interference.structure import PartTable, structure_exact, structure_points
@@ -33,6 +34,8 @@ from checker.records import Interference, PairType
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 
 _EYE3 = np.eye(3)
+_EXCL_KEEP = 256
+"""Cable selections whose exclusion tables a checker keeps (a full check's, and one per cable)."""
 
 
 @dataclass(frozen=True)
@@ -83,7 +86,7 @@ class Checker:
         self._pidx = {p.name: i for i, p in enumerate(self.parts)}
         self.horizon = float(horizon)
         self.stretch = float(stretch)
-        self._excl_cache: tuple | None = None
+        self._excl_cache: dict = {}
 
     @property
     def bounds_gaps(self) -> bool:
@@ -104,30 +107,24 @@ class Checker:
         corner = np.maximum(np.abs(lo), np.abs(hi))
         return np.sqrt(np.einsum("ij,ij->i", corner, corner))
 
-    def _exclusion_table(self, cable_names: Sequence[str], exclusions: Sequence[Exclusion]) -> tuple:
-        """Exclusions as arrays: ((key, lo, hi, n_parts) sorted by key =
-        cable * n_parts + part, cable, lo, hi) for these cables and parts."""
-        # a run passes the same windows at every full check: built once per
-        # (cables, windows) and kept (with the windows, so their id stays theirs)
+    def _exclusion_table(self, cable_names: Sequence[str], exclusions: Sequence[Exclusion]) -> ExclusionTable:
+        """The windows of these cables against this checker's parts
+        (:meth:`~checker.interference.exclusions.ExclusionArrays.table`)."""
+        # a run passes the same windows at every check: the list's arrays are
+        # built once, and the last few cable selections are kept
+        arrays = exclusion_arrays(exclusions)
         names = tuple(cable_names)
-        cached = self._excl_cache
-        if cached is not None and cached[0] is exclusions and cached[1] == names and cached[2] == len(exclusions):
-            return cached[3]
-        cidx = {n: i for i, n in enumerate(names)}
-        pidx = self._pidx
-        ex_c = np.array([cidx.get(e.cable, -1) for e in exclusions], dtype=np.int64)
-        ex_p = np.array([pidx.get(e.part, -1) for e in exclusions], dtype=np.int64)
-        s_min = np.array([e.s_min for e in exclusions], dtype=float)
-        s_max = np.array([e.s_max for e in exclusions], dtype=float)
-        mine = (ex_c >= 0) & (ex_p >= 0)
-        ex_c, ex_p, s_min, s_max = ex_c[mine], ex_p[mine], s_min[mine], s_max[mine]
-        ex_lo, ex_hi = np.minimum(s_min, s_max), np.maximum(s_min, s_max)
-        n_parts = max(len(self.parts), 1)
-        key = ex_c * n_parts + ex_p
-        o = np.argsort(key, kind="stable")
-        table = (key[o], ex_lo[o], ex_hi[o], n_parts), ex_c, ex_lo, ex_hi
-        if isinstance(exclusions, (list, tuple)):
-            self._excl_cache = (exclusions, names, len(exclusions), table)
+        cache = self._excl_cache
+        if cache.get("arrays") is not arrays:
+            cache.clear()
+            cache["arrays"] = arrays
+            cache["parts"] = arrays.part_map(self._pidx)
+        table = cache.get(names)
+        if table is None:
+            table = arrays.table(names, cache["parts"], len(self.parts))
+            if len(cache) > _EXCL_KEEP:
+                del cache[next(k for k in cache if isinstance(k, tuple))]
+            cache[names] = table
         return table
 
     def densify_many(self, pts: np.ndarray, offsets: np.ndarray, radii: np.ndarray,
@@ -139,7 +136,7 @@ class Checker:
                        poses: np.ndarray, exclusions: Sequence[Exclusion],
                        active: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
         """:func:`checker.interference.structure.structure_many` on this checker's parts."""
-        excl = self._exclusion_table(names, exclusions)[0] if self._tab is not None else None
+        excl = self._exclusion_table(names, exclusions).excl if self._tab is not None else None
         return structure.structure_many(self._tab, self.config, excl, names, radii, dense, poses, active)
 
     def cable_pairs_many(self, names: Sequence[str], radii: np.ndarray, dense: DenseStates,
@@ -198,7 +195,8 @@ class Checker:
         if len(set(cable_names)) != len(cable_names):
             raise ValueError("cable names must be unique")
         if cables:
-            excl, ex_c, ex_lo, ex_hi = self._exclusion_table(cable_names, exclusions)
+            table = self._exclusion_table(cable_names, exclusions)
+            excl, ex_c, ex_lo, ex_hi = table.excl, table.cable, table.lo, table.hi
             exact = config.method == "exact"
             cuts = (np.concatenate([ex_c, ex_c]), np.concatenate([ex_lo, ex_hi])) if exact \
                 else (np.zeros(0, np.int64), np.zeros(0))

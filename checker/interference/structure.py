@@ -215,12 +215,20 @@ def structure_points(dp, ch, tab, config, excl, hits, limit=None, excl_near=None
 
 def structure_exact(dp, ch, tab, config, excl, hits) -> None:
     """Least signed distance along every candidate element to its part, minus r."""
-    p, s, seg = dp.p, dp.s, dp.seg
-    if len(seg) == 0:
+    if len(dp.seg) == 0:
         return
     # Chunk spheres hold whole elements: the margin needs no half length.
     margin = float(dp.radius.max()) + config.clearance
     i0, pk = chunk_part_pairs(tab, ch, margin)
+    structure_exact_pairs(dp, tab, config, excl, hits, i0, pk)
+
+
+def structure_exact_pairs(dp, tab, config, excl, hits, i0: np.ndarray, pk: np.ndarray) -> None:
+    """:func:`structure_exact` on given (element, part) candidates (element
+    i0 joins points i0 and i0 + 1): any superset of the broad phase's
+    candidates gives the same records (the filters below only drop elements
+    farther than the clearance)."""
+    p, s = dp.p, dp.s
     it = i0
     if len(it) == 0:
         return
