@@ -68,7 +68,8 @@ def harness_scene(n_cables: int = 64, n_parts: int = 1000, segments: int = 40, d
     Args:
         n_cables: cables (>= 1).
         n_parts: rigid parts besides the carriage's plate (>= 0).
-        segments: MuJoCo elements per cable.
+        segments: MuJoCo elements per cable (more where its route has more
+            points: one per slice of parts it threads).
         duration: simulated seconds (the carriage rises over the first half
             and falls back over the second).
         seed: random sizes, orientations and near parts.
@@ -136,7 +137,8 @@ def harness_scene(n_cables: int = 64, n_parts: int = 1000, segments: int = 40, d
             via.append([x0 + (s + 0.5) * PITCH, y + w, z - w])
         route = np.array([[0.0, y, z]] + via + [[x_end, y, z]])
         path = float(np.linalg.norm(np.diff(route, axis=0), axis=1).sum())
-        cables.append({"name": f"c{c:02d}", "radius": RADIUS, "segments": segments,
+        # every route point is a vertex: a long cable (few cables among many parts) gets more elements
+        cables.append({"name": f"c{c:02d}", "radius": RADIUS, "segments": max(segments, len(route)),
                        "length": round(1.05 * path, 6),
                        "start": {"body": "world", "pos": [0.0, y, z]},
                        "end": {"body": "carriage", "pos": [x_end, y, z]},
