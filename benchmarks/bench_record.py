@@ -135,7 +135,7 @@ def main(argv=None) -> int:
         row.append(None if not (now and then) else now["record"] / then["record"])
         row.append("-" if now is None else ("yes" if now["ratio"] <= 0.5 else "NO"))
         rows.append(row if len(trees) > 1 else [row[0], *row[6:11], row[-1]])
-        print(rows[-1], flush=True)
+        print(f"{scene.stem}: measured", file=sys.stderr, flush=True)
     cols = (["scene", "before_rec", "before_sim", "before_ratio", "before_cpu_ratio", "before_mb",
              "rec", "sim", "ratio", "cpu_ratio", "mb", "rec/before", "ratio<=0.5"] if len(trees) > 1
             else ["scene", "rec", "sim", "ratio", "cpu_ratio", "mb", "ratio<=0.5"])
