@@ -46,6 +46,7 @@ from __future__ import annotations
 import hashlib
 import threading
 from collections import OrderedDict
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -68,7 +69,7 @@ from checker.segments import (
 
 __all__ = [
     "SHAPE_CODE", "MeshData", "Shape", "ShapeType", "distance_bounds", "face_plane_distance", "face_plane_distance_batch",
-    "least_signed_distance", "mesh_shape", "primitive_bounds", "segment_signed_distance", "segment_signed_distance_batch",
+    "least_signed_distance", "mesh_shape", "primitive_bounds", "segment_signed_distance", "size_rows", "segment_signed_distance_batch",
     "segment_signed_distance_mixed", "signed_distance", "signed_distance_batch", "signed_distance_value_batch",
 ]
 
@@ -140,6 +141,15 @@ class Shape:
 
 SHAPE_CODE = {t: n for n, t in enumerate(ShapeType)}
 """Each shape type's integer code, for shape types held in arrays."""
+
+
+def size_rows(shapes: Sequence[Shape]) -> np.ndarray:
+    """(K, 3) the shapes' sizes padded with zeros to three columns: one kind
+    may be given with 2 or 3 numbers (a plane), so rows stack whatever each gave."""
+    rows = np.zeros((len(shapes), 3))
+    for r, sh in enumerate(shapes):
+        rows[r, : min(3, len(sh.size))] = sh.size[:3]
+    return rows
 
 
 def primitive_bounds(codes: np.ndarray, sizes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -310,11 +320,7 @@ def least_signed_distance(shapes: list[Shape], rotations: np.ndarray, positions:
         if sh.mesh is not None:
             d = _mesh_least(sh.mesh, loc, limit)
         else:
-            # sizes padded to three columns: one kind may be given with 2 or 3 numbers (a plane)
-            rows = np.zeros((len(members), 3))
-            for r, m in enumerate(members):
-                rows[r, : min(3, len(shapes[m].size))] = shapes[m].size[:3]
-            size = np.repeat(rows, len(p), axis=0)
+            size = np.repeat(size_rows([shapes[m] for m in members]), len(p), axis=0)
             d = signed_distance_value_batch(sh.type, size, loc)
         out = np.minimum(out, d.reshape(len(members), len(p)).min(axis=0))
     return out

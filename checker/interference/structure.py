@@ -43,9 +43,9 @@ from checker.shapes import (
     segment_signed_distance_mixed,
     signed_distance,
     signed_distance_value_batch,
+    size_rows,
 )
 
-TYPE_CODE = SHAPE_CODE
 _STRUCTURE, _KEEPOUT = TYPE_ORDER.index(PairType.CABLE_STRUCTURE), TYPE_ORDER.index(PairType.KEEPOUT)
 
 
@@ -58,13 +58,10 @@ class PartTable:
         k = len(parts)
         self.parts = parts
         self.names = [pt.name for pt in parts]
-        self.size = np.zeros((k, 3))
-        for n, pt in enumerate(parts):
-            sz = pt.shape.size[:3]
-            self.size[n, : len(sz)] = sz
-        self.type = np.array([TYPE_CODE[pt.shape.type] for pt in parts], dtype=np.int64).reshape(k)
+        self.size = size_rows([pt.shape for pt in parts])
+        self.type = np.array([SHAPE_CODE[pt.shape.type] for pt in parts], dtype=np.int64).reshape(k)
         self.lo, self.hi = primitive_bounds(self.type, self.size)
-        for n in np.nonzero(self.type == TYPE_CODE[ShapeType.MESH])[0]:
+        for n in np.nonzero(self.type == SHAPE_CODE[ShapeType.MESH])[0]:
             self.lo[n], self.hi[n] = parts[n].shape.local_bounds()
         self.keepout = np.array([pt.keepout for pt in parts], dtype=bool)
         # Parts sharing one mesh are answered in one call: group id per part.
@@ -75,7 +72,7 @@ class PartTable:
         for pt in parts:
             if pt.shape.mesh is not None:
                 self.mesh_shapes[groups[id(pt.shape.mesh)]] = pt.shape
-        self.is_plane = self.type == TYPE_CODE[ShapeType.PLANE]
+        self.is_plane = self.type == SHAPE_CODE[ShapeType.PLANE]
         # Bounding spheres of the finite parts, in their own frames.
         self.finite = np.nonzero(~self.is_plane)[0]
         self.planes = np.nonzero(self.is_plane)[0]
@@ -248,7 +245,7 @@ def structure_exact_pairs(dp, tab, config, excl, hits, i0: np.ndarray, pk: np.nd
     it, pk, i0, a, b = it[near], pk[near], i0[near], a[near], b[near]
     d = np.full(len(it), np.inf)
     t = np.zeros(len(it))
-    is_mesh = tab.type[pk] == TYPE_CODE[ShapeType.MESH]
+    is_mesh = tab.type[pk] == SHAPE_CODE[ShapeType.MESH]
     sel = np.nonzero(is_mesh)[0]
     grp = tab.mesh_group[pk[sel]]
     for g in np.unique(grp):
