@@ -2,11 +2,12 @@
 
 The points (or elements) of every cable are cut into chunks of a few
 consecutive ones, each with a bounding sphere (around the chord's midpoint,
-of half the arc length), and one k-d tree is built over pairs of consecutive
-chunks. :meth:`Chunks.pairs` gives chunk pairs that may come within a reach
-(cable against cable, other than neighbours along one cable: the near field
-of :mod:`checker.interference.cablepairs`); :func:`chunk_part_pairs` meets
-every part's bounding sphere with the tree, then the chunks' spheres. Cost
+of half the arc length), and pairs of consecutive chunks ("super chunks")
+are binned into a uniform grid (:class:`checker.cellgrid.CellGrid`).
+:meth:`Chunks.pairs` gives chunk pairs that may come within a reach (cable
+against cable, other than neighbours along one cable: the near field of
+:mod:`checker.interference.cablepairs`); :func:`chunk_part_pairs` meets
+every part's bounding sphere with the grid, then the chunks' spheres. Cost
 therefore grows with the number of close pairs, not with points x parts.
 
 Deliberately not here: exact distances (the narrow phases of
@@ -19,8 +20,8 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.spatial import cKDTree
 
+from checker.cellgrid import CellGrid
 if TYPE_CHECKING:
     from checker.interference.structure import PartTable
 
@@ -42,11 +43,12 @@ class Chunks:
         centre, radius: bounding spheres.
         sub: (S, 2) the chunks of each super chunk (two consecutive chunks of
             one cable), -1 padded; sup_centre, sup_radius: their spheres.
-        tree: k-d tree over the super chunks' centres.
+        grid: the super chunks' centres in a cell grid, its cells sized for
+            :meth:`pairs` at ``reach``.
         has_next: (M,) point i + 1 is on point i's cable.
     """
 
-    def __init__(self, p, s, cable, has_next, items):
+    def __init__(self, p, s, cable, has_next, items, reach: float = 0.0):
         ic = cable[items]
         n = len(items)
         # Position of each item along its cable's run of items.
@@ -70,7 +72,7 @@ class Chunks:
         self.radius = 0.5 * (s[b] - s[a])
         self.has_next = has_next
         # Pairs of consecutive chunks of one cable ("super chunks") hold the
-        # tree for chunk pairs: half as many spheres to pair up.
+        # grid for chunk pairs: half as many spheres to pair up.
         nc = len(starts)
         new_sup = np.r_[True, self.cable[1:] != self.cable[:-1]]
         run = np.nonzero(new_sup)[0]
@@ -84,7 +86,8 @@ class Chunks:
         sb = b[np.r_[sup_start[1:], nc] - 1]
         self.sup_centre = 0.5 * (p[sa] + p[sb])
         self.sup_radius = 0.5 * (s[sb] - s[sa])
-        self.tree = cKDTree(self.sup_centre, balanced_tree=False, compact_nodes=False)
+        rmax = float(self.sup_radius.max()) if nc else 0.0
+        self.grid = CellGrid(self.sup_centre, (reach + 2.0 * rmax) * (1 + SLACK))
 
     def pairs(self, reach: float) -> tuple[np.ndarray, np.ndarray]:
         """Chunk pairs (A < B) whose spheres come within ``reach``, except
@@ -95,11 +98,11 @@ class Chunks:
         # Super chunk pairs first (the two chunks of one are adjacent), then
         # their chunks' 2 x 2 combinations against the chunks' own spheres.
         rmax = float(self.sup_radius.max())
-        pr = self.tree.query_pairs((reach + 2.0 * rmax) * (1 + SLACK), output_type="ndarray")
-        if len(pr) == 0:
+        sa, sb = self.grid.pairs((reach + 2.0 * rmax) * (1 + SLACK))
+        if len(sa) == 0:
             return none
-        a = np.repeat(self.sub[pr[:, 0]], 2, axis=1).ravel()
-        b = np.tile(self.sub[pr[:, 1]], (1, 2)).ravel()
+        a = np.repeat(self.sub.take(sa, axis=0), 2, axis=1).ravel()
+        b = np.tile(self.sub.take(sb, axis=0), (1, 2)).ravel()
         ok = (a >= 0) & (b >= 0)
         a, b = a[ok], b[ok]
         a, b = np.minimum(a, b), np.maximum(a, b)
@@ -140,7 +143,7 @@ def chunk_part_pairs(tab: PartTable, ch: Chunks, margin: float) -> tuple[np.ndar
     """(item, part) pairs where the item may lie within ``margin`` of the part.
 
     Each finite part's bounding sphere, grown by ``margin``, is met with the
-    super chunks' spheres through their tree, then with their chunks'
+    super chunks' spheres through their grid, then with their chunks'
     spheres; the items of every chunk met are candidates. Planes take every item.
     Returns item indices (into the points) and part indices, both (n,).
     """
@@ -149,12 +152,9 @@ def chunk_part_pairs(tab: PartTable, ch: Chunks, margin: float) -> tuple[np.ndar
     if len(fin) and len(ch.radius):
         c_world = np.einsum("nij,nj->ni", tab.rot[fin], tab.c_loc) + tab.trans[fin]
         rad = tab.half_diag + margin
-        lists = ch.tree.query_ball_point(c_world, (rad + float(ch.sup_radius.max())) * (1 + SLACK),
-                                         return_sorted=False)
-        cnt = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(fin))
-        sup = np.fromiter((i for x in lists for i in x), dtype=np.int64, count=int(cnt.sum()))
-        c = ch.sub[sup].ravel()
-        k = np.repeat(np.arange(len(fin)), 2 * cnt)
+        k, sup = ch.grid.near(c_world, (rad + float(ch.sup_radius.max())) * (1 + SLACK))
+        c = ch.sub.take(sup, axis=0).ravel()
+        k = np.repeat(k, 2)
         ok = c >= 0
         c, k = c[ok], k[ok]
         ok = within_reach(ch.centre[c], c_world[k], rad[k] + ch.radius[c])

@@ -203,11 +203,12 @@ class Checker:
             dp = discretise(cables, config, cuts)
             has_next = np.concatenate([dp.cable[:-1] == dp.cable[1:], [False]])
             limit = config.clearance + (horizon if bounded else 0.0)
+            reach = 2.0 * float(dp.radius.max()) + (config.clearance if exact else limit)  # of the cable pairs
             if exact:
-                ch = Chunks(dp.p, dp.s, dp.cable, has_next, dp.seg)
+                ch = Chunks(dp.p, dp.s, dp.cable, has_next, dp.seg, reach)
                 cable_pairs_exact(dp, ch, config.clearance, hits)
             else:
-                ch = Chunks(dp.p, dp.s, dp.cable, has_next, np.arange(len(dp.p)))
+                ch = Chunks(dp.p, dp.s, dp.cable, has_next, np.arange(len(dp.p)), reach)
                 cable_pairs_points(dp, ch, config.clearance, hits, limit, self.stretch if bounded else 0.0)
             if tab is not None:
                 if exact:
