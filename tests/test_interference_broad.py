@@ -54,3 +54,20 @@ def test_part_candidates_hold_every_point_near_a_part(cables, parts, margin):
     for i, k in zip(*np.nonzero(d < 0)):
         assert (i, tab.finite[k]) in found
     assert ch.idx.shape[1] == CHUNK
+
+
+@settings(max_examples=40, deadline=None)
+@given(cable_sets(max_cables=3, max_points=12), part_sets(max_parts=4), st.floats(0.0, 0.05))
+def test_box_cut_keeps_every_point_near_a_part_box(cables, parts, margin):
+    """With ``box``, every point within ``margin`` of a part's own box (in the
+    part's frame) is still a candidate for it, and no candidate is new."""
+    dp, ch = _chunks(cables)
+    tab = PartTable(parts)
+    items, pk = chunk_part_pairs(tab, ch, margin, box=True)
+    found = set(zip(items.tolist(), pk.tolist()))
+    assert found <= set(zip(*(x.tolist() for x in chunk_part_pairs(tab, ch, margin))))
+    for k in tab.finite:
+        loc = (dp.p - tab.trans[k]) @ tab.rot[k]
+        gap = np.maximum(np.maximum(tab.lo[k] - loc, loc - tab.hi[k]), 0.0)
+        for i in np.flatnonzero(np.linalg.norm(gap, axis=1) < margin):
+            assert (i, k) in found

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from checker.arrays import within
 from checker.cellgrid import CellGrid
 if TYPE_CHECKING:
     from checker.interference.structure import PartTable
@@ -49,44 +50,39 @@ class Chunks:
     """
 
     def __init__(self, p, s, cable, has_next, items, reach: float = 0.0):
-        ic = cable[items]
         n = len(items)
-        # Position of each item along its cable's run of items.
-        new_cable = np.r_[True, ic[1:] != ic[:-1]]
-        run_start = np.nonzero(new_cable)[0]
-        local = np.arange(n) - np.repeat(run_start, np.diff(np.r_[run_start, n]))
-        slot = local % CHUNK
-        first = slot == 0
-        cid = np.cumsum(first) - 1
-        starts = np.nonzero(first)[0]
-        self.idx = np.full((len(starts), CHUNK), -1, dtype=np.int64)
-        self.idx[cid, slot] = items
-        self.cable = ic[starts]
+        ic = cable.take(items)
+        # Runs of one cable's items (start, length), cut into chunks.
+        run_start = np.r_[0, np.flatnonzero(ic[1:] != ic[:-1]) + 1] if n else np.zeros(0, np.int64)
+        run_end = np.r_[run_start[1:], n]
+        per = -(-(run_end - run_start) // CHUNK)
+        starts = np.repeat(run_start, per) + CHUNK * within(per)
+        end = np.repeat(run_end, per)
+        at = starts[:, None] + np.arange(CHUNK)
+        self.idx = np.where(at < end[:, None], items.take(np.minimum(at, max(n - 1, 0))), -1)
+        self.cable = ic.take(starts)
         # A chunk's pieces form a polyline from a to b of arc length L; every
         # point x of it lies within L / 2 of the chord's midpoint, since
         # |x - a| + |x - b| <= L.
-        a = items[starts]
-        last = items[np.r_[starts[1:], n] - 1]
-        b = np.where(has_next[last], last + 1, last)
-        self.centre = 0.5 * (p[a] + p[b])
-        self.radius = 0.5 * (s[b] - s[a])
+        a = items.take(starts)
+        last = items.take(np.minimum(starts + CHUNK, end) - 1)
+        b = np.where(has_next.take(last), last + 1, last)
+        self.centre = 0.5 * (p.take(a, axis=0) + p.take(b, axis=0))
+        self.radius = 0.5 * (s.take(b) - s.take(a))
         self.has_next = has_next
         # Pairs of consecutive chunks of one cable ("super chunks") hold the
         # grid for chunk pairs: half as many spheres to pair up.
-        nc = len(starts)
-        new_sup = np.r_[True, self.cable[1:] != self.cable[:-1]]
-        run = np.nonzero(new_sup)[0]
-        local = np.arange(nc) - np.repeat(run, np.diff(np.r_[run, nc]))
-        first = local % 2 == 0
-        sid = np.cumsum(first) - 1
-        sup_start = np.nonzero(first)[0]
-        self.sub = np.full((len(sup_start), 2), -1, dtype=np.int64)
-        self.sub[sid, local % 2] = np.arange(nc)
-        sa = a[sup_start]
-        sb = b[np.r_[sup_start[1:], nc] - 1]
-        self.sup_centre = 0.5 * (p[sa] + p[sb])
-        self.sup_radius = 0.5 * (s[sb] - s[sa])
-        rmax = float(self.sup_radius.max()) if nc else 0.0
+        first = np.cumsum(per) - per                    # each run's first chunk
+        half = -(-per // 2)
+        sup_start = np.repeat(first, half) + 2 * within(half)
+        sup_end = np.repeat(first + per, half)
+        second = sup_start + 1
+        self.sub = np.stack([sup_start, np.where(second < sup_end, second, -1)], axis=1)
+        sa = a.take(sup_start)
+        sb = b.take(np.minimum(second, sup_end - 1))
+        self.sup_centre = 0.5 * (p.take(sa, axis=0) + p.take(sb, axis=0))
+        self.sup_radius = 0.5 * (s.take(sb) - s.take(sa))
+        rmax = float(self.sup_radius.max()) if len(sup_start) else 0.0
         self.grid = CellGrid(self.sup_centre, (reach + 2.0 * rmax) * (1 + SLACK))
 
     def pairs(self, reach: float) -> tuple[np.ndarray, np.ndarray]:
@@ -104,25 +100,31 @@ class Chunks:
         a = np.repeat(self.sub.take(sa, axis=0), 2, axis=1).ravel()
         b = np.tile(self.sub.take(sb, axis=0), (1, 2)).ravel()
         ok = (a >= 0) & (b >= 0)
-        a, b = a[ok], b[ok]
+        a, b = a.compress(ok), b.compress(ok)
         a, b = np.minimum(a, b), np.maximum(a, b)
-        lim = reach + self.radius[a] + self.radius[b]
-        keep = within_reach(self.centre[a], self.centre[b], lim) & ~((self.cable[a] == self.cable[b]) & (b - a <= 1))
-        return a[keep], b[keep]
+        lim = reach + self.radius.take(a) + self.radius.take(b)
+        keep = rows_within(self.centre, a, b, lim) & ~((self.cable.take(a) == self.cable.take(b)) & (b - a <= 1))
+        return a.compress(keep), b.compress(keep)
 
     def expand(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """All item pairs (i in chunk a, j in chunk b), flattened, padding dropped."""
-        i = np.repeat(self.idx[a], CHUNK, axis=1).ravel()
-        j = np.tile(self.idx[b], (1, CHUNK)).ravel()
+        i = np.repeat(self.idx.take(a, axis=0), CHUNK, axis=1).ravel()
+        j = np.tile(self.idx.take(b, axis=0), (1, CHUNK)).ravel()
         ok = (i >= 0) & (j >= 0)
-        return i[ok], j[ok]
+        return i.compress(ok), j.compress(ok)
 
 
 def within_reach(x: np.ndarray, y: np.ndarray, lim: np.ndarray) -> np.ndarray:
     """|x - y| < lim for rows of (n, 3) arrays, with a margin (pruning only)."""
     t = x - y
+    t *= t
     lim = lim * (1 + SLACK)
-    return np.einsum("ij,ij->i", t, t) < _square(lim)
+    return (t[:, 0] + t[:, 1]) + t[:, 2] < _square(lim)
+
+
+def rows_within(p: np.ndarray, i: np.ndarray, j: np.ndarray, lim: np.ndarray) -> np.ndarray:
+    """:func:`within_reach` of rows i and j of p (n, 3)."""
+    return within_reach(p.take(i, axis=0), p.take(j, axis=0), lim)
 
 
 def within_reach_t(x: np.ndarray, y: np.ndarray, lim: np.ndarray) -> np.ndarray:
@@ -139,12 +141,14 @@ def _square(lim: np.ndarray) -> np.ndarray:
     return np.maximum(lim * lim, np.finfo(np.float64).smallest_subnormal)
 
 
-def chunk_part_pairs(tab: PartTable, ch: Chunks, margin: float) -> tuple[np.ndarray, np.ndarray]:
+def chunk_part_pairs(tab: PartTable, ch: Chunks, margin: float, box: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """(item, part) pairs where the item may lie within ``margin`` of the part.
 
     Each finite part's bounding sphere, grown by ``margin``, is met with the
     super chunks' spheres through their grid, then with their chunks'
-    spheres; the items of every chunk met are candidates. Planes take every item.
+    spheres (with ``box``, then each chunk's sphere with the part's own box
+    in its frame, grown by ``margin``); the items of every chunk met are
+    candidates. Planes take every item.
     Returns item indices (into the points) and part indices, both (n,).
     """
     items, parts = [], []
@@ -156,14 +160,26 @@ def chunk_part_pairs(tab: PartTable, ch: Chunks, margin: float) -> tuple[np.ndar
         c = ch.sub.take(sup, axis=0).ravel()
         k = np.repeat(k, 2)
         ok = c >= 0
-        c, k = c[ok], k[ok]
-        ok = within_reach(ch.centre[c], c_world[k], rad[k] + ch.radius[c])
-        c, k = c[ok], k[ok]
-        it = ch.idx[c].ravel()
-        pk = np.repeat(fin[k], CHUNK)
+        c, k = c.compress(ok), k.compress(ok)
+        centre, rc = ch.centre.take(c, axis=0), ch.radius.take(c)
+        ok = within_reach(centre, c_world.take(k, axis=0), rad.take(k) + rc)
+        c, k = c.compress(ok), k.compress(ok)
+        if box:
+            # the chunk's sphere against the part's own box grown by the
+            # margin (and by a margin for the rounding of the frame change)
+            part = fin.take(k)
+            d = centre.compress(ok, axis=0) - tab.trans.take(part, axis=0)
+            loc = np.einsum("ni,nij->nj", d, tab.rot.take(part, axis=0))
+            a = np.abs(d)
+            grow = ((margin + rc.compress(ok)) * (1 + SLACK) + SLACK * np.maximum(np.maximum(a[:, 0], a[:, 1]), a[:, 2]))
+            inb = (loc >= tab.lo.take(part, axis=0) - grow[:, None]) & (loc <= tab.hi.take(part, axis=0) + grow[:, None])
+            ok = inb[:, 0] & inb[:, 1] & inb[:, 2]
+            c, k = c.compress(ok), k.compress(ok)
+        it = ch.idx.take(c, axis=0).ravel()
+        pk = np.repeat(fin.take(k), CHUNK)
         ok = it >= 0
-        items.append(it[ok])
-        parts.append(pk[ok])
+        items.append(it.compress(ok))
+        parts.append(pk.compress(ok))
     if len(tab.planes):
         every = ch.idx[ch.idx >= 0]
         items.append(np.tile(every, len(tab.planes)))

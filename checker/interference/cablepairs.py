@@ -35,13 +35,13 @@ import numpy as np
 from checker.arrays import ranges, within
 from checker.cable import self_pair_excluded, self_pair_window
 from checker.closest import row_norm, segment_segment
-from checker.interference.broad import NEAR, SLACK, Chunks, within_reach, within_reach_t
+from checker.interference.broad import NEAR, SLACK, Chunks, _square, rows_within, within_reach, within_reach_t
 from checker.interference.discrete import DenseStates, Discrete
 from checker.interference.hits import TYPE_ORDER, Hits, worst_records
 from checker.records import Interference, PairType
 
 
-def _near_windows(p, s, cab, reach, lim) -> np.ndarray:
+def _near_windows(pt, s, cab, last, reach, lim) -> np.ndarray:
     """Points that start a window of ``NEAR + 1`` elements which may hold a self hit.
 
     In a window from point i to point j (``NEAR + 1`` places on, or the
@@ -52,24 +52,62 @@ def _near_windows(p, s, cab, reach, lim) -> np.ndarray:
     window whose arc exceeds its chord by no more than ``reach - lim`` holds
     none. Every near-field pair (first pass, or a point against an element's
     midpoint) lies in the window starting at its lower index.
+
+    Args:
+        pt: (3, n) the points, coordinate-major; s, cab: (n,) their arc
+            lengths and cables; last: (C,) each cable's last point.
     """
-    n = len(p)
+    n = pt.shape[1]
     w = NEAR + 1
     if n <= w:
         return np.arange(n)
     # Windows reaching past their cable's end end there instead.
-    j = np.arange(w, n + w)
-    j[n - w:] = n - 1
-    cut = np.nonzero(cab[j] != cab)[0]
-    j[cut] = np.searchsorted(cab, cab[cut], side="right") - 1
-    d = np.empty_like(p)
-    d[: n - w] = p[w:] - p[: n - w]
-    d[cut] = p[j[cut]] - p[cut]
-    d[n - w:] = p[j[n - w:]] - p[n - w:]
-    chord = np.sqrt(np.einsum("ij,ij->i", d, d))
-    arc = s[j] - s
-    slack = SLACK * (np.abs(s[j]) + reach + lim)
-    return np.nonzero(arc - chord > reach - lim - slack)[0]
+    j = np.minimum(np.arange(w, n + w), last.take(cab))
+    d = pt.take(j, axis=1)
+    d -= pt
+    d *= d
+    chord = np.sqrt((d[0] + d[1]) + d[2])
+    sj = s.take(j)
+    arc = sj - s
+    slack = SLACK * (np.abs(sj) + reach + lim)
+    return np.flatnonzero(arc - chord > reach - lim - slack)
+
+
+def _near_field(pt, s, cab, has_next, start, reach, lim):
+    """The near field's candidates from the windows starting at ``start``:
+    first-pass pairs (a, b), then points against elements' midpoints (q, e),
+    for b = a + 1 .. a + NEAR on a's cable (see :func:`cable_pairs_points`)."""
+    n = pt.shape[1]
+    k = np.arange(1, NEAR + 1)
+    at = start[:, None] + np.arange(NEAR + 2)            # a .. a + NEAR and the end of element a + NEAR
+    on = (at < n) & (cab.take(np.minimum(at, n - 1)) == cab.take(start)[:, None])
+    at = np.minimum(at, n - 1)
+    w = pt.take(at, axis=1)                               # (3, m, NEAR + 2)
+    mid = 0.5 * (w[:, :, :-1] + w[:, :, 1:])              # midpoints of elements a + 0 .. a + NEAR
+    sw = s.take(at)
+    sm = 0.5 * (sw[:, :-1] + sw[:, 1:])
+    ra = reach.take(start)[:, None]
+    lim2 = _square(lim.take(start)[:, None] * (1 + SLACK))
+    tol = SLACK * (ra + np.abs(sw[:, 1:-1]))
+    sa, sb = sw[:, :1], sw[:, 1:-1]                       # a; b = a + k
+
+    def close(x, y):
+        d = x - y
+        d *= d
+        return (d[0] + d[1]) + d[2] < lim2
+
+    valid = on[:, 1:-1]
+    first = valid & (sb - sa > ra - tol) & close(w[:, :, :1], w[:, :, 1:-1])
+    # a against element b (b + 1 on the cable), b against element a (k >= 2)
+    a_eb = on[:, 2:] & (sm[:, 1:] - sa > ra - tol) & close(w[:, :, :1], mid[:, :, 1:])
+    b_ea = valid & (k >= 2) & (sb - sm[:, :1] > ra - tol) & close(w[:, :, 1:-1], mid[:, :, :1])
+    out = []
+    for mask in (first, a_eb, b_ea):
+        r, c = np.nonzero(mask)
+        a = start.take(r)
+        out.append((a, a + k.take(c)))
+    (fa, fb), (qa, ea), (eb, qb) = out
+    return fa, fb, np.r_[qa, qb], np.r_[ea, eb]
 
 
 def cable_pairs_points(dp: Discrete, ch: Chunks, clearance: float, hits: Hits,
@@ -91,9 +129,10 @@ def cable_pairs_points(dp: Discrete, ch: Chunks, clearance: float, hits: Hits,
     limit = clearance if limit is None else limit
     n = len(p)
     has_next = ch.has_next
+    pt = np.ascontiguousarray(p.T)
 
     def mid(e):  # midpoints of elements e (e + 1 on the same cable)
-        return 0.5 * (p[e] + p[e + 1])
+        return 0.5 * (p.take(e, axis=0) + p.take(e + 1, axis=0))
 
     lim_self = 2.0 * rad + limit
     e0 = np.zeros(0, np.int64)
@@ -101,51 +140,36 @@ def cable_pairs_points(dp: Discrete, ch: Chunks, clearance: float, hits: Hits,
     # Near field: offsets 1..NEAR along one cable, from the window starts
     # that can hold a hit at all (see _near_windows).
     reach = self_pair_window(rad, clearance) - stretch
-    start = _near_windows(p, s, cab, reach, lim_self)
+    start = _near_windows(pt, s, cab, np.flatnonzero(~has_next), reach, lim_self)
     if len(start):
-        k = np.tile(np.arange(1, NEAR + 1), len(start))
-        a = np.repeat(start, NEAR)
-        b = a + k
-        ok = b < n
-        a, b, k = a[ok], b[ok], k[ok]
-        ok = cab[b] == cab[a]
-        a, b, k = a[ok], b[ok], k[ok]
-        tol = SLACK * (reach[a] + np.abs(s[b]))
-        # First pass (a, b); second pass a against element b (when b + 1 is
-        # on the cable) and b against element a (two or more places apart).
-        o = (s[b] - s[a] > reach[a] - tol) & within_reach(p[a], p[b], lim_self[a])
-        fi.append(a[o])
-        fj.append(b[o])
-        e_ok = has_next[b]
-        eb = np.minimum(b, n - 2)
-        o = e_ok & (0.5 * (s[eb] + s[eb + 1]) - s[a] > reach[a] - tol) & within_reach(p[a], mid(eb), lim_self[a])
-        sq.append(a[o])
-        se.append(b[o])
-        o = (k >= 2) & (s[b] - 0.5 * (s[a] + s[a + 1]) > reach[b] - tol) & within_reach(p[b], mid(a), lim_self[b])
-        sq.append(b[o])
-        se.append(a[o])
+        a, b, q, e = _near_field(pt, s, cab, has_next, start, reach, lim_self)
+        fi.append(a)
+        fj.append(b)
+        sq.append(q)
+        se.append(e)
     # Far field: chunk pairs.
     ca, cb = ch.pairs(2.0 * float(rad.max()) + limit)
     ci, cj = np.zeros(0, np.int64), np.zeros(0, np.int64)
     if len(ca):
-        same = ch.cable[ca] == ch.cable[cb]
-        i, j = ch.expand(ca[~same], cb[~same])
-        ok = within_reach(p[i], p[j], rad[i] + rad[j] + limit)
-        ci, cj = np.minimum(i[ok], j[ok]), np.maximum(i[ok], j[ok])
-        i, j = ch.expand(ca[same], cb[same])
+        same = ch.cable.take(ca) == ch.cable.take(cb)
+        i, j = ch.expand(ca.compress(~same), cb.compress(~same))
+        ok = rows_within(p, i, j, rad.take(i) + rad.take(j) + limit)
+        i, j = i.compress(ok), j.compress(ok)
+        ci, cj = np.minimum(i, j), np.maximum(i, j)
+        i, j = ch.expand(ca.compress(same), cb.compress(same))
         far = np.abs(i - j) > NEAR
-        i, j = i[far], j[far]
-        ok = within_reach(p[i], p[j], lim_self[i])
+        i, j = i.compress(far), j.compress(far)
+        ok = rows_within(p, i, j, lim_self.take(i))
         fi.append(np.minimum(i[ok], j[ok]))
         fj.append(np.maximum(i[ok], j[ok]))
         for q, e in ((i, j), (j, i)):
-            ok = has_next[e] & within_reach(p[q], mid(np.minimum(e, n - 2)), lim_self[q])
+            ok = has_next.take(e) & within_reach(p.take(q, axis=0), mid(np.minimum(e, n - 2)), lim_self.take(q))
             sq.append(q[ok])
             se.append(e[ok])
     rows = point_pair_rows(p, s, cab, rad, reach, clearance, limit, (ci, cj),
                            (np.concatenate(fi), np.concatenate(fj)), (np.concatenate(sq), np.concatenate(se)))
     for kind, a, b, v, i, s_b, rec in rows:
-        hits.add(kind, a, b, v, p[i], s[i], s_b, rec)
+        hits.add(kind, a, b, v, p.take(i, axis=0), s.take(i), s_b, rec)
 
 
 def point_pair_rows(p: np.ndarray, s: np.ndarray, cab: np.ndarray, rad: np.ndarray, reach: np.ndarray,

@@ -46,6 +46,8 @@ from checker.shapes import (
     size_rows,
 )
 
+_TYPES = list(ShapeType)
+"""Shape types by their codes (SHAPE_CODE)."""
 _STRUCTURE, _KEEPOUT = TYPE_ORDER.index(PairType.CABLE_STRUCTURE), TYPE_ORDER.index(PairType.KEEPOUT)
 
 
@@ -93,7 +95,7 @@ class PartTable:
 
     def to_local(self, k: np.ndarray, x: np.ndarray) -> np.ndarray:
         """World points x (n, 3) into the frames of parts k (n,)."""
-        return to_local(x, self.trans[k], self.rot[k])
+        return to_local(x, self.trans.take(k, axis=0), self.rot.take(k, axis=0))
 
 
 def to_local(x: np.ndarray, trans: np.ndarray, rot: np.ndarray) -> np.ndarray:
@@ -132,12 +134,15 @@ def point_distances(tab: PartTable, pk: np.ndarray, loc: np.ndarray, face_plane:
     bound exceeds another point's upper bound in its group may likewise be
     answered by a bound, above the group's least value."""
     d = np.full(len(pk), np.inf)
-    types = list(ShapeType)
-    for code in np.unique(tab.type[pk]):
-        stype = types[code]
-        sel = np.nonzero(tab.type[pk] == code)[0]
+    code = tab.type.take(pk)
+    # the points of each type (each in increasing order) from one stable sort
+    order = np.argsort(code, kind="stable")
+    bounds = np.r_[0, np.cumsum(np.bincount(code, minlength=len(_TYPES)))]
+    for c in np.flatnonzero(np.diff(bounds)):
+        stype = _TYPES[c]
+        sel = order[bounds[c]:bounds[c + 1]]
         if stype is ShapeType.MESH:
-            grp = tab.mesh_group[pk[sel]]
+            grp = tab.mesh_group.take(pk.take(sel))
             for g in np.unique(grp):
                 sk = sel[grp == g]
                 shape = tab.mesh_shapes[g]
@@ -159,9 +164,9 @@ def point_distances(tab: PartTable, pk: np.ndarray, loc: np.ndarray, face_plane:
                     sk, lim = sk[rest], lim[rest]
                 d[sk] = face_plane_distance(shape, loc[sk]) if face_plane else signed_distance(shape, loc[sk], lim)[0]
         elif face_plane:
-            d[sel] = face_plane_distance_batch(stype, tab.size[pk[sel]], loc[sel])
+            d[sel] = face_plane_distance_batch(stype, tab.size.take(pk.take(sel), axis=0), loc.take(sel, axis=0))
         else:
-            d[sel] = signed_distance_value_batch(stype, tab.size[pk[sel]], loc[sel])
+            d[sel] = signed_distance_value_batch(stype, tab.size.take(pk.take(sel), axis=0), loc.take(sel, axis=0))
     return d
 
 
@@ -181,12 +186,13 @@ def point_values(tab: PartTable, k: np.ndarray, loc: np.ndarray, rad: np.ndarray
         whether each lies outside those windows too, else None).
     """
     thr = (rad + limit)[:, None]
-    keep = np.all((loc >= tab.lo[k] - thr) & (loc <= tab.hi[k] + thr), axis=1)
+    inb = (loc >= tab.lo.take(k, axis=0) - thr) & (loc <= tab.hi.take(k, axis=0) + thr)
+    keep = inb[:, 0] & inb[:, 1] & inb[:, 2]
     keep &= ~excluded(cable, k, m, excl)
     idx = np.flatnonzero(keep)
-    k, loc, rad = k[idx], loc[idx], rad[idx]
-    rec = None if excl_record is None else ~excluded(cable[idx], k, m[idx], excl_record)
-    v = point_distances(tab, k, loc, face_plane, rad + limit, None if group is None else group[idx]) - rad
+    k, loc, rad = k.take(idx), loc.take(idx, axis=0), rad.take(idx)
+    rec = None if excl_record is None else ~excluded(cable.take(idx), k, m.take(idx), excl_record)
+    v = point_distances(tab, k, loc, face_plane, rad + limit, None if group is None else group.take(idx)) - rad
     o = v < limit
     return idx[o], v[o], None if rec is None else rec[o]
 
@@ -199,15 +205,15 @@ def structure_points(dp, ch, tab, config, excl, hits, limit=None, excl_near=None
     ``excl_near`` are kept too: both only bound the gaps, never records."""
     limit = config.clearance if limit is None else limit
     margin = float(dp.radius.max()) + limit
-    it, pk = chunk_part_pairs(tab, ch, margin)
+    it, pk = chunk_part_pairs(tab, ch, margin, box=True)
     if len(it) == 0:
         return
-    loc = tab.to_local(pk, dp.p[it])
-    o, v, rec = point_values(tab, pk, loc, dp.radius[it], dp.cable[it], dp.m[it],
+    loc = tab.to_local(pk, dp.p.take(it, axis=0))
+    o, v, rec = point_values(tab, pk, loc, dp.radius.take(it), dp.cable.take(it), dp.m.take(it),
                              excl if excl_near is None else excl_near, limit, config.face_plane,
                              excl_record=None if excl_near is None else excl)
-    it, pk = it[o], pk[o]
-    _add_structure(hits, tab, dp.cable[it], pk, v, dp.p[it], dp.s[it], rec)
+    it, pk = it.take(o), pk.take(o)
+    _add_structure(hits, tab, dp.cable.take(it), pk, v, dp.p.take(it, axis=0), dp.s.take(it), rec)
 
 
 def structure_exact(dp, ch, tab, config, excl, hits) -> None:
@@ -216,7 +222,7 @@ def structure_exact(dp, ch, tab, config, excl, hits) -> None:
         return
     # Chunk spheres hold whole elements: the margin needs no half length.
     margin = float(dp.radius.max()) + config.clearance
-    i0, pk = chunk_part_pairs(tab, ch, margin)
+    i0, pk = chunk_part_pairs(tab, ch, margin, box=True)
     structure_exact_pairs(dp, tab, config, excl, hits, i0, pk)
 
 
