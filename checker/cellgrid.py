@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from checker.arrays import ranges, within
+from checker.arrays import within
 
 _AXIS_CELLS = 2.0 ** 20
 """At most this many cells along an axis: keys fit in int64 and index rounding stays below _ROUND."""
@@ -118,11 +118,12 @@ class CellGrid:
 
     def _runs(self, strip: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Sorted positions (start, end) of the points in x-cells lo .. hi
-        (inclusive) of strips ``strip`` (valid strip numbers; any lo, hi)."""
+        (inclusive) of strips ``strip`` (valid strip numbers, or -1 for
+        none; any lo, hi)."""
+        empty = len(self.strips)
         if self.strip_run is not None:
-            run = self.strip_run.take(strip)
+            run = np.where(strip >= 0, self.strip_run.take(np.maximum(strip, 0)), empty)
         else:
-            empty = len(self.strips)
             run = np.searchsorted(self.strips, strip)
             run[self.strips.take(np.minimum(run, empty - 1)) != strip] = empty
         x0 = self.x_first.take(run)
@@ -151,19 +152,19 @@ class CellGrid:
         keep = (d0 > 0) | (d1 >= 0)
         d0, d1 = d0[keep], d1[keep]
         q0, q1, q2 = self.q
-        r0 = q0 + d0[:, None]
+        r0 = q0 + d0[:, None]                               # (offsets, n): rows, columns, x-cells
         r1 = q1 + d1[:, None]
         valid = (r0 < self.dims[0]) & (r1 >= 0) & (r1 < self.dims[1])
-        row = np.flatnonzero(valid)                         # offset * n + sorted position
-        pos = row % n
-        x = q2.take(pos)
-        s, e = self._runs((r0 * self.dims[1] + r1).take(row), x - m, x + m)
-        own = np.flatnonzero((d0 == 0) & (d1 == 0))[0] * n  # this strip: the points after this one
-        mine = slice(np.searchsorted(row, own), np.searchsorted(row, own + n))
-        np.maximum(s[mine], pos[mine] + 1, out=s[mine])
-        cnt = np.maximum(e - s, 0)
-        i = np.repeat(pos, cnt)
-        j = ranges(s, cnt)
+        strip = np.where(valid, r0 * self.dims[1] + r1, -1).ravel()
+        x = np.broadcast_to(q2, r0.shape).ravel()
+        s, e = self._runs(strip, x - m, x + m)
+        s, e = s.reshape(r0.shape), e.reshape(r0.shape)
+        np.maximum(s[0], np.arange(1, n + 1), out=s[0])    # (0, 0) first: this strip, the points after this one
+        cnt = np.maximum(e - s, 0).ravel()
+        row = np.repeat(np.arange(len(cnt)), cnt)
+        first = np.cumsum(cnt) - cnt
+        i = row % n
+        j = (s.ravel() - first).take(row) + np.arange(len(row))
         ok = self._close(self.xs.take(i, axis=1), j, reach * reach)
         i, j = self.order.take(i.compress(ok)), self.order.take(j.compress(ok))
         return np.minimum(i, j), np.maximum(i, j)
@@ -193,8 +194,8 @@ class CellGrid:
         narrow = np.where(wide, 0, strips)
         k = np.repeat(np.arange(k_n), narrow)
         t = within(narrow)
-        w1 = w[1].take(k)
-        strip = (lo[0].take(k) + t // w1) * self.dims[1] + lo[1].take(k) + t % w1
+        t0, t1 = np.divmod(t, w[1].take(k))
+        strip = (lo[0].take(k) + t0) * self.dims[1] + lo[1].take(k) + t1
         if wide.any():
             kw = np.repeat(np.flatnonzero(wide), len(self.strips))
             sw = np.tile(self.strips, int(wide.sum()))
@@ -205,8 +206,9 @@ class CellGrid:
         x0 = lo[2].take(k)
         s, e = self._runs(strip, x0, x0 + w[2].take(k) - 1)
         cnt = e - s
-        k = np.repeat(k, cnt)
-        j = ranges(s, cnt)
+        row = np.repeat(np.arange(len(cnt)), cnt)
+        j = (s - (np.cumsum(cnt) - cnt)).take(row) + np.arange(len(row))
+        k = k.take(row)
         r = rad.take(k)
         ok = self._close(ct.take(k, axis=1), j, r * r)
         return k.compress(ok), self.order.take(j.compress(ok))

@@ -148,29 +148,48 @@ def sd_ellipsoid(e: np.ndarray, p: np.ndarray, t0: np.ndarray | None = None) -> 
     tol = 1e-14 * np.maximum(e2[:, 0], np.max(ey, axis=1))
     t = lo.copy() if t0 is None else np.clip(t0, lo, hi)
     act = np.nonzero(hi - lo > tol)[0]
+    # the unconverged points' state, compacted: written back as they converge
+    ta, la, ha, e2a, eya, tola = t[act], lo[act], hi[act], e2[act], ey[act], tol[act]
     for _ in range(200):
         if len(act) == 0:
             break
-        ta, e2a, eya = t[act], e2[act], ey[act]
         den = ta[:, None] + e2a
         ok = den > 0
-        r = np.where(ok, eya, 0.0) / np.where(ok, den, 1.0)
-        f = np.sum(r * r, axis=1) - 1.0
-        df = -2.0 * np.sum(r * r / np.where(ok, den, 1.0), axis=1)
-        # At the pole with y_min > 0, F is +inf.
-        pole = np.any(~ok & (eya > 0), axis=1)
-        lo_a = np.where((f > 0) | pole, ta, lo[act])
-        hi_a = np.where((f <= 0) & ~pole, ta, hi[act])
-        step_ok = ~pole & (df < 0)
-        tn = ta - np.where(step_ok, f, 0.0) / np.where(step_ok, df, -1.0)
+        regular = ok.all()                                   # no point at a pole: fewer operations, same values
+        safe = den if regular else np.where(ok, den, 1.0)
+        r = (eya if regular else np.where(ok, eya, 0.0)) / safe
+        r2 = r * r
+        f = ((r2[:, 0] + r2[:, 1]) + r2[:, 2]) - 1.0        # np.sum's order, written out
+        q = r2 / safe
+        df = -2.0 * ((q[:, 0] + q[:, 1]) + q[:, 2])
+        if regular:
+            lo_a = np.where(f > 0, ta, la)
+            hi_a = np.where(f <= 0, ta, ha)
+            step_ok = df < 0
+        else:
+            # At the pole with y_min > 0, F is +inf.
+            at_pole = ~ok & (eya > 0)
+            pole = at_pole[:, 0] | at_pole[:, 1] | at_pole[:, 2]
+            lo_a = np.where((f > 0) | pole, ta, la)
+            hi_a = np.where((f <= 0) & ~pole, ta, ha)
+            step_ok = ~pole & (df < 0)
+        tn = ta - (f / df if step_ok.all() else np.where(step_ok, f, 0.0) / np.where(step_ok, df, -1.0))
         mid = 0.5 * (lo_a + hi_a)
         # a tiny Newton step far from the root (F steep near the pole: a point
         # on a principal plane by rounding) is no convergence: bisect instead
-        stalled = (np.abs(tn - ta) <= tol[act]) & (np.abs(f) > 1e-10)
+        small = np.abs(tn - ta) <= tola
+        stalled = small & (np.abs(f) > 1e-10)
         tn = np.where(~step_ok | (tn < lo_a) | (tn > hi_a) | stalled, mid, tn)
-        conv = ((np.abs(tn - ta) <= tol[act]) & ~stalled) | (hi_a - lo_a <= tol[act])
-        t[act], lo[act], hi[act] = tn, lo_a, hi_a
-        act = act[~conv]
+        conv = ((np.abs(tn - ta) <= tola) & ~stalled) | (hi_a - lo_a <= tola)
+        if conv.any():
+            done = act[conv]
+            t[done], lo[done], hi[done] = tn[conv], lo_a[conv], hi_a[conv]
+            go = ~conv
+            act = act[go]
+            ta, la, ha, e2a, eya, tola = tn[go], lo_a[go], hi_a[go], e2a[go], eya[go], tola[go]
+        else:
+            ta, la, ha = tn, lo_a, hi_a
+    t[act], lo[act], hi[act] = ta, la, ha
     den = t[:, None] + e2
     ok = den > 0.0
     x = np.where(ok, e2 * ys, 0.0) / np.where(ok, den, 1.0)
