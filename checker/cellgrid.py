@@ -4,13 +4,14 @@ The points are binned into cells of one side and sorted by cell, the cells
 ordered by (row, column, x) where x is the axis of largest extent: the cells
 of one (row, column) "strip" that cover an interval of x then hold one
 contiguous run of the sorted points. Two small tables say where each cell's
-points start: one per occupied strip (dense over the rows and columns, or a
-binary search in the occupied strips when that table would be large) and,
-per occupied strip, one entry per x-cell between its first and last point.
-A query (a centre and a radius r) reads off, for every strip within r, the
-run of points in the x-cells within r: a handful of array operations per
-query, no tree and no search, and memory proportional to the points, not to
-the grid's volume. Every candidate is then tested with the exact squared
+points start: one over the strips (rows x columns) and, per occupied strip,
+one entry per x-cell between its first and last point. A query (a centre
+and a radius r) reads off, for every strip within r, the run of points in
+the x-cells within r: a handful of array operations per query, no tree and
+no search. When either table would be large against the number of points
+(few points spread far apart), the runs are found by binary search in the
+sorted cell keys instead: the same runs, so memory stays proportional to the
+points, not to the grid's volume. Every candidate is then tested with the exact squared
 distance, so the answer is an exact set: the pairs whose squared distance,
 computed as ``(dx*dx + dy*dy) + dz*dz``, is at most ``r * r``.
 
@@ -38,9 +39,9 @@ _ROUND = 2.0 ** -30
 """Bound on the rounding of a cell coordinate (in cells) and of a difference of two."""
 _UNDERFLOW = 1e-150
 """Below this distance a squared distance may underflow to 0: the least radius and cell side."""
-_STRIPS_PER_POINT = 64
-"""The strip table is dense up to this many strips per point (plus _STRIPS_MIN)."""
-_STRIPS_MIN = 4096
+_TABLE_PER_POINT = 64
+"""The tables are used up to this many entries per point (plus _TABLE_MIN)."""
+_TABLE_MIN = 4096
 
 
 class CellGrid:
@@ -53,12 +54,12 @@ class CellGrid:
             a little larger (rounding margin), at least 2**-20 of the
             points' largest extent and at least 1e-150. Queries of a radius
             r look at about (2 r / cell + 1)**2 strips around a point.
-        max_strips: largest dense table of strips (default: 64 per point
-            plus 4096); beyond it a strip is found by binary search in the
-            occupied ones (the same answers).
+        max_table: largest table (default: 64 entries per point plus
+            4096); beyond it runs are found by binary search (the same
+            answers).
     """
 
-    def __init__(self, x: np.ndarray, cell: float, max_strips: int | None = None):
+    def __init__(self, x: np.ndarray, cell: float, max_table: int | None = None):
         x = np.asarray(x, dtype=float).reshape(-1, 3)
         n = len(x)
         self.n = n
@@ -78,8 +79,10 @@ class CellGrid:
         self.dims = np.floor(ext[self.axes] / self.h).astype(np.int64) + 1
         q = self._cells(xt[self.axes])                      # (3, n) cell coordinates
         strip = q[0] * self.dims[1] + q[1]
-        order = np.argsort(strip * self.dims[2] + q[2])
+        key = strip * self.dims[2] + q[2]
+        order = np.argsort(key)
         self.order = order
+        self.key = key.take(order)                          # cell keys, increasing
         self.xs = xt.take(order, axis=1)                    # points in sorted order, (3, n), original axes
         q = q.take(order, axis=1)
         self.q = q                                          # cell coordinates in sorted order
@@ -95,6 +98,11 @@ class CellGrid:
         self.x_first = q[2].take(run_start)
         self.x_last = q[2].take(np.r_[run_start[1:], n] - 1) if n else np.zeros(0, np.int64)
         width = self.x_last - self.x_first + 2
+        limit = _TABLE_PER_POINT * n + _TABLE_MIN if max_table is None else max_table
+        n_strips = int(self.dims[0] * self.dims[1])
+        if n_strips > limit or int(width.sum()) > limit:
+            self.table = None
+            return
         self.offset = np.cumsum(width) - width
         slot = self.offset.take(run) + q[2] - self.x_first.take(run)
         self.table = np.zeros(int(width.sum()) + 1, np.int64)
@@ -104,13 +112,8 @@ class CellGrid:
         self.x_first = np.r_[self.x_first, 0]
         self.x_last = np.r_[self.x_last, -1]
         self.offset = np.r_[self.offset, 0]
-        n_strips = int(self.dims[0] * self.dims[1])
-        limit = _STRIPS_PER_POINT * n + _STRIPS_MIN if max_strips is None else max_strips
-        if n_strips <= limit:
-            self.strip_run = np.full(n_strips, empty, np.int64)
-            self.strip_run[self.strips] = np.arange(empty)
-        else:
-            self.strip_run = None
+        self.strip_run = np.full(n_strips, empty, np.int64)
+        self.strip_run[self.strips] = np.arange(empty)
 
     def _cells(self, f: np.ndarray) -> np.ndarray:
         """Cell coordinates (3, n) of points (3, n) given in the grid's axis order."""
@@ -120,12 +123,15 @@ class CellGrid:
         """Sorted positions (start, end) of the points in x-cells lo .. hi
         (inclusive) of strips ``strip`` (valid strip numbers, or -1 for
         none; any lo, hi)."""
-        empty = len(self.strips)
-        if self.strip_run is not None:
-            run = np.where(strip >= 0, self.strip_run.take(np.maximum(strip, 0)), empty)
-        else:
-            run = np.searchsorted(self.strips, strip)
-            run[self.strips.take(np.minimum(run, empty - 1)) != strip] = empty
+        if self.table is None:
+            # the same runs by binary search in the sorted keys
+            base = strip * self.dims[2]
+            s = np.searchsorted(self.key, base + np.maximum(lo, 0))
+            e = np.searchsorted(self.key, base + np.minimum(hi, self.dims[2] - 1) + 1)
+            none = strip < 0
+            s[none] = e[none] = 0
+            return s, e
+        run = np.where(strip >= 0, self.strip_run.take(np.maximum(strip, 0)), len(self.strips))
         x0 = self.x_first.take(run)
         x1 = self.x_last.take(run) + 1
         base = self.offset.take(run) - x0

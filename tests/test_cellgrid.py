@@ -95,3 +95,16 @@ def test_empty_and_single():
 def test_non_finite_points_are_refused():
     with pytest.raises(ValueError, match="finite"):
         CellGrid(np.array([[0.0, 0.0, np.nan]]), 1.0)
+
+
+def test_far_apart_points_keep_the_tables_small():
+    """Strips crossed far apart along x (the x-table would be mostly empty)
+    are searched instead: the same pairs, no table larger than the points."""
+    y = np.arange(50.0)
+    x = np.concatenate([np.c_[np.zeros(50), y, np.zeros(50)], np.c_[np.full(50, 1e4), y, np.zeros(50)]])
+    grid = CellGrid(x, 1.0)
+    assert grid.table is None
+    assert _as_set(*grid.pairs(1.0)) == brute_pairs(x, 1.0)
+    c = np.array([[0.0, 10.0, 0.0], [1e4, 20.0, 0.5]])
+    r = np.array([2.0, 1.0])
+    assert _as_set(*grid.near(c, r)) == brute_near(x, c, r)

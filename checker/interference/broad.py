@@ -23,6 +23,7 @@ import numpy as np
 
 from checker.arrays import within
 from checker.cellgrid import CellGrid
+
 if TYPE_CHECKING:
     from checker.interference.structure import PartTable
 
@@ -119,7 +120,7 @@ def within_reach(x: np.ndarray, y: np.ndarray, lim: np.ndarray) -> np.ndarray:
     t = x - y
     t *= t
     lim = lim * (1 + SLACK)
-    return (t[:, 0] + t[:, 1]) + t[:, 2] < _square(lim)
+    return (t[:, 0] + t[:, 1]) + t[:, 2] < reach_squared(lim)
 
 
 def rows_within(p: np.ndarray, i: np.ndarray, j: np.ndarray, lim: np.ndarray) -> np.ndarray:
@@ -132,10 +133,10 @@ def within_reach_t(x: np.ndarray, y: np.ndarray, lim: np.ndarray) -> np.ndarray:
     t = x - y
     t *= t
     lim = lim * (1 + SLACK)
-    return t[0] + t[1] + t[2] < _square(lim)
+    return t[0] + t[1] + t[2] < reach_squared(lim)
 
 
-def _square(lim: np.ndarray) -> np.ndarray:
+def reach_squared(lim: np.ndarray) -> np.ndarray:
     """lim squared, never below the least subnormal: a reach under 1e-162
     squares to 0 and would drop coincident points (pruning stays conservative)."""
     return np.maximum(lim * lim, np.finfo(np.float64).smallest_subnormal)

@@ -35,7 +35,15 @@ import numpy as np
 from checker.arrays import ranges, within
 from checker.cable import self_pair_excluded, self_pair_window
 from checker.closest import row_norm, segment_segment
-from checker.interference.broad import NEAR, SLACK, Chunks, _square, rows_within, within_reach, within_reach_t
+from checker.interference.broad import (
+    NEAR,
+    SLACK,
+    Chunks,
+    reach_squared,
+    rows_within,
+    within_reach,
+    within_reach_t,
+)
 from checker.interference.discrete import DenseStates, Discrete
 from checker.interference.hits import TYPE_ORDER, Hits, worst_records
 from checker.records import Interference, PairType
@@ -73,7 +81,7 @@ def _near_windows(pt, s, cab, last, reach, lim) -> np.ndarray:
     return np.flatnonzero(arc - chord > reach - lim - slack)
 
 
-def _near_field(pt, s, cab, has_next, start, reach, lim):
+def _near_field(pt, s, cab, start, reach, lim):
     """The near field's candidates from the windows starting at ``start``:
     first-pass pairs (a, b), then points against elements' midpoints (q, e),
     for b = a + 1 .. a + NEAR on a's cable (see :func:`cable_pairs_points`)."""
@@ -87,7 +95,7 @@ def _near_field(pt, s, cab, has_next, start, reach, lim):
     sw = s.take(at)
     sm = 0.5 * (sw[:, :-1] + sw[:, 1:])
     ra = reach.take(start)[:, None]
-    lim2 = _square(lim.take(start)[:, None] * (1 + SLACK))
+    lim2 = reach_squared(lim.take(start)[:, None] * (1 + SLACK))
     tol = SLACK * (ra + np.abs(sw[:, 1:-1]))
     sa, sb = sw[:, :1], sw[:, 1:-1]                       # a; b = a + k
 
@@ -142,7 +150,7 @@ def cable_pairs_points(dp: Discrete, ch: Chunks, clearance: float, hits: Hits,
     reach = self_pair_window(rad, clearance) - stretch
     start = _near_windows(pt, s, cab, np.flatnonzero(~has_next), reach, lim_self)
     if len(start):
-        a, b, q, e = _near_field(pt, s, cab, has_next, start, reach, lim_self)
+        a, b, q, e = _near_field(pt, s, cab, start, reach, lim_self)
         fi.append(a)
         fj.append(b)
         sq.append(q)

@@ -14,6 +14,7 @@ Deliberately not here: finding candidates or computing distances.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import NamedTuple
@@ -139,7 +140,7 @@ def worst_records(states: int, state: np.ndarray, t: np.ndarray, a: np.ndarray, 
         ptype = TYPE_ORDER[t_i]
         out[st_i].append(Interference(
             type=ptype, a=a_names[a_i], b=b_names(ptype)[b_i], min_distance=d,
-            severity=severity_of(d, clearance), where=w_i, s=s_i, s_b=None if sb_i != sb_i else sb_i))  # nan: none
+            severity=severity_of(d, clearance), where=w_i, s=s_i, s_b=None if math.isnan(sb_i) else sb_i))
     for recs in out:
         recs.sort(key=record_order)
     return out
