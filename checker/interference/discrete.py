@@ -48,8 +48,9 @@ def rest_table(cables: Sequence[CableState]) -> tuple[np.ndarray, np.ndarray]:
     """(C,) bool, the cable has rest coordinates; (N,) all cables' rest
     coordinates concatenated (0 where a cable has none)."""
     has = np.array([c.rest_s is not None for c in cables], bool)
-    rest = np.concatenate([c.rest_s if c.rest_s is not None else np.zeros(len(c.points)) for c in cables]) \
-        if len(cables) else np.zeros(0)
+    if not has.any():
+        return has, np.zeros(sum(len(c.points) for c in cables))
+    rest = np.concatenate([c.rest_s if c.rest_s is not None else np.zeros(len(c.points)) for c in cables])
     return has, rest
 
 
