@@ -4,10 +4,11 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
-from strategies import cable_sets, coords
+from strategies import cable_sets, coords, polylines
+from test_interference import as_dict, assert_same, brute_points
 
 from checker.cable import densify_batch
-from checker.interference import Checker
+from checker.interference import Checker, check_state
 from checker.records import PairType
 from checker.scene_state import CableState, CheckConfig
 
@@ -82,3 +83,15 @@ def test_cable_pairs_kernel_batched_equals_single_state(cables, data):
         assert [(r.type, r.a, r.b, r.min_distance, r.s, r.s_b) for r in recs] == \
             [(r.type, r.a, r.b, r.min_distance, r.s, r.s_b) for r in want]
         assert all(np.array_equal(a.where, b.where) for a, b in zip(recs, want))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(polylines(min_points=6, max_points=20, step=0.006), min_size=1, max_size=2),
+       st.floats(0.002, 0.006), st.floats(0.0, 0.01))
+def test_points_near_field_equals_brute_force(lines, radius, clearance):
+    """Random walks of steps about the radius fold back within a few places
+    along the cable (the near field's windows) and cross each other: the
+    self and cable-cable records equal an every-pair reference."""
+    cables = [CableState(f"c{k}", p, radius) for k, p in enumerate(lines)]
+    cfg = CheckConfig(clearance=clearance)
+    assert_same(as_dict(check_state(cables, [], cfg)), brute_points(cables, [], cfg), 1e-12)
