@@ -11,7 +11,9 @@ the x-cells within r: a handful of array operations per query, no tree and
 no search. When either table would be large against the number of points
 (few points spread far apart), the runs are found by binary search in the
 sorted cell keys instead: the same runs, so memory stays proportional to the
-points, not to the grid's volume. Every candidate is then tested with the exact squared
+points, not to the grid's volume. A few points (up to 64 by default) are
+not binned at all: every pair is a candidate, which costs less than a grid.
+Every candidate is then tested with the exact squared
 distance, so the answer is an exact set: the pairs whose squared distance,
 computed as ``(dx*dx + dy*dy) + dz*dz``, is at most ``r * r``.
 
@@ -42,6 +44,8 @@ _UNDERFLOW = 1e-150
 _TABLE_PER_POINT = 64
 """The tables are used up to this many entries per point (plus _TABLE_MIN)."""
 _TABLE_MIN = 4096
+_BRUTE = 64
+"""Up to this many points every pair is a candidate (no grid)."""
 
 
 class CellGrid:
@@ -57,9 +61,11 @@ class CellGrid:
         max_table: largest table (default: 64 entries per point plus
             4096); beyond it runs are found by binary search (the same
             answers).
+        brute: up to this many points, no grid: every pair is a candidate
+            (the same answers).
     """
 
-    def __init__(self, x: np.ndarray, cell: float, max_table: int | None = None):
+    def __init__(self, x: np.ndarray, cell: float, max_table: int | None = None, brute: int = _BRUTE):
         x = np.asarray(x, dtype=float).reshape(-1, 3)
         n = len(x)
         self.n = n
@@ -70,6 +76,10 @@ class CellGrid:
                 raise ValueError("cell grid points must be finite")
         else:
             lo = hi = np.zeros(3)
+        self.brute = n <= brute
+        if self.brute:
+            self.order, self.xs, self.table = np.arange(n), xt, None
+            return
         ext = hi - lo
         # the strips run along the axis of largest extent (x, last)
         ax = int(np.argmax(ext))
@@ -148,6 +158,10 @@ class CellGrid:
         n = self.n
         if n < 2 or not reach >= 0.0:
             return none
+        if self.brute:
+            i, j = np.triu_indices(n, 1)
+            ok = self._close(self.xs.take(i, axis=1), j, reach * reach)
+            return i.compress(ok), j.compress(ok)
         m = int(min(self._reach(reach), self.dims.max()))
         # half of the strips around each point (rows ahead, or this row and
         # columns ahead, or this strip and positions after the point): every
@@ -186,6 +200,12 @@ class CellGrid:
             return none
         rad = np.broadcast_to(np.asarray(radius, float), (k_n,))
         ct = np.ascontiguousarray(c.T)
+        if self.brute:
+            k = np.repeat(np.arange(k_n), self.n)
+            j = np.tile(np.arange(self.n), k_n)
+            r = rad.take(k)
+            ok = self._close(ct.take(k, axis=1), j, r * r)
+            return k.compress(ok), j.compress(ok)
         f = (ct[self.axes] - self.lo[:, None]) / self.h
         dims = self.dims[:, None].astype(float)
         m = np.minimum(self._reach(rad), float(self.dims.max()) + 1.0)

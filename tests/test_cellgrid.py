@@ -57,11 +57,12 @@ def _as_set(a, b) -> set:
 @example((np.array([[0.0, 0, 0], [1.0, 0, 0], [2.0, 0, 0]]), 1.0), 1.0, 1.0, True)
 def test_pairs_are_the_brute_force_pairs(cloud, cell, ratio, dense):
     """Every pair i < j within the reach, once, and nothing else; the same
-    with the strip table dense or searched; reaches beyond the cell too."""
+    with the tables or binary search, or no grid at all (few points);
+    reaches beyond the cell too."""
     x, scale = cloud
-    grid = CellGrid(x, cell * scale, None if dense else 0)
     reach = cell * scale * ratio
-    assert _as_set(*grid.pairs(reach)) == brute_pairs(x, reach)
+    for grid in (CellGrid(x, cell * scale, None if dense else 0, brute=0), CellGrid(x, cell * scale)):
+        assert _as_set(*grid.pairs(reach)) == brute_pairs(x, reach)
 
 
 @settings(max_examples=150, deadline=None)
@@ -72,8 +73,8 @@ def test_near_is_the_brute_force_near(cloud, cell, k, data):
     lo = x.min(axis=0) if len(x) else np.zeros(3)
     c = lo + data.draw(coords((k, 3), -0.5, 1.5)) * scale
     r = data.draw(coords(k, 0.0, 2.0)) * scale
-    for table in (None, 0):
-        grid = CellGrid(x, cell * scale, table)
+    for table, brute in ((None, 0), (0, 0), (None, 64)):
+        grid = CellGrid(x, cell * scale, table, brute)
         assert _as_set(*grid.near(c, r)) == brute_near(x, c, r)
 
 
@@ -81,15 +82,16 @@ def test_exactly_at_the_reach_is_a_pair_far_from_the_origin():
     """Points exactly the reach apart (in floating point) pair up at 1e6 m;
     a hair farther, not."""
     x = np.array([[1e6, 1e6, 1e6], [1e6 + 0.125, 1e6, 1e6], [1e6 + 0.25 + 2 ** -20, 1e6, 1e6]])
-    grid = CellGrid(x, 0.125)
+    grid = CellGrid(x, 0.125, brute=0)
     assert _as_set(*grid.pairs(0.125)) == {(0, 1)}
     assert _as_set(*grid.near(x[:1], np.array([0.125]))) == {(0, 0), (0, 1)}
 
 
 def test_empty_and_single():
-    assert CellGrid(np.zeros((0, 3)), 1.0).pairs(1.0)[0].size == 0
-    assert CellGrid(np.ones((1, 3)), 1.0).pairs(1.0)[0].size == 0
-    assert CellGrid(np.zeros((0, 3)), 1.0).near(np.zeros((2, 3)), 1.0)[0].size == 0
+    for brute in (0, 64):
+        assert CellGrid(np.zeros((0, 3)), 1.0, brute=brute).pairs(1.0)[0].size == 0
+        assert CellGrid(np.ones((1, 3)), 1.0, brute=brute).pairs(1.0)[0].size == 0
+        assert CellGrid(np.zeros((0, 3)), 1.0, brute=brute).near(np.zeros((2, 3)), 1.0)[0].size == 0
 
 
 def test_non_finite_points_are_refused():
@@ -102,7 +104,7 @@ def test_far_apart_points_keep_the_tables_small():
     are searched instead: the same pairs, no table larger than the points."""
     y = np.arange(50.0)
     x = np.concatenate([np.c_[np.zeros(50), y, np.zeros(50)], np.c_[np.full(50, 1e4), y, np.zeros(50)]])
-    grid = CellGrid(x, 1.0)
+    grid = CellGrid(x, 1.0, brute=0)
     assert grid.table is None
     assert _as_set(*grid.pairs(1.0)) == brute_pairs(x, 1.0)
     c = np.array([[0.0, 10.0, 0.0], [1e4, 20.0, 0.5]])
