@@ -7,8 +7,9 @@ are binned into a uniform grid (:class:`checker.cellgrid.CellGrid`).
 :meth:`Chunks.pairs` gives chunk pairs that may come within a reach (cable
 against cable, other than neighbours along one cable: the near field of
 :mod:`checker.interference.cablepairs`); :func:`chunk_part_pairs` meets
-every part's bounding sphere with the grid, then the chunks' spheres. Cost
-therefore grows with the number of close pairs, not with points x parts.
+every part's bounding sphere with the grid, then the chunks' spheres and
+(optionally) the part's own box. Cost therefore grows with the number of
+close pairs, not with points x parts.
 
 Deliberately not here: exact distances (the narrow phases of
 :mod:`~checker.interference.cablepairs` and
