@@ -27,11 +27,14 @@ from functools import cache
 from pathlib import Path
 
 import numpy as np
+import pyarrow as pa
 import rerun as rr
 
 from checker.shapes import Shape
 from sim.build import Built
 from sim.record.cables import CableFrames
+from sim.record.columns import Once, column, floats, rgba, vec3
+from sim.record.columns import times as sim_time
 from sim.record.clashes import Settings, send_clash_list, send_log
 from sim.record.layout import Extent, blueprint
 from sim.record.marks import ClashMarks, Mark
@@ -110,9 +113,6 @@ class Recorder:
         self._rest = [np.asarray(c, float) for c in cables] if cables is not None else None
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         self.scene.log_static(self.rec, np.asarray(part_poses, float), self._rest, qpos)
-        self.cables.log_static(self.rec)
-        self.rec.log("world/mujoco_contacts", rr.Points3D.from_fields(radii=[-3.0], colors=[CONTACT_COLOUR]),
-                     static=True)
 
     # -- per frame --------------------------------------------------------
     def log_step(self, t: float, cables: list[np.ndarray], part_poses: np.ndarray,
@@ -240,10 +240,13 @@ class Recorder:
                                      self.unit, self.settings.units), make_active=True, make_default=True)
 
     def _send_contacts(self, times: np.ndarray) -> None:
+        """MuJoCo's contact points, one column, their style (3 px, the
+        contacts' colour) in the first row."""
         found = [(f, c) for f, c in enumerate(self._contacts) if c is not None]
         if not found:
             return
-        self.rec.send_columns("world/mujoco_contacts",
-                              indexes=[rr.TimeColumn("sim_time", duration=times[[f for f, _ in found]])],
-                              columns=rr.Points3D.columns(positions=np.concatenate([c for _, c in found]))
-                              .partition([len(c) for _, c in found]))
+        p = rr.Points3D
+        self.rec.send_columns("world/mujoco_contacts", indexes=[sim_time(times[[f for f, _ in found]])], columns=[
+            column(p.descriptor_positions(), vec3(np.concatenate([c for _, c in found])), [len(c) for _, c in found]),
+            Once(p.descriptor_radii(), floats([-3.0], pa.float32()), len(found)),
+            Once(p.descriptor_colors(), rgba([CONTACT_COLOUR]), len(found))])

@@ -16,6 +16,7 @@ import rerun as rr
 from rerun.components import TensorDataBatch
 
 from sim.build import Built
+from sim.record.columns import column, floats, rgba, strips
 from sim.record.style import escape
 
 _VIRIDIS = np.array([(68, 1, 84), (59, 82, 139), (33, 145, 140), (94, 201, 98), (253, 231, 37)], float)
@@ -60,16 +61,22 @@ def tensor_1d(values: np.ndarray) -> pa.StructArray:
 def send_wear(rec: rr.RecordingStream, built: Built, wear: list, rest: list[np.ndarray] | None,
               unit: float) -> None:
     """Each cable's wear (:class:`checker.wear.CableWear`): colour along its rest
-    shape (`rest`, metres; else as routed) and a bar chart per measure."""
+    shape (`rest`, metres; else as routed) and a bar chart per measure, each
+    one static chunk."""
+    bar, line = rr.BarChart, rr.LineStrips3D
     for i, w in enumerate(wear):
         name = escape(w.name)
         edges = np.append(w.s, w.length) / unit
-        at, widths = tensor_1d(edges[:-1]), np.diff(edges)
+        at, widths = tensor_1d(edges[:-1]), floats(np.diff(edges), pa.float32())
         for measure, values in (("contact_time", w.contact_time), ("sliding", w.sliding / unit),
                                 ("bend_cycles", w.bend_cycles)):
-            rec.log(f"wear/{name}/{measure}", rr.BarChart(tensor_1d(values), abscissa=at, widths=widths),
-                    static=True)
+            rec.send_columns(f"wear/{name}/{measure}", indexes=[], columns=[
+                column(bar.descriptor_values(), tensor_1d(values)), column(bar.descriptor_abscissa(), at),
+                column(bar.descriptor_widths(), widths, [len(widths)])])
         pts = np.asarray(rest[i] if rest is not None else built.cables[i].routed, float) / unit
-        rec.log(f"wear_map/{name}", rr.LineStrips3D(np.stack([pts[:-1], pts[1:]], axis=1),
-                                                    radii=[built.cables[i].radius / unit],
-                                                    colors=wear_colours(w.sliding, w.contact_time)), static=True)
+        ends = np.stack([pts[:-1], pts[1:]], axis=1).reshape(-1, 3)          # one two-point strip per bin
+        k = len(pts) - 1
+        rec.send_columns(f"wear_map/{name}", indexes=[], columns=[
+            column(line.descriptor_strips(), strips(ends, np.arange(0, 2 * k + 1, 2)), [k]),
+            column(line.descriptor_radii(), floats([built.cables[i].radius / unit], pa.float32()), [1]),
+            column(line.descriptor_colors(), rgba(wear_colours(w.sliding, w.contact_time)), [k])])

@@ -1,0 +1,102 @@
+"""Arrow columns for rerun's `send_columns`, built from numpy directly.
+
+rerun's archetype helpers (`rr.Scalars.columns(...)`, `rr.AnyValues.columns(...)`,
+`rr.Ellipsoids3D.columns(...)`) convert and check their input field by field in
+Python, tens to hundreds of microseconds per entity; at the close of a short
+run, when every entity is sent, that was most of the recording's cost. Here
+each component's arrow array is made in one call from numpy and handed to
+rerun's own `ComponentColumn` with the archetype's own descriptor (rerun's
+`ComponentBatchLike` protocol: anything with `as_arrow_array`).
+
+Not here: what is logged where (the other modules of `sim.record`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pyarrow as pa
+import rerun as rr
+
+VEC3 = pa.list_(pa.field("item", pa.float32(), nullable=False), 3)
+"""A point or a size: three float32, as rerun stores them."""
+STRIP = pa.list_(pa.field("item", VEC3, nullable=False))
+"""A line strip: a list of points."""
+
+
+@dataclass(frozen=True)
+class Ready:
+    """An arrow array that is already in the component's arrow type."""
+
+    array: pa.Array
+
+    def as_arrow_array(self) -> pa.Array:
+        return self.array
+
+
+def column(descriptor: rr.ComponentDescriptor, array: pa.Array,
+           lengths: np.ndarray | Sequence[int] | None = None) -> rr.ComponentColumn:
+    """A component column: `array` split into rows of `lengths` values (default one each)."""
+    return rr.ComponentColumn(descriptor, Ready(array), lengths=lengths)
+
+
+@dataclass(frozen=True)
+class Once:
+    """A component given once, in the first row of a column of `rows` rows,
+    and absent (null) from the others: a style or a legend label that every
+    later row finds (rerun looks each component up at or before the time
+    shown; an empty value, unlike an absent one, would clear it). Used as
+    a column of `send_columns` (it has `ComponentColumn`'s two methods)."""
+
+    descriptor: rr.ComponentDescriptor
+    value: pa.Array
+    rows: int
+
+    def component_descriptor(self) -> rr.ComponentDescriptor:
+        return self.descriptor
+
+    def as_arrow_array(self) -> pa.Array:
+        offsets = np.full(self.rows + 1, len(self.value), np.int32)
+        offsets[0] = 0
+        valid = np.zeros(self.rows, bool)
+        valid[0] = True
+        # from buffers: `ListArray.from_arrays(..., mask=)` imports pyarrow.compute (tens of ms)
+        return pa.Array.from_buffers(pa.list_(self.value.type), self.rows,
+                                     [pa.py_buffer(np.packbits(valid, bitorder="little")), pa.py_buffer(offsets)],
+                                     null_count=self.rows - 1, children=[self.value])
+
+
+def vec3(points: np.ndarray) -> pa.Array:
+    """(n, 3) points or sizes as rerun's `Vec3D` array."""
+    flat = np.ascontiguousarray(points, np.float32).reshape(-1)
+    return pa.FixedSizeListArray.from_arrays(pa.array(flat), type=VEC3)
+
+
+def strips(points: np.ndarray, offsets: np.ndarray) -> pa.Array:
+    """Line strips as rerun's `LineStrip3D` array: strip k runs through
+    `points[offsets[k]:offsets[k + 1]]` ((n, 3) points, (k + 1,) offsets)."""
+    return pa.ListArray.from_arrays(pa.array(np.asarray(offsets, np.int32)), vec3(points), type=STRIP)
+
+
+def floats(values, kind: pa.DataType = pa.float64()) -> pa.Array:
+    """A float array of `kind` (rerun's scalars are float64, radii and widths float32)."""
+    return pa.array(np.asarray(values, np.float32 if kind == pa.float32() else np.float64))
+
+
+def strings(texts: Sequence[str]) -> pa.Array:
+    return pa.array(texts, pa.utf8())
+
+
+def rgba(colours: Sequence[Sequence[int]]) -> pa.Array:
+    """(n, 3 or 4) 8-bit colours as rerun's packed RGBA (uint32)."""
+    c = np.asarray(colours, np.uint32).reshape(len(colours), -1)
+    if c.shape[1] == 3:
+        c = np.concatenate([c, np.full((len(c), 1), 255, np.uint32)], axis=1)
+    return pa.array((c[:, 0] << 24) | (c[:, 1] << 16) | (c[:, 2] << 8) | c[:, 3])
+
+
+def times(seconds: np.ndarray) -> rr.TimeColumn:
+    """The `sim_time` index of a column."""
+    return rr.TimeColumn("sim_time", duration=seconds)
