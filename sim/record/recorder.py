@@ -33,7 +33,7 @@ import rerun as rr
 from checker.shapes import Shape
 from sim.build import Built
 from sim.record.cables import CableFrames
-from sim.record.columns import Once, column, floats, rgba, vec3
+from sim.record.columns import Once, column, floats, rgba, strings, vec3
 from sim.record.columns import times as sim_time
 from sim.record.clashes import Settings, send_clash_list, send_log
 from sim.record.layout import Extent, blueprint
@@ -232,8 +232,10 @@ class Recorder:
         send_log(rec, self._log)
         send_clash_list(rec, self._events, self._event_joints, self.unit, self.settings.units)
         send_wear(rec, self.built, self._wear, self._rest, self.unit)
-        rec.set_time("sim_time", duration=0.0)
-        rec.log("summary", rr.TextDocument(self._summary, media_type="text/markdown"))
+        doc = rr.TextDocument
+        rec.send_columns("summary", indexes=[sim_time(np.zeros(1))],
+                         columns=[column(doc.descriptor_text(), strings([self._summary])),
+                                  column(doc.descriptor_media_type(), strings(["text/markdown"]))])
         extent = Extent(bounds, self.series.lowest("checks/"), frozenset(p.split("/")[0] for p in self.series.series),
                         any(p.startswith("cables/twist/") for p in self.series.series))
         rec.send_blueprint(blueprint(self.built, self._events, self._wear, extent, self.settings.clearance,
