@@ -4,9 +4,8 @@ rerun's archetype helpers (`rr.Scalars.columns(...)`, `rr.AnyValues.columns(...)
 `rr.Ellipsoids3D.columns(...)`) convert and check their input field by field in
 Python, tens to hundreds of microseconds per entity; at the close of a short
 run, when every entity is sent, that was most of the recording's cost. Here
-each component's arrow array is made in one call from numpy and handed to
-rerun's own `ComponentColumn` with the archetype's own descriptor (rerun's
-`ComponentBatchLike` protocol: anything with `as_arrow_array`).
+each component's arrow array is made in one call from numpy and sent with
+the archetype's own descriptor.
 
 Not here: what is logged where (the other modules of `sim.record`).
 """
@@ -27,19 +26,31 @@ STRIP = pa.list_(pa.field("item", VEC3, nullable=False))
 
 
 @dataclass(frozen=True)
-class Ready:
-    """An arrow array that is already in the component's arrow type."""
+class Column:
+    """A component column for `send_columns` (rerun's `ComponentColumn` reads
+    no more than these two methods): the component's values, `values`, cut
+    into one row per entry of `offsets`."""
 
-    array: pa.Array
+    descriptor: rr.ComponentDescriptor
+    values: pa.Array
+    offsets: np.ndarray
+
+    def component_descriptor(self) -> rr.ComponentDescriptor:
+        return self.descriptor
 
     def as_arrow_array(self) -> pa.Array:
-        return self.array
+        return pa.ListArray.from_arrays(pa.array(self.offsets), self.values)
 
 
-def column(descriptor: rr.ComponentDescriptor, array: pa.Array,
-           lengths: np.ndarray | Sequence[int] | None = None) -> rr.ComponentColumn:
-    """A component column: `array` split into rows of `lengths` values (default one each)."""
-    return rr.ComponentColumn(descriptor, Ready(array), lengths=lengths)
+def column(descriptor: rr.ComponentDescriptor, values: pa.Array,
+           lengths: np.ndarray | Sequence[int] | None = None) -> Column:
+    """A component column: `values` split into rows of `lengths` values (default one each)."""
+    if lengths is None:
+        offsets = np.arange(len(values) + 1, dtype=np.int32)
+    else:
+        offsets = np.zeros(len(lengths) + 1, np.int32)
+        np.cumsum(lengths, out=offsets[1:])
+    return Column(descriptor, values, offsets)
 
 
 @dataclass(frozen=True)
@@ -47,8 +58,8 @@ class Once:
     """A component given once, in the first row of a column of `rows` rows,
     and absent (null) from the others: a style or a legend label that every
     later row finds (rerun looks each component up at or before the time
-    shown; an empty value, unlike an absent one, would clear it). Used as
-    a column of `send_columns` (it has `ComponentColumn`'s two methods)."""
+    shown; an empty value, unlike an absent one, would clear it). A column
+    of `send_columns` like :class:`Column`."""
 
     descriptor: rr.ComponentDescriptor
     value: pa.Array

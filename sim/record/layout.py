@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
+from rerun.blueprint.components import ComponentColumnSelector
 
 from sim.build import Built
 from sim.record.style import SPOT, STATE_COLOURS, STATES, escape, pair_text
@@ -133,7 +134,8 @@ def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance:
     lists = rrb.Tabs(
         rrb.DataframeView(name="Clash list (select a row's time to jump)", origin="clashes",
                           query=rrb.archetypes.DataframeQuery(
-                              timeline="sim_time", select=["sim_time", *[f"/clashes:{c}" for c in CLASH_COLUMNS]])),
+                              timeline="sim_time", select=["sim_time", *[ComponentColumnSelector(
+                                  entity_path="/clashes", component=c) for c in CLASH_COLUMNS]])),
         rrb.TextLogView(name="Events", origin="events"),
         rrb.TextDocumentView(name="Summary", origin="summary"),
     )

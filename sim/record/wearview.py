@@ -10,6 +10,8 @@ Not here: measuring wear (`checker.wear`).
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 import pyarrow as pa
 import rerun as rr
@@ -40,22 +42,30 @@ def wear_colours(sliding: np.ndarray, contact_time: np.ndarray) -> np.ndarray:
     return np.round(rgb).astype(np.uint8)
 
 
+@cache
+def _tensor_parts() -> tuple:
+    """What every 1-D float64 tensor shares: the arrow type, the F64 arm of
+    its buffer union and the (empty) arrays of the other arms."""
+    dt = TensorDataBatch._ARROW_DATATYPE
+    union = dt.field("buffer").type
+    k = [f.name for f in union].index("F64")
+    empty = [pa.nulls(0, type=f.type) for f in union]
+    codes = [pa.array([k], pa.int8()).buffers()[1], pa.array([0], pa.int32()).buffers()[1]]
+    return dt, union, k, empty, codes, pa.nulls(1, dt.field("names").type)
+
+
 def tensor_1d(values: np.ndarray) -> pa.StructArray:
     """A 1-D float64 vector as rerun's tensor component (`TensorDataBatch`'s
     arrow type), built directly: rerun's own converter casts its arrays,
     and the first cast of a process imports `pyarrow.compute` (tens of ms)."""
     v = np.ascontiguousarray(values, np.float64).ravel()
-    dt = TensorDataBatch._ARROW_DATATYPE
+    dt, union, k, empty, codes, names = _tensor_parts()
     shape = pa.ListArray.from_arrays(pa.array([0, 1], pa.int32()), pa.array([len(v)], pa.uint64()),
                                      type=dt.field("shape").type)
-    union = dt.field("buffer").type
-    k = [f.name for f in union].index("F64")
-    children = [pa.nulls(0, type=f.type) for f in union]
+    children = list(empty)
     children[k] = pa.ListArray.from_arrays(pa.array([0, len(v)], pa.int32()), pa.array(v), type=union[k].type)
-    buffer = pa.Array.from_buffers(type=union, length=1, children=children,
-                                   buffers=[None, pa.array([k], pa.int8()).buffers()[1],
-                                            pa.array([0], pa.int32()).buffers()[1]])
-    return pa.StructArray.from_arrays([shape, pa.nulls(1, dt.field("names").type), buffer], fields=list(dt))
+    buffer = pa.Array.from_buffers(type=union, length=1, children=children, buffers=[None, *codes])
+    return pa.StructArray.from_arrays([shape, names, buffer], fields=list(dt))
 
 
 def send_wear(rec: rr.RecordingStream, built: Built, wear: list, rest: list[np.ndarray] | None,
