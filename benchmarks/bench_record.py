@@ -27,7 +27,15 @@ The target: recording at most half of MuJoCo's time per step (ratio <=
 0.5) on every scene, and no more per step than before the clash review
 (``c5dc43e``).
 
+``--harness D1,D2`` measures instead the recording's size on the harness
+scene (``sim.harness``: 64 cables among 1,000 parts), run by this checkout
+for each duration D (simulated seconds, one process each): the file's size,
+its size per simulated second and its growth per simulated second between
+consecutive durations (what is written once, such as the parts' shapes and
+one chunk per entity with its schema, drops out of the growth).
+
 Run: python benchmarks/bench_record.py [--before REV[,REV]] [--repeat N] [--scenes a,b] [--out DIR]
+     python benchmarks/bench_record.py --harness 1,2 [--out DIR]
 
 Timings depend on the machine and its load: compare rows of one run, not
 runs of different days.
@@ -135,13 +143,54 @@ def _table(cols: list[str], rows: list[list]) -> str:
 COLUMNS = ("rec", "close", "frame", "open", "sim", "ratio", "with_open", "cpu_ratio", "mb")
 
 
+def harness(durations: list[float], out: Path) -> str:
+    """The harness scene's recording size per simulated second (see the module docstring)."""
+    from sim.harness import harness_scene, write_scene
+
+    rows, sizes = [], {}
+    for d in durations:
+        scene = write_scene(harness_scene(64, 1000, duration=d), out / f"harness_{d:g}s.toml")
+        report, record = out / f"harness_{d:g}s.json", out / f"harness_{d:g}s.rrd"
+        proc = subprocess.run([sys.executable, "-P", "-m", "sim.cli", "run", str(scene), "--report", str(report),
+                               "--record", str(record), "--quiet", "--fail-on", "never"], cwd=REPO,
+                              env=dict(os.environ, PYTHONPATH=str(REPO)), capture_output=True, text=True, check=False)
+        if proc.returncode != 0 or not record.exists():
+            rows.append([f"{d:g}", None, None, None, None, f"failed ({proc.returncode})"])
+            continue
+        t = json.loads(report.read_text())["timing"]
+        sizes[d] = record.stat().st_size / 2 ** 20
+        done = [k for k in sorted(sizes) if k < d]
+        growth = (sizes[d] - sizes[done[-1]]) / (d - done[-1]) if done else None
+        rows.append([f"{d:g}", sizes[d], sizes[d] / d, growth, t["record_s"] / d, ""])
+        print(f"harness {d:g} s: measured", file=sys.stderr, flush=True)
+    return ("Harness scene (64 cables, 1,000 parts): the recording's size; mb_per_s = size / duration; "
+            "growth = (size - size of the previous duration) / (difference of durations); record_s_per_s: "
+            "the report's record_s per simulated second\n"
+            + _table(["duration_s", "mb", "mb_per_s", "growth_mb_per_s", "record_s_per_s", "note"], rows))
+
+
+def _machine() -> str:
+    load = os.getloadavg()
+    return (f"\nmachine: {os.cpu_count()} cores, load average {load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f} "
+            f"at the end; python {sys.version.split()[0]}")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--before", default=BEFORE, help="git revisions to compare with, comma-separated ('' for none)")
     ap.add_argument("--repeat", type=int, default=3, help="runs per scene and code")
     ap.add_argument("--scenes", default="", help="comma-separated scene stems (default: every example)")
     ap.add_argument("--out", type=Path, default=None, help="folder for the reports and recordings")
+    ap.add_argument("--harness", default="", help="durations (s, comma-separated): the harness recording's size")
     a = ap.parse_args(argv)
+    if a.harness:
+        out = a.out or Path(tempfile.mkdtemp(prefix="bench_record_"))
+        out.mkdir(parents=True, exist_ok=True)
+        sys.path.insert(0, str(REPO))
+        text = harness([float(x) for x in a.harness.split(",")], out) + _machine()
+        print(text)
+        (out / "bench_record_harness.txt").write_text(text + "\n")
+        return 0
     scenes = sorted((REPO / "scenes").glob("*.toml"))
     if a.scenes:
         scenes = [s for s in scenes if s.stem in a.scenes.split(",")]
@@ -178,13 +227,11 @@ def main(argv=None) -> int:
             rows.append(row)
         print(f"{scene.stem}: measured", file=sys.stderr, flush=True)
     cols = ["scene", "code", *COLUMNS, "now/this", "ratio<=0.5"]
-    load = os.getloadavg()
     text = (f"Recording against MuJoCo, ms per checked step unless named (close, open: ms per run), best of "
             f"{a.repeat} runs each, one process per run, codes in turn; ratio = rec / sim; with_open = "
             f"(record + open) / sim; cpu_ratio: rec / sim in CPU time (median); now/this: this checkout's rec "
             f"over the row's\n" + _table(cols, rows)
-            + f"\nmachine: {os.cpu_count()} cores, load average {load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f} "
-              f"at the end; python {sys.version.split()[0]}")
+            + _machine())
     print(text)
     (out / "bench_record.txt").write_text(text + "\n")
     (out / "bench_record.json").write_text(json.dumps(found, indent=1))
