@@ -113,7 +113,6 @@ class Recorder:
         self._rest = [np.asarray(c, float) for c in cables] if cables is not None else None
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         self.scene.log_static(self.rec, np.asarray(part_poses, float), self._rest, qpos)
-        self.rec.flush(timeout_sec=0.0)  # static data goes to the file now, not with the rest at the close
 
     # -- per frame --------------------------------------------------------
     def log_step(self, t: float, cables: list[np.ndarray], part_poses: np.ndarray,
