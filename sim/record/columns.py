@@ -79,6 +79,23 @@ class Once:
                                      null_count=self.rows - 1, children=[self.value])
 
 
+@dataclass(frozen=True)
+class _Ready:
+    """An arrow array already in its component's type (rerun's `ComponentBatchLike`)."""
+
+    array: pa.Array
+
+    def as_arrow_array(self) -> pa.Array:
+        return self.array
+
+
+def named(values: dict[str, pa.Array]) -> list[rr.DescribedComponentBatch]:
+    """Values named by component with no archetype, as `rr.AnyValues` makes
+    them (whose type guessing, the first time in a process, imports
+    `dateutil` and tries `pandas`: milliseconds)."""
+    return [rr.DescribedComponentBatch(_Ready(v), rr.ComponentDescriptor(k)) for k, v in values.items()]
+
+
 def vec3(points: np.ndarray) -> pa.Array:
     """(n, 3) points or sizes as rerun's `Vec3D` array."""
     flat = np.ascontiguousarray(points, np.float32).reshape(-1)

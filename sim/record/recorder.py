@@ -33,7 +33,7 @@ import rerun as rr
 from checker.shapes import Shape
 from sim.build import Built
 from sim.record.cables import CableFrames
-from sim.record.columns import Once, column, floats, rgba, strings, vec3
+from sim.record.columns import Once, column, floats, named, rgba, strings, vec3
 from sim.record.columns import times as sim_time
 from sim.record.clashes import Settings, send_clash_list, send_log
 from sim.record.layout import Extent, blueprint
@@ -74,8 +74,9 @@ class Recorder:
         self.rec.save(str(self.tmp))
         self.rec.send_recording_name(scene.name)
         s = self.settings
-        self.rec.send_property("cablecheck", rr.AnyValues(
-            units=s.units, clearance=s.clearance / self.unit, scene_file=s.scene_file, version=s.version))
+        self.rec.send_property("cablecheck", named({
+            "units": strings([s.units]), "clearance": floats([s.clearance / self.unit]),
+            "scene_file": strings([s.scene_file]), "version": strings([s.version])}))
         self.scene = SceneGeometry(built, self.unit)
         self.cables = CableFrames(built, self.unit)
         self.marks = ClashMarks(built, self.unit, s.units, shapes)
