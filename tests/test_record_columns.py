@@ -46,7 +46,7 @@ def test_columns_equal_reruns_own(lengths, seed):
 def test_strips_radii_and_colours_equal_reruns_own():
     pts = np.arange(18, dtype=float).reshape(6, 3)
     ours = _rerun([column(rr.LineStrips3D.descriptor_strips(), strips(pts, [0, 2, 6]), [1, 1]),
-                   column(rr.LineStrips3D.descriptor_radii(), floats([0.5, 2.0], pa.float32())),
+                   column(rr.LineStrips3D.descriptor_radii(), floats([0.5, 2.0], np.float32)),
                    column(rr.LineStrips3D.descriptor_colors(), rgba([(255, 0, 230), (1, 2, 3)]))])
     theirs = _rerun(rr.LineStrips3D.columns(strips=[pts[:2], pts[2:]], radii=[0.5, 2.0],
                                             colors=[(255, 0, 230), (1, 2, 3)]))

@@ -107,4 +107,4 @@ class CableFrames:
                              columns=[column(rr.LineStrips3D.descriptor_strips(), lines, counts),
                                       column(rr.LineStrips3D.descriptor_colors(), pa.array(colours[states]), counts),
                                       Once(rr.LineStrips3D.descriptor_radii(),
-                                           floats([cable.radius / self.unit], pa.float32()), len(counts))])
+                                           floats([cable.radius / self.unit], np.float32), len(counts))])

@@ -108,9 +108,9 @@ def strips(points: np.ndarray, offsets: np.ndarray) -> pa.Array:
     return pa.ListArray.from_arrays(pa.array(np.asarray(offsets, np.int32)), vec3(points), type=STRIP)
 
 
-def floats(values, kind: pa.DataType = pa.float64()) -> pa.Array:
-    """A float array of `kind` (rerun's scalars are float64, radii and widths float32)."""
-    return pa.array(np.asarray(values, np.float32 if kind == pa.float32() else np.float64))
+def floats(values, dtype: type = np.float64) -> pa.Array:
+    """A float array (rerun's scalars are float64, radii and widths float32)."""
+    return pa.array(np.asarray(values, dtype))
 
 
 def strings(texts: Sequence[str]) -> pa.Array:

@@ -20,7 +20,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pyarrow as pa
 import rerun as rr
 
 from checker import spot
@@ -185,5 +184,5 @@ class ClashMarks:
             columns += [column(rr.LineStrips3D.descriptor_strips(),
                                strips(pairs.reshape(-1, 3), np.arange(0, 2 * len(pairs) + 1, 2)), has),
                         column(rr.LineStrips3D.descriptor_radii(),
-                               floats(np.full(len(pairs), 0.35 * radius), pa.float32()), has)]
+                               floats(np.full(len(pairs), 0.35 * radius), np.float32), has)]
         rec.send_columns(f"world/interference/{path}", indexes=index(frames), columns=columns)

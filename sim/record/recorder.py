@@ -27,15 +27,14 @@ from functools import cache
 from pathlib import Path
 
 import numpy as np
-import pyarrow as pa
 import rerun as rr
 
 from checker.shapes import Shape
 from sim.build import Built
 from sim.record.cables import CableFrames
+from sim.record.clashes import Settings, send_clash_list, send_log
 from sim.record.columns import Once, column, floats, named, rgba, strings, vec3
 from sim.record.columns import times as sim_time
-from sim.record.clashes import Settings, send_clash_list, send_log
 from sim.record.layout import Extent, blueprint
 from sim.record.marks import ClashMarks, Mark
 from sim.record.scene import SceneGeometry
@@ -251,5 +250,5 @@ class Recorder:
         p = rr.Points3D
         self.rec.send_columns("world/mujoco_contacts", indexes=[sim_time(times[[f for f, _ in found]])], columns=[
             column(p.descriptor_positions(), vec3(np.concatenate([c for _, c in found])), [len(c) for _, c in found]),
-            Once(p.descriptor_radii(), floats([-3.0], pa.float32()), len(found)),
+            Once(p.descriptor_radii(), floats([-3.0], np.float32), len(found)),
             Once(p.descriptor_colors(), rgba([CONTACT_COLOUR]), len(found))])

@@ -17,7 +17,6 @@ Not here: what the values are (the run measures them).
 from __future__ import annotations
 
 import numpy as np
-import pyarrow as pa
 import rerun as rr
 
 from sim.build import Built
@@ -156,4 +155,4 @@ def send_limit_lines(rec: rr.RecordingStream, built: Built, times: np.ndarray, c
             column(rr.Scalars.descriptor_scalars(), floats([value, value])),
             Once(rr.SeriesLines.descriptor_names(), strings([name]), 2),
             Once(rr.SeriesLines.descriptor_colors(), rgba([colour]), 2),
-            Once(rr.SeriesLines.descriptor_widths(), floats([1.0], pa.float32()), 2)])
+            Once(rr.SeriesLines.descriptor_widths(), floats([1.0], np.float32), 2)])

@@ -77,7 +77,7 @@ def send_wear(rec: rr.RecordingStream, built: Built, wear: list, rest: list[np.n
     for i, w in enumerate(wear):
         name = escape(w.name)
         edges = np.append(w.s, w.length) / unit
-        at, widths = tensor_1d(edges[:-1]), floats(np.diff(edges), pa.float32())
+        at, widths = tensor_1d(edges[:-1]), floats(np.diff(edges), np.float32)
         for measure, values in (("contact_time", w.contact_time), ("sliding", w.sliding / unit),
                                 ("bend_cycles", w.bend_cycles)):
             rec.send_columns(f"wear/{name}/{measure}", indexes=[], columns=[
@@ -88,5 +88,5 @@ def send_wear(rec: rr.RecordingStream, built: Built, wear: list, rest: list[np.n
         k = len(pts) - 1
         rec.send_columns(f"wear_map/{name}", indexes=[], columns=[
             column(line.descriptor_strips(), strips(ends, np.arange(0, 2 * k + 1, 2)), [k]),
-            column(line.descriptor_radii(), floats([built.cables[i].radius / unit], pa.float32()), [1]),
+            column(line.descriptor_radii(), floats([built.cables[i].radius / unit], np.float32), [1]),
             column(line.descriptor_colors(), rgba(wear_colours(w.sliding, w.contact_time)), [k])])
