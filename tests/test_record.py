@@ -8,6 +8,7 @@ recorder's own buffers.
 from __future__ import annotations
 
 import json
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -316,6 +317,21 @@ def test_a_cable_lying_on_a_plate_with_one_end_sliding_wears_only_where_it_touch
     grey = int.from_bytes(bytes([200, 200, 200, 255]), "big")
     colours = np.array(strip["LineStrips3D:colors"], np.uint32)
     assert (colours[never] == grey).all() and not (colours[contact > 0] == grey).any()
+
+
+def test_a_style_given_once_rides_in_the_first_row(pinch):
+    _, record = pinch
+    # one chunk per entity: the cable's radius and the contacts' style in the first row, absent after
+    for entity, style in (("/world/cables/loop", ["LineStrips3D:radii"]),
+                          ("/world/mujoco_contacts", ["Points3D:radii", "Points3D:colors"])):
+        chunks = [c for c in RrdReader(record).stream() if c.entity_path == entity]
+        assert len(chunks) == 1 and not chunks[0].is_static
+        rows = _rows(record, entity)
+        for key in style:
+            assert rows[0][key] and all(r[key] is None for r in rows[1:])
+    scene = tomllib.loads((ROOT / "scenes" / "drawer_pinch.toml").read_text())
+    (first, *_) = _rows(record, "/world/cables/loop")
+    assert first["LineStrips3D:radii"] == [pytest.approx(scene["cables"][0]["radius"])]     # mm, as the scene
 
 
 def test_frames_recorded_for_an_event_alone_keep_only_what_changes(pinch):

@@ -18,7 +18,8 @@ module of this package that writes each part:
 - the blueprint: views, a saved viewpoint per clash, plot ranges (:mod:`.layout`).
 
 :class:`Recorder` (:mod:`.recorder`) buffers each frame and sends
-everything in columns when closed: recording costs a fraction of a step.
+everything in columns when closed, built as arrow arrays from numpy
+(:mod:`.columns`): recording costs a fraction of a step.
 
 This package does not decide what is interference or wear; it shows what it
 is given.

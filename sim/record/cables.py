@@ -19,15 +19,14 @@ from __future__ import annotations
 import numpy as np
 import pyarrow as pa
 import rerun as rr
-from rerun.components import LineStrip3DBatch
 
 from sim.build import Built
+from sim.record.columns import STRIP, Once, column, floats, rgba, strips
+from sim.record.columns import times as sim_time
 from sim.record.marks import Mark
 from sim.record.style import STATE_COLOURS, STATES, escape
 
 _RANK = {s: n for n, s in enumerate(STATES)}
-_VEC3 = LineStrip3DBatch._ARROW_DATATYPE.value_type
-"""A point of a strip: three float32, as rerun stores them."""
 
 
 def runs(points: np.ndarray, states: np.ndarray) -> tuple[pa.Array, np.ndarray, np.ndarray]:
@@ -38,8 +37,7 @@ def runs(points: np.ndarray, states: np.ndarray) -> tuple[pa.Array, np.ndarray, 
     Built in arrow directly: rerun's converter takes strips one at a time."""
     n_f, n = states.shape
     if n == 0 or n_f == 0:
-        return (pa.array([], type=LineStrip3DBatch._ARROW_DATATYPE), np.zeros(0, np.uint8),
-                np.zeros(n_f, np.int64))
+        return pa.array([], type=STRIP), np.zeros(0, np.uint8), np.zeros(n_f, np.int64)
     start = np.ones((n_f, n), bool)
     start[:, 1:] = states[:, 1:] != states[:, :-1]
     frame, first = np.nonzero(start)                        # strips in frame order, then along the cable
@@ -53,10 +51,7 @@ def runs(points: np.ndarray, states: np.ndarray) -> tuple[pa.Array, np.ndarray, 
     offsets = np.zeros(len(sizes) + 1, np.int32)
     np.cumsum(sizes, out=offsets[1:])
     idx = np.repeat(frame * (n + 1) + first - offsets[:-1], sizes) + np.arange(offsets[-1])
-    flat = np.asarray(points, np.float32).reshape(-1, 3)[idx].ravel()
-    xyz = pa.FixedSizeListArray.from_arrays(pa.array(flat), type=_VEC3)
-    strips = pa.ListArray.from_arrays(pa.array(offsets), xyz, type=LineStrip3DBatch._ARROW_DATATYPE)
-    return strips, states[frame, first], counts
+    return strips(np.asarray(points, np.float32).reshape(-1, 3)[idx], offsets), states[frame, first], counts
 
 
 class CableFrames:
@@ -75,12 +70,6 @@ class CableFrames:
         self._points: list[list[np.ndarray]] = [[] for _ in built.cables]
         self._states: list[list[np.ndarray]] = [[] for _ in built.cables]
         self._frames: list[list[int]] = [[] for _ in built.cables]
-
-    def log_static(self, rec: rr.RecordingStream) -> None:
-        """Each cable's radius, once."""
-        for cable in self.built.cables:
-            rec.log(f"world/cables/{escape(cable.name)}",
-                    rr.LineStrips3D.from_fields(radii=[cable.radius / self.unit]), static=True)
 
     def add(self, frame: int, cables: list[np.ndarray], marks: list[Mark], sampled: bool = True) -> None:
         """One frame: body centres (metres) and the clashes that colour them.
@@ -107,13 +96,15 @@ class CableFrames:
         state[i][near] = np.maximum(state[i][near], rank)
 
     def send(self, rec: rr.RecordingStream, times: np.ndarray) -> None:
-        """Every cable's frames, one column per cable (`times`: each frame's, seconds)."""
-        rgba = np.array([int.from_bytes(bytes([*STATE_COLOURS[s], 255]), "big") for s in STATES], np.uint32)
+        """Every cable's frames, one column per cable (`times`: each frame's,
+        seconds), its radius in the first row (one chunk per cable)."""
+        colours = np.array(rgba([STATE_COLOURS[s] for s in STATES]).to_pylist(), np.uint32)
         for i, cable in enumerate(self.built.cables):
             if not self._points[i]:
                 continue
-            strips, states, counts = runs(np.stack(self._points[i]), np.stack(self._states[i]))
-            rec.send_columns(f"world/cables/{escape(cable.name)}",
-                             indexes=[rr.TimeColumn("sim_time", duration=times[self._frames[i]])],
-                             columns=rr.LineStrips3D.columns(strips=strips, colors=pa.array(rgba[states]))
-                             .partition(counts))
+            lines, states, counts = runs(np.stack(self._points[i]), np.stack(self._states[i]))
+            rec.send_columns(f"world/cables/{escape(cable.name)}", indexes=[sim_time(times[self._frames[i]])],
+                             columns=[column(rr.LineStrips3D.descriptor_strips(), lines, counts),
+                                      column(rr.LineStrips3D.descriptor_colors(), pa.array(colours[states]), counts),
+                                      Once(rr.LineStrips3D.descriptor_radii(),
+                                           floats([cable.radius / self.unit], np.float32), len(counts))])

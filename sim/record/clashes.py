@@ -18,6 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 import rerun as rr
 
+from sim.record.columns import column, floats, strings
+from sim.record.columns import times as sim_time
 from sim.record.style import pair_text
 
 
@@ -43,8 +45,9 @@ def send_log(rec: rr.RecordingStream, entries: list[tuple[float, str, str]]) -> 
     if not entries:
         return
     entries = sorted(entries, key=lambda e: e[0])
-    rec.send_columns("events", indexes=[rr.TimeColumn("sim_time", duration=[e[0] for e in entries])],
-                     columns=rr.TextLog.columns(text=[e[1] for e in entries], level=[e[2] for e in entries]))
+    rec.send_columns("events", indexes=[sim_time(np.array([e[0] for e in entries]))],
+                     columns=[column(rr.TextLog.descriptor_text(), strings([e[1] for e in entries])),
+                              column(rr.TextLog.descriptor_level(), strings([e[2] for e in entries]))])
 
 
 def send_clash_list(rec: rr.RecordingStream, events: list, joints: list[dict], unit: float, units: str) -> None:
@@ -53,14 +56,15 @@ def send_clash_list(rec: rr.RecordingStream, events: list, joints: list[dict], u
         return
     rows = sorted(zip(events, joints), key=lambda r: float(r[0].t_worst))
     ev = [e for e, _ in rows]
-    rec.send_columns("clashes", indexes=[rr.TimeColumn("sim_time", duration=[float(e.t_worst) for e in ev])],
-                     columns=rr.AnyValues.columns(
-                         type=[e.type for e in ev], pair=[pair_text(e.a, e.b) for e in ev],
-                         severity=[e.severity for e in ev], phase=[e.phase for e in ev],
-                         start_s=np.array([e.t_start for e in ev], float), end_s=np.array([e.t_end for e in ev], float),
-                         worst_distance=np.array([e.min_distance / unit for e in ev], float),
-                         worst_time_s=np.array([e.t_worst for e in ev], float), units=[units] * len(ev),
-                         joints=[", ".join(f"{k} {v:.4g}" for k, v in j.items()) or "-" for _, j in rows]))
+    fields = {"type": strings([e.type for e in ev]), "pair": strings([pair_text(e.a, e.b) for e in ev]),
+              "severity": strings([e.severity for e in ev]), "phase": strings([e.phase for e in ev]),
+              "start_s": floats([e.t_start for e in ev]), "end_s": floats([e.t_end for e in ev]),
+              "worst_distance": floats([e.min_distance / unit for e in ev]),
+              "worst_time_s": floats([e.t_worst for e in ev]), "units": strings([units] * len(ev)),
+              "joints": strings([", ".join(f"{k} {v:.4g}" for k, v in j.items()) or "-" for _, j in rows])}
+    # the list's columns, as `rr.AnyValues` names them (a component per field, no archetype)
+    rec.send_columns("clashes", indexes=[sim_time(np.array([float(e.t_worst) for e in ev]))],
+                     columns=[column(rr.ComponentDescriptor(name), values) for name, values in fields.items()])
 
 
 def summary_text(scene: str, settings: Settings, events: list, wear: list, unit: float,

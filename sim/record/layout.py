@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
+from rerun.blueprint.components import ComponentColumnSelector
 
 from sim.build import Built
 from sim.record.style import SPOT, STATE_COLOURS, STATES, escape, pair_text
@@ -28,14 +29,26 @@ VIEWPOINTS = 6
 """Clashes (worst first) that get a saved viewpoint of their own."""
 
 
-def spot_style() -> list:
+@dataclass(frozen=True)
+class Together:
+    """Several archetypes' components as one (rerun's `AsComponents`): a
+    view's defaults logged in one entry, one chunk of the blueprint, not one
+    per archetype."""
+
+    parts: tuple
+
+    def as_component_batches(self) -> list:
+        return [batch for part in self.parts for batch in part.as_component_batches()]
+
+
+def spot_style() -> Together:
     """The 3D views' defaults that style the spots (`sim.record.marks`): a
     labelled wire sphere and its gap in the spot's colour. Every other
     ellipsoid and line strip (parts, cables, the wear map) carries its own
     fill, colour and radius, which a default never overrides."""
-    return [rr.Ellipsoids3D.from_fields(colors=[SPOT], line_radii=[-2.5], fill_mode="MajorWireframe",
-                                        show_labels=True),
-            rr.LineStrips3D.from_fields(colors=[SPOT])]
+    return Together((rr.Ellipsoids3D.from_fields(colors=[SPOT], line_radii=[-2.5], fill_mode="MajorWireframe",
+                                                 show_labels=True),
+                     rr.LineStrips3D.from_fields(colors=[SPOT])))
 
 
 def lane_style() -> rr.StateConfiguration:
@@ -86,15 +99,16 @@ def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance:
               units: str) -> rrb.Blueprint:
     """The layout of a finished run (`clearance` in metres)."""
     bounds = extent.bounds
+    spots = [spot_style()]          # made once, the default of every 3D view
     tabs = [rrb.Spatial3DView(name="Scene", origin="world", eye_controls=_scene_eye(bounds, unit),
-                              defaults=spot_style())]
+                              defaults=spots)]
     radius = {c.name: c.radius for c in built.cables}
     worst = sorted(events, key=lambda e: (e.severity != "hard", e.min_distance))[:VIEWPOINTS]
     for n, ev in enumerate(worst, 1):
         reach = max(12.0 * (radius.get(ev.a, 0.01) + clearance), 0.25 * float(np.linalg.norm(bounds[1] - bounds[0])))
         tabs.append(rrb.Spatial3DView(
             name=f"#{n} {ev.severity} {pair_text(ev.a, ev.b)} @ {ev.t_worst:.3f} s", origin="world",
-            eye_controls=_eye(bounds, np.asarray(ev.where, float), reach, unit), defaults=spot_style()))
+            eye_controls=_eye(bounds, np.asarray(ev.where, float), reach, unit), defaults=spots))
     if wear:
         tabs.append(rrb.Spatial3DView(name="Wear map (sliding; grey: no contact)", origin="wear_map"))
     clear = clearance / unit
@@ -120,7 +134,8 @@ def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance:
     lists = rrb.Tabs(
         rrb.DataframeView(name="Clash list (select a row's time to jump)", origin="clashes",
                           query=rrb.archetypes.DataframeQuery(
-                              timeline="sim_time", select=["sim_time", *[f"/clashes:{c}" for c in CLASH_COLUMNS]])),
+                              timeline="sim_time", select=["sim_time", *[ComponentColumnSelector(
+                                  entity_path="/clashes", component=c) for c in CLASH_COLUMNS]])),
         rrb.TextLogView(name="Events", origin="events"),
         rrb.TextDocumentView(name="Summary", origin="summary"),
     )

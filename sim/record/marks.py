@@ -25,6 +25,8 @@ import rerun as rr
 from checker import spot
 from checker.shapes import Shape
 from sim.build import Built
+from sim.record.columns import column, floats, strings, strips, vec3
+from sim.record.columns import times as sim_time
 from sim.record.style import pair_path, pair_text
 
 
@@ -127,11 +129,12 @@ class ClashMarks:
         """Every pair's spot, gap and lane, one column per entity (`times`: each frame's, seconds)."""
         self._resolve_spots()
         n_f = len(times)
-        index = lambda frames: [rr.TimeColumn("sim_time", duration=times[np.asarray(frames, int)])]
+        index = lambda frames: [sim_time(times[np.asarray(frames, int)])]
+        state = rr.StateChange.descriptor_state()
         for path, (frames, states) in self._lanes.items():
             # the lanes' configuration (state names and colours) is the view's default
             # (`sim.record.layout`): one chunk per lane, not two
-            rec.send_columns(f"lanes/{path}", indexes=index(frames), columns=rr.StateChange.columns(state=states))
+            rec.send_columns(f"lanes/{path}", indexes=index(frames), columns=[column(state, strings(states))])
         lo, hi = bounds
         for path, rows in self._rows.items():
             self._send_spot(rec, path, rows, n_f, index, max(
@@ -163,19 +166,23 @@ class ClashMarks:
             centres.append(None)
             labels.append(None)
             segs.append(None)
-        lengths = [0 if c is None else 1 for c in centres]
+        lengths = np.array([0 if c is None else 1 for c in centres], np.int32)
         pts = np.array([c for c in centres if c is not None]).reshape(-1, 3)
-        text = [x for x in labels if x is not None]
         # the sizes go with the centres: an empty row has no sphere at all (a size without
         # a centre would draw one at the origin); the segment to the other side (emptied
         # with the marker) rides in the same entity, and the style is the views' default
         # (`sim.record.layout`): one chunk per pair, where a style and a gap entity would
         # make four
-        k = len(pts)
-        columns = [*rr.Ellipsoids3D.columns(centers=pts, half_sizes=np.full((k, 3), radius)).partition(lengths),
-                   *rr.Ellipsoids3D.columns(labels=text).partition(lengths)]
+        e = rr.Ellipsoids3D
+        columns = [column(e.descriptor_centers(), vec3(pts), lengths),
+                   column(e.descriptor_half_sizes(), vec3(np.full((len(pts), 3), radius)), lengths),
+                   column(e.descriptor_labels(), strings([x for x in labels if x is not None]), lengths)]
         seg_rows = [s for s in segs if s is not None]
         if seg_rows:
-            columns += rr.LineStrips3D.columns(strips=np.stack(seg_rows), radii=np.full(len(seg_rows), 0.35 * radius)) \
-                .partition([0 if s is None else 1 for s in segs])
+            has = np.array([0 if s is None else 1 for s in segs], np.int32)
+            pairs = np.stack(seg_rows)                                   # (k, 2, 3)
+            columns += [column(rr.LineStrips3D.descriptor_strips(),
+                               strips(pairs.reshape(-1, 3), np.arange(0, 2 * len(pairs) + 1, 2)), has),
+                        column(rr.LineStrips3D.descriptor_radii(),
+                               floats(np.full(len(pairs), 0.35 * radius), np.float32), has)]
         rec.send_columns(f"world/interference/{path}", indexes=index(frames), columns=columns)

@@ -33,6 +33,8 @@ from checker.shapes import Shape
 from sim.build import Built
 from sim.record.cables import CableFrames
 from sim.record.clashes import Settings, send_clash_list, send_log
+from sim.record.columns import Once, column, floats, named, rgba, strings, vec3
+from sim.record.columns import times as sim_time
 from sim.record.layout import Extent, blueprint
 from sim.record.marks import ClashMarks, Mark
 from sim.record.scene import SceneGeometry
@@ -71,8 +73,9 @@ class Recorder:
         self.rec.save(str(self.tmp))
         self.rec.send_recording_name(scene.name)
         s = self.settings
-        self.rec.send_property("cablecheck", rr.AnyValues(
-            units=s.units, clearance=s.clearance / self.unit, scene_file=s.scene_file, version=s.version))
+        self.rec.send_property("cablecheck", named({
+            "units": strings([s.units]), "clearance": floats([s.clearance / self.unit]),
+            "scene_file": strings([s.scene_file]), "version": strings([s.version])}))
         self.scene = SceneGeometry(built, self.unit)
         self.cables = CableFrames(built, self.unit)
         self.marks = ClashMarks(built, self.unit, s.units, shapes)
@@ -110,9 +113,6 @@ class Recorder:
         self._rest = [np.asarray(c, float) for c in cables] if cables is not None else None
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         self.scene.log_static(self.rec, np.asarray(part_poses, float), self._rest, qpos)
-        self.cables.log_static(self.rec)
-        self.rec.log("world/mujoco_contacts", rr.Points3D.from_fields(radii=[-3.0], colors=[CONTACT_COLOUR]),
-                     static=True)
 
     # -- per frame --------------------------------------------------------
     def log_step(self, t: float, cables: list[np.ndarray], part_poses: np.ndarray,
@@ -232,18 +232,23 @@ class Recorder:
         send_log(rec, self._log)
         send_clash_list(rec, self._events, self._event_joints, self.unit, self.settings.units)
         send_wear(rec, self.built, self._wear, self._rest, self.unit)
-        rec.set_time("sim_time", duration=0.0)
-        rec.log("summary", rr.TextDocument(self._summary, media_type="text/markdown"))
+        doc = rr.TextDocument
+        rec.send_columns("summary", indexes=[sim_time(np.zeros(1))],
+                         columns=[column(doc.descriptor_text(), strings([self._summary])),
+                                  column(doc.descriptor_media_type(), strings(["text/markdown"]))])
         extent = Extent(bounds, self.series.lowest("checks/"), frozenset(p.split("/")[0] for p in self.series.series),
                         any(p.startswith("cables/twist/") for p in self.series.series))
         rec.send_blueprint(blueprint(self.built, self._events, self._wear, extent, self.settings.clearance,
                                      self.unit, self.settings.units), make_active=True, make_default=True)
 
     def _send_contacts(self, times: np.ndarray) -> None:
+        """MuJoCo's contact points, one column, their style (3 px, the
+        contacts' colour) in the first row."""
         found = [(f, c) for f, c in enumerate(self._contacts) if c is not None]
         if not found:
             return
-        self.rec.send_columns("world/mujoco_contacts",
-                              indexes=[rr.TimeColumn("sim_time", duration=times[[f for f, _ in found]])],
-                              columns=rr.Points3D.columns(positions=np.concatenate([c for _, c in found]))
-                              .partition([len(c) for _, c in found]))
+        p = rr.Points3D
+        self.rec.send_columns("world/mujoco_contacts", indexes=[sim_time(times[[f for f, _ in found]])], columns=[
+            column(p.descriptor_positions(), vec3(np.concatenate([c for _, c in found])), [len(c) for _, c in found]),
+            Once(p.descriptor_radii(), floats([-3.0], np.float32), len(found)),
+            Once(p.descriptor_colors(), rgba([CONTACT_COLOUR]), len(found))])

@@ -20,6 +20,8 @@ import numpy as np
 import rerun as rr
 
 from sim.build import Built
+from sim.record.columns import Once, column, floats, rgba, strings
+from sim.record.columns import times as sim_time
 from sim.record.style import HARD, escape
 
 
@@ -129,21 +131,18 @@ class SeriesSet:
         series, not two)."""
         every = list(self.series.items())
         kept = changes_many([times[s.frames] for _, s in every], [s.values for _, s in every])
+        scalars, names = rr.Scalars.descriptor_scalars(), rr.SeriesLines.descriptor_names()
         for (path, series), keep in zip(every, kept):
-            values = np.asarray(series.values, float)
-            columns = rr.Scalars.columns(scalars=values[keep])
+            columns = [column(scalars, floats(np.asarray(series.values, float)[keep]))]
             if path in self.labels:
-                first = np.zeros(int(keep.sum()), np.int64)
-                first[0] = 1
-                columns = [*columns, *rr.SeriesLines.columns(names=[self.labels[path]]).partition(first)]
-            rec.send_columns(path, indexes=[rr.TimeColumn("sim_time", duration=times[series.frames][keep])],
-                             columns=columns)
+                columns.append(Once(names, strings([self.labels[path]]), int(keep.sum())))
+            rec.send_columns(path, indexes=[sim_time(times[series.frames][keep])], columns=columns)
 
 
 def send_limit_lines(rec: rr.RecordingStream, built: Built, times: np.ndarray, clearance: float, unit: float,
                      units: str) -> None:
     """Clearance and zero lines on the distance plot, bend-radius limits on the bend plot."""
-    ends = [rr.TimeColumn("sim_time", duration=[times[0], times[-1]])]
+    ends = [sim_time(np.array([times[0], times[-1]]))]
     lines = [("checks/limits/clearance", clearance / unit, f"clearance ({units})", (120, 120, 120)),
              ("checks/limits/zero", 0.0, "touching", (60, 60, 60))]
     for cable in built.cables:
@@ -151,5 +150,9 @@ def send_limit_lines(rec: rr.RecordingStream, built: Built, times: np.ndarray, c
             lines.append((f"cables/bend_radius/{escape(cable.name)}_limit", cable.min_bend_radius / unit,
                           f"{cable.name} bend limit ({units})", HARD))
     for path, value, name, colour in lines:
-        rec.log(path, rr.SeriesLines(names=[name], colors=[colour], widths=[1.0]), static=True)
-        rec.send_columns(path, indexes=ends, columns=rr.Scalars.columns(scalars=[value, value]))
+        # the line's style rides in its first row: one chunk per line
+        rec.send_columns(path, indexes=ends, columns=[
+            column(rr.Scalars.descriptor_scalars(), floats([value, value])),
+            Once(rr.SeriesLines.descriptor_names(), strings([name]), 2),
+            Once(rr.SeriesLines.descriptor_colors(), rgba([colour]), 2),
+            Once(rr.SeriesLines.descriptor_widths(), floats([1.0], np.float32), 2)])

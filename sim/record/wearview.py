@@ -10,12 +10,15 @@ Not here: measuring wear (`checker.wear`).
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 import pyarrow as pa
 import rerun as rr
 from rerun.components import TensorDataBatch
 
 from sim.build import Built
+from sim.record.columns import column, floats, rgba, strips
 from sim.record.style import escape
 
 _VIRIDIS = np.array([(68, 1, 84), (59, 82, 139), (33, 145, 140), (94, 201, 98), (253, 231, 37)], float)
@@ -39,37 +42,51 @@ def wear_colours(sliding: np.ndarray, contact_time: np.ndarray) -> np.ndarray:
     return np.round(rgb).astype(np.uint8)
 
 
+@cache
+def _tensor_parts() -> tuple:
+    """What every 1-D float64 tensor shares: the arrow type, the F64 arm of
+    its buffer union and the (empty) arrays of the other arms."""
+    dt = TensorDataBatch._ARROW_DATATYPE
+    union = dt.field("buffer").type
+    k = [f.name for f in union].index("F64")
+    empty = [pa.nulls(0, type=f.type) for f in union]
+    codes = [pa.array([k], pa.int8()).buffers()[1], pa.array([0], pa.int32()).buffers()[1]]
+    return dt, union, k, empty, codes, pa.nulls(1, dt.field("names").type)
+
+
 def tensor_1d(values: np.ndarray) -> pa.StructArray:
     """A 1-D float64 vector as rerun's tensor component (`TensorDataBatch`'s
     arrow type), built directly: rerun's own converter casts its arrays,
     and the first cast of a process imports `pyarrow.compute` (tens of ms)."""
     v = np.ascontiguousarray(values, np.float64).ravel()
-    dt = TensorDataBatch._ARROW_DATATYPE
+    dt, union, k, empty, codes, names = _tensor_parts()
     shape = pa.ListArray.from_arrays(pa.array([0, 1], pa.int32()), pa.array([len(v)], pa.uint64()),
                                      type=dt.field("shape").type)
-    union = dt.field("buffer").type
-    k = [f.name for f in union].index("F64")
-    children = [pa.nulls(0, type=f.type) for f in union]
+    children = list(empty)
     children[k] = pa.ListArray.from_arrays(pa.array([0, len(v)], pa.int32()), pa.array(v), type=union[k].type)
-    buffer = pa.Array.from_buffers(type=union, length=1, children=children,
-                                   buffers=[None, pa.array([k], pa.int8()).buffers()[1],
-                                            pa.array([0], pa.int32()).buffers()[1]])
-    return pa.StructArray.from_arrays([shape, pa.nulls(1, dt.field("names").type), buffer], fields=list(dt))
+    buffer = pa.Array.from_buffers(type=union, length=1, children=children, buffers=[None, *codes])
+    return pa.StructArray.from_arrays([shape, names, buffer], fields=list(dt))
 
 
 def send_wear(rec: rr.RecordingStream, built: Built, wear: list, rest: list[np.ndarray] | None,
               unit: float) -> None:
     """Each cable's wear (:class:`checker.wear.CableWear`): colour along its rest
-    shape (`rest`, metres; else as routed) and a bar chart per measure."""
+    shape (`rest`, metres; else as routed) and a bar chart per measure, each
+    one static chunk."""
+    bar, line = rr.BarChart, rr.LineStrips3D
     for i, w in enumerate(wear):
         name = escape(w.name)
         edges = np.append(w.s, w.length) / unit
-        at, widths = tensor_1d(edges[:-1]), np.diff(edges)
+        at, widths = tensor_1d(edges[:-1]), floats(np.diff(edges), np.float32)
         for measure, values in (("contact_time", w.contact_time), ("sliding", w.sliding / unit),
                                 ("bend_cycles", w.bend_cycles)):
-            rec.log(f"wear/{name}/{measure}", rr.BarChart(tensor_1d(values), abscissa=at, widths=widths),
-                    static=True)
+            rec.send_columns(f"wear/{name}/{measure}", indexes=[], columns=[
+                column(bar.descriptor_values(), tensor_1d(values)), column(bar.descriptor_abscissa(), at),
+                column(bar.descriptor_widths(), widths, [len(widths)])])
         pts = np.asarray(rest[i] if rest is not None else built.cables[i].routed, float) / unit
-        rec.log(f"wear_map/{name}", rr.LineStrips3D(np.stack([pts[:-1], pts[1:]], axis=1),
-                                                    radii=[built.cables[i].radius / unit],
-                                                    colors=wear_colours(w.sliding, w.contact_time)), static=True)
+        ends = np.stack([pts[:-1], pts[1:]], axis=1).reshape(-1, 3)          # one two-point strip per bin
+        k = len(pts) - 1
+        rec.send_columns(f"wear_map/{name}", indexes=[], columns=[
+            column(line.descriptor_strips(), strips(ends, np.arange(0, 2 * k + 1, 2)), [k]),
+            column(line.descriptor_radii(), floats([built.cables[i].radius / unit], np.float32), [1]),
+            column(line.descriptor_colors(), rgba(wear_colours(w.sliding, w.contact_time)), [k])])
