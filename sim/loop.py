@@ -59,17 +59,21 @@ class StepState:
 
 
 class Simulation:
-    """A built scene with its data, stepped by `steps()`."""
+    """A built scene with its data, stepped by `steps()`.
 
-    def __init__(self, built: Built):
+    `reach`: leave the concave meshes' surfaces no cable can reach out of a
+    state's detection pass (`sim.surfacereach`; the same contacts). False
+    collides every surface at every state (to compare the two)."""
+
+    def __init__(self, built: Built, reach: bool = True):
         self.built = built
         self.model = built.model
         self.data = mujoco.MjData(self.model)
         self.model.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
         self.motion = Motion(built)
         self.detect_data = mujoco.MjData(built.detect) if built.detect is not None else None
-        reach = SurfaceReach(built.detect) if built.detect is not None else None
-        self._reach = reach if reach is not None and len(reach) else None   # concave meshes' surface patches
+        surfaces = SurfaceReach(built.detect) if (reach and built.detect is not None) else None
+        self.reach = surfaces if surfaces is not None and len(surfaces) else None
         self.reader = ContactReader(built)
         self.hull = HullReader.of(built)
         self._part_geoms = np.array([p.geom_id for p in built.parts], int)
@@ -189,7 +193,7 @@ class Simulation:
         (`sim.surfacereach`: MuJoCo could find no contact on them), the
         reach of all the states tested at once."""
         m2, d2 = self.built.detect, self.detect_data
-        reach = self._reach
+        reach = self.reach
         keep = None
         if reach is not None:
             xpos = np.empty((len(qposes), m2.nbody, 3))

@@ -76,18 +76,16 @@ def _key(raw) -> list:
 
 
 def _unfiltered(sim: Simulation, qposes) -> list:
-    reach, sim._reach = sim._reach, None
-    try:
-        return sim.collide_many(qposes)
-    finally:
-        sim._reach = reach
+    every = Simulation(sim.built, reach=False)
+    assert every.reach is None
+    return every.collide_many(qposes)
 
 
 def _reachable(sim: Simulation, qpos: np.ndarray) -> np.ndarray:
     m, d = sim.built.detect, sim.detect_data
     d.qpos[:] = qpos
     mujoco.mj_kinematics(m, d)
-    return sim._reach.reachable(d.xpos[None].copy(), d.xmat[None].copy())[0]
+    return sim.reach.reachable(d.xpos[None].copy(), d.xmat[None].copy())[0]
 
 
 def _placed(built, qpos: np.ndarray, body: str, pos, rot: np.ndarray) -> np.ndarray:
@@ -104,7 +102,7 @@ def _placed(built, qpos: np.ndarray, body: str, pos, rot: np.ndarray) -> np.ndar
 
 def test_a_far_surface_is_left_out_and_the_contacts_are_the_same(cell):
     built, sim = cell
-    assert len(sim._reach) == 2
+    assert len(sim.reach) == 2
     q0 = built.qpos0
     names = {p.geom_id: p.name for p in built.parts}
     surfaces = [names[g] for g in surface_geoms(built.detect)[1].tolist()]
@@ -118,7 +116,7 @@ def test_a_far_surface_is_left_out_and_the_contacts_are_the_same(cell):
     assert [_key(a) for a in found] == [_key(b) for b in _unfiltered(sim, qposes)]
     assert len(found[2].dist) and not len(found[0].dist)       # the example has contacts, and states without
     m = built.detect
-    assert (m.flex_vertnum[sim._reach.flexes] > 0).all() and (m.flex_bvhadr[sim._reach.flexes] >= 0).all()
+    assert (m.flex_vertnum[sim.reach.flexes] > 0).all() and (m.flex_bvhadr[sim.reach.flexes] >= 0).all()
 
 
 @settings(max_examples=60)
@@ -143,7 +141,7 @@ def test_a_surface_left_out_is_beyond_the_contact_distance(cell, offset, turn, c
     cable = built.cables[0]
     pts = d.flexvert_xpos[m.flex_vertadr[cable.flex_id]:][:cable.count]
     margin = float(m.flex_margin[cable.flex_id])
-    for f, kept in zip(sim._reach.flexes.tolist(), keep.tolist()):
+    for f, kept in zip(sim.reach.flexes.tolist(), keep.tolist()):
         verts = d.flexvert_xpos[m.flex_vertadr[f]:][:m.flex_vertnum[f]]
         tri = verts[m.flex_elem[m.flex_elemdataadr[f]:][:3 * m.flex_elemnum[f]].reshape(-1, 3)]
         seg = np.repeat(np.arange(cable.count - 1), len(tri))
