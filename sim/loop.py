@@ -208,8 +208,8 @@ class Simulation:
             for i, qpos in enumerate(qposes):
                 d2.qpos[:] = qpos
                 mujoco.mj_kinematics(m2, d2)
-                if keep is not None:
-                    reach.leave_out(keep[i])
+                if keep is not None and (i == 0 or (keep[i] != keep[i - 1]).any()):
+                    reach.leave_out(keep[i])      # consecutive states mostly reach the same surfaces
                 mujoco.mj_comPos(m2, d2)
                 mujoco.mj_flex(m2, d2)
                 mujoco.mj_collision(m2, d2)

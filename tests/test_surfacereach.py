@@ -112,9 +112,14 @@ def test_a_far_surface_is_left_out_and_the_contacts_are_the_same(cell):
     start = q0[int(built.model.jnt_qposadr[built.model.body_jntadr[
         mujoco.mj_name2id(built.model, mujoco.mjtObj.mjOBJ_BODY, "near")]]):][:3]
     qposes = [_placed(built, q0, "near", start + [0.0, 0.0, dz], np.eye(3)) for dz in (-0.05, -0.01, 0.0, 0.002, 0.01)]
+    # and the far U brought under the cable's end in the middle of the batch: its surface in, then out again
+    far = _placed(built, q0, "near", start + [0.0, 0.0, -0.05], np.eye(3))
+    far = _placed(built, far, "far", start, np.eye(3))
+    qposes = qposes[:2] + [far] + qposes[2:]
+    assert [_reachable(sim, q).tolist().count(True) for q in qposes[1:4]] == [1, 2, 1]
     found = sim.collide_many(qposes)
     assert [_key(a) for a in found] == [_key(b) for b in _unfiltered(sim, qposes)]
-    assert len(found[2].dist) and not len(found[0].dist)       # the example has contacts, and states without
+    assert len(found[3].dist) and len(found[2].dist) and not len(found[0].dist)   # contacts, and states without
     m = built.detect
     assert (m.flex_vertnum[sim.reach.flexes] > 0).all() and (m.flex_bvhadr[sim.reach.flexes] >= 0).all()
 
