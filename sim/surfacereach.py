@@ -16,12 +16,14 @@ margins added). When the segment's box, in the surface body's frame, lies
 apart from the surface's box grown by r + rho + twice that margin along
 some axis, every point of the segment is that far from every point of the
 surface, so MuJoCo could report no contact there (the margin counted twice
-is room for GJK's tolerance, which is far below it). The positions are the
-detection model's own (mj_kinematics at the state, the cable vertices
-placed as mj_flex places them): nothing comes from the checker, so
-validation still judges the checker against all that MuJoCo finds on the
-whole surface (tests/test_surfacereach.py compares the contacts and the
-bound against exact distances).
+is room for GJK's tolerance, which is far below it). Every
+one-dimensional flex counts as a cable; should the mjcf model bring a flex
+of another dimension that can meet a surface, no surface is ever left out.
+The positions are the detection model's own (mj_kinematics at the state,
+the cable vertices placed as mj_flex places them): nothing comes from the
+checker, so validation still judges the checker against all that MuJoCo
+finds on the whole surface (tests/test_surfacereach.py compares the
+contacts and the bound against exact distances).
 
 How a surface is left out: the detection model is never stepped, so for
 one pass its flex gets no vertices, no elements, no tree and no contact
@@ -65,6 +67,11 @@ class SurfaceReach:
         self.hi = np.array([m.flex_vert[a:a + n].max(axis=0) for a, n in zip(adr, num)]).reshape(-1, 3)
         radius = float(m.flex_radius[flexes].max()) if len(flexes) else 0.0
         s_margin = float(m.flex_margin[flexes].max()) if len(flexes) else 0.0
+        # a flex of the mjcf model itself (not a cable) that can meet a surface: no
+        # bound is kept for it, every surface stays in every pass
+        meets = ((m.flex_contype & int(np.bitwise_or.reduce(m.flex_conaffinity[flexes], initial=0)))
+                 | (m.flex_conaffinity & int(np.bitwise_or.reduce(m.flex_contype[flexes], initial=0)))) != 0
+        self._always = bool((meets & ~surface & (m.flex_dim != 1)).any())
         # the cables: their vertices (flex vertex ids, in order) and elements (pairs of rows)
         vids, segs, grow = [], [], []
         for c in np.flatnonzero(~surface & (m.flex_dim == 1)).tolist():
@@ -98,6 +105,8 @@ class SurfaceReach:
         `xpos` (S, nbody, 3) and `xmat` (S, nbody, 9) (module docstring)."""
         xpos, xmat = np.asarray(xpos, float), np.asarray(xmat, float)
         n_s = len(xpos)
+        if self._always:
+            return np.ones((n_s, len(self.flexes)), bool)
         if not len(self.flexes) or not len(self._segs):
             return np.zeros((n_s, len(self.flexes)), bool)
         pts = xpos[:, self._vbody]                                            # (S, V, 3), as mj_flex places them

@@ -12,9 +12,10 @@ from hypothesis import strategies as st
 
 from checker.closest import segment_triangle
 from sim.build import build
-from sim.detection_mesh import surface_geoms
+from sim.detection_mesh import SURFACE_PREFIX, surface_geoms
 from sim.loop import Simulation
 from sim.scene import load_scene
+from sim.surfacereach import SurfaceReach
 from tests.strategies import coords, rotations
 from tests.test_detection_mesh import POCKET_FLOOR, u_mesh
 
@@ -155,3 +156,24 @@ def test_a_surface_left_out_is_beyond_the_contact_distance(cell, offset, turn, c
         gap = dist - cable.radius - float(m.flex_radius[f])
         assert kept or gap > margin, (f, gap)
     assert _key(sim.collide_many([qpos])[0]) == _key(_unfiltered(sim, [qpos])[0])
+
+
+@pytest.mark.parametrize("meets", [True, False])
+def test_a_model_flex_of_other_dimension_that_can_meet_a_surface_keeps_every_surface(meets):
+    """Only cables (one-dimensional flexes) have a bound: a two-dimensional
+    flex of the mjcf model whose bits meet a surface's keeps every surface in
+    every pass; one whose bits do not changes nothing."""
+    spec = mujoco.MjSpec()
+    body = spec.worldbody.add_body(name="b", pos=[0.0, 0.0, 1.0])
+    for name, contype, conaffinity in ((f"{SURFACE_PREFIX}0", 0, 8), ("cloth", 8 if meets else 2, 0)):
+        f = spec.add_flex()
+        f.name, f.dim, f.radius = name, 2, 1e-3
+        f.vertbody = ["b"]
+        f.vert = [0.0, 0.0, 0.0, 0.1, 0.0, 0.0, 0.0, 0.1, 0.0]
+        f.elem = [0, 1, 2]
+        f.contype, f.conaffinity = contype, conaffinity
+    m = spec.compile()
+    reach = SurfaceReach(m)
+    d = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, d)
+    assert reach.reachable(d.xpos[None], d.xmat[None]).tolist() == [[meets]]
