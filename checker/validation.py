@@ -203,13 +203,20 @@ class SimulatorPairs:
         kind, a, b, dist, pos, st = kind[keep], a[keep], b[keep], dist[keep], pos[keep], st[keep]
         if len(dist) == 0:
             return out
-        swap = (kind == PairType.CABLE_CABLE.value) & (a.astype(str) > b.astype(str))
-        a, b = np.where(swap, b, a), np.where(swap, a, b)
-        # the first least distance per (state, kind, a, b), as __call__ keeps
-        _, key = np.unique(np.stack([kind.astype(str), a.astype(str), b.astype(str)], axis=1), axis=0,
-                           return_inverse=True)
-        o = np.lexsort((np.arange(len(dist)), dist, key.ravel(), st))
-        head = o[np.r_[True, (st[o][1:] != st[o][:-1]) | (key.ravel()[o][1:] != key.ravel()[o][:-1])]]
+        swap = kind == PairType.CABLE_CABLE.value
+        if swap.any():
+            swap[swap] = a[swap].astype(str) > b[swap].astype(str)
+            a, b = np.where(swap, b, a), np.where(swap, a, b)
+        # the first least distance per (state, kind, a, b), as __call__ keeps:
+        # the pairs numbered through one table of names (a batch's contacts
+        # name a few cables and parts)
+        number: dict = {}
+        ia = np.array([number.setdefault(x, len(number)) for x in a.tolist()], np.int64)
+        ib = np.array([number.setdefault(x, len(number)) for x in b.tolist()], np.int64)
+        ik = np.array([number.setdefault(x, len(number)) for x in kind.tolist()], np.int64)
+        key = (ik * len(number) + ia) * len(number) + ib
+        o = np.lexsort((np.arange(len(dist)), dist, key, st))
+        head = o[np.r_[True, (st[o][1:] != st[o][:-1]) | (key[o][1:] != key[o][:-1])]]
         for i in head.tolist():
             out[st[i]][(str(kind[i]), str(a[i]), str(b[i]))] = (float(dist[i]), pos[i])
         return out

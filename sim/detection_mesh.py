@@ -17,10 +17,13 @@ Why a rigid flex and not a convex decomposition (CoACD, V-HACD): the flex
 is the mesh itself, to MuJoCo's float precision, with no tolerance, no
 parameters and no cache; a decomposition approximates the surface (by a
 concavity tolerance), takes seconds to minutes per mesh and would need a
-cache on disk. The price is MuJoCo's time: every step it places each
-surface's vertices and boxes (in proportion to the triangles) and tests the
-cable elements against the triangles near them, where a hull is one convex
-test; `benchmarks/bench_detection_mesh.py` measures both side by side.
+cache on disk. The price is MuJoCo's time: every mj_flex places each
+surface's vertices, element boxes and tree (in proportion to the
+triangles) and the cable elements are tested against the triangles near
+them, where a hull is one convex test. A surface no cable can reach at a
+state is left out of that state's pass (`sim.surfacereach`), so the cost
+follows what is near the cables; `benchmarks/bench_detection_mesh.py`
+measures hulls and surfaces side by side.
 
 A 2D flex element is a triangle with a radius that must be positive:
 `SURFACE_RADIUS` is tiny, and `ContactReader` adds it back to MuJoCo's
@@ -30,7 +33,8 @@ triangle (the hull geom would have reported it); the checker decides
 containment itself.
 
 This module does not step or read the simulation; `sim.contacts` names
-the contacts (`surface_geoms`).
+the contacts (`surface_geoms`), `sim.surfacereach` chooses a state's
+surfaces.
 """
 
 from __future__ import annotations

@@ -26,6 +26,7 @@ from sim.build import Built
 from sim.contacts import ContactReader, Contacts, RawContacts
 from sim.hullgap import HullReader, HullRows
 from sim.motion import Motion
+from sim.surfacereach import SurfaceReach
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,15 +59,21 @@ class StepState:
 
 
 class Simulation:
-    """A built scene with its data, stepped by `steps()`."""
+    """A built scene with its data, stepped by `steps()`.
 
-    def __init__(self, built: Built):
+    `reach`: leave the concave meshes' surfaces no cable can reach out of a
+    state's detection pass (`sim.surfacereach`; the same contacts). False
+    collides every surface at every state (to compare the two)."""
+
+    def __init__(self, built: Built, reach: bool = True):
         self.built = built
         self.model = built.model
         self.data = mujoco.MjData(self.model)
         self.model.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
         self.motion = Motion(built)
         self.detect_data = mujoco.MjData(built.detect) if built.detect is not None else None
+        surfaces = SurfaceReach(built.detect) if (reach and built.detect is not None) else None
+        self.reach = surfaces if surfaces is not None and len(surfaces) else None
         self.reader = ContactReader(built)
         self.hull = HullReader.of(built)
         self._part_geoms = np.array([p.geom_id for p in built.parts], int)
@@ -178,13 +185,39 @@ class Simulation:
 
     def collide(self, qpos: np.ndarray) -> RawContacts:
         """The detection model's collision pass at `qpos`: its contacts, unnamed."""
+        return self.collide_many([qpos])[0]
+
+    def collide_many(self, qposes: list[np.ndarray]) -> list[RawContacts]:
+        """:meth:`collide` at each of `qposes`. The concave meshes' surfaces
+        no cable can reach at a state are left out of its pass
+        (`sim.surfacereach`: MuJoCo could find no contact on them), the
+        reach of all the states tested at once."""
         m2, d2 = self.built.detect, self.detect_data
-        d2.qpos[:] = qpos
-        mujoco.mj_kinematics(m2, d2)
-        mujoco.mj_comPos(m2, d2)
-        mujoco.mj_flex(m2, d2)
-        mujoco.mj_collision(m2, d2)
-        return self.reader.raw(d2)
+        reach = self.reach
+        keep = None
+        if reach is not None:
+            xpos = np.empty((len(qposes), m2.nbody, 3))
+            xmat = np.empty((len(qposes), m2.nbody, 9))
+            for i, qpos in enumerate(qposes):
+                d2.qpos[:] = qpos
+                mujoco.mj_kinematics(m2, d2)
+                xpos[i], xmat[i] = d2.xpos, d2.xmat
+            keep = reach.reachable(xpos, xmat)
+        out = []
+        try:
+            for i, qpos in enumerate(qposes):
+                d2.qpos[:] = qpos
+                mujoco.mj_kinematics(m2, d2)
+                if keep is not None and (i == 0 or (keep[i] != keep[i - 1]).any()):
+                    reach.leave_out(keep[i])      # consecutive states mostly reach the same surfaces
+                mujoco.mj_comPos(m2, d2)
+                mujoco.mj_flex(m2, d2)
+                mujoco.mj_collision(m2, d2)
+                out.append(self.reader.raw(d2))
+        finally:
+            if reach is not None:
+                reach.restore()
+        return out
 
     def read_many(self, raws: list[RawContacts]) -> list[Contacts]:
         """Contacts of :meth:`collide` named, for many steps at once."""

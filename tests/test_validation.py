@@ -127,6 +127,43 @@ def test_many_states_at_once_is_each_state_alone():
     assert seen > 20
 
 
+def test_least_distance_per_pair_is_the_brute_force_one():
+    """No window or self contact to drop: each state's pairs are the least
+    distance over its contacts of that (type, a, b), cable-cable pairs named
+    in name order, ties to the first contact; counted contact by contact."""
+    from checker.validation import SimulatorPairs
+    rng = np.random.default_rng(7)
+    names, radii, offsets = ["c", "d", "e"], np.array([0.01, 0.004, 0.006]), np.array([0, 6, 12, 18])
+    pairs = SimulatorPairs([], 0.005)
+    for trial in range(10):
+        n_s = int(rng.integers(1, 5))
+        pts = np.cumsum(rng.normal(size=(n_s, 18, 3)) * 0.05, axis=1)
+        contacts = []
+        for _ in range(n_s):
+            m = int(rng.integers(0, 30))
+            kind = rng.choice(["cable-structure", "keepout", "cable-cable"], m).astype(object)
+            a = rng.choice(names, m).astype(object)
+            b = np.array([rng.choice([x for x in names if x != y]) if k == "cable-cable" else rng.choice(["box", "d"])
+                          for k, y in zip(kind, a)], dtype=object)          # a part may share a cable's name
+            dist = np.round(rng.normal(size=m) * 0.004, 3)                   # rounded: ties happen
+            contacts.append(SimContacts(kind, a, b, rng.integers(0, 5, m),
+                                        np.where(kind == "cable-cable", rng.integers(0, 5, m), -1), dist,
+                                        rng.normal(size=(m, 3))))
+        got = pairs.many(contacts, names, radii, pts, offsets)
+        for k, c in enumerate(contacts):
+            want: dict = {}
+            for i in range(len(c.dist)):
+                a, b = c.a[i], c.b[i]
+                if c.kind[i] == "cable-cable" and a > b:
+                    a, b = b, a
+                key = (c.kind[i], a, b)
+                if key not in want or c.dist[i] < want[key][0]:
+                    want[key] = (float(c.dist[i]), c.pos[i])
+            assert got[k].keys() == want.keys()
+            for key, (d, pos) in want.items():
+                assert got[k][key][0] == d and np.array_equal(got[k][key][1], pos)
+
+
 def test_attachment_window_follows_the_material():
     """The cable stretched by 10 %: a contact on its last element is in the
     window [0.8, 1.0] of material (rest_s), not of arc length (0.99-1.1)."""

@@ -1,0 +1,138 @@
+"""Which concave mesh surfaces of the detection model the cables can reach at a state.
+
+A concave mesh is seen by the detection model as a rigid flex of its own
+triangles (`sim.detection_mesh`). MuJoCo places every flex at every
+mj_flex (vertices, element boxes, tree) and its collision pass visits
+every flex that has contact bits (the broadphase box of all its vertices,
+then the tree against each cable), near a cable or not: a state's cost
+would grow with the meshes' size. `SurfaceReach` leaves the surfaces no
+cable can reach out of the state's pass, so it grows with what is near.
+
+The bound: a surface's triangles lie in its box (axis-aligned in the frame
+of the body that carries them, fixed). MuJoCo makes a contact between a
+cable element (segment, radius r) and a triangle (radius rho) only when
+their distance is below r + rho + the pair's margin (the two flexes'
+margins added). When the segment's box, in the surface body's frame, lies
+apart from the surface's box grown by r + rho + twice that margin along
+some axis, every point of the segment is that far from every point of the
+surface, so MuJoCo could report no contact there (the margin counted twice
+is room for GJK's tolerance, which is far below it). Every
+one-dimensional flex counts as a cable; should the mjcf model bring a flex
+of another dimension that can meet a surface, no surface is ever left out.
+The positions are the detection model's own (mj_kinematics at the state,
+the cable vertices placed as mj_flex places them): nothing comes from the
+checker, so validation still judges the checker against all that MuJoCo
+finds on the whole surface (tests/test_surfacereach.py compares the
+contacts and the bound against exact distances).
+
+How a surface is left out: the detection model is never stepped, so for
+one pass its flex gets no vertices, no elements, no tree and no contact
+bits (`flex_vertnum`, `flex_elemnum`, `flex_bvhadr`, `flex_contype`,
+`flex_conaffinity`): mj_flex skips its vertices and elements and the
+collision pass never pairs it. `restore` puts the model back as compiled.
+
+This module does not read contacts (`sim.contacts`) or decide what a
+contact means; it only narrows MuJoCo's pass.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from sim.detection_mesh import surface_geoms
+
+
+class SurfaceReach:
+    """The surfaces of a detection model, their reach test and the switch
+    that leaves some out of a collision pass.
+
+    Args:
+      model: the detection model (`sim.detection_mesh.add_surfaces`).
+
+    Attributes:
+      flexes: (F,) the surfaces' flex ids.
+      bodies: (F,) the body carrying each surface.
+      lo, hi: (F, 3) each surface's box in its body's frame.
+    """
+
+    def __init__(self, model: mujoco.MjModel):
+        self.model = m = model
+        self.flexes = flexes = surface_geoms(m)[0]
+        surface = np.zeros(m.nflex, bool)
+        surface[flexes] = True
+        adr, num = m.flex_vertadr[flexes], m.flex_vertnum[flexes]
+        self.bodies = m.flex_vertbodyid[adr].astype(np.int64)
+        self.lo = np.array([m.flex_vert[a:a + n].min(axis=0) for a, n in zip(adr, num)]).reshape(-1, 3)
+        self.hi = np.array([m.flex_vert[a:a + n].max(axis=0) for a, n in zip(adr, num)]).reshape(-1, 3)
+        radius = float(m.flex_radius[flexes].max()) if len(flexes) else 0.0
+        s_margin = float(m.flex_margin[flexes].max()) if len(flexes) else 0.0
+        # a flex of the mjcf model itself (not a cable) that can meet a surface: no
+        # bound is kept for it, every surface stays in every pass
+        meets = ((m.flex_contype & int(np.bitwise_or.reduce(m.flex_conaffinity[flexes], initial=0)))
+                 | (m.flex_conaffinity & int(np.bitwise_or.reduce(m.flex_contype[flexes], initial=0)))) != 0
+        self._always = bool((meets & ~surface & (m.flex_dim != 1)).any())
+        # the cables: their vertices (flex vertex ids, in order) and elements (pairs of rows)
+        vids, segs, grow = [], [], []
+        for c in np.flatnonzero(~surface & (m.flex_dim == 1)).tolist():
+            v0, n = int(m.flex_vertadr[c]), int(m.flex_vertnum[c])
+            da = int(m.flex_elemdataadr[c])
+            elem = m.flex_elem[da:da + 2 * int(m.flex_elemnum[c])].reshape(-1, 2).astype(np.int64)
+            segs.append(elem + sum(len(v) for v in vids))
+            vids.append(np.arange(v0, v0 + n))
+            # a contact needs a distance below r + rho + margin; the margin again is slack
+            margin = float(m.flex_margin[c]) + s_margin
+            grow.append(np.full(len(elem), float(m.flex_radius[c]) + radius + 2.0 * margin))
+        verts = np.concatenate(vids) if vids else np.zeros(0, np.int64)
+        self._vbody = m.flex_vertbodyid[verts].astype(np.int64)
+        offset = m.flex_vert[verts]
+        self._held = np.flatnonzero(offset.any(axis=1))      # vertices off their body's origin
+        self._offset = offset[self._held]
+        self._segs = np.concatenate(segs) if segs else np.zeros((0, 2), np.int64)
+        self._grow = np.concatenate(grow) if grow else np.zeros(0)
+        self._compiled = tuple(a[flexes].copy() for a in self._fields())
+
+    def __len__(self) -> int:
+        return len(self.flexes)
+
+    def _fields(self) -> tuple[np.ndarray, ...]:
+        m = self.model
+        return m.flex_vertnum, m.flex_elemnum, m.flex_bvhadr, m.flex_contype, m.flex_conaffinity
+
+    def reachable(self, xpos: np.ndarray, xmat: np.ndarray) -> np.ndarray:
+        """(S, F) bool: the surfaces some cable element can reach, for S
+        states given by the detection model's body poses after mj_kinematics,
+        `xpos` (S, nbody, 3) and `xmat` (S, nbody, 9) (module docstring)."""
+        xpos, xmat = np.asarray(xpos, float), np.asarray(xmat, float)
+        n_s = len(xpos)
+        if self._always:
+            return np.ones((n_s, len(self.flexes)), bool)
+        if not len(self.flexes) or not len(self._segs):
+            return np.zeros((n_s, len(self.flexes)), bool)
+        pts = xpos[:, self._vbody]                                            # (S, V, 3), as mj_flex places them
+        if len(self._held):
+            rot = xmat[:, self._vbody[self._held]].reshape(n_s, -1, 3, 3)
+            pts[:, self._held] += (rot @ self._offset[None, :, :, None])[..., 0]
+        rot = xmat[:, self.bodies].reshape(n_s, -1, 1, 3, 3)                 # (S, F, 1, 3, 3)
+        diff = pts[:, None, :, :] - xpos[:, self.bodies, None, :]             # (S, F, V, 3)
+        # into each surface body's frame: R^T (p - x), row by row
+        local = (diff[..., 0:1] * rot[..., 0, :] + diff[..., 1:2] * rot[..., 1, :]
+                 + diff[..., 2:3] * rot[..., 2, :])
+        a, b = local[:, :, self._segs[:, 0]], local[:, :, self._segs[:, 1]]   # (S, F, E, 3)
+        grow = self._grow[:, None]
+        apart = ((np.minimum(a, b) - grow > self.hi[:, None, :])
+                 | (np.maximum(a, b) + grow < self.lo[:, None, :]))
+        return ~apart.any(axis=3).all(axis=2)
+
+    def leave_out(self, keep: np.ndarray) -> None:
+        """Take the surfaces in `keep` (F,) bool into the next mj_flex and
+        mj_collision of the model and leave the others out (`restore` puts
+        them all back)."""
+        keep = np.asarray(keep, bool)
+        for field, compiled, off in zip(self._fields(), self._compiled, (0, 0, -1, 0, 0)):
+            field[self.flexes] = np.where(keep, compiled, off)
+
+    def restore(self) -> None:
+        """Every surface as compiled."""
+        for field, value in zip(self._fields(), self._compiled):
+            field[self.flexes] = value

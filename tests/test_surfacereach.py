@@ -1,0 +1,179 @@
+"""The reach test of the detection model's concave surfaces (sim.surfacereach):
+a surface left out of a collision pass is one on which MuJoCo finds no
+contact, so the pass finds what it finds with every surface in."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from checker.closest import segment_triangle
+from sim.build import build
+from sim.detection_mesh import SURFACE_PREFIX, surface_geoms
+from sim.loop import Simulation
+from sim.scene import load_scene
+from sim.surfacereach import SurfaceReach
+from tests.strategies import coords, rotations
+from tests.test_detection_mesh import POCKET_FLOOR, u_mesh
+
+CLEARANCE = 0.005
+RADIUS = 0.005
+
+
+@pytest.fixture(scope="module")
+def cell(tmp_path_factory):
+    """Two concave U meshes on bodies of their own ("near" with the cable's
+    end 3 mm above its pocket's floor, "far" 1 m away) and a cable from the
+    world to a point 30 mm below a third body, "carrier"; no dynamics."""
+    tmp = tmp_path_factory.mktemp("reach")
+    u_mesh().export(tmp / "u.stl")
+    end_z = POCKET_FLOOR + RADIUS + 0.003
+    (tmp / "reach.toml").write_text(f"""
+[scene]
+name = "reach"
+units = "m"
+duration = 0.004
+[effects]
+dynamics = false
+[check]
+clearance = {CLEARANCE!r}
+[[bodies]]
+name = "near"
+[[bodies]]
+name = "far"
+pos = [1.0, 0.0, 0.0]
+[[bodies]]
+name = "carrier"
+pos = [0.0, 0.0, {end_z + 0.03!r}]
+[[parts]]
+name = "near/u"
+body = "near"
+shape = "mesh"
+file = "u.stl"
+[[parts]]
+name = "far/u"
+body = "far"
+shape = "mesh"
+file = "u.stl"
+[[cables]]
+name = "c"
+radius = {RADIUS!r}
+start = {{ pos = [0.0, 0.0, 0.3] }}
+end = {{ body = "carrier", pos = [0.0, 0.0, -0.03] }}
+segments = 10
+""")
+    built = build(load_scene(tmp / "reach.toml"))
+    sim = Simulation(built)
+    sim.reset()
+    return built, sim
+
+
+def _key(raw) -> list:
+    return sorted(zip(raw.geom[:, 0].tolist(), raw.geom[:, 1].tolist(), raw.flex[:, 0].tolist(),
+                      raw.flex[:, 1].tolist(), raw.elem[:, 0].tolist(), raw.dist.tolist()))
+
+
+def _unfiltered(sim: Simulation, qposes) -> list:
+    every = Simulation(sim.built, reach=False)
+    assert every.reach is None
+    return every.collide_many(qposes)
+
+
+def _reachable(sim: Simulation, qpos: np.ndarray) -> np.ndarray:
+    m, d = sim.built.detect, sim.detect_data
+    d.qpos[:] = qpos
+    mujoco.mj_kinematics(m, d)
+    return sim.reach.reachable(d.xpos[None].copy(), d.xmat[None].copy())[0]
+
+
+def _placed(built, qpos: np.ndarray, body: str, pos, rot: np.ndarray) -> np.ndarray:
+    """`qpos` with `body`'s free joint at `pos` (model coordinates) turned by `rot`."""
+    m = built.model
+    adr = int(m.jnt_qposadr[m.body_jntadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, body)]])
+    out = qpos.copy()
+    out[adr:adr + 3] = pos
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, np.asarray(rot, float).ravel())
+    out[adr + 3:adr + 7] = quat
+    return out
+
+
+def test_a_far_surface_is_left_out_and_the_contacts_are_the_same(cell):
+    built, sim = cell
+    assert len(sim.reach) == 2
+    q0 = built.qpos0
+    names = {p.geom_id: p.name for p in built.parts}
+    surfaces = [names[g] for g in surface_geoms(built.detect)[1].tolist()]
+    assert sorted(surfaces) == ["far/u", "near/u"]
+    assert _reachable(sim, q0).tolist() == [n == "near/u" for n in surfaces]
+    # the near U moved down past the cable's end and up over it: contact, none, overlap
+    start = q0[int(built.model.jnt_qposadr[built.model.body_jntadr[
+        mujoco.mj_name2id(built.model, mujoco.mjtObj.mjOBJ_BODY, "near")]]):][:3]
+    qposes = [_placed(built, q0, "near", start + [0.0, 0.0, dz], np.eye(3)) for dz in (-0.05, -0.01, 0.0, 0.002, 0.01)]
+    # and the far U brought under the cable's end in the middle of the batch: its surface in, then out again
+    far = _placed(built, q0, "near", start + [0.0, 0.0, -0.05], np.eye(3))
+    far = _placed(built, far, "far", start, np.eye(3))
+    qposes = qposes[:2] + [far] + qposes[2:]
+    assert [_reachable(sim, q).tolist().count(True) for q in qposes[1:4]] == [1, 2, 1]
+    found = sim.collide_many(qposes)
+    assert [_key(a) for a in found] == [_key(b) for b in _unfiltered(sim, qposes)]
+    assert len(found[3].dist) and len(found[2].dist) and not len(found[0].dist)   # contacts, and states without
+    m = built.detect
+    assert (m.flex_vertnum[sim.reach.flexes] > 0).all() and (m.flex_bvhadr[sim.reach.flexes] >= 0).all()
+
+
+@settings(max_examples=60)
+@given(offset=coords(3, -0.12, 0.12), turn=rotations(), carrier=coords(3, -0.05, 0.05),
+       carrier_turn=rotations(), far=st.booleans())
+def test_a_surface_left_out_is_beyond_the_contact_distance(cell, offset, turn, carrier, carrier_turn, far):
+    """The near U and the body holding the cable's end at drawn poses: a
+    surface found out of reach is farther from every cable element than
+    MuJoCo's contact distance (exact segment-triangle distances), and the
+    pass finds the same contacts as one with every surface in."""
+    built, sim = cell
+    m, d = built.detect, sim.detect_data
+    q0 = built.qpos0
+    jnt = built.model.body_jntadr[mujoco.mj_name2id(built.model, mujoco.mjtObj.mjOBJ_BODY, "carrier")]
+    end = q0[int(built.model.jnt_qposadr[jnt]):][:3]
+    qpos = _placed(built, q0, "near", end + offset, turn)
+    qpos = _placed(built, qpos, "carrier", end + carrier, carrier_turn)
+    if far:
+        qpos = _placed(built, qpos, "far", end - offset, turn.T)
+    keep = _reachable(sim, qpos)
+    mujoco.mj_flex(m, d)
+    cable = built.cables[0]
+    pts = d.flexvert_xpos[m.flex_vertadr[cable.flex_id]:][:cable.count]
+    margin = float(m.flex_margin[cable.flex_id])
+    for f, kept in zip(sim.reach.flexes.tolist(), keep.tolist()):
+        verts = d.flexvert_xpos[m.flex_vertadr[f]:][:m.flex_vertnum[f]]
+        tri = verts[m.flex_elem[m.flex_elemdataadr[f]:][:3 * m.flex_elemnum[f]].reshape(-1, 3)]
+        seg = np.repeat(np.arange(cable.count - 1), len(tri))
+        t = np.tile(np.arange(len(tri)), cable.count - 1)
+        dist = segment_triangle(pts[seg], pts[seg + 1], tri[t, 0], tri[t, 1], tri[t, 2])[0].min()
+        gap = dist - cable.radius - float(m.flex_radius[f])
+        assert kept or gap > margin, (f, gap)
+    assert _key(sim.collide_many([qpos])[0]) == _key(_unfiltered(sim, [qpos])[0])
+
+
+@pytest.mark.parametrize("meets", [True, False])
+def test_a_model_flex_of_other_dimension_that_can_meet_a_surface_keeps_every_surface(meets):
+    """Only cables (one-dimensional flexes) have a bound: a two-dimensional
+    flex of the mjcf model whose bits meet a surface's keeps every surface in
+    every pass; one whose bits do not changes nothing."""
+    spec = mujoco.MjSpec()
+    body = spec.worldbody.add_body(name="b", pos=[0.0, 0.0, 1.0])
+    for name, contype, conaffinity in ((f"{SURFACE_PREFIX}0", 0, 8), ("cloth", 8 if meets else 2, 0)):
+        f = spec.add_flex()
+        f.name, f.dim, f.radius = name, 2, 1e-3
+        f.vertbody = ["b"]
+        f.vert = [0.0, 0.0, 0.0, 0.1, 0.0, 0.0, 0.0, 0.1, 0.0]
+        f.elem = [0, 1, 2]
+        f.contype, f.conaffinity = contype, conaffinity
+    m = spec.compile()
+    reach = SurfaceReach(m)
+    d = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, d)
+    assert reach.reachable(d.xpos[None], d.xmat[None]).tolist() == [[meets]]
