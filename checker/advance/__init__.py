@@ -63,8 +63,8 @@ no pair can have come within the clearance while
   the pairs the caller leaves out of the bound and checks itself at every
   step (*active* part pairs, within the clearance at k0),
 - every cable element splits into the same number of discrete points as at
-  k0, and the cables' element lengths changed by at most ``stretch`` in
-  total (summed over elements).
+  k0, and each cable's element lengths changed by at most ``stretch`` in
+  total (summed over its elements).
 
 Proof sketch. With the same number of pieces per element, every discrete
 point (and every element midpoint, and every point of a piece) is the same
@@ -111,8 +111,9 @@ lower the gaps); a point with no candidate for part k was at least H past
 the clearance from it, and at least ``F[e, k]`` past it, since the element
 lies in its box and the part in its own (a point outside the part's box is
 outside the part, at a distance no less than the boxes' separation). Exclusions are windows in arc length (self: ``|s_a -
-s_b| < pi r + clearance``), and an arc length moved by at most the total
-change of element lengths; attachments are fixed windows of the cable's
+s_b| < pi r + clearance``, both places on one cable), and the arc length
+between two places of one cable changed by at most the total change of
+that cable's element lengths; attachments are fixed windows of the cable's
 material, where a discrete point, the same combination of the same two
 centres, keeps its material coordinate (and so its window) while skipping;
 the gaps at k0 include candidates up to ``stretch`` inside every window

@@ -84,6 +84,9 @@ class Advancement:
         # per element: the limit (inf between cables) and 1 for a real element
         self._lim_all = np.where(self._valid, self._lim, np.inf)
         self._validf = self._valid.astype(float)
+        # the first element of every cable that has one: the stretch is summed
+        # per cable (an arc length moves with its own cable's elements alone)
+        self._cable_first = offsets[:-1][np.diff(offsets) >= 2]
         rad = None if radius is None else np.asarray(radius, float)[cable_of_pt]
         box = None if part_box is None or radius is None else \
             (np.asarray(part_box[0], float)[:, None, :], np.asarray(part_box[1], float)[:, None, :])
@@ -161,6 +164,15 @@ class Advancement:
         self._ok = cable_ok and self._parts.ok_at_start() and self._pairs.ok and self.stretch > mu
         return Active(structure, cable)
 
+    def _stretch_ok(self, seg: np.ndarray) -> np.ndarray:
+        """Per state (S,): every cable's element lengths changed by at most
+        ``stretch`` in total since the start; seg (N - 1, S) the element
+        lengths (between cables too, left out)."""
+        if not len(self._cable_first):
+            return np.ones(seg.shape[1], bool)
+        change = self._validf[:, None] * np.abs(seg - self._seg_raw[:, None])
+        return (np.add.reduceat(change, self._cable_first, axis=0) < self._stretch).all(axis=0)
+
     def stop(self) -> None:
         """A full check ran without gaps: prove nothing until the next :meth:`start`."""
         self.full += 1
@@ -227,7 +239,7 @@ class Advancement:
             # joining two cables: limit inf, 1 piece at the start and now)
             pieces = element_pieces(seg, self._lim_all[:, None])
             ok = (pieces == self._pieces_all[:, None]).all(axis=0) & \
-                (self._validf @ np.abs(seg - self._seg_raw[:, None]) < self._stretch)
+                self._stretch_ok(seg)
             n = leading(ok)
         if n and len(self._pos):
             poses = poses[:n]
