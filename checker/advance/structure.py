@@ -52,6 +52,7 @@ class CentrePartGaps:
         :meth:`checker.advance.skip.Advancement.start`. Returns the active
         (centre, part) pairs."""
         self._sparse = sparse
+        self._promoted = np.zeros(0, np.int64)                  # sparse: part * N + centre keys
         horizon, mu = self._horizon, self._mu
         if sparse:
             return self._start_sparse(gap_part, horizon, candidates, active, mu)
@@ -224,6 +225,80 @@ class CentrePartGaps:
         """:func:`~checker.advance.common.bracket` at the start's arc lengths."""
         return bracket(self._s_c, self._cable, self._offsets, cab, s)
 
+    def failing(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray,
+                dp: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """The (centre, part) pairs whose condition fails at some of the
+        states (x (N, 3, S), poses, dq (N, S), dp (P, S) as for :meth:`clear`):
+        (centre, part, first failing state) arrays, and the first state at
+        which a condition fails that names no pair (a centre moved past the
+        sparse gaps' cap, or their gaps are not all positive; S when none).
+        The state passes :meth:`clear` exactly when no pair fails at it and
+        it is before that state."""
+        s = x.shape[2]
+        if self._sparse:
+            return self._failing_sparse(x, poses, dq, dp)
+        top = np.transpose(poses[:, :, :3, :], (1, 3, 2, 0)).reshape(len(dp), 4, 3 * s)
+        w = np.matmul(self._u0h, top).reshape(len(dp), len(x), 3, s)
+        w -= x
+        bad = np.einsum("knis,knis->kns", w, w) >= self._g2[:, :, None]
+        if bad.any():
+            bad &= (dq + dp[:, None, :]) >= self._g_kn[:, :, None]
+        k, i = np.nonzero(bad.any(axis=2))
+        return i, k, np.argmax(bad[k, i], axis=1), s
+
+    def _failing_sparse(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray,
+                        dp: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """:meth:`failing` on the sparse gaps (as :meth:`_parts_clear_sparse`)."""
+        s = x.shape[2]
+        z = np.zeros(0, np.int64)
+        if not self._ensure_sparse():
+            return z, z, z, 0
+        g_still, mk, u0h, g_kn, g2, still, still_cap = self._sparse_tables((dp > 0).any(axis=1))
+        centre, part, first = [z], [z], [z]
+        over = dq >= g_still[:, None]                                # (N, S)
+        stop = s
+        rows = np.nonzero(over.any(axis=1))[0]
+        if len(rows):
+            # a centre past the cap of the unlisted pairs names no pair
+            cap = dq[rows] >= still_cap
+            if cap.any():
+                stop = int(np.argmax(cap.any(axis=0)))
+            # the listed entries of the centres over their least gap
+            e_row, e_part, e_g = still
+            lo = np.searchsorted(e_row, rows, "left")
+            cnt = np.searchsorted(e_row, rows, "right") - lo
+            at = ranges(lo, cnt)
+            bad = dq[e_row[at]] >= e_g[at, None]
+            hit = bad.any(axis=1)
+            centre.append(e_row[at][hit])
+            part.append(e_part[at][hit])
+            first.append(np.argmax(bad[hit], axis=1))
+        if len(mk):
+            top = np.transpose(poses[:, mk, :3, :], (1, 3, 2, 0)).reshape(len(mk), 4, 3 * s)
+            w = np.matmul(u0h, top).reshape(len(mk), len(x), 3, s)
+            w -= x
+            bad = np.einsum("knis,knis->kns", w, w) >= g2[:, :, None]
+            if bad.any():
+                bad &= (dq + dp[mk][:, None, :]) >= g_kn[:, :, None]
+            k, i = np.nonzero(bad.any(axis=2))
+            centre.append(i)
+            part.append(mk[k])
+            first.append(np.argmax(bad[k, i], axis=1))
+        return np.concatenate(centre), np.concatenate(part), np.concatenate(first), stop
+
+    def promote(self, centre: np.ndarray, part: np.ndarray) -> None:
+        """Leave (centre, part) pairs out of the bound from now until the
+        next start: the caller evaluates them itself at every state."""
+        if not len(centre):
+            return
+        if self._sparse:
+            self._promoted = np.union1d(self._promoted, part * len(self._pts) + centre)
+            self._sp_cache = {}
+            return
+        self._g_pt[centre, part] = np.inf
+        self._g_kn[part, centre] = np.inf
+        self._g2[part, centre] = np.inf
+
     def clear(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray) -> np.ndarray:
         """Cable-structure and keep-out conditions per state (S,); x (N, 3, S)
         the centres, dq (N, S) their displacements, dp (P, S) the parts'."""
@@ -240,6 +315,42 @@ class CentrePartGaps:
             bad &= (dq + dp[:, None, :]) >= self._g_kn[:, :, None]
         return ~bad.reshape(-1, s).any(axis=0)
 
+    def _sparse_tables(self, moved: np.ndarray) -> tuple:
+        """For the parts that did not move (``~moved``, (P,) bool): each
+        centre's least gap; for the parts that moved: their indices, the
+        centres in their frames (homogeneous), the gaps (K, N) and their
+        squares; the listed entries against parts that did not move as
+        (centre, part, gap) sorted by centre, and the gap of the unlisted
+        pairs against them (the cap). Promoted pairs are left out
+        (gap inf). Kept per set of moving parts."""
+        tag = moved.tobytes()
+        if tag not in self._sp_cache:
+            n = len(self._pts)
+            part, row, g = self._sp_part, self._sp_row, self._sp_g
+            if len(self._promoted):
+                g = np.where(np.isin(part * n + row, self._promoted), np.inf, g)
+            still = ~moved[part]
+            still_cap = float(self._sp_default[~moved].min(initial=np.inf))
+            g_still = np.full(n, still_cap)
+            np.minimum.at(g_still, row[still], g[still])
+            o = np.argsort(row[still], kind="stable")
+            entries = (row[still][o], part[still][o], g[still][o])
+            mk = np.nonzero(moved)[0]
+            col = np.full(len(moved), -1, np.int64)
+            col[mk] = np.arange(len(mk))
+            g_kn = np.repeat(self._sp_default[mk][:, None], n, axis=1)
+            on = ~still
+            np.minimum.at(g_kn, (col[part[on]], row[on]), g[on])
+            if len(self._promoted):
+                pk, pc = self._promoted // n, self._promoted % n
+                m = col[pk] >= 0
+                g_kn[col[pk[m]], pc[m]] = np.inf
+            u0 = (self._pts[None] - self._pos[mk, None]) @ self._rot[mk]
+            u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
+            g2 = np.where(g_kn > 0, g_kn, 0.0) ** 2
+            self._sp_cache = {tag: (g_still, mk, u0h, g_kn, g2, entries, still_cap)}
+        return self._sp_cache[tag]
+
     def _parts_clear_sparse(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray) -> np.ndarray:
         """:meth:`clear` on the sparse gaps: parts that did not move in
         these states (dp 0, so ``rel`` is ``dq``) reduce to one least gap per
@@ -248,24 +359,7 @@ class CentrePartGaps:
         s = x.shape[2]
         if not self._ensure_sparse():
             return np.zeros(s, bool)
-        moved = (dp > 0).any(axis=1)
-        tag = moved.tobytes()
-        if tag not in self._sp_cache:
-            n = len(self._pts)
-            still = ~moved[self._sp_part]
-            g_still = np.full(n, float(self._sp_default[~moved].min(initial=np.inf)))
-            np.minimum.at(g_still, self._sp_row[still], self._sp_g[still])
-            mk = np.nonzero(moved)[0]
-            col = np.full(len(moved), -1, np.int64)
-            col[mk] = np.arange(len(mk))
-            g_kn = np.repeat(self._sp_default[mk][:, None], n, axis=1)
-            on = ~still
-            np.minimum.at(g_kn, (col[self._sp_part[on]], self._sp_row[on]), self._sp_g[on])
-            u0 = (self._pts[None] - self._pos[mk, None]) @ self._rot[mk]
-            u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
-            g2 = np.where(g_kn > 0, g_kn, 0.0) ** 2
-            self._sp_cache = {tag: (g_still, mk, u0h, g_kn, g2)}
-        g_still, mk, u0h, g_kn, g2 = self._sp_cache[tag]
+        g_still, mk, u0h, g_kn, g2, _, _ = self._sparse_tables((dp > 0).any(axis=1))
         ok = (dq < g_still[:, None]).all(axis=0)
         if len(mk):
             top = np.transpose(poses[:, mk, :3, :], (1, 3, 2, 0)).reshape(len(mk), 4, 3 * s)
