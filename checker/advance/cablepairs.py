@@ -98,7 +98,7 @@ class CablePairGaps:
             i, j = np.broadcast_to(i, ok.shape)[ok], np.broadcast_to(j, ok.shape)[ok]
             v = np.broadcast_to(value[:, None, None], ok.shape)[ok]
             key = np.minimum(i, j) * n + np.maximum(i, j)
-            o = np.argsort(key, kind="stable")
+            o = np.argsort(key)                  # (the least per key: any order of equal keys)
             key, v = key[o], v[o]
             first = np.r_[len(key) > 0, key[1:] != key[:-1]][:len(key)]
             start = np.nonzero(first)[0]

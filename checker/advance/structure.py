@@ -171,11 +171,12 @@ class CentrePartGaps:
             reach = (cap + np.sqrt(3.0) * 0.5 * float(seg.max()) + float(self._rad.max()) + self.clearance
                      + 1e-9 * (1.0 + float(np.abs(pts).max())))
             kb = np.nonzero(bounded)[0]
-            found = cKDTree(mid).query_ball_point(self._pos[kb], reach + self._rho[kb])
-            count = np.array([len(f) for f in found], np.int64)
-            if count.sum():
-                e_list.append(elem[np.concatenate([np.asarray(f, np.int64) for f in found if len(f)])])
-                k_list.append(np.repeat(kb, count))
+            # every (part, midpoint) pair within the largest radius, then each part's own
+            found = cKDTree(self._pos[kb]).sparse_distance_matrix(
+                cKDTree(mid), reach + float(self._rho[kb].max()), output_type="ndarray")
+            on = found["v"] <= reach + self._rho[kb[found["i"]]]
+            e_list.append(elem[found["j"][on].astype(np.int64)])
+            k_list.append(kb[found["i"][on].astype(np.int64)])
         unbounded = np.nonzero(checked & only & ~np.isfinite(self._rho))[0]
         if len(unbounded) and len(elem):
             e_list.append(np.tile(elem, len(unbounded)))
@@ -200,10 +201,12 @@ class CentrePartGaps:
         keep = checked[part] & only[part] & (val < cap)
         rows, part, val = rows[keep], part[keep], val[keep]
         key = part * n + rows
-        o = np.lexsort((val, key))
+        o = np.argsort(key)
         key, val = key[o], val[o]
-        first = np.r_[len(key) > 0, key[1:] != key[:-1]][:len(key)]
-        key, val = key[first], val[first]                       # the least per (part, centre)
+        first = np.flatnonzero(np.r_[len(key) > 0, key[1:] != key[:-1]][:len(key)])
+        if len(first):
+            val = np.minimum.reduceat(val, first)                # the least per (part, centre)
+        key = key[first]
         part, rows = key // n, key % n
         return part, rows, val
 
@@ -370,3 +373,4 @@ class CentrePartGaps:
                 bad &= (dq + dp[mk][:, None, :]) >= g_kn[:, :, None]
             ok &= ~bad.reshape(-1, s).any(axis=0)
         return ok
+
