@@ -4,7 +4,9 @@ After a full check, the gaps of cable pairs are kept per near element pair
 (one cable, within ``2 BLOCK`` elements: also proven apart by the chord
 bound at the state itself), per pair of body centres that candidates are
 charged to, and per pair of blocks of ``BLOCK`` elements for everything
-else (their spheres at the start, and at the state itself). :meth:`CablePairGaps.clear`
+else (their boxes at the start, and at the state itself). Pairs whose
+condition fails can be named (:meth:`CablePairGaps.failing`) and left to
+the caller (:meth:`CablePairGaps.promote`). :meth:`CablePairGaps.clear`
 tests many states at once.
 
 Deliberately not here: cables against parts, part pairs, the run of states
@@ -151,9 +153,9 @@ class CablePairGaps:
         whose box is below a lower bound of its block pairs' gaps clears them
         all; the block pairs of the others are formed when tested
         (:meth:`_block_pairs`), with their own gaps. The lower bound: the
-        distance between spheres about the groups enclosing their blocks'
-        spheres, put through the blocks' rule (``max(H, min(d, far))``, which
-        grows with d). Block pairs listed (one by one) are those whose
+        distance between the groups' boxes (holding their blocks' boxes)
+        less the groups' largest radii, put through the blocks' rule
+        (``max(H, min(d, far))``, which grows with d). Block pairs listed (one by one) are those whose
         centres lie within the search radius of the k-d tree (``2 max reach
         + clearance + far``) when there are more than 64 blocks, else all;
         the group pairs kept are those that may hold one."""
@@ -339,7 +341,7 @@ class CablePairGaps:
         tested a group pair at a time first (a group's box of displacements
         holds its blocks'; group pairs whose least gap exceeds the spread
         pass unlooked), one by one only in group pairs that do not pass
-        whole, the spheres at this state only for block pairs failing the
+        whole, the boxes at this state only for block pairs failing the
         box, and over runs of states of doubling length."""
         n_s = len(dcc)
         ok = np.ones(n_s, bool)

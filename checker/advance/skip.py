@@ -7,7 +7,10 @@ at once) against the conditions of the package docstring: cable pairs
 (:mod:`~checker.advance.structure`), part pairs
 (:mod:`~checker.advance.partpairs`), and here the elements' pieces and
 stretch. The pairs the caller evaluates itself (*active*) come back from
-:meth:`Advancement.start` as an :class:`Active` record.
+:meth:`Advancement.start` as an :class:`Active` record; with
+:meth:`Advancement.clear_run_local` the pairs whose bound fails later join
+them (*promoted*) instead of ending the run, up to a budget
+(:class:`Cleared`).
 
 Deliberately not here: the arithmetic of the three conditions, the checks
 themselves, any simulator.

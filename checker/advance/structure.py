@@ -6,7 +6,9 @@ it, or where there is none the larger of the horizon and the elements'
 floor (their boxes' distance from the part's box in its frame). Kept as a
 dense (centres x parts) table, or for large scenes as sparse entries below
 ``FAR_HORIZONS`` horizons found through a k-d tree. :meth:`CentrePartGaps.clear`
-tests many states at once, in each part's own frame and in the world.
+tests many states at once, in each part's own frame and in the world;
+:meth:`CentrePartGaps.failing` names the pairs that fail and
+:meth:`CentrePartGaps.promote` leaves them to the caller.
 
 Deliberately not here: cable pairs, part pairs, the run of states
 (:class:`checker.advance.skip.Advancement`).
