@@ -144,28 +144,62 @@ class CentrePartGaps:
         return structure
 
     def _ensure_sparse(self) -> bool:
-        """Every sparse entry of the last start (once); True when all gaps are positive."""
+        """The sparse entries of the last start that are cheap (once): the
+        candidates and the unbounded parts' floors; the bounded parts'
+        floors come per centre, when a centre first needs them
+        (:meth:`_refine`). True when all gaps are positive."""
         if not self._sp_ready:
             gap_part, horizon, candidates, rest, mu = self._sp_rest
-            part, rows, val = self._sparse_entries(gap_part, horizon, candidates, rest)
+            part, rows, val = self._sparse_entries(gap_part, horizon, candidates, rest,
+                                                   elem=np.zeros(0, np.int64))
             p0, r0, g0 = self._sp_first
             self._sp_part = np.concatenate([p0, part])
             self._sp_row = np.concatenate([r0, rows])
             self._sp_g = np.concatenate([g0, val - mu])
+            self._sp_done = ~self._valid.copy()                 # elements whose floors are listed
             self._sp_ready = True
             self._sp_ok = bool(np.all(self._sp_g > 0)) and self._sp_cap > 0
         return self._sp_ok
 
+    def _refined(self) -> np.ndarray:
+        """(N,) bool: centres both of whose elements have their floors listed."""
+        done = self._sp_done
+        out = np.ones(len(self._pts), bool)
+        out[:-1] &= done
+        out[1:] &= done
+        return out
+
+    def _refine(self, centres: np.ndarray) -> None:
+        """List the bounded parts' floors of the elements next to ``centres``
+        (their gaps then as in :meth:`_start_sparse`)."""
+        n = len(self._pts)
+        e = np.concatenate([centres - 1, centres])
+        e = np.unique(e[(e >= 0) & (e < n - 1)])
+        e = e[~self._sp_done[e]]
+        if not len(e):
+            return
+        gap_part, horizon, candidates, rest, mu = self._sp_rest
+        part, rows, val = self._sparse_entries(gap_part, horizon, candidates, rest, elem=e, lazy=True)
+        self._sp_part = np.concatenate([self._sp_part, part])
+        self._sp_row = np.concatenate([self._sp_row, rows])
+        self._sp_g = np.concatenate([self._sp_g, val - mu])
+        self._sp_done[e] = True
+        self._sp_cache = {}
+
     def _sparse_entries(self, gap_part: np.ndarray, horizon: float, candidates: tuple[np.ndarray, ...],
-                        only: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                        only: np.ndarray, elem: np.ndarray | None = None,
+                        lazy: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(part, centre, gap) entries below the cap of the parts ``only`` (P,) bool
-        (see :meth:`_start_sparse`), the least per pair, sorted by part."""
+        (see :meth:`_start_sparse`), the least per pair, sorted by part.
+        ``elem``: the elements whose bounded parts' floors are listed (None:
+        all); ``lazy``: those floors alone (no candidates, no unbounded parts)."""
         pts, n = self._pts, len(self._pts)
         cap = self.FAR_HORIZONS * horizon
         checked = np.isfinite(gap_part)
         box_lo, box_hi = self._box[0][:, 0], self._box[1][:, 0]
         seg = np.where(self._valid, self._seg_raw, 0.0)
-        elem = np.nonzero(self._valid)[0]
+        every = np.nonzero(self._valid)[0]
+        elem = every if elem is None else elem
         mid = 0.5 * (pts[elem] + pts[elem + 1])
         bounded = checked & only & np.isfinite(self._rho)
         e_list, k_list = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
@@ -180,9 +214,9 @@ class CentrePartGaps:
             e_list.append(elem[found["j"][on].astype(np.int64)])
             k_list.append(kb[found["i"][on].astype(np.int64)])
         unbounded = np.nonzero(checked & only & ~np.isfinite(self._rho))[0]
-        if len(unbounded) and len(elem):
-            e_list.append(np.tile(elem, len(unbounded)))
-            k_list.append(np.repeat(unbounded, len(elem)))
+        if len(unbounded) and len(every) and not lazy:
+            e_list.append(np.tile(every, len(unbounded)))
+            k_list.append(np.repeat(unbounded, len(every)))
         e, k = np.concatenate(e_list), np.concatenate(k_list)
         # F[e, k] as _floor computes it (the element's ends in the part's frame)
         rot, pos = self._rot[k], self._pos[k]
@@ -194,7 +228,7 @@ class CentrePartGaps:
         part = np.concatenate([k, k])
         val = np.maximum(horizon, np.concatenate([f, f]))
         cab, s, c_part, value = candidates
-        if len(value):
+        if len(value) and not lazy:
             lo, hi = self._bracket(cab, s)
             count = hi - lo + 1
             rows = np.concatenate([rows, ranges(lo, count)])
@@ -258,7 +292,7 @@ class CentrePartGaps:
         z = np.zeros(0, np.int64)
         if not self._ensure_sparse():
             return z, z, z, 0
-        g_still, mk, u0h, g_kn, g2, still, still_cap = self._sparse_tables((dp > 0).any(axis=1))
+        g_still, mk, u0h, g_kn, g2, still, still_cap = self._tables_for(x, poses, dq, dp)
         centre, part, first = [z], [z], [z]
         over = dq >= g_still[:, None]                                # (N, S)
         stop = s
@@ -279,12 +313,7 @@ class CentrePartGaps:
             part.append(e_part[at][hit])
             first.append(np.argmax(bad[hit], axis=1))
         if len(mk):
-            top = np.transpose(poses[:, mk, :3, :], (1, 3, 2, 0)).reshape(len(mk), 4, 3 * s)
-            w = np.matmul(u0h, top).reshape(len(mk), len(x), 3, s)
-            w -= x
-            bad = np.einsum("knis,knis->kns", w, w) >= g2[:, :, None]
-            if bad.any():
-                bad &= (dq + dp[mk][:, None, :]) >= g_kn[:, :, None]
+            bad = self._moved_bad(x, poses, dq, dp[mk], mk, u0h, g_kn, g2)
             k, i = np.nonzero(bad.any(axis=2))
             centre.append(i)
             part.append(mk[k])
@@ -336,7 +365,12 @@ class CentrePartGaps:
                 g = np.where(np.isin(part * n + row, self._promoted), np.inf, g)
             still = ~moved[part]
             still_cap = float(self._sp_default[~moved].min(initial=np.inf))
+            # a centre whose floors are not listed yet: the horizon (every
+            # floor's gap max(H, F) is at least that)
+            coarse = ~self._refined()
+            near = self._horizon - self._mu
             g_still = np.full(n, still_cap)
+            g_still[coarse] = min(still_cap, near)
             np.minimum.at(g_still, row[still], g[still])
             o = np.argsort(row[still], kind="stable")
             entries = (row[still][o], part[still][o], g[still][o])
@@ -344,6 +378,7 @@ class CentrePartGaps:
             col = np.full(len(moved), -1, np.int64)
             col[mk] = np.arange(len(mk))
             g_kn = np.repeat(self._sp_default[mk][:, None], n, axis=1)
+            g_kn[:, coarse] = np.minimum(g_kn[:, coarse], near)
             on = ~still
             np.minimum.at(g_kn, (col[part[on]], row[on]), g[on])
             if len(self._promoted):
@@ -356,6 +391,34 @@ class CentrePartGaps:
             self._sp_cache = {tag: (g_still, mk, u0h, g_kn, g2, entries, still_cap)}
         return self._sp_cache[tag]
 
+    def _tables_for(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray) -> tuple:
+        """:meth:`_sparse_tables` for these states, after listing the floors
+        of every centre that fails its coarse gap (the horizon) at one of
+        them: a centre's test then is what the whole table's would be."""
+        moved = (dp > 0).any(axis=1)
+        tables = self._sparse_tables(moved)
+        g_still, mk, u0h, g_kn, g2 = tables[:5]
+        need = (dq >= g_still[:, None]).any(axis=1)
+        if len(mk):
+            need |= self._moved_bad(x, poses, dq, dp[mk], mk, u0h, g_kn, g2).any(axis=(0, 2))
+        need &= ~self._refined()
+        if need.any():
+            self._refine(np.nonzero(need)[0])
+            tables = self._sparse_tables(moved)
+        return tables
+
+    def _moved_bad(self, x, poses, dq, dp, mk, u0h, g_kn, g2) -> np.ndarray:
+        """(K, N, S): centre n fails against moved part mk[k] at state s
+        (``rel`` and the world bound both at or past the gap)."""
+        s = x.shape[2]
+        top = np.transpose(poses[:, mk, :3, :], (1, 3, 2, 0)).reshape(len(mk), 4, 3 * s)
+        w = np.matmul(u0h, top).reshape(len(mk), len(x), 3, s)
+        w -= x
+        bad = np.einsum("knis,knis->kns", w, w) >= g2[:, :, None]
+        if bad.any():
+            bad &= (dq + dp[:, None, :]) >= g_kn[:, :, None]
+        return bad
+
     def _parts_clear_sparse(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray) -> np.ndarray:
         """:meth:`clear` on the sparse gaps: parts that did not move in
         these states (dp 0, so ``rel`` is ``dq``) reduce to one least gap per
@@ -364,15 +427,9 @@ class CentrePartGaps:
         s = x.shape[2]
         if not self._ensure_sparse():
             return np.zeros(s, bool)
-        g_still, mk, u0h, g_kn, g2, _, _ = self._sparse_tables((dp > 0).any(axis=1))
+        g_still, mk, u0h, g_kn, g2, _, _ = self._tables_for(x, poses, dq, dp)
         ok = (dq < g_still[:, None]).all(axis=0)
         if len(mk):
-            top = np.transpose(poses[:, mk, :3, :], (1, 3, 2, 0)).reshape(len(mk), 4, 3 * s)
-            w = np.matmul(u0h, top).reshape(len(mk), len(x), 3, s)
-            w -= x
-            bad = np.einsum("knis,knis->kns", w, w) >= g2[:, :, None]
-            if bad.any():
-                bad &= (dq + dp[mk][:, None, :]) >= g_kn[:, :, None]
-            ok &= ~bad.reshape(-1, s).any(axis=0)
+            ok &= ~self._moved_bad(x, poses, dq, dp[mk], mk, u0h, g_kn, g2).reshape(-1, s).any(axis=0)
         return ok
 
