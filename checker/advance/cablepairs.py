@@ -286,12 +286,17 @@ class CablePairGaps:
         eb0, eb1 = np.clip(lo_b, first_b, last_b), np.clip(np.maximum(hi_b - 1, lo_b), first_b, last_b)
         near = (ca == cb) & (np.maximum(ea1, eb1) - np.minimum(ea0, eb0) < span)
         if near.any():
+            # most places lie inside one element on either side: those pairs
+            # directly, the few at a centre (two elements) expanded
+            one = near & (ea0 == ea1) & (eb0 == eb1)
+            many = near & ~one
             k = np.arange(3)
-            ea = ea0[near][:, None, None] + k[None, :, None]
-            eb = eb0[near][:, None, None] + k[None, None, :]
-            ok = (ea <= ea1[near][:, None, None]) & (eb <= eb1[near][:, None, None])
-            ea, eb = np.broadcast_to(ea, ok.shape)[ok], np.broadcast_to(eb, ok.shape)[ok]
-            v = np.broadcast_to(value[near][:, None, None], ok.shape)[ok]
+            ea = ea0[many][:, None, None] + k[None, :, None]
+            eb = eb0[many][:, None, None] + k[None, None, :]
+            ok = (ea <= ea1[many][:, None, None]) & (eb <= eb1[many][:, None, None])
+            ea = np.concatenate([ea0[one], np.broadcast_to(ea, ok.shape)[ok]])
+            eb = np.concatenate([eb0[one], np.broadcast_to(eb, ok.shape)[ok]])
+            v = np.concatenate([value[one], np.broadcast_to(value[many][:, None, None], ok.shape)[ok]])
             e, f = np.minimum(ea, eb), np.maximum(ea, eb)
             np.minimum.at(self._g_near, self._near_index[e * span + (f - e)], v)
         return near
