@@ -212,29 +212,22 @@ class Advancement:
         early costs a state or two."""
         if not self._ok or len(pts) == 0 or pts.shape[1] != len(self._pts):
             return Cleared(0, self._active)
-        x = np.ascontiguousarray(np.transpose(pts, (1, 2, 0)))           # (N, 3, S)
-        move = x - self._pts[:, :, None]
-        dq = row_norm3(move)                                              # (N, S)
-        if len(move):
-            spread = move.max(axis=0) - move.min(axis=0)                 # (3, S)
-            diag = np.sqrt(np.einsum("is,is->s", spread, spread))
-            dcc = np.minimum(2.0 * dq.max(axis=0), diag)
-        else:
-            diag = dcc = np.zeros(x.shape[2])
-        d = x[1:] - x[:-1]                                                # (N - 1, 3, S)
-        seg = row_norm3(d)
-        pieces = element_pieces(seg, self._lim_all[:, None])
-        n = leading((pieces == self._pieces_all[:, None]).all(axis=0) & self._stretch_ok(seg))
-        dp = np.zeros((len(self._pos), n))
-        if n and len(self._pos):
-            dp = self._pairs.moves(poses[:n]).T                            # (P, S)
-            n = leading(self._pairs.clear(dp))
         z = np.zeros(0, np.int64)
-        a, b, done = 0, 1, 0
+        a, b, done, total = 0, 1, 0, len(pts)
         structure, cable = [self._active.structure], [self._active.cable]
-        while a < n:
-            b = min(b, n)
-            run = slice(a, b)
+        while a < total:
+            b = min(b, total)
+            x, move, dq, diag, dcc, d, seg = _states(pts[a:b], self._pts)
+            # the conditions that name no pair first: pieces, stretch, part pairs
+            pieces = element_pieces(seg, self._lim_all[:, None])
+            n = leading((pieces == self._pieces_all[:, None]).all(axis=0) & self._stretch_ok(seg))
+            dp = np.zeros((len(self._pos), n))
+            if n and len(self._pos):
+                dp = self._pairs.moves(poses[a:a + n]).T                   # (P, S)
+                n = leading(self._pairs.clear(dp))
+            if not n:
+                break
+            run = slice(0, n)
             if self._cable_pairs:
                 (near, cc, blocks), stop = self._cable_gaps.failing(
                     x[:, :, run], move[:, :, run], dcc[run], diag[run], d[:, :, run], seg[:, run])
@@ -243,16 +236,17 @@ class Advancement:
                 blocks = (z, z, z)
                 stop = leading(dcc[run] < self._g_cable)
             if len(self._pos):
-                centre, part, first, stop_p = self._parts.failing(x[:, :, run], poses[run], dq[:, run], dp[:, run])
+                centre, part, first, stop_p = self._parts.failing(x[:, :, run], poses[a:a + n], dq[:, run],
+                                                                  dp[:, run])
                 stop = min(stop, stop_p)
             else:
                 centre = part = first = z
             # pairs promoted per state, and the first state past the budget
-            per = (np.bincount(first, minlength=b - a) + 4 * np.bincount(near[1], minlength=b - a)
-                   + np.bincount(cc[1], minlength=b - a)
-                   + (CablePairGaps.BLOCK + 1) ** 2 * np.bincount(blocks[2], minlength=b - a))
+            per = (np.bincount(first, minlength=n) + 4 * np.bincount(near[1], minlength=n)
+                   + np.bincount(cc[1], minlength=n)
+                   + (CablePairGaps.BLOCK + 1) ** 2 * np.bincount(blocks[2], minlength=n))
             over = self._promoted + np.cumsum(per) > budget
-            m = min(stop, int(np.argmax(over)) if over.any() else b - a)
+            m = min(stop, int(np.argmax(over)) if over.any() else n)
             take = first < m
             self._parts.promote(centre[take], part[take])
             structure.append((centre[take], part[take]))
@@ -399,3 +393,23 @@ def _union(pairs: list[tuple[np.ndarray, np.ndarray]], n: int) -> tuple[np.ndarr
     second = np.concatenate([np.asarray(p[1], np.int64) for p in pairs])
     key = np.unique(second * n + first)
     return key % n, key // n
+
+
+def _states(pts: np.ndarray, start: np.ndarray) -> tuple:
+    """What the conditions read of states pts (S, N, 3), the start's centres
+    ``start`` (N, 3): the centres laid out last x (N, 3, S), their moves
+    and the moves' lengths dq (N, S), the bounds on any two centres'
+    relative move (the bounding box's diagonal, and the least of it and
+    twice the largest dq) (S,), the elements d (N - 1, 3, S) and their
+    lengths (N - 1, S)."""
+    x = np.ascontiguousarray(np.transpose(pts, (1, 2, 0)))
+    move = x - start[:, :, None]
+    dq = row_norm3(move)
+    if len(move):
+        spread = move.max(axis=0) - move.min(axis=0)
+        diag = np.sqrt(np.einsum("is,is->s", spread, spread))
+        dcc = np.minimum(2.0 * dq.max(axis=0), diag)
+    else:
+        diag = dcc = np.zeros(x.shape[2])
+    d = x[1:] - x[:-1]
+    return x, move, dq, diag, dcc, d, row_norm3(d)
