@@ -10,8 +10,11 @@ at the last full check, which the skip rule leaves out and which are
 checked on their own (a cable lying on an arm link or held in a part just
 inside its attachment window, two leads crossing, a table just under a
 robot base or a hinge pin through its knuckles would otherwise stop all
-skipping; a part pair is checked whole, as the full check would). The other
-states are checked in full.
+skipping; a part pair is checked whole, as the full check would). Cable
+pairs whose bound fails after a full check join them (*promoted*: a cable
+sliding towards one part, two leads drawing near) while they are few
+(``PROMOTE_SHARE``), so the cost of a step grows with what came near, not
+with the scene. The other states are checked in full.
 
 Why batches: a cable has a few dozen body centres, so numpy's cost per call,
 not the arrays' size, is what a step costs. The skip rule and the measures
@@ -61,6 +64,12 @@ ACTIVE_HORIZONS = 0.1
 check is below this many horizons, and moving part pairs whose box bound is,
 are *active*: checked on their own at every state instead of bounding the
 skip (checker.advance)."""
+
+PROMOTE_SHARE = 0.25
+"""Pairs whose bound fails after a full check are checked on their own
+(promoted, :meth:`checker.advance.Advancement.clear_run_local`) until the
+next full check, while they number at most this share of the body centres;
+past it a full check costs less."""
 
 ADVANCE_STRETCH_RADII = 0.25
 """... and up to this many (smallest) cable radii of arc length inside the
@@ -184,6 +193,7 @@ class StepChecks:
         self._part_active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         self._names = [c.name for c in built.cables]
         self._offsets = offsets
+        self._budget = int(PROMOTE_SHARE * offsets[-1])
         self._radii = radii
         # material coordinate (rest arc length) of every body centre: the exclusion windows' measure
         self._rest = np.concatenate([c.rest_s for c in built.cables]) if built.cables else np.zeros(0)
@@ -219,7 +229,13 @@ class StepChecks:
         out: list[StepResult] = []
         j = 0
         while j < len(states):
-            k = self.advance.clear_run(pts[j:], poses[j:]) if self.advance is not None else 0
+            k = 0
+            if self.advance is not None:
+                cleared = self.advance.clear_run_local(pts[j:], poses[j:], self._budget)
+                k = cleared.states
+                centre, built_part = cleared.active.structure
+                self._active = (centre, self._checker_index[built_part])   # (centre, checker part)
+                self._cable_active = cleared.active.cable
             if k:
                 part = slice(j, j + k)
                 out += self._proven_clear(states[part], pts[part], poses[part], single[part],

@@ -115,12 +115,15 @@ def test_two_cables_approaching():
     shift = np.zeros_like(pts)
     shift[51:] = [0.0, 1.0, 0.0]
     proven = 0
+    margin = 0.05 - 2 * _R - _CLEAR                          # how far b may come before the clearance
     for gap in np.linspace(0.0, 0.035, 36):
         moved = pts - gap * shift
         if adv.proven_clear(moved, _NO_PARTS):
             proven += 1
-            assert gap < _H and not _pairwise(checker, moved, offsets)
-    assert proven > 0
+            assert gap < margin and not _pairwise(checker, moved, offsets)
+    # the blocks' boxes (parallel leads: their distance is the leads') prove
+    # every step short of the clearance, past the horizon
+    assert proven == np.count_nonzero(np.linspace(0.0, 0.035, 36) < margin - 1e-9) > _H / 0.001 + 1
     assert _pairwise(checker, pts - 0.035 * shift, offsets)
     assert not adv.proven_clear(pts - 0.035 * shift, _NO_PARTS)
 
@@ -257,3 +260,63 @@ def test_clear_run_with_many_blocks_counts_what_one_at_a_time_would():
         assert batch.clear_run(pts, np.repeat(_NO_PARTS[None], len(pts), axis=0)) == expect
         counts.add(expect)
     assert len(counts) > 1
+
+
+def _clear_args(adv, pts):
+    """What Advancement.clear_run hands the cable-pair conditions for states pts (S, N, 3)."""
+    from checker.advance.common import row_norm3
+    x = np.ascontiguousarray(np.transpose(pts, (1, 2, 0)))
+    move = x - adv._pts[:, :, None]
+    dq = row_norm3(move)
+    spread = move.max(axis=0) - move.min(axis=0)
+    diag = np.sqrt(np.einsum("is,is->s", spread, spread))
+    d = x[1:] - x[:-1]
+    return x, move, np.minimum(2.0 * dq.max(axis=0), diag), diag, d, row_norm3(d)
+
+
+def test_failing_names_every_pair_clear_rejects():
+    """CablePairGaps.failing: the first state at which a near pair, a
+    centre pair or a block pair fails (or a condition naming no pair) is
+    the first state clear rejects; promoting the pairs named lets the
+    states pass up to the next such condition."""
+    from checker.advance.common import leading
+    rng = np.random.default_rng(8)
+    grid = np.array([(x, y) for x in range(5) for y in range(4)], float) * 0.06
+    cables = [np.stack([np.linspace(0.0, 1.0, 41), np.full(41, x), np.full(41, y)], axis=1) for x, y in grid]
+    hp, second = _hairpin(0.04)
+    seen = set()
+    for trial in range(24):
+        base = cables if trial % 2 else [hp]
+        flat = np.concatenate(base)
+        scale = rng.choice([0.001, 0.004, 0.01, 0.03])
+        moves = np.cumsum(rng.normal(size=(8, 1, 3)) * scale, axis=0)
+        pts = flat[None] + moves * rng.random(len(flat))[None, :, None]
+        _, adv, _, _ = _cable_adv(base)
+        gaps = adv._cable_gaps
+        args = _clear_args(adv, pts)
+        expect = leading(gaps.clear(*args))
+        (near, cc, blocks), stop = gaps.failing(*args)
+        first = min([stop] + [int(f.min()) for f in (near[1], cc[1], blocks[2]) if len(f)])
+        assert first == expect
+        seen.add((expect, bool(len(near[0])), bool(len(cc[0])), bool(len(blocks[0]))))
+        gaps.promote(near[0], cc[0], blocks[0], blocks[1])
+        (near2, cc2, blocks2), stop2 = gaps.failing(*args)
+        assert stop2 == stop and not len(near2[0]) + len(cc2[0]) + len(blocks2[0])
+        assert leading(gaps.clear(*args)) == stop
+        i, j = gaps.centre_pairs(near[0], cc[0], blocks[0], blocks[1])
+        assert np.all(i <= j) and len(np.unique(i * len(flat) + j)) == len(i)
+    assert any(s[1] for s in seen) and any(s[3] for s in seen) and {s[0] for s in seen} >= {0, 8}
+
+
+def test_blocks_stay_on_one_cable():
+    """Blocks of BLOCK elements restart at every cable (a block across two
+    cables would span from one's end to the other's start)."""
+    cables = [_line([0.0, 0, 0], [0.4, 0, 0], 41), _line([0.0, 0.1, 0], [0.1, 0.1, 0], 3),
+              _line([0.0, 0.2, 0], [0.4, 0.2, 0], 10)]
+    _, adv, _, offsets = _cable_adv(cables)
+    gaps = adv._cable_gaps
+    gaps._ensure_blocks()
+    start, last = gaps._blk_start, gaps._blk_last
+    cable = np.searchsorted(offsets, start, "right") - 1
+    assert np.all(last < offsets[cable + 1]) and np.all(last - start <= gaps.BLOCK) and np.all(last > start)
+    assert start.tolist() == [0, 4, 8, 12, 16, 20, 24, 28, 32, 36, 41, 44, 48, 52]

@@ -8,6 +8,7 @@ from test_advance_cablepairs import _CLEAR, _H, _R, _STRETCH, _hairpin
 from checker.advance import Advancement
 from checker.interference import Checker
 from checker.interference.hits import Gaps
+from checker.records import PairType
 from checker.scene_state import CableState, CheckConfig, PartState
 from checker.shapes import Shape, ShapeType
 
@@ -93,3 +94,139 @@ def test_clear_run_counts_the_leading_states_one_at_a_time_would():
         assert batch.clear_run(pts, poses) == expect == batch.skipped
         counts.add(expect)
     assert 0 in counts and 12 in counts and len(counts) > 2
+
+
+def _two_slabs():
+    """Two slabs and two cables (metres): cable a lies inside the clearance
+    of slab 0 (an active pair), cable b starts 12 mm above slab 1 (a
+    candidate 7 mm past the clearance); the checker and an Advancement
+    started from its full check with (a, slab 0) active."""
+    slab = Shape(ShapeType.BOX, [0.3, 0.1, 0.01])
+    config = CheckConfig(clearance=_CLEAR)
+    parts = [PartState("slab0", slab, np.eye(4)), PartState("slab1", slab, np.eye(4))]
+    poses = np.tile(np.eye(4), (2, 1, 1))
+    poses[1, :3, 3] = [0.0, 0.5, 0.0]
+    checker = Checker(parts, config, horizon=_H, stretch=_STRETCH)
+    x = np.linspace(-0.2, 0.2, 21)
+    a = np.stack([x, np.zeros(21), np.full(21, 0.01 + _R + 0.002)], axis=1)
+    b = np.stack([x, np.full(21, 0.5), np.full(21, 0.01 + _R + 0.012)], axis=1)
+    offsets = np.array([0, 21, 42])
+    radii = np.array([_R, _R])
+    gaps = checker.check_with_gaps([CableState("a", a, _R), CableState("b", b, _R)], poses).gaps
+    z = np.zeros(0, np.int64)
+
+    def fresh():
+        adv = Advancement(offsets, config.spacing * radii, np.array([0.32, 0.32]), _CLEAR, _STRETCH, radii,
+                          checker.part_bounds())
+        adv.start(np.concatenate([a, b]), poses, gaps, (z, z), np.zeros(0), active=(np.array([0]), np.array([0])))
+        return adv
+
+    return checker, fresh, np.concatenate([a, b]), poses, offsets, radii
+
+
+def test_clear_run_local_promotes_the_pairs_whose_bound_fails():
+    """Cable a shifts along slab 0 inside its clearance (active) while cable
+    b comes down onto slab 1, past its gap and into the clearance: without
+    a budget the run stops where b's bound fails (as clear_run does); with
+    one, b's centres against slab 1 are promoted and every state is proven,
+    and evaluating the active and promoted pairs alone gives each state's
+    full-check records, to the bit."""
+    checker, fresh, pts0, poses, offsets, radii = _two_slabs()
+    steps = np.arange(1, 9)
+    pts = np.repeat(pts0[None], len(steps), axis=0)
+    pts[:, :21, 0] += 0.001 * steps[:, None]                 # a slides along slab 0
+    pts[:, 21:, 2] -= 0.002 * steps[:, None]                 # b comes down 2 mm a step, to 4 mm
+    poses_s = np.repeat(poses[None], len(steps), axis=0)
+    strict = fresh().clear_run(pts, poses_s)
+    assert strict == 3                                       # b moved 8 mm > its 7 mm gap at the 4th state
+    assert fresh().clear_run_local(pts, poses_s, 0).states == strict
+    cleared = fresh().clear_run_local(pts, poses_s, 100)
+    assert cleared.states == len(steps)
+    centre, part = cleared.active.structure
+    assert set(part[centre >= 21].tolist()) == {1} and set(part[centre < 21].tolist()) == {0}
+    assert len(cleared.active.cable[0]) == 0
+    dense = checker.densify_many(pts, offsets, radii)
+    local = checker.structure_many(["a", "b"], radii, dense, poses_s, (), cleared.active.structure)
+    for k in range(len(steps)):
+        cables = [CableState("a", pts[k, :21], _R), CableState("b", pts[k, 21:], _R)]
+        full = [r for r in checker.check(cables, poses_s[k], horizon=0.0)
+                if r.type in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)]
+        assert [repr(r) for r in local[k]] == [repr(r) for r in full]
+    assert {r.b for r in local[-1]} == {"slab0", "slab1"}      # b ends inside the clearance
+    # a tight budget ends the run where the promoted pairs would exceed it
+    tight = fresh().clear_run_local(pts, poses_s, 4)
+    assert strict <= tight.states < len(steps)
+
+
+def test_clear_run_local_without_budget_counts_what_clear_run_counts():
+    """Budget 0 promotes nothing: the same leading states as clear_run, on
+    random moves of a hairpin over a slab (a part moving too)."""
+    hp, _ = _hairpin(0.04)
+    config = CheckConfig(clearance=_CLEAR)
+    poses0 = np.eye(4)[None].copy()
+    poses0[0, :3, 3] = [0.0, 0.0, -0.05]
+    checker = Checker([PartState("slab", Shape(ShapeType.BOX, [1.0, 1.0, 0.015]), np.eye(4))],
+                      config, horizon=_H, stretch=_STRETCH)
+    gaps = checker.check_with_gaps([CableState("c0", hp, _R)], poses0).gaps
+    offsets = np.array([0, len(hp)])
+    z = np.zeros(0, np.int64)
+
+    def fresh():
+        a = Advancement(offsets, config.spacing * np.array([_R]), np.array([1.5]), _CLEAR, _STRETCH,
+                        np.array([_R]), checker.part_bounds())
+        a.start(hp, poses0, gaps, (z, z), np.zeros(0))
+        return a
+
+    rng = np.random.default_rng(3)
+    counts = set()
+    for trial in range(40):
+        scale = rng.choice([0.001, 0.003, 0.01])
+        pts = hp[None] + np.cumsum(rng.normal(size=(12, 1, 3)) * scale, axis=0)
+        pts[:, 5:] += np.cumsum(rng.normal(size=(12, 1, 3)) * scale, axis=0)
+        poses = np.repeat(poses0, 12, axis=0)[:, None].copy()
+        poses[:, 0, :3, 3] += np.cumsum(rng.normal(size=(12, 3)) * scale, axis=0)
+        a, b = fresh(), fresh()
+        n = a.clear_run(pts, poses)
+        assert b.clear_run_local(pts, poses, 0).states == n == b.skipped
+        counts.add(n)
+    assert 0 in counts and 12 in counts and len(counts) > 2
+
+
+def test_stretch_runs_hold_every_pair_the_stretch_protects():
+    """Each element's run (Advancement._stretch_runs) reaches every element f
+    of its cable that a self pair inside the exclusion window could span
+    (the elements between them shorter than the window) and the near
+    pairs' chord spans (f < e + 2 BLOCK); a stretch spread over a long cable
+    passes where the cable's sum would not, one concentrated in a run does
+    not."""
+    from checker.advance.cablepairs import CablePairGaps
+    rng = np.random.default_rng(4)
+    for trial in range(20):
+        counts = rng.integers(2, 30, size=3)
+        offsets = np.concatenate([[0], np.cumsum(counts)])
+        radii = rng.uniform(0.002, 0.01, size=3)
+        pts = np.concatenate([np.cumsum(rng.uniform(0.001, 0.02, size=(c, 3)), axis=0) for c in counts])
+        a = Advancement(offsets, 0.5 * radii, np.zeros(0), _CLEAR, _STRETCH, radii)
+        z = np.zeros(0, np.int64)
+        a.start(pts, np.zeros((0, 4, 4)), Gaps(_H, 1.0, np.zeros(0)), (z, z), np.zeros(0))
+        run = a._run_last
+        cable = np.repeat(np.arange(3), counts)
+        s_c = np.concatenate([np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(pts[o:o + c], axis=0), axis=1))]
+                              for o, c in zip(offsets[:-1], counts)])
+        for e in range(len(pts) - 1):
+            if cable[e] != cable[e + 1]:
+                continue
+            for f in range(e, offsets[cable[e] + 1] - 1):
+                window = np.pi * radii[cable[e]] + _CLEAR
+                if s_c[f] - s_c[e + 1] < window or f < e + 2 * CablePairGaps.BLOCK:
+                    assert run[e] >= f, (trial, e, f)
+    # 60 elements of 10 mm, window pi r + clearance = 36 mm: each lengthened by 0.1 mm
+    line = np.linspace([0.0, 0, 0], [0.6, 0, 0], 61)
+    a = Advancement(np.array([0, 61]), np.array([5.0]), np.zeros(0), _CLEAR, _STRETCH, np.array([_R]))
+    z = np.zeros(0, np.int64)
+    a.start(line, np.zeros((0, 4, 4)), Gaps(_H, 1.0, np.zeros(0)), (z, z), np.zeros(0))
+    spread = line * 1.01                                      # 6 mm in all, 0.1 mm per element
+    assert a.proven_clear(spread, np.zeros((0, 4, 4)))
+    bunched = line.copy()
+    bunched[30:] += [0.003, 0.0, 0.0]                         # 3 mm > stretch (2.5 mm) in one element
+    assert not a.proven_clear(bunched, np.zeros((0, 4, 4)))

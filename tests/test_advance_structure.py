@@ -91,3 +91,49 @@ def test_active_places_leave_the_bound():
     moved[3] -= [17.0, 0.0, 0.0]
     assert not b.proven_clear(moved, poses)
     assert b.proven_clear(far + [0.0, 0.0, 1.9], poses)
+
+
+def _slabs_run(sparse: bool, seed: int):
+    """An Advancement over two slabs and two cables (tests/test_advance_skip.py),
+    its centre-part gaps dense or sparse, and random moves of the cables and
+    of slab 1: (gaps, states as Advancement.clear_run hands them)."""
+    import pytest
+    from test_advance_skip import _two_slabs
+    from checker.advance.common import row_norm3
+
+    checker, fresh, pts0, poses, offsets, radii = _two_slabs()
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(Advancement, "SPARSE_ENTRIES", 0 if sparse else 10 ** 9)
+        adv = fresh()
+    rng = np.random.default_rng(seed)
+    scale = rng.choice([0.001, 0.003, 0.01])
+    pts = pts0[None] + np.cumsum(rng.normal(size=(10, 1, 3)) * scale, axis=0) * rng.random(len(pts0))[None, :, None]
+    poses_s = np.repeat(poses[None], 10, axis=0)
+    if seed % 2:
+        poses_s[:, 1, :3, 3] += np.cumsum(rng.normal(size=(10, 3)) * scale, axis=0)
+    x = np.ascontiguousarray(np.transpose(pts, (1, 2, 0)))
+    dq = row_norm3(x - adv._pts[:, :, None])
+    dp = adv._pairs.moves(poses_s).T
+    return adv._parts, (x, poses_s, dq, dp)
+
+
+def test_failing_names_every_pair_clear_rejects():
+    """CentrePartGaps.failing (dense and sparse): the first state at which a
+    (centre, part) pair fails (or a condition naming no pair) is the first
+    state clear rejects; once the pairs named are promoted, clear passes
+    every state up to such a condition."""
+    from checker.advance.common import leading
+    seen = set()
+    for sparse in (False, True):
+        for seed in range(16):
+            parts, args = _slabs_run(sparse, seed)
+            assert parts._sparse is sparse
+            expect = leading(parts.clear(*args))
+            centre, part, first, stop = parts.failing(*args)
+            assert min([stop] + first.tolist()) == expect
+            seen.add((sparse, expect, len(centre) > 0))
+            parts.promote(centre, part)
+            assert not len(parts.failing(*args)[0])
+            assert leading(parts.clear(*args)) == stop
+    assert {(s, e > 0) for s, e, _ in seen} >= {(False, True), (True, True)}
+    assert any(named and e < 10 for _, e, named in seen)

@@ -44,15 +44,16 @@ no pair can have come within the clearance while
     candidate pair that is no near pair's has one place on an element next
     to i and the other on an element next to j; ``g[i, j]`` the least such
     candidate's value minus the clearance,
-  - for every pair of blocks A, B of ``BLOCK`` consecutive elements
-    (centres ``b K .. b K + K``) other than a block with itself or the
-    next on one cable (their element pairs are all near pairs), either
-    ``box(A, B) < max(H, L[A, B])``, where ``box(A, B)`` is the norm of
-    the componentwise largest ``|d_a - d_b|`` over the two blocks'
-    bounding boxes of displacements, and ``L[A, B]`` the distance at k0
-    between spheres enclosing the blocks' centres, minus the largest radii
-    of the two blocks and the clearance (capped at ``FAR_HORIZONS * H``);
-    or the same distance at step k itself is above 0,
+  - for every pair of blocks A, B of ``BLOCK`` consecutive elements of
+    one cable (centres ``s .. s + K``, restarting at every cable) other
+    than a block with itself or the next on one cable (their element
+    pairs are all near pairs), either ``box(A, B) < max(H, L[A, B])``,
+    where ``box(A, B)`` is the norm of the componentwise largest ``|d_a -
+    d_b|`` over the two blocks' bounding boxes of displacements, and
+    ``L[A, B]`` the distance at k0 between the axis-aligned boxes of the
+    blocks' centres, minus the largest radii of the two blocks and the
+    clearance (capped at ``FAR_HORIZONS * H``); or the same distance at
+    step k itself is above 0,
   - ``min(spread, 2 max dq) < FAR_HORIZONS * H`` when some block pairs are
     farther apart than that and left unlisted,
 - ``dq_i < g[i, k]`` for every part k that did not move, and
@@ -63,8 +64,17 @@ no pair can have come within the clearance while
   the pairs the caller leaves out of the bound and checks itself at every
   step (*active* part pairs, within the clearance at k0),
 - every cable element splits into the same number of discrete points as at
-  k0, and the cables' element lengths changed by at most ``stretch`` in
-  total (summed over elements).
+  k0, and the element lengths of every *run* changed by at most ``stretch``
+  in total: the run of element e is e .. L(e) on its cable, with L(e) the
+  last element f such that the elements e + 1 .. f - 1 were shorter in
+  all than ``w + stretch`` at k0 (``w`` the self-exclusion window, below),
+  and at least e + 2 BLOCK (without cable radii: whole cables).
+
+A pair whose own condition fails at step k need not end the skipping: the
+caller may evaluate it itself from then on, as it does the active pairs
+(:meth:`Advancement.clear_run_local`, *promoted* pairs); the conditions
+that name no pair (pieces and stretch, part pairs, the far limit of the
+block pairs, a centre past the sparse gaps' cap) still end it.
 
 Proof sketch. With the same number of pieces per element, every discrete
 point (and every element midpoint, and every point of a piece) is the same
@@ -82,11 +92,10 @@ candidates are, below). A checked pair of places that was no candidate was
 at least H past the clearance at k0 (or deeper than ``stretch`` inside its
 exclusion window, where it stays), and at least ``L[A, B]`` past it for
 blocks holding its elements (each place is in the convex hull of its
-block's centres, inside the enclosing sphere); its relative displacement
+block's centres, inside their bounding box); its relative displacement
 lies in the difference of the two blocks' boxes of displacements, whose
 largest point is ``box(A, B)`` away from the origin, and below
-``min(spread, 2 max dq)`` for any two places. A block joining two cables
-only holds more centres: its box and sphere only grow. A point of a rigid
+``min(spread, 2 max dq)`` for any two places. A point of a rigid
 part moved by at most
 ``dp``. Every value checked is a distance between two cable points, or a
 point's distance to a rigid solid, minus fixed radii: a 1-Lipschitz function
@@ -94,9 +103,9 @@ of the places, so it dropped by at most ``|d_a - d_b|`` (cable pairs), and
 by at most the point's displacement in the part's own frame, or the point's
 plus the part's displacement in the world (cable and part; a point outside a
 solid with distance above the clearance stays outside, where the signed
-distance is the distance). Two conditions look at step k alone (the chord's ``S`` aside). Spheres:
-every place of a block lies in the convex hull of its centres, inside the
-sphere about their bounding box. Chord: let two places on elements e and f
+distance is the distance). Two conditions look at step k alone (the chord's ``S`` aside). Boxes:
+every place of a block lies in the convex hull of its centres, inside
+their bounding box. Chord: let two places on elements e and f
 be checked at step k, so their arc lengths differ by at least ``w`` (and by
 at least ``S``). Along the polyline between them the unit tangent turns by
 at most ``T`` in total, so every tangent lies within the angle ``T / 2`` of
@@ -111,8 +120,11 @@ lower the gaps); a point with no candidate for part k was at least H past
 the clearance from it, and at least ``F[e, k]`` past it, since the element
 lies in its box and the part in its own (a point outside the part's box is
 outside the part, at a distance no less than the boxes' separation). Exclusions are windows in arc length (self: ``|s_a -
-s_b| < pi r + clearance``), and an arc length moved by at most the total
-change of element lengths; attachments are fixed windows of the cable's
+s_b| < pi r + clearance``, both places on one cable), and the arc length
+between two places changed by at most the total change of the elements
+from the one's to the other's, a part of a run when they were inside the
+window at k0 (the elements between them shorter than ``w``) or are a near
+pair's (the chord's ``S``); attachments are fixed windows of the cable's
 material, where a discrete point, the same combination of the same two
 centres, keeps its material coordinate (and so its window) while skipping;
 the gaps at k0 include candidates up to ``stretch`` inside every window

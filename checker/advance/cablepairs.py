@@ -4,7 +4,9 @@ After a full check, the gaps of cable pairs are kept per near element pair
 (one cable, within ``2 BLOCK`` elements: also proven apart by the chord
 bound at the state itself), per pair of body centres that candidates are
 charged to, and per pair of blocks of ``BLOCK`` elements for everything
-else (their spheres at the start, and at the state itself). :meth:`CablePairGaps.clear`
+else (their boxes at the start, and at the state itself). Pairs whose
+condition fails can be named (:meth:`CablePairGaps.failing`) and left to
+the caller (:meth:`CablePairGaps.promote`). :meth:`CablePairGaps.clear`
 tests many states at once.
 
 Deliberately not here: cables against parts, part pairs, the run of states
@@ -98,7 +100,7 @@ class CablePairGaps:
             i, j = np.broadcast_to(i, ok.shape)[ok], np.broadcast_to(j, ok.shape)[ok]
             v = np.broadcast_to(value[:, None, None], ok.shape)[ok]
             key = np.minimum(i, j) * n + np.maximum(i, j)
-            o = np.argsort(key, kind="stable")
+            o = np.argsort(key)                  # (the least per key: any order of equal keys)
             key, v = key[o], v[o]
             first = np.r_[len(key) > 0, key[1:] != key[:-1]][:len(key)]
             start = np.nonzero(first)[0]
@@ -124,6 +126,7 @@ class CablePairGaps:
         # a run whose states fail the cheaper conditions never needs them
         self._blk_args = (horizon, mu)
         self._blocks_ready = False
+        self._blk_done = np.zeros(0, np.int64)          # promoted block pairs, a * blocks + b
         self._g_min_nb = min(float(self._g_cc.min(initial=np.inf)),
                              float(self._g_near.min(initial=np.inf)) if self._near else np.inf)
         return cable_active
@@ -150,18 +153,22 @@ class CablePairGaps:
         whose box is below a lower bound of its block pairs' gaps clears them
         all; the block pairs of the others are formed when tested
         (:meth:`_block_pairs`), with their own gaps. The lower bound: the
-        distance between spheres about the groups enclosing their blocks'
-        spheres, put through the blocks' rule (``max(H, min(d, far))``, which
-        grows with d). Block pairs listed (one by one) are those whose
+        distance between the groups' boxes (holding their blocks' boxes)
+        less the groups' largest radii, put through the blocks' rule
+        (``max(H, min(d, far))``, which grows with d). Block pairs listed (one by one) are those whose
         centres lie within the search radius of the k-d tree (``2 max reach
         + clearance + far``) when there are more than 64 blocks, else all;
         the group pairs kept are those that may hold one."""
         n = len(self._pts)
-        # blocks of BLOCK elements: centres [b K, b K + K] (overlapping by one)
+        # blocks of BLOCK elements of one cable: centres [s, s + K] (overlapping
+        # by one), the last of each cable shorter (a block across two cables
+        # would reach from one's end to the other's start)
         kb = self.BLOCK
-        nb = max(1, -(-(n - 1) // kb)) if n else 0
-        self._blk_start = np.arange(nb) * kb
-        self._blk_last = np.minimum(self._blk_start + kb, max(n - 1, 0))
+        first, count = self._offsets[:-1], np.diff(self._offsets)
+        per = np.where(count > 0, -(-np.maximum(count - 1, 1) // kb), 0)
+        self._blk_start = np.repeat(first, per) + kb * (np.arange(int(per.sum())) - np.repeat(np.cumsum(per) - per, per))
+        self._blk_last = np.minimum(self._blk_start + kb, np.repeat(first + count - 1, per))
+        nb = len(self._blk_start)
         far = self.FAR_HORIZONS * horizon
         self._blk_h, self._blk_far, self._blk_mu = horizon, far, mu
         self._grp_blocks = np.arange(0, nb, self.GROUP)
@@ -184,12 +191,10 @@ class CablePairGaps:
             rad = np.maximum(np.maximum.reduceat(self._rad, self._blk_start), self._rad[self._blk_last])
             self._blk_rad = rad[:, None] + self.clearance / 2 + mu      # each block's share of a pair's
             reach = big + rad
-            self._blk_centre, self._blk_reach = centre, reach
-            g_lo = np.minimum.reduceat(centre, self._grp_blocks)
-            g_hi = np.maximum.reduceat(centre, self._grp_blocks)
-            g_centre = 0.5 * (g_lo + g_hi)
-            off = row_norm(centre - g_centre[group])
-            g_reach = np.maximum.reduceat(off + reach, self._grp_blocks)
+            self._blk_centre, self._blk_lo, self._blk_hi, self._blk_r = centre, lo, hi, rad
+            g_lo = np.minimum.reduceat(lo, self._grp_blocks)
+            g_hi = np.maximum.reduceat(hi, self._grp_blocks)
+            g_rad = np.maximum.reduceat(rad, self._grp_blocks)
             if nb <= 64:                                # few blocks: every pair
                 gi, gj = np.triu_indices(ng)
             else:
@@ -198,11 +203,13 @@ class CablePairGaps:
                 tree = cKDTree(centre)
                 listed = int(tree.count_neighbors(tree, radius)) == nb * nb
                 self._g_far = (np.inf if listed else far) - mu
+                g_centre = 0.5 * (g_lo + g_hi)
+                off = row_norm(centre - g_centre[group])
                 pairs = cKDTree(g_centre).query_pairs(radius + 2.0 * float(off.max()) + 1e-9 * (1.0 + radius),
                                                       output_type="ndarray")
                 gi = np.concatenate([np.arange(ng), pairs[:, 0]]).astype(np.int64)
                 gj = np.concatenate([np.arange(ng), pairs[:, 1]]).astype(np.int64)
-            dist = row_norm(g_centre[gi] - g_centre[gj]) - g_reach[gi] - g_reach[gj] - self.clearance
+            dist = _box_distance(g_lo[gi], g_hi[gi], g_lo[gj], g_hi[gj]) - g_rad[gi] - g_rad[gj] - self.clearance
             g_grp = np.maximum(horizon, np.minimum(dist, far))
         else:
             gi, gj = np.triu_indices(ng)
@@ -226,15 +233,18 @@ class CablePairGaps:
         end = self._blk_last[bj]
         near = (bj - bi <= 1) & (self._cable[self._blk_start[bi]] == self._cable[end])
         bi, bj = bi[~near], bj[~near]
+        if len(self._blk_done):
+            keep = ~np.isin(bi * nb + bj, self._blk_done)
+            bi, bj = bi[keep], bj[keep]
         if self._blk_rad is None:
             gap = np.full(len(bi), self._blk_h)
         else:
-            c = self._blk_centre
-            sep = row_norm(c[bi] - c[bj])
             if self._blk_radius is not None:
-                on = sep <= self._blk_radius
-                bi, bj, sep = bi[on], bj[on], sep[on]
-            dist = sep - self._blk_reach[bi] - self._blk_reach[bj] - self.clearance
+                c = self._blk_centre
+                on = row_norm(c[bi] - c[bj]) <= self._blk_radius
+                bi, bj = bi[on], bj[on]
+            dist = (_box_distance(self._blk_lo[bi], self._blk_hi[bi], self._blk_lo[bj], self._blk_hi[bj])
+                    - self._blk_r[bi] - self._blk_r[bj] - self.clearance)
             gap = np.maximum(self._blk_h, np.minimum(dist, self._blk_far))
         gap = gap - self._blk_mu
         return bi, bj, np.where(gap > 0, gap, 0.0) ** 2
@@ -276,12 +286,17 @@ class CablePairGaps:
         eb0, eb1 = np.clip(lo_b, first_b, last_b), np.clip(np.maximum(hi_b - 1, lo_b), first_b, last_b)
         near = (ca == cb) & (np.maximum(ea1, eb1) - np.minimum(ea0, eb0) < span)
         if near.any():
+            # most places lie inside one element on either side: those pairs
+            # directly, the few at a centre (two elements) expanded
+            one = near & (ea0 == ea1) & (eb0 == eb1)
+            many = near & ~one
             k = np.arange(3)
-            ea = ea0[near][:, None, None] + k[None, :, None]
-            eb = eb0[near][:, None, None] + k[None, None, :]
-            ok = (ea <= ea1[near][:, None, None]) & (eb <= eb1[near][:, None, None])
-            ea, eb = np.broadcast_to(ea, ok.shape)[ok], np.broadcast_to(eb, ok.shape)[ok]
-            v = np.broadcast_to(value[near][:, None, None], ok.shape)[ok]
+            ea = ea0[many][:, None, None] + k[None, :, None]
+            eb = eb0[many][:, None, None] + k[None, None, :]
+            ok = (ea <= ea1[many][:, None, None]) & (eb <= eb1[many][:, None, None])
+            ea = np.concatenate([ea0[one], np.broadcast_to(ea, ok.shape)[ok]])
+            eb = np.concatenate([eb0[one], np.broadcast_to(eb, ok.shape)[ok]])
+            v = np.concatenate([value[one], np.broadcast_to(value[many][:, None, None], ok.shape)[ok]])
             e, f = np.minimum(ea, eb), np.maximum(ea, eb)
             np.minimum.at(self._g_near, self._near_index[e * span + (f - e)], v)
         return near
@@ -291,6 +306,10 @@ class CablePairGaps:
         the chord bound at this state (module docstring) or within its gap
         of relative motion since the start. d (N - 1, 3, S) the elements,
         seg (N - 1, S) their lengths."""
+        return ~self._near_bad(move, d, seg).any(axis=0)
+
+    def _near_bad(self, move: np.ndarray, d: np.ndarray, seg: np.ndarray) -> np.ndarray:
+        """(E, S): near element pair e fails at state s (:meth:`_near_clear`)."""
         s = move.shape[2]
         # turning at each centre, rounded up (arccos loses ~1e-8 near 0); a
         # zero-length element turns by pi (proves nothing)
@@ -309,7 +328,7 @@ class CablePairGaps:
             dd = move[a] - move[b]
             rel2 = np.einsum("pis,pis->ps", dd, dd).reshape(4, len(rows), s).max(axis=0)
             bad[rows] &= rel2 >= self._g_near2[rows, None]
-        return ~bad.any(axis=0)
+        return bad
 
     def clear(self, x: np.ndarray, move: np.ndarray, dcc: np.ndarray, diag: np.ndarray,
                            d: np.ndarray, seg: np.ndarray) -> np.ndarray:
@@ -327,7 +346,7 @@ class CablePairGaps:
         tested a group pair at a time first (a group's box of displacements
         holds its blocks'; group pairs whose least gap exceeds the spread
         pass unlooked), one by one only in group pairs that do not pass
-        whole, the spheres at this state only for block pairs failing the
+        whole, the boxes at this state only for block pairs failing the
         box, and over runs of states of doubling length."""
         n_s = len(dcc)
         ok = np.ones(n_s, bool)
@@ -362,14 +381,95 @@ class CablePairGaps:
                 a, b = b, 2 * b + 1
         return ok
 
+    def failing(self, x: np.ndarray, move: np.ndarray, dcc: np.ndarray, diag: np.ndarray,
+                d: np.ndarray, seg: np.ndarray) -> tuple[tuple, int]:
+        """The cable-pair conditions (as :meth:`clear`, same arguments) per
+        pair: ((near element pairs, centre pairs, block pairs), stop). Each
+        of the three is (index, first failing state) arrays: near pairs
+        index ``_ne``/``_nf``, centre pairs ``_cc_i``/``_cc_j``, block pairs
+        (a, b, first). ``stop``: the first state at which a condition fails
+        that names no pair (the far limit, gaps not all positive; S when
+        none). A state passes :meth:`clear` exactly when no pair fails at
+        it and it is before ``stop``."""
+        n_s = len(dcc)
+        z = np.zeros(0, np.int64)
+        near = cc = (z, z)
+        easy = diag < self._g_min_nb
+        if not easy.all():
+            if self._near:
+                bad = self._near_bad(move, d, seg) & ~easy
+                rows = np.nonzero(bad.any(axis=1))[0]
+                near = (rows, np.argmax(bad[rows], axis=1))
+            if len(self._cc_i):
+                dd = move[self._cc_i] - move[self._cc_j]
+                bad = (np.einsum("mis,mis->ms", dd, dd) >= self._g_cc2[:, None]) & ~easy
+                rows = np.nonzero(bad.any(axis=1))[0]
+                cc = (rows, np.argmax(bad[rows], axis=1))
+        if not self._ensure_blocks():
+            return (near, cc, (z, z, z)), 0
+        far = dcc >= self._g_far
+        stop = int(np.argmax(far)) if far.any() else n_s
+        blocks = (z, z, z)
+        if len(self._gi) and stop:
+            bi, bj, bad = self._block_fails(x[:, :, :stop], move[:, :, :stop], float(diag[:stop].max()))
+            rows = np.nonzero(bad.any(axis=1))[0]
+            blocks = (bi[rows], bj[rows], np.argmax(bad[rows], axis=1))
+        return (near, cc, blocks), stop
+
+    def centre_pairs(self, near: np.ndarray, cc: np.ndarray, a: np.ndarray,
+                     b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The pairs of body centres (i <= j, unique) whose places make up
+        near element pairs ``near``, centre pairs ``cc`` and block pairs (a,
+        b): evaluating them evaluates every pair of places the conditions
+        of those pairs bound."""
+        i = [np.repeat(self._ne[near], 4) + np.tile([0, 0, 1, 1], len(near)),
+             self._cc_i[cc]]
+        j = [np.repeat(self._nf[near], 4) + np.tile([0, 1, 0, 1], len(near)),
+             self._cc_j[cc]]
+        if len(a):
+            k = np.arange(self.BLOCK + 1)
+            ia = (self._blk_start[a][:, None, None] + k[:, None]) + 0 * k[None, None, :]
+            jb = (self._blk_start[b][:, None, None] + k[None, None, :]) + 0 * k[:, None]
+            ok = (ia <= self._blk_last[a][:, None, None]) & (jb <= self._blk_last[b][:, None, None])
+            i.append(ia[ok])
+            j.append(jb[ok])
+        i, j = np.concatenate(i).astype(np.int64), np.concatenate(j).astype(np.int64)
+        n = len(self._pts)
+        key = np.unique(np.minimum(i, j) * n + np.maximum(i, j))
+        return key // n, key % n
+
+    def promote(self, near: np.ndarray, cc: np.ndarray, a: np.ndarray, b: np.ndarray) -> None:
+        """Leave near element pairs, centre pairs and block pairs out of
+        the bound until the next start (the caller evaluates their centre
+        pairs, :meth:`centre_pairs`, at every state)."""
+        if len(near):
+            self._g_near[near] = np.inf
+            self._g_near2[near] = np.inf
+        if len(cc):
+            self._g_cc[cc] = np.inf
+            self._g_cc2[cc] = np.inf
+        if len(a):
+            self._blk_done = np.union1d(self._blk_done, a * self._nb + b)
+        if len(near) or len(cc):
+            self._g_min_nb = min(float(self._g_cc.min(initial=np.inf)),
+                                 float(self._g_near.min(initial=np.inf)) if self._near else np.inf)
+
     def _blocks_clear(self, x: np.ndarray, move: np.ndarray, diag: float) -> np.ndarray:
         """The block-pair condition per state (S,) of x and move (N, 3, S);
         ``diag`` bounds every block pair's box (the largest diagonal)."""
+        return ~self._block_fails(x, move, diag)[2].any(axis=0)
+
+    def _block_fails(self, x: np.ndarray, move: np.ndarray,
+                     diag: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The block pairs (a, b) tested one by one and whether each fails
+        at each state ((M, S) bool); the others pass (:meth:`_blocks_clear`)."""
         s = x.shape[2]
+        z = np.zeros(0, np.int64)
+        none = (z, z, np.zeros((0, s), bool))
         # group pairs whose least gap exceeds every box pass whole
         cand = np.nonzero(self._g_grp <= diag)[0]
         if not len(cand):
-            return np.ones(s, bool)
+            return none
         box = self._block_boxes(move)
         glo = np.minimum.reduceat(box[0], self._grp_blocks, axis=0)
         ghi = np.maximum.reduceat(box[1], self._grp_blocks, axis=0)
@@ -378,20 +478,19 @@ class CablePairGaps:
         grp_ok = np.einsum("pis,pis->ps", rel, rel) < self._g_grp2[cand, None]
         fail = cand[~grp_ok.all(axis=1)]
         if not len(fail):
-            return np.ones(s, bool)
+            return none
         bi, bj, g2 = self._block_pairs(fail)                            # their block pairs
         rel = np.maximum(np.abs(box[1][bi] - box[0][bj]), np.abs(box[0][bi] - box[1][bj]))
         blk_ok = np.einsum("pis,pis->ps", rel, rel) < g2[:, None]
         if self._blk_rad is not None:
             bad = np.nonzero(~blk_ok.all(axis=1))[0]
             if len(bad):
-                # or apart now: spheres about the blocks' boxes of centres, at this state
+                # or apart now: the blocks' boxes of centres, at this state
                 lo, hi = self._block_boxes(x)
-                sphere = 0.5 * row_norm3(hi - lo) + self._blk_rad
-                centre = 0.5 * (lo + hi)
                 a, b = bi[bad], bj[bad]
-                blk_ok[bad] |= row_norm3(centre[a] - centre[b]) > sphere[a] + sphere[b]
-        return blk_ok.all(axis=0)
+                sep = np.maximum(np.maximum(lo[b] - hi[a], lo[a] - hi[b]), 0.0)
+                blk_ok[bad] |= row_norm3(sep) > self._blk_rad[a] + self._blk_rad[b]
+        return bi, bj, ~blk_ok
 
     def _block_boxes(self, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Componentwise least and largest of v (N, 3, S) over each block's
@@ -399,3 +498,10 @@ class CablePairGaps:
         last = v[self._blk_last]
         return (np.minimum(np.minimum.reduceat(v, self._blk_start, axis=0), last),
                 np.maximum(np.maximum.reduceat(v, self._blk_start, axis=0), last))
+
+
+def _box_distance(lo_a: np.ndarray, hi_a: np.ndarray, lo_b: np.ndarray, hi_b: np.ndarray) -> np.ndarray:
+    """Distance between axis-aligned boxes, row by row ((M, 3) corners): 0
+    where they overlap."""
+    sep = np.maximum(np.maximum(lo_b - hi_a, lo_a - hi_b), 0.0)
+    return row_norm(sep)

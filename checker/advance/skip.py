@@ -7,7 +7,10 @@ at once) against the conditions of the package docstring: cable pairs
 (:mod:`~checker.advance.structure`), part pairs
 (:mod:`~checker.advance.partpairs`), and here the elements' pieces and
 stretch. The pairs the caller evaluates itself (*active*) come back from
-:meth:`Advancement.start` as an :class:`Active` record.
+:meth:`Advancement.start` as an :class:`Active` record; with
+:meth:`Advancement.clear_run_local` the pairs whose bound fails later join
+them (*promoted*) instead of ending the run, up to a budget
+(:class:`Cleared`).
 
 Deliberately not here: the arithmetic of the three conditions, the checks
 themselves, any simulator.
@@ -44,6 +47,20 @@ class Active:
 
     structure: tuple[np.ndarray, np.ndarray]
     cable: tuple[np.ndarray, np.ndarray]
+
+
+@dataclass(frozen=True)
+class Cleared:
+    """A run of states :meth:`Advancement.clear_run_local` proved clear.
+
+    Attributes:
+        states: how many leading states are proven clear but for ``active``.
+        active: the pairs the caller evaluates itself at those states: the
+            start's, and those whose bound failed since (promoted).
+    """
+
+    states: int
+    active: Active
 
 
 class Advancement:
@@ -84,6 +101,11 @@ class Advancement:
         # per element: the limit (inf between cables) and 1 for a real element
         self._lim_all = np.where(self._valid, self._lim, np.inf)
         self._validf = self._valid.astype(float)
+        # the first element of every cable that has one: without radii the
+        # stretch is summed per cable (an arc length moves with its own
+        # cable's elements alone); with them over windows (see _stretch_runs)
+        self._cable_first = offsets[:-1][np.diff(offsets) >= 2]
+        self._run_last: np.ndarray | None = None
         rad = None if radius is None else np.asarray(radius, float)[cable_of_pt]
         box = None if part_box is None or radius is None else \
             (np.asarray(part_box[0], float)[:, None, :], np.asarray(part_box[1], float)[:, None, :])
@@ -93,6 +115,9 @@ class Advancement:
                               self.clearance, self.stretch)
         self._pairs = PartPairGaps(part_radius, clearance)
         self._ok = False
+        z = np.zeros(0, np.int64)
+        self._active = Active((z, z), (z, z))
+        self._promoted = 0
         self.full = 0
         self.skipped = 0
 
@@ -143,11 +168,13 @@ class Advancement:
         s_c = polyline_arc_lengths(np.where(self._valid, self._seg_raw, 0.0), self._offsets)
         horizon = gaps.horizon
         start = Start(self._pts, rot, pos, self._seg_raw, s_c, mu, float(horizon))
+        self._run_last = self._stretch_runs(s_c)
         candidates = gaps.part_candidates
         sparse = (candidates is not None and self._layout.box is not None and n > 1 and horizon > 0
                   and n * n_p > self.SPARSE_ENTRIES)
         self._parts = CentrePartGaps(self._layout, start)
         structure = self._parts.start(gap_part, candidates, active, sparse)
+        self._promoted = 0
         self._cable_pairs = gaps.cable_candidates is not None
         cable = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         if self._cable_pairs:
@@ -159,7 +186,128 @@ class Advancement:
         self._pairs.start(poses, pairs, pair_bound, mu)
         self._stretch = self.stretch - mu
         self._ok = cable_ok and self._parts.ok_at_start() and self._pairs.ok and self.stretch > mu
-        return Active(structure, cable)
+        self._active = Active(structure, cable)
+        return self._active
+
+    def clear_run_local(self, pts: np.ndarray, poses: np.ndarray, budget: int) -> Cleared:
+        """Like :meth:`clear_run`, but a pair whose own bound fails does not
+        end the run: it is *promoted*, left out of the bound until the next
+        start and handed to the caller with the active pairs, to evaluate
+        at every state of the run (as it evaluates the active pairs). A run
+        ends where a condition fails that names no pair (pieces, stretch,
+        part pairs, the cable pairs' far limit, a centre past the sparse
+        gaps' cap) or where the pairs promoted since the start would exceed
+        ``budget`` (centre-part pairs plus pairs of body centres, a block
+        pair counted as its (BLOCK + 1)^2 centre pairs): past that a full check
+        costs less than evaluating them. With ``budget`` 0 it counts what
+        :meth:`clear_run` counts.
+
+        Why it is sound: a state passes when every pair either passes its
+        bound (the package docstring) or is evaluated by the caller; a pair
+        promoted at a later state of the run is evaluated at the earlier
+        ones too (evaluating a pair that is clear adds no record).
+
+        Each condition is evaluated on runs of states of doubling length
+        (as :meth:`clear_run` does for the block pairs): a run that ends
+        early costs a state or two."""
+        if not self._ok or len(pts) == 0 or pts.shape[1] != len(self._pts):
+            return Cleared(0, self._active)
+        z = np.zeros(0, np.int64)
+        a, b, done, total = 0, 1, 0, len(pts)
+        structure, cable = [self._active.structure], [self._active.cable]
+        while a < total:
+            b = min(b, total)
+            x, move, dq, diag, dcc, d, seg = _states(pts[a:b], self._pts)
+            # the conditions that name no pair first: pieces, stretch, part pairs
+            pieces = element_pieces(seg, self._lim_all[:, None])
+            n = leading((pieces == self._pieces_all[:, None]).all(axis=0) & self._stretch_ok(seg))
+            dp = np.zeros((len(self._pos), n))
+            if n and len(self._pos):
+                dp = self._pairs.moves(poses[a:a + n]).T                   # (P, S)
+                n = leading(self._pairs.clear(dp))
+            if not n:
+                break
+            run = slice(0, n)
+            if self._cable_pairs:
+                (near, cc, blocks), stop = self._cable_gaps.failing(
+                    x[:, :, run], move[:, :, run], dcc[run], diag[run], d[:, :, run], seg[:, run])
+            else:
+                near = cc = (z, z)
+                blocks = (z, z, z)
+                stop = leading(dcc[run] < self._g_cable)
+            if len(self._pos):
+                centre, part, first, stop_p = self._parts.failing(x[:, :, run], poses[a:a + n], dq[:, run],
+                                                                  dp[:, run])
+                stop = min(stop, stop_p)
+            else:
+                centre = part = first = z
+            # pairs promoted per state, and the first state past the budget
+            per = (np.bincount(first, minlength=n) + 4 * np.bincount(near[1], minlength=n)
+                   + np.bincount(cc[1], minlength=n)
+                   + (CablePairGaps.BLOCK + 1) ** 2 * np.bincount(blocks[2], minlength=n))
+            over = self._promoted + np.cumsum(per) > budget
+            m = min(stop, int(np.argmax(over)) if over.any() else n)
+            take = first < m
+            self._parts.promote(centre[take], part[take])
+            structure.append((centre[take], part[take]))
+            if self._cable_pairs:
+                ne, cc_k, on = near[0][near[1] < m], cc[0][cc[1] < m], blocks[2] < m
+                self._cable_gaps.promote(ne, cc_k, blocks[0][on], blocks[1][on])
+                cable.append(self._cable_gaps.centre_pairs(ne, cc_k, blocks[0][on], blocks[1][on]))
+            self._promoted += int(per[:m].sum())
+            done = a + m
+            if m < b - a:
+                break
+            a, b = b, 2 * b + 1
+        self.skipped += done
+        if len(structure) > 1 or len(cable) > 1:
+            self._active = Active(_union(structure, len(self._pts)), _union(cable, len(self._pts)))
+        return Cleared(done, self._active)
+
+    def _stretch_runs(self, s_c: np.ndarray) -> np.ndarray | None:
+        """(N - 1,): for each element e the last element of the run [e, L]
+        whose total change of length the stretch condition bounds, or None
+        (no radii: whole cables).
+
+        Which runs matter. Self pairs: two places on elements e <= f of one
+        cable that were inside the exclusion window deeper than ``stretch``
+        at the start (so no candidate) had the elements between them shorter
+        in all than the window ``w = pi r + clearance``; their arc-length
+        separation changed by at most the change of elements e .. f. The
+        chord bound: the arc from centre e + 1 to centre f of a near pair (f
+        < e + 2 BLOCK) changed by at most that of elements e + 1 .. f - 1. So
+        L is the last element f of e's cable with ``s_c[f] - s_c[e + 1] < w
+        + stretch`` (widened: a longer run only bounds more), and at least e
+        + 2 BLOCK."""
+        rad = self._layout.rad
+        if rad is None or len(s_c) < 2:
+            return None
+        n = len(s_c)
+        e = np.arange(n - 1)
+        cable = self._layout.cable
+        last = self._offsets[cable[e] + 1] - 2                      # the cable's last element
+        w = np.pi * rad[e] + self.clearance + self.stretch
+        width = 2.0 * (float(s_c.max(initial=0.0)) + float(w.max(initial=0.0))) + 1.0
+        key = cable * width + s_c
+        reach = np.searchsorted(key, key[np.minimum(e + 1, n - 1)] + w + 1e-9 * width, "left") - 1
+        run = np.maximum(reach, e + 2 * CablePairGaps.BLOCK)
+        return np.where(self._valid, np.minimum(run, last), e)
+
+    def _stretch_ok(self, seg: np.ndarray) -> np.ndarray:
+        """Per state (S,): the stretch condition: the element lengths of
+        every run of :meth:`_stretch_runs` (without radii: of every cable)
+        changed by at most ``stretch`` in total since the start; seg (N - 1,
+        S) the element lengths (between cables too, left out). The runs'
+        sums are differences of one cumulative sum (its rounding, ~1e-16 of
+        all the changes, far below the margin)."""
+        change = self._validf[:, None] * np.abs(seg - self._seg_raw[:, None])
+        if self._run_last is not None:
+            total = np.concatenate([np.zeros((1, seg.shape[1])), np.cumsum(change, axis=0)])
+            runs = total[self._run_last + 1] - total[:-1]
+            return (runs < self._stretch).all(axis=0)
+        if not len(self._cable_first):
+            return np.ones(seg.shape[1], bool)
+        return (np.add.reduceat(change, self._cable_first, axis=0) < self._stretch).all(axis=0)
 
     def stop(self) -> None:
         """A full check ran without gaps: prove nothing until the next :meth:`start`."""
@@ -227,7 +375,7 @@ class Advancement:
             # joining two cables: limit inf, 1 piece at the start and now)
             pieces = element_pieces(seg, self._lim_all[:, None])
             ok = (pieces == self._pieces_all[:, None]).all(axis=0) & \
-                (self._validf @ np.abs(seg - self._seg_raw[:, None]) < self._stretch)
+                self._stretch_ok(seg)
             n = leading(ok)
         if n and len(self._pos):
             poses = poses[:n]
@@ -236,3 +384,32 @@ class Advancement:
             n = leading(ok)
         self.skipped += n
         return n
+
+
+def _union(pairs: list[tuple[np.ndarray, np.ndarray]], n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct pairs of a list of (first, second) arrays, sorted by
+    (second, first); ``n`` bounds the first."""
+    first = np.concatenate([np.asarray(p[0], np.int64) for p in pairs])
+    second = np.concatenate([np.asarray(p[1], np.int64) for p in pairs])
+    key = np.unique(second * n + first)
+    return key % n, key // n
+
+
+def _states(pts: np.ndarray, start: np.ndarray) -> tuple:
+    """What the conditions read of states pts (S, N, 3), the start's centres
+    ``start`` (N, 3): the centres laid out last x (N, 3, S), their moves
+    and the moves' lengths dq (N, S), the bounds on any two centres'
+    relative move (the bounding box's diagonal, and the least of it and
+    twice the largest dq) (S,), the elements d (N - 1, 3, S) and their
+    lengths (N - 1, S)."""
+    x = np.ascontiguousarray(np.transpose(pts, (1, 2, 0)))
+    move = x - start[:, :, None]
+    dq = row_norm3(move)
+    if len(move):
+        spread = move.max(axis=0) - move.min(axis=0)
+        diag = np.sqrt(np.einsum("is,is->s", spread, spread))
+        dcc = np.minimum(2.0 * dq.max(axis=0), diag)
+    else:
+        diag = dcc = np.zeros(x.shape[2])
+    d = x[1:] - x[:-1]
+    return x, move, dq, diag, dcc, d, row_norm3(d)

@@ -6,7 +6,9 @@ it, or where there is none the larger of the horizon and the elements'
 floor (their boxes' distance from the part's box in its frame). Kept as a
 dense (centres x parts) table, or for large scenes as sparse entries below
 ``FAR_HORIZONS`` horizons found through a k-d tree. :meth:`CentrePartGaps.clear`
-tests many states at once, in each part's own frame and in the world.
+tests many states at once, in each part's own frame and in the world;
+:meth:`CentrePartGaps.failing` names the pairs that fail and
+:meth:`CentrePartGaps.promote` leaves them to the caller.
 
 Deliberately not here: cable pairs, part pairs, the run of states
 (:class:`checker.advance.skip.Advancement`).
@@ -52,6 +54,7 @@ class CentrePartGaps:
         :meth:`checker.advance.skip.Advancement.start`. Returns the active
         (centre, part) pairs."""
         self._sparse = sparse
+        self._promoted = np.zeros(0, np.int64)                  # sparse: part * N + centre keys
         horizon, mu = self._horizon, self._mu
         if sparse:
             return self._start_sparse(gap_part, horizon, candidates, active, mu)
@@ -141,28 +144,62 @@ class CentrePartGaps:
         return structure
 
     def _ensure_sparse(self) -> bool:
-        """Every sparse entry of the last start (once); True when all gaps are positive."""
+        """The sparse entries of the last start that are cheap (once): the
+        candidates and the unbounded parts' floors; the bounded parts'
+        floors come per centre, when a centre first needs them
+        (:meth:`_refine`). True when all gaps are positive."""
         if not self._sp_ready:
             gap_part, horizon, candidates, rest, mu = self._sp_rest
-            part, rows, val = self._sparse_entries(gap_part, horizon, candidates, rest)
+            part, rows, val = self._sparse_entries(gap_part, horizon, candidates, rest,
+                                                   elem=np.zeros(0, np.int64))
             p0, r0, g0 = self._sp_first
             self._sp_part = np.concatenate([p0, part])
             self._sp_row = np.concatenate([r0, rows])
             self._sp_g = np.concatenate([g0, val - mu])
+            self._sp_done = ~self._valid.copy()                 # elements whose floors are listed
             self._sp_ready = True
             self._sp_ok = bool(np.all(self._sp_g > 0)) and self._sp_cap > 0
         return self._sp_ok
 
+    def _refined(self) -> np.ndarray:
+        """(N,) bool: centres both of whose elements have their floors listed."""
+        done = self._sp_done
+        out = np.ones(len(self._pts), bool)
+        out[:-1] &= done
+        out[1:] &= done
+        return out
+
+    def _refine(self, centres: np.ndarray) -> None:
+        """List the bounded parts' floors of the elements next to ``centres``
+        (their gaps then as in :meth:`_start_sparse`)."""
+        n = len(self._pts)
+        e = np.concatenate([centres - 1, centres])
+        e = np.unique(e[(e >= 0) & (e < n - 1)])
+        e = e[~self._sp_done[e]]
+        if not len(e):
+            return
+        gap_part, horizon, candidates, rest, mu = self._sp_rest
+        part, rows, val = self._sparse_entries(gap_part, horizon, candidates, rest, elem=e, lazy=True)
+        self._sp_part = np.concatenate([self._sp_part, part])
+        self._sp_row = np.concatenate([self._sp_row, rows])
+        self._sp_g = np.concatenate([self._sp_g, val - mu])
+        self._sp_done[e] = True
+        self._sp_cache = {}
+
     def _sparse_entries(self, gap_part: np.ndarray, horizon: float, candidates: tuple[np.ndarray, ...],
-                        only: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                        only: np.ndarray, elem: np.ndarray | None = None,
+                        lazy: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(part, centre, gap) entries below the cap of the parts ``only`` (P,) bool
-        (see :meth:`_start_sparse`), the least per pair, sorted by part."""
+        (see :meth:`_start_sparse`), the least per pair, sorted by part.
+        ``elem``: the elements whose bounded parts' floors are listed (None:
+        all); ``lazy``: those floors alone (no candidates, no unbounded parts)."""
         pts, n = self._pts, len(self._pts)
         cap = self.FAR_HORIZONS * horizon
         checked = np.isfinite(gap_part)
         box_lo, box_hi = self._box[0][:, 0], self._box[1][:, 0]
         seg = np.where(self._valid, self._seg_raw, 0.0)
-        elem = np.nonzero(self._valid)[0]
+        every = np.nonzero(self._valid)[0]
+        elem = every if elem is None else elem
         mid = 0.5 * (pts[elem] + pts[elem + 1])
         bounded = checked & only & np.isfinite(self._rho)
         e_list, k_list = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
@@ -170,15 +207,16 @@ class CentrePartGaps:
             reach = (cap + np.sqrt(3.0) * 0.5 * float(seg.max()) + float(self._rad.max()) + self.clearance
                      + 1e-9 * (1.0 + float(np.abs(pts).max())))
             kb = np.nonzero(bounded)[0]
-            found = cKDTree(mid).query_ball_point(self._pos[kb], reach + self._rho[kb])
-            count = np.array([len(f) for f in found], np.int64)
-            if count.sum():
-                e_list.append(elem[np.concatenate([np.asarray(f, np.int64) for f in found if len(f)])])
-                k_list.append(np.repeat(kb, count))
+            # every (part, midpoint) pair within the largest radius, then each part's own
+            found = cKDTree(self._pos[kb]).sparse_distance_matrix(
+                cKDTree(mid), reach + float(self._rho[kb].max()), output_type="ndarray")
+            on = found["v"] <= reach + self._rho[kb[found["i"]]]
+            e_list.append(elem[found["j"][on].astype(np.int64)])
+            k_list.append(kb[found["i"][on].astype(np.int64)])
         unbounded = np.nonzero(checked & only & ~np.isfinite(self._rho))[0]
-        if len(unbounded) and len(elem):
-            e_list.append(np.tile(elem, len(unbounded)))
-            k_list.append(np.repeat(unbounded, len(elem)))
+        if len(unbounded) and len(every) and not lazy:
+            e_list.append(np.tile(every, len(unbounded)))
+            k_list.append(np.repeat(unbounded, len(every)))
         e, k = np.concatenate(e_list), np.concatenate(k_list)
         # F[e, k] as _floor computes it (the element's ends in the part's frame)
         rot, pos = self._rot[k], self._pos[k]
@@ -190,7 +228,7 @@ class CentrePartGaps:
         part = np.concatenate([k, k])
         val = np.maximum(horizon, np.concatenate([f, f]))
         cab, s, c_part, value = candidates
-        if len(value):
+        if len(value) and not lazy:
             lo, hi = self._bracket(cab, s)
             count = hi - lo + 1
             rows = np.concatenate([rows, ranges(lo, count)])
@@ -199,10 +237,12 @@ class CentrePartGaps:
         keep = checked[part] & only[part] & (val < cap)
         rows, part, val = rows[keep], part[keep], val[keep]
         key = part * n + rows
-        o = np.lexsort((val, key))
+        o = np.argsort(key)
         key, val = key[o], val[o]
-        first = np.r_[len(key) > 0, key[1:] != key[:-1]][:len(key)]
-        key, val = key[first], val[first]                       # the least per (part, centre)
+        first = np.flatnonzero(np.r_[len(key) > 0, key[1:] != key[:-1]][:len(key)])
+        if len(first):
+            val = np.minimum.reduceat(val, first)                # the least per (part, centre)
+        key = key[first]
         part, rows = key // n, key % n
         return part, rows, val
 
@@ -224,6 +264,75 @@ class CentrePartGaps:
         """:func:`~checker.advance.common.bracket` at the start's arc lengths."""
         return bracket(self._s_c, self._cable, self._offsets, cab, s)
 
+    def failing(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray,
+                dp: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """The (centre, part) pairs whose condition fails at some of the
+        states (x (N, 3, S), poses, dq (N, S), dp (P, S) as for :meth:`clear`):
+        (centre, part, first failing state) arrays, and the first state at
+        which a condition fails that names no pair (a centre moved past the
+        sparse gaps' cap, or their gaps are not all positive; S when none).
+        The state passes :meth:`clear` exactly when no pair fails at it and
+        it is before that state."""
+        s = x.shape[2]
+        if self._sparse:
+            return self._failing_sparse(x, poses, dq, dp)
+        top = np.transpose(poses[:, :, :3, :], (1, 3, 2, 0)).reshape(len(dp), 4, 3 * s)
+        w = np.matmul(self._u0h, top).reshape(len(dp), len(x), 3, s)
+        w -= x
+        bad = np.einsum("knis,knis->kns", w, w) >= self._g2[:, :, None]
+        if bad.any():
+            bad &= (dq + dp[:, None, :]) >= self._g_kn[:, :, None]
+        k, i = np.nonzero(bad.any(axis=2))
+        return i, k, np.argmax(bad[k, i], axis=1), s
+
+    def _failing_sparse(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray,
+                        dp: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """:meth:`failing` on the sparse gaps (as :meth:`_parts_clear_sparse`)."""
+        s = x.shape[2]
+        z = np.zeros(0, np.int64)
+        if not self._ensure_sparse():
+            return z, z, z, 0
+        g_still, mk, u0h, g_kn, g2, still, still_cap = self._tables_for(x, poses, dq, dp)
+        centre, part, first = [z], [z], [z]
+        over = dq >= g_still[:, None]                                # (N, S)
+        stop = s
+        rows = np.nonzero(over.any(axis=1))[0]
+        if len(rows):
+            # a centre past the cap of the unlisted pairs names no pair
+            cap = dq[rows] >= still_cap
+            if cap.any():
+                stop = int(np.argmax(cap.any(axis=0)))
+            # the listed entries of the centres over their least gap
+            e_row, e_part, e_g = still
+            lo = np.searchsorted(e_row, rows, "left")
+            cnt = np.searchsorted(e_row, rows, "right") - lo
+            at = ranges(lo, cnt)
+            bad = dq[e_row[at]] >= e_g[at, None]
+            hit = bad.any(axis=1)
+            centre.append(e_row[at][hit])
+            part.append(e_part[at][hit])
+            first.append(np.argmax(bad[hit], axis=1))
+        if len(mk):
+            bad = self._moved_bad(x, poses, dq, dp[mk], mk, u0h, g_kn, g2)
+            k, i = np.nonzero(bad.any(axis=2))
+            centre.append(i)
+            part.append(mk[k])
+            first.append(np.argmax(bad[k, i], axis=1))
+        return np.concatenate(centre), np.concatenate(part), np.concatenate(first), stop
+
+    def promote(self, centre: np.ndarray, part: np.ndarray) -> None:
+        """Leave (centre, part) pairs out of the bound from now until the
+        next start: the caller evaluates them itself at every state."""
+        if not len(centre):
+            return
+        if self._sparse:
+            self._promoted = np.union1d(self._promoted, part * len(self._pts) + centre)
+            self._sp_cache = {}
+            return
+        self._g_pt[centre, part] = np.inf
+        self._g_kn[part, centre] = np.inf
+        self._g2[part, centre] = np.inf
+
     def clear(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray) -> np.ndarray:
         """Cable-structure and keep-out conditions per state (S,); x (N, 3, S)
         the centres, dq (N, S) their displacements, dp (P, S) the parts'."""
@@ -240,6 +349,76 @@ class CentrePartGaps:
             bad &= (dq + dp[:, None, :]) >= self._g_kn[:, :, None]
         return ~bad.reshape(-1, s).any(axis=0)
 
+    def _sparse_tables(self, moved: np.ndarray) -> tuple:
+        """For the parts that did not move (``~moved``, (P,) bool): each
+        centre's least gap; for the parts that moved: their indices, the
+        centres in their frames (homogeneous), the gaps (K, N) and their
+        squares; the listed entries against parts that did not move as
+        (centre, part, gap) sorted by centre, and the gap of the unlisted
+        pairs against them (the cap). Promoted pairs are left out
+        (gap inf). Kept per set of moving parts."""
+        tag = moved.tobytes()
+        if tag not in self._sp_cache:
+            n = len(self._pts)
+            part, row, g = self._sp_part, self._sp_row, self._sp_g
+            if len(self._promoted):
+                g = np.where(np.isin(part * n + row, self._promoted), np.inf, g)
+            still = ~moved[part]
+            still_cap = float(self._sp_default[~moved].min(initial=np.inf))
+            # a centre whose floors are not listed yet: the horizon (every
+            # floor's gap max(H, F) is at least that)
+            coarse = ~self._refined()
+            near = self._horizon - self._mu
+            g_still = np.full(n, still_cap)
+            g_still[coarse] = min(still_cap, near)
+            np.minimum.at(g_still, row[still], g[still])
+            o = np.argsort(row[still], kind="stable")
+            entries = (row[still][o], part[still][o], g[still][o])
+            mk = np.nonzero(moved)[0]
+            col = np.full(len(moved), -1, np.int64)
+            col[mk] = np.arange(len(mk))
+            g_kn = np.repeat(self._sp_default[mk][:, None], n, axis=1)
+            g_kn[:, coarse] = np.minimum(g_kn[:, coarse], near)
+            on = ~still
+            np.minimum.at(g_kn, (col[part[on]], row[on]), g[on])
+            if len(self._promoted):
+                pk, pc = self._promoted // n, self._promoted % n
+                m = col[pk] >= 0
+                g_kn[col[pk[m]], pc[m]] = np.inf
+            u0 = (self._pts[None] - self._pos[mk, None]) @ self._rot[mk]
+            u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
+            g2 = np.where(g_kn > 0, g_kn, 0.0) ** 2
+            self._sp_cache = {tag: (g_still, mk, u0h, g_kn, g2, entries, still_cap)}
+        return self._sp_cache[tag]
+
+    def _tables_for(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray) -> tuple:
+        """:meth:`_sparse_tables` for these states, after listing the floors
+        of every centre that fails its coarse gap (the horizon) at one of
+        them: a centre's test then is what the whole table's would be."""
+        moved = (dp > 0).any(axis=1)
+        tables = self._sparse_tables(moved)
+        g_still, mk, u0h, g_kn, g2 = tables[:5]
+        need = (dq >= g_still[:, None]).any(axis=1)
+        if len(mk):
+            need |= self._moved_bad(x, poses, dq, dp[mk], mk, u0h, g_kn, g2).any(axis=(0, 2))
+        need &= ~self._refined()
+        if need.any():
+            self._refine(np.nonzero(need)[0])
+            tables = self._sparse_tables(moved)
+        return tables
+
+    def _moved_bad(self, x, poses, dq, dp, mk, u0h, g_kn, g2) -> np.ndarray:
+        """(K, N, S): centre n fails against moved part mk[k] at state s
+        (``rel`` and the world bound both at or past the gap)."""
+        s = x.shape[2]
+        top = np.transpose(poses[:, mk, :3, :], (1, 3, 2, 0)).reshape(len(mk), 4, 3 * s)
+        w = np.matmul(u0h, top).reshape(len(mk), len(x), 3, s)
+        w -= x
+        bad = np.einsum("knis,knis->kns", w, w) >= g2[:, :, None]
+        if bad.any():
+            bad &= (dq + dp[:, None, :]) >= g_kn[:, :, None]
+        return bad
+
     def _parts_clear_sparse(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray) -> np.ndarray:
         """:meth:`clear` on the sparse gaps: parts that did not move in
         these states (dp 0, so ``rel`` is ``dq``) reduce to one least gap per
@@ -248,31 +427,9 @@ class CentrePartGaps:
         s = x.shape[2]
         if not self._ensure_sparse():
             return np.zeros(s, bool)
-        moved = (dp > 0).any(axis=1)
-        tag = moved.tobytes()
-        if tag not in self._sp_cache:
-            n = len(self._pts)
-            still = ~moved[self._sp_part]
-            g_still = np.full(n, float(self._sp_default[~moved].min(initial=np.inf)))
-            np.minimum.at(g_still, self._sp_row[still], self._sp_g[still])
-            mk = np.nonzero(moved)[0]
-            col = np.full(len(moved), -1, np.int64)
-            col[mk] = np.arange(len(mk))
-            g_kn = np.repeat(self._sp_default[mk][:, None], n, axis=1)
-            on = ~still
-            np.minimum.at(g_kn, (col[self._sp_part[on]], self._sp_row[on]), self._sp_g[on])
-            u0 = (self._pts[None] - self._pos[mk, None]) @ self._rot[mk]
-            u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
-            g2 = np.where(g_kn > 0, g_kn, 0.0) ** 2
-            self._sp_cache = {tag: (g_still, mk, u0h, g_kn, g2)}
-        g_still, mk, u0h, g_kn, g2 = self._sp_cache[tag]
+        g_still, mk, u0h, g_kn, g2, _, _ = self._tables_for(x, poses, dq, dp)
         ok = (dq < g_still[:, None]).all(axis=0)
         if len(mk):
-            top = np.transpose(poses[:, mk, :3, :], (1, 3, 2, 0)).reshape(len(mk), 4, 3 * s)
-            w = np.matmul(u0h, top).reshape(len(mk), len(x), 3, s)
-            w -= x
-            bad = np.einsum("knis,knis->kns", w, w) >= g2[:, :, None]
-            if bad.any():
-                bad &= (dq + dp[mk][:, None, :]) >= g_kn[:, :, None]
-            ok &= ~bad.reshape(-1, s).any(axis=0)
+            ok &= ~self._moved_bad(x, poses, dq, dp[mk], mk, u0h, g_kn, g2).reshape(-1, s).any(axis=0)
         return ok
+
