@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.advance import Advancement, part_pair_bounds
+from checker.advance import Advancement, PartSolids, part_pair_bounds
 from checker.cable import CableMeasures, taut_margin
 from checker.events import AllowList, AllowRule
 from checker.interference import Checker, single_records_many
@@ -169,8 +169,13 @@ class StepChecks:
             box_lo = np.full((len(built.parts), 3), -np.inf)
             box_hi = np.full((len(built.parts), 3), np.inf)
             box_lo[checked], box_hi[checked] = self.checker.part_bounds()
+            # part pairs: boxes holding both what the part-part check and the cable check measure
+            solid_lo, solid_hi = rigid.lo.copy(), rigid.hi.copy()
+            solid_lo[checked] = np.minimum(solid_lo[checked], box_lo[checked])
+            solid_hi[checked] = np.maximum(solid_hi[checked], box_hi[checked])
             self.advance = Advancement(offsets, config.spacing * radii, rho, config.clearance,
-                                       self.stretch, radii, (box_lo, box_hi))
+                                       self.stretch, radii, (box_lo, box_hi),
+                                       PartSolids(solid_lo, solid_hi, rigid.axial, rigid.error))
             self._moving_pairs = self.part_checker.moving_pairs()
             self._checked_index = np.nonzero(checked)[0]
             self._checker_index = np.cumsum(checked) - 1          # built part -> checker part
