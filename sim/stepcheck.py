@@ -292,10 +292,12 @@ class StepChecks:
                 records = [a + b for a, b in zip(found, records)]
         active = self.part_checker.check_pairs_many(poses, *self._part_active) if len(self._part_active[0]) \
             else [[] for _ in range(n)]
+        same = self.part_checker.replay_many(poses) if self.part_checker.has_same_body_records \
+            else [[] for _ in range(n)]
         out = []
-        for state, recs, st, bd, found in zip(states, records, strain, bend, active):
+        for recs, st, bd, found, static in zip(records, strain, bend, active, same):
             cable_records = self._focus(recs)
-            part_records = self._same_body_records(state.part_poses) + found
+            part_records = static + found
             out.append(StepResult(cable_records + part_records, cable_records, st, bd, False))
         return out
 
