@@ -372,6 +372,10 @@ class PartChecker:
         gives those pairs."""
         if not len(i):
             return []
+        fast = self._primitive_pairs_many(np.asarray(poses, float)[None], np.asarray(i, np.int64),
+                                          np.asarray(j, np.int64))
+        if fast is not None:
+            return fast[0]
         return check_parts(self.parts, self.parts.place(poses), self.clearance, self.focus, pairs=(i, j))
 
     def check_pairs_many(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray) -> list[list[Interference]]:

@@ -127,6 +127,31 @@ def test_a_panel_swinging_round_a_knuckle(hinge):
             assert gaps.clear_at(now) == (reach < 13.0 - 1e-6) or abs(reach - 13.0) < 1e-6
 
 
+def test_a_floor_tilted_with_a_box_on_it_moves_nothing_relative_to_it():
+    """A floor plane and a box 2 above it, tilted and carried together: the
+    plane turned (its world move unbounded), the box did not move in the
+    plane's frame; lifted 1 more in that frame it is still clear, sunk by
+    1.95 it is not (clearance 0.1)."""
+    ps = PartSet.build(["floor", "box"], [Shape(ShapeType.PLANE, []), Shape(ShapeType.BOX, [0.5, 0.5, 0.5])])
+    start = np.tile(np.eye(4), (2, 1, 1))
+    start[1, 2, 3] = 2.5
+    carry = _turn_z(0.7)
+    carry[:3, :3] = carry[:3, :3] @ np.array([[1, 0, 0], [0, np.cos(0.4), -np.sin(0.4)], [0, np.sin(0.4), np.cos(0.4)]])
+    carry[:3, 3] = [3.0, 1.0, -2.0]
+    gaps = _gaps(ps, start, 0.1)
+    assert gaps.ok and np.isinf(gaps.moves(carry @ start)[0])
+    for lift, clear in ((0.0, True), (1.0, True), (-1.95, False)):
+        now = carry @ start
+        now[1] = carry @ _lift(start[1], lift)
+        assert gaps.clear_at(now) == clear
+
+
+def _lift(pose: np.ndarray, dz: float) -> np.ndarray:
+    out = pose.copy()
+    out[2, 3] += dz
+    return out
+
+
 def test_parts_moving_together_move_nothing_relative_to_each_other():
     """Two boxes 1 apart carried together by a large rigid motion: the world
     moves add up to far more than the gap, the relative move is 0."""

@@ -257,9 +257,9 @@ def test_moving_pairs_equal_all_pairs_filtered(seed):
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_pairs_at_many_states_are_each_states_own_check(seed):
     """check_pairs_many on primitive pairs (one call for every state) and on
-    pairs with a mesh (laid out once per state): each state's records are
-    what check_pairs gives it alone, places bit for bit; keep-out zones and
-    a focus included."""
+    pairs with a mesh (laid out once per state), and check_pairs: each
+    state's records are what the part-part check of those pairs gives it
+    alone, places bit for bit; keep-out zones and a focus included."""
     rng = np.random.default_rng(seed)
     kinds = [ShapeType.BOX, ShapeType.SPHERE, ShapeType.CYLINDER, ShapeType.CAPSULE, ShapeType.ELLIPSOID]
     with_mesh = seed == 2
@@ -281,9 +281,10 @@ def test_pairs_at_many_states_are_each_states_own_check(seed):
         many = pc.check_pairs_many(batch, i, j)
         found = 0
         for poses, got in zip(batch, many):
-            want = pc.check_pairs(poses, i, j)
-            assert [(r.type, r.a, r.b, r.min_distance, r.severity) for r in got] == \
-                [(r.type, r.a, r.b, r.min_distance, r.severity) for r in want]
-            assert all(np.array_equal(g.where, w.where) for g, w in zip(got, want))
+            want = check_parts(ps, ps.place(poses), 0.05, focus, pairs=(i, j))
+            for recs in (got, pc.check_pairs(poses, i, j)):
+                assert [(r.type, r.a, r.b, r.min_distance, r.severity) for r in recs] == \
+                    [(r.type, r.a, r.b, r.min_distance, r.severity) for r in want]
+                assert all(np.array_equal(g.where, w.where) for g, w in zip(recs, want))
             found += len(got)
         assert found > 5

@@ -74,10 +74,20 @@ class PartSolids:
     error: np.ndarray
 
 
+def _turned_z(v: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
+    """Points v (..., 3) turned about z by the angle of (cos, sin) (broadcast to v[..., 0])."""
+    out = np.empty(np.broadcast_shapes(v.shape, cos.shape[:-1] + (3,)))
+    x, y = v[..., 0], v[..., 1]
+    out[..., 0] = cos[..., 0] * x - sin[..., 0] * y
+    out[..., 1] = sin[..., 0] * x + cos[..., 0] * y
+    out[..., 2] = v[..., 2]
+    return out
+
+
 def _corner_moves(d_rot: np.ndarray, d_pos: np.ndarray, corners: np.ndarray) -> np.ndarray:
     """(n,): the largest ``|d_rot c + d_pos|`` over the corners c (n, 8, 3)
     for d_rot (n, 3, 3), d_pos (n, 3)."""
-    v = np.einsum("nij,nkj->nki", d_rot, corners) + d_pos[:, None, :]
+    v = corners @ np.swapaxes(d_rot, -1, -2) + d_pos[:, None, :]
     return np.sqrt(np.einsum("nki,nki->nk", v, v).max(axis=1))
 
 
@@ -106,7 +116,8 @@ class PartPairGaps:
       relative pose about that axis by the angle ``phi`` that best undoes
       its turn since the start, ``Rz(phi) ~ Q0 Q^T`` (a door knuckle turning
       on a hinge pin, a panel swinging round the knuckle's axis: nothing
-      moves). The distance of the true shapes is the same at both poses;
+      moves); the corners of the other part's box are turned (a part
+      without a box keeps the radius bound, not turned). The distance of the true shapes is the same at both poses;
       the check measures a curved part's inscribed tessellation less its
       error, at most ``error[i] + error[j]`` below the true distance, so
       this bound is held to ``g - error[i] - error[j]``.
@@ -130,15 +141,14 @@ class PartPairGaps:
         self._plane = ~np.isfinite(self._rho)
         self._axial = np.zeros(n, bool) if solids is None else np.asarray(solids.axial, bool)
         self._error = np.zeros(n) if solids is None else np.asarray(solids.error, float)
-        self._corners = None
         self._boxed = np.zeros(n, bool)
+        self._corners = np.zeros((n, 8, 3))                            # (P, 8, 3), 0 where unboxed
         if solids is not None:
             lo, hi = np.asarray(solids.lo, float), np.asarray(solids.hi, float)
             self._boxed = np.isfinite(lo).all(axis=1) & np.isfinite(hi).all(axis=1)
             pick = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], bool)
-            box = np.where(self._boxed[:, None], 1.0, 0.0)[:, :, None] * np.stack([lo, hi], axis=1)
-            box = np.nan_to_num(box)                                   # (P, 2, 3), 0 where unboxed
-            self._corners = np.where(pick[None], box[:, 1][:, None], box[:, 0][:, None])   # (P, 8, 3)
+            box = np.where(self._boxed[:, None, None], np.stack([lo, hi], axis=1), 0.0)
+            self._corners = np.where(pick[None], box[:, 1][:, None], box[:, 0][:, None])
         # the frame part of a pair: a plane first, then an axial part
         self._rank = np.where(self._plane, 2, np.where(self._axial, 1, 0))
         self.clearance = float(clearance)
@@ -161,8 +171,9 @@ class PartPairGaps:
         self._f, self._m = np.where(swap, pj, pi), np.where(swap, pi, pj)
         self._turn = self._axial[self._f] & ~self._plane[self._f]
         self._g_rel = self._g_pair - np.where(self._turn, self._error[pi] + self._error[pj], 0.0)
-        self._q0, self._s0 = self._relative(self._poses[None], np.arange(len(pi)))
-        self._q0, self._s0 = self._q0[0], self._s0[0]
+        q0, s0, c0 = self._relative(self._poses[None], np.arange(len(pi)))
+        self._q0, self._s0, self._c0 = q0[0], s0[0], c0[0]
+        self._q0_sin = np.stack([self._q0[:, 1], -self._q0[:, 0]], axis=1)   # M10 - M01 against Q's top rows
 
     def stop(self) -> None:
         """Prove nothing until the next :meth:`start`."""
@@ -176,51 +187,51 @@ class PartPairGaps:
         fro = np.sqrt(np.einsum("...ij,...ij->...", d_rot, d_rot))
         dp = np.sqrt(np.einsum("...i,...i->...", d_pos, d_pos))
         dp += np.multiply(fro, self._rho, out=np.zeros_like(fro), where=fro > 0)   # plane turned: inf
-        if self._corners is not None:
+        if self._boxed.any():
             turned = (fro > 0) & self._boxed
             if turned.any():
                 at = np.nonzero(turned)
                 dp[at] = np.minimum(dp[at], _corner_moves(d_rot[at], d_pos[at], self._corners[at[-1]]))
         return dp
 
-    def _relative(self, poses: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(Q (S, n, 3, 3), s (S, n, 3)): the other part's pose in the frame
-        part's frame for pairs ``rows`` (n,) at poses (S, P, 4, 4)."""
+    def _relative(self, poses: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(Q (S, n, 3, 3), s (S, n, 3), corners (S, n, 8, 3)): the other
+        part's pose and its box's corners in the frame part's frame, for
+        pairs ``rows`` (n,) at poses (S, P, 4, 4)."""
         f, m = self._f[rows], self._m[rows]
         pf, pm = poses[:, f], poses[:, m]
-        rf = pf[..., :3, :3]
-        q = np.einsum("snji,snjk->snik", rf, pm[..., :3, :3])
-        s = np.einsum("snji,snj->sni", rf, pm[..., :3, 3] - pf[..., :3, 3])
-        return q, s
+        rft = np.swapaxes(pf[..., :3, :3], -1, -2)
+        q = rft @ pm[..., :3, :3]
+        s = (rft @ (pm[..., :3, 3] - pf[..., :3, 3])[..., None])[..., 0]
+        return q, s, self._corners[m][None] @ np.swapaxes(q, -1, -2) + s[..., None, :]
 
     def _relative_moves(self, poses: np.ndarray, rows: np.ndarray) -> np.ndarray:
         """(n, S): the ``rel`` bound (class docstring) of pairs ``rows`` at poses (S, P, 4, 4)."""
-        q, s = self._relative(poses, rows)
-        q0, s0 = self._q0[rows], self._s0[rows]
+        q, s, c = self._relative(poses, rows)
+        q0 = self._q0[rows]
         turn = self._turn[rows]
-        if turn.any():
-            # Rz(phi) nearest Q0 Q^T: cos and sin along (M00 + M11, M10 - M01)
-            mq = np.einsum("nij,snkj->snik", q0, q)
-            c, sn = mq[..., 0, 0] + mq[..., 1, 1], mq[..., 1, 0] - mq[..., 0, 1]
-            ln = np.hypot(c, sn)
-            use = turn[None] & (ln > 0)
-            c = np.where(use, c / np.where(use, ln, 1.0), 1.0)
-            sn = np.where(use, sn / np.where(use, ln, 1.0), 0.0)
-            x, y = q[..., 0, :], q[..., 1, :]
-            q = np.stack([c[..., None] * x - sn[..., None] * y, sn[..., None] * x + c[..., None] * y,
-                          q[..., 2, :]], axis=-2)
-            s = np.stack([c * s[..., 0] - sn * s[..., 1], sn * s[..., 0] + c * s[..., 1], s[..., 2]], axis=-1)
-        dq = q - q0
-        fro = np.sqrt(np.einsum("snij,snij->sn", dq, dq))
-        ds = s - s0
-        out = np.sqrt(np.einsum("sni,sni->sn", ds, ds))
         m = self._m[rows]
-        out += np.multiply(fro, self._rho[m], out=np.zeros_like(fro), where=fro > 0)
-        if self._corners is not None:
-            turned = (fro > 0) & self._boxed[m][None]
-            if turned.any():
-                at = np.nonzero(turned)
-                out[at] = np.minimum(out[at], _corner_moves(dq[at], ds[at], self._corners[m[at[1]]]))
+        loose = np.flatnonzero(~self._boxed[m])
+        if turn.any():
+            # Rz(phi) nearest M = Q0 Q^T: cos and sin along (M00 + M11, M10 - M01)
+            top = q[..., :2, :]
+            cos = np.einsum("nak,snak->sn", q0[:, :2], top)
+            sin = np.einsum("nak,snak->sn", self._q0_sin[rows], top)
+            ln = np.hypot(cos, sin)
+            use = turn[None] & (ln > 0)
+            ln = np.where(use, ln, 1.0)
+            cos = np.where(use, cos / ln, 1.0)[..., None, None]
+            sin = np.where(use, sin / ln, 0.0)[..., None, None]
+            c = _turned_z(c, cos, sin)
+        d = c - self._c0[rows]
+        out = np.sqrt(np.einsum("snki,snki->snk", d, d).max(axis=2))              # boxed: the corners'
+        if len(loose):                                  # no box: the radius bound, not turned (sound too)
+            dq = q[:, loose] - q0[loose]
+            fro = np.sqrt(np.einsum("snij,snij->sn", dq, dq))
+            ds = s[:, loose] - self._s0[rows[loose]]
+            far = np.sqrt(np.einsum("sni,sni->sn", ds, ds))
+            far += np.multiply(fro, self._rho[m[loose]], out=np.zeros_like(fro), where=fro > 0)
+            out[:, loose] = far
         return out.T
 
     def _pair_ok(self, dp: np.ndarray, poses: np.ndarray) -> np.ndarray:
