@@ -346,7 +346,10 @@ def _parallel_cylinders(ka, sa, ra, pa, kb, sb, rb, pb):
     support points along the normal of ``A - B`` nearest the origin."""
     axis_a, axis_b = ra[:, :, 2], rb[:, :, 2]
     cos = np.abs(np.einsum("ni,ni->n", axis_a, axis_b))
-    sin = _norm(np.cross(axis_a, axis_b), axis=1)
+    a0, a1, a2 = axis_a[:, 0], axis_a[:, 1], axis_a[:, 2]
+    b0, b1, b2 = axis_b[:, 0], axis_b[:, 1], axis_b[:, 2]
+    cx, cy, cz = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0     # a x b
+    sin = np.sqrt(cx * cx + cy * cy + cz * cz)
     ok = sin <= PARALLEL_SIN
     cap = ka == 2
     rad_b = sb[:, 0] + sb[:, 1] * sin
