@@ -349,6 +349,10 @@ class PartChecker:
         self._skip = np.zeros((n, n), bool) if skip is None else np.asarray(skip, bool)
         self._static: tuple[list[Interference], np.ndarray, np.ndarray] | None = None
         self._tiled: dict[tuple, PartSet] = {}
+        # the oriented-box test's centres and grown half extents, per part (see _boxes_overlap)
+        flat = parts.plane[:, None]                                  # (planes: never boxed)
+        self._mid = 0.5 * (np.where(flat, 0.0, parts.lo) + np.where(flat, 0.0, parts.hi))
+        self._grown = parts.half() + 0.5 * clearance
 
     def check(self, poses: np.ndarray) -> list[Interference]:
         """Records for poses (P, 4, 4)."""
@@ -433,8 +437,7 @@ class PartChecker:
         rot_a, rot_b = poses[:, i, :3, :3].reshape(-1, 3, 3), poses[:, j, :3, :3].reshape(-1, 3, 3)
         pos_a, pos_b = poses[:, i][..., :3, 3].reshape(-1, 3), poses[:, j][..., :3, 3].reshape(-1, 3)
         # Placement's box centres and the grown oriented-box test, as check_parts
-        mid = 0.5 * (parts.lo + parts.hi)
-        half = parts.half() + 0.5 * self.clearance
+        mid, half = self._mid, self._grown
         c_a = np.einsum("nij,nj->ni", rot_a, mid[a]) + pos_a
         c_b = np.einsum("nij,nj->ni", rot_b, mid[b]) + pos_b
         near = np.flatnonzero(obb_overlap(c_a, rot_a, half[a], c_b, rot_b, half[b]))
@@ -497,7 +500,9 @@ class PartChecker:
         # Placement.world's arithmetic, the states stacked
         world = np.einsum("nij,nkj->nki", rot, pts) + rigid[..., :3, 3].reshape(n_s * k, 1, 3)
         world = world.reshape(n_s, k, 3)
-        return [[replace(r, where=w) for r, w in zip(found, ws)] for ws in world]
+        fields = [(r.type, r.a, r.b, r.min_distance, r.severity, r.s, r.s_b) for r in found]
+        return [[Interference(t, a, b, d, sev, w, s_, sb) for (t, a, b, d, sev, s_, sb), w in zip(fields, ws)]
+                for ws in world]
 
     def _replay(self, placed) -> list[Interference]:
         found, ka, local = self._static
