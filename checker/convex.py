@@ -398,13 +398,16 @@ def convex_pairs(kind_a: np.ndarray, size_a: np.ndarray, rot_a: np.ndarray, pos_
     # order each pair so that a sphere, else a capsule, comes first
     rank = np.array([3, 0, 1, 2, 2])                     # box, sphere, capsule, cylinder, ellipsoid
     swap = rank[kind_b] < rank[kind_a]
-    ka, kb = np.where(swap, kind_b, kind_a), np.where(swap, kind_a, kind_b)
-    sa = np.where(swap[:, None], size_b, size_a)
-    sb = np.where(swap[:, None], size_a, size_b)
-    ra = np.where(swap[:, None, None], rot_b, rot_a)
-    rb = np.where(swap[:, None, None], rot_a, rot_b)
-    pa = np.where(swap[:, None], pos_b, pos_a)
-    pb = np.where(swap[:, None], pos_a, pos_b)
+    if swap.any():
+        ka, kb = np.where(swap, kind_b, kind_a), np.where(swap, kind_a, kind_b)
+        sa = np.where(swap[:, None], size_b, size_a)
+        sb = np.where(swap[:, None], size_a, size_b)
+        ra = np.where(swap[:, None, None], rot_b, rot_a)
+        rb = np.where(swap[:, None, None], rot_a, rot_b)
+        pa = np.where(swap[:, None], pos_b, pos_a)
+        pb = np.where(swap[:, None], pos_a, pos_b)
+    else:                                                # (the same arrays, uncopied)
+        ka, kb, sa, sb, ra, rb, pa, pb = kind_a, kind_b, size_a, size_b, rot_a, rot_b, pos_a, pos_b
     n = len(ka)
     sd = np.full(n, np.nan)
     where = np.zeros((n, 3))
@@ -415,7 +418,7 @@ def convex_pairs(kind_a: np.ndarray, size_a: np.ndarray, rot_a: np.ndarray, pos_
 
     # sphere with anything: the centre's signed distance to B, minus the radius
     sph = np.flatnonzero(ka == 1)
-    for k in np.unique(kb[sph]):
+    for k in (np.unique(kb[sph]) if len(sph) else ()):
         rows = sph[kb[sph] == k]
         c = np.einsum("nji,nj->ni", rb[rows], pa[rows] - pb[rows])
         d, q = signed_distance_batch(types[k], sb[rows], c)
