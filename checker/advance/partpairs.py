@@ -1,9 +1,11 @@
 """The skip rule's bound on part pairs (part-part, keep-out between parts).
 
-Two rigid parts that may move relative to each other stay apart while the
-sum of how far any point of each moved is below a lower bound on their
-distance at the full check: the separation of their oriented boxes along a
-box axis (:func:`part_pair_bounds`).
+Two rigid parts that may move relative to each other stay apart while a
+bound on how far one moved relative to the other stays below a lower bound
+on their distance at the full check, the separation of their oriented boxes
+along a box axis (:func:`part_pair_bounds`): the sum of their moves in the
+world, or the move of one in the other's own frame, modulo turns about the
+axis of a solid of revolution (:class:`PartPairGaps`).
 
 Deliberately not here: cables, the run of states
 (:class:`checker.advance.skip.Advancement`), the part-part check itself
@@ -117,10 +119,11 @@ class PartPairGaps:
       its turn since the start, ``Rz(phi) ~ Q0 Q^T`` (a door knuckle turning
       on a hinge pin, a panel swinging round the knuckle's axis: nothing
       moves); the corners of the other part's box are turned (a part
-      without a box keeps the radius bound, not turned). The distance of the true shapes is the same at both poses;
-      the check measures a curved part's inscribed tessellation less its
-      error, at most ``error[i] + error[j]`` below the true distance, so
-      this bound is held to ``g - error[i] - error[j]``.
+      without a box keeps the radius bound, not turned). The distance of
+      the true shapes is the same at both poses; the check measures a
+      curved part's inscribed tessellation less its error, at most
+      ``error[i] + error[j]`` below the true distance, so this bound is
+      held to ``g - error[i] - error[j]``.
 
     Each is a bound on the drop of the distance (1-Lipschitz in the points),
     so the pair stays outside the clearance while any one holds. Any
