@@ -14,7 +14,9 @@ same machine:
 
 Printed: check time per step (median of the repeats), full checks and
 steps proven clear, MuJoCo's simulation time per step, and the ratios
-side by side. Events and pairs of the first two must be identical.
+side by side; then whether the door with its pin skips what the door
+without it skips and whether its check takes no longer than the
+simulation. Events and pairs of the first two must be identical.
 
 Run: python benchmarks/bench_active_pairs.py [--repeats N]
 """
@@ -61,6 +63,10 @@ def main() -> None:
         adv = last[name]["settings"]["advance"]
         counts = "-" if adv is None else f"{adv['full_checks']} / {adv['proven_clear_steps']}"
         print(f"{name:<22} {t:>13.3f} {s:>11.3f} {t / s:>9.2f} {t / base:>7.2f}  {counts}")
+    same = last["pin"]["settings"]["advance"] == last["no pin"]["settings"]["advance"]
+    ratio = statistics.median(times["pin"]) / statistics.median(sim["pin"])
+    print(f"pin skips the steps the door without it skips: {'yes' if same else 'no'}; "
+          f"pin check <= simulation: {'yes' if ratio <= 1.0 else 'no'} ({ratio:.2f})")
 
 
 if __name__ == "__main__":

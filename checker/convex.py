@@ -22,11 +22,16 @@ By pair (``exact`` says which answers are exact to rounding):
   minus the radius: exact. Overlapping: with a box, the least of ``h_D`` over
   the face normals of ``A - B`` (box axes and axis x box-axis crosses): exact;
   with the others, the general rule below;
+- cylinder or capsule with a cylinder on a parallel axis (a pin in its
+  bore, a knuckle on its hinge pin): ``A - B`` is a cylinder (grown by the
+  capsule's radius), so the signed distance is a point's to that cylinder
+  in closed form: exact, inside and out, and the same number however the
+  parts turn about the axis (:func:`_parallel_cylinders`);
 - box with box overlapping: the least of ``h_D`` over the 15 separating
   axes (they are all the face normals of ``A - B``): exact. Apart, the
   distance is the callers' (exact triangles; see :mod:`checker.parts`);
 - any other pair (a cylinder or an ellipsoid with a box, a capsule, a
-  cylinder or an ellipsoid): the least of ``h_D`` over the 15 axes of the two
+  cylinder off parallel or an ellipsoid): the least of ``h_D`` over the 15 axes of the two
   frames, their centres' offset and both signs, then refined by Gilbert's
   algorithm, alternating projections between the solids and projected
   gradient descent on the sphere of directions (the gradient of ``h_D`` is
@@ -318,6 +323,57 @@ def _descend(u: np.ndarray, f: np.ndarray, args, scale: np.ndarray) -> tuple[np.
     return f, u
 
 
+PARALLEL_SIN = 1e-9
+"""Axes whose angle's sine is at most this count as parallel for the closed
+form of a cylinder (or capsule) with a cylinder: B is widened to the
+cylinder along A's axis that holds it (radius ``rb + hb sin``, half length
+``hb cos + rb sin``), so the answer stays a lower bound, exact when the axes
+are parallel to the bit."""
+
+
+def _parallel_cylinders(ka, sa, ra, pa, kb, sb, rb, pb):
+    """A cylinder or capsule A and a cylinder B on (nearly) parallel axes: (sd, where, exact, ok).
+
+    With parallel axes, ``A - B`` is the cylinder of radius ``ra + rb`` and half
+    length ``ha + hb`` about ``pa - pb`` (a capsule: the cylinder of radius
+    ``rb``, half length ``ha + hb``, grown by the ball of radius ``ra``), so
+    the signed distance is the closed-form signed distance of B's centre, in
+    A's frame, to that cylinder (less the capsule's radius: growing a convex
+    set by a ball lowers its signed distance by the radius everywhere,
+    inside too). Axes within :data:`PARALLEL_SIN` of parallel take B's
+    enclosing cylinder along A's axis (a lower bound); ``ok`` is False for the
+    others (left to the general rule). ``where`` is the midpoint of the two
+    support points along the normal of ``A - B`` nearest the origin."""
+    axis_a, axis_b = ra[:, :, 2], rb[:, :, 2]
+    cos = np.abs(np.einsum("ni,ni->n", axis_a, axis_b))
+    a0, a1, a2 = axis_a[:, 0], axis_a[:, 1], axis_a[:, 2]
+    b0, b1, b2 = axis_b[:, 0], axis_b[:, 1], axis_b[:, 2]
+    cx, cy, cz = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0     # a x b
+    sin = np.sqrt(cx * cx + cy * cy + cz * cz)
+    ok = sin <= PARALLEL_SIN
+    cap = ka == 2
+    rad_b = sb[:, 0] + sb[:, 1] * sin
+    half_b = sb[:, 1] * cos + sb[:, 0] * sin
+    rad = np.where(cap, 0.0, sa[:, 0]) + rad_b
+    half = sa[:, 1] + half_b
+    x = np.einsum("nji,nj->ni", ra, pb - pa)                  # B's centre in A's frame
+    rho = np.hypot(x[:, 0], x[:, 1])
+    dr, dz = rho - rad, np.abs(x[:, 2]) - half
+    inside = np.maximum(dr, dz)                               # > 0: apart
+    d = np.where(inside > 0.0, np.hypot(np.maximum(dr, 0.0), np.maximum(dz, 0.0)), inside)
+    sd = d - np.where(cap, sa[:, 0], 0.0)
+    # the outward normal of A - B nearest the origin (A's frame): the pair's best direction
+    radial = np.where(rho[:, None] > 0, np.stack([x[:, 0], x[:, 1], np.zeros(len(x))], axis=1)
+                      / np.where(rho > 0, rho, 1.0)[:, None], [1.0, 0.0, 0.0])
+    axial = np.zeros_like(x)
+    axial[:, 2] = np.where(x[:, 2] >= 0.0, 1.0, -1.0)
+    out = np.maximum(dr, 0.0)[:, None] * radial + np.maximum(dz, 0.0)[:, None] * axial
+    u = np.where((inside > 0.0)[:, None], out / np.maximum(_norm(out, axis=1), 1e-300)[:, None],
+                 np.where((dr >= dz)[:, None], radial, axial))
+    _, wa, wb = _h_d(ka, sa, ra, pa, kb, sb, rb, pb, np.einsum("nij,nj->ni", ra, u))
+    return sd, 0.5 * (wa + wb), ok & (sin == 0.0), ok
+
+
 def convex_pairs(kind_a: np.ndarray, size_a: np.ndarray, rot_a: np.ndarray, pos_a: np.ndarray,
                  kind_b: np.ndarray, size_b: np.ndarray, rot_b: np.ndarray, pos_b: np.ndarray,
                  beyond: float = np.inf) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -342,13 +398,16 @@ def convex_pairs(kind_a: np.ndarray, size_a: np.ndarray, rot_a: np.ndarray, pos_
     # order each pair so that a sphere, else a capsule, comes first
     rank = np.array([3, 0, 1, 2, 2])                     # box, sphere, capsule, cylinder, ellipsoid
     swap = rank[kind_b] < rank[kind_a]
-    ka, kb = np.where(swap, kind_b, kind_a), np.where(swap, kind_a, kind_b)
-    sa = np.where(swap[:, None], size_b, size_a)
-    sb = np.where(swap[:, None], size_a, size_b)
-    ra = np.where(swap[:, None, None], rot_b, rot_a)
-    rb = np.where(swap[:, None, None], rot_a, rot_b)
-    pa = np.where(swap[:, None], pos_b, pos_a)
-    pb = np.where(swap[:, None], pos_a, pos_b)
+    if swap.any():
+        ka, kb = np.where(swap, kind_b, kind_a), np.where(swap, kind_a, kind_b)
+        sa = np.where(swap[:, None], size_b, size_a)
+        sb = np.where(swap[:, None], size_a, size_b)
+        ra = np.where(swap[:, None, None], rot_b, rot_a)
+        rb = np.where(swap[:, None, None], rot_a, rot_b)
+        pa = np.where(swap[:, None], pos_b, pos_a)
+        pb = np.where(swap[:, None], pos_a, pos_b)
+    else:                                                # (the same arrays, uncopied)
+        ka, kb, sa, sb, ra, rb, pa, pb = kind_a, kind_b, size_a, size_b, rot_a, rot_b, pos_a, pos_b
     n = len(ka)
     sd = np.full(n, np.nan)
     where = np.zeros((n, 3))
@@ -359,7 +418,7 @@ def convex_pairs(kind_a: np.ndarray, size_a: np.ndarray, rot_a: np.ndarray, pos_
 
     # sphere with anything: the centre's signed distance to B, minus the radius
     sph = np.flatnonzero(ka == 1)
-    for k in np.unique(kb[sph]):
+    for k in (np.unique(kb[sph]) if len(sph) else ()):
         rows = sph[kb[sph] == k]
         c = np.einsum("nji,nj->ni", rb[rows], pa[rows] - pb[rows])
         d, q = signed_distance_batch(types[k], sb[rows], c)
@@ -412,6 +471,13 @@ def convex_pairs(kind_a: np.ndarray, size_a: np.ndarray, rot_a: np.ndarray, pos_
             sd[r_out] = m[out] - sa[r_out, 0]
             where[r_out] = 0.5 * (pw + sa[r_out, :1] * u + qw)
             exact[r_out] = done[r_out] = True
+
+    # a cylinder or a capsule with a cylinder on a parallel axis: A - B is a cylinder
+    # (rounded by the capsule's radius), the origin's signed distance to it in closed form
+    par = np.flatnonzero(~done & ((ka == 2) | (ka == 3)) & (kb == 3))
+    if len(par):
+        sd[par], where[par], exact[par], ok = _parallel_cylinders(*(x[par] for x in args))
+        done[par] = ok
 
     # the rest by support functions: exact for box-box and capsule-box (all face normals
     # of A - B are among the starts), else refined by descent

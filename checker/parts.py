@@ -349,6 +349,10 @@ class PartChecker:
         self._skip = np.zeros((n, n), bool) if skip is None else np.asarray(skip, bool)
         self._static: tuple[list[Interference], np.ndarray, np.ndarray] | None = None
         self._tiled: dict[tuple, PartSet] = {}
+        # the oriented-box test's centres and grown half extents, per part (see _boxes_overlap)
+        flat = parts.plane[:, None]                                  # (planes: never boxed)
+        self._mid = 0.5 * (np.where(flat, 0.0, parts.lo) + np.where(flat, 0.0, parts.hi))
+        self._grown = parts.half() + 0.5 * clearance
 
     def check(self, poses: np.ndarray) -> list[Interference]:
         """Records for poses (P, 4, 4)."""
@@ -372,6 +376,10 @@ class PartChecker:
         gives those pairs."""
         if not len(i):
             return []
+        fast = self._primitive_pairs_many(np.asarray(poses, float)[None], np.asarray(i, np.int64),
+                                          np.asarray(j, np.int64))
+        if fast is not None:
+            return fast[0]
         return check_parts(self.parts, self.parts.place(poses), self.clearance, self.focus, pairs=(i, j))
 
     def check_pairs_many(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray) -> list[list[Interference]]:
@@ -383,6 +391,9 @@ class PartChecker:
         out: list[list[Interference]] = [[] for _ in range(n_s)]
         if not len(i) or not n_s:
             return out
+        fast = self._primitive_pairs_many(np.asarray(poses, float), np.asarray(i, np.int64), np.asarray(j, np.int64))
+        if fast is not None:
+            return fast
         used, local = np.unique(np.concatenate([i, j]), return_inverse=True)
         k = len(used)
         key = tuple(used.tolist())
@@ -401,6 +412,49 @@ class PartChecker:
         placed = view.place(poses.reshape(-1, 4, 4))
         for a, _, rec in _check_indexed(view, placed, self.clearance, focus, None, True, (vi, vj)):
             out[a // k].append(rec)
+        return out
+
+    def _primitive_pairs_many(self, poses: np.ndarray, i: np.ndarray,
+                              j: np.ndarray) -> list[list[Interference]] | None:
+        """:meth:`check_pairs_many` when every pair is two primitives (no
+        plane): the oriented-box test and :func:`checker.convex.convex_pairs`
+        on the pairs at all the states in one call, straight from the poses
+        (what :func:`check_parts` does with the same rows, whose answers
+        depend on each row alone); None when some pair needs its triangles
+        (two boxes apart) or is no pair of primitives."""
+        parts, kind = self.parts, self.parts.convex_kind
+        i, j = np.minimum(i, j), np.maximum(i, j)
+        order = np.lexsort((j, i))
+        i, j = i[order], j[order]
+        if (kind[i] < 0).any() or (kind[j] < 0).any():
+            return None
+        if self.focus is not None:
+            focus = np.asarray(self.focus, bool)
+            keep = focus[i] != focus[j]
+            i, j = i[keep], j[keep]
+        n_s, n = len(poses), len(i)
+        a, b = np.tile(i, n_s), np.tile(j, n_s)
+        rot_a, rot_b = poses[:, i, :3, :3].reshape(-1, 3, 3), poses[:, j, :3, :3].reshape(-1, 3, 3)
+        pos_a, pos_b = poses[:, i][..., :3, 3].reshape(-1, 3), poses[:, j][..., :3, 3].reshape(-1, 3)
+        # Placement's box centres and the grown oriented-box test, as check_parts
+        mid, half = self._mid, self._grown
+        c_a = np.einsum("nij,nj->ni", rot_a, mid[a]) + pos_a
+        c_b = np.einsum("nij,nj->ni", rot_b, mid[b]) + pos_b
+        near = np.flatnonzero(obb_overlap(c_a, rot_a, half[a], c_b, rot_b, half[b]))
+        out: list[list[Interference]] = [[] for _ in range(n_s)]
+        if not len(near):
+            return out
+        size = parts.sd_groups[2]
+        ka, kb = a[near], b[near]
+        value, where, _, apart = convex_pairs(kind[ka], size[ka], rot_a[near], pos_a[near],
+                                              kind[kb], size[kb], rot_b[near], pos_b[near], self.clearance)
+        if apart.any():
+            return None
+        touch = parts.touch(ka, kb)
+        for k in np.flatnonzero((value < -touch) | ((touch < value) & (value < self.clearance))):
+            rec = _record(parts, int(ka[k]), int(kb[k]), float(value[k]), where[k], self.clearance)
+            if rec is not None:
+                out[int(near[k]) // n].append(rec)
         return out
 
     def moving_pairs(self) -> tuple[np.ndarray, np.ndarray]:
@@ -430,7 +484,25 @@ class PartChecker:
         """The same-body records alone at poses (P, 4, 4): what :meth:`check`
         returns when no moving pair can be within the clearance. Needs a
         :meth:`check` first."""
-        return self._replay(self.parts.place(poses))
+        return self.replay_many(np.asarray(poses, float)[None])[0]
+
+    def replay_many(self, poses: np.ndarray) -> list[list[Interference]]:
+        """:meth:`replay` at S states at once (poses (S, P, 4, 4)), to the
+        bit: the places of all the states' records moved in one product."""
+        found, ka, local = self._static
+        if not len(found):
+            return [[] for _ in range(len(poses))]
+        poses = np.asarray(poses, float)
+        n_s, k = len(poses), len(ka)
+        rigid = poses[:, ka]                                  # (S, K, 4, 4)
+        rot = rigid[..., :3, :3].reshape(n_s * k, 3, 3)
+        pts = np.broadcast_to(local[None], (n_s,) + local.shape).reshape(n_s * k, 1, 3)
+        # Placement.world's arithmetic, the states stacked
+        world = np.einsum("nij,nkj->nki", rot, pts) + rigid[..., :3, 3].reshape(n_s * k, 1, 3)
+        world = world.reshape(n_s, k, 3)
+        fields = [(r.type, r.a, r.b, r.min_distance, r.severity, r.s, r.s_b) for r in found]
+        return [[Interference(t, a, b, d, sev, w, s_, sb) for (t, a, b, d, sev, s_, sb), w in zip(fields, ws)]
+                for ws in world]
 
     def _replay(self, placed) -> list[Interference]:
         found, ka, local = self._static

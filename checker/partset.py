@@ -245,6 +245,18 @@ class PartSet:
         index = {t: k for k, t in enumerate(CONVEX)}
         return np.array([index.get(sh.type, -1) for sh in self.shapes], np.int64)
 
+    @cached_property
+    def axial(self) -> np.ndarray:
+        """(P,) bool: the part is unchanged by any turn about its frame's z
+        axis (a sphere, capsule or cylinder, an ellipsoid with equal x and
+        y radii), as the part-part check measures it (true shapes, or a
+        tessellation within ``error`` of them)."""
+        kind = self.convex_kind
+        size = self.sd_groups[2]
+        types = [CONVEX.index(t) for t in (ShapeType.SPHERE, ShapeType.CAPSULE, ShapeType.CYLINDER)]
+        round_ellipsoid = (kind == CONVEX.index(ShapeType.ELLIPSOID)) & (size[:, 0] == size[:, 1])
+        return np.isin(kind, types) | round_ellipsoid
+
     def touch(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Touching tolerance (absolute) of part pairs ``a``, ``b`` (n,)."""
         return TOUCH * np.maximum(self.size[a], self.size[b])

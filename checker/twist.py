@@ -38,6 +38,24 @@ def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.einsum("...i,...i->...", a, b)
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``_cross(a, b)`` of (..., 3) arrays: its arithmetic and bits (each
+    component one product less another), without its Python-level axis
+    handling, which cost more than the products on a cable's few dozen edges."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    np.subtract(a1 * b2, a2 * b1, out=out[..., 0])
+    np.subtract(a2 * b0, a0 * b2, out=out[..., 1])
+    np.subtract(a0 * b1, a1 * b0, out=out[..., 2])
+    return out
+
+
+def _norm(x: np.ndarray, keepdims: bool = False) -> np.ndarray:
+    """``np.linalg.norm(x, axis=-1)`` for real arrays: its formula and bits."""
+    return np.sqrt(np.add.reduce(x * x, axis=-1, keepdims=keepdims))
+
+
 def _wrap(angle: np.ndarray) -> np.ndarray:
     """Angles wrapped to (-pi, pi]."""
     return np.pi - np.mod(np.pi - angle, 2.0 * np.pi)
@@ -46,7 +64,7 @@ def _wrap(angle: np.ndarray) -> np.ndarray:
 def _tangents(points: np.ndarray) -> np.ndarray:
     """(S, m, 3) unit edge tangents; zero-length edges take a neighbour's."""
     e = np.diff(points, axis=1)
-    length = np.linalg.norm(e, axis=2)
+    length = _norm(e)
     scale = np.abs(points).max(axis=(1, 2), keepdims=True)[:, :, 0] + _TINY
     ok = length > 1e-12 * scale
     idx = np.where(ok, np.arange(e.shape[1])[None, :], 0)
@@ -63,23 +81,23 @@ def _tangents(points: np.ndarray) -> np.ndarray:
 def _normal_to(t: np.ndarray) -> np.ndarray:
     """(..., 3) unit vectors perpendicular to unit `t`, from the axis least aligned with it."""
     axis = np.eye(3)[np.argmin(np.abs(t), axis=-1)]
-    n = np.cross(t, axis)
-    return n / np.linalg.norm(n, axis=-1, keepdims=True)
+    n = _cross(t, axis)
+    return n / _norm(n, keepdims=True)
 
 
 def _signed_angle(a: np.ndarray, b: np.ndarray, axis: np.ndarray) -> np.ndarray:
     """Angle from `a` to `b` about unit `axis` (both taken perpendicular to it)."""
-    return np.arctan2(_dot(np.cross(a, b), axis), _dot(a, b) - _dot(a, axis) * _dot(b, axis))
+    return np.arctan2(_dot(_cross(a, b), axis), _dot(a, b) - _dot(a, axis) * _dot(b, axis))
 
 
 def _rotate_min(v: np.ndarray, t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
     """`v` rotated by the least rotation taking unit `t0` to unit `t1`
     (Rodrigues' formula with c = t0 x t1, d = t0 . t1); a cusp (t1 = -t0)
     turns half a turn about a normal of t0."""
-    c = np.cross(t0, t1)
+    c = _cross(t0, t1)
     d = _dot(t0, t1)
     folded = d < -1.0 + 1e-12
-    out = v * d[..., None] + np.cross(c, v) + c * (_dot(c, v) / np.where(folded, 1.0, 1.0 + d))[..., None]
+    out = v * d[..., None] + _cross(c, v) + c * (_dot(c, v) / np.where(folded, 1.0, 1.0 + d))[..., None]
     if folded.any():
         a = _normal_to(t0)
         out = np.where(folded[..., None], 2.0 * a * _dot(a, v)[..., None] - v, out)
@@ -110,7 +128,7 @@ def transport(points: np.ndarray, vectors: np.ndarray) -> tuple[np.ndarray, np.n
     alpha = _signed_angle(f[:, 0], np.asarray(vectors, float), t[:, 0])
     phi = alpha + beta.sum(axis=1)
     t_end, f_end = t[:, -1], f[:, -1]
-    moved = np.cos(phi)[:, None] * f_end + np.sin(phi)[:, None] * np.cross(t_end, f_end)
+    moved = np.cos(phi)[:, None] * f_end + np.sin(phi)[:, None] * _cross(t_end, f_end)
     return t_end, moved
 
 

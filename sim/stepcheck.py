@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.advance import Advancement, part_pair_bounds
+from checker.advance import Advancement, PartSolids, part_pair_bounds
 from checker.cable import CableMeasures, taut_margin
 from checker.events import AllowList, AllowRule
 from checker.interference import Checker, single_records_many
@@ -178,8 +178,13 @@ class StepChecks:
             box_lo = np.full((len(built.parts), 3), -np.inf)
             box_hi = np.full((len(built.parts), 3), np.inf)
             box_lo[checked], box_hi[checked] = self.checker.part_bounds()
+            # part pairs: boxes holding both what the part-part check and the cable check measure
+            solid_lo, solid_hi = rigid.lo.copy(), rigid.hi.copy()
+            solid_lo[checked] = np.minimum(solid_lo[checked], box_lo[checked])
+            solid_hi[checked] = np.maximum(solid_hi[checked], box_hi[checked])
             self.advance = Advancement(offsets, config.spacing * radii, rho, config.clearance,
-                                       self.stretch, radii, (box_lo, box_hi))
+                                       self.stretch, radii, (box_lo, box_hi),
+                                       PartSolids(solid_lo, solid_hi, rigid.axial, rigid.error))
             self._moving_pairs = self.part_checker.moving_pairs()
             self._checked_index = np.nonzero(checked)[0]
             self._checker_index = np.cumsum(checked) - 1          # built part -> checker part
@@ -303,10 +308,12 @@ class StepChecks:
                 records = [a + b for a, b in zip(found, records)]
         active = self.part_checker.check_pairs_many(poses, *self._part_active) if len(self._part_active[0]) \
             else [[] for _ in range(n)]
+        same = self.part_checker.replay_many(poses) if self.part_checker.has_same_body_records \
+            else [[] for _ in range(n)]
         out = []
-        for state, recs, st, bd, found in zip(states, records, strain, bend, active):
+        for recs, st, bd, found, static in zip(records, strain, bend, active, same):
             cable_records = self._focus(recs)
-            part_records = self._same_body_records(state.part_poses) + found
+            part_records = static + found
             out.append(StepResult(cable_records + part_records, cable_records, st, bd, False))
         return out
 

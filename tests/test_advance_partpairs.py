@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from strategies import coords, poses
 
-from checker.advance.partpairs import PartPairGaps, part_pair_bounds
+from checker.advance.partpairs import PartPairGaps, PartSolids, part_pair_bounds
+from checker.parts import check_parts
 from checker.partset import PartSet
-from checker.shapes import Shape, ShapeType
+from checker.shapes import Shape, ShapeType, mesh_shape
 
 pytestmark = pytest.mark.filterwarnings("error")
 
@@ -46,14 +48,15 @@ def test_bound_never_exceeds_the_distance_of_the_boxes(half_a, half_b, pose_a, p
 @given(st.floats(0.0, 0.5), st.floats(0.0, 0.5))
 def test_pairs_clear_while_the_moves_stay_below_the_bound(move_a, move_b):
     """Two parts 1 apart (bound 1, clearance 0.1): clear exactly while the
-    sum of their moves stays below 0.9 (less the rounding margin)."""
+    motion of one relative to the other (the moves at right angles: their
+    length) stays below 0.9 (less the rounding margin)."""
     gaps = PartPairGaps(np.array([0.5, 0.5]), 0.1)
     start = np.tile(np.eye(4), (2, 1, 1))
     gaps.start(start, (np.array([0]), np.array([1])), np.array([1.0]), mu=0.0)
     now = start.copy()
     now[0, 0, 3] += move_a
     now[1, 1, 3] -= move_b
-    assert gaps.clear_at(now) == (move_a + move_b < 0.9)
+    assert gaps.clear_at(now) == (np.sqrt(move_a * move_a + move_b * move_b) < 0.9)
     gaps.stop()
     assert not gaps.clear_at(start)
 
@@ -74,3 +77,184 @@ def test_failing_pairs_are_the_pairs_whose_bound_fails(move_a, move_c):
     assert gaps.clear_at(now) == (not want)
     gaps.stop()
     assert gaps.failing_at(start) is None
+
+
+def _solids(ps: PartSet) -> PartSolids:
+    return PartSolids(ps.lo, ps.hi, ps.axial, ps.error)
+
+
+def _radius(ps: PartSet) -> np.ndarray:
+    corner = np.maximum(np.abs(ps.lo), np.abs(ps.hi))
+    return np.sqrt(np.einsum("ij,ij->i", corner, corner))
+
+
+def _turn_z(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    out = np.eye(4)
+    out[:2, :2] = [[c, -s], [s, c]]
+    return out
+
+
+def _gaps(ps: PartSet, start: np.ndarray, clearance: float, solids: bool = True) -> PartPairGaps:
+    i, j = np.array([0]), np.array([1])
+    gaps = PartPairGaps(_radius(ps), clearance, _solids(ps) if solids else None)
+    gaps.start(start, (i, j), part_pair_bounds(ps, ps.place(start), i, j))
+    return gaps
+
+
+@pytest.mark.parametrize("hinge", [ShapeType.CYLINDER, ShapeType.BOX])
+def test_a_panel_swinging_round_a_knuckle(hinge):
+    """A door panel 18 from the axis of a knuckle (radius 12), swinging 60
+    degrees round that axis, clearance 5: round the cylinder nothing moves
+    relative to the solid (clear at every angle); round a box of the
+    cylinder's size, the bound fails once a corner of the panel may have
+    moved by the 13 left (a turn of 13 / 430 rad or more, the panel's far
+    corners 430 from the axis)."""
+    size = [12.0, 12.0, 20.0] if hinge is ShapeType.BOX else [12.0, 20.0]
+    ps = PartSet.build(["knuckle", "panel"], [Shape(hinge, size), Shape(ShapeType.BOX, [200.0, 5.0, 150.0])],
+                       tolerance=0.5)
+    start = np.tile(np.eye(4), (2, 1, 1))
+    start[1, :3, 3] = [230.0, 0.0, 0.0]
+    gaps = _gaps(ps, start, 5.0)
+    assert gaps.ok
+    for angle in np.linspace(0.0, np.pi / 3, 61):
+        now = start.copy()
+        now[1] = _turn_z(angle) @ start[1]
+        if hinge is ShapeType.CYLINDER:
+            assert gaps.clear_at(now)
+        else:
+            reach = np.hypot(430.0, 5.0) * 2 * np.sin(angle / 2)         # the far corners' move
+            assert gaps.clear_at(now) == (reach < 13.0 - 1e-6) or abs(reach - 13.0) < 1e-6
+
+
+def test_a_floor_tilted_with_a_box_on_it_moves_nothing_relative_to_it():
+    """A floor plane and a box 2 above it, tilted and carried together: the
+    plane turned (its world move unbounded), the box did not move in the
+    plane's frame; lifted 1 more in that frame it is still clear, sunk by
+    1.95 it is not (clearance 0.1)."""
+    ps = PartSet.build(["floor", "box"], [Shape(ShapeType.PLANE, []), Shape(ShapeType.BOX, [0.5, 0.5, 0.5])])
+    start = np.tile(np.eye(4), (2, 1, 1))
+    start[1, 2, 3] = 2.5
+    carry = _turn_z(0.7)
+    carry[:3, :3] = carry[:3, :3] @ np.array([[1, 0, 0], [0, np.cos(0.4), -np.sin(0.4)], [0, np.sin(0.4), np.cos(0.4)]])
+    carry[:3, 3] = [3.0, 1.0, -2.0]
+    gaps = _gaps(ps, start, 0.1)
+    assert gaps.ok and np.isinf(gaps.moves(carry @ start)[0])
+    for lift, clear in ((0.0, True), (1.0, True), (-1.95, False)):
+        now = carry @ start
+        now[1] = carry @ _lift(start[1], lift)
+        assert gaps.clear_at(now) == clear
+
+
+def _lift(pose: np.ndarray, dz: float) -> np.ndarray:
+    out = pose.copy()
+    out[2, 3] += dz
+    return out
+
+
+def test_parts_moving_together_move_nothing_relative_to_each_other():
+    """Two boxes 1 apart carried together by a large rigid motion: the world
+    moves add up to far more than the gap, the relative move is 0."""
+    cube = Shape(ShapeType.BOX, [0.5, 0.5, 0.5])
+    ps = PartSet.build(["a", "b"], [cube, cube])
+    start = np.tile(np.eye(4), (2, 1, 1))
+    start[1, 0, 3] = 2.0
+    carry = _turn_z(1.0)
+    carry[:3, 3] = [5.0, -3.0, 2.0]
+    now = carry @ start
+    assert _gaps(ps, start, 0.1).clear_at(now)
+    assert _gaps(ps, start, 0.1, solids=False).clear_at(now)                # (radii alone: relative too)
+    world = PartPairGaps(_radius(ps), 0.1, _solids(ps))
+    world.start(start, (np.array([0]), np.array([1])), np.array([1.0]))
+    assert (world.moves(now) > 1.0).all()                                  # each part moved farther
+    moved = now.copy()
+    moved[1] = _turn_z(0.0) @ now[1]
+    moved[1, :3, 3] += carry[:3, :3] @ np.array([-0.95, 0.0, 0.0])         # then 0.95 closer: inside 0.1
+    assert not _gaps(ps, start, 0.1).clear_at(moved)
+
+
+@settings(max_examples=40, deadline=None)
+@given(coords(3, -1.0, 1.0), coords(3, -2.0, 2.0), poses(reach=3.0), poses(reach=3.0))
+def test_corner_moves_bound_every_point_of_the_box(lo_hi, shift, start, now):
+    """The world move of a boxed part is its farthest corner's: at least the
+    move of any point of its box, at most the radius bound."""
+    half = np.abs(lo_hi) + 0.1
+    ps = PartSet.build(["a"], [Shape(ShapeType.BOX, half)])
+    start, now = start[None].copy(), now[None].copy()
+    start[0, :3, 3] += shift
+    plain = PartPairGaps(_radius(ps), 0.0)
+    boxed = PartPairGaps(_radius(ps), 0.0, _solids(ps))
+    for g in (plain, boxed):
+        g.start(start, (np.zeros(0, np.int64), np.zeros(0, np.int64)), np.zeros(0))
+    dp = boxed.moves(now)[0]
+    u = np.random.default_rng(0).uniform(-1, 1, (500, 3)) * half
+    u = np.vstack([u, _corners(half)])
+    move = np.linalg.norm(u @ (now[0, :3, :3] - start[0, :3, :3]).T + (now[0, :3, 3] - start[0, :3, 3]), axis=1)
+    assert move.max() <= dp * (1 + 1e-12) + 1e-12
+    assert dp == pytest.approx(move.max(), rel=1e-9, abs=1e-12)           # attained at a corner
+    assert dp <= plain.moves(now)[0] * (1 + 1e-12) + 1e-12
+
+
+def _shape(kind, size):
+    if kind == "mesh":
+        tm = trimesh.creation.icosphere(subdivisions=1, radius=float(size[0]))
+        return mesh_shape(np.asarray(tm.vertices), np.asarray(tm.faces))
+    return Shape(kind, size)
+
+
+def _random_rotation(rng) -> np.ndarray:
+    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+    q = q * np.sign(np.diag(r))
+    return q if np.linalg.det(q) > 0 else -q
+
+
+def _nudge(rng, amount: float) -> np.ndarray:
+    """A rigid motion turning by about ``amount`` rad and moving by up to ``amount``."""
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    out = np.eye(4)
+    out[:3, :3] = np.eye(3) + np.sin(amount) * k + (1 - np.cos(amount)) * k @ k
+    out[:3, 3] = rng.uniform(-amount, amount, 3)
+    return out
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_pair_proven_clear_has_no_record(seed):
+    """Brute force against the part-part check itself: part b drawn near
+    part a, then turned about a's axis by any angle, nudged, and both
+    carried by a rigid motion (the world moves are large, the relative one
+    a turn about the axis plus a little); whenever the condition says clear,
+    the check at the new poses has no record for the pair. Coarse
+    tessellations (errors up to 1e-2) make a curved part's triangles
+    measure below its true distance. Many drawn pairs are proven clear,
+    after large turns about an axis too."""
+    rng = np.random.default_rng(seed)
+    kinds = [ShapeType.BOX, ShapeType.SPHERE, ShapeType.CYLINDER, ShapeType.CAPSULE, "mesh"]
+    clearance = 0.05
+    proven = turned = 0
+    for _ in range(200):
+        ka, kb = kinds[rng.integers(5)], kinds[rng.integers(5)]
+        ps = PartSet.build(["a", "b"], [_shape(ka, rng.uniform(0.05, 0.3, 3)), _shape(kb, rng.uniform(0.05, 0.3, 3))],
+                           tolerance=1e-2)
+        # b along a drawn direction, where the box bound is just past the clearance
+        scale = np.linspace(0.0, 1.2, 61)
+        far = ps.tiled(np.array([0, 1]), len(scale))
+        poses = np.tile(np.eye(4), (2 * len(scale), 1, 1))
+        poses[1::2, :3, :3] = _random_rotation(rng)
+        poses[1::2, :3, 3] = scale[:, None] * rng.normal(size=3) / np.sqrt(3)
+        sep = part_pair_bounds(far, far.place(poses), np.arange(0, 2 * len(scale), 2), np.arange(1, 2 * len(scale), 2))
+        pick = np.flatnonzero(sep > clearance + rng.uniform(0.0, 0.05))
+        if not len(pick):
+            continue
+        pose_b = poses[2 * pick[0] + 1]
+        start = np.stack([np.eye(4), pose_b])
+        carry = _nudge(rng, 3.0)
+        turn = rng.uniform(-np.pi, np.pi)
+        now = np.stack([carry, carry @ _turn_z(turn) @ _nudge(rng, rng.uniform(0.0, 0.05)) @ pose_b])
+        gaps = _gaps(ps, start, clearance)
+        if gaps.ok and gaps.clear_at(now):
+            assert check_parts(ps, ps.place(now), clearance) == []
+            proven += 1
+            turned += abs(turn) > 0.5 and ps.axial[0]
+    assert proven > 25 and turned > 10

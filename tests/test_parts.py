@@ -115,6 +115,31 @@ def test_checker_checks_same_body_pairs_once_and_replays_them():
     assert np.allclose(ab.where, first_ab.where + [0, 0, 10])
 
 
+def test_replaying_many_states_gives_each_state_its_own_answer_to_the_bit():
+    """replay_many over a batch of turned and moved poses: the records the
+    full check replays at each state, places and all, bit for bit."""
+    ps = PartSet.build(["a", "b", "c", "d"], [CUBE, CUBE, CUBE, CUBE], groups=["body", "body", "other", "other"])
+    pc = PartChecker(ps, 0.01)
+    pc.check(np.array([pose(), pose(0.9), pose(9), pose(9.95)]))
+    rng = np.random.default_rng(2)
+    batch = []
+    for _ in range(7):
+        q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+        q = q * np.sign(np.diag(r)) * np.sign(np.linalg.det(q * np.sign(np.diag(r))))
+        carry = np.eye(4)
+        carry[:3, :3], carry[:3, 3] = q, rng.uniform(-3, 3, 3)
+        turn = np.eye(4)
+        turn[:3, :3] = q.T
+        batch.append(np.stack([carry @ pose(), carry @ pose(0.9), turn @ pose(9), turn @ pose(9.95)]))
+    many = pc.replay_many(np.stack(batch))
+    for poses, got in zip(batch, many):
+        want = pc.check(poses)[:2]                      # the replayed records come first
+        assert [(r.a, r.b) for r in got] == [("a", "b"), ("c", "d")]
+        assert [(r.a, r.b, r.min_distance) for r in got] == [(r.a, r.b, r.min_distance) for r in want]
+        assert all(np.array_equal(g.where, w.where) for g, w in zip(got, want))
+        assert all(np.array_equal(g.where, w.where) for g, w in zip(got, pc.replay(poses)))
+
+
 def test_tessellation_error_bound_holds():
     for shape in (Shape(ShapeType.SPHERE, [0.7]), Shape(ShapeType.CAPSULE, [0.3, 0.5]),
                   Shape(ShapeType.CYLINDER, [0.4, 0.2]), Shape(ShapeType.ELLIPSOID, [0.5, 0.3, 0.2])):
@@ -227,3 +252,39 @@ def test_moving_pairs_equal_all_pairs_filtered(seed):
     i, j = PartChecker(ps, 0.01, skip=skip).moving_pairs()
     want = [(a, b) for a in range(n) for b in range(a + 1, n) if groups[a] != groups[b] and not skip[a, b]]
     assert list(zip(i.tolist(), j.tolist())) == want
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_pairs_at_many_states_are_each_states_own_check(seed):
+    """check_pairs_many on primitive pairs (one call for every state) and on
+    pairs with a mesh (laid out once per state), and check_pairs: each
+    state's records are what the part-part check of those pairs gives it
+    alone, places bit for bit; keep-out zones and a focus included."""
+    rng = np.random.default_rng(seed)
+    kinds = [ShapeType.BOX, ShapeType.SPHERE, ShapeType.CYLINDER, ShapeType.CAPSULE, ShapeType.ELLIPSOID]
+    with_mesh = seed == 2
+    shapes = [Shape(kinds[k], rng.uniform(0.05, 0.3, 3)) for k in rng.integers(0, 5, 5)]
+    if with_mesh:
+        tm = trimesh.creation.icosphere(subdivisions=1, radius=0.2)
+        shapes[0] = mesh_shape(np.asarray(tm.vertices), np.asarray(tm.faces))
+    names = ["p0", "p1", "zone/p2", "p3", "p4"]
+    ps = PartSet.build(names, shapes, keepout=[False, False, True, False, False], tolerance=5e-3)
+    i, j = np.array([0, 0, 1, 2, 3, 1]), np.array([1, 2, 3, 4, 4, 4])
+    batch = np.tile(np.eye(4), (24, 5, 1, 1))
+    for s in range(24):
+        for k in range(5):
+            q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+            batch[s, k, :3, :3] = q * np.sign(np.diag(r)) * np.sign(np.linalg.det(q * np.sign(np.diag(r))))
+            batch[s, k, :3, 3] = rng.uniform(-0.35, 0.35, 3)
+    for focus in (None, ps.select("zone")):
+        pc = PartChecker(ps, 0.05, focus)
+        many = pc.check_pairs_many(batch, i, j)
+        found = 0
+        for poses, got in zip(batch, many):
+            want = check_parts(ps, ps.place(poses), 0.05, focus, pairs=(i, j))
+            for recs in (got, pc.check_pairs(poses, i, j)):
+                assert [(r.type, r.a, r.b, r.min_distance, r.severity) for r in recs] == \
+                    [(r.type, r.a, r.b, r.min_distance, r.severity) for r in want]
+                assert all(np.array_equal(g.where, w.where) for g, w in zip(recs, want))
+            found += len(got)
+        assert found > 5

@@ -103,3 +103,26 @@ def test_empty_and_plane_only_sets():
     assert len(ps.tris) == 0 and ps.forest.root.tolist() == [-1]
     ps = PartSet.build([], [])
     assert len(ps.tris) == 0 and len(ps.lo) == 0
+
+
+def test_solids_of_revolution_about_their_z_axis():
+    """axial: the sphere, capsule, cylinder and an ellipsoid with equal x and
+    y radii are unchanged by turning about their z axis; a box (even a
+    square one), a flattened ellipsoid, a mesh and a plane are not marked.
+    Checked on the shapes' own signed distances: turning points about z
+    changes none of an axial part's."""
+    from checker.shapes import signed_distance
+
+    box = trimesh.creation.box(extents=[1, 1, 1])
+    shapes = [Shape(ShapeType.SPHERE, [0.3]), Shape(ShapeType.CAPSULE, [0.2, 0.4]),
+              Shape(ShapeType.CYLINDER, [0.2, 0.4]), Shape(ShapeType.ELLIPSOID, [0.3, 0.3, 0.5]),
+              Shape(ShapeType.BOX, [0.3, 0.3, 0.5]), Shape(ShapeType.ELLIPSOID, [0.3, 0.2, 0.5]),
+              mesh_shape(np.asarray(box.vertices), np.asarray(box.faces)), Shape(ShapeType.PLANE, [])]
+    ps = PartSet.build([f"p{k}" for k in range(len(shapes))], shapes, tolerance=1e-2)
+    assert ps.axial.tolist() == [True] * 4 + [False] * 4
+    pts = np.random.default_rng(4).uniform(-0.8, 0.8, (200, 3))
+    c, s = np.cos(0.7), np.sin(0.7)
+    turned = pts @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]).T
+    for shape, axial in zip(shapes[:6], ps.axial[:6]):
+        same = np.allclose(signed_distance(shape, pts)[0], signed_distance(shape, turned)[0], atol=1e-9)
+        assert same == axial

@@ -12,7 +12,9 @@ part and cable candidates, and :func:`part_pair_bounds`). On a later step k, wit
   ``rel[i, k] = |u_i^k(k) - u_i^k(k0)|`` its displacement relative to part k,
 - ``dp[k]``: a bound on how far any point of part k moved since k0, its
   translation plus ``||R - R0||_F`` times the part's bounding radius about
-  its frame's origin (a plane that rotated: unbounded),
+  its frame's origin (a plane that rotated: unbounded), or with the part's
+  box the farthest move of a corner of it, ``max |(R - R0) c + t - t0|``
+  (a point's move is convex in the point),
 - ``g[i, k]``: centre i's gap to part k (inf when (i, k) is *active*: the
   caller evaluates every discrete point of the elements next to i against
   part k directly at every step, as the run does for places inside or
@@ -59,10 +61,13 @@ no pair can have come within the clearance while
 - ``dq_i < g[i, k]`` for every part k that did not move, and
   ``min(rel[i, k], dq_i + dp[k]) < g[i, k]`` for every part k that moved
   (cable-structure, keep-out),
-- ``dp[i] + dp[j] < bound[i, j] - clearance`` for every part pair that can
-  move relative to the other (part-part, keep-out between parts), except
-  the pairs the caller leaves out of the bound and checks itself at every
-  step (*active* part pairs, within the clearance at k0),
+- ``min(dp[i] + dp[j], rel[i, j]) < bound[i, j] - clearance`` for every
+  part pair that can move relative to the other (part-part, keep-out
+  between parts), ``rel`` the move of one part in the other's own frame
+  (modulo turns about that part's axis where it is a solid of revolution,
+  less both tessellation errors: :class:`~checker.advance.partpairs.PartPairGaps`),
+  except the pairs the caller leaves out of the bound and checks itself at
+  every step (*active* part pairs, within the clearance at k0),
 - every cable element splits into the same number of discrete points as at
   k0, and the element lengths of every *run* changed by at most ``stretch``
   in total: the run of element e is e .. L(e) on its cable, with L(e) the
@@ -131,7 +136,9 @@ the gaps at k0 include candidates up to ``stretch`` inside every window
 all the same, so none that left a window since was unaccounted for. Part pairs: the least distance
 of their triangles is at least the separation of their oriented boxes on any
 box axis (or, for a plane, the box's lowest point above it), which
-:func:`part_pair_bounds` takes at k0. Rounding is absorbed by a margin of
+:func:`part_pair_bounds` takes at k0; the distance of two rigid solids
+depends on their relative pose alone, and not on a turn about the axis of
+a solid of revolution. Rounding is absorbed by a margin of
 1e-9 of the scene's extent.
 
 So on such a step the pairwise checks can be skipped: their answer is "no
@@ -150,7 +157,7 @@ states, pieces and stretch). It takes arrays and knows no simulator; it does
 not check anything itself.
 """
 
-from checker.advance.partpairs import part_pair_bounds
+from checker.advance.partpairs import PartSolids, part_pair_bounds
 from checker.advance.skip import Active, Advancement
 
-__all__ = ["Active", "Advancement", "part_pair_bounds"]
+__all__ = ["Active", "Advancement", "PartSolids", "part_pair_bounds"]

@@ -1,9 +1,11 @@
 """The skip rule's bound on part pairs (part-part, keep-out between parts).
 
-Two rigid parts that may move relative to each other stay apart while the
-sum of how far any point of each moved is below a lower bound on their
-distance at the full check: the separation of their oriented boxes along a
-box axis (:func:`part_pair_bounds`).
+Two rigid parts that may move relative to each other stay apart while a
+bound on how far one moved relative to the other stays below a lower bound
+on their distance at the full check, the separation of their oriented boxes
+along a box axis (:func:`part_pair_bounds`): the sum of their moves in the
+world, or the move of one in the other's own frame, modulo turns about the
+axis of a solid of revolution (:class:`PartPairGaps`).
 
 Deliberately not here: cables, the run of states
 (:class:`checker.advance.skip.Advancement`), the part-part check itself
@@ -11,6 +13,8 @@ Deliberately not here: cables, the run of states
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -52,17 +56,104 @@ def part_pair_bounds(parts: PartSet, placed: Placement, i: np.ndarray, j: np.nda
     return out
 
 
+@dataclass(frozen=True)
+class PartSolids:
+    """What the part-pair condition knows of each part beyond its bounding radius.
+
+    Attributes:
+        lo, hi: (P, 3) bounds in the part's own frame of everything the
+            checks measure of it (cables against its solid, parts against
+            its triangles); infinite for a plane.
+        axial: (P,) bool, the part is unchanged by any turn about its
+            frame's z axis (:attr:`checker.partset.PartSet.axial`).
+        error: (P,) how far below the true distance the part-part check
+            may measure the part (its tessellation error).
+    """
+
+    lo: np.ndarray
+    hi: np.ndarray
+    axial: np.ndarray
+    error: np.ndarray
+
+
+def _turned_z(v: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
+    """Points v (..., 3) turned about z by the angle of (cos, sin) (broadcast to v[..., 0])."""
+    out = np.empty(np.broadcast_shapes(v.shape, cos.shape[:-1] + (3,)))
+    x, y = v[..., 0], v[..., 1]
+    out[..., 0] = cos[..., 0] * x - sin[..., 0] * y
+    out[..., 1] = sin[..., 0] * x + cos[..., 0] * y
+    out[..., 2] = v[..., 2]
+    return out
+
+
+def _corner_moves(d_rot: np.ndarray, d_pos: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """(n,): the largest ``|d_rot c + d_pos|`` over the corners c (n, 8, 3)
+    for d_rot (n, 3, 3), d_pos (n, 3)."""
+    v = corners @ np.swapaxes(d_rot, -1, -2) + d_pos[:, None, :]
+    return np.sqrt(np.einsum("nki,nki->nk", v, v).max(axis=1))
+
+
 class PartPairGaps:
     """The part-pair condition, restarted at every full check.
+
+    A pair (i, j) is clear at a state while the bound on how far any point of
+    one part moved relative to the other since the start stays below its
+    gap ``g = bound - clearance - mu``: the least of
+
+    - ``dp[i] + dp[j]``, how far any point of each moved in the world
+      (:meth:`moves`): ``||R - R0||_F rho + |t - t0|``, or with the parts'
+      boxes (:class:`PartSolids`) the largest move of a corner of the box,
+      ``max |(R - R0) c + t - t0|`` (a point's move is convex in the point,
+      so a box's largest is at a corner);
+    - ``rel``: the motion of the pair's *other* part in its *frame* part's
+      own frame (a part on a plane's side is measured in the plane's frame):
+      with ``Q = R_f^T R_m`` and ``s = R_f^T (t_m - t_f)``, every point
+      ``Q u + s`` of the other part moved by at most
+      ``||Q - Q0||_F rho_m + |s - s0|``, or the largest ``|(Q - Q0) c + s - s0|``
+      over the corners c of its box, relative to the frame part (two parts
+      turning and moving together move nothing relative to each other);
+    - where the frame part is unchanged by turning about its own z axis
+      (``axial``: a cylinder, capsule, sphere or round ellipsoid, as the
+      part-part check measures it), the same after turning the other part's
+      relative pose about that axis by the angle ``phi`` that best undoes
+      its turn since the start, ``Rz(phi) ~ Q0 Q^T`` (a door knuckle turning
+      on a hinge pin, a panel swinging round the knuckle's axis: nothing
+      moves); the corners of the other part's box are turned (a part
+      without a box keeps the radius bound, not turned). The distance of
+      the true shapes is the same at both poses; the check measures a
+      curved part's inscribed tessellation less its error, at most
+      ``error[i] + error[j]`` below the true distance, so this bound is
+      held to ``g - error[i] - error[j]``.
+
+    Each is a bound on the drop of the distance (1-Lipschitz in the points),
+    so the pair stays outside the clearance while any one holds. Any
+    ``phi`` is sound (its choice only tightens): ``Rz(phi)`` is an isometry
+    of the frame part's solid.
 
     Args:
         part_radius: (P,) bounding radius of each part about its frame's
             origin (inf for planes).
         clearance: the clearance.
+        solids: the parts' boxes, symmetry and tessellation errors, or
+            None (the bounding radii alone, no symmetry).
     """
 
-    def __init__(self, part_radius: np.ndarray, clearance: float):
+    def __init__(self, part_radius: np.ndarray, clearance: float, solids: PartSolids | None = None):
         self._rho = np.asarray(part_radius, float)
+        n = len(self._rho)
+        self._plane = ~np.isfinite(self._rho)
+        self._axial = np.zeros(n, bool) if solids is None else np.asarray(solids.axial, bool)
+        self._error = np.zeros(n) if solids is None else np.asarray(solids.error, float)
+        self._boxed = np.zeros(n, bool)
+        self._corners = np.zeros((n, 8, 3))                            # (P, 8, 3), 0 where unboxed
+        if solids is not None:
+            lo, hi = np.asarray(solids.lo, float), np.asarray(solids.hi, float)
+            self._boxed = np.isfinite(lo).all(axis=1) & np.isfinite(hi).all(axis=1)
+            pick = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], bool)
+            box = np.where(self._boxed[:, None, None], np.stack([lo, hi], axis=1), 0.0)
+            self._corners = np.where(pick[None], box[:, 1][:, None], box[:, 0][:, None])
+        # the frame part of a pair: a plane first, then an axial part
+        self._rank = np.where(self._plane, 2, np.where(self._axial, 1, 0))
         self.clearance = float(clearance)
         self.ok = False
         """True while the last start proved every pair apart (else nothing is proven)."""
@@ -73,11 +164,19 @@ class PartPairGaps:
         (i, j) and lower bounds on their distances (:func:`part_pair_bounds`);
         ``mu`` the rounding margin (None: from the poses)."""
         self._poses = np.array(poses, float)
-        self._pi, self._pj = pairs
+        pi, pj = (np.asarray(x, np.int64) for x in pairs)
+        self._pi, self._pj = pi, pj
         if mu is None:
             mu = 1e-9 * (1.0 + float(np.abs(self._poses[:, :3, 3]).max(initial=0.0)))
         self._g_pair = np.asarray(pair_bound, float) - self.clearance - mu
         self.ok = bool(np.all(self._g_pair > 0))
+        swap = self._rank[pj] > self._rank[pi]
+        self._f, self._m = np.where(swap, pj, pi), np.where(swap, pi, pj)
+        self._turn = self._axial[self._f] & ~self._plane[self._f]
+        self._g_rel = self._g_pair - np.where(self._turn, self._error[pi] + self._error[pj], 0.0)
+        q0, s0, c0 = self._relative(self._poses[None], np.arange(len(pi)))
+        self._q0, self._s0, self._c0 = q0[0], s0[0], c0[0]
+        self._q0_sin = np.stack([self._q0[:, 1], -self._q0[:, 0]], axis=1)   # M10 - M01 against Q's top rows
 
     def stop(self) -> None:
         """Prove nothing until the next :meth:`start`."""
@@ -91,13 +190,69 @@ class PartPairGaps:
         fro = np.sqrt(np.einsum("...ij,...ij->...", d_rot, d_rot))
         dp = np.sqrt(np.einsum("...i,...i->...", d_pos, d_pos))
         dp += np.multiply(fro, self._rho, out=np.zeros_like(fro), where=fro > 0)   # plane turned: inf
+        if self._boxed.any():
+            turned = (fro > 0) & self._boxed
+            if turned.any():
+                at = np.nonzero(turned)
+                dp[at] = np.minimum(dp[at], _corner_moves(d_rot[at], d_pos[at], self._corners[at[-1]]))
         return dp
 
-    def clear(self, dp: np.ndarray) -> np.ndarray:
-        """The condition per state (S,) from the parts' moves dp (P, S) (:meth:`moves`)."""
+    def _relative(self, poses: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(Q (S, n, 3, 3), s (S, n, 3), corners (S, n, 8, 3)): the other
+        part's pose and its box's corners in the frame part's frame, for
+        pairs ``rows`` (n,) at poses (S, P, 4, 4)."""
+        f, m = self._f[rows], self._m[rows]
+        pf, pm = poses[:, f], poses[:, m]
+        rft = np.swapaxes(pf[..., :3, :3], -1, -2)
+        q = rft @ pm[..., :3, :3]
+        s = (rft @ (pm[..., :3, 3] - pf[..., :3, 3])[..., None])[..., 0]
+        return q, s, self._corners[m][None] @ np.swapaxes(q, -1, -2) + s[..., None, :]
+
+    def _relative_moves(self, poses: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """(n, S): the ``rel`` bound (class docstring) of pairs ``rows`` at poses (S, P, 4, 4)."""
+        q, s, c = self._relative(poses, rows)
+        q0 = self._q0[rows]
+        turn = self._turn[rows]
+        m = self._m[rows]
+        loose = np.flatnonzero(~self._boxed[m])
+        if turn.any():
+            # Rz(phi) nearest M = Q0 Q^T: cos and sin along (M00 + M11, M10 - M01)
+            top = q[..., :2, :]
+            cos = np.einsum("nak,snak->sn", q0[:, :2], top)
+            sin = np.einsum("nak,snak->sn", self._q0_sin[rows], top)
+            ln = np.hypot(cos, sin)
+            use = turn[None] & (ln > 0)
+            ln = np.where(use, ln, 1.0)
+            cos = np.where(use, cos / ln, 1.0)[..., None, None]
+            sin = np.where(use, sin / ln, 0.0)[..., None, None]
+            c = _turned_z(c, cos, sin)
+        d = c - self._c0[rows]
+        out = np.sqrt(np.einsum("snki,snki->snk", d, d).max(axis=2))              # boxed: the corners'
+        if len(loose):                                  # no box: the radius bound, not turned (sound too)
+            dq = q[:, loose] - q0[loose]
+            fro = np.sqrt(np.einsum("snij,snij->sn", dq, dq))
+            ds = s[:, loose] - self._s0[rows[loose]]
+            far = np.sqrt(np.einsum("sni,sni->sn", ds, ds))
+            far += np.multiply(fro, self._rho[m[loose]], out=np.zeros_like(fro), where=fro > 0)
+            out[:, loose] = far
+        return out.T
+
+    def _pair_ok(self, dp: np.ndarray, poses: np.ndarray) -> np.ndarray:
+        """(n_pairs, S) the condition per pair and state, from the world
+        moves dp (P, S) and the poses (S, P, 4, 4): the pairs the world
+        moves do not prove apart are tested relative to each other."""
+        ok = dp[self._pi] + dp[self._pj] < self._g_pair[:, None]
+        rows = np.flatnonzero(~ok.all(axis=1))
+        if len(rows):
+            ok[rows] |= self._relative_moves(poses, rows) < self._g_rel[rows, None]
+        return ok
+
+    def clear(self, dp: np.ndarray, poses: np.ndarray) -> np.ndarray:
+        """The condition per state (S,) from the parts' moves dp (P, S)
+        (:meth:`moves`) at poses (S, P, 4, 4)."""
         if not len(self._pi):
             return np.ones(dp.shape[1], bool)
-        return (dp[self._pi] + dp[self._pj] < self._g_pair[:, None]).all(axis=0)
+        return self._pair_ok(dp, poses).all(axis=0)
 
     def clear_at(self, poses: np.ndarray) -> bool:
         """True when no moving part pair can be within the clearance (the
@@ -106,8 +261,7 @@ class PartPairGaps:
         whose cable checks run in full."""
         if not self.ok or len(poses) != len(self._poses):
             return False
-        dp = self.moves(poses)
-        return not len(self._pi) or bool(np.all(dp[self._pi] + dp[self._pj] < self._g_pair))
+        return not len(self._pi) or bool(self.clear(self.moves(poses)[:, None], np.asarray(poses)[None])[0])
 
     def failing_at(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """The moving part pairs (i, j) whose bound fails at poses (every
@@ -117,6 +271,5 @@ class PartPairGaps:
             return None
         if not len(self._pi):
             return self._pi[:0], self._pj[:0]
-        dp = self.moves(poses)
-        fail = ~(dp[self._pi] + dp[self._pj] < self._g_pair)
+        fail = ~self._pair_ok(self.moves(poses)[:, None], np.asarray(poses)[None])[:, 0]
         return self._pi[fail], self._pj[fail]

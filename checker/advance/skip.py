@@ -24,7 +24,7 @@ import numpy as np
 
 from checker.advance.cablepairs import CablePairGaps
 from checker.advance.common import FAR_HORIZONS, Layout, Start, leading, row_norm3
-from checker.advance.partpairs import PartPairGaps
+from checker.advance.partpairs import PartPairGaps, PartSolids
 from checker.advance.structure import CentrePartGaps
 from checker.cable import element_pieces, polyline_arc_lengths
 from checker.closest import row_norm
@@ -79,6 +79,9 @@ class Advancement:
             (infinite for a plane: lo -inf, hi (inf, inf, 0)); with them and
             ``radius``, centres far from a part get the boxes' distance as
             their gap to it (else the horizon).
+        part_solids: the parts' boxes, symmetry and tessellation errors for
+            the part-pair condition (:class:`~checker.advance.partpairs.PartSolids`),
+            or None (their bounding radii alone).
 
     Attributes:
         full, skipped: full checks started (or stopped) and states proven clear so far.
@@ -92,7 +95,8 @@ class Advancement:
 
     def __init__(self, offsets: np.ndarray, spacing: np.ndarray, part_radius: np.ndarray,
                  clearance: float, stretch: float, radius: np.ndarray | None = None,
-                 part_box: tuple[np.ndarray, np.ndarray] | None = None):
+                 part_box: tuple[np.ndarray, np.ndarray] | None = None,
+                 part_solids: PartSolids | None = None):
         offsets = np.asarray(offsets, np.int64)
         cable_of_pt = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
         self._valid = cable_of_pt[:-1] == cable_of_pt[1:]
@@ -113,7 +117,7 @@ class Advancement:
         self.stretch = float(stretch)
         self._layout = Layout(offsets, cable_of_pt, self._valid, rad, box, np.asarray(part_radius, float),
                               self.clearance, self.stretch)
-        self._pairs = PartPairGaps(part_radius, clearance)
+        self._pairs = PartPairGaps(part_radius, clearance, part_solids)
         self._ok = False
         z = np.zeros(0, np.int64)
         self._active = Active((z, z), (z, z))
@@ -224,7 +228,7 @@ class Advancement:
             dp = np.zeros((len(self._pos), n))
             if n and len(self._pos):
                 dp = self._pairs.moves(poses[a:a + n]).T                   # (P, S)
-                n = leading(self._pairs.clear(dp))
+                n = leading(self._pairs.clear(dp, poses[a:a + n]))
             if not n:
                 break
             run = slice(0, n)
@@ -380,7 +384,7 @@ class Advancement:
         if n and len(self._pos):
             poses = poses[:n]
             dp = self._pairs.moves(poses).T                                # (P, S)
-            ok = self._parts.clear(x[:, :, :n], poses, dq[:, :n], dp) & self._pairs.clear(dp)
+            ok = self._parts.clear(x[:, :, :n], poses, dq[:, :n], dp) & self._pairs.clear(dp, poses)
             n = leading(ok)
         self.skipped += n
         return n
