@@ -206,8 +206,7 @@ def example_scenes_table(sizes: BenchSizes, out: Path) -> tuple[Table, dict]:
         "realtime_factor: simulated seconds over the step loop's wall time (the wear map's too); _total adds "
         "building and settling.",
         "full_checks / proven_clear: checked steps run in full and steps the skip rule (checker.advance) "
-        "proved clear; a cable-structure pair inside the clearance is then checked on its own, but a "
-        "self or cable-cable pair inside it (crossing, coil_self) keeps every step a full check.",
+        "proved clear; a pair inside the clearance (or whose own bound fails) is then checked on its own.",
     ] + ([f"each scene runs its first {sizes.example_seconds:g} simulated second(s) only."]
          if sizes.example_seconds is not None else [])
     return table, found
