@@ -58,9 +58,10 @@ no pair can have come within the clearance while
     step k itself is above 0,
   - ``min(spread, 2 max dq) < FAR_HORIZONS * H`` when some block pairs are
     farther apart than that and left unlisted,
-- ``dq_i < g[i, k]`` for every part k that did not move, and
-  ``min(rel[i, k], dq_i + dp[k]) < g[i, k]`` for every part k that moved
-  (cable-structure, keep-out),
+- ``dq_i < g[i, k]`` for every part k that did not move, and for every
+  part k that moved and every element (i, i + 1), either ``rel[j, k] <
+  g[j, k]`` for both its centres j, or ``dq_j + dp[k] < g[j, k]`` for both
+  (one bound for the whole element; cable-structure, keep-out),
 - ``min(dp[i] + dp[j], rel[i, j]) < bound[i, j] - clearance`` for every
   part pair that can move relative to the other (part-part, keep-out
   between parts), ``rel`` the move of one part in the other's own frame
@@ -108,7 +109,13 @@ of the places, so it dropped by at most ``|d_a - d_b|`` (cable pairs), and
 by at most the point's displacement in the part's own frame, or the point's
 plus the part's displacement in the world (cable and part; a point outside a
 solid with distance above the clearance stays outside, where the signed
-distance is the distance). Two conditions look at step k alone (the chord's ``S`` aside). Boxes:
+distance is the distance). A point ``(1 - t) x_i + t x_(i+1)`` of an element
+moved in part k's frame by at most ``(1 - t) rel[i, k] + t rel[i + 1, k] <
+(1 - t) g[i, k] + t g[i + 1, k]``, at most the element's own gap (each
+centre's gap is the least over its elements), and likewise in the world:
+hence one bound for both centres (a centre riding with a turning part, next
+to one held still in the world, passes by the one and the other by the
+other, and the points between them by neither). Two conditions look at step k alone (the chord's ``S`` aside). Boxes:
 every place of a block lies in the convex hull of its centres, inside
 their bounding box. Chord: let two places on elements e and f
 be checked at step k, so their arc lengths differ by at least ``w`` (and by

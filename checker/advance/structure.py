@@ -276,12 +276,7 @@ class CentrePartGaps:
         s = x.shape[2]
         if self._sparse:
             return self._failing_sparse(x, poses, dq, dp)
-        top = np.transpose(poses[:, :, :3, :], (1, 3, 2, 0)).reshape(len(dp), 4, 3 * s)
-        w = np.matmul(self._u0h, top).reshape(len(dp), len(x), 3, s)
-        w -= x
-        bad = np.einsum("knis,knis->kns", w, w) >= self._g2[:, :, None]
-        if bad.any():
-            bad &= (dq + dp[:, None, :]) >= self._g_kn[:, :, None]
+        bad = self._named(x, poses, dq, dp, self._u0h, self._g_kn, self._g2)
         k, i = np.nonzero(bad.any(axis=2))
         return i, k, np.argmax(bad[k, i], axis=1), s
 
@@ -339,14 +334,7 @@ class CentrePartGaps:
         s = x.shape[2]
         if self._sparse:
             return self._parts_clear_sparse(x, poses, dq, dp)
-        # every centre as it would be had it moved rigidly with part k:
-        # u0h[k] (N, 4) times the poses' top rows (4, 3 S), one product per part
-        top = np.transpose(poses[:, :, :3, :], (1, 3, 2, 0)).reshape(len(dp), 4, 3 * s)
-        w = np.matmul(self._u0h, top).reshape(len(dp), len(x), 3, s)
-        w -= x
-        bad = np.einsum("knis,knis->kns", w, w) >= self._g2[:, :, None]
-        if bad.any():                            # or within the gap by the world displacements
-            bad &= (dq + dp[:, None, :]) >= self._g_kn[:, :, None]
+        bad = self._named(x, poses, dq, dp, self._u0h, self._g_kn, self._g2)
         return ~bad.reshape(-1, s).any(axis=0)
 
     def _sparse_tables(self, moved: np.ndarray) -> tuple:
@@ -400,23 +388,43 @@ class CentrePartGaps:
         g_still, mk, u0h, g_kn, g2 = tables[:5]
         need = (dq >= g_still[:, None]).any(axis=1)
         if len(mk):
-            need |= self._moved_bad(x, poses, dq, dp[mk], mk, u0h, g_kn, g2).any(axis=(0, 2))
+            need |= self._moved_bad(x, poses, dq, dp[mk], mk, u0h, g_kn, g2, touched=True).any(axis=(0, 2))
         need &= ~self._refined()
         if need.any():
             self._refine(np.nonzero(need)[0])
             tables = self._sparse_tables(moved)
         return tables
 
-    def _moved_bad(self, x, poses, dq, dp, mk, u0h, g_kn, g2) -> np.ndarray:
-        """(K, N, S): centre n fails against moved part mk[k] at state s
-        (``rel`` and the world bound both at or past the gap)."""
+    def _moved_bad(self, x, poses, dq, dp, mk, u0h, g_kn, g2, touched: bool = False) -> np.ndarray:
+        """:meth:`_named` against the moved parts mk (K, N, S); ``touched``:
+        every centre of a failing element instead (both of a crossing one)."""
+        return self._named(x, poses[:, mk], dq, dp, u0h, g_kn, g2, touched)
+
+    def _named(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray, u0h: np.ndarray,
+               g_kn: np.ndarray, g2: np.ndarray, touched: bool = False) -> np.ndarray:
+        """(K, N, S): centre n is named against part k (the K parts of
+        ``poses`` (S, K, 4, 4), ``dp`` (K, S), the tables u0h, g_kn, g2 their
+        rows) at state s: it fails both its ``rel`` and its world bound, or
+        it is the first centre of an element whose two centres pass by
+        different ones (the element's points are bounded by neither: package
+        docstring). A state fails exactly when a centre is named at it, and
+        promoting the named centres leaves no element failing."""
         s = x.shape[2]
-        top = np.transpose(poses[:, mk, :3, :], (1, 3, 2, 0)).reshape(len(mk), 4, 3 * s)
-        w = np.matmul(u0h, top).reshape(len(mk), len(x), 3, s)
+        # every centre as it would be had it moved rigidly with part k:
+        # u0h[k] (N, 4) times the poses' top rows (4, 3 S), one product per part
+        top = np.transpose(poses[:, :, :3, :], (1, 3, 2, 0)).reshape(len(dp), 4, 3 * s)
+        w = np.matmul(u0h, top).reshape(len(dp), len(x), 3, s)
         w -= x
-        bad = np.einsum("knis,knis->kns", w, w) >= g2[:, :, None]
-        if bad.any():
-            bad &= (dq + dp[:, None, :]) >= g_kn[:, :, None]
+        rel = np.einsum("knis,knis->kns", w, w) >= g2[:, :, None]
+        if not rel.any():
+            return rel
+        world = (dq + dp[:, None, :]) >= g_kn[:, :, None]
+        bad = rel & world
+        cross = (rel[:, :-1] & world[:, 1:]) | (world[:, :-1] & rel[:, 1:])
+        cross &= self._valid[None, :, None]
+        bad[:, :-1] |= cross
+        if touched:
+            bad[:, 1:] |= cross
         return bad
 
     def _parts_clear_sparse(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray) -> np.ndarray:
