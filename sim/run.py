@@ -30,7 +30,7 @@ from checker.cable import TAUT_STRAIN
 from checker.events import Event, EventTracker
 from checker.records import PairType, Severity
 from checker.scene_state import CheckConfig
-from checker.twist import TwistMeter
+from checker.twist import TwistMeter, update_many
 from checker.wear import CableWear, WearMap
 from sim.build import Built, build
 from sim.jointspace import JointLog
@@ -259,14 +259,17 @@ class _Checked:
         self.batch_twist = np.full((len(states), len(self.clamped)), np.nan)
         if not states or states[0].end_rot is None:
             return
-        for i, clamped in enumerate(self.clamped):
-            if not clamped:
-                continue
-            pts = np.stack([s.cables[i] for s in states])
-            rot = np.stack([s.end_rot[i] for s in states])
+        cables = [i for i, clamped in enumerate(self.clamped) if clamped]
+        if not cables:
+            return
+        pts = [np.stack([s.cables[i] for s in states]) for i in cables]
+        rot = [np.stack([s.end_rot[i] for s in states]) for i in cables]
+        for i, p, r in zip(cables, pts, rot):
             if self.twist[i] is None:
-                self.twist[i] = TwistMeter(pts[0], rot[0, 0], rot[0, 1])
-            self.batch_twist[:, i] = np.degrees(self.twist[i].update(pts, rot[:, 0], rot[:, 1]))
+                self.twist[i] = TwistMeter(p[0], r[0, 0], r[0, 1])
+        twists = update_many([self.twist[i] for i in cables], pts, [r[:, 0] for r in rot], [r[:, 1] for r in rot])
+        for i, twist in zip(cables, twists):
+            self.batch_twist[:, i] = np.degrees(twist)
 
     def take(self, states, results) -> None:
         """The checked states (oldest first) and their results."""

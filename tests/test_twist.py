@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from hypothesis import assume, given, settings, strategies as st
 
-from checker.twist import TwistMeter, transport, twist_angle
+from checker.twist import TwistMeter, transport, twist_angle, update_many
 
 
 def _rot(axis, angle) -> np.ndarray:
@@ -118,3 +118,21 @@ def test_run_reports_the_twist_a_turning_end_winds_in(tmp_path):
         assert abs(cable["max_twist"] - 90.0) < (1e-6 if not dynamics else 0.5), dynamics
         moment = 2e7 * np.pi * 0.004 ** 4 / 2 * np.radians(cable["max_twist"]) / cable["length"]
         assert np.isclose(cable["max_twist_moment"], moment)
+
+
+def test_update_many_is_each_meter_updated_alone():
+    """Meters updated together (two cables of one point count, one of
+    another) give the bits of each updated alone, step after step."""
+    rng = np.random.default_rng(3)
+    shapes = [np.cumsum(rng.normal(size=(n, 3)), axis=0) for n in (9, 9, 14)]
+    rots = [np.linalg.qr(rng.normal(size=(2, 3, 3)))[0] for _ in shapes]
+    alone = [TwistMeter(p, r[0], r[1]) for p, r in zip(shapes, rots)]
+    together = [TwistMeter(p, r[0], r[1]) for p, r in zip(shapes, rots)]
+    for _ in range(3):
+        pts = [p[None] + 0.1 * rng.normal(size=(5,) + p.shape) for p in shapes]
+        start = [np.linalg.qr(rng.normal(size=(5, 3, 3)))[0] for _ in shapes]
+        end = [np.linalg.qr(rng.normal(size=(5, 3, 3)))[0] for _ in shapes]
+        got = update_many(together, pts, start, end)
+        for m, g, p, s, e in zip(alone, got, pts, start, end):
+            assert np.array_equal(m.update(p, s, e), g)
+    assert [m.max_abs for m in alone] == [m.max_abs for m in together]
