@@ -240,6 +240,11 @@ def transformed_aabb(lo: np.ndarray, hi: np.ndarray, rot: np.ndarray, shift: np.
     return cw - hw, cw + hw
 
 
+_CROSS = tuple(np.array(v, np.int64) for v in zip(*[
+    (i, (i + 1) % 3, (i + 2) % 3, j, (j + 1) % 3, (j + 2) % 3) for i in range(3) for j in range(3)]))
+"""(i, i+1, i+2, j, j+1, j+2) mod 3 for the nine edge-cross axes A_i x B_j."""
+
+
 def obb_overlap(c1: np.ndarray, r1: np.ndarray, h1: np.ndarray,
                 c2: np.ndarray, r2: np.ndarray, h2: np.ndarray) -> np.ndarray:
     """15-axis separating-axis test for pairs of oriented boxes.
@@ -268,15 +273,13 @@ def obb_overlap(c1: np.ndarray, r1: np.ndarray, h1: np.ndarray,
     ra = np.einsum("nji,nj->ni", ar, h1)
     tb = np.einsum("nji,nj->ni", rot, t)
     sep |= np.any(np.abs(tb) > ra + h2 + slack[:, None], axis=1)
-    # cross products A_i x B_j
-    for i in range(3):
-        i1, i2 = (i + 1) % 3, (i + 2) % 3
-        for j in range(3):
-            j1, j2 = (j + 1) % 3, (j + 2) % 3
-            ra = h1[:, i1] * ar[:, i2, j] + h1[:, i2] * ar[:, i1, j]
-            rb = h2[:, j1] * ar[:, i, j2] + h2[:, j2] * ar[:, i, j1]
-            tt = np.abs(t[:, i2] * rot[:, i1, j] - t[:, i1] * rot[:, i2, j])
-            sep |= tt > ra + rb + slack
+    # cross products A_i x B_j, the nine at once (each term the loop's own
+    # products and sums: the same bits, a tenth of the numpy calls)
+    i, i1, i2, j, j1, j2 = _CROSS
+    ra = h1[:, i1] * ar[:, i2, j] + h1[:, i2] * ar[:, i1, j]
+    rb = h2[:, j1] * ar[:, i, j2] + h2[:, j2] * ar[:, i, j1]
+    tt = np.abs(t[:, i2] * rot[:, i1, j] - t[:, i1] * rot[:, i2, j])
+    sep |= (tt > ra + rb + slack[:, None]).any(axis=1)
     return ~sep
 
 

@@ -38,6 +38,21 @@ def test_obb_overlap_matches_corner_projection(seed):
     assert got == _obb_brute(c1, r1, h1, c2, r2, h2)
 
 
+def test_obb_overlap_of_a_batch_is_each_pair_alone():
+    """Many pairs in one call answer as each pair alone (and as the corner projection)."""
+    rng = np.random.default_rng(11)
+    n = 200
+    c1, c2 = rng.uniform(-2, 2, (n, 3)), rng.uniform(-2, 2, (n, 3))
+    r1, r2 = np.stack([_rot(rng) for _ in range(n)]), np.stack([_rot(rng) for _ in range(n)])
+    h1, h2 = rng.uniform(0.1, 1.5, (n, 3)), rng.uniform(0.1, 1.5, (n, 3))
+    got = obb_overlap(c1, r1, h1, c2, r2, h2)
+    alone = [obb_overlap(c1[k:k + 1], r1[k:k + 1], h1[k:k + 1], c2[k:k + 1], r2[k:k + 1], h2[k:k + 1])[0]
+             for k in range(n)]
+    assert got.tolist() == alone
+    assert got.tolist() == [_obb_brute(c1[k], r1[k], h1[k], c2[k], r2[k], h2[k]) for k in range(n)]
+    assert 0 < got.sum() < n
+
+
 def test_touching_boxes_overlap():
     eye = np.eye(3)[None]
     h = np.ones((1, 3))
