@@ -451,10 +451,13 @@ class PartChecker:
         if apart.any():
             return None
         touch = parts.touch(ka, kb)
-        for k in np.flatnonzero((value < -touch) | ((touch < value) & (value < self.clearance))):
-            rec = _record(parts, int(ka[k]), int(kb[k]), float(value[k]), where[k], self.clearance)
+        rec_k = np.flatnonzero((value < -touch) | ((touch < value) & (value < self.clearance)))
+        # one record per state and pair: plain Python values, taken in one pass each
+        for a_k, b_k, v_k, w_k, s_k in zip(ka[rec_k].tolist(), kb[rec_k].tolist(), value[rec_k].tolist(),
+                                            where[rec_k], (near[rec_k] // n).tolist()):
+            rec = _record(parts, a_k, b_k, v_k, w_k, self.clearance)
             if rec is not None:
-                out[int(near[k]) // n].append(rec)
+                out[s_k].append(rec)
         return out
 
     def moving_pairs(self) -> tuple[np.ndarray, np.ndarray]:

@@ -282,14 +282,18 @@ class _Checked:
                                             for s in states]),
                                   np.stack([s.part_poses for s in states]), [r.records for r in results])
             self.timer.lap("wear")
+        if len(results):
+            # the batch's extremes in one pass (the first of equal magnitudes, as state by state)
+            strain = np.stack([r.strain for r in results])
+            first = strain[np.argmax(np.abs(strain), axis=0), np.arange(strain.shape[1])]
+            self.max_strain = np.where(np.abs(first) > np.abs(self.max_strain), first, self.max_strain)
+            self.max_stretch = np.maximum(self.max_stretch, strain.max(axis=0))
+            self.min_bend = np.minimum(self.min_bend, np.stack([r.bend for r in results]).min(axis=0))
         for k, (state, res) in enumerate(zip(states, results)):
             if state.step == 0:
                 self.rest_points = state.cables
                 if recorder:
                     recorder.log_static(state.part_poses, state.cables, state.qpos)
-            self.max_strain = np.where(np.abs(res.strain) > np.abs(self.max_strain), res.strain, self.max_strain)
-            self.max_stretch = np.maximum(self.max_stretch, res.strain)
-            self.min_bend = np.minimum(self.min_bend, res.bend)
             started, closed = self.tracker.update(state.t, res.records)
             if res.near is not None:
                 self.pending_near = res.near     # a full check's candidates, shown at the next frame
