@@ -40,7 +40,7 @@ from sim.record import Mark, Recorder, Settings, summary_text
 from sim.report import STAGES, CableOutcome, RunOutcome, Timing, report_of, write_report
 from sim.scene import Scene, check_allow_names
 from sim.staticbuild import build_static, needs_model
-from sim.stepcheck import BATCH, StepChecks
+from sim.stepcheck import BATCH, BATCH_MAX, StepChecks
 from sim.stop import StopRequest
 
 RECORD_RATE = 100.0
@@ -175,16 +175,19 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
                    checks.exclusions)
     complete = False
     batch: list = []
+    size = BATCH
     try:
         for state in (() if stop.asked else sim.steps(contacts=False, every=every)):
-            # states are checked BATCH at a time (sim.stepcheck): the last
-            # one of the run, or of an interrupted run, closes its batch
+            # states are checked BATCH at a time at first, then each batch
+            # twice the last up to BATCH_MAX (sim.stepcheck): the last state
+            # of the run, or of an interrupted run, closes its batch
             batch.append(state)
-            if len(batch) < BATCH and state.step < sim.total_steps and not stop.asked:
+            if len(batch) < size and state.step < sim.total_steps and not stop.asked:
                 continue
             timer.lap("sim")
             out.take(batch, checks.run(batch))
             batch = []
+            size = min(2 * size, max(BATCH, BATCH_MAX))
             if stop.asked:
                 break
         complete = not stop.asked

@@ -37,13 +37,15 @@ def _strip(x):
 def test_batch_size_changes_no_answer(name: str, tmp_path, monkeypatch):
     scene = load_scene(SCENES / f"{name}.toml")
     reports = []
-    for size in (1, 7, sim.run.BATCH):
+    # fixed batches of 1, 7 and BATCH states, then the run's own (growing) batches
+    for size, most in ((1, 1), (7, 7), (sim.run.BATCH, sim.run.BATCH), (sim.run.BATCH, sim.run.BATCH_MAX)):
         monkeypatch.setattr(sim.run, "BATCH", size)
-        rep = run_scene(scene, RunOptions(report=tmp_path / f"{size}.json", record=None))
+        monkeypatch.setattr(sim.run, "BATCH_MAX", most)
+        rep = run_scene(scene, RunOptions(report=tmp_path / f"{size}-{most}.json", record=None))
         reports.append(_strip(_comparable(rep)))
     adv = reports[0]["advance"]
     assert adv["full_checks"] > 1 and adv["proven_clear_steps"] > 0   # both kinds in the batches
-    assert reports[0] == reports[1] == reports[2]
+    assert reports[0] == reports[1] == reports[2] == reports[3]
 
 
 def test_active_part_pairs_batch_size_changes_no_answer(tmp_path, monkeypatch):
@@ -52,12 +54,13 @@ def test_active_part_pairs_batch_size_changes_no_answer(tmp_path, monkeypatch):
     answers, allowed pairs included."""
     scene = load_scene(Path(__file__).resolve().parent / "scenes" / "door.toml")
     reports = []
-    for size in (1, 7, sim.run.BATCH):
+    for size, most in ((1, 1), (7, 7), (sim.run.BATCH, sim.run.BATCH), (sim.run.BATCH, sim.run.BATCH_MAX)):
         monkeypatch.setattr(sim.run, "BATCH", size)
-        rep = run_scene(scene, RunOptions(report=tmp_path / f"{size}.json", record=None))
+        monkeypatch.setattr(sim.run, "BATCH_MAX", most)
+        rep = run_scene(scene, RunOptions(report=tmp_path / f"{size}-{most}.json", record=None))
         reports.append(_strip({**_comparable(rep), "allowed": rep["allowed"]}))
     assert reports[0]["advance"]["proven_clear_steps"] > reports[0]["advance"]["full_checks"]
-    assert reports[0]["allowed"] and reports[0] == reports[1] == reports[2]
+    assert reports[0]["allowed"] and reports[0] == reports[1] == reports[2] == reports[3]
 
 
 def test_neighbour_links_in_the_kinematic_tree():
