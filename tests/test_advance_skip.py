@@ -60,9 +60,10 @@ def test_bound_stretch_and_gaps_at_or_below_zero():
     assert not a.proven_clear(pts, poses)
 
 
-def test_clear_run_counts_the_leading_states_one_at_a_time_would():
-    """clear_run over a batch of states equals testing them in order, one at
-    a time, up to the first that is not proven clear (with a part moving)."""
+def _hairpin_over_moving_slab():
+    """A hairpin 25 mm above a slab's surface, an Advancement factory started
+    from its full check, and 40 random batches of 12 states in which the
+    cable moves and bends and the slab moves (seeded)."""
     hp, _ = _hairpin(0.04)
     config = CheckConfig(clearance=_CLEAR)
     poses0 = np.eye(4)[None].copy()
@@ -79,14 +80,25 @@ def test_clear_run_counts_the_leading_states_one_at_a_time_would():
         a.start(hp, poses0, gaps, (z, z), np.zeros(0))
         return a
 
-    rng = np.random.default_rng(3)
+    def batches():
+        rng = np.random.default_rng(3)
+        for _ in range(40):
+            scale = rng.choice([0.001, 0.003, 0.01])
+            pts = hp[None] + np.cumsum(rng.normal(size=(12, 1, 3)) * scale, axis=0)
+            pts[:, 5:] += np.cumsum(rng.normal(size=(12, 1, 3)) * scale, axis=0)   # and bends
+            poses = np.repeat(poses0, 12, axis=0)[:, None].copy()
+            poses[:, 0, :3, 3] += np.cumsum(rng.normal(size=(12, 3)) * scale, axis=0)
+            yield pts, poses
+
+    return fresh, batches()
+
+
+def test_clear_run_counts_the_leading_states_one_at_a_time_would():
+    """clear_run over a batch of states equals testing them in order, one at
+    a time, up to the first that is not proven clear (with a part moving)."""
+    fresh, batches = _hairpin_over_moving_slab()
     counts = set()
-    for trial in range(40):
-        scale = rng.choice([0.001, 0.003, 0.01])
-        pts = hp[None] + np.cumsum(rng.normal(size=(12, 1, 3)) * scale, axis=0)
-        pts[:, 5:] += np.cumsum(rng.normal(size=(12, 1, 3)) * scale, axis=0)   # and bends
-        poses = np.repeat(poses0, 12, axis=0)[:, None].copy()
-        poses[:, 0, :3, 3] += np.cumsum(rng.normal(size=(12, 3)) * scale, axis=0)
+    for pts, poses in batches:
         one, batch = fresh(), fresh()
         expect = 0
         while expect < 12 and one.proven_clear(pts[expect], poses[expect]):
@@ -161,30 +173,9 @@ def test_clear_run_local_promotes_the_pairs_whose_bound_fails():
 def test_clear_run_local_without_budget_counts_what_clear_run_counts():
     """Budget 0 promotes nothing: the same leading states as clear_run, on
     random moves of a hairpin over a slab (a part moving too)."""
-    hp, _ = _hairpin(0.04)
-    config = CheckConfig(clearance=_CLEAR)
-    poses0 = np.eye(4)[None].copy()
-    poses0[0, :3, 3] = [0.0, 0.0, -0.05]
-    checker = Checker([PartState("slab", Shape(ShapeType.BOX, [1.0, 1.0, 0.015]), np.eye(4))],
-                      config, horizon=_H, stretch=_STRETCH)
-    gaps = checker.check_with_gaps([CableState("c0", hp, _R)], poses0).gaps
-    offsets = np.array([0, len(hp)])
-    z = np.zeros(0, np.int64)
-
-    def fresh():
-        a = Advancement(offsets, config.spacing * np.array([_R]), np.array([1.5]), _CLEAR, _STRETCH,
-                        np.array([_R]), checker.part_bounds())
-        a.start(hp, poses0, gaps, (z, z), np.zeros(0))
-        return a
-
-    rng = np.random.default_rng(3)
+    fresh, batches = _hairpin_over_moving_slab()
     counts = set()
-    for trial in range(40):
-        scale = rng.choice([0.001, 0.003, 0.01])
-        pts = hp[None] + np.cumsum(rng.normal(size=(12, 1, 3)) * scale, axis=0)
-        pts[:, 5:] += np.cumsum(rng.normal(size=(12, 1, 3)) * scale, axis=0)
-        poses = np.repeat(poses0, 12, axis=0)[:, None].copy()
-        poses[:, 0, :3, 3] += np.cumsum(rng.normal(size=(12, 3)) * scale, axis=0)
+    for pts, poses in batches:
         a, b = fresh(), fresh()
         n = a.clear_run(pts, poses)
         assert b.clear_run_local(pts, poses, 0).states == n == b.skipped
