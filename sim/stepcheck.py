@@ -10,8 +10,8 @@ at the last full check, which the skip rule leaves out and which are
 checked on their own (a cable lying on an arm link or held in a part just
 inside its attachment window, two leads crossing, a table just under a
 robot base or a hinge pin through its knuckles would otherwise stop all
-skipping; a part pair is checked whole, as the full check would). Cable
-pairs whose bound fails after a full check join them (*promoted*: a cable
+skipping; a part pair is checked whole, as the full check would). Pairs
+whose bound fails after a full check join them (*promoted*: a cable
 sliding towards one part, two leads drawing near) while they are few
 (``PROMOTE_SHARE``), so the cost of a step grows with what came near, not
 with the scene. The other states are checked in full.
