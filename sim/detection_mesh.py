@@ -5,7 +5,7 @@ MuJoCo collides a mesh geom as its convex hull (computation chapter,
 touches the hull where the checker, which checks the mesh itself, finds it
 clear. The detection model (see `sim.build`) is never stepped: it only has
 to see the geometry the checker checks. There, each colliding mesh geom
-that is not convex is joined by a rigid flex of its triangles (every vertex
+that is not convex is joined by rigid flexes of its triangles (every vertex
 on the geom's body: MuJoCo's documented way to collide a general
 non-convex mesh, XMLreference "flex/body"), and the geom itself stops
 meeting the cables, so a cable's contacts with that part are flex-flex
@@ -18,12 +18,20 @@ is the mesh itself, to MuJoCo's float precision, with no tolerance, no
 parameters and no cache; a decomposition approximates the surface (by a
 concavity tolerance), takes seconds to minutes per mesh and would need a
 cache on disk. The price is MuJoCo's time: every mj_flex places each
-surface's vertices, element boxes and tree (in proportion to the
+flex's vertices, element boxes and tree (in proportion to the
 triangles) and the cable elements are tested against the triangles near
-them, where a hull is one convex test. A surface no cable can reach at a
-state is left out of that state's pass (`sim.surfacereach`), so the cost
-follows what is near the cables; `benchmarks/bench_detection_mesh.py`
-measures hulls and surfaces side by side.
+them, where a hull is one convex test. So a surface is cut into patches
+of at most `PATCH_TRIANGLES` triangles (halving its triangles at the
+median of their centroids along the longest side of their box, a k-d
+split), each a rigid flex of its own on the same body, and a patch no
+cable can reach at a state is left out of that state's pass
+(`sim.surfacereach`): the cost follows the triangles near the cables,
+not the size of the meshes they pass. MuJoCo tests a cable element
+against each triangle on its own (an element pair, never a flex as a
+whole), and a triangle keeps its vertices' coordinates, so the patches
+give the contacts the whole surface gives (tests/test_detection_mesh.py);
+`benchmarks/bench_detection_mesh.py` measures hulls and surfaces side by
+side.
 
 A 2D flex element is a triangle with a radius that must be positive:
 `SURFACE_RADIUS` is tiny, and `ContactReader` adds it back to MuJoCo's
@@ -44,7 +52,15 @@ import numpy as np
 import trimesh
 
 SURFACE_PREFIX = "detect/surface:"
-"""Name prefix of the rigid flexes; the geom id follows (`surface_geoms`)."""
+"""Name prefix of the rigid flexes; the geom id follows, then `/` and the
+patch's index (`surface_geoms`)."""
+
+PATCH_TRIANGLES = 256
+"""Most triangles in one flex of a surface. Smaller patches follow the
+cables more closely but each flex costs MuJoCo a little in every pass (its
+tree root, its broadphase entry): on the robot cell's meshes (60,000
+triangles) 128 to 256 is where the two balance
+(benchmarks/bench_detection_mesh.py)."""
 
 SURFACE_RADIUS = 1e-6
 """Radius of the surface flexes' triangles, metres (MuJoCo needs a positive
@@ -87,7 +103,7 @@ def _surface_meshes(spec: mujoco.MjSpec, model: mujoco.MjModel) -> list[tuple[mu
 
 def add_surfaces(spec: mujoco.MjSpec, model: mujoco.MjModel, cable_bit: int) -> mujoco.MjModel:
     """The detection model with each colliding non-convex mesh geom's surface
-    as a rigid flex meeting the cables (and the geom no longer meeting
+    as rigid flexes (its patches, `patches`) meeting the cables (and the geom no longer meeting
     them); `model` itself when there is none. `spec` was compiled into
     `model`; `cable_bit` is the cables' contype bit."""
     found = _surface_meshes(spec, model)
@@ -97,28 +113,50 @@ def add_surfaces(spec: mujoco.MjSpec, model: mujoco.MjModel, cable_bit: int) -> 
         body = g.parent
         if not body.name:  # a flex names its body; the detection model's body names are not read
             body.name = f"{SURFACE_PREFIX}body{body.id}"
-        f = spec.add_flex()
-        f.name = f"{SURFACE_PREFIX}{g.id}"
-        f.dim = 2
-        f.radius = SURFACE_RADIUS
-        f.vertbody = [body.name]
-        f.vert = verts.ravel().tolist()
-        f.elem = faces.ravel().tolist()
-        f.contype, f.conaffinity = 0, cable_bit
-        f.margin = 0.0  # MuJoCo adds the two flexes' margins; the cable's is the clearance
-        f.selfcollide = mujoco.mjtFlexSelf.mjFLEXSELF_NONE
+        for k, tri in enumerate(patches(verts[faces].mean(axis=1), PATCH_TRIANGLES)):
+            used, local = np.unique(faces[tri], return_inverse=True)    # the patch's own vertices
+            f = spec.add_flex()
+            f.name = f"{SURFACE_PREFIX}{g.id}/{k}"
+            f.dim = 2
+            f.radius = SURFACE_RADIUS
+            f.vertbody = [body.name]
+            f.vert = verts[used].ravel().tolist()
+            f.elem = local.ravel().tolist()
+            f.contype, f.conaffinity = 0, cable_bit
+            f.margin = 0.0  # MuJoCo adds the two flexes' margins; the cable's is the clearance
+            f.selfcollide = mujoco.mjtFlexSelf.mjFLEXSELF_NONE
         g.conaffinity = int(g.conaffinity) & ~cable_bit
     return spec.compile()
 
 
+def patches(centroids: np.ndarray, most: int) -> list[np.ndarray]:
+    """Triangle indices (ascending) of the patches of a surface whose
+    triangles have `centroids` (T, 3): halved at the median centroid along
+    the longest side of their box until no patch has more than `most`
+    (a k-d split; each level is one sort per patch, not per triangle)."""
+    out, todo = [], [np.arange(len(centroids))]
+    while todo:
+        idx = todo.pop()
+        if len(idx) <= most:
+            out.append(np.sort(idx))
+            continue
+        c = centroids[idx]
+        axis = int(np.argmax(c.max(axis=0) - c.min(axis=0)))
+        order = idx[np.argsort(c[:, axis], kind="stable")]
+        half = len(order) // 2
+        todo += [order[half:], order[:half]]
+    return out
+
+
 def surface_geoms(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
-    """(flex ids, geom ids) of the surface flexes of a detection model."""
+    """(flex ids, geom ids) of the surface flexes (patches) of a detection
+    model; a geom has one row per patch."""
     flexes, geoms = [], []
     for f in range(model.nflex):
         name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_FLEX, f) or ""
         if name.startswith(SURFACE_PREFIX):
             flexes.append(f)
-            geoms.append(int(name[len(SURFACE_PREFIX):]))
+            geoms.append(int(name[len(SURFACE_PREFIX):].split("/")[0]))
     return np.array(flexes, np.int64), np.array(geoms, np.int64)
 
 

@@ -188,8 +188,8 @@ class Simulation:
         return self.collide_many([qpos])[0]
 
     def collide_many(self, qposes: list[np.ndarray]) -> list[RawContacts]:
-        """:meth:`collide` at each of `qposes`. The concave meshes' surfaces
-        no cable can reach at a state are left out of its pass
+        """:meth:`collide` at each of `qposes`. The concave meshes' surface
+        patches no cable can reach at a state are left out of its pass
         (`sim.surfacereach`: MuJoCo could find no contact on them), the
         reach of all the states tested at once."""
         m2, d2 = self.built.detect, self.detect_data
@@ -208,8 +208,8 @@ class Simulation:
             for i, qpos in enumerate(qposes):
                 d2.qpos[:] = qpos
                 mujoco.mj_kinematics(m2, d2)
-                if keep is not None and (i == 0 or (keep[i] != keep[i - 1]).any()):
-                    reach.leave_out(keep[i])      # consecutive states mostly reach the same surfaces
+                if keep is not None:
+                    reach.leave_out(keep[i])      # writes only the patches that change
                 mujoco.mj_comPos(m2, d2)
                 mujoco.mj_flex(m2, d2)
                 mujoco.mj_collision(m2, d2)

@@ -1,31 +1,36 @@
-"""Which concave mesh surfaces of the detection model the cables can reach at a state.
+"""Which patches of the concave mesh surfaces the cables can reach at a state.
 
-A concave mesh is seen by the detection model as a rigid flex of its own
-triangles (`sim.detection_mesh`). MuJoCo places every flex at every
-mj_flex (vertices, element boxes, tree) and its collision pass visits
-every flex that has contact bits (the broadphase box of all its vertices,
-then the tree against each cable), near a cable or not: a state's cost
-would grow with the meshes' size. `SurfaceReach` leaves the surfaces no
-cable can reach out of the state's pass, so it grows with what is near.
+A concave mesh is seen by the detection model as rigid flexes of its own
+triangles, in patches (`sim.detection_mesh`). MuJoCo places every flex at
+every mj_flex (vertices, element boxes, tree) and its collision pass
+visits every flex that has contact bits (the broadphase box of all its
+vertices, then the tree against each cable), near a cable or not: a
+state's cost would grow with the meshes' size. `SurfaceReach` leaves the
+patches no cable can reach out of the state's pass, so it grows with what
+is near.
 
-The bound: a surface's triangles lie in its box (axis-aligned in the frame
+The bound: a patch's triangles lie in its box (axis-aligned in the frame
 of the body that carries them, fixed). MuJoCo makes a contact between a
 cable element (segment, radius r) and a triangle (radius rho) only when
 their distance is below r + rho + the pair's margin (the two flexes'
-margins added). When the segment's box, in the surface body's frame, lies
-apart from the surface's box grown by r + rho + twice that margin along
+margins added). When the segment's box, in the patch body's frame, lies
+apart from the patch's box grown by r + rho + twice that margin along
 some axis, every point of the segment is that far from every point of the
-surface, so MuJoCo could report no contact there (the margin counted twice
-is room for GJK's tolerance, which is far below it). Every
-one-dimensional flex counts as a cable; should the mjcf model bring a flex
-of another dimension that can meet a surface, no surface is ever left out.
-The positions are the detection model's own (mj_kinematics at the state,
-the cable vertices placed as mj_flex places them): nothing comes from the
-checker, so validation still judges the checker against all that MuJoCo
-finds on the whole surface (tests/test_surfacereach.py compares the
-contacts and the bound against exact distances).
+patch, so MuJoCo could report no contact there (the margin counted twice
+is room for GJK's tolerance, which is far below it). The test runs in
+two steps with the same bound: each segment against the box of all the
+patches on a body, then down a tree of boxes over that body's patches
+(each node the box of its children) to the patches themselves. Every
+one-dimensional flex counts as a cable; should the mjcf model bring a
+flex of another dimension that can meet a surface, no patch is ever left
+out. The positions are the detection model's own
+(mj_kinematics at the state, the cable vertices placed as mj_flex places
+them): nothing comes from the checker, so validation still judges the
+checker against all that MuJoCo finds on the whole surface
+(tests/test_surfacereach.py compares the contacts and the bound against
+exact distances).
 
-How a surface is left out: the detection model is never stepped, so for
+How a patch is left out: the detection model is never stepped, so for
 one pass its flex gets no vertices, no elements, no tree and no contact
 bits (`flex_vertnum`, `flex_elemnum`, `flex_bvhadr`, `flex_contype`,
 `flex_conaffinity`): mj_flex skips its vertices and elements and the
@@ -44,16 +49,16 @@ from sim.detection_mesh import surface_geoms
 
 
 class SurfaceReach:
-    """The surfaces of a detection model, their reach test and the switch
-    that leaves some out of a collision pass.
+    """The surface patches of a detection model, their reach test and the
+    switch that leaves some out of a collision pass.
 
     Args:
       model: the detection model (`sim.detection_mesh.add_surfaces`).
 
     Attributes:
-      flexes: (F,) the surfaces' flex ids.
-      bodies: (F,) the body carrying each surface.
-      lo, hi: (F, 3) each surface's box in its body's frame.
+      flexes: (F,) the patches' flex ids.
+      bodies: (F,) the body carrying each patch.
+      lo, hi: (F, 3) each patch's box in its body's frame.
     """
 
     def __init__(self, model: mujoco.MjModel):
@@ -65,10 +70,30 @@ class SurfaceReach:
         self.bodies = m.flex_vertbodyid[adr].astype(np.int64)
         self.lo = np.array([m.flex_vert[a:a + n].min(axis=0) for a, n in zip(adr, num)]).reshape(-1, 3)
         self.hi = np.array([m.flex_vert[a:a + n].max(axis=0) for a, n in zip(adr, num)]).reshape(-1, 3)
+        # per body carrying patches, a binary tree of boxes over its patches (in
+        # flex order: a surface's patches come in k-d order, neighbours next to
+        # each other), padded to 2**depth leaves with empty boxes; level 0 is
+        # the box of all the body's patches
+        self._carriers, row_body = np.unique(self.bodies, return_inverse=True)
+        n_c = len(self._carriers)
+        rank = np.zeros(len(flexes), np.int64)
+        order = np.argsort(row_body, kind="stable")
+        starts = np.searchsorted(row_body[order], np.arange(n_c))
+        rank[order] = np.arange(len(flexes)) - starts[row_body[order]]
+        depth = int(np.ceil(np.log2(rank.max() + 1))) if len(flexes) else 0
+        self._leaf_row = np.full((n_c, 2 ** depth), -1, np.int64)
+        self._leaf_row[row_body, rank] = np.arange(len(flexes))
+        lo = np.full((n_c, 2 ** depth, 3), np.inf)
+        hi = np.full((n_c, 2 ** depth, 3), -np.inf)
+        lo[row_body, rank], hi[row_body, rank] = self.lo, self.hi
+        self._levels = [(lo, hi)]
+        while lo.shape[1] > 1:
+            lo, hi = lo.reshape(n_c, -1, 2, 3).min(axis=2), hi.reshape(n_c, -1, 2, 3).max(axis=2)
+            self._levels.insert(0, (lo, hi))
         radius = float(m.flex_radius[flexes].max()) if len(flexes) else 0.0
         s_margin = float(m.flex_margin[flexes].max()) if len(flexes) else 0.0
         # a flex of the mjcf model itself (not a cable) that can meet a surface: no
-        # bound is kept for it, every surface stays in every pass
+        # bound is kept for it, every patch stays in every pass
         meets = ((m.flex_contype & int(np.bitwise_or.reduce(m.flex_conaffinity[flexes], initial=0)))
                  | (m.flex_conaffinity & int(np.bitwise_or.reduce(m.flex_contype[flexes], initial=0)))) != 0
         self._always = bool((meets & ~surface & (m.flex_dim != 1)).any())
@@ -91,6 +116,7 @@ class SurfaceReach:
         self._segs = np.concatenate(segs) if segs else np.zeros((0, 2), np.int64)
         self._grow = np.concatenate(grow) if grow else np.zeros(0)
         self._compiled = tuple(a[flexes].copy() for a in self._fields())
+        self._kept = np.ones(len(flexes), bool)             # as compiled: every patch in
 
     def __len__(self) -> int:
         return len(self.flexes)
@@ -100,7 +126,7 @@ class SurfaceReach:
         return m.flex_vertnum, m.flex_elemnum, m.flex_bvhadr, m.flex_contype, m.flex_conaffinity
 
     def reachable(self, xpos: np.ndarray, xmat: np.ndarray) -> np.ndarray:
-        """(S, F) bool: the surfaces some cable element can reach, for S
+        """(S, F) bool: the patches some cable element can reach, for S
         states given by the detection model's body poses after mj_kinematics,
         `xpos` (S, nbody, 3) and `xmat` (S, nbody, 9) (module docstring)."""
         xpos, xmat = np.asarray(xpos, float), np.asarray(xmat, float)
@@ -113,26 +139,43 @@ class SurfaceReach:
         if len(self._held):
             rot = xmat[:, self._vbody[self._held]].reshape(n_s, -1, 3, 3)
             pts[:, self._held] += (rot @ self._offset[None, :, :, None])[..., 0]
-        rot = xmat[:, self.bodies].reshape(n_s, -1, 1, 3, 3)                 # (S, F, 1, 3, 3)
-        diff = pts[:, None, :, :] - xpos[:, self.bodies, None, :]             # (S, F, V, 3)
-        # into each surface body's frame: R^T (p - x), row by row
+        rot = xmat[:, self._carriers].reshape(n_s, -1, 1, 3, 3)               # (S, B, 1, 3, 3)
+        diff = pts[:, None, :, :] - xpos[:, self._carriers, None, :]          # (S, B, V, 3)
+        # into each carrying body's frame: R^T (p - x), row by row
         local = (diff[..., 0:1] * rot[..., 0, :] + diff[..., 1:2] * rot[..., 1, :]
                  + diff[..., 2:3] * rot[..., 2, :])
-        a, b = local[:, :, self._segs[:, 0]], local[:, :, self._segs[:, 1]]   # (S, F, E, 3)
+        a, b = local[:, :, self._segs[:, 0]], local[:, :, self._segs[:, 1]]   # (S, B, E, 3)
         grow = self._grow[:, None]
-        apart = ((np.minimum(a, b) - grow > self.hi[:, None, :])
-                 | (np.maximum(a, b) + grow < self.lo[:, None, :]))
-        return ~apart.any(axis=3).all(axis=2)
+        seg_lo, seg_hi = np.minimum(a, b) - grow, np.maximum(a, b) + grow
+        root_lo, root_hi = self._levels[0]
+        near = ~((seg_lo > root_hi[:, 0][:, None, :]) | (seg_hi < root_lo[:, 0][:, None, :])).any(axis=3)
+        s, c, e = np.nonzero(near)                          # segments near all of a body's patches
+        lo, hi = seg_lo[s, c, e], seg_hi[s, c, e]           # (T, 3)
+        seg, node = np.arange(len(s)), np.zeros(len(s), np.int64)
+        for box_lo, box_hi in self._levels[1:]:             # down the tree: the children of nodes met
+            seg, node = np.repeat(seg, 2), (2 * node[:, None] + np.arange(2)).ravel()
+            b = c[seg]
+            meet = ~((lo[seg] > box_hi[b, node]) | (hi[seg] < box_lo[b, node])).any(axis=1)
+            seg, node = seg[meet], node[meet]
+        out = np.zeros((n_s, len(self.flexes)), bool)
+        out[s[seg], self._leaf_row[c[seg], node]] = True    # a padding leaf's empty box meets nothing
+        return out
 
     def leave_out(self, keep: np.ndarray) -> None:
-        """Take the surfaces in `keep` (F,) bool into the next mj_flex and
+        """Take the patches in `keep` (F,) bool into the next mj_flex and
         mj_collision of the model and leave the others out (`restore` puts
-        them all back)."""
+        them all back). Only the patches whose state changes are written."""
         keep = np.asarray(keep, bool)
+        change = np.flatnonzero(keep != self._kept)
+        if not len(change):
+            return
+        flexes, now = self.flexes[change], keep[change]
         for field, compiled, off in zip(self._fields(), self._compiled, (0, 0, -1, 0, 0)):
-            field[self.flexes] = np.where(keep, compiled, off)
+            field[flexes] = np.where(now, compiled[change], off)
+        self._kept = keep.copy()
 
     def restore(self) -> None:
-        """Every surface as compiled."""
+        """Every patch as compiled."""
         for field, value in zip(self._fields(), self._compiled):
             field[self.flexes] = value
+        self._kept = np.ones(len(self.flexes), bool)

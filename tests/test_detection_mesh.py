@@ -8,7 +8,11 @@ import pytest
 import trimesh
 
 from sim.build import build
-from sim.detection_mesh import SURFACE_RADIUS, hull_parts, is_convex, surface_geoms
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from sim import detection_mesh
+from sim.detection_mesh import SURFACE_RADIUS, hull_parts, is_convex, patches, surface_geoms
 from sim.loop import Simulation
 from sim.run import RunOptions, run_scene
 from sim.scene import load_scene
@@ -170,3 +174,42 @@ def test_a_face_naming_one_vertex_twice_is_left_out_of_the_surface(tmp_path):
     (flex,) = surface_geoms(m)[0]
     assert m.flex_elemnum[flex] == len(faces) - 1
     assert abs(found.dist[found.b == "u"].min() - 0.003) < 1e-7
+
+
+@settings(max_examples=50)
+@given(n=st.integers(1, 400), most=st.integers(1, 64), seed=st.integers(0, 2**31 - 1))
+def test_patches_hold_every_triangle_once_and_none_too_many(n, most, seed):
+    """A k-d split of drawn centroids: every triangle in exactly one patch,
+    none over `most`, no more patches than halving needs, and two patches
+    split at a level lie on the two sides of a plane."""
+    centroids = np.random.default_rng(seed).normal(size=(n, 3))
+    out = patches(centroids, most)
+    assert np.array_equal(np.sort(np.concatenate(out)), np.arange(n))
+    assert all(len(p) <= most and np.all(np.diff(p) > 0) for p in out)
+    assert len(out) <= 2 ** int(np.ceil(np.log2(max(n / most, 1))))
+    if len(out) >= 2:    # the first split: the patches before and after it apart along one axis
+        half = len(out) // 2 if len(out) & (len(out) - 1) == 0 else None
+        if half:
+            a, b = centroids[np.concatenate(out[:half])], centroids[np.concatenate(out[half:])]
+            assert any(a[:, k].max() <= b[:, k].min() or b[:, k].max() <= a[:, k].min() for k in range(3))
+
+
+@pytest.mark.parametrize("z_end", [POCKET_FLOOR + 0.008, POCKET_FLOOR + 0.006, POCKET_FLOOR + 0.004])
+def test_a_surface_in_patches_has_the_contacts_of_the_whole_surface(tmp_path, monkeypatch, z_end):
+    """The U as one flex and cut into 20 patches of 1 or 2 triangles: the same
+    contacts, to the bit (MuJoCo pairs a cable element with each triangle on
+    its own), every patch in the pass or only those in reach."""
+    scene = _scene(tmp_path, z_end)
+    whole = build(scene)
+    monkeypatch.setattr(detection_mesh, "PATCH_TRIANGLES", 2)
+    cut = build(scene)
+    assert len(surface_geoms(whole.detect)[0]) == 1 and len(surface_geoms(cut.detect)[0]) == 20
+    assert set(surface_geoms(cut.detect)[1].tolist()) == {whole.parts[0].geom_id}
+
+    def key(built, reach):
+        c = Simulation(built, reach=reach).detect_qpos(built.qpos0)
+        return sorted(zip(c.kind.tolist(), c.a.tolist(), c.b.tolist(), c.elem_a.tolist(), c.dist.tolist(),
+                          map(tuple, c.pos.tolist())))
+
+    expected = key(whole, False)
+    assert expected and key(cut, False) == expected and key(cut, True) == expected

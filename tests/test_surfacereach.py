@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 
 from checker.closest import segment_triangle
 from sim.build import build
+from sim import detection_mesh
 from sim.detection_mesh import SURFACE_PREFIX, surface_geoms
 from sim.loop import Simulation
 from sim.scene import load_scene
@@ -28,7 +29,19 @@ def cell(tmp_path_factory):
     """Two concave U meshes on bodies of their own ("near" with the cable's
     end 3 mm above its pocket's floor, "far" 1 m away) and a cable from the
     world to a point 30 mm below a third body, "carrier"; no dynamics."""
-    tmp = tmp_path_factory.mktemp("reach")
+    return _cell(tmp_path_factory.mktemp("reach"))
+
+
+@pytest.fixture(scope="module")
+def patched(tmp_path_factory):
+    """The same cell with each U cut into patches of at most 3 triangles
+    (16 per U) on a tree of boxes 4 levels deep."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(detection_mesh, "PATCH_TRIANGLES", 3)
+        return _cell(tmp_path_factory.mktemp("patched"))
+
+
+def _cell(tmp):
     u_mesh().export(tmp / "u.stl")
     end_z = POCKET_FLOOR + RADIUS + 0.003
     (tmp / "reach.toml").write_text(f"""
@@ -133,6 +146,34 @@ def test_a_surface_left_out_is_beyond_the_contact_distance(cell, offset, turn, c
     surface found out of reach is farther from every cable element than
     MuJoCo's contact distance (exact segment-triangle distances), and the
     pass finds the same contacts as one with every surface in."""
+    _left_out_beyond_contact(cell, offset, turn, carrier, carrier_turn, far)
+
+
+@settings(max_examples=60)
+@given(offset=coords(3, -0.12, 0.12), turn=rotations(), carrier=coords(3, -0.05, 0.05),
+       carrier_turn=rotations(), far=st.booleans())
+def test_a_patch_left_out_is_beyond_the_contact_distance(patched, offset, turn, carrier, carrier_turn, far):
+    """The same with each U in small patches, each patch tested down the
+    tree of boxes: a patch left out is beyond MuJoCo's contact distance,
+    and the contacts are those of every patch in."""
+    built, sim = patched
+    assert len(sim.reach) == 32 and len(sim.reach._levels) == 5
+    _left_out_beyond_contact(patched, offset, turn, carrier, carrier_turn, far)
+
+
+def test_patches_are_left_out_one_by_one(patched):
+    """With the cable's end in the near U's pocket some of its patches are
+    in the pass and others out, and the contacts are those of every patch in."""
+    built, sim = patched
+    keep = _reachable(sim, built.qpos0)
+    names = {p.geom_id: p.name for p in built.parts}
+    near = np.array([names[g] == "near/u" for g in surface_geoms(built.detect)[1].tolist()])
+    assert keep[near].any() and not keep[near].all() and not keep[~near].any()
+    found = sim.collide_many([built.qpos0])
+    assert len(found[0].dist) and _key(found[0]) == _key(_unfiltered(sim, [built.qpos0])[0])
+
+
+def _left_out_beyond_contact(cell, offset, turn, carrier, carrier_turn, far):
     built, sim = cell
     m, d = built.detect, sim.detect_data
     q0 = built.qpos0
