@@ -4,14 +4,15 @@ as their own surface (sim.detection_mesh) against MuJoCo's convex hulls.
 The same simulated states (every `--every`-th step of the robot cell after
 settling) go through the detection model's collision pass (mj_kinematics,
 mj_flex, mj_collision, the contacts copied out: `Simulation.collide_many`,
-a batch of 32 states at a time) three times, side by side in one run: with
+a batch of 32 states at a time) four times, side by side in one run: with
 the meshes left to MuJoCo's convex hulls; as built, each non-convex
-collision mesh a rigid flex of its triangles, every surface in every pass;
-and as a run does it, the surfaces no cable can reach at a state left out
-(`sim.surfacereach`; the contacts must be the same, and are checked).
-Printed: ms per state for each (CPU time of this process, best of
-`--repeat`), the ratios, contacts per state, and the (cable, part) pairs
-each sees within the clearance.
+collision mesh rigid flexes of its triangles, every surface in every pass;
+each mesh one flex, those no cable can reach at a state left out of its
+pass; and as a run does it, each mesh in patches, the patches no cable can
+reach left out (`sim.surfacereach`; the contacts of the last three must be
+the same, and are checked by name). Printed: ms per state for each (CPU
+time of this process, best of `--repeat`), the ratios, contacts per
+state, and the (cable, part) pairs each sees within the clearance.
 
 Run: python benchmarks/bench_detection_mesh.py [--states N] [--every K]
 """
@@ -26,6 +27,7 @@ from unittest import mock
 
 import numpy as np
 
+import sim.detection_mesh
 import sim.mjspec
 from sim.build import build
 from sim.loop import Simulation
@@ -45,6 +47,8 @@ def main(argv=None) -> None:
     surfaces = build(scene)
     with mock.patch.object(sim.mjspec, "add_surfaces", lambda spec, model, cable_bit: model):
         hulls = build(scene)
+    with mock.patch.object(sim.detection_mesh, "PATCH_TRIANGLES", 10 ** 9):
+        whole = build(scene)
     run = Simulation(surfaces)
     run.reset()
     run.settle()
@@ -54,12 +58,14 @@ def main(argv=None) -> None:
             states.append(state.qpos.copy())
         if len(states) >= args.states:
             break
-    flexes = surfaces.detect.nflex - hulls.detect.nflex
+    meshes = whole.detect.nflex - hulls.detect.nflex
+    patches = surfaces.detect.nflex - hulls.detect.nflex
     triangles = int(surfaces.detect.flex_elemnum[hulls.detect.nflex:].sum())
-    print(f"robot cell: {len(states)} states, {flexes} concave meshes as surfaces ({triangles} triangles)")
+    print(f"robot cell: {len(states)} states, {meshes} concave meshes as surfaces ({triangles} triangles, "
+          f"{patches} patches of at most {sim.detection_mesh.PATCH_TRIANGLES})")
     rows, found = {}, {}
     for label, built, reach in (("hulls", hulls, True), ("surfaces, every one", surfaces, False),
-                                ("surfaces, in reach", surfaces, True)):
+                                ("whole meshes in reach", whole, True), ("patches in reach", surfaces, True)):
         detector = Simulation(built, reach=reach)
         best = np.inf
         for _ in range(args.repeat):
@@ -69,14 +75,17 @@ def main(argv=None) -> None:
         named = detector.read_many(raws)
         near = Counter(pair for c in named for pair in set(zip(c.a, c.b)))
         rows[label] = best / len(states)
-        found[label] = [sorted(zip(r.flex.tolist(), r.geom.tolist(), r.elem.tolist(), r.dist.tolist())) for r in raws]
-        print(f"  {label:19s} {1e3 * rows[label]:7.3f} ms/state, {np.mean([len(r.dist) for r in raws]):6.1f} "
+        found[label] = [sorted(zip(c.kind.tolist(), c.a.tolist(), c.b.tolist(), c.elem_a.tolist(),
+                                   c.dist.tolist(), map(tuple, c.pos.tolist()))) for c in named]
+        print(f"  {label:21s} {1e3 * rows[label]:7.3f} ms/state, {np.mean([len(r.dist) for r in raws]):6.1f} "
               f"contacts/state; pairs within the clearance (states): {dict(near)}")
-    same = found["surfaces, every one"] == found["surfaces, in reach"]
-    print(f"  surfaces / hulls = {rows['surfaces, every one'] / rows['hulls']:.1f}x every one, "
-          f"{rows['surfaces, in reach'] / rows['hulls']:.1f}x in reach; in reach / every one = "
-          f"{rows['surfaces, in reach'] / rows['surfaces, every one']:.2f}; same contacts: {same}")
-
+    every = rows["surfaces, every one"]
+    same = found["surfaces, every one"] == found["whole meshes in reach"] == found["patches in reach"]
+    print(f"  surfaces / hulls = {every / rows['hulls']:.1f}x every one, "
+          f"{rows['whole meshes in reach'] / rows['hulls']:.1f}x whole meshes in reach, "
+          f"{rows['patches in reach'] / rows['hulls']:.1f}x patches in reach; / every one = "
+          f"{rows['whole meshes in reach'] / every:.2f} whole meshes, {rows['patches in reach'] / every:.2f} "
+          f"patches; same contacts: {same}")
 
 if __name__ == "__main__":
     main()
