@@ -34,7 +34,12 @@ How a patch is left out: the detection model is never stepped, so for
 one pass its flex gets no vertices, no elements, no tree and no contact
 bits (`flex_vertnum`, `flex_elemnum`, `flex_bvhadr`, `flex_contype`,
 `flex_conaffinity`): mj_flex skips its vertices and elements and the
-collision pass never pairs it. `restore` puts the model back as compiled.
+collision pass never pairs it. Its vertices are also put on the world
+body (`flex_vertbodyid` 0): MuJoCo's broadphase takes the centre and
+spread of every flex vertex off the world to choose its sweep axis, left
+out or not, and the axis only orders the sweep (the box pairs it finds,
+and so the contacts, are the same). `restore` puts the model back as
+compiled.
 
 This module does not read contacts (`sim.contacts`) or decide what a
 contact means; it only narrows MuJoCo's pass.
@@ -45,6 +50,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from checker.arrays import ranges
 from sim.detection_mesh import surface_geoms
 
 
@@ -116,6 +122,7 @@ class SurfaceReach:
         self._segs = np.concatenate(segs) if segs else np.zeros((0, 2), np.int64)
         self._grow = np.concatenate(grow) if grow else np.zeros(0)
         self._compiled = tuple(a[flexes].copy() for a in self._fields())
+        self._vertbody = m.flex_vertbodyid.copy()
         self._kept = np.ones(len(flexes), bool)             # as compiled: every patch in
 
     def __len__(self) -> int:
@@ -172,10 +179,14 @@ class SurfaceReach:
         flexes, now = self.flexes[change], keep[change]
         for field, compiled, off in zip(self._fields(), self._compiled, (0, 0, -1, 0, 0)):
             field[flexes] = np.where(now, compiled[change], off)
+        count = self._compiled[0][change]                   # the patches' vertices as compiled
+        verts = ranges(self.model.flex_vertadr[flexes], count)
+        self.model.flex_vertbodyid[verts] = np.where(np.repeat(now, count), self._vertbody[verts], 0)
         self._kept = keep.copy()
 
     def restore(self) -> None:
         """Every patch as compiled."""
         for field, value in zip(self._fields(), self._compiled):
             field[self.flexes] = value
+        self.model.flex_vertbodyid[:] = self._vertbody
         self._kept = np.ones(len(self.flexes), bool)

@@ -173,6 +173,29 @@ def test_patches_are_left_out_one_by_one(patched):
     assert len(found[0].dist) and _key(found[0]) == _key(_unfiltered(sim, [built.qpos0])[0])
 
 
+def test_a_patch_left_out_has_no_vertices_elements_tree_bits_or_body_and_restore_undoes_it(patched):
+    built, sim = patched
+    m, reach = built.detect, sim.reach
+    compiled = [a.copy() for a in (m.flex_vertnum, m.flex_elemnum, m.flex_bvhadr, m.flex_contype,
+                                   m.flex_conaffinity, m.flex_vertbodyid)]
+    keep = np.arange(len(reach)) % 3 == 0
+    for step in (keep, ~keep, keep):     # patches going out, coming back in, out again
+        reach.leave_out(step)
+        for f, kept in zip(reach.flexes.tolist(), step.tolist()):
+            verts = slice(m.flex_vertadr[f], m.flex_vertadr[f] + compiled[0][f])
+            if kept:
+                assert [int(a[f]) for a in (m.flex_vertnum, m.flex_elemnum, m.flex_bvhadr, m.flex_contype,
+                                            m.flex_conaffinity)] == [int(a[f]) for a in compiled[:5]]
+                assert np.array_equal(m.flex_vertbodyid[verts], compiled[5][verts])
+            else:
+                assert m.flex_vertnum[f] == m.flex_elemnum[f] == m.flex_contype[f] == m.flex_conaffinity[f] == 0
+                assert m.flex_bvhadr[f] == -1 and not m.flex_vertbodyid[verts].any()
+    reach.restore()
+    assert all(np.array_equal(a, b) for a, b in zip(compiled, (m.flex_vertnum, m.flex_elemnum, m.flex_bvhadr,
+                                                              m.flex_contype, m.flex_conaffinity,
+                                                              m.flex_vertbodyid)))
+
+
 def _left_out_beyond_contact(cell, offset, turn, carrier, carrier_turn, far):
     built, sim = cell
     m, d = built.detect, sim.detect_data
