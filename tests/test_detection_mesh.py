@@ -6,13 +6,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-
-from sim.build import build
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from sim import detection_mesh
-from sim.detection_mesh import SURFACE_RADIUS, hull_parts, is_convex, patches, surface_geoms
+from sim.build import build
+from sim.detection_mesh import (
+    SURFACE_RADIUS,
+    hull_parts,
+    is_convex,
+    patches,
+    surface_geoms,
+)
 from sim.loop import Simulation
 from sim.run import RunOptions, run_scene
 from sim.scene import load_scene

@@ -11,8 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from checker.closest import segment_triangle
-from sim.build import build
 from sim import detection_mesh
+from sim.build import build
 from sim.detection_mesh import SURFACE_PREFIX, surface_geoms
 from sim.loop import Simulation
 from sim.scene import load_scene
@@ -156,7 +156,7 @@ def test_a_patch_left_out_is_beyond_the_contact_distance(patched, offset, turn, 
     """The same with each U in small patches, each patch tested down the
     tree of boxes: a patch left out is beyond MuJoCo's contact distance,
     and the contacts are those of every patch in."""
-    built, sim = patched
+    _, sim = patched
     assert len(sim.reach) == 32 and len(sim.reach._levels) == 5
     _left_out_beyond_contact(patched, offset, turn, carrier, carrier_turn, far)
 
