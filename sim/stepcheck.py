@@ -82,6 +82,12 @@ PROMOTE_SHARE = 0.25
 next full check, while they number at most this share of the body centres;
 past it a full check costs less."""
 
+PROMOTE_MIN = 64
+"""... and at least this many whatever the scene's size: a few dozen pairs
+evaluated at every state cost a batch about what one does (numpy's
+per-call overhead), far less than the full checks they spare a small scene
+(the door scene: 5 full checks with a budget of 5 pairs, 1 with 64)."""
+
 ADVANCE_STRETCH_RADII = 0.25
 """... and up to this many (smallest) cable radii of arc length inside the
 exclusion windows (the total change of element lengths a skipped step allows)."""
@@ -209,7 +215,7 @@ class StepChecks:
         self._part_active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         self._names = [c.name for c in built.cables]
         self._offsets = offsets
-        self._budget = int(PROMOTE_SHARE * offsets[-1])
+        self._budget = max(int(PROMOTE_SHARE * offsets[-1]), PROMOTE_MIN)
         self._radii = radii
         # material coordinate (rest arc length) of every body centre: the exclusion windows' measure
         self._rest = np.concatenate([c.rest_s for c in built.cables]) if built.cables else np.zeros(0)
