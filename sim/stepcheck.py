@@ -13,8 +13,8 @@ robot base or a hinge pin through its knuckles would otherwise stop all
 skipping; a part pair is checked whole, as the full check would). Pairs
 whose bound fails after a full check join them (*promoted*: a cable
 sliding towards one part, two leads drawing near) while they are few
-(``PROMOTE_SHARE``), so the cost of a step grows with what came near, not
-with the scene. The other states are checked in full.
+(``PROMOTE_SHARE``, ``PROMOTE_MIN``), so the cost of a step grows with
+what came near, not with the scene. The other states are checked in full.
 
 Why batches: a cable has a few dozen body centres, so numpy's cost per call,
 not the arrays' size, is what a step costs. The skip rule and the measures
