@@ -174,17 +174,21 @@ class EventTracker:
 
     @staticmethod
     def key(record: Interference) -> PairKey:
-        return (PairType(record.type), record.a, record.b)
+        kind = record.type
+        return (kind if type(kind) is PairType else PairType(kind), record.a, record.b)
 
     def update(self, t: float, records: Iterable[Interference]) -> tuple[list[PairKey], list[Event]]:
         """Take the records of the step at time t; return (pairs that started
         an event, events that closed)."""
         started: list[PairKey] = []
         seen = set()
+        if not records and not self._open:      # most steps of a run: nothing to take or close
+            return started, []
+        allow = self.allow if self.allow else None
         for r in records:
             k = self.key(r)
-            if self.allow:
-                rule = self.allow.match(k)
+            if allow is not None:
+                rule = allow.match(k)
                 if rule is not None:
                     best = self.allowed.get(k)
                     if best is None or r.min_distance < best.min_distance:
@@ -192,7 +196,7 @@ class EventTracker:
                                                        np.asarray(r.where), rule.reason)
                     continue
             seen.add(k)
-            severity = Severity(r.severity)
+            severity = r.severity if type(r.severity) is Severity else Severity(r.severity)
             ev = self._open.get(k)
             if ev is None:
                 ev = self._open[k] = _Open(t, t, r, t, severity)

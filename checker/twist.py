@@ -68,6 +68,8 @@ def _tangents(points: np.ndarray) -> np.ndarray:
     length = _norm(e)
     scale = np.abs(points).max(axis=(1, 2), keepdims=True)[:, :, 0] + _TINY
     ok = length > 1e-12 * scale
+    if ok.all():                                                    # no edge to fill (the usual case)
+        return e / length[:, :, None]
     idx = np.where(ok, np.arange(e.shape[1])[None, :], 0)
     idx = np.maximum.accumulate(idx, axis=1)                        # forward fill
     first = np.argmax(ok, axis=1)                                   # leading zero edges: the first good one

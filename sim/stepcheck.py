@@ -13,8 +13,8 @@ robot base or a hinge pin through its knuckles would otherwise stop all
 skipping; a part pair is checked whole, as the full check would). Pairs
 whose bound fails after a full check join them (*promoted*: a cable
 sliding towards one part, two leads drawing near) while they are few
-(``PROMOTE_SHARE``), so the cost of a step grows with what came near, not
-with the scene. The other states are checked in full.
+(``PROMOTE_SHARE``, ``PROMOTE_MIN``), so the cost of a step grows with
+what came near, not with the scene. The other states are checked in full.
 
 Why batches: a cable has a few dozen body centres, so numpy's cost per call,
 not the arrays' size, is what a step costs. The skip rule and the measures
@@ -81,6 +81,12 @@ PROMOTE_SHARE = 0.25
 (promoted, :meth:`checker.advance.Advancement.clear_run_local`) until the
 next full check, while they number at most this share of the body centres;
 past it a full check costs less."""
+
+PROMOTE_MIN = 64
+"""... and at least this many whatever the scene's size: a few dozen pairs
+evaluated at every state cost a batch about what one does (numpy's
+per-call overhead), far less than the full checks they spare a small scene
+(the door scene: 5 full checks with a budget of 5 pairs, 1 with 64)."""
 
 ADVANCE_STRETCH_RADII = 0.25
 """... and up to this many (smallest) cable radii of arc length inside the
@@ -209,7 +215,7 @@ class StepChecks:
         self._part_active = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         self._names = [c.name for c in built.cables]
         self._offsets = offsets
-        self._budget = int(PROMOTE_SHARE * offsets[-1])
+        self._budget = max(int(PROMOTE_SHARE * offsets[-1]), PROMOTE_MIN)
         self._radii = radii
         # material coordinate (rest arc length) of every body centre: the exclusion windows' measure
         self._rest = np.concatenate([c.rest_s for c in built.cables]) if built.cables else np.zeros(0)

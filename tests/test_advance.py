@@ -250,7 +250,9 @@ def test_door_hinge_pin_never_forces_full_checks(tmp_path):
         runs[name] = fast
     skip = {name: rep["settings"]["advance"] for name, rep in runs.items()}
     assert skip["door"] == skip["no_allow"] == skip["no_pin"]
-    assert skip["door"]["proven_clear_steps"] > 4 * skip["door"]["full_checks"]
+    # the door panel swinging away from the frame's post: its boxes stay apart
+    # at every state (checker.advance.partpairs), no full check past the first
+    assert skip["door"]["full_checks"] == 1
     # the pin: allowed in the scene as written, hard part-part events without the allow pairs
     pin = {(p["a"], p["b"]) for p in runs["door"]["allowed"]}
     assert pin == {("hinge/knuckle_lower", "hinge/pin"), ("hinge/knuckle_upper", "hinge/pin"),
@@ -282,13 +284,19 @@ def test_sparse_part_gaps_change_no_answer(seed: int, tmp_path, monkeypatch):
 
 
 def test_sparse_part_gaps_on_the_drawer(tmp_path, monkeypatch):
+    """The sparse gaps on the drawer: the same answers; they skip at most
+    what the dense table skips (a centre past their cap ends a run: the
+    cable rides the drawer out farther than FAR_HORIZONS horizons), and
+    nearly as much."""
     scene = load_scene(SCENES[[p.stem for p in SCENES].index("drawer")])
     dense = run_scene(scene, RunOptions(report=tmp_path / "d.json", record=None))
     monkeypatch.setattr(Advancement, "SPARSE_ENTRIES", 0)
     sparse = run_scene(scene, RunOptions(report=tmp_path / "a.json", record=None))
     assert _strip(sparse["events"]) == _strip(dense["events"])
     assert _strip(sparse["pairs"]) == _strip(dense["pairs"])
-    assert sparse["settings"]["advance"] == dense["settings"]["advance"]
+    a, d = sparse["settings"]["advance"], dense["settings"]["advance"]
+    assert a["full_checks"] + a["proven_clear_steps"] == d["full_checks"] + d["proven_clear_steps"]
+    assert 0.99 * d["proven_clear_steps"] <= a["proven_clear_steps"] <= d["proven_clear_steps"]
 
 
 
@@ -312,6 +320,7 @@ def test_harness_pairs_checked_on_their_own(tmp_path, monkeypatch):
         assert _strip(fast[key]) == _strip(full[key]) if isinstance(fast[key], list) else fast[key] == full[key], key
     assert fast["events"]
     monkeypatch.setattr(stepcheck, "PROMOTE_SHARE", 0.0)
+    monkeypatch.setattr(stepcheck, "PROMOTE_MIN", 0)
     strict = run_scene(scene, RunOptions(report=tmp_path / "c.json", record=None))
     assert _strip(strict["events"]) == _strip(fast["events"])
     a, s = fast["settings"]["advance"], strict["settings"]["advance"]

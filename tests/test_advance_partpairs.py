@@ -104,27 +104,38 @@ def _gaps(ps: PartSet, start: np.ndarray, clearance: float, solids: bool = True)
 
 @pytest.mark.parametrize("hinge", [ShapeType.CYLINDER, ShapeType.BOX])
 def test_a_panel_swinging_round_a_knuckle(hinge):
-    """A door panel 18 from the axis of a knuckle (radius 12), swinging 60
-    degrees round that axis, clearance 5: round the cylinder nothing moves
+    """A door panel 8 from a knuckle (half-width 12), swinging 60 degrees
+    round the knuckle's axis, clearance 5: round a cylinder nothing moves
     relative to the solid (clear at every angle); round a box of the
-    cylinder's size, the bound fails once a corner of the panel may have
-    moved by the 13 left (a turn of 13 / 430 rad or more, the panel's far
-    corners 430 from the axis)."""
+    cylinder's size, a state is clear while a corner of the panel may have
+    moved by less than the 3 left (a turn of 3 / 420 rad, the panel's far
+    corners 420 from the axis), or while the boxes at the state itself are
+    more than 5 apart along a box axis: along the panel, its near end 20
+    from the axis less the box's 12 (cos + sin); along the box's x axis,
+    the panel's near corner at 20 cos - 5 sin less 12 (past 5 apart up to
+    about 20 degrees, not from there on)."""
     size = [12.0, 12.0, 20.0] if hinge is ShapeType.BOX else [12.0, 20.0]
     ps = PartSet.build(["knuckle", "panel"], [Shape(hinge, size), Shape(ShapeType.BOX, [200.0, 5.0, 150.0])],
                        tolerance=0.5)
     start = np.tile(np.eye(4), (2, 1, 1))
-    start[1, :3, 3] = [230.0, 0.0, 0.0]
+    start[1, :3, 3] = [220.0, 0.0, 0.0]
     gaps = _gaps(ps, start, 5.0)
     assert gaps.ok
+    seen = set()
     for angle in np.linspace(0.0, np.pi / 3, 61):
         now = start.copy()
         now[1] = _turn_z(angle) @ start[1]
         if hinge is ShapeType.CYLINDER:
             assert gaps.clear_at(now)
-        else:
-            reach = np.hypot(430.0, 5.0) * 2 * np.sin(angle / 2)         # the far corners' move
-            assert gaps.clear_at(now) == (reach < 13.0 - 1e-6) or abs(reach - 13.0) < 1e-6
+            continue
+        reach = np.hypot(420.0, 5.0) * 2 * np.sin(angle / 2)         # the far corners' move
+        c, s = np.cos(angle), np.sin(angle)
+        apart = max(20.0 - 12.0 * (c + s), 20.0 * c - 5.0 * s - 12.0)   # along the panel, along the box
+        if min(abs(reach - 3.0), abs(apart - 5.0)) > 1e-6:
+            want = reach < 3.0 or apart > 5.0
+            assert gaps.clear_at(now) == want
+            seen.add((reach < 3.0, apart > 5.0))
+    assert hinge is ShapeType.CYLINDER or seen == {(True, True), (False, True), (False, False)}
 
 
 def test_a_floor_tilted_with_a_box_on_it_moves_nothing_relative_to_it():
@@ -258,3 +269,81 @@ def test_a_pair_proven_clear_has_no_record(seed):
             proven += 1
             turned += abs(turn) > 0.5 and ps.axial[0]
     assert proven > 25 and turned > 10
+
+
+def _far_start(ps: PartSet, clearance: float) -> PartPairGaps:
+    """The pair's bound started with the parts far apart (a plane first, so
+    the other part is 50 above it): any later state is a large move of one
+    relative to the other, which only the state's own box separation can
+    prove clear."""
+    start = np.tile(np.eye(4), (2, 1, 1))
+    start[1, 2, 3] = 50.0
+    return _gaps(ps, start, clearance)
+
+
+_KINDS = [ShapeType.BOX, ShapeType.SPHERE, ShapeType.CYLINDER, ShapeType.CAPSULE, "mesh", ShapeType.PLANE]
+
+
+def _pair_set(ka, kb, size_a, size_b) -> PartSet:
+    shapes = [Shape(ShapeType.PLANE, []) if k is ShapeType.PLANE else _shape(k, size)
+              for k, size in ((ka, size_a), (kb, size_b))]
+    return PartSet.build(["a", "b"], shapes, tolerance=1e-2)
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.sampled_from(_KINDS), st.sampled_from(_KINDS[:5]), coords(3, 0.05, 0.3), coords(3, 0.05, 0.3),
+       poses(reach=0.6), poses(reach=0.6))
+def test_a_pair_its_boxes_prove_apart_has_no_record(ka, kb, size_a, size_b, pose_a, pose_b):
+    """Brute force against the part-part check: two parts (a plane, a
+    primitive or a coarse mesh, then a finite part) at drawn poses, their
+    bound started far apart; whenever the condition says clear at the drawn
+    poses (proven by the boxes' separation there: the moves are large), the
+    check there has no record."""
+    ps = _pair_set(ka, kb, size_a, size_b)
+    gaps = _far_start(ps, 0.05)
+    now = np.stack([pose_a, pose_b])
+    if gaps.ok and gaps.clear_at(now):
+        assert check_parts(ps, ps.place(now), 0.05) == []
+
+
+def test_states_far_apart_are_proven_by_their_boxes_and_near_ones_not():
+    """The same draws counted (seeded): many states are proven clear only by
+    their own boxes' separation, and the others include states whose
+    boxes are 0.01 past the clearance or less (none proven)."""
+    rng = np.random.default_rng(3)
+    proven = near = 0
+    for _ in range(300):
+        ka, kb = _KINDS[rng.integers(6)], _KINDS[rng.integers(5)]
+        ps = _pair_set(ka, kb, rng.uniform(0.05, 0.3, 3), rng.uniform(0.05, 0.3, 3))
+        gaps = _far_start(ps, 0.05)
+        now = np.tile(np.eye(4), (2, 1, 1))
+        now[1, :3, :3] = _random_rotation(rng)
+        now[1, :3, 3] = rng.uniform(-0.8, 0.8, 3)
+        sep = part_pair_bounds(ps, ps.place(now), np.array([0]), np.array([1]))[0]
+        clear = gaps.clear_at(now)
+        assert clear == (sep > 0.05 + 1e-6) or abs(sep - 0.05) < 1e-6
+        if clear:
+            assert check_parts(ps, ps.place(now), 0.05) == []
+        proven += clear
+        near += sep <= 0.06
+    assert proven > 50 and near > 50
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.lists(poses(reach=0.6), min_size=6, max_size=6), st.integers(1, 3))
+def test_many_states_and_pairs_at_once_answer_as_one_by_one(drawn, k):
+    """The condition for S states and several pairs at once is each
+    state's own answer (the states and pairs laid out in one pass)."""
+    cube, ball = Shape(ShapeType.BOX, [0.1, 0.2, 0.15]), Shape(ShapeType.SPHERE, [0.12])
+    ps = PartSet.build(["floor", "a", "b"], [Shape(ShapeType.PLANE, []), cube, ball])
+    start = np.tile(np.eye(4), (3, 1, 1))
+    start[1, :3, 3] = [0.0, 0.0, 50.0]
+    start[2, :3, 3] = [50.0, 0.0, 100.0]
+    i, j = np.array([0, 0, 1]), np.array([1, 2, 2])
+    gaps = PartPairGaps(_radius(ps), 0.05, _solids(ps))
+    gaps.start(start, (i, j), part_pair_bounds(ps, ps.place(start), i, j))
+    states = np.tile(start, (k, 1, 1, 1))
+    for s in range(k):
+        states[s, 1], states[s, 2] = drawn[2 * s], drawn[2 * s + 1]
+    one_by_one = [gaps.clear_at(p) for p in states]
+    assert gaps.clear(gaps.moves(states).T, states).tolist() == one_by_one

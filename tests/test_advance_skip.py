@@ -221,3 +221,28 @@ def test_stretch_runs_hold_every_pair_the_stretch_protects():
     bunched = line.copy()
     bunched[30:] += [0.003, 0.0, 0.0]                         # 3 mm > stretch (2.5 mm) in one element
     assert not a.proven_clear(bunched, np.zeros((0, 4, 4)))
+
+
+def test_clear_run_local_in_calls_of_any_length_proves_what_one_call_proves():
+    """The states of a batch handed to clear_run_local in consecutive calls
+    of drawn lengths (each call's run of states continuing the last's) are
+    proven exactly as in one call: the same count, the same pairs left to
+    the caller (budgets 0, 3 and 100, on the hairpin's random batches)."""
+    fresh, batches = _hairpin_over_moving_slab()
+    rng = np.random.default_rng(7)
+    counts = set()
+    for pts, poses in batches:
+        for budget in (0, 3, 100):
+            one = fresh().clear_run_local(pts, poses, budget)
+            split, done = fresh(), 0
+            cuts = np.sort(rng.choice(np.arange(1, 12), size=rng.integers(1, 5), replace=False))
+            for lo, hi in zip(np.r_[0, cuts], np.r_[cuts, 12]):
+                part = split.clear_run_local(pts[lo:hi], poses[lo:hi], budget)
+                done += part.states
+                if part.states < hi - lo:
+                    break
+            assert done == one.states == split.skipped
+            assert all(np.array_equal(x, y) for x, y in zip(part.active.structure + part.active.cable,
+                                                            one.active.structure + one.active.cable))
+            counts.add(one.states)
+    assert 0 in counts and 12 in counts and len(counts) > 2

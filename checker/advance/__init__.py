@@ -67,6 +67,7 @@ no pair can have come within the clearance while
   between parts), ``rel`` the move of one part in the other's own frame
   (modulo turns about that part's axis where it is a solid of revolution,
   less both tessellation errors: :class:`~checker.advance.partpairs.PartPairGaps`),
+  or the same box separation at step k itself above the clearance,
   except the pairs the caller leaves out of the bound and checks itself at
   every step (*active* part pairs, within the clearance at k0),
 - every cable element splits into the same number of discrete points as at
@@ -145,7 +146,9 @@ of their triangles is at least the separation of their oriented boxes on any
 box axis (or, for a plane, the box's lowest point above it), which
 :func:`part_pair_bounds` takes at k0; the distance of two rigid solids
 depends on their relative pose alone, and not on a turn about the axis of
-a solid of revolution. Rounding is absorbed by a margin of
+a solid of revolution; boxes more than the clearance apart at step k on
+a box axis are rejected there by the part-part check's own oriented-box
+test (the same boxes grown by half the clearance each). Rounding is absorbed by a margin of
 1e-9 of the scene's extent.
 
 So on such a step the pairwise checks can be skipped: their answer is "no

@@ -5,7 +5,9 @@ bound on how far one moved relative to the other stays below a lower bound
 on their distance at the full check, the separation of their oriented boxes
 along a box axis (:func:`part_pair_bounds`): the sum of their moves in the
 world, or the move of one in the other's own frame, modulo turns about the
-axis of a solid of revolution (:class:`PartPairGaps`).
+axis of a solid of revolution (:class:`PartPairGaps`); or while the same
+separation at the state itself exceeds the clearance (a door panel that
+swung far from its start, still far from the frame).
 
 Deliberately not here: cables, the run of states
 (:class:`checker.advance.skip.Advancement`), the part-part check itself
@@ -30,28 +32,41 @@ def part_pair_bounds(parts: PartSet, placed: Placement, i: np.ndarray, j: np.nda
     above the plane (what the part-part check measures, the lowest vertex,
     is at least that). Two planes: inf (no vertices to test).
     """
-    half = parts.half()
-    c, rot = placed.centre, placed.rot
+    rot, c, pos = placed.rot, placed.centre, placed.pos
+    return box_bounds(parts.half(), parts.plane, i, j, (rot[i], c[i], pos[i]), (rot[j], c[j], pos[j]))
+
+
+def box_bounds(half: np.ndarray, plane: np.ndarray, i: np.ndarray, j: np.ndarray,
+               a: tuple[np.ndarray, np.ndarray, np.ndarray],
+               b: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+    """:func:`part_pair_bounds` from the parts' half extents (P, 3) and
+    plane flags (P,), for pairs of parts i, j (n,) placed as ``a`` and ``b``:
+    each (rotations (n, 3, 3), box centres (n, 3), origins (n, 3)) in the
+    world (a pair may list the same parts at another pose)."""
     out = np.full(len(i), np.inf)
-    pi, pj = parts.plane[i], parts.plane[j]
+    pi, pj = plane[i], plane[j]
     both = ~pi & ~pj
     if both.any():
-        a, b = i[both], j[both]
-        ra, rb = rot[a], rot[b]
-        t = c[b] - c[a]
+        ra, rb = a[0][both], b[0][both]
+        ha, hb = half[i[both]], half[j[both]]
+        t = b[1][both] - a[1][both]
         rel = np.abs(np.einsum("nji,njk->nik", ra, rb))   # |A_i . B_k|
         ta = np.abs(np.einsum("nji,nj->ni", ra, t))        # along a's axes
         tb = np.abs(np.einsum("nji,nj->ni", rb, t))        # along b's axes
-        sa = ta - half[a] - np.einsum("nik,nk->ni", rel, half[b])
-        sb = tb - half[b] - np.einsum("nik,ni->nk", rel, half[a])
+        sa = ta - ha - np.einsum("nik,nk->ni", rel, hb)
+        sb = tb - hb - np.einsum("nik,ni->nk", rel, ha)
         out[both] = np.maximum(sa.max(axis=1), sb.max(axis=1))
     one = pi ^ pj
     if one.any():
-        p = np.where(pi, i, j)[one]
+        flip = pi[one][:, None]                            # the plane first
+        p_rot = np.where(flip[:, :, None], a[0][one], b[0][one])
+        p_pos = np.where(flip, a[2][one], b[2][one])
+        q_rot = np.where(flip[:, :, None], b[0][one], a[0][one])
+        q_c = np.where(flip, b[1][one], a[1][one])
         q = np.where(pi, j, i)[one]
-        nrm = rot[p][:, :, 2]
-        height = np.einsum("ni,ni->n", c[q] - placed.pos[p], nrm)
-        extent = np.einsum("nk,nk->n", np.abs(np.einsum("nji,nj->ni", rot[q], nrm)), half[q])
+        nrm = p_rot[:, :, 2]
+        height = np.einsum("ni,ni->n", q_c - p_pos, nrm)
+        extent = np.einsum("nk,nk->n", np.abs(np.einsum("nji,nj->ni", q_rot, nrm)), half[q])
         out[one] = height - extent
     return out
 
@@ -128,7 +143,10 @@ class PartPairGaps:
     Each is a bound on the drop of the distance (1-Lipschitz in the points),
     so the pair stays outside the clearance while any one holds. Any
     ``phi`` is sound (its choice only tightens): ``Rz(phi)`` is an isometry
-    of the frame part's solid.
+    of the frame part's solid. Failing all three, a pair is still clear at
+    a state where its boxes (:class:`PartSolids`, holding the part-part
+    check's own boxes) are more than the clearance apart on a box axis
+    (:func:`box_bounds`): the check's oriented-box test rejects it there.
 
     Args:
         part_radius: (P,) bounding radius of each part about its frame's
@@ -152,6 +170,10 @@ class PartPairGaps:
             pick = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], bool)
             box = np.where(self._boxed[:, None, None], np.stack([lo, hi], axis=1), 0.0)
             self._corners = np.where(pick[None], box[:, 1][:, None], box[:, 0][:, None])
+        # the boxes the state's own separation measures (box_bounds): half extents and centres
+        self._half = np.where(self._boxed[:, None], 0.5 * (self._corners[:, 7] - self._corners[:, 0]), 0.0)
+        self._mid = np.where(self._boxed[:, None], 0.5 * (self._corners[:, 7] + self._corners[:, 0]), 0.0)
+        self._known = self._boxed | self._plane
         # the frame part of a pair: a plane first, then an axial part
         self._rank = np.where(self._plane, 2, np.where(self._axial, 1, 0))
         self.clearance = float(clearance)
@@ -169,6 +191,7 @@ class PartPairGaps:
         if mu is None:
             mu = 1e-9 * (1.0 + float(np.abs(self._poses[:, :3, 3]).max(initial=0.0)))
         self._g_pair = np.asarray(pair_bound, float) - self.clearance - mu
+        self._mu = mu
         self.ok = bool(np.all(self._g_pair > 0))
         swap = self._rank[pj] > self._rank[pi]
         self._f, self._m = np.where(swap, pj, pi), np.where(swap, pi, pj)
@@ -240,12 +263,40 @@ class PartPairGaps:
     def _pair_ok(self, dp: np.ndarray, poses: np.ndarray) -> np.ndarray:
         """(n_pairs, S) the condition per pair and state, from the world
         moves dp (P, S) and the poses (S, P, 4, 4): the pairs the world
-        moves do not prove apart are tested relative to each other."""
+        moves do not prove apart are tested relative to each other, and
+        those still failing by their boxes' separation at the state itself."""
         ok = dp[self._pi] + dp[self._pj] < self._g_pair[:, None]
         rows = np.flatnonzero(~ok.all(axis=1))
         if len(rows):
             ok[rows] |= self._relative_moves(poses, rows) < self._g_rel[rows, None]
+            rows = rows[~ok[rows].all(axis=1) & self._known[self._pi[rows]] & self._known[self._pj[rows]]]
+            if len(rows):
+                ok[rows] |= self._separated(poses, rows)
         return ok
+
+    def _separated(self, poses: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """(n, S): pairs ``rows`` (both parts boxed or planes) whose boxes'
+        separation at poses (S, P, 4, 4) itself (:func:`box_bounds`) exceeds
+        the clearance by the rounding margin: the part-part check's
+        oriented-box test (the boxes grown by half the clearance each, no
+        larger than these) rejects the pair there, so it has no record.
+        The margin: the start's, plus 1e-9 of the boxes' extent from the
+        origin (what the test's own rounding allowance grows with)."""
+        i, j = self._pi[rows], self._pj[rows]
+        n_s, n = len(poses), len(rows)
+        both = np.concatenate([i, j])
+        placed = poses[:, both]                                            # (S, 2n, 4, 4)
+        rot = placed[..., :3, :3].reshape(-1, 3, 3)                        # (S * 2n, 3, 3), state-major
+        pos = placed[..., :3, 3].reshape(-1, 3)
+        c = np.einsum("nij,nj->ni", rot, np.tile(self._mid[both], (n_s, 1))) + pos
+        first = (np.arange(n_s)[:, None] * 2 * n + np.arange(n)[None]).ravel()     # state-major rows
+        second = first + n
+        ti, tj = np.tile(i, n_s), np.tile(j, n_s)
+        sep = box_bounds(self._half, self._plane, ti, tj, (rot[first], c[first], pos[first]),
+                         (rot[second], c[second], pos[second]))
+        extent = np.abs(c).max(axis=1) + self._half[np.tile(both, n_s)].max(axis=1)
+        margin = self._mu + 1e-9 * (extent[first] + extent[second])
+        return (sep - self.clearance > margin).reshape(n_s, n).T
 
     def clear(self, dp: np.ndarray, poses: np.ndarray) -> np.ndarray:
         """The condition per state (S,) from the parts' moves dp (P, S)

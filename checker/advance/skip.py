@@ -122,6 +122,7 @@ class Advancement:
         z = np.zeros(0, np.int64)
         self._active = Active((z, z), (z, z))
         self._promoted = 0
+        self._step = 1
         self.full = 0
         self.skipped = 0
 
@@ -179,6 +180,7 @@ class Advancement:
         self._parts = CentrePartGaps(self._layout, start)
         structure = self._parts.start(gap_part, candidates, active, sparse)
         self._promoted = 0
+        self._step = 1
         self._cable_pairs = gaps.cable_candidates is not None
         cable = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         if self._cable_pairs:
@@ -211,16 +213,17 @@ class Advancement:
         promoted at a later state of the run is evaluated at the earlier
         ones too (evaluating a pair that is clear adds no record).
 
-        Each condition is evaluated on runs of states of doubling length
-        (as :meth:`clear_run` does for the block pairs): a run that ends
-        early costs a state or two."""
+        Each condition is evaluated on runs of states of doubling length,
+        counted from the start across calls: a run that ends early after a
+        start costs a state or two, and one that goes on is soon evaluated
+        a whole call's states at a time (numpy's per-call overhead once)."""
         if not self._ok or len(pts) == 0 or pts.shape[1] != len(self._pts):
             return Cleared(0, self._active)
         z = np.zeros(0, np.int64)
-        a, b, done, total = 0, 1, 0, len(pts)
+        a, done, total = 0, 0, len(pts)
         structure, cable = [self._active.structure], [self._active.cable]
         while a < total:
-            b = min(b, total)
+            b = min(a + self._step, total)
             x, move, dq, diag, dcc, d, seg = _states(pts[a:b], self._pts)
             # the conditions that name no pair first: pieces, stretch, part pairs
             pieces = element_pieces(seg, self._lim_all[:, None])
@@ -262,7 +265,8 @@ class Advancement:
             done = a + m
             if m < b - a:
                 break
-            a, b = b, 2 * b + 1
+            a = b
+            self._step *= 2
         self.skipped += done
         if len(structure) > 1 or len(cable) > 1:
             self._active = Active(_union(structure, len(self._pts)), _union(cable, len(self._pts)))
