@@ -100,3 +100,28 @@ def test_structure_kernel_batched_equals_single_state(cables, parts, data):
         assert [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in recs] == \
             [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in want]
         assert all(np.array_equal(a.where, b.where) for a, b in zip(recs, want))
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.data())
+def test_active_points_is_the_dense_mask(data):
+    """active_points' join equals marking every (centre, part) entry in a
+    dense parts x centres table and reading each point's own centre (and,
+    inside an element, the next one): the same pairs, in the same order."""
+    from checker.interference.structure import active_points
+
+    n = data.draw(st.integers(1, 12))
+    n_s = data.draw(st.integers(1, 3))
+    per = data.draw(st.lists(st.integers(0, 3), min_size=n, max_size=n))     # inner points per centre
+    centre = np.concatenate([np.repeat(np.arange(n), np.array(per) + 1)] * n_s).astype(np.int64)
+    own = np.concatenate([np.concatenate([[True] + [False] * k for k in per])] * n_s)
+    own[np.flatnonzero(centre == n - 1)] = True      # the last centre has no element after it
+    m = data.draw(st.integers(0, 20))
+    ci = np.array(data.draw(st.lists(st.integers(0, n - 1), min_size=m, max_size=m)), np.int64)
+    pi = np.array(data.draw(st.lists(st.integers(0, 6), min_size=m, max_size=m)), np.int64)
+    it, k = active_points(centre, own, ci, pi, n)
+    parts = np.unique(pi)
+    mark = np.zeros((len(parts), n + 1), bool)
+    mark[np.searchsorted(parts, pi), ci] = True
+    kk, want_it = np.nonzero(mark[:, centre] | (~own & mark[:, centre + 1]))
+    assert np.array_equal(it, want_it) and np.array_equal(k, parts[kk])

@@ -273,6 +273,42 @@ def _add_structure(hits, tab, cable, part, value, where, s, record=None) -> None
         hits.add(kind, cable[o], part[o], value[o], where[o], s[o], None, None if record is None else record[o])
 
 
+def active_points(centre: np.ndarray, own: np.ndarray, ci: np.ndarray, pi: np.ndarray,
+                  n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(point, part) pairs of discrete points and the parts they are active
+    for, sorted by part and then point, each once: a point is active for part
+    k when (its centre, k) is an active entry or, for a point inside an
+    element (not ``own``), when (the element's far centre, k) is.
+
+    Joined through the entries grouped by centre (a point meets only its own
+    centres' entries), so the cost grows with the pairs found, not with the
+    points times the parts.
+
+    Args:
+        centre: (M,) each point's body centre in its state (0 .. n - 1).
+        own: (M,) whether the point is that centre itself.
+        ci, pi: the active entries (centre in a state, part).
+        n: body centres per state.
+    """
+    ci, pi = np.asarray(ci, np.int64), np.asarray(pi, np.int64)
+    o = np.argsort(ci, kind="stable")
+    ci, pi = ci[o], pi[o]
+    count = np.bincount(ci, minlength=n + 1)
+    first = np.cumsum(count) - count
+
+    def meet(points: np.ndarray, key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        c = count[key]
+        total = int(c.sum())
+        at = np.repeat(first[key] - (np.cumsum(c) - c), c) + np.arange(total)
+        return np.repeat(points, c), pi[at]
+
+    inner = np.flatnonzero(~own)
+    a_it, a_k = meet(np.arange(len(centre)), centre)
+    b_it, b_k = meet(inner, centre[inner] + 1)
+    key = np.unique(np.concatenate([a_k, b_k]) * max(len(centre), 1) + np.concatenate([a_it, b_it]))
+    return key % max(len(centre), 1), key // max(len(centre), 1)
+
+
 def structure_many(tab: PartTable | None, config: CheckConfig, excl: tuple, names: Sequence[str],
                    radii: np.ndarray, dense: DenseStates, poses: np.ndarray,
                    active: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
@@ -303,15 +339,7 @@ def structure_many(tab: PartTable | None, config: CheckConfig, excl: tuple, name
     radii = np.asarray(radii, float)
     p, s, src, own = dense.p, dense.s, dense.src, dense.own
     state, cab = dense.poly // n_c, dense.poly % n_c
-    # each point against the parts it is active for: its own centre's, or
-    # (inside an element) either end's
-    parts, row = np.unique(pi, return_inverse=True)
-    mark = np.zeros((len(parts), n + 1), bool)
-    mark[row, ci] = True
-    centre = src % n
-    need = mark[:, centre] | (~own & mark[:, centre + 1])
-    kk, it = np.nonzero(need)
-    k = parts[kk]
+    it, k = active_points(src % n, own, ci, pi, n)
     q = state[it] * n_k + k
     rot = np.ascontiguousarray(poses[:, :, :3, :3]).reshape(-1, 3, 3)
     trans = np.ascontiguousarray(poses[:, :, :3, 3]).reshape(-1, 3)
