@@ -62,7 +62,7 @@ def _bounding_radius(kind: str, size: np.ndarray) -> float:
 
 
 def harness_scene(n_cables: int = 64, n_parts: int = 1000, segments: int = 40, duration: float = 1.0,
-                  seed: int = 0, dynamics: bool = True, method: str = "points") -> dict:
+                  seed: int = 0, dynamics: bool = True, method: str = "points", settle: float = 0.0) -> dict:
     """The scene dict (see the module docstring).
 
     Args:
@@ -75,6 +75,10 @@ def harness_scene(n_cables: int = 64, n_parts: int = 1000, segments: int = 40, d
         seed: random sizes, orientations and near parts.
         dynamics: simulate the cables (False: a static check of the routes).
         method: the check method ("points" or "exact").
+        settle: seconds settled before t = 0 (`scene.settle`). The routes
+            droop between their via points and nothing holds a cable there,
+            so without settling (0) the run starts with every cable falling
+            into its sag and swinging; ``SETTLE`` brings them to rest first.
     """
     if n_cables < 1 or n_parts < 0 or segments < 1:
         raise ValueError("need n_cables >= 1, n_parts >= 0, segments >= 1")
@@ -154,7 +158,7 @@ def harness_scene(n_cables: int = 64, n_parts: int = 1000, segments: int = 40, d
                         {"t": duration, "pos": [0.0, 0.0, 0.0]}]}] if duration > 0 else []
     return {
         "scene": {"name": f"harness-{n_cables}x{n_parts}", "units": "mm", "duration": duration,
-                  "settle": 0.0},
+                  "settle": settle},
         "effects": {"dynamics": dynamics, "gravity": dynamics,
                     "contact": ["cable-structure"] if dynamics else []},
         "check": {"method": method, "clearance": CLEARANCE},

@@ -273,40 +273,47 @@ def _add_structure(hits, tab, cable, part, value, where, s, record=None) -> None
         hits.add(kind, cable[o], part[o], value[o], where[o], s[o], None, None if record is None else record[o])
 
 
-def active_points(centre: np.ndarray, own: np.ndarray, ci: np.ndarray, pi: np.ndarray,
+def active_points(src: np.ndarray, own: np.ndarray, ci: np.ndarray, pi: np.ndarray,
                   n: int) -> tuple[np.ndarray, np.ndarray]:
     """(point, part) pairs of discrete points and the parts they are active
     for, sorted by part and then point, each once: a point is active for part
     k when (its centre, k) is an active entry or, for a point inside an
     element (not ``own``), when (the element's far centre, k) is.
 
-    Joined through the entries grouped by centre (a point meets only its own
-    centres' entries), so the cost grows with the pairs found, not with the
-    points times the parts.
+    The points of centre g are a run (its own point, then those inside the
+    element after it, :func:`checker.cable.densify_batch`), so an entry's
+    points are one run too: from past the previous centre's own point to the
+    next centre's. The runs of a part's entries (over every state), merged
+    where they overlap, are expanded at once: the cost grows with the pairs
+    found, not with the points times the parts.
 
     Args:
-        centre: (M,) each point's body centre in its state (0 .. n - 1).
-        own: (M,) whether the point is that centre itself.
+        src, own: (M,) each point's body centre counted over all states
+            (nondecreasing, every centre's own point first) and whether the
+            point is that centre itself.
         ci, pi: the active entries (centre in a state, part).
         n: body centres per state.
     """
-    ci, pi = np.asarray(ci, np.int64), np.asarray(pi, np.int64)
-    o = np.argsort(ci, kind="stable")
-    ci, pi = ci[o], pi[o]
-    count = np.bincount(ci, minlength=n + 1)
-    first = np.cumsum(count) - count
-
-    def meet(points: np.ndarray, key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        c = count[key]
-        total = int(c.sum())
-        at = np.repeat(first[key] - (np.cumsum(c) - c), c) + np.arange(total)
-        return np.repeat(points, c), pi[at]
-
-    inner = np.flatnonzero(~own)
-    a_it, a_k = meet(np.arange(len(centre)), centre)
-    b_it, b_k = meet(inner, centre[inner] + 1)
-    key = np.unique(np.concatenate([a_k, b_k]) * max(len(centre), 1) + np.concatenate([a_it, b_it]))
-    return key % max(len(centre), 1), key // max(len(centre), 1)
+    if len(ci) == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    start = np.flatnonzero(own)                 # the own point of every centre, in order
+    n_g = len(start)
+    lo_of = np.r_[0, start[:-1] + 1]             # past the previous centre's own point
+    hi_of = np.r_[start[1:], len(src)]           # up to the next centre's own point
+    g = (np.arange(n_g // max(n, 1), dtype=np.int64)[:, None] * n + np.asarray(ci, np.int64)[None, :]).ravel()
+    k = np.broadcast_to(np.asarray(pi, np.int64), (n_g // max(n, 1), len(ci))).ravel()
+    o = np.lexsort((g, k))
+    g, k = g[o], k[o]
+    lo, hi = lo_of[g], hi_of[g]
+    # merge the runs of a part that overlap (sorted by centre, both ends grow)
+    new = np.r_[True, (k[1:] != k[:-1]) | (lo[1:] >= hi[:-1])]
+    first = np.flatnonzero(new)
+    last = np.r_[first[1:], len(new)] - 1
+    lo, hi, k = lo[first], hi[last], k[first]
+    size = hi - lo
+    total = int(size.sum())
+    it = np.repeat(lo - (np.cumsum(size) - size), size) + np.arange(total)
+    return it, np.repeat(k, size)
 
 
 def structure_many(tab: PartTable | None, config: CheckConfig, excl: tuple, names: Sequence[str],
@@ -339,7 +346,7 @@ def structure_many(tab: PartTable | None, config: CheckConfig, excl: tuple, name
     radii = np.asarray(radii, float)
     p, s, src, own = dense.p, dense.s, dense.src, dense.own
     state, cab = dense.poly // n_c, dense.poly % n_c
-    it, k = active_points(src % n, own, ci, pi, n)
+    it, k = active_points(src, own, ci, pi, n)
     q = state[it] * n_k + k
     rot = np.ascontiguousarray(poses[:, :, :3, :3]).reshape(-1, 3, 3)
     trans = np.ascontiguousarray(poses[:, :, :3, 3]).reshape(-1, 3)
