@@ -296,7 +296,9 @@ class _Checked:
             if state.step == 0:
                 self.rest_points = state.cables
                 if recorder:
+                    self.timer.lap("check")
                     recorder.log_static(state.part_poses, state.cables, state.qpos)
+                    self.timer.lap("record")      # the scene's static data: recording, not checking
             started, closed = self.tracker.update(state.t, res.records)
             if res.near is not None:
                 self.pending_near = res.near     # a full check's candidates, shown at the next frame
