@@ -156,7 +156,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
                          clearance=scene.check.clearance)
     checks = StepChecks(built, config, options.only, options.advance,
                         sim if validate else None, timer.lap)
-    timer.lap("sim")      # preparing the checks: counted as before
+    timer.skip()          # preparing the checks is set-up, as building the model is: no stage's
     settings = _settings(scene)
     recorder = Recorder(built, options.record, checks.shapes, settings) if options.record else None
     every = scene.check.every
