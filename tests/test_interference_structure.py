@@ -120,7 +120,7 @@ def test_active_points_is_the_dense_mask(data):
     m = data.draw(st.integers(0, 20))
     ci = np.array(data.draw(st.lists(st.integers(0, n - 1), min_size=m, max_size=m)), np.int64)
     pi = np.array(data.draw(st.lists(st.integers(0, 6), min_size=m, max_size=m)), np.int64)
-    it, k = active_points(src, own, ci, pi, n)
+    it, k = active_points(src, own, ci, pi, n, n_s)
     centre = src % n
     parts = np.unique(pi)
     mark = np.zeros((len(parts), n + 1), bool)
@@ -143,7 +143,7 @@ def test_active_points_on_densified_states():
     dense = checker.densify_many(pts, offsets, radii)
     n = offsets[-1]
     ci, pi = rng.integers(0, n, 30), rng.integers(0, len(parts), 30)
-    it, k = active_points(dense.src, dense.own, ci, pi, n)
+    it, k = active_points(dense.src, dense.own, ci, pi, n, 4)
     parts_u = np.unique(pi)
     mark = np.zeros((len(parts_u), n + 1), bool)
     mark[np.searchsorted(parts_u, pi), ci] = True

@@ -274,7 +274,7 @@ def _add_structure(hits, tab, cable, part, value, where, s, record=None) -> None
 
 
 def active_points(src: np.ndarray, own: np.ndarray, ci: np.ndarray, pi: np.ndarray,
-                  n: int) -> tuple[np.ndarray, np.ndarray]:
+                  n: int, states: int) -> tuple[np.ndarray, np.ndarray]:
     """(point, part) pairs of discrete points and the parts they are active
     for, sorted by part and then point, each once: a point is active for part
     k when (its centre, k) is an active entry or, for a point inside an
@@ -289,22 +289,28 @@ def active_points(src: np.ndarray, own: np.ndarray, ci: np.ndarray, pi: np.ndarr
 
     Args:
         src, own: (M,) each point's body centre counted over all states
-            (nondecreasing, every centre's own point first) and whether the
-            point is that centre itself.
+            (nondecreasing, every present centre's own point first) and
+            whether the point is that centre itself. Points may be those of
+            some centres only (``densify_many``'s ``keep``): every entry's
+            centre and both its neighbours must be present.
         ci, pi: the active entries (centre in a state, part).
         n: body centres per state.
+        states: S, the states.
     """
     if len(ci) == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    start = np.flatnonzero(own)                 # the own point of every centre, in order
-    n_g = len(start)
-    lo_of = np.r_[0, start[:-1] + 1]             # past the previous centre's own point
-    hi_of = np.r_[start[1:], len(src)]           # up to the next centre's own point
-    g = (np.arange(n_g // max(n, 1), dtype=np.int64)[:, None] * n + np.asarray(ci, np.int64)[None, :]).ravel()
-    k = np.broadcast_to(np.asarray(pi, np.int64), (n_g // max(n, 1), len(ci))).ravel()
+    start = np.flatnonzero(own)                 # the own point of every present centre, in order
+    present = src[start]
+    end = np.r_[start[1:], len(src)]             # up to the next present centre's own point
+    g = (np.arange(states, dtype=np.int64)[:, None] * n + np.asarray(ci, np.int64)[None, :]).ravel()
+    k = np.broadcast_to(np.asarray(pi, np.int64), (states, len(ci))).ravel()
     o = np.lexsort((g, k))
     g, k = g[o], k[o]
-    lo, hi = lo_of[g], hi_of[g]
+    at = np.searchsorted(present, g)
+    before = np.maximum(at - 1, 0)
+    # past the previous centre's own point (its points inside the element up to g)
+    lo = np.where((at > 0) & (present[before] == g - 1), start[before] + 1, start[at])
+    hi = end[at]
     # merge the runs of a part that overlap (sorted by centre, both ends grow)
     new = np.r_[True, (k[1:] != k[:-1]) | (lo[1:] >= hi[:-1])]
     first = np.flatnonzero(new)
@@ -346,7 +352,7 @@ def structure_many(tab: PartTable | None, config: CheckConfig, excl: tuple, name
     radii = np.asarray(radii, float)
     p, s, src, own = dense.p, dense.s, dense.src, dense.own
     state, cab = dense.poly // n_c, dense.poly % n_c
-    it, k = active_points(src, own, ci, pi, n)
+    it, k = active_points(src, own, ci, pi, n, n_s)
     q = state[it] * n_k + k
     rot = np.ascontiguousarray(poses[:, :, :3, :3]).reshape(-1, 3, 3)
     trans = np.ascontiguousarray(poses[:, :, :3, 3]).reshape(-1, 3)
