@@ -2,7 +2,11 @@
 
 Scenes come from :func:`sim.harness.harness_scene` (cables of ``--segments``
 elements threaded through non-overlapping parts, a few within the
-clearance, one carriage moving). Four tables and a profile, every number measured in this
+clearance, one carriage rising and falling once over the run), settled for
+``--settle`` seconds before t = 0 (default :data:`sim.harness.SETTLE`, which
+brings the 64 x 1,000 harness to rest; ``--settle 0`` runs them from their
+drooped routes, every cable falling into its sag over the first 0.2 s and
+swinging after). Four tables and a profile, every number measured in this
 run on this machine:
 
 1. ``build``: the part set (surfaces, trees, probes) of N harness parts,
@@ -32,7 +36,7 @@ run on this machine:
    tracemalloc's top allocation sites of one run.
 
 Run: python benchmarks/bench_scale.py [--quick] [--cables 1,16,64] [--parts 10,100,1000]
-       [--duration S] [--harness] [--tables build,runs,queries,static] [--static C,P]
+       [--duration S] [--settle S] [--harness] [--tables build,runs,queries,static] [--static C,P]
        [--profile C P] [--out DIR] [--before REV] [--rec-growth]
 
 ``--quick`` runs a small subset (seconds to a minute). Timings depend on the
@@ -293,9 +297,12 @@ def build_table(parts: list[int], before: str | None, mem_gb: float) -> tuple[st
 
 
 def run_table(grid: list[tuple[int, int]], duration: float, segments: int, mem_gb: float, out: Path,
-              validate: bool, before: str | None = None, growth_too: bool = False) -> tuple[str, list[dict]]:
+              validate: bool, before: str | None = None, growth_too: bool = False,
+              settle: float = 0.0) -> tuple[str, list[dict]]:
     """Each grid scene run by this checkout and, with ``before``, by that git
-    revision (the same scene file, one process each, rows side by side)."""
+    revision (the same scene file, one process each, rows side by side),
+    settled ``settle`` seconds before t = 0 (not timed per simulated second:
+    the report's timing starts after it)."""
     from sim.harness import harness_scene, write_scene
 
     trees = [("this checkout", REPO)]
@@ -303,7 +310,7 @@ def run_table(grid: list[tuple[int, int]], duration: float, segments: int, mem_g
         trees.append((f"before ({before})", _export(before)))
     rows, found = [], []
     for c, p in grid:
-        data = harness_scene(c, p, segments=segments, duration=duration)
+        data = harness_scene(c, p, segments=segments, duration=duration, settle=settle)
         data["check"]["validate"] = validate
         scene = write_scene(data, out / f"harness_{c}x{p}.toml")
         for k, (label, path) in enumerate(trees):
@@ -318,25 +325,31 @@ def run_table(grid: list[tuple[int, int]], duration: float, segments: int, mem_g
                 size = rec.stat().st_size / 2 ** 20 if rec.exists() else None
                 growth = _growth(data, size, duration, out / f"half_{c}x{p}{tag}", path, mem_gb) \
                     if (growth_too and size is not None) else None
-                row = {"code": label, "cables": c, "parts": p, "sim_s": t["sim_s"] * per,
+                # check + validation + recording against the simulation, per step alike
+                ratio = (t["check_s"] + t["validate_s"] + t["record_s"]) / t["sim_s"] if t["sim_s"] else None
+                row = {"code": label, "cables": c, "parts": p, "settle_s": settle, "sim_s": t["sim_s"] * per,
                        "check_s": t["check_s"] * per, "validate_s": t["validate_s"] * per,
-                       "record_s": t["record_s"] * per, "total_s": t["total_s"] * per, "process_s": wall,
+                       "record_s": t["record_s"] * per, "cvr_over_sim": ratio,
+                       "total_s": t["total_s"] * per, "process_s": wall,
                        "peak_rss_mb": rss, "recording_mb_per_s": None if size is None else size * per,
                        "recording_growth_mb_per_s": growth}
                 found.append(row)
                 rows.append([label, c, p, row["sim_s"], row["check_s"], row["validate_s"], row["record_s"],
-                             row["total_s"], wall, rss, row["recording_mb_per_s"], growth])
+                             ratio, row["total_s"], wall, rss, row["recording_mb_per_s"], growth])
             else:
                 last = (se.strip().splitlines() or ["?"])[-1]
-                rows.append([label, c, p, None, None, None, None, None, wall, rss, None,
+                rows.append([label, c, p, None, None, None, None, None, None, wall, rss, None,
                              f"failed ({code}): {last[:80]}"])
                 found.append({"code": label, "cables": c, "parts": p, "failed": last, "peak_rss_mb": rss})
-    title = (f"Runs: seconds per simulated second ({duration} s simulated, {segments} elements per cable, "
+    title = (f"Runs: seconds per simulated second ({duration} s simulated after {settle} s of settling, "
+             f"{segments} elements per cable, "
              f"validation {'on' if validate else 'off'}), one process per row, address space <= {mem_gb} GB")
     if growth_too:
         title += ("; rec_growth: the recording's growth per simulated second, (size - size of the same "
                   "run at half the duration) / (half the duration), without what is written once")
-    return _table(title, ["code", "cables", "parts", "sim", "check", "validate", "record", "total", "process_s",
+    title += "; (c+v+r)/sim: check + validate + record over sim"
+    return _table(title, ["code", "cables", "parts", "sim", "check", "validate", "record", "(c+v+r)/sim",
+                          "total", "process_s",
                           "peak_rss_mb", "rec_mb_per_s", "rec_growth"], rows), found
 
 
@@ -424,6 +437,8 @@ def main() -> int:
     ap.add_argument("--build-parts", default=None, help="part counts of the build table (default 100,1000,3000)")
     ap.add_argument("--segments", type=int, default=40)
     ap.add_argument("--duration", type=float, default=None, help="simulated seconds (default 0.5; quick 0.1)")
+    ap.add_argument("--settle", type=float, default=None,
+                    help="seconds settled before t = 0 in the runs and the profile (default sim.harness.SETTLE)")
     ap.add_argument("--harness", action="store_true", help="also run the 64 x 1,000 harness scene")
     ap.add_argument("--rec-growth", action="store_true",
                     help="also run each scene for half the duration: the recording's growth per simulated second")
@@ -456,10 +471,12 @@ def main() -> int:
     sys.path.insert(0, str(REPO))            # the parent uses this checkout (children: PYTHONPATH)
     a.out.mkdir(parents=True, exist_ok=True)
     duration = a.duration if a.duration is not None else (0.1 if a.quick else 0.5)
+    from sim.harness import SETTLE
+    settle = SETTLE if a.settle is None else a.settle
     if a.profile:
         from sim.harness import harness_scene, write_scene
         c, p = a.profile
-        data = harness_scene(c, p, segments=a.segments, duration=duration)
+        data = harness_scene(c, p, segments=a.segments, duration=duration, settle=settle)
         data["check"]["validate"] = not a.no_validate
         scene = write_scene(data, a.out / f"profile_{c}x{p}.toml")
         code, wall, rss, so, se = _child([str(Path(__file__).resolve()), "--mode-profile", str(scene)], REPO,
@@ -479,7 +496,8 @@ def main() -> int:
     results, texts = {}, []
     for name, fn in (("build", lambda: build_table(build_parts, a.before or None, a.mem_limit_gb)),
                      ("runs", lambda: run_table(grid, duration, a.segments, a.mem_limit_gb, a.out,
-                                                not a.no_validate, a.before or None, a.rec_growth)),
+                                                not a.no_validate, a.before or None, a.rec_growth,
+                                                settle)),
                      ("queries", lambda: query_table(grid, a.segments, a.mem_limit_gb, a.out)),
                      ("static", lambda: static_table([tuple(ints(a.static))], a.segments, a.mem_limit_gb, a.out))):
         if name not in a.tables.split(","):

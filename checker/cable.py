@@ -167,7 +167,8 @@ def element_pieces(length: np.ndarray, spacing: np.ndarray) -> np.ndarray:
 
 
 def densify_batch(
-    points: np.ndarray, offsets: np.ndarray, spacing: np.ndarray, source: bool = False
+    points: np.ndarray, offsets: np.ndarray, spacing: np.ndarray, source: bool = False,
+    keep: np.ndarray | None = None,
 ) -> tuple[np.ndarray, ...]:
     """:func:`densify` for many polylines at once.
 
@@ -176,6 +177,10 @@ def densify_batch(
         offsets: (C + 1,) start of each polyline in ``points``; polyline c is
             ``points[offsets[c]:offsets[c + 1]]`` with at least 2 points.
         spacing: (C,) largest allowed element length per polyline.
+        keep: (N,) bool, or None (all): only the kept input points emit
+            (themselves and the points inside the element after them), each
+            exactly as without ``keep`` (arc lengths along the whole
+            polyline); ``new_offsets`` then counts the emitted points.
 
     Returns:
         pts: (M, 3) densified points, concatenated.
@@ -198,12 +203,14 @@ def densify_batch(
     pieces = np.where(valid, element_pieces(seg_len, lim).astype(np.int64), 0)
     step = np.where(valid, seg_len, 0.0)
     s_pt = polyline_arc_lengths(step, offsets)
-    if np.all(pieces <= 1):  # nothing to split
+    if keep is None and np.all(pieces <= 1):  # nothing to split
         out = (p.copy(), s_pt, cable_of_pt, offsets.copy())
         return out + ((np.arange(len(p)), np.ones(len(p), bool), np.zeros(len(p))) if source else ())
     # Each point emits itself, then pieces-1 interior points of its element.
     emit = np.ones(len(p), dtype=np.int64)
     emit[:-1] += np.maximum(pieces - 1, 0)
+    if keep is not None:
+        emit = np.where(keep, emit, 0)
     total = int(emit.sum())
     src = np.repeat(np.arange(len(p)), emit)
     first = np.cumsum(emit) - emit

@@ -156,7 +156,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
                          clearance=scene.check.clearance)
     checks = StepChecks(built, config, options.only, options.advance,
                         sim if validate else None, timer.lap)
-    timer.lap("sim")      # preparing the checks: counted as before
+    timer.skip()          # preparing the checks is set-up, as building the model is: no stage's
     settings = _settings(scene)
     recorder = Recorder(built, options.record, checks.shapes, settings) if options.record else None
     every = scene.check.every
@@ -296,7 +296,9 @@ class _Checked:
             if state.step == 0:
                 self.rest_points = state.cables
                 if recorder:
+                    self.timer.lap("check")
                     recorder.log_static(state.part_poses, state.cables, state.qpos)
+                    self.timer.lap("record")      # the scene's static data: recording, not checking
             started, closed = self.tracker.update(state.t, res.records)
             if res.near is not None:
                 self.pending_near = res.near     # a full check's candidates, shown at the next frame

@@ -38,6 +38,7 @@ from checker.advance import Advancement, PartSolids, part_pair_bounds
 from checker.cable import CableMeasures, taut_margin
 from checker.events import AllowList, AllowRule
 from checker.interference import Checker, single_records_many
+from checker.interference.discrete import around_centres
 from checker.parts import PartChecker
 from checker.recheck import Recheck
 from checker.records import Interference, PairType
@@ -315,7 +316,9 @@ class StepChecks:
             for i, recs in zip(flagged.tolist(), found):
                 records[i] = recs
         if len(self._active[0]) or len(self._cable_active[0]):
-            dense = self.checker.densify_many(pts, self._offsets, self._radii, self._rest)    # once for both
+            # the points of the elements next to the active centres alone, once for both
+            keep = around_centres(np.concatenate([self._active[0], *self._cable_active]), pts.shape[1])
+            dense = self.checker.densify_many(pts, self._offsets, self._radii, self._rest, keep)
             if len(self._active[0]):
                 found = self.checker.structure_many(names, self._radii, dense, poses[:, self.checked_parts],
                                                     self.exclusions, self._active)

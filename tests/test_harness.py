@@ -56,3 +56,27 @@ def test_a_small_harness_runs(tmp_path):
     scene = load_scene(write_scene(data, tmp_path / "h.toml"))
     report = run_scene(scene, RunOptions(report=tmp_path / "r.json", record=None))
     assert report["complete"] and report["timing"]["sim_s"] > 0 and report["settings"]["steps"] > 0
+
+
+def test_settling_brings_the_cables_to_rest(tmp_path):
+    """The routes droop between via points that hold nothing: unsettled,
+    the cables fall into their sag at t = 0; after SETTLE seconds of
+    settling they are at rest (the carriage held still meanwhile)."""
+    from sim.build import build
+    from sim.harness import SETTLE
+    from sim.loop import Simulation
+
+    def moved(settle: float) -> float:
+        data = harness_scene(4, 40, segments=16, duration=0.2, settle=settle)
+        data["motion"] = []                                     # the carriage still: the cables' own motion
+        built = build(load_scene(write_scene(data, tmp_path / f"h{settle}.toml")), detect=False)
+        sim = Simulation(built)
+        sim.reset()
+        sim.settle()
+        states = sim.steps(contacts=False)
+        first = np.concatenate(next(states).cables)
+        for _ in range(10):                                     # 20 ms
+            last = next(states)
+        return float(np.linalg.norm(np.concatenate(last.cables) - first, axis=1).max())
+
+    assert moved(0.0) > 5e-3 and moved(SETTLE) < 1e-4           # m: falling, then still (under 0.1 mm)

@@ -63,3 +63,44 @@ def test_insert_at_material_puts_points_on_the_polyline(steps, cuts):
         u = (mm - m[e]) / (m[e + 1] - m[e])
         assert np.allclose(p2[k], p[e] + u * (p[e + 1] - p[e]), atol=1e-12)
         assert s2[k] == pytest.approx(s[e] + u * (s[e + 1] - s[e]), abs=1e-12)
+
+
+def _records(found):
+    return [[(r.type, r.a, r.b, r.min_distance, r.s, r.s_b, tuple(np.asarray(r.where))) for r in recs]
+            for recs in found]
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_kept_centres_give_every_record_of_the_whole_discretisation(seed):
+    """densify_many keeping only the active centres and their neighbours
+    (around_centres): structure_many and cable_pairs_many return the same
+    records, bit for bit, as on every centre's points (random cables, parts
+    with a mesh, states moved a little, sparse random entries)."""
+    from test_interference import random_scene
+
+    from checker.interference import Checker
+    from checker.interference.discrete import around_centres
+
+    rng = np.random.default_rng(700 + seed)
+    cables, parts = random_scene(seed, n_cables=4, n_parts=5)
+    checker = Checker(parts, CheckConfig(clearance=0.02))
+    offsets = np.concatenate([[0], np.cumsum([len(c.points) for c in cables])])
+    n = int(offsets[-1])
+    radii = np.array([c.radius for c in cables])
+    base = np.concatenate([c.points for c in cables])
+    states = base[None] + rng.normal(size=(int(rng.integers(1, 4)), n, 3)) * 1e-6
+    poses = np.stack([[p.pose for p in parts]] * len(states))
+    names = [c.name for c in cables]
+    rest = np.concatenate([np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(c.points, axis=0), axis=1))] * 1.01
+                           for c in cables])
+    m = int(rng.integers(1, 6))
+    part_entries = (rng.integers(0, n, m), rng.integers(0, len(parts), m))
+    cable_entries = (rng.integers(0, n, m), rng.integers(0, n, m))
+    whole = checker.densify_many(states, offsets, radii, rest)
+    keep = around_centres(np.concatenate([part_entries[0], *cable_entries]), n)
+    kept = checker.densify_many(states, offsets, radii, rest, keep)
+    assert len(kept.p) <= len(whole.p)
+    assert _records(checker.structure_many(names, radii, kept, poses, (), part_entries)) == \
+        _records(checker.structure_many(names, radii, whole, poses, (), part_entries))
+    assert _records(checker.cable_pairs_many(names, radii, kept, cable_entries)) == \
+        _records(checker.cable_pairs_many(names, radii, whole, cable_entries))

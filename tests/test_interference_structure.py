@@ -100,3 +100,53 @@ def test_structure_kernel_batched_equals_single_state(cables, parts, data):
         assert [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in recs] == \
             [(r.type, r.a, r.b, r.min_distance, r.s, r.severity) for r in want]
         assert all(np.array_equal(a.where, b.where) for a, b in zip(recs, want))
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.data())
+def test_active_points_is_the_dense_mask(data):
+    """active_points' runs equal marking every (centre, part) entry in a
+    dense parts x centres table and reading each point's own centre (and,
+    inside an element, the next one): the same pairs, in the same order."""
+    from checker.interference.structure import active_points
+
+    cuts = data.draw(st.lists(st.integers(2, 5), min_size=1, max_size=3))      # centres per cable
+    n = sum(cuts)
+    n_s = data.draw(st.integers(1, 3))
+    per = np.array(data.draw(st.lists(st.integers(0, 3), min_size=n, max_size=n)))  # inner points per centre
+    per[np.cumsum(cuts) - 1] = 0                  # a cable's last centre starts no element
+    src = np.repeat(np.arange(n_s * n), np.tile(per + 1, n_s))
+    own = np.r_[True, src[1:] != src[:-1]]
+    m = data.draw(st.integers(0, 20))
+    ci = np.array(data.draw(st.lists(st.integers(0, n - 1), min_size=m, max_size=m)), np.int64)
+    pi = np.array(data.draw(st.lists(st.integers(0, 6), min_size=m, max_size=m)), np.int64)
+    it, k = active_points(src, own, ci, pi, n, n_s)
+    centre = src % n
+    parts = np.unique(pi)
+    mark = np.zeros((len(parts), n + 1), bool)
+    mark[np.searchsorted(parts, pi), ci] = True
+    kk, want_it = np.nonzero(mark[:, centre] | (~own & mark[:, centre + 1]))
+    assert np.array_equal(it, want_it) and np.array_equal(k, parts[kk])
+
+
+def test_active_points_on_densified_states():
+    """The same on real discrete points (densify_many of random cables, several states)."""
+    from checker.interference.structure import active_points
+
+    rng = np.random.default_rng(3)
+    cables, parts = random_scene(4, n_cables=3, n_parts=5)
+    checker = Checker(parts, CheckConfig(clearance=0.01))
+    offsets = np.concatenate([[0], np.cumsum([len(c.points) for c in cables])])
+    radii = np.array([c.radius for c in cables])
+    pts = np.stack([np.concatenate([c.points for c in cables]) + rng.normal(size=(offsets[-1], 3)) * 0.01
+                    for _ in range(4)])
+    dense = checker.densify_many(pts, offsets, radii)
+    n = offsets[-1]
+    ci, pi = rng.integers(0, n, 30), rng.integers(0, len(parts), 30)
+    it, k = active_points(dense.src, dense.own, ci, pi, n, 4)
+    parts_u = np.unique(pi)
+    mark = np.zeros((len(parts_u), n + 1), bool)
+    mark[np.searchsorted(parts_u, pi), ci] = True
+    centre = dense.src % n
+    kk, want_it = np.nonzero(mark[:, centre] | (~dense.own & mark[:, centre + 1]))
+    assert len(want_it) and np.array_equal(it, want_it) and np.array_equal(k, parts_u[kk])

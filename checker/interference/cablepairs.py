@@ -302,7 +302,10 @@ def cable_pairs_many(clearance: float, names: Sequence[str], radii: np.ndarray, 
     every one next to j, and on one cable also with the midpoint of
     every piece next to j (and the other way round); a record is the
     worst of those (the caller knows the others to be clear). Every
-    state must split each element into as many pieces as the first.
+    state must split each element into as many pieces as the first. The
+    points may be those of some centres only (``densify_many``'s
+    ``keep``): every entry's centre and both its neighbours must be
+    present.
 
     Args:
         names, radii: the cables' names and radii (C,).
@@ -326,7 +329,9 @@ def cable_pairs_many(clearance: float, names: Sequence[str], radii: np.ndarray, 
     # one state's layout: the points next to each centre (its own point,
     # the points inside its two elements) and the pieces inside them
     c0, own0 = src[:m], own[:m]
-    piece0 = np.r_[poly[1:m] == poly[:m - 1], False]
+    # a piece: two consecutive points of one element (or an element's last
+    # and its far end), never across centres left out (densify_many's keep)
+    piece0 = np.r_[(poly[1:m] == poly[:m - 1]) & (c0[1:] - c0[:-1] <= 1), False]
     pt_c = np.concatenate([c0[own0], c0[~own0], c0[~own0] + 1])           # centre each point is next to
     pt_i = np.concatenate([np.flatnonzero(own0), np.flatnonzero(~own0), np.flatnonzero(~own0)])
     pc_c = np.concatenate([c0[piece0], c0[piece0] + 1])                  # centre each piece is next to

@@ -129,20 +129,36 @@ class DenseStates:
 
 
 def densify_many(pts: np.ndarray, offsets: np.ndarray, radii: np.ndarray, spacing: float,
-                 rest: np.ndarray | None = None) -> DenseStates:
+                 rest: np.ndarray | None = None, keep: np.ndarray | None = None) -> DenseStates:
     """The discrete points of S states (S, N, 3) at once, each cable of
     each state a polyline of its own (the bits of :meth:`check`'s own
     discretisation of each state), for :meth:`structure_many` and
     :meth:`cable_pairs_many`. ``rest``: (N,) the centres' material
     coordinates (:attr:`CableState.rest_s` of every cable, concatenated),
-    or None (the current arc lengths)."""
+    or None (the current arc lengths). ``keep``: (N,) bool, the centres
+    whose points (their own, those inside the element after them) are
+    wanted in every state (each as without ``keep``), or None (all): the
+    callers need the elements next to their entries' centres whole, so
+    they keep each such centre and both its neighbours
+    (:func:`around_centres`)."""
     n_s, n = pts.shape[:2]
     radii = np.asarray(radii, float)
     p, s, poly, _, src, own, frac = densify_batch(pts.reshape(-1, 3), tile_offsets(offsets, n_s),
-                                                  np.tile(spacing * radii, n_s), source=True)
+                                                  np.tile(spacing * radii, n_s), source=True,
+                                                  keep=None if keep is None else np.tile(keep, n_s))
     if rest is None:
         m = s
     else:
         m = material_coordinates(s, src, frac, np.ones(len(s), bool), np.tile(np.asarray(rest, float), n_s))
     return DenseStates(p, s, m, poly, src, own, n_s, n, len(radii))
 
+
+def around_centres(centres: np.ndarray, n: int) -> np.ndarray:
+    """(n,) bool: the given body centres and both neighbours of each (the
+    centres ``densify_many`` must keep for the elements next to them to be
+    whole: every point on them and both their ends)."""
+    keep = np.zeros(n, bool)
+    c = np.asarray(centres, np.int64)
+    for shift in (-1, 0, 1):
+        keep[np.clip(c + shift, 0, max(n - 1, 0))] = True
+    return keep

@@ -128,9 +128,9 @@ class Checker:
         return table
 
     def densify_many(self, pts: np.ndarray, offsets: np.ndarray, radii: np.ndarray,
-                     rest: np.ndarray | None = None) -> DenseStates:
+                     rest: np.ndarray | None = None, keep: np.ndarray | None = None) -> DenseStates:
         """:func:`checker.interference.discrete.densify_many` at this checker's spacing."""
-        return discrete.densify_many(pts, offsets, radii, self.config.spacing, rest)
+        return discrete.densify_many(pts, offsets, radii, self.config.spacing, rest, keep)
 
     def structure_many(self, names: Sequence[str], radii: np.ndarray, dense: DenseStates,
                        poses: np.ndarray, exclusions: Sequence[Exclusion],

@@ -273,6 +273,55 @@ def _add_structure(hits, tab, cable, part, value, where, s, record=None) -> None
         hits.add(kind, cable[o], part[o], value[o], where[o], s[o], None, None if record is None else record[o])
 
 
+def active_points(src: np.ndarray, own: np.ndarray, ci: np.ndarray, pi: np.ndarray,
+                  n: int, states: int) -> tuple[np.ndarray, np.ndarray]:
+    """(point, part) pairs of discrete points and the parts they are active
+    for, sorted by part and then point, each once: a point is active for part
+    k when (its centre, k) is an active entry or, for a point inside an
+    element (not ``own``), when (the element's far centre, k) is.
+
+    The points of centre g are a run (its own point, then those inside the
+    element after it, :func:`checker.cable.densify_batch`), so an entry's
+    points are one run too: from past the previous centre's own point to the
+    next centre's. The runs of a part's entries (over every state), merged
+    where they overlap, are expanded at once: the cost grows with the pairs
+    found, not with the points times the parts.
+
+    Args:
+        src, own: (M,) each point's body centre counted over all states
+            (nondecreasing, every present centre's own point first) and
+            whether the point is that centre itself. Points may be those of
+            some centres only (``densify_many``'s ``keep``): every entry's
+            centre and both its neighbours must be present.
+        ci, pi: the active entries (centre in a state, part).
+        n: body centres per state.
+        states: S, the states.
+    """
+    if len(ci) == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    start = np.flatnonzero(own)                 # the own point of every present centre, in order
+    present = src[start]
+    end = np.r_[start[1:], len(src)]             # up to the next present centre's own point
+    g = (np.arange(states, dtype=np.int64)[:, None] * n + np.asarray(ci, np.int64)[None, :]).ravel()
+    k = np.broadcast_to(np.asarray(pi, np.int64), (states, len(ci))).ravel()
+    o = np.lexsort((g, k))
+    g, k = g[o], k[o]
+    at = np.searchsorted(present, g)
+    before = np.maximum(at - 1, 0)
+    # past the previous centre's own point (its points inside the element up to g)
+    lo = np.where((at > 0) & (present[before] == g - 1), start[before] + 1, start[at])
+    hi = end[at]
+    # merge the runs of a part that overlap (sorted by centre, both ends grow)
+    new = np.r_[True, (k[1:] != k[:-1]) | (lo[1:] >= hi[:-1])]
+    first = np.flatnonzero(new)
+    last = np.r_[first[1:], len(new)] - 1
+    lo, hi, k = lo[first], hi[last], k[first]
+    size = hi - lo
+    total = int(size.sum())
+    it = np.repeat(lo - (np.cumsum(size) - size), size) + np.arange(total)
+    return it, np.repeat(k, size)
+
+
 def structure_many(tab: PartTable | None, config: CheckConfig, excl: tuple, names: Sequence[str],
                    radii: np.ndarray, dense: DenseStates, poses: np.ndarray,
                    active: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
@@ -303,15 +352,7 @@ def structure_many(tab: PartTable | None, config: CheckConfig, excl: tuple, name
     radii = np.asarray(radii, float)
     p, s, src, own = dense.p, dense.s, dense.src, dense.own
     state, cab = dense.poly // n_c, dense.poly % n_c
-    # each point against the parts it is active for: its own centre's, or
-    # (inside an element) either end's
-    parts, row = np.unique(pi, return_inverse=True)
-    mark = np.zeros((len(parts), n + 1), bool)
-    mark[row, ci] = True
-    centre = src % n
-    need = mark[:, centre] | (~own & mark[:, centre + 1])
-    kk, it = np.nonzero(need)
-    k = parts[kk]
+    it, k = active_points(src, own, ci, pi, n, n_s)
     q = state[it] * n_k + k
     rot = np.ascontiguousarray(poses[:, :, :3, :3]).reshape(-1, 3, 3)
     trans = np.ascontiguousarray(poses[:, :, :3, 3]).reshape(-1, 3)
