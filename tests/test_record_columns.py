@@ -17,7 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from rerun.chunk import RrdReader
 
-from sim.record.columns import Once, column, floats, rgba, strings, strips, times, vec3
+from sim.record.columns import Once, column, floats, mat3, rgba, strings, strips, times, vec3
 
 
 def _rerun(columns) -> dict[str, pa.Array]:
@@ -54,6 +54,28 @@ def test_strips_radii_and_colours_equal_reruns_own():
         assert ours[key].type == theirs[key].type and ours[key].equals(theirs[key]), key
     (alpha,) = rr.LineStrips3D.columns(colors=[(255, 0, 230, 90), (1, 2, 3, 4)])
     assert rgba([(255, 0, 230, 90), (1, 2, 3, 4)]).equals(alpha.as_arrow_array().flatten())
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(1, 6), st.integers(0, 2 ** 31))
+def test_poses_and_colours_equal_reruns_own(frames, seed):
+    """Poses (translation, column-major rotation) and packed colours, as the
+    recorder sends moving parts and part colours."""
+    rng = np.random.default_rng(seed)
+    poses = rng.normal(size=(frames, 4, 4)) * 1e2
+    t = rr.Transform3D
+    ours = _rerun([column(t.descriptor_translation(), vec3(poses[:, :3, 3])),
+                   column(t.descriptor_mat3x3(), mat3(poses[:, :3, :3]))])
+    theirs = _rerun(t.columns(translation=poses[:, :3, 3], mat3x3=poses[:, :3, :3]))
+    assert ours.keys() == theirs.keys()
+    for key in ours:
+        assert ours[key].type == theirs[key].type and ours[key].equals(theirs[key]), key
+    colours = rng.integers(0, 256, size=(frames, 4)).astype(np.uint8)
+    for kind in (rr.Boxes3D, rr.Ellipsoids3D, rr.Capsules3D, rr.Cylinders3D):
+        (theirs,) = kind.columns(colors=colours)
+        assert column(kind.descriptor_colors(), rgba(colours)).as_arrow_array().equals(theirs.as_arrow_array())
+    (theirs,) = rr.Mesh3D.columns(albedo_factor=colours)
+    assert column(rr.Mesh3D.descriptor_albedo_factor(), rgba(colours)).as_arrow_array().equals(theirs.as_arrow_array())
 
 
 def test_once_is_in_the_first_row_and_absent_from_the_others(tmp_path: Path):

@@ -23,6 +23,8 @@ VEC3 = pa.list_(pa.field("item", pa.float32(), nullable=False), 3)
 """A point or a size: three float32, as rerun stores them."""
 STRIP = pa.list_(pa.field("item", VEC3, nullable=False))
 """A line strip: a list of points."""
+MAT3 = pa.list_(pa.field("item", pa.float32(), nullable=False), 9)
+"""A 3x3 matrix: nine float32, column by column, as rerun stores it."""
 
 
 @dataclass(frozen=True)
@@ -102,6 +104,12 @@ def vec3(points: np.ndarray) -> pa.Array:
     return pa.FixedSizeListArray.from_arrays(pa.array(flat), type=VEC3)
 
 
+def mat3(matrices: np.ndarray) -> pa.Array:
+    """(n, 3, 3) matrices as rerun's `Mat3x3` array (column-major)."""
+    flat = np.ascontiguousarray(np.swapaxes(np.asarray(matrices).reshape(-1, 3, 3), 1, 2), np.float32).reshape(-1)
+    return pa.FixedSizeListArray.from_arrays(pa.array(flat), type=MAT3)
+
+
 def strips(points: np.ndarray, offsets: np.ndarray) -> pa.Array:
     """Line strips as rerun's `LineStrip3D` array: strip k runs through
     `points[offsets[k]:offsets[k + 1]]` ((n, 3) points, (k + 1,) offsets)."""
@@ -117,7 +125,7 @@ def strings(texts: Sequence[str]) -> pa.Array:
     return pa.array(texts, pa.utf8())
 
 
-def rgba(colours: Sequence[Sequence[int]]) -> pa.Array:
+def rgba(colours: Sequence[Sequence[int]] | np.ndarray) -> pa.Array:
     """(n, 3 or 4) 8-bit colours as rerun's packed RGBA (uint32)."""
     c = np.asarray(colours, np.uint32).reshape(len(colours), -1)
     if c.shape[1] == 3:

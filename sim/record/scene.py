@@ -21,6 +21,7 @@ import numpy as np
 import rerun as rr
 
 from sim.build import Built, PartModel
+from sim.record.columns import Column, column, mat3, rgba, vec3
 from sim.record.style import KEEPOUT_COLOUR, PART_COLOUR, PART_DIMMED, part_path, visual_paths
 
 _KINDS = {"box": rr.Boxes3D, "plane": rr.Boxes3D, "sphere": rr.Ellipsoids3D,
@@ -68,10 +69,11 @@ def transform(pose: np.ndarray, unit: float) -> rr.Transform3D:
     return rr.Transform3D(translation=pose[:3, 3] / unit, mat3x3=pose[:3, :3])
 
 
-def _colour_columns(part, colours: np.ndarray):
-    """A part's colour alone, one (4,) colour per row, as columns of its shape's archetype."""
+def _colour_columns(part, colours: np.ndarray) -> list[Column]:
+    """A part's colour alone, one (4,) colour per row, as a column of its shape's archetype."""
     kind = _KINDS.get(part.shape)
-    return kind.columns(colors=colours) if kind is not None else rr.Mesh3D.columns(albedo_factor=colours)
+    descriptor = kind.descriptor_colors() if kind is not None else rr.Mesh3D.descriptor_albedo_factor()
+    return [column(descriptor, rgba(colours))]
 
 
 class SceneGeometry:
@@ -183,9 +185,10 @@ class SceneGeometry:
         if not stacks:
             return
         every = np.concatenate(stacks, axis=1)                                  # (F, M + B, 4, 4)
+        t = rr.Transform3D
         for j, path in enumerate(paths):
-            rec.send_columns(path, indexes=index, columns=rr.Transform3D.columns(
-                translation=every[:, j, :3, 3] / u, mat3x3=every[:, j, :3, :3]))
+            rec.send_columns(path, indexes=index, columns=[column(t.descriptor_translation(), vec3(every[:, j, :3, 3] / u)),
+                                                           column(t.descriptor_mat3x3(), mat3(every[:, j, :3, :3]))])
 
     def send_colours(self, rec: rr.RecordingStream, times: np.ndarray, dimmed: np.ndarray) -> None:
         """Every part's and visual geom's colour, one column per entity: its

@@ -44,28 +44,32 @@ def wear_colours(sliding: np.ndarray, contact_time: np.ndarray) -> np.ndarray:
 
 @cache
 def _tensor_parts() -> tuple:
-    """What every 1-D float64 tensor shares: the arrow type, the F64 arm of
-    its buffer union and the (empty) arrays of the other arms."""
+    """What every 1-D float64 tensor shares: the arrow type, its shape's
+    type, the F64 arm of its buffer union (index and type), the (empty)
+    arrays of the other arms, the union's type-code and offset buffers, its
+    (null) names and the offsets of a one-row list."""
     dt = TensorDataBatch._ARROW_DATATYPE
     union = dt.field("buffer").type
     k = [f.name for f in union].index("F64")
     empty = [pa.nulls(0, type=f.type) for f in union]
     codes = [pa.array([k], pa.int8()).buffers()[1], pa.array([0], pa.int32()).buffers()[1]]
-    return dt, union, k, empty, codes, pa.nulls(1, dt.field("names").type)
+    return (dt, dt.field("shape").type, union, k, union[k].type, empty, codes, pa.nulls(1, dt.field("names").type),
+            pa.py_buffer(np.array([0, 1], np.int32)))
 
 
 def tensor_1d(values: np.ndarray) -> pa.StructArray:
     """A 1-D float64 vector as rerun's tensor component (`TensorDataBatch`'s
-    arrow type), built directly: rerun's own converter casts its arrays,
-    and the first cast of a process imports `pyarrow.compute` (tens of ms)."""
+    arrow type), built directly from buffers: rerun's own converter casts
+    its arrays, and the first cast of a process imports `pyarrow.compute`
+    (tens of ms)."""
     v = np.ascontiguousarray(values, np.float64).ravel()
-    dt, union, k, empty, codes, names = _tensor_parts()
-    shape = pa.ListArray.from_arrays(pa.array([0, 1], pa.int32()), pa.array([len(v)], pa.uint64()),
-                                     type=dt.field("shape").type)
+    dt, shape_type, union, k, f64_type, empty, codes, names, one_row = _tensor_parts()
+    shape = pa.Array.from_buffers(shape_type, 1, [None, one_row], children=[pa.array(np.array([len(v)], np.uint64))])
     children = list(empty)
-    children[k] = pa.ListArray.from_arrays(pa.array([0, len(v)], pa.int32()), pa.array(v), type=union[k].type)
+    children[k] = pa.Array.from_buffers(f64_type, 1, [None, pa.py_buffer(np.array([0, len(v)], np.int32))],
+                                        children=[pa.array(v)])
     buffer = pa.Array.from_buffers(type=union, length=1, children=children, buffers=[None, *codes])
-    return pa.StructArray.from_arrays([shape, names, buffer], fields=list(dt))
+    return pa.Array.from_buffers(dt, 1, [None], children=[shape, names, buffer])
 
 
 def send_wear(rec: rr.RecordingStream, built: Built, wear: list, rest: list[np.ndarray] | None,
