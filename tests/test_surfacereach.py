@@ -228,7 +228,7 @@ def test_a_model_flex_of_other_dimension_that_can_meet_a_surface_keeps_every_sur
     flex of the mjcf model whose bits meet a surface's keeps every surface in
     every pass; one whose bits do not changes nothing."""
     spec = mujoco.MjSpec()
-    body = spec.worldbody.add_body(name="b", pos=[0.0, 0.0, 1.0])
+    spec.worldbody.add_body(name="b", pos=[0.0, 0.0, 1.0])
     for name, contype, conaffinity in ((f"{SURFACE_PREFIX}0", 0, 8), ("cloth", 8 if meets else 2, 0)):
         f = spec.add_flex()
         f.name, f.dim, f.radius = name, 2, 1e-3
