@@ -52,6 +52,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from sim.benchtable import text_table
+
 REPO = Path(__file__).resolve().parents[1]
 BEFORE = "c5dc43e,ab65c56"
 """Default ``--before``: the recording before the clash review and wear map
@@ -132,14 +134,6 @@ def _run(scene: Path, tree: Path, out: Path) -> dict | None:
             "mb": record.stat().st_size / 2 ** 20}
 
 
-def _table(cols: list[str], rows: list[list]) -> str:
-    fmt = lambda v: "-" if v is None else (f"{v:.3f}" if isinstance(v, float) else str(v))
-    cells = [[fmt(v) for v in r] for r in rows]
-    width = [max(len(c), *(len(r[k]) for r in cells)) for k, c in enumerate(cols)]
-    return "\n".join(["  ".join(c.rjust(w) for c, w in zip(cols, width))]
-                     + ["  ".join(v.rjust(w) for v, w in zip(r, width)) for r in cells])
-
-
 COLUMNS = ("rec", "close", "frame", "open", "sim", "ratio", "with_open", "cpu_ratio", "mb")
 
 
@@ -166,7 +160,7 @@ def harness(durations: list[float], out: Path) -> str:
     return ("Harness scene (64 cables, 1,000 parts): the recording's size; mb_per_s = size / duration; "
             "growth = (size - size of the previous duration) / (difference of durations); record_s_per_s: "
             "the report's record_s per simulated second\n"
-            + _table(["duration_s", "mb", "mb_per_s", "growth_mb_per_s", "record_s_per_s", "note"], rows))
+            + text_table(["duration_s", "mb", "mb_per_s", "growth_mb_per_s", "record_s_per_s", "note"], rows))
 
 
 def _machine() -> str:
@@ -230,7 +224,7 @@ def main(argv=None) -> int:
     text = (f"Recording against MuJoCo, ms per checked step unless named (close, open: ms per run), best of "
             f"{a.repeat} runs each, one process per run, codes in turn; ratio = rec / sim; with_open = "
             f"(record + open) / sim; cpu_ratio: rec / sim in CPU time (median); now/this: this checkout's rec "
-            f"over the row's\n" + _table(cols, rows)
+            f"over the row's\n" + text_table(cols, rows)
             + _machine())
     print(text)
     (out / "bench_record.txt").write_text(text + "\n")

@@ -47,6 +47,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from sim.benchtable import text_table
+
 REPO = Path(__file__).resolve().parents[1]
 VARIANTS = ("as is", "no footer", "no blueprint")
 PARTS = ("data", "layout", "blueprint", "finish", "replace")
@@ -118,14 +120,6 @@ def _run(scene: Path, variant: str, out: Path) -> dict | None:
     return ms
 
 
-def _table(cols: list[str], rows: list[list]) -> str:
-    fmt = lambda v: "-" if v is None else (f"{v:.3f}" if isinstance(v, float) else str(v))
-    cells = [[fmt(v) for v in r] for r in rows]
-    width = [max(len(c), *(len(r[k]) for r in cells)) for k, c in enumerate(cols)]
-    return "\n".join(["  ".join(c.rjust(w) for c, w in zip(cols, width))]
-                     + ["  ".join(v.rjust(w) for v, w in zip(r, width)) for r in cells])
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeat", type=int, default=5, help="runs per scene and variant")
@@ -158,7 +152,7 @@ def main(argv=None) -> int:
     load = os.getloadavg()
     text = (f"The recorder's close, ms per run (wall, best of {a.repeat}; cpu: the whole process's CPU time, "
             f"median), one process per run, variants in turn; no footer / no blueprint: the same run with rerun's "
-            f"footer not written / the blueprint not sent (not how cablecheck writes)\n" + _table(cols, rows)
+            f"footer not written / the blueprint not sent (not how cablecheck writes)\n" + text_table(cols, rows)
             + f"\nmachine: {os.cpu_count()} cores, load average {load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f} "
               f"at the end; python {sys.version.split()[0]}")
     print(text)

@@ -80,3 +80,13 @@ def _fmt(v) -> str:
             return f"{v:g}"
         return f"{v:.3g}" if abs(v) < 1e4 else f"{v:.0f}"
     return str(v)
+
+
+def text_table(cols: list[str], rows: list[list]) -> str:
+    """Rows under right-aligned column names, floats to 3 decimals (the
+    recording benchmarks' tables, printed only)."""
+    fmt = lambda v: "-" if v is None else (f"{v:.3f}" if isinstance(v, float) else str(v))
+    cells = [[fmt(v) for v in r] for r in rows]
+    width = [max(len(c), *(len(r[k]) for r in cells)) for k, c in enumerate(cols)]
+    return "\n".join(["  ".join(c.rjust(w) for c, w in zip(cols, width))]
+                     + ["  ".join(v.rjust(w) for v, w in zip(r, width)) for r in cells])

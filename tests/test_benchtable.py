@@ -8,7 +8,7 @@ import csv
 
 import pytest
 
-from sim.benchtable import Table, median_time
+from sim.benchtable import Table, median_time, text_table
 
 
 def test_rows_fit_the_columns_and_print_and_write_as_reported(tmp_path):
@@ -38,3 +38,12 @@ def test_median_time_warms_up_once_then_times_repeat_calls():
     calls.clear()
     median_time(lambda: calls.append(1), 0)                       # at least one timed call
     assert len(calls) == 2
+
+
+def test_text_table_right_aligns_each_column_to_its_widest_cell():
+    text = text_table(["scene", "ms"], [["drawer", 0.5], ["a", None], ["bracket_static", 12]])
+    lines = text.splitlines()
+    assert lines == ["         scene     ms",
+                     "        drawer  0.500",
+                     "             a      -",
+                     "bracket_static     12"]
