@@ -24,13 +24,20 @@ def _strip(rows):
     return [{k: (np.asarray(v).tolist() if isinstance(v, np.ndarray) else v) for k, v in r.items()} for r in rows]
 
 
-@pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)
-def test_skipping_changes_no_answer(path: Path, tmp_path):
-    scene = load_scene(path)
+def _skipping_and_in_full(scene, tmp_path):
+    """`scene` run with the skip rule and with every step checked in full:
+    both reports, after asserting their events and pairs are the same."""
     fast = run_scene(scene, RunOptions(report=tmp_path / "a.json", record=None))
     full = run_scene(scene, RunOptions(report=tmp_path / "b.json", record=None, advance=False))
     assert _strip(fast["events"]) == _strip(full["events"])
     assert _strip(fast["pairs"]) == _strip(full["pairs"])
+    return fast, full
+
+
+@pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)
+def test_skipping_changes_no_answer(path: Path, tmp_path):
+    scene = load_scene(path)
+    fast, full = _skipping_and_in_full(scene, tmp_path)
     assert fast["summary"] == full["summary"]
     for a, b in zip(fast["cables"], full["cables"]):
         assert a["max_strain"] == b["max_strain"] and a["min_bend_radius"] == b["min_bend_radius"]
@@ -77,11 +84,8 @@ keys = [ { t = 0.0, pos = [0, 0, 0] },
     path = tmp_path / "probe.toml"
     path.write_text(text)
     scene = load_scene(path)
-    fast = run_scene(scene, RunOptions(report=tmp_path / "a.json", record=None))
-    full = run_scene(scene, RunOptions(report=tmp_path / "b.json", record=None, advance=False))
+    fast, full = _skipping_and_in_full(scene, tmp_path)
     assert any(e["b"] == "probe/block" for e in _strip(full["events"]))
-    assert _strip(fast["events"]) == _strip(full["events"])
-    assert _strip(fast["pairs"]) == _strip(full["pairs"])
     assert fast["settings"]["advance"]["proven_clear_steps"] > 0
 
 
@@ -104,11 +108,8 @@ keys = [ { t = 0.0, pos = [0, 0, 0] }, { t = 0.8, pos = [60, 0, 0] } ]
     path = tmp_path / "sliding.toml"
     path.write_text(text)
     scene = load_scene(path)
-    fast = run_scene(scene, RunOptions(report=tmp_path / "a.json", record=None))
-    full = run_scene(scene, RunOptions(report=tmp_path / "b.json", record=None, advance=False))
+    fast, full = _skipping_and_in_full(scene, tmp_path)
     assert [e["type"] for e in full["events"]] == ["cable-cable"]
-    assert _strip(fast["events"]) == _strip(full["events"])
-    assert _strip(fast["pairs"]) == _strip(full["pairs"])
     adv = fast["settings"]["advance"]
     assert adv["proven_clear_steps"] > adv["full_checks"]
 
@@ -162,10 +163,7 @@ def test_random_scenes_skip_without_changing_answers(seed: int, tmp_path):
     path = tmp_path / "random.toml"
     path.write_text(_random_scene_text(seed))
     scene = load_scene(path)
-    fast = run_scene(scene, RunOptions(report=tmp_path / "a.json", record=None))
-    full = run_scene(scene, RunOptions(report=tmp_path / "b.json", record=None, advance=False))
-    assert _strip(fast["events"]) == _strip(full["events"])
-    assert _strip(fast["pairs"]) == _strip(full["pairs"])
+    fast, full = _skipping_and_in_full(scene, tmp_path)
     for a, b in zip(fast["cables"], full["cables"]):
         assert a["max_strain"] == b["max_strain"] and a["min_bend_radius"] == b["min_bend_radius"]
 
@@ -208,10 +206,7 @@ def test_turning_part_pairs_skip_without_changing_answers(seed: int, tmp_path):
     path = tmp_path / "turning.toml"
     path.write_text(_turning_scene_text(seed))
     scene = load_scene(path)
-    fast = run_scene(scene, RunOptions(report=tmp_path / "a.json", record=None))
-    full = run_scene(scene, RunOptions(report=tmp_path / "b.json", record=None, advance=False))
-    assert _strip(fast["events"]) == _strip(full["events"])
-    assert _strip(fast["pairs"]) == _strip(full["pairs"])
+    fast, full = _skipping_and_in_full(scene, tmp_path)
     assert any(p["type"] == "part-part" for p in full["pairs"])
     assert fast["settings"]["advance"]["proven_clear_steps"] > 0
 
@@ -274,10 +269,7 @@ def test_sparse_part_gaps_change_no_answer(seed: int, tmp_path, monkeypatch):
     scene = load_scene(path)
     dense = run_scene(scene, RunOptions(report=tmp_path / "d.json", record=None))
     monkeypatch.setattr(Advancement, "SPARSE_ENTRIES", 0)
-    fast = run_scene(scene, RunOptions(report=tmp_path / "a.json", record=None))
-    full = run_scene(scene, RunOptions(report=tmp_path / "b.json", record=None, advance=False))
-    assert _strip(fast["events"]) == _strip(full["events"])
-    assert _strip(fast["pairs"]) == _strip(full["pairs"])
+    fast, _ = _skipping_and_in_full(scene, tmp_path)
     a, d = fast["settings"]["advance"], dense["settings"]["advance"]
     assert a["proven_clear_steps"] <= d["proven_clear_steps"]
     assert a["proven_clear_steps"] >= 0.9 * d["proven_clear_steps"]
