@@ -72,10 +72,14 @@ class SurfaceReach:
         self.flexes = flexes = surface_geoms(m)[0]
         surface = np.zeros(m.nflex, bool)
         surface[flexes] = True
-        adr, num = m.flex_vertadr[flexes], m.flex_vertnum[flexes]
+        adr = m.flex_vertadr[flexes]
         self.bodies = m.flex_vertbodyid[adr].astype(np.int64)
-        self.lo = np.array([m.flex_vert[a:a + n].min(axis=0) for a, n in zip(adr, num)]).reshape(-1, 3)
-        self.hi = np.array([m.flex_vert[a:a + n].max(axis=0) for a, n in zip(adr, num)]).reshape(-1, 3)
+        # each patch's box: one reduction over the model's vertices, cut at every
+        # flex's first (a flex's vertices are contiguous; none has no vertex)
+        self.lo, self.hi = np.zeros((0, 3)), np.zeros((0, 3))
+        if len(flexes):
+            self.lo = np.minimum.reduceat(m.flex_vert, m.flex_vertadr, axis=0)[flexes]
+            self.hi = np.maximum.reduceat(m.flex_vert, m.flex_vertadr, axis=0)[flexes]
         # per body carrying patches, a binary tree of boxes over its patches (in
         # flex order: a surface's patches come in k-d order, neighbours next to
         # each other), padded to 2**depth leaves with empty boxes; level 0 is
