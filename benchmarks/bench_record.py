@@ -15,17 +15,24 @@ folder), ``--repeat`` times each. Per scene and code the table gives:
   (the recorder's constructor and ``log_static``), which the run's stages
   leave out of ``record`` (the constructor is not timed, the static scene
   falls in ``check``), stated so that nothing moved there goes unseen;
-- ``sim``: ``timing.sim_ms_per_step`` (MuJoCo's per step);
-- ``ratio`` = rec / sim, and ``with_open`` = (record + open) / sim over
-  the run;
+- ``sim``: ``timing.sim_ms_per_step`` (MuJoCo's per step: stepping only,
+  building its model is left out);
+- ``build``: ms spent building the MuJoCo models (`sim.build.build`, once
+  per run), MuJoCo's own fixed cost, beside the recording's (open + close);
+- ``ratio`` = rec / sim (the close spread over the run's steps),
+  ``frame_ratio`` = frame / sim (per step, both sides without their
+  once-per-run costs), and ``with_open`` = (record + open) / sim over the
+  run;
 - ``cpu_ratio``: rec / sim in CPU time (the process's, all threads, per
   run stage), which the machine's load moves much less than wall time;
 - ``mb``: the recording's size.
 
 Times are each the best (lowest) of the repeats; ``cpu_ratio`` the median.
-The target: recording at most half of MuJoCo's time per step (ratio <=
-0.5) on every scene, and no more per step than before the clash review
-(``c5dc43e``).
+The target: recording at most half of MuJoCo's time per step on every
+scene, and no more per step than before the clash review (``c5dc43e``).
+Both verdicts are printed: per step (``frame_ratio <= 0.5``) and with the
+close spread over the steps (``ratio <= 0.5``), which a short scene misses
+by its fixed close alone.
 
 ``--harness D1,D2`` measures instead the recording's size on the harness
 scene (``sim.harness``: 64 cables among 1,000 parts), run by this checkout
@@ -75,7 +82,7 @@ _CHILD = """
 import json, sys, time
 import sim.record, sim.run
 from sim.cli import main
-cpu, wall = {}, {"open": 0.0, "close": 0.0}
+cpu, wall = {}, {"open": 0.0, "close": 0.0, "build": 0.0}
 Timer = sim.run._Timer
 lap = Timer.lap
 def timed(self, stage):
@@ -100,13 +107,15 @@ def clock(part, f):
     return clocked
 R = sim.record.Recorder
 R.__init__, R.log_static, R.close = clock("open", R.__init__), clock("open", R.log_static), clock("close", R.close)
+sim.run.build = clock("build", sim.run.build)
 code = main(sys.argv[1:])
 print(json.dumps({"cpu": cpu, "wall": wall}))
 sys.exit(code)
 """
 """The child: ``cablecheck`` with the run's stage timer also adding up CPU
 time per stage, and the recorder's opening (its constructor and the static
-scene, which the run's `record` stage does not count) and closing timed."""
+scene, which the run's `record` stage does not count) and closing timed,
+and MuJoCo's model build (once per run, in no stage) beside them."""
 
 
 def _run(scene: Path, tree: Path, out: Path) -> dict | None:
@@ -128,13 +137,13 @@ def _run(scene: Path, tree: Path, out: Path) -> dict | None:
     steps = t["record_s"] * 1e3 / t["record_ms_per_step"] if t["record_ms_per_step"] else 0
     return {"rec": t["record_ms_per_step"], "sim": t["sim_ms_per_step"], "close": wall["close"] * 1e3,
             "frame": (t["record_s"] - wall["close"]) * 1e3 / steps if steps else None,
-            "open": wall["open"] * 1e3, "with_open": (t["record_s"] + wall["open"]) / t["sim_s"],
+            "open": wall["open"] * 1e3, "build": wall.get("build", 0.0) * 1e3, "with_open": (t["record_s"] + wall["open"]) / t["sim_s"],
             "cpu_ratio": cpu.get("record", 0.0) / cpu["sim"] * t["sim_s"] / t["record_s"]
             * t["record_ms_per_step"] / t["sim_ms_per_step"] if t["record_s"] and cpu.get("sim") else None,
             "mb": record.stat().st_size / 2 ** 20}
 
 
-COLUMNS = ("rec", "close", "frame", "open", "sim", "ratio", "with_open", "cpu_ratio", "mb")
+COLUMNS = ("rec", "close", "frame", "open", "build", "sim", "ratio", "frame_ratio", "with_open", "cpu_ratio", "mb")
 
 
 def harness(durations: list[float], out: Path) -> str:
@@ -205,8 +214,9 @@ def main(argv=None) -> int:
             if not rs:
                 continue
             m = {k: min(r[k] for r in rs if r[k] is not None) if any(r[k] is not None for r in rs) else None
-                 for k in ("rec", "close", "frame", "open", "sim", "with_open")}
+                 for k in ("rec", "close", "frame", "open", "build", "sim", "with_open")}
             m["ratio"] = m["rec"] / m["sim"]
+            m["frame_ratio"] = None if m["frame"] is None else m["frame"] / m["sim"]
             ratios = [r["cpu_ratio"] for r in rs if r["cpu_ratio"] is not None]
             m["cpu_ratio"] = statistics.median(ratios) if ratios else None
             m["mb"] = rs[-1]["mb"]
@@ -217,12 +227,14 @@ def main(argv=None) -> int:
             m = best.get(label)
             row = [scene.stem, label] + [None if m is None else m[k] for k in COLUMNS]
             row.append(None if label == "now" or not (m and now) else now["rec"] / m["rec"])
+            row.append(("yes" if m["frame_ratio"] is not None and m["frame_ratio"] <= 0.5 else "NO") if m else "-")
             row.append(("yes" if m["ratio"] <= 0.5 else "NO") if m else "-")
             rows.append(row)
         print(f"{scene.stem}: measured", file=sys.stderr, flush=True)
-    cols = ["scene", "code", *COLUMNS, "now/this", "ratio<=0.5"]
+    cols = ["scene", "code", *COLUMNS, "now/this", "frame_ratio<=0.5", "ratio<=0.5"]
     text = (f"Recording against MuJoCo, ms per checked step unless named (close, open: ms per run), best of "
-            f"{a.repeat} runs each, one process per run, codes in turn; ratio = rec / sim; with_open = "
+            f"{a.repeat} runs each, one process per run, codes in turn; build: MuJoCo's model build, ms per run; "
+            f"ratio = rec / sim; frame_ratio = frame / sim; with_open = "
             f"(record + open) / sim; cpu_ratio: rec / sim in CPU time (median); now/this: this checkout's rec "
             f"over the row's\n" + text_table(cols, rows)
             + _machine())
