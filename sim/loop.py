@@ -219,6 +219,14 @@ class Simulation:
                 reach.restore()
         return out
 
+    def collision_seconds(self) -> float:
+        """Wall seconds of the detection model's collision passes so far, by
+        MuJoCo's own timer (mjTIMER_POS_COLLISION: mj_collision alone, what
+        :meth:`collide_many` costs at least); 0 without a detection model."""
+        if self.detect_data is None:
+            return 0.0
+        return float(self.detect_data.timer[mujoco.mjtTimer.mjTIMER_POS_COLLISION].duration)
+
     def read_many(self, raws: list[RawContacts]) -> list[Contacts]:
         """Contacts of :meth:`collide` named, for many steps at once."""
         return self.reader.read_many(raws, self.built.origin)

@@ -97,10 +97,14 @@ class AdvanceOutcome:
 
 @dataclass(frozen=True)
 class Timing:
-    """Wall-clock seconds: the whole run and each of `STAGES`."""
+    """Wall-clock seconds: the whole run and each of `STAGES`; `collision`:
+    MuJoCo's own collision passes on the detection model (its timer), a part
+    of the validate stage (what validation costs at least), or None when the
+    run does not validate."""
 
     total: float
     stages: dict[str, float]
+    collision: float | None = None
 
 
 @dataclass(frozen=True)
@@ -220,6 +224,9 @@ def _timing(t: Timing, steps: int, checked: int) -> dict:
     out.update({f"{k}_s": t.stages[k] for k in STAGES})
     out.update({f"{k}_ms_per_step": 1e3 * t.stages[k] / per_check for k in ("check", "validate", "record", "wear")})
     out["sim_ms_per_step"] = 1e3 * t.stages["sim"] / max(steps, 1)
+    if t.collision is not None:
+        out["validate_collision_s"] = t.collision
+        out["validate_collision_ms_per_step"] = 1e3 * t.collision / per_check
     return out
 
 

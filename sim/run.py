@@ -222,7 +222,9 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         warnings=sim.warnings(), part_warnings=ends.part_warnings,
         physics_warnings=tuple(built.warnings) + ends.hull_warnings,
         substeps=built.substeps.count if built.substeps else 1,
-        timing=Timing(time.perf_counter() - start, dict(timer.total)), recording=options.record)
+        timing=Timing(time.perf_counter() - start, dict(timer.total),
+                      sim.collision_seconds() if (validate and not static) else None),
+        recording=options.record)
 
 
 def _clamped(anchor) -> bool:

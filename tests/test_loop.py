@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import mujoco
@@ -66,3 +67,21 @@ def test_settling_finds_rest_without_drag():
     sim.settle()
     state = next(sim.steps(contacts=False))
     assert sim.data.energy[1] < 1e-9 and np.isfinite(state.cables[0]).all()
+
+
+def test_the_detection_models_collision_time_is_mujocos_timer_of_its_passes():
+    """`collision_seconds` counts MuJoCo's collision passes on the detection
+    model, one per state collided, and no more than the wall time they took."""
+    built = build(parse_scene(_door(contact=True), Path("/virtual/door.toml")))
+    sim = Simulation(built)
+    sim.reset()
+    assert sim.collision_seconds() == 0.0
+    qposes = [sim.data.qpos.copy()] * 5
+    start = time.perf_counter()
+    sim.collide_many(qposes)
+    wall = time.perf_counter() - start
+    timer = sim.detect_data.timer[mujoco.mjtTimer.mjTIMER_POS_COLLISION]
+    assert timer.number == 5
+    assert 0.0 < sim.collision_seconds() <= wall
+    assert Simulation(build(parse_scene(_door(contact=True), Path("/virtual/door.toml")), detect=False)
+                      ).collision_seconds() == 0.0

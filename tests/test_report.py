@@ -225,3 +225,11 @@ def test_failed_write_keeps_the_earlier_report_and_no_temp(tmp_path: Path, monke
     with pytest.raises(TypeError):      # not JSON: nothing is written at all
         write_report({"x": object()}, path)
     assert [p.name for p in tmp_path.iterdir()] == ["r.json"]
+
+
+def test_the_detection_models_collision_time_is_reported_with_validation_only():
+    r = report_of(_outcome(timing=Timing(1.5, {"sim": 0.5, "check": 0.6, "validate": 0.2, "record": 0.1,
+                                               "wear": 0.1}, collision=0.125)))["timing"]
+    assert r["validate_collision_s"] == 0.125
+    assert r["validate_collision_ms_per_step"] == pytest.approx(1e3 * 0.125 / 50)
+    assert "validate_collision_s" not in report_of(_outcome())["timing"]
