@@ -18,9 +18,12 @@ apart from the patch's box grown by r + rho + twice that margin along
 some axis, every point of the segment is that far from every point of the
 patch, so MuJoCo could report no contact there (the margin counted twice
 is room for GJK's tolerance, which is far below it). The test runs in
-two steps with the same bound: each segment against the box of all the
+three steps with the same bound: each segment against the box of all the
 patches on a body, then down a tree of boxes over that body's patches
-(each node the box of its children) to the patches themselves. Every
+(each node the box of its children) to the patches themselves, and last
+the segments that reach a patch's box again along the patch's own
+principal axes (`oriented_boxes`: a slanted, thin patch's box along them
+is far tighter; any direction separates as well as the body's axes). Every
 one-dimensional flex counts as a cable; should the mjcf model bring a
 flex of another dimension that can meet a surface, no patch is ever left
 out. The positions are the detection model's own
@@ -77,9 +80,12 @@ class SurfaceReach:
         # each patch's box: one reduction over the model's vertices, cut at every
         # flex's first (a flex's vertices are contiguous; none has no vertex)
         self.lo, self.hi = np.zeros((0, 3)), np.zeros((0, 3))
+        self.axes, self.axis_lo, self.axis_hi = np.zeros((0, 3, 3)), np.zeros((0, 3)), np.zeros((0, 3))
         if len(flexes):
             self.lo = np.minimum.reduceat(m.flex_vert, m.flex_vertadr, axis=0)[flexes]
             self.hi = np.maximum.reduceat(m.flex_vert, m.flex_vertadr, axis=0)[flexes]
+            self.axes, self.axis_lo, self.axis_hi = oriented_boxes(m.flex_vert, m.flex_vertadr, m.flex_vertnum)
+            self.axes, self.axis_lo, self.axis_hi = self.axes[flexes], self.axis_lo[flexes], self.axis_hi[flexes]
         # per body carrying patches, a binary tree of boxes over its patches (in
         # flex order: a surface's patches come in k-d order, neighbours next to
         # each other), padded to 2**depth leaves with empty boxes; level 0 is
@@ -100,6 +106,9 @@ class SurfaceReach:
         while lo.shape[1] > 1:
             lo, hi = lo.reshape(n_c, -1, 2, 3).min(axis=2), hi.reshape(n_c, -1, 2, 3).max(axis=2)
             self._levels.insert(0, (lo, hi))
+        # below the root, each level's boxes by parent, both children at once, as
+        # (hi, -lo): a segment's (lo, -hi) greater along any axis is apart from it
+        self._children = [np.concatenate([hi, -lo], axis=2).reshape(n_c, -1, 2, 6) for lo, hi in self._levels[1:]]
         radius = float(m.flex_radius[flexes].max()) if len(flexes) else 0.0
         s_margin = float(m.flex_margin[flexes].max()) if len(flexes) else 0.0
         # a flex of the mjcf model itself (not a cable) that can meet a surface: no
@@ -150,26 +159,31 @@ class SurfaceReach:
         if len(self._held):
             rot = xmat[:, self._vbody[self._held]].reshape(n_s, -1, 3, 3)
             pts[:, self._held] += (rot @ self._offset[None, :, :, None])[..., 0]
-        rot = xmat[:, self._carriers].reshape(n_s, -1, 1, 3, 3)               # (S, B, 1, 3, 3)
+        rot = xmat[:, self._carriers].reshape(n_s, -1, 3, 3)                  # (S, B, 3, 3)
         diff = pts[:, None, :, :] - xpos[:, self._carriers, None, :]          # (S, B, V, 3)
-        # into each carrying body's frame: R^T (p - x), row by row
-        local = (diff[..., 0:1] * rot[..., 0, :] + diff[..., 1:2] * rot[..., 1, :]
-                 + diff[..., 2:3] * rot[..., 2, :])
+        local = diff @ rot                                                    # into each carrier's frame: R^T (p - x)
         a, b = local[:, :, self._segs[:, 0]], local[:, :, self._segs[:, 1]]   # (S, B, E, 3)
         grow = self._grow[:, None]
         seg_lo, seg_hi = np.minimum(a, b) - grow, np.maximum(a, b) + grow
         root_lo, root_hi = self._levels[0]
         near = ~((seg_lo > root_hi[:, 0][:, None, :]) | (seg_hi < root_lo[:, 0][:, None, :])).any(axis=3)
         s, c, e = np.nonzero(near)                          # segments near all of a body's patches
-        lo, hi = seg_lo[s, c, e], seg_hi[s, c, e]           # (T, 3)
-        seg, node = np.arange(len(s)), np.zeros(len(s), np.int64)
-        for box_lo, box_hi in self._levels[1:]:             # down the tree: the children of nodes met
-            seg, node = np.repeat(seg, 2), (2 * node[:, None] + np.arange(2)).ravel()
-            b = c[seg]
-            meet = ~((lo[seg] > box_hi[b, node]) | (hi[seg] < box_lo[b, node])).any(axis=1)
-            seg, node = seg[meet], node[meet]
+        apart = np.concatenate([seg_lo[s, c, e], -seg_hi[s, c, e]], axis=1)   # (T, 6)
+        seg, body, node = np.arange(len(s)), c, np.zeros(len(s), np.int64)
+        for children in self._children:                     # down the tree: the children of nodes met
+            meet = ~(apart[:, None, :] > children[body, node]).any(axis=2)   # (T, 2)
+            i, j = np.nonzero(meet)
+            seg, body, apart, node = seg[i], body[i], apart[i], 2 * node[i] + j
+        # the pairs met at the leaves, each segment again in its patch's own
+        # axes (a padding leaf's empty box met nothing)
+        s, c, e, row = s[seg], body, e[seg], self._leaf_row[body, node]
+        axes = self.axes[row]                                                 # (T, 3, 3), rows the axes
+        a = (axes @ local[s, c, self._segs[e, 0]][:, :, None])[..., 0]
+        b = (axes @ local[s, c, self._segs[e, 1]][:, :, None])[..., 0]
+        grow = self._grow[e][:, None]
+        meet = ~((np.minimum(a, b) - grow > self.axis_hi[row]) | (np.maximum(a, b) + grow < self.axis_lo[row])).any(1)
         out = np.zeros((n_s, len(self.flexes)), bool)
-        out[s[seg], self._leaf_row[c[seg], node]] = True    # a padding leaf's empty box meets nothing
+        out[s[meet], row[meet]] = True
         return out
 
     def leave_out(self, keep: np.ndarray) -> None:
@@ -194,3 +208,22 @@ class SurfaceReach:
             field[self.flexes] = value
         self.model.flex_vertbodyid[:] = self._vertbody
         self._kept = np.ones(len(self.flexes), bool)
+
+
+def oriented_boxes(verts: np.ndarray, adr: np.ndarray, count: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Boxes along the principal axes of groups of points: group k is
+    `verts[adr[k]:adr[k] + count[k]]`, the groups back to back from the
+    first point to the last, none empty (a model's flexes).
+    Returns (K, 3, 3) orthonormal axes as rows and (K, 3) the points' least
+    and largest coordinates along them. A surface patch is a thin piece of
+    a mesh, often slanted in its body's frame: along its own axes its box is
+    far tighter than the axis-aligned one."""
+    verts = np.asarray(verts, float).reshape(-1, 3)
+    adr, n = np.asarray(adr, np.int64), np.asarray(count, np.int64)
+    centre = np.add.reduceat(verts, adr, axis=0) / n[:, None]
+    d = verts - np.repeat(centre, n, axis=0)
+    scatter = np.add.reduceat(d[:, :, None] * d[:, None, :], adr, axis=0)
+    axes = np.linalg.eigh(scatter)[1].transpose(0, 2, 1)                      # eigenvectors as rows
+    along = np.einsum("vij,vj->vi", np.repeat(axes, n, axis=0), verts)
+    return axes, np.minimum.reduceat(along, adr, axis=0), np.maximum.reduceat(along, adr, axis=0)

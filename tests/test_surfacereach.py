@@ -16,7 +16,7 @@ from sim.build import build
 from sim.detection_mesh import SURFACE_PREFIX, surface_geoms
 from sim.loop import Simulation
 from sim.scene import load_scene
-from sim.surfacereach import SurfaceReach
+from sim.surfacereach import SurfaceReach, oriented_boxes
 from tests.strategies import coords, rotations
 from tests.test_detection_mesh import POCKET_FLOOR, u_mesh
 
@@ -241,3 +241,61 @@ def test_a_model_flex_of_other_dimension_that_can_meet_a_surface_keeps_every_sur
     d = mujoco.MjData(m)
     mujoco.mj_kinematics(m, d)
     assert reach.reachable(d.xpos[None], d.xmat[None]).tolist() == [[meets]]
+
+
+@settings(max_examples=40)
+@given(groups=st.lists(st.integers(1, 12), min_size=1, max_size=5), turn=rotations(),
+       points=coords((60, 3), -0.05, 0.05), flat=st.booleans())
+def test_oriented_boxes_hold_their_points_on_orthonormal_axes(groups, turn, points, flat):
+    """Every point lies in its group's box along that group's axes (against
+    a brute-force projection), the axes are orthonormal, and a flat group
+    turned anywhere gets a box of no thickness."""
+    count = np.array(groups)
+    adr = np.concatenate([[0], np.cumsum(count)[:-1]])
+    verts = points[:count.sum()].copy()
+    if flat:
+        verts[:, 2] = 0.01
+        verts = verts @ turn.T + 0.3
+    axes, lo, hi = oriented_boxes(verts, adr, count)
+    np.testing.assert_allclose(axes @ axes.transpose(0, 2, 1), np.broadcast_to(np.eye(3), axes.shape), atol=1e-12)
+    for k, (a, n) in enumerate(zip(adr, count)):
+        along = verts[a:a + n] @ axes[k].T
+        np.testing.assert_array_equal(along.min(axis=0) <= along.max(axis=0), True)
+        assert (along >= lo[k] - 1e-12).all() and (along <= hi[k] + 1e-12).all()
+        np.testing.assert_allclose([along.min(axis=0), along.max(axis=0)], [lo[k], hi[k]], atol=1e-12)
+        if flat and n >= 3:
+            assert (hi[k] - lo[k]).min() < 1e-9
+
+
+def test_a_slanted_patch_is_left_out_where_only_its_own_axes_separate_it():
+    """A thin square turned 45 degrees about x in its body's frame, the
+    cable's segment parallel to it 30 mm off its face: inside the square's
+    axis-aligned box grown by the contact distance, apart along the square's
+    normal by more than it: left out."""
+    spec = mujoco.MjSpec()
+    spec.worldbody.add_body(name="b", pos=[0.0, 0.0, 1.0])
+    half = 0.05
+    c, s45 = np.cos(np.pi / 4), np.sin(np.pi / 4)
+    square = [[x, y * c, y * s45] for x, y in ((-half, -half), (half, -half), (half, half), (-half, half))]
+    f = spec.add_flex()
+    f.name, f.dim, f.radius = f"{SURFACE_PREFIX}0", 2, 1e-6
+    f.vertbody = ["b"]
+    f.vert = np.ravel(square).tolist()
+    f.elem = [0, 1, 2, 0, 2, 3]
+    f.contype, f.conaffinity, f.margin = 1, 1, 0.005
+    cable = spec.add_flex()
+    cable.name, cable.dim, cable.radius, cable.margin = "cable", 1, 0.002, 0.005
+    off = 0.03 * np.array([0.0, -s45, c])        # off the face, along its normal
+    ends = np.array([[-0.03, 0.0, 0.0], [0.03, 0.0, 0.0]]) + off + [0.0, 0.0, 1.0]
+    spec.worldbody.add_body(name="v")
+    cable.vertbody = ["v", "v"]
+    cable.vert = np.ravel(ends).tolist()
+    cable.elem = [0, 1]
+    m = spec.compile()
+    reach = SurfaceReach(m)
+    d = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, d)
+    grow = 0.002 + 1e-6 + 2 * 0.01
+    seg = ends - [0.0, 0.0, 1.0]
+    assert ((seg.min(axis=0) - grow <= reach.hi[0]) & (seg.max(axis=0) + grow >= reach.lo[0])).all()
+    assert reach.reachable(d.xpos[None], d.xmat[None]).tolist() == [[False]]
