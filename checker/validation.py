@@ -52,6 +52,16 @@ COMPARED_TYPES = (PairType.SELF, PairType.CABLE_CABLE, PairType.CABLE_STRUCTURE,
 """Pair types both sides report (bend and taut are the checker's alone)."""
 
 
+@dataclass(frozen=True, eq=False)
+class NameTable:
+    """The tables integer contact codes index (:attr:`SimContacts.codes`):
+    the pair types' values and the names (either may appear more than once:
+    equal strings are one kind or name)."""
+
+    kinds: np.ndarray
+    names: np.ndarray
+
+
 @dataclass(frozen=True)
 class SimContacts:
     """Simulator contacts of one step as parallel arrays (n,).
@@ -63,6 +73,10 @@ class SimContacts:
         for a contact at vertex v, as MuJoCo gives flex-plane contacts).
       dist: signed surface distance.
       pos: (n, 3) contact points.
+      codes, table: optionally, the same kinds and names as (n, 3) integer
+        codes (kind, a, b) into ``table`` (a simulator's contacts already
+        numbered: :meth:`SimulatorPairs.many` then reads no string); None:
+        the names alone.
     """
 
     kind: np.ndarray
@@ -72,6 +86,8 @@ class SimContacts:
     elem_b: np.ndarray
     dist: np.ndarray
     pos: np.ndarray
+    codes: np.ndarray | None = None
+    table: NameTable | None = None
 
 
 def simulator_pairs(contacts: SimContacts, cables: dict[str, tuple[np.ndarray, float]],
@@ -105,22 +121,21 @@ class SimulatorPairs:
         hi = np.array([max(e.s_min, e.s_max) for e in exclusions], dtype=float)
         o = np.argsort(key, kind="stable")
         self._ex_key, self._ex_lo, self._ex_hi = key[o], lo[o], hi[o]
+        self._cache: tuple | None = None
 
-    def _in_window(self, a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+    def _in_window(self, ca: np.ndarray, pb: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                    slack: np.ndarray) -> np.ndarray:
         """(n,) True where cable a's span [lo, hi] (material coordinates) lies
-        in a window of cable a against part b (names), each end given
-        ``slack``."""
-        ca = np.array([self._cable_code.get(x, -1) for x in a.tolist()], np.int64)
-        pb = np.array([self._part_code.get(x, -1) for x in b.tolist()], np.int64)
+        in a window of cable a against part b (their window codes, -1 for a
+        name no window has), each end given ``slack``."""
         key = np.where((ca >= 0) & (pb >= 0), ca * self._n_part + pb, -1)
         first = np.searchsorted(self._ex_key, key, "left")
         count = np.searchsorted(self._ex_key, key, "right") - first
         count[key < 0] = 0
-        out = np.zeros(len(a), bool)
+        out = np.zeros(len(ca), bool)
         if count.sum() == 0:
             return out
-        row = np.repeat(np.arange(len(a)), count)
+        row = np.repeat(np.arange(len(ca)), count)
         w = ranges(first, count)
         hit = (lo[row] >= self._ex_lo[w] - slack[row]) & (hi[row] <= self._ex_hi[w] + slack[row])
         out[row[hit]] = True
@@ -158,18 +173,20 @@ class SimulatorPairs:
         def cat(field: str) -> np.ndarray:
             return np.concatenate([np.asarray(getattr(c, field)) for c in contacts])
 
-        kind, a, b = cat("kind"), cat("a"), cat("b")
+        table, codes = self._codes(contacts, cat)
+        look = self._lookups(table, names)
+        kind, a, b = look.kind[codes[:, 0]], look.name[codes[:, 1]], look.name[codes[:, 2]]
         elem_a, elem_b, dist = cat("elem_a"), cat("elem_b"), cat("dist")
         pos = np.concatenate([np.asarray(c.pos, float).reshape(-1, 3) for c in contacts])
         st = np.repeat(np.arange(n_s), counts)
-        keep = (elem_a != -1) & np.logical_or.reduce([kind == k.value for k in COMPARED_TYPES])
+        keep = (elem_a != -1) & look.compared[kind]
         if not keep.any():
             return out
         kind, a, b, elem_a, elem_b, dist, pos, st = (x[keep] for x in (kind, a, b, elem_a, elem_b, dist, pos, st))
-        code = {name: i for i, name in enumerate(names)}
         offsets = np.asarray(offsets, np.int64)
-        ca = np.array([code[x] for x in a.tolist()], np.int64)
-        cb = np.array([code.get(x, -1) for x in b.tolist()], np.int64)
+        ca, cb = look.cable[a], look.cable[b]
+        if (ca < 0).any():
+            raise KeyError(look.names[a[ca < 0][0]])        # side a of a compared contact is a cable
         # arc lengths of every state's cables, each on its own (arc_length's bits)
         flat = pts.reshape(-1, 3)
         s_all = polyline_arc_lengths(row_norm(np.diff(flat, axis=0)), tile_offsets(offsets, n_s))
@@ -192,34 +209,86 @@ class SimulatorPairs:
             s_a, elem_lo, elem_hi = (np.where(vertex, at, x) for x in (s_a, elem_lo, elem_hi))
         on_b = (cb >= 0) & (elem_b >= 0)
         s_b = np.where(on_b, place(np.maximum(cb, 0), np.maximum(elem_b, 0))[0], 0.0)
-        drop = (kind == PairType.SELF.value) & self_pair_excluded(s_a, s_b, np.asarray(radii, float)[ca],
-                                                                   self.clearance)
+        drop = (kind == look.self_kind) & self_pair_excluded(s_a, s_b, np.asarray(radii, float)[ca],
+                                                             self.clearance)
         if len(self._ex_lo):
-            structure = (kind == PairType.CABLE_STRUCTURE.value) | (kind == PairType.KEEPOUT.value)
+            structure = look.structure[kind]
             if structure.any():
                 w = np.nonzero(structure)[0]
-                drop[w[self._in_window(a[w], b[w], elem_lo[w], elem_hi[w], 0.25 * (elem_hi[w] - elem_lo[w]))]] = True
+                drop[w[self._in_window(look.window_cable[a[w]], look.window_part[b[w]], elem_lo[w], elem_hi[w],
+                                       0.25 * (elem_hi[w] - elem_lo[w]))]] = True
         keep = ~drop
         kind, a, b, dist, pos, st = kind[keep], a[keep], b[keep], dist[keep], pos[keep], st[keep]
         if len(dist) == 0:
             return out
-        swap = kind == PairType.CABLE_CABLE.value
-        if swap.any():
-            swap[swap] = a[swap].astype(str) > b[swap].astype(str)
-            a, b = np.where(swap, b, a), np.where(swap, a, b)
-        # the first least distance per (state, kind, a, b), as __call__ keeps:
-        # the pairs numbered through one table of names (a batch's contacts
-        # name a few cables and parts)
-        number: dict = {}
-        ia = np.array([number.setdefault(x, len(number)) for x in a.tolist()], np.int64)
-        ib = np.array([number.setdefault(x, len(number)) for x in b.tolist()], np.int64)
-        ik = np.array([number.setdefault(x, len(number)) for x in kind.tolist()], np.int64)
-        key = (ik * len(number) + ia) * len(number) + ib
+        swap = (kind == look.cable_kind) & (a > b)         # names are numbered in sorted order
+        a, b = np.where(swap, b, a), np.where(swap, a, b)
+        # the first least distance per (state, kind, a, b), as __call__ keeps
+        u = len(look.names)
+        key = (kind * u + a) * u + b
         o = np.lexsort((np.arange(len(dist)), dist, key, st))
         head = o[np.r_[True, (st[o][1:] != st[o][:-1]) | (key[o][1:] != key[o][:-1])]]
-        for i in head.tolist():
-            out[st[i]][(str(kind[i]), str(a[i]), str(b[i]))] = (float(dist[i]), pos[i])
+        for i, k, x, y in zip(head.tolist(), kind[head].tolist(), a[head].tolist(), b[head].tolist()):
+            out[st[i]][(look.kinds[k], look.names[x], look.names[y])] = (float(dist[i]), pos[i])
         return out
+
+    @staticmethod
+    def _codes(contacts: Sequence[SimContacts], cat) -> tuple[NameTable, np.ndarray]:
+        """The contacts' (kind, a, b) as (n, 3) codes into one table: their
+        own when they all share one, else the names numbered here."""
+        table = contacts[0].table
+        if table is not None and all(c.table is table and c.codes is not None for c in contacts):
+            return table, np.concatenate([np.asarray(c.codes, np.int64).reshape(-1, 3) for c in contacts])
+        kinds, kind = np.unique(cat("kind").astype(str), return_inverse=True)
+        names, ab = np.unique(np.concatenate([cat("a"), cat("b")]).astype(str), return_inverse=True)
+        ab = ab.reshape(2, -1)
+        return NameTable(kinds, names), np.stack([kind.ravel(), ab[0], ab[1]], axis=1).astype(np.int64)
+
+    def _lookups(self, table: NameTable, cables: Sequence[str]) -> "_Lookups":
+        """Per code of `table`: its distinct name's number (in sorted order),
+        the cable, window cable and window part it is; per kind code: its
+        type. Kept for the last table and cables (a simulator's is the same
+        at every batch)."""
+        cached = self._cache
+        if cached is not None and cached[0] is table and cached[1] == list(cables):
+            return cached[2]
+        kinds, kind = np.unique(np.asarray(table.kinds).astype(str), return_inverse=True)
+        names, name = np.unique(np.asarray(table.names).astype(str), return_inverse=True)
+        kinds, names = kinds.tolist(), names.tolist()
+        cable_of = {c: i for i, c in enumerate(cables)}
+        n_kinds = len(kinds)
+        value = {t.value: t for t in PairType}
+        types = [value.get(k) for k in kinds]
+        look = _Lookups(
+            kinds=kinds + [PairType.SELF.value, PairType.CABLE_CABLE.value], names=names,
+            kind=kind.ravel().astype(np.int64), name=name.ravel().astype(np.int64),
+            compared=np.array([t in COMPARED_TYPES for t in types] + [False, False], bool),
+            structure=np.array([t in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) for t in types] + [False, False]),
+            cable=np.array([cable_of.get(x, -1) for x in names], np.int64),
+            window_cable=np.array([self._cable_code.get(x, -1) for x in names], np.int64),
+            window_part=np.array([self._part_code.get(x, -1) for x in names], np.int64),
+            self_kind=kinds.index(PairType.SELF.value) if PairType.SELF.value in kinds else n_kinds,
+            cable_kind=(kinds.index(PairType.CABLE_CABLE.value) if PairType.CABLE_CABLE.value in kinds
+                        else n_kinds + 1))
+        self._cache = (table, list(cables), look)
+        return look
+
+
+@dataclass(frozen=True, eq=False)
+class _Lookups:
+    """A name table's codes mapped for :meth:`SimulatorPairs.many` (see ``_lookups``)."""
+
+    kinds: list[str]
+    names: list[str]
+    kind: np.ndarray
+    name: np.ndarray
+    compared: np.ndarray
+    structure: np.ndarray
+    cable: np.ndarray
+    window_cable: np.ndarray
+    window_part: np.ndarray
+    self_kind: int
+    cable_kind: int
 
 
 class Reason(StrEnum):

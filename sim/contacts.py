@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from checker.validation import SimContacts
+from checker.validation import NameTable, SimContacts
 from sim.build import Built
 from sim.detection_mesh import surface_geoms
 
@@ -30,7 +30,8 @@ Contacts = SimContacts
 """MuJoCo contacts of one step as parallel arrays: `checker.validation.SimContacts`.
 
 kind: "cable-structure", "keepout", "cable-cable", "self" or "part-part";
-a, b: names (for contacts with a cable, a is the cable); elem_a, elem_b:
+a, b: names (for contacts with a cable, a is the cable), also as integer
+codes (kind, a, b) into the reader's `table`; elem_a, elem_b:
 element index along cable a / b, -1 for a part, -2 - v for a contact
 MuJoCo puts at vertex v (flex-plane); dist: signed surface
 distance, metres; pos: (n, 3) contact points, world metres."""
@@ -65,8 +66,10 @@ class ContactReader:
         extra[flexes] = m.flex_radius[flexes] if len(flexes) else 0.0
         self._names, self._keepout, self._named = names, keepout, names != ""
         self._surface, self._radius = surface, extra
+        self.table = NameTable(self._KINDS, names)          # what the contacts' codes index
         self._empty = Contacts(np.zeros(0, dtype=object), np.zeros(0, dtype=object), np.zeros(0, dtype=object),
-                               np.zeros(0, int), np.zeros(0, int), np.zeros(0), np.zeros((0, 3)))
+                               np.zeros(0, int), np.zeros(0, int), np.zeros(0), np.zeros((0, 3)),
+                               np.zeros((0, 3), np.int64), self.table)
 
     @staticmethod
     def raw(data: mujoco.MjData) -> "RawContacts":
@@ -110,9 +113,11 @@ class ContactReader:
             counts = np.bincount(step, minlength=len(raws))
             code, kind, elem, dist, pos = code[valid], kind[valid], elem[valid], dist[valid], pos[valid]
         kinds, a, b = self._KINDS[kind], self._names[code[:, 0]], self._names[code[:, 1]]
+        codes = np.concatenate([kind[:, None], code], axis=1).astype(np.int64)
         cut = np.cumsum(counts)[:-1]
-        return [Contacts(*parts) for parts in zip(*(np.split(x, cut) for x in
-                                                  (kinds, a, b, elem[:, 0], elem[:, 1], dist, pos)))]
+        return [Contacts(*parts, self.table) for parts in zip(*(np.split(x, cut) for x in
+                                                              (kinds, a, b, elem[:, 0], elem[:, 1], dist, pos,
+                                                               codes)))]
 
 
 @dataclass(frozen=True)

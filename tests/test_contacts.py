@@ -71,6 +71,10 @@ def test_kinds_and_names(tmp_path):
     # 12 elements and the short held edge at each clamped end (sim.cableplan.clamp_edges)
     assert all(0 <= c.elem_a[i] < 14 and c.elem_b[i] == -1 for i in cable)
     assert abs(c.dist[cable].min() + 0.001) < 1e-6       # 2 mm above the tops minus the 3 mm radius
+    # the same kinds and names as codes into the reader's table
+    assert c.codes.shape == (len(c.dist), 3)
+    assert list(c.table.kinds[c.codes[:, 0]]) == list(c.kind)
+    assert list(c.table.names[c.codes[:, 1]]) == list(c.a) and list(c.table.names[c.codes[:, 2]]) == list(c.b)
 
 
 def test_cable_pairs_put_a_cable_first():
@@ -81,3 +85,6 @@ def test_cable_pairs_put_a_cable_first():
     selfs = [(a, b, ea, eb) for c in coil for k, a, b, ea, eb in zip(c.kind, c.a, c.b, c.elem_a, c.elem_b)
              if k == "self"]
     assert selfs and all(a == b == "lead" and ea >= 0 and eb >= 0 for a, b, ea, eb in selfs)
+    for c in crossing + coil:
+        assert [tuple(x) for x in zip(c.table.kinds[c.codes[:, 0]], c.table.names[c.codes[:, 1]],
+                                      c.table.names[c.codes[:, 2]])] == list(zip(c.kind, c.a, c.b))

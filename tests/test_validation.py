@@ -127,6 +127,55 @@ def test_many_states_at_once_is_each_state_alone():
     assert seen > 20
 
 
+def test_contacts_numbered_by_a_shared_table_give_what_their_names_give():
+    """Contacts carrying integer codes into one name table (as a simulator
+    numbers them; a name may sit in the table twice, kinds too) give
+    exactly the pairs, distances and points their names alone give."""
+    from checker.validation import NameTable, SimulatorPairs
+    rng = np.random.default_rng(11)
+    names, radii, offsets = ["c", "d"], np.array([0.01, 0.004]), np.array([0, 11, 18])
+    excl = [Exclusion("c", "clamp", 0.0, 0.25), Exclusion("d", "box", 0.3, 0.6)]
+    table = NameTable(np.array(["part-part", "cable-structure", "keepout", "cable-cable", "self", "keepout"],
+                               dtype=object),
+                      np.array(["", "c", "d", "clamp", "box", "zone", "bracket", "box", "c"], dtype=object))
+    where = {}
+    for i, x in enumerate(table.names.tolist()):
+        where.setdefault(x, []).append(i)
+    kinds = {}
+    for i, x in enumerate(table.kinds.tolist()):
+        kinds.setdefault(x, []).append(i)
+    seen = 0
+    for trial in range(30):
+        n_s = int(rng.integers(1, 6))
+        pts = np.cumsum(rng.normal(size=(n_s, 18, 3)) * 0.05, axis=1)
+        plain, coded = [], []
+        for _ in range(n_s):
+            m = int(rng.integers(0, 12))
+            kind = rng.choice(["cable-structure", "keepout", "self", "cable-cable", "part-part"], m)
+            a = np.where(kind == "part-part", "bracket", rng.choice(names, m)).astype(object)
+            b = np.where(kind == "self", a, np.where(kind == "cable-cable", rng.choice(names, m),
+                                                     rng.choice(["clamp", "box", "zone", "d"], m))).astype(object)
+            b = np.where(kind == "part-part", "box", b).astype(object)
+            ea = np.where(kind == "part-part", -1, rng.integers(-3, 10, m))
+            eb = np.where(np.isin(kind, ["self", "cable-cable"]), rng.integers(0, 6, m), -1)
+            dist = np.round(rng.normal(size=m) * 0.004, 3)                  # ties happen
+            pos = rng.normal(size=(m, 3)) * 0.2
+            codes = np.array([[rng.choice(kinds[k]), rng.choice(where[x]), rng.choice(where[y])]
+                              for k, x, y in zip(kind.tolist(), a.tolist(), b.tolist())], np.int64).reshape(-1, 3)
+            plain.append(SimContacts(kind.astype(object), a, b, ea, eb, dist, pos))
+            coded.append(SimContacts(kind.astype(object), a, b, ea, eb, dist, pos, codes, table))
+        pairs = SimulatorPairs(excl, 0.005)
+        for rest in (None, np.linspace(0.0, 1.0, 18)):
+            want = pairs.many(plain, names, radii, pts, offsets, rest)
+            got = pairs.many(coded, names, radii, pts, offsets, rest)
+            for g, w in zip(got, want):
+                assert g.keys() == w.keys()
+                for key in w:
+                    assert g[key][0] == w[key][0] and np.array_equal(g[key][1], w[key][1])
+                seen += len(w)
+    assert seen > 50
+
+
 def test_least_distance_per_pair_is_the_brute_force_one():
     """No window or self contact to drop: each state's pairs are the least
     distance over its contacts of that (type, a, b), cable-cable pairs named
