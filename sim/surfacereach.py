@@ -12,12 +12,14 @@ is near.
 The bound: a patch's triangles lie in its box (axis-aligned in the frame
 of the body that carries them, fixed). MuJoCo makes a contact between a
 cable element (segment, radius r) and a triangle (radius rho) only when
-their distance is below r + rho + the pair's margin (the two flexes'
-margins added). When the segment's box, in the patch body's frame, lies
-apart from the patch's box grown by r + rho + twice that margin along
-some axis, every point of the segment is that far from every point of the
-patch, so MuJoCo could report no contact there (the margin counted twice
-is room for GJK's tolerance, which is far below it). The test runs in
+their distance is below r + rho + the pair's margin and gap (the two
+flexes' added; mj_collideElems), give or take the convex solver's
+tolerance (`opt.ccd_tolerance`: the solver tests the shapes grown by the
+margin for intersection to that tolerance). When the segment's box, in
+the patch body's frame, lies apart from the patch's box grown by r + rho
++ margin + gap + `REACH_SLACK` along some axis, every point of the segment
+is that far from every point of the patch, so MuJoCo could report no
+contact there. The test runs in
 three steps with the same bound: each segment against the box of all the
 patches on a body, then down a tree of boxes over that body's patches
 (each node the box of its children) to the patches themselves, and last
@@ -55,6 +57,16 @@ import numpy as np
 
 from checker.arrays import ranges
 from sim.detection_mesh import surface_geoms
+
+
+REACH_SLACK = 0.1
+"""Room beyond MuJoCo's contact distance in the reach bound, as a share of
+the pair's margin (module docstring) ..."""
+
+REACH_TOLERANCES = 100.0
+"""... and in convex solver tolerances (`opt.ccd_tolerance`, the precision
+of MuJoCo's intersection test of the grown shapes): far more than any
+rounding, far less than a patch."""
 
 
 class SurfaceReach:
@@ -111,6 +123,8 @@ class SurfaceReach:
         self._children = [np.concatenate([hi, -lo], axis=2).reshape(n_c, -1, 2, 6) for lo, hi in self._levels[1:]]
         radius = float(m.flex_radius[flexes].max()) if len(flexes) else 0.0
         s_margin = float(m.flex_margin[flexes].max()) if len(flexes) else 0.0
+        s_gap = float(m.flex_gap[flexes].max()) if len(flexes) else 0.0
+        override = bool(m.opt.enableflags & int(mujoco.mjtEnableBit.mjENBL_OVERRIDE))
         # a flex of the mjcf model itself (not a cable) that can meet a surface: no
         # bound is kept for it, every patch stays in every pass
         meets = ((m.flex_contype & int(np.bitwise_or.reduce(m.flex_conaffinity[flexes], initial=0)))
@@ -124,9 +138,12 @@ class SurfaceReach:
             elem = m.flex_elem[da:da + 2 * int(m.flex_elemnum[c])].reshape(-1, 2).astype(np.int64)
             segs.append(elem + sum(len(v) for v in vids))
             vids.append(np.arange(v0, v0 + n))
-            # a contact needs a distance below r + rho + margin; the margin again is slack
-            margin = float(m.flex_margin[c]) + s_margin
-            grow.append(np.full(len(elem), float(m.flex_radius[c]) + radius + 2.0 * margin))
+            # a contact needs a distance below r + rho + margin + gap (mj_assignMargin:
+            # the option's margin replaces the pair's under override)
+            margin = float(m.opt.o_margin) if override else float(m.flex_margin[c]) + s_margin
+            room = margin + float(m.flex_gap[c]) + s_gap
+            slack = REACH_SLACK * margin + REACH_TOLERANCES * float(m.opt.ccd_tolerance)
+            grow.append(np.full(len(elem), float(m.flex_radius[c]) + radius + room + slack))
         verts = np.concatenate(vids) if vids else np.zeros(0, np.int64)
         self._vbody = m.flex_vertbodyid[verts].astype(np.int64)
         offset = m.flex_vert[verts]

@@ -16,7 +16,7 @@ from sim.build import build
 from sim.detection_mesh import SURFACE_PREFIX, surface_geoms
 from sim.loop import Simulation
 from sim.scene import load_scene
-from sim.surfacereach import SurfaceReach, oriented_boxes
+from sim.surfacereach import REACH_SLACK, REACH_TOLERANCES, SurfaceReach, oriented_boxes
 from tests.strategies import coords, rotations
 from tests.test_detection_mesh import POCKET_FLOOR, u_mesh
 
@@ -299,3 +299,55 @@ def test_a_slanted_patch_is_left_out_where_only_its_own_axes_separate_it():
     seg = ends - [0.0, 0.0, 1.0]
     assert ((seg.min(axis=0) - grow <= reach.hi[0]) & (seg.max(axis=0) + grow >= reach.lo[0])).all()
     assert reach.reachable(d.xpos[None], d.xmat[None]).tolist() == [[False]]
+
+
+def _square_and_segment(margin: float, radius: float) -> mujoco.MjModel:
+    """A surface patch, a 100 mm square in the plane z = 0 of a fixed body,
+    and a cable of one 60 mm element (margin `margin`) on a free body."""
+    spec = mujoco.MjSpec()
+    spec.worldbody.add_body(name="b")
+    half = 0.05
+    f = spec.add_flex()
+    f.name, f.dim, f.radius = f"{SURFACE_PREFIX}0", 2, 1e-6
+    f.vertbody = ["b"]
+    f.vert = [-half, -half, 0.0, half, -half, 0.0, half, half, 0.0, -half, half, 0.0]
+    f.elem = [0, 1, 2, 0, 2, 3]
+    body = spec.worldbody.add_body(name="v")
+    body.add_freejoint()
+    g = body.add_geom()
+    g.type, g.size, g.contype, g.conaffinity = mujoco.mjtGeom.mjGEOM_SPHERE, [0.001, 0.0, 0.0], 0, 0
+    c = spec.add_flex()
+    c.name, c.dim, c.radius, c.margin = "cable", 1, radius, margin
+    c.vertbody = ["v", "v"]
+    c.vert = [-0.03, 0.0, 0.0, 0.03, 0.0, 0.0]
+    c.elem = [0, 1]
+    return spec.compile()
+
+
+@settings(max_examples=80, deadline=None)
+@given(margin=st.sampled_from([0.0, 0.005]), above=st.floats(-0.001, 0.0015), tilt=st.floats(-0.2, 0.2),
+       shift=coords(2, -0.015, 0.015))
+def test_the_bound_keeps_every_surface_mujoco_touches_and_leaves_out_what_lies_beyond_its_slack(
+        margin, above, tilt, shift):
+    """A segment over a flat patch, its lower end `above` MuJoCo's contact
+    distance (radius + patch radius + margin): wherever MuJoCo makes a
+    contact the patch is kept, and beyond the contact distance + the
+    bound's slack it is left out (the bound is that tight on a flat patch)."""
+    r = 0.002
+    m = _square_and_segment(margin, r)
+    reach, d = SurfaceReach(m), mujoco.MjData(m)
+    reach_at = r + 1e-6 + margin
+    ends = np.array([[-0.03 * np.cos(tilt), 0.0, -0.03 * np.sin(tilt)], [0.03 * np.cos(tilt), 0.0, 0.03 * np.sin(tilt)]])
+    low = reach_at + above
+    d.qpos[:3] = [shift[0], shift[1], low - ends[:, 2].min()]
+    d.qpos[3:7] = [np.cos(tilt / 2), 0.0, -np.sin(tilt / 2), 0.0]    # turned about y: the ends as `ends`
+    mujoco.mj_kinematics(m, d)
+    kept = bool(reach.reachable(d.xpos[None].copy(), d.xmat[None].copy())[0, 0])
+    mujoco.mj_forward(m, d)
+    if d.ncon:
+        assert kept and d.contact.dist[:d.ncon].min() < margin + 1e-9
+    slack = REACH_SLACK * margin + REACH_TOLERANCES * m.opt.ccd_tolerance
+    if above > slack + 1e-9:
+        assert not kept
+    if above < -1e-6:
+        assert d.ncon                        # MuJoCo touches it: the case above is met
