@@ -136,6 +136,7 @@ class HullGaps:
         self.parts = [p.name for p in watched(built)]
         self._cable_names, self._cable_ids = _table(self.cables)
         self._part_names, self._part_ids = _table(self.parts)
+        self._by_code: tuple | None = None      # (name table, cable and part per code)
         self.clearance = built.scene.check.clearance
         self.tolerance = GAP_TOLERANCE * self.clearance
         self._elems = max([c.count for c in built.cables], default=1)
@@ -158,8 +159,7 @@ class HullGaps:
 
         # the detection model's least surface distance per (state, cable, part, element)
         state = np.repeat(np.arange(len(detected)), [len(c.dist) for c in detected])
-        cable = _lookup(self._cable_names, self._cable_ids, np.concatenate([c.a for c in detected]))
-        part = _lookup(self._part_names, self._part_ids, np.concatenate([c.b for c in detected]))
+        cable, part = self._ids(detected)
         elem = np.concatenate([c.elem_a for c in detected]).astype(np.int64)
         dist = np.concatenate([c.dist for c in detected]).astype(float)
         ok = (cable >= 0) & (part >= 0) & (elem >= 0)
@@ -189,6 +189,21 @@ class HullGaps:
         self._bounded[bigger] = False
         np.logical_or.at(self._bounded, pair[top & bigger[pair]], bounded[top & bigger[pair]])
         self._gap = np.maximum(self._gap, best)
+
+    def _ids(self, detected: list[Contacts]) -> tuple[np.ndarray, np.ndarray]:
+        """The cable and watched part (-1: none) of every contact of the
+        batch, by side a and b: through their codes when the contacts share
+        one name table (`sim.contacts.ContactReader`), else by name."""
+        table = detected[0].table if detected else None
+        if table is not None and all(c.table is table and c.codes is not None for c in detected):
+            if self._by_code is None or self._by_code[0] is not table:
+                names = np.asarray(table.names, dtype=object)
+                self._by_code = (table, _lookup(self._cable_names, self._cable_ids, names),
+                                 _lookup(self._part_names, self._part_ids, names))
+            codes = np.concatenate([c.codes for c in detected])
+            return self._by_code[1][codes[:, 1]], self._by_code[2][codes[:, 2]]
+        return (_lookup(self._cable_names, self._cable_ids, np.concatenate([c.a for c in detected])),
+                _lookup(self._part_names, self._part_ids, np.concatenate([c.b for c in detected])))
 
     def found(self) -> list[HullGap]:
         """The (cable, part) pairs held on a hull so far, in cable then part order."""

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from test_detection_mesh import u_mesh
@@ -136,6 +138,36 @@ def test_gaps_are_element_by_element_the_surface_less_the_hull(gaps_built):
     assert found.gap == pytest.approx(0.0045) and not found.bounded and (found.t_start, found.t_end) == (0.5, 0.6)
     (w,) = g.warnings()
     assert "up to 0.0045 m beyond the hull" in w and "from t = 0.500 to 0.600 s" in w
+
+
+def test_contacts_numbered_by_a_shared_table_give_the_gaps_their_names_give(gaps_built):
+    """Contacts carrying codes into one name table (as `ContactReader` gives
+    them; a name twice, names of neither side) find the same gaps, spans
+    and bounds as the same contacts by name."""
+    from checker.validation import NameTable
+    table = NameTable(np.array(["part-part", "cable-structure"], object),
+                      np.array(["", "u", "over", "flat", "u", "frame", "over"], object))
+    rng = np.random.default_rng(3)
+
+    def coded(c):
+        where = {}
+        for i, x in enumerate(table.names.tolist()):
+            where.setdefault(x, []).append(i)
+        codes = np.array([[1, rng.choice(where[a]), rng.choice(where[b])] for a, b in zip(c.a, c.b)],
+                         np.int64).reshape(-1, 3)
+        return dataclasses.replace(c, codes=codes, table=table)
+
+    by_name, by_code = HullGaps(gaps_built), HullGaps(gaps_built)
+    over, flat = by_name.cables.index("over"), by_name.cables.index("flat")
+    for k in range(6):
+        hulls = [_hulls([(over, 0, int(e), float(d)) for e, d in zip(rng.integers(0, 8, 3), rng.uniform(0, 2e-3, 3))]
+                        + [(flat, 0, 5, 0.001)])]
+        found = [_contacts([("over", "u", int(e), float(d)) for e, d in zip(rng.integers(0, 8, 4),
+                                                                            rng.uniform(0, 5e-3, 4))]
+                           + [("flat", "frame", 5, 0.003), ("flat", "u", 5, 0.004)])]
+        by_name.take(np.array([0.1 * k]), hulls, found)
+        by_code.take(np.array([0.1 * k]), hulls, [coded(c) for c in found])
+    assert by_code.found() == by_name.found() and by_name.found()
 
 
 def test_only_active_simulation_contacts_of_cables_with_watched_hulls_are_read(gaps_built):
