@@ -191,12 +191,13 @@ class SimulatorPairs:
         flat = pts.reshape(-1, 3)
         s_all = polyline_arc_lengths(row_norm(np.diff(flat, axis=0)), tile_offsets(offsets, n_s))
 
-        def place(cab, elem):
+        def place(cab, elem, rows=slice(None)):
             """(arc length of the projection, element start, element end) on
-            cable cab; the element's ends in material coordinates."""
+            cable cab for the contacts `rows`; the element's ends in material
+            coordinates."""
             i = offsets[cab] + np.clip(elem, 0, offsets[cab + 1] - offsets[cab] - 2)
-            g = st * n + i
-            _, t, _ = point_segment(pos, flat[g], flat[g + 1])
+            g = st[rows] * n + i
+            _, t, _ = point_segment(pos[rows], flat[g], flat[g + 1])
             lo, hi = (s_all[g], s_all[g + 1]) if rest is None else (rest[i], rest[i + 1])
             return s_all[g] + t * (s_all[g + 1] - s_all[g]), lo, hi
 
@@ -207,8 +208,9 @@ class SimulatorPairs:
         if vertex.any():
             at = s_all[st * n + offsets[ca] + np.clip(vert, 0, offsets[ca + 1] - offsets[ca] - 1)]
             s_a, elem_lo, elem_hi = (np.where(vertex, at, x) for x in (s_a, elem_lo, elem_hi))
-        on_b = (cb >= 0) & (elem_b >= 0)
-        s_b = np.where(on_b, place(np.maximum(cb, 0), np.maximum(elem_b, 0))[0], 0.0)
+        on_b = np.flatnonzero((cb >= 0) & (elem_b >= 0))   # on a cable's element: cable-cable and self
+        s_b = np.zeros(len(cb))
+        s_b[on_b] = place(cb[on_b], elem_b[on_b], on_b)[0]
         drop = (kind == look.self_kind) & self_pair_excluded(s_a, s_b, np.asarray(radii, float)[ca],
                                                              self.clearance)
         if len(self._ex_lo):

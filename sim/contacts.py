@@ -114,10 +114,9 @@ class ContactReader:
             code, kind, elem, dist, pos = code[valid], kind[valid], elem[valid], dist[valid], pos[valid]
         kinds, a, b = self._KINDS[kind], self._names[code[:, 0]], self._names[code[:, 1]]
         codes = np.concatenate([kind[:, None], code], axis=1).astype(np.int64)
-        cut = np.cumsum(counts)[:-1]
-        return [Contacts(*parts, self.table) for parts in zip(*(np.split(x, cut) for x in
-                                                              (kinds, a, b, elem[:, 0], elem[:, 1], dist, pos,
-                                                               codes)))]
+        bounds = np.concatenate([[0], np.cumsum(counts)]).tolist()
+        arrays = (kinds, a, b, elem[:, 0], elem[:, 1], dist, pos, codes)
+        return [Contacts(*[x[i:j] for x in arrays], self.table) for i, j in zip(bounds[:-1], bounds[1:])]
 
 
 @dataclass(frozen=True)
