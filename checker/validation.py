@@ -90,6 +90,17 @@ class SimContacts:
     table: NameTable | None = None
 
 
+def shared_codes(contacts: Sequence[SimContacts]) -> tuple[NameTable, np.ndarray] | None:
+    """The contacts' (kind, a, b) codes, (n, 3) over all of them in order,
+    and the one name table they index, when every one carries codes into
+    the same table (a simulator's reader numbers them so); else None (read
+    their names)."""
+    table = contacts[0].table if len(contacts) else None
+    if table is None or not all(c.table is table and c.codes is not None for c in contacts):
+        return None
+    return table, np.concatenate([np.asarray(c.codes, np.int64).reshape(-1, 3) for c in contacts])
+
+
 def simulator_pairs(contacts: SimContacts, cables: dict[str, tuple[np.ndarray, float]],
                     exclusions: Sequence[Exclusion],
                     clearance: float) -> dict[tuple[str, str, str], tuple[float, np.ndarray]]:
@@ -238,15 +249,15 @@ class SimulatorPairs:
     def _codes(contacts: Sequence[SimContacts], cat) -> tuple[NameTable, np.ndarray]:
         """The contacts' (kind, a, b) as (n, 3) codes into one table: their
         own when they all share one, else the names numbered here."""
-        table = contacts[0].table
-        if table is not None and all(c.table is table and c.codes is not None for c in contacts):
-            return table, np.concatenate([np.asarray(c.codes, np.int64).reshape(-1, 3) for c in contacts])
+        shared = shared_codes(contacts)
+        if shared is not None:
+            return shared
         kinds, kind = np.unique(cat("kind").astype(str), return_inverse=True)
         names, ab = np.unique(np.concatenate([cat("a"), cat("b")]).astype(str), return_inverse=True)
         ab = ab.reshape(2, -1)
         return NameTable(kinds, names), np.stack([kind.ravel(), ab[0], ab[1]], axis=1).astype(np.int64)
 
-    def _lookups(self, table: NameTable, cables: Sequence[str]) -> "_Lookups":
+    def _lookups(self, table: NameTable, cables: Sequence[str]) -> _Lookups:
         """Per code of `table`: its distinct name's number (in sorted order),
         the cable, window cable and window part it is; per kind code: its
         type. Kept for the last table and cables (a simulator's is the same

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from checker.validation import shared_codes
 from sim.built import Built
 from sim.contacts import Contacts
 from sim.detection_mesh import surface_geoms
@@ -194,13 +195,13 @@ class HullGaps:
         """The cable and watched part (-1: none) of every contact of the
         batch, by side a and b: through their codes when the contacts share
         one name table (`sim.contacts.ContactReader`), else by name."""
-        table = detected[0].table if detected else None
-        if table is not None and all(c.table is table and c.codes is not None for c in detected):
+        shared = shared_codes(detected)
+        if shared is not None:
+            table, codes = shared
             if self._by_code is None or self._by_code[0] is not table:
                 names = np.asarray(table.names, dtype=object)
                 self._by_code = (table, _lookup(self._cable_names, self._cable_ids, names),
                                  _lookup(self._part_names, self._part_ids, names))
-            codes = np.concatenate([c.codes for c in detected])
             return self._by_code[1][codes[:, 1]], self._by_code[2][codes[:, 2]]
         return (_lookup(self._cable_names, self._cable_ids, np.concatenate([c.a for c in detected])),
                 _lookup(self._part_names, self._part_ids, np.concatenate([c.b for c in detected])))

@@ -176,6 +176,28 @@ def test_contacts_numbered_by_a_shared_table_give_what_their_names_give():
     assert seen > 50
 
 
+def test_shared_codes_only_when_every_contact_indexes_one_table():
+    """The codes of all contacts in order when each carries codes into the
+    same table; None when one has none, another table or there are none."""
+    from checker.validation import NameTable, shared_codes
+    table = NameTable(np.array(["cable-structure"], dtype=object), np.array(["c", "box"], dtype=object))
+    other = NameTable(table.kinds.copy(), table.names.copy())
+
+    def contacts(n, codes=True, tab=table):
+        return SimContacts(np.full(n, "cable-structure", dtype=object), np.full(n, "c", dtype=object),
+                           np.full(n, "box", dtype=object), np.zeros(n, int), np.full(n, -1), np.zeros(n),
+                           np.zeros((n, 3)), np.tile([0, 0, 1], (n, 1)) + np.arange(n)[:, None] if codes else None,
+                           tab if codes else None)
+
+    got = shared_codes([contacts(2), contacts(0), contacts(3)])
+    assert got is not None and got[0] is table
+    assert np.array_equal(got[1], np.concatenate([np.tile([0, 0, 1], (k, 1)) + np.arange(k)[:, None]
+                                                  for k in (2, 0, 3)]))
+    assert shared_codes([contacts(2), contacts(1, codes=False)]) is None
+    assert shared_codes([contacts(2), contacts(1, tab=other)]) is None
+    assert shared_codes([]) is None
+
+
 def test_least_distance_per_pair_is_the_brute_force_one():
     """No window or self contact to drop: each state's pairs are the least
     distance over its contacts of that (type, a, b), cable-cable pairs named
