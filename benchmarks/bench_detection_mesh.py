@@ -87,5 +87,6 @@ def main(argv=None) -> None:
           f"{rows['whole meshes in reach'] / every:.2f} whole meshes, {rows['patches in reach'] / every:.2f} "
           f"patches; same contacts: {same}")
 
+
 if __name__ == "__main__":
     main()

@@ -84,14 +84,14 @@ def main(argv=None) -> None:
     print(f"  check                   {t['check_s']:8.2f} s  ({t['check_ms_per_step']:.2f} ms/step)")
     print(f"  validation (MuJoCo)     {t['validate_s']:8.2f} s  ({t['validate_ms_per_step']:.2f} ms/step)")
     print(f"  recording               {t['record_s']:8.2f} s  ({t['record_ms_per_step']:.2f} ms/step)")
-    col = t["validate_collision_s"]
+    col, sim_s = t["validate_collision_s"], max(t["sim_s"], 1e-12)
     print(f"  of validation, MuJoCo's collision pass (detection model): {col:.2f} s "
-          f"({t['validate_collision_ms_per_step']:.2f} ms/step) = {col / max(t['sim_s'], 1e-12):.2f} of the "
+          f"({t['validate_collision_ms_per_step']:.2f} ms/step) = {col / sim_s:.2f} of the "
           f"simulation (validation's floor); the rest, ours: {t['validate_s'] - col:.2f} s")
-    print(f"  check + validation + recording / simulation = {overhead / max(t['sim_s'], 1e-12):.2f} (target <= 1)")
+    print(f"  check + validation + recording / simulation = {overhead / sim_s:.2f} (target <= 1)")
     print(f"  with validation at its floor: (check + MuJoCo's collision pass + recording) / simulation = "
-          f"{(t['check_s'] + col + t['record_s']) / max(t['sim_s'], 1e-12):.2f}; "
-          f"MuJoCo's collision pass alone / simulation = {col / max(t['sim_s'], 1e-12):.2f}")
+          f"{(t['check_s'] + col + t['record_s']) / sim_s:.2f}; "
+          f"MuJoCo's collision pass alone / simulation = {col / sim_s:.2f}")
     print(f"  real-time factor = {duration / t['total_s']:.3f} (simulated s per wall s; target >= 1)")
     print(f"  parts from visual geoms: {len(set(part_names) & visual_names)}, pairs: {len(pairs_visual)}, "
           f"events: {len(from_visual)} (target 0)")
