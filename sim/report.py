@@ -97,14 +97,20 @@ class AdvanceOutcome:
 
 @dataclass(frozen=True)
 class Timing:
-    """Wall-clock seconds: the whole run and each of `STAGES`; `collision`:
-    MuJoCo's own collision passes on the detection model (its timer), a part
-    of the validate stage (what validation costs at least), or None when the
-    run does not validate."""
+    """Seconds: `total` the whole run's wall-clock time; each of `STAGES` the
+    CPU time of the thread that ran it (the simulation may step ahead on a
+    thread of its own, `sim.ahead`: stages overlap, and waiting for the
+    other side is no stage's time); `collision`: MuJoCo's own collision
+    passes on the detection model (its timer), a part of the validate stage
+    (what validation costs at least), or None when the run does not
+    validate; `loop`: the wall-clock time of the step loop (simulating,
+    checking, validating, the wear map and the recording to its close: the
+    run without building and settling), or None where not measured."""
 
     total: float
     stages: dict[str, float]
     collision: float | None = None
+    loop: float | None = None
 
 
 @dataclass(frozen=True)
@@ -136,7 +142,7 @@ class RunOutcome:
       part_warnings, physics_warnings: what the part checks and the model
         builder warned about.
       substeps: simulation substeps per timestep.
-      timing: wall-clock seconds.
+      timing: the run's wall-clock seconds and its stages' CPU seconds.
       recording: the recording's path, or None.
     """
 
@@ -221,6 +227,8 @@ def _validation(v: ValidationSummary, u: float) -> dict:
 def _timing(t: Timing, steps: int, checked: int) -> dict:
     per_check = max(checked, 1)
     out = {"total_s": t.total}
+    if t.loop is not None:
+        out["loop_s"] = t.loop
     out.update({f"{k}_s": t.stages[k] for k in STAGES})
     out.update({f"{k}_ms_per_step": 1e3 * t.stages[k] / per_check for k in ("check", "validate", "record", "wear")})
     out["sim_ms_per_step"] = 1e3 * t.stages["sim"] / max(steps, 1)

@@ -18,7 +18,7 @@ the report.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -32,6 +32,7 @@ from checker.records import PairType, Severity
 from checker.scene_state import CheckConfig
 from checker.twist import TwistMeter, update_many
 from checker.wear import CableWear, WearMap
+from sim.ahead import StepsAhead, thread_cpu
 from sim.build import Built, build
 from sim.jointspace import JointLog
 from sim.kinematic import KinematicSimulation
@@ -65,6 +66,11 @@ class RunOptions:
         come within it since the last full check (:mod:`checker.advance`;
         the same events, pairs and MuJoCo comparison as checking every step
         in full). False checks every step in full.
+      overlap: simulate the next steps on a thread of their own while the
+        last ones are checked (`sim.ahead`: the same states, events and
+        report; on two cores the run takes about the larger side's time,
+        not the sum). False runs every stage on the calling thread (a study
+        worker, which is one core's share already).
     """
 
     report: Path
@@ -73,6 +79,7 @@ class RunOptions:
     spacing: float | None = None
     only: str | None = None
     advance: bool = True
+    overlap: bool = True
 
 
 Progress = Callable[[str, float, float], None]
@@ -80,18 +87,20 @@ Progress = Callable[[str, float, float], None]
 
 
 class _Timer:
-    """Wall-clock seconds per stage."""
+    """CPU seconds per stage of the thread that runs the stages (`sim.ahead`:
+    the simulation may run on another thread, which counts its own; waiting
+    for it is no stage's time)."""
 
     def __init__(self):
         self.total = dict.fromkeys(STAGES, 0.0)
-        self._t = time.perf_counter()
+        self._t = thread_cpu()
 
     def skip(self) -> None:
         """Start the next stage now, the time since the last lap counted nowhere."""
-        self._t = time.perf_counter()
+        self._t = thread_cpu()
 
     def lap(self, stage: str) -> None:
-        now = time.perf_counter()
+        now = thread_cpu()
         self.total[stage] += now - self._t
         self._t = now
 
@@ -174,26 +183,34 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     out = _Checked(built, tracker, recorder, timer, progress, record_stride, sim.total_steps, joints, wear,
                    checks.exclusions)
     complete = False
+    # the states until a stop is asked (polled before each step is simulated)
+    states = () if stop.asked else _until(sim.steps(contacts=False, every=every), lambda: stop.asked)
+    # dynamics: the simulation steps ahead on a thread of its own (sim.ahead)
+    ahead = StepsAhead(states) if (options.overlap and scene.effects.dynamics and not static) else None
     batch: list = []
     size = BATCH
+    loop_start = time.perf_counter()
     try:
-        for state in (() if stop.asked else sim.steps(contacts=False, every=every)):
+        for state in (states if ahead is None else ahead):
             # states are checked BATCH at a time at first, then each batch
             # twice the last up to BATCH_MAX (sim.stepcheck): the last state
-            # of the run, or of an interrupted run, closes its batch
+            # of the run closes its batch, and an interrupted run's last
+            # states are checked after the loop
             batch.append(state)
-            if len(batch) < size and state.step < sim.total_steps and not stop.asked:
+            if len(batch) < size and state.step < sim.total_steps:
                 continue
-            timer.lap("sim")
-            out.take(batch, checks.run(batch))
+            _check_batch(batch, checks, out, timer, ahead)
             batch = []
             size = min(2 * size, max(BATCH, BATCH_MAX))
-            if stop.asked:
-                break
+        if batch:
+            _check_batch(batch, checks, out, timer, ahead)
         complete = not stop.asked
     except KeyboardInterrupt:
         complete = False    # a second Ctrl-C: the batch being checked is left out
     finally:
+        if ahead is not None:
+            ahead.close()
+            timer.total["sim"] += ahead.cpu
         closed = {id(ev) for ev in tracker.events}
         events = tuple(tracker.finish())
         worn = wear.result()
@@ -210,6 +227,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
                             None if event_joints is None else [f["joints"] for f in event_joints])
             recorder.close()
             timer.lap("record")
+        loop_s = time.perf_counter() - loop_start
     ends = checks.outcome(validated=scene.check.validate)
     return RunOutcome(
         scene=scene, config=config, scene_file=settings.scene_file, version=settings.version,
@@ -223,8 +241,27 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         physics_warnings=tuple(built.warnings) + ends.hull_warnings,
         substeps=built.substeps.count if built.substeps else 1,
         timing=Timing(time.perf_counter() - start, dict(timer.total),
-                      sim.collision_seconds() if (validate and not static) else None),
+                      sim.collision_seconds() if (validate and not static) else None, loop_s),
         recording=options.record)
+
+
+def _until(states: Iterator, stop: Callable[[], bool]) -> Iterator:
+    """`states` until `stop()` (asked before each next state is made)."""
+    for state in states:
+        yield state
+        if stop():
+            return
+
+
+def _check_batch(batch: list, checks: StepChecks, out: "_Checked", timer: _Timer,
+                 ahead: StepsAhead | None) -> None:
+    """Check a batch of states and take it in; the time since the last
+    lap was the simulation's, or with `ahead` the wait for it (no stage's)."""
+    if ahead is None:
+        timer.lap("sim")
+    else:
+        timer.skip()
+    out.take(batch, checks.run(batch))
 
 
 def _clamped(anchor) -> bool:

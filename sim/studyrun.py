@@ -125,7 +125,9 @@ def run_variant(task: VariantTask, bundle: Bundle) -> VariantOutput:
         report = Path(tmp) / "out" / "report.json"
         record = Path(tmp) / "out" / "recording.rrd" if task.record else None
         stop = _EventStop(task.stop_event) if task.stop_event else None
-        run_scene(scene, RunOptions(report=report, record=record), stop=stop)
+        # a worker is one thread, one core's share of the cluster: its run
+        # stays on that thread (no simulation stepped ahead, sim.ahead)
+        run_scene(scene, RunOptions(report=report, record=record, overlap=False), stop=stop)
         return VariantOutput(report=report.read_bytes(),
                              recording=record.read_bytes() if record else None)
 

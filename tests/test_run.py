@@ -170,3 +170,35 @@ def test_outcome_record_gives_the_report(tmp_path: Path):
     assert outcome.complete and len(outcome.events) == 1 and outcome.checked == STEPS + 1
     report = run_scene(scene, RunOptions(report=tmp_path / "r.json", record=None))
     assert _text(report) == _text(report_of(outcome))
+
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "scenes"
+
+
+def test_simulating_ahead_on_a_thread_gives_the_same_report(tmp_path: Path):
+    """A dynamic scene with contact, validation and recording: stepping the
+    simulation on a thread of its own (sim.ahead) gives the report of the
+    run on one thread, timing apart."""
+    scene = load_scene(EXAMPLES / "crossing.toml")
+    one = run_scene(scene, RunOptions(report=tmp_path / "one.json", record=tmp_path / "one.rrd", overlap=False))
+    two = run_scene(scene, RunOptions(report=tmp_path / "two.json", record=tmp_path / "two.rrd"))
+    assert one["events"] and one["validation"]["compared_steps"] > 0
+    assert _text(two) == _text(one).replace("one.rrd", "two.rrd")
+    assert two["timing"]["sim_s"] > 0
+
+
+def test_a_stopped_run_checks_every_step_simulated_ahead(tmp_path: Path):
+    """A stop asked while the simulation runs ahead of the checks (it may
+    have simulated them all by then): every step simulated is checked."""
+    scene = load_scene(EXAMPLES / "crossing.toml")
+    stop = StopRequest()
+
+    def progress(stage, done, total):
+        if stage == "run" and done >= 30 and not stop.asked:
+            stop.asked, stop.signal_name = True, "SIGINT"
+
+    report = run_scene(scene, RunOptions(report=tmp_path / "r.json", record=None), progress=progress, stop=stop)
+    assert report["complete"] is False and report["interrupted"] == "SIGINT"
+    steps = report["settings"]["steps"]
+    assert 30 <= steps <= round(scene.duration / scene.timestep)
+    assert report["settings"]["checked_steps"] == steps + 1
