@@ -94,6 +94,9 @@ def print_summary(report: dict, report_path: Path) -> None:
         bend = c["min_bend_radius"]
         flags = [f for f, on in (("TAUT", c["taut"]), ("BEND", c["bend_violation"])) if on]
         strain = c["max_strain"]
+        if strain is None:       # no step checked (a run stopped while building or settling)
+            print(f"  cable {c['name']}: length {c['length']:.4g} {units}, no step checked")
+            continue
         print(f"  cable {c['name']}: length {c['length']:.4g} {units}, max strain "
               f"{round(100 * strain, 2) + 0.0:.2f} %, min bend radius "
               f"{'straight' if bend is None else f'{bend:.4g} {units}'}"

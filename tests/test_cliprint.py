@@ -90,3 +90,19 @@ def test_progress_off_a_terminal_is_a_line_per_quarter(capsys, enabled):
     bar.done()
     lines = capsys.readouterr().err.splitlines()
     assert lines == ([f"simulating: {p}%" for p in (0, 25, 50, 75, 100)] if enabled else [])
+
+
+def test_a_run_stopped_before_its_first_step_prints_without_a_traceback(tmp_path: Path, capsys):
+    """A stop asked while building or settling: the real report (no step
+    checked, strain and bend unmeasured) prints as such."""
+    from sim.run import RunOptions, run_scene
+    from sim.scene import load_scene
+    from sim.stop import StopRequest
+
+    stop = StopRequest()
+    stop.asked, stop.signal_name = True, "SIGINT"
+    scene = load_scene(Path(__file__).resolve().parents[1] / "scenes" / "crossing.toml")
+    report = run_scene(scene, RunOptions(report=tmp_path / "r.json", record=None), stop=stop)
+    print_summary(report, tmp_path / "r.json")
+    out = capsys.readouterr().out
+    assert "INTERRUPTED" in out and out.count("no step checked") == len(report["cables"]) > 0
