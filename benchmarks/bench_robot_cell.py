@@ -16,12 +16,20 @@ running a 5 s pick-and-place. One run, recording on, gives side by side
 - MuJoCo's own collision pass on the detection model (its timer, inside
   the validation stage): validation's floor, and the ratio check +
   validation + recording would reach were the rest of validation free, or
-  were all our own work free (MuJoCo's collision pass alone).
+  were all our own work free (MuJoCo's collision pass alone);
+- the real-time factor of the whole run and of its step loop (the
+  report's ``loop_s``); with ``--serial`` the same run again on one thread
+  (``RunOptions.overlap`` False: no simulation stepped ahead, ``sim.ahead``)
+  and the two loops' wall times side by side.
+
+The stages are CPU seconds of the thread that ran them (the report's
+``timing``), so the ratio does not depend on whether they overlapped.
 
 ``--profile`` adds the functions where the run spends most of its time
-(cProfile, cumulative). ``--duration`` shortens the run (the example is 5 s).
+(cProfile, cumulative; it profiles the checking thread only). ``--duration``
+shortens the run (the example is 5 s).
 
-Run: python benchmarks/bench_robot_cell.py [--duration S] [--profile] [--out DIR]
+Run: python benchmarks/bench_robot_cell.py [--duration S] [--profile] [--serial] [--out DIR]
 """
 
 from __future__ import annotations
@@ -46,6 +54,8 @@ def main(argv=None) -> None:
     ap.add_argument("--duration", type=float, default=None, help="simulated seconds (default: the scene's)")
     ap.add_argument("--profile", action="store_true", help="print the top functions by cumulative time")
     ap.add_argument("--out", type=Path, default=None, help="folder for report.json and cell.rrd")
+    ap.add_argument("--serial", action="store_true",
+                    help="run it again on one thread and compare the step loops' wall times")
     args = ap.parse_args(argv)
 
     scene = load_scene(SCENE)
@@ -92,7 +102,15 @@ def main(argv=None) -> None:
     print(f"  with validation at its floor: (check + MuJoCo's collision pass + recording) / simulation = "
           f"{(t['check_s'] + col + t['record_s']) / sim_s:.2f}; "
           f"MuJoCo's collision pass alone / simulation = {col / sim_s:.2f}")
-    print(f"  real-time factor = {duration / t['total_s']:.3f} (simulated s per wall s; target >= 1)")
+    print(f"  real-time factor = {duration / t['total_s']:.3f} (simulated s per wall s, building and settling "
+          f"included; target >= 1); of the step loop alone {duration / t['loop_s']:.3f}")
+    if args.serial:
+        one = run_scene(scene, RunOptions(report=out / "serial.json", record=out / "serial.rrd", overlap=False))
+        t1 = one["timing"]
+        print(f"  on one thread (no simulation stepped ahead): step loop {t1['loop_s']:.2f} s against "
+              f"{t['loop_s']:.2f} s, {t1['loop_s'] / t['loop_s']:.2f}x as long; whole run {t1['total_s']:.2f} s "
+              f"against {t['total_s']:.2f} s; its (check + validation + recording) / simulation = "
+              f"{(t1['check_s'] + t1['validate_s'] + t1['record_s']) / max(t1['sim_s'], 1e-12):.2f}")
     print(f"  parts from visual geoms: {len(set(part_names) & visual_names)}, pairs: {len(pairs_visual)}, "
           f"events: {len(from_visual)} (target 0)")
     print(f"  hard events against a clamp's own link: {len(clamp_hard)} (target 0)"
