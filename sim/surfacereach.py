@@ -22,10 +22,15 @@ is that far from every point of the patch, so MuJoCo could report no
 contact there. The test runs in
 three steps with the same bound: each segment against the box of all the
 patches on a body, then down a tree of boxes over that body's patches
-(each node the box of its children) to the patches themselves, and last
-the segments that reach a patch's box again along the patch's own
-principal axes (`oriented_boxes`: a slanted, thin patch's box along them
-is far tighter; any direction separates as well as the body's axes). Every
+(each node the box of its children, a few levels at a time) to the
+patches themselves, and last the segments that reach a patch's box again
+along the patch's own principal axes (`oriented_boxes`: a slanted, thin
+patch's box along them is far tighter; any direction separates as well as
+the body's axes). Before them a cull in the world frame leaves out, with
+no rotation, the (segment, body) pairs whose spheres lie apart (the
+segment's around its box grown by the bound, the body's around the box
+of its patches): what it leaves out the first step would, so the patches
+kept are the same. Every
 one-dimensional flex counts as a cable; should the mjcf model bring a
 flex of another dimension that can meet a surface, no patch is ever left
 out. The positions are the detection model's own
@@ -67,6 +72,15 @@ REACH_TOLERANCES = 100.0
 """... and in convex solver tolerances (`opt.ccd_tolerance`, the precision
 of MuJoCo's intersection test of the grown shapes): far more than any
 rounding, far less than a patch."""
+
+TREE_STEP = 2
+"""Levels of a body's tree of patch boxes tested at once (2**2 boxes per
+segment): fewer steps down the tree, each a few numpy calls (1, 2, 3, 4 levels
+at once: 64, 55, 59, 73 us a state on the robot cell, side by side)."""
+
+CULL_ROOM = 1e-9
+"""Metres added to a segment's sphere in the first cull (`SurfaceReach.reachable`):
+far more than the rounding of the distances, it only keeps more to test."""
 
 
 class SurfaceReach:
@@ -118,9 +132,22 @@ class SurfaceReach:
         while lo.shape[1] > 1:
             lo, hi = lo.reshape(n_c, -1, 2, 3).min(axis=2), hi.reshape(n_c, -1, 2, 3).max(axis=2)
             self._levels.insert(0, (lo, hi))
-        # below the root, each level's boxes by parent, both children at once, as
-        # (hi, -lo): a segment's (lo, -hi) greater along any axis is apart from it
-        self._children = [np.concatenate([hi, -lo], axis=2).reshape(n_c, -1, 2, 6) for lo, hi in self._levels[1:]]
+        # the boxes as the test compares them (`_met`): the root's (B, 8) and,
+        # below it, a few levels at a time (`TREE_STEP`), each step's level by
+        # ancestor in the level above the step, all its 2**step descendants at
+        # once (B * nodes, 8 * 2**step): a box its descendants meet it meets too
+        self._root = _faces(self._levels[0][0][:, 0], self._levels[0][1][:, 0])
+        self._steps = []
+        level = 0
+        while level + 1 < len(self._levels):
+            step = min(TREE_STEP, len(self._levels) - 1 - level)
+            level += step
+            self._steps.append((step, _faces(*self._levels[level]).reshape(-1, 8 << step)))
+        self._axis_faces = _faces(self.axis_lo, self.axis_hi)
+        # each body's patches in a sphere (world frame, the first cull): around its root box
+        root_lo, root_hi = self._levels[0][0][:, 0], self._levels[0][1][:, 0]
+        self._centre = 0.5 * (root_lo + root_hi)
+        self._radius = 0.5 * np.sqrt(((root_hi - root_lo) ** 2).sum(axis=1)) if n_c else np.zeros(0)
         radius = float(m.flex_radius[flexes].max()) if len(flexes) else 0.0
         s_margin = float(m.flex_margin[flexes].max()) if len(flexes) else 0.0
         s_gap = float(m.flex_gap[flexes].max()) if len(flexes) else 0.0
@@ -165,42 +192,58 @@ class SurfaceReach:
     def reachable(self, xpos: np.ndarray, xmat: np.ndarray) -> np.ndarray:
         """(S, F) bool: the patches some cable element can reach, for S
         states given by the detection model's body poses after mj_kinematics,
-        `xpos` (S, nbody, 3) and `xmat` (S, nbody, 9) (module docstring)."""
+        `xpos` (S, nbody, 3) and `xmat` (S, nbody, 9) (module docstring).
+
+        Before the boxes, a cull in the world frame: a segment's sphere
+        (around its midpoint, half its length plus its growth) apart from the
+        sphere around a body's root box is apart from the box (a few
+        rotations per state are left to do, not one per segment and body)."""
         xpos, xmat = np.asarray(xpos, float), np.asarray(xmat, float)
         n_s = len(xpos)
         if self._always:
             return np.ones((n_s, len(self.flexes)), bool)
         if not len(self.flexes) or not len(self._segs):
             return np.zeros((n_s, len(self.flexes)), bool)
-        pts = xpos[:, self._vbody]                                            # (S, V, 3), as mj_flex places them
+        n_c, n_e = len(self._carriers), len(self._segs)
+        pts = xpos.take(self._vbody, axis=1)                                  # (S, V, 3), as mj_flex places them
         if len(self._held):
-            rot = xmat[:, self._vbody[self._held]].reshape(n_s, -1, 3, 3)
-            pts[:, self._held] += (rot @ self._offset[None, :, :, None])[..., 0]
-        rot = xmat[:, self._carriers].reshape(n_s, -1, 3, 3)                  # (S, B, 3, 3)
-        diff = pts[:, None, :, :] - xpos[:, self._carriers, None, :]          # (S, B, V, 3)
-        local = diff @ rot                                                    # into each carrier's frame: R^T (p - x)
-        a, b = local[:, :, self._segs[:, 0]], local[:, :, self._segs[:, 1]]   # (S, B, E, 3)
-        grow = self._grow[:, None]
-        seg_lo, seg_hi = np.minimum(a, b) - grow, np.maximum(a, b) + grow
-        root_lo, root_hi = self._levels[0]
-        near = ~((seg_lo > root_hi[:, 0][:, None, :]) | (seg_hi < root_lo[:, 0][:, None, :])).any(axis=3)
-        s, c, e = np.nonzero(near)                          # segments near all of a body's patches
-        apart = np.concatenate([seg_lo[s, c, e], -seg_hi[s, c, e]], axis=1)   # (T, 6)
-        seg, body, node = np.arange(len(s)), c, np.zeros(len(s), np.int64)
-        for children in self._children:                     # down the tree: the children of nodes met
-            meet = ~(apart[:, None, :] > children[body, node]).any(axis=2)   # (T, 2)
-            i, j = np.nonzero(meet)
-            seg, body, apart, node = seg[i], body[i], apart[i], 2 * node[i] + j
+            rot = xmat.take(self._vbody[self._held], axis=1).reshape(n_s, -1, 3, 3)
+            pts[:, self._held] += np.einsum("svij,vj->svi", rot, self._offset)
+        a, b = pts.take(self._segs[:, 0], axis=1), pts.take(self._segs[:, 1], axis=1)   # (S, E, 3)
+        mid, d = 0.5 * (a + b), b - a
+        # the spheres: a segment's radius with room for rounding (it only widens the cull)
+        half = 0.5 * np.sqrt(_row_dots(d)) + self._grow + CULL_ROOM
+        rot = xmat.take(self._carriers, axis=1).reshape(n_s, n_c, 3, 3)       # (S, B, 3, 3)
+        origin = xpos.take(self._carriers, axis=1)                            # (S, B, 3)
+        centre = origin + np.einsum("sbij,bj->sbi", rot, self._centre)
+        gap = (_row_dots(centre)[:, :, None] + _row_dots(mid)[:, None, :]
+               - 2.0 * (centre @ mid.transpose(0, 2, 1)))                     # (S, B, E) squared distances
+        reach = self._radius[None, :, None] + half[:, None, :]
+        sc, e = np.divmod(np.flatnonzero(gap <= reach * reach), n_e)          # flat: np.nonzero's 3-d indices cost more
+        s = sc // n_c
+        # the pairs left, into their body's frame: R^T (p - x)
+        c, se = sc - s * n_c, s * n_e + e
+        rot, origin = rot.reshape(-1, 3, 3).take(sc, axis=0), origin.reshape(-1, 3).take(sc, axis=0)
+        la = np.einsum("ti,tij->tj", a.reshape(-1, 3).take(se, axis=0) - origin, rot)
+        lb = np.einsum("ti,tij->tj", b.reshape(-1, 3).take(se, axis=0) - origin, rot)
+        grow = self._grow.take(e)[:, None]
+        apart = _segment_faces(np.minimum(la, lb) - grow, np.maximum(la, lb) + grow)      # (T, 8)
+        k = np.flatnonzero(_met(apart, self._root.take(c, axis=0)))   # near all of a body's patches
+        apart, body, node = apart.take(k, axis=0), c.take(k), np.zeros(len(k), np.int64)
+        for step, faces in self._steps:                     # down the tree: the descendants of nodes met
+            nodes = len(faces) // n_c
+            i, j = np.divmod(np.flatnonzero(_met(np.tile(apart, 1 << step),
+                                                 faces.take(body * nodes + node, axis=0))), 1 << step)
+            k, body, apart, node = k.take(i), body.take(i), apart.take(i, axis=0), (node.take(i) << step) + j
         # the pairs met at the leaves, each segment again in its patch's own
         # axes (a padding leaf's empty box met nothing)
-        s, c, e, row = s[seg], body, e[seg], self._leaf_row[body, node]
-        axes = self.axes[row]                                                 # (T, 3, 3), rows the axes
-        a = (axes @ local[s, c, self._segs[e, 0]][:, :, None])[..., 0]
-        b = (axes @ local[s, c, self._segs[e, 1]][:, :, None])[..., 0]
-        grow = self._grow[e][:, None]
-        meet = ~((np.minimum(a, b) - grow > self.axis_hi[row]) | (np.maximum(a, b) + grow < self.axis_lo[row])).any(1)
+        row = self._leaf_row.take(body * self._leaf_row.shape[1] + node)
+        axes, grow = self.axes.take(row, axis=0), grow.take(k, axis=0)
+        pa, pb = np.einsum("tij,tj->ti", axes, la.take(k, axis=0)), np.einsum("tij,tj->ti", axes, lb.take(k, axis=0))
+        meet = _met(_segment_faces(np.minimum(pa, pb) - grow, np.maximum(pa, pb) + grow),
+                    self._axis_faces.take(row, axis=0))
         out = np.zeros((n_s, len(self.flexes)), bool)
-        out[s[meet], row[meet]] = True
+        out[s.take(k)[meet], row[meet]] = True
         return out
 
     def leave_out(self, keep: np.ndarray) -> None:
@@ -225,6 +268,36 @@ class SurfaceReach:
             field[self.flexes] = value
         self.model.flex_vertbodyid[:] = self._vertbody
         self._kept = np.ones(len(self.flexes), bool)
+
+
+def _row_dots(x: np.ndarray) -> np.ndarray:
+    """(..., 3) -> (...): each row's dot product with itself (a product
+    with a vector of ones: numpy's sum or einsum over a short last axis
+    cost several times more)."""
+    return (x * x) @ np.ones(3)
+
+
+def _faces(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Boxes (..., 3) as `_met` compares them: (hi, -lo) and two columns of
+    +inf (nothing is greater), (..., 8)."""
+    pad = np.full(lo.shape[:-1] + (2,), np.inf)
+    return np.concatenate([hi, -lo, pad], axis=-1)
+
+
+def _segment_faces(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Segments' boxes (T, 3) as `_met` compares them: (lo, -hi) and two
+    zeros, (T, 8)."""
+    return np.concatenate([lo, -hi, np.zeros((len(lo), 2))], axis=1)
+
+
+def _met(apart: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(T, 8k) segments' boxes (`_segment_faces`) against (T, 8k) boxes
+    (`_faces`), k of each per row side by side: (T * k,) True where a
+    segment's box meets its box (no axis holds them apart: lo > hi or
+    -hi > -lo). The eight comparisons of a pair are eight bytes of one
+    64-bit word, zero when none holds (numpy's any over a short axis costs
+    ten times more)."""
+    return np.greater(apart, faces).view(np.uint64).ravel() == 0
 
 
 def oriented_boxes(verts: np.ndarray, adr: np.ndarray, count: np.ndarray

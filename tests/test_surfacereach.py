@@ -161,6 +161,59 @@ def test_a_patch_left_out_is_beyond_the_contact_distance(patched, offset, turn, 
     _left_out_beyond_contact(patched, offset, turn, carrier, carrier_turn, far)
 
 
+def _direct(reach: SurfaceReach, m: mujoco.MjModel, xpos: np.ndarray, xmat: np.ndarray) -> np.ndarray:
+    """The reach test with neither the cull nor the tree: every segment's box
+    against every patch's box in its body's frame, then along the patch's
+    own axes (a leaf's ancestors hold its box, so the tree prunes nothing it
+    would keep)."""
+    d = mujoco.MjData(m)
+    out = np.zeros((len(xpos), len(reach)), bool)
+    for i, (x, r) in enumerate(zip(xpos, xmat)):
+        d.xpos[:], d.xmat[:] = x, r
+        mujoco.mj_flex(m, d)
+        verts = np.concatenate([np.arange(m.flex_vertadr[c], m.flex_vertadr[c] + m.flex_vertnum[c])
+                                for c in np.flatnonzero(m.flex_dim == 1)])
+        pts = d.flexvert_xpos[verts]
+        for f, (body, lo, hi) in enumerate(zip(reach.bodies, reach.lo, reach.hi)):
+            local = (pts - x[body]) @ r[body].reshape(3, 3)
+            a, b = local[reach._segs[:, 0]], local[reach._segs[:, 1]]
+            g = reach._grow[:, None]
+            box = ~((np.minimum(a, b) - g > hi) | (np.maximum(a, b) + g < lo)).any(axis=1)
+            pa, pb = a @ reach.axes[f].T, b @ reach.axes[f].T
+            along = ~((np.minimum(pa, pb) - g > reach.axis_hi[f]) | (np.maximum(pa, pb) + g < reach.axis_lo[f])).any(1)
+            out[i, f] = (box & along).any()
+    return out
+
+
+def test_the_cull_and_the_tree_keep_the_patches_a_direct_test_keeps(patched):
+    """The carrier and the two Us at poses drawn around the cable's end, many
+    states at once: the world-frame cull of sphere pairs and the steps down
+    the tree keep exactly the patches that testing every segment against
+    every patch keeps (some states keep none, some many)."""
+    built, sim = patched
+    m, d = built.detect, sim.detect_data
+    q0 = built.qpos0
+    jnt = built.model.body_jntadr[mujoco.mj_name2id(built.model, mujoco.mjtObj.mjOBJ_BODY, "carrier")]
+    end = q0[int(built.model.jnt_qposadr[jnt]):][:3]
+    rng = np.random.default_rng(7)
+    xpos, xmat = [], []
+    for _ in range(150):
+        turns = [np.linalg.qr(rng.normal(size=(3, 3)))[0] for _ in range(3)]
+        turns = [t * np.sign(np.linalg.det(t)) for t in turns]
+        qpos = _placed(built, q0, "near", end + rng.uniform(-0.1, 0.1, 3), turns[0])
+        qpos = _placed(built, qpos, "far", end + rng.uniform(-0.1, 0.1, 3), turns[1])
+        qpos = _placed(built, qpos, "carrier", end + rng.uniform(-0.05, 0.05, 3), turns[2])
+        d.qpos[:] = qpos
+        mujoco.mj_kinematics(m, d)
+        xpos.append(d.xpos.copy())
+        xmat.append(d.xmat.copy())
+    xpos, xmat = np.array(xpos), np.array(xmat)
+    got = sim.reach.reachable(xpos, xmat)
+    kept = got.sum(axis=1)
+    assert (kept == 0).any() and kept.max() >= 4
+    assert np.array_equal(got, _direct(sim.reach, m, xpos, xmat))
+
+
 def test_patches_are_left_out_one_by_one(patched):
     """With the cable's end in the near U's pocket some of its patches are
     in the pass and others out, and the contacts are those of every patch in."""
