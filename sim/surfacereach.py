@@ -57,6 +57,8 @@ contact means; it only narrows MuJoCo's pass.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import mujoco
 import numpy as np
 
@@ -250,17 +252,40 @@ class SurfaceReach:
         """Take the patches in `keep` (F,) bool into the next mj_flex and
         mj_collision of the model and leave the others out (`restore` puts
         them all back). Only the patches whose state changes are written."""
+        for _ in self.leave_out_each(np.asarray(keep, bool)[None]):
+            pass
+
+    def leave_out_each(self, keep: np.ndarray) -> Iterator[int]:
+        """`leave_out` for S states in turn, `keep` (S, F) bool: yields each
+        state's index once the model is set for it. What changes from state
+        to state is found for all of them at once; a state writes only the
+        patches that change (none, mostly: then nothing)."""
         keep = np.asarray(keep, bool)
-        change = np.flatnonzero(keep != self._kept)
-        if not len(change):
+        n_s, n_f = keep.shape
+        if not n_f:
+            yield from range(n_s)
             return
-        flexes, now = self.flexes[change], keep[change]
-        for field, compiled, off in zip(self._fields(), self._compiled, (0, 0, -1, 0, 0)):
-            field[flexes] = np.where(now, compiled[change], off)
-        count = self._compiled[0][change]                   # the patches' vertices as compiled
+        before = np.concatenate([self._kept[None], keep[:-1]])
+        state, row = np.divmod(np.flatnonzero(keep != before), n_f)          # the changes, state by state
+        now = keep[state, row]
+        flexes = self.flexes.take(row)
+        values = [np.where(now, compiled.take(row), off)
+                  for compiled, off in zip(self._compiled, (0, 0, -1, 0, 0))]
+        count = self._compiled[0].take(row)                                    # their vertices as compiled
         verts = ranges(self.model.flex_vertadr[flexes], count)
-        self.model.flex_vertbodyid[verts] = np.where(np.repeat(now, count), self._vertbody[verts], 0)
-        self._kept = keep.copy()
+        bodies = np.where(np.repeat(now, count), self._vertbody[verts], 0)
+        at = np.searchsorted(state, np.arange(n_s + 1)).tolist()
+        vert_at = np.concatenate([[0], np.cumsum(count)])[at].tolist()
+        fields, vertbody = self._fields(), self.model.flex_vertbodyid
+        for i in range(n_s):
+            lo, hi = at[i], at[i + 1]
+            if hi > lo:
+                f = flexes[lo:hi]
+                for field, value in zip(fields, values):
+                    field[f] = value[lo:hi]
+                vertbody[verts[vert_at[i]:vert_at[i + 1]]] = bodies[vert_at[i]:vert_at[i + 1]]
+                self._kept = keep[i].copy()
+            yield i
 
     def restore(self) -> None:
         """Every patch as compiled."""
