@@ -97,7 +97,8 @@ class ContactReader:
         if swap.any():
             for arr in (code, is_flex, flex, elem):
                 arr[swap] = arr[swap][:, ::-1]
-        dist = dist + self._radius[code].sum(axis=1)                          # a surface's triangles are the mesh
+        extra = self._radius.take(code)
+        dist = dist + (extra[:, 0] + extra[:, 1])                             # a surface's triangles are the mesh
         ko = self._keepout[code]
         kind = np.where(is_flex[:, 0], np.where(is_flex[:, 1], 3 + (flex[:, 0] == flex[:, 1]), 1 + ko[:, 1]),
                         2 * (ko[:, 0] | ko[:, 1]))                           # codes into _KINDS

@@ -33,9 +33,10 @@ of its patches): what it leaves out the first step would, so the patches
 kept are the same. Every
 one-dimensional flex counts as a cable; should the mjcf model bring a
 flex of another dimension that can meet a surface, no patch is ever left
-out. The positions are the detection model's own
-(mj_kinematics at the state, the cable vertices placed as mj_flex places
-them): nothing comes from the checker, so validation still judges the
+out. The positions are MuJoCo's body poses at the state (mj_kinematics;
+the simulation's, which share the detection model's kinematic tree and so
+are its own bit for bit), the cable vertices placed as mj_flex places
+them: nothing comes from the checker, so validation still judges the
 checker against all that MuJoCo finds on the whole surface
 (tests/test_surfacereach.py compares the contacts and the bound against
 exact distances).
