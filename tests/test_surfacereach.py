@@ -16,7 +16,7 @@ from sim.build import build
 from sim.detection_mesh import SURFACE_PREFIX, surface_geoms
 from sim.loop import Simulation
 from sim.scene import load_scene
-from sim.surfacereach import REACH_SLACK, REACH_TOLERANCES, SurfaceReach, oriented_boxes
+from sim.surfacereach import PIECE_LEVELS, REACH_SLACK, REACH_TOLERANCES, SurfaceReach, oriented_boxes, pieces
 from tests.strategies import coords, rotations
 from tests.test_detection_mesh import POCKET_FLOOR, u_mesh
 
@@ -130,7 +130,9 @@ def test_a_far_surface_is_left_out_and_the_contacts_are_the_same(cell):
     far = _placed(built, q0, "near", start + [0.0, 0.0, -0.05], np.eye(3))
     far = _placed(built, far, "far", start, np.eye(3))
     qposes = qposes[:2] + [far] + qposes[2:]
-    assert [_reachable(sim, q).tolist().count(True) for q in qposes[1:4]] == [1, 2, 1]
+    # (10 mm below, the pocket's floor is 13 mm from the cable's end: beyond the
+    # contact distance, and the pieces' boxes leave the near U out too)
+    assert [_reachable(sim, q).tolist().count(True) for q in qposes[1:4]] == [0, 1, 1]
     found = sim.collide_many(qposes)
     assert [_key(a) for a in found] == [_key(b) for b in _unfiltered(sim, qposes)]
     assert len(found[3].dist) and len(found[2].dist) and not len(found[0].dist)   # contacts, and states without
@@ -157,31 +159,40 @@ def test_a_patch_left_out_is_beyond_the_contact_distance(patched, offset, turn, 
     tree of boxes: a patch left out is beyond MuJoCo's contact distance,
     and the contacts are those of every patch in."""
     _, sim = patched
-    assert len(sim.reach) == 32 and len(sim.reach._levels) == 5
+    assert len(sim.reach) == 32 and len(sim.reach._levels) == 5 + PIECE_LEVELS
     _left_out_beyond_contact(patched, offset, turn, carrier, carrier_turn, far)
 
 
 def _direct(reach: SurfaceReach, m: mujoco.MjModel, xpos: np.ndarray, xmat: np.ndarray) -> np.ndarray:
-    """The reach test with neither the cull nor the tree: every segment's box
-    against every patch's box in its body's frame, then along the patch's
-    own axes (a leaf's ancestors hold its box, so the tree prunes nothing it
+    """The reach test with neither the cull nor the tree: every segment
+    against every piece of every patch, its box in its body's frame, then
+    along the piece's own axes and the segment's direction crossed with
+    them (a leaf's ancestors hold its box, so the tree prunes nothing it
     would keep)."""
     d = mujoco.MjData(m)
     out = np.zeros((len(xpos), len(reach)), bool)
+    g = reach._grow[:, None]
     for i, (x, r) in enumerate(zip(xpos, xmat)):
         d.xpos[:], d.xmat[:] = x, r
         mujoco.mj_flex(m, d)
         verts = np.concatenate([np.arange(m.flex_vertadr[c], m.flex_vertadr[c] + m.flex_vertnum[c])
                                 for c in np.flatnonzero(m.flex_dim == 1)])
         pts = d.flexvert_xpos[verts]
-        for f, (body, lo, hi) in enumerate(zip(reach.bodies, reach.lo, reach.hi)):
+        for p, patch in enumerate(reach.piece_patch):
+            body = reach.bodies[patch]
             local = (pts - x[body]) @ r[body].reshape(3, 3)
             a, b = local[reach._segs[:, 0]], local[reach._segs[:, 1]]
-            g = reach._grow[:, None]
-            box = ~((np.minimum(a, b) - g > hi) | (np.maximum(a, b) + g < lo)).any(axis=1)
-            pa, pb = a @ reach.axes[f].T, b @ reach.axes[f].T
-            along = ~((np.minimum(pa, pb) - g > reach.axis_hi[f]) | (np.maximum(pa, pb) + g < reach.axis_lo[f])).any(1)
-            out[i, f] = (box & along).any()
+            box = ~((np.minimum(a, b) - g > reach.piece_hi[p]) | (np.maximum(a, b) + g < reach.piece_lo[p])).any(1)
+            pa, pb = a @ reach.piece_axes[p].T, b @ reach.piece_axes[p].T
+            lo, hi = reach.piece_axis_lo[p], reach.piece_axis_hi[p]
+            along = ~((np.minimum(pa, pb) - g > hi) | (np.maximum(pa, pb) + g < lo)).any(1)
+            w, mid = 0.5 * (pb - pa), 0.5 * (pa + pb) - 0.5 * (lo + hi)
+            apart = np.zeros(len(w), bool)
+            for axis in np.eye(3):
+                cross = np.cross(w, axis)
+                extent = np.abs(cross) @ (0.5 * (hi - lo)) + g[:, 0] * np.linalg.norm(cross, axis=1)
+                apart |= np.abs((mid * cross).sum(1)) > extent
+            out[i, patch] |= (box & along & ~apart).any()
     return out
 
 
@@ -189,7 +200,7 @@ def test_the_cull_and_the_tree_keep_the_patches_a_direct_test_keeps(patched):
     """The carrier and the two Us at poses drawn around the cable's end, many
     states at once: the world-frame cull of sphere pairs and the steps down
     the tree keep exactly the patches that testing every segment against
-    every patch keeps (some states keep none, some many)."""
+    every piece keeps (some states keep none, some many)."""
     built, sim = patched
     m, d = built.detect, sim.detect_data
     q0 = built.qpos0
@@ -404,3 +415,27 @@ def test_the_bound_keeps_every_surface_mujoco_touches_and_leaves_out_what_lies_b
         assert not kept
     if above < -1e-6:
         assert d.ncon                        # MuJoCo touches it: the case above is met
+
+
+@pytest.mark.parametrize("levels", [0, 1, 3])
+def test_every_triangle_lies_in_a_piece_of_its_patch(cell, levels):
+    """`pieces`: each triangle of a patch lies wholly in one of its patch's
+    pieces, in its box in the body's frame and along its axes; a patch has
+    2**levels pieces (halves of equal counts of triangles), fewer only when
+    it has fewer triangles."""
+    built, sim = cell
+    m, flexes = built.detect, sim.reach.flexes
+    patch, node, lo, hi, axes, axis_lo, axis_hi = pieces(m, flexes, levels)
+    assert np.bincount(patch, minlength=len(flexes)).max() <= 2 ** levels and (node < 2 ** levels).all()
+    eps = 1e-12
+    for f, flex in enumerate(flexes.tolist()):
+        verts = m.flex_vert[m.flex_vertadr[flex]:][:m.flex_vertnum[flex]]
+        tri = verts[m.flex_elem[m.flex_elemdataadr[flex]:][:3 * m.flex_elemnum[flex]].reshape(-1, 3)]
+        mine = np.flatnonzero(patch == f)
+        inside = np.zeros((len(tri), len(mine)), bool)
+        for k, p in enumerate(mine.tolist()):
+            along = tri @ axes[p].T
+            inside[:, k] = (((tri >= lo[p] - eps) & (tri <= hi[p] + eps)).all(axis=(1, 2))
+                            & ((along >= axis_lo[p] - eps) & (along <= axis_hi[p] + eps)).all(axis=(1, 2)))
+        assert inside.any(axis=1).all()
+        assert len(mine) == min(2 ** levels, len(tri))          # halves of equal counts: none empty
