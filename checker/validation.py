@@ -43,7 +43,7 @@ import numpy as np
 
 from checker.arrays import first_least, ranges
 from checker.cable import polyline_arc_lengths, self_pair_excluded, tile_offsets
-from checker.closest import point_segment, row_norm
+from checker.closest import row_norm, segment_parameter
 from checker.events import AllowList
 from checker.records import Interference, PairType, severity_of
 from checker.scene_state import Exclusion
@@ -208,7 +208,7 @@ class SimulatorPairs:
             coordinates."""
             i = offsets.take(cab) + np.clip(elem, 0, offsets.take(cab + 1) - offsets.take(cab) - 2)
             g = st[rows] * n + i
-            _, t, _ = point_segment(pos[rows], flat.take(g, axis=0), flat.take(g + 1, axis=0))
+            t = segment_parameter(pos[rows], flat.take(g, axis=0), flat.take(g + 1, axis=0))
             at, after = s_all.take(g), s_all.take(g + 1)
             lo, hi = (at, after) if rest is None else (rest.take(i), rest.take(i + 1))
             return at + t * (after - at), lo, hi
