@@ -16,7 +16,14 @@ from sim.build import build
 from sim.detection_mesh import SURFACE_PREFIX, surface_geoms
 from sim.loop import Simulation
 from sim.scene import load_scene
-from sim.surfacereach import PIECE_LEVELS, REACH_SLACK, REACH_TOLERANCES, SurfaceReach, oriented_boxes, pieces
+from sim.surfacereach import (
+    PIECE_LEVELS,
+    REACH_SLACK,
+    REACH_TOLERANCES,
+    SurfaceReach,
+    oriented_boxes,
+    pieces,
+)
 from tests.strategies import coords, rotations
 from tests.test_detection_mesh import POCKET_FLOOR, u_mesh
 
