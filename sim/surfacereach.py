@@ -22,19 +22,21 @@ segment lies apart from a box grown by r + rho + margin + gap +
 `REACH_SLACK` along some axis, every point of the segment is that far
 from every point in the box, so MuJoCo could report no contact with a
 triangle in it; a patch is left out when every segment lies so apart
-from each of its pieces. The test runs in steps with the same bound:
+from its box or from each of its pieces' boxes. The test runs in steps
+with the same bound:
 each segment against the box of all the patches on a body, then down a
 tree of boxes over that body's patches and their pieces (each node the
-box of its children, a few levels at a time), and last the segments
-that reach a piece's box again along the piece's own axes (a slanted,
-thin piece's box along them is far tighter) and along the segment's
-direction crossed with each of them (with the box's axes, the axes that
-separate a segment from a box whenever anything does). Before them a
+box of its children, a few levels at a time); the segments that reach a
+patch's box are tested again along the patch's own principal axes before
+its pieces, and those that reach a piece's box along the piece's (a
+slanted, thin box is far tighter along them), both also along the
+segment's direction crossed with each axis (with the box's axes, the axes
+that separate a segment from a box whenever anything does). Before them a
 cull in the world frame leaves out, with no rotation, the (segment, body)
 pairs whose spheres lie apart (the segment's around its box grown by the
 bound, the body's around the box of its patches): what it leaves out the
-first step would, so the patches kept are the same. On the robot cell a
-state keeps 7.7 of 330 patches (15.1 with the patches' own boxes alone;
+first step would, so what is kept is the same. On the robot cell a
+state keeps 6.7 of 330 patches (15.1 with the patches' own boxes alone;
 2 have contacts): each kept patch costs mj_flex and mj_collision some
 10 us even without contacts. Every
 one-dimensional flex counts as a cable; should the mjcf model bring a
@@ -150,7 +152,10 @@ class SurfaceReach:
         rank[order] = np.arange(len(flexes)) - starts[row_body[order]]
         leaf = (rank.take(self.piece_patch) << PIECE_LEVELS) + self.piece_node     # each piece's leaf
         piece_body = row_body.take(self.piece_patch)
-        depth = int(np.ceil(np.log2(rank.max() + 1))) + PIECE_LEVELS if len(flexes) else 0
+        patch_depth = int(np.ceil(np.log2(rank.max() + 1))) if len(flexes) else 0
+        depth = patch_depth + PIECE_LEVELS if len(flexes) else 0
+        self._patch_row = np.full((n_c, 2 ** patch_depth), -1, np.int64)    # the patch at each node of its level
+        self._patch_row[row_body, rank] = np.arange(len(flexes))
         self._leaf_row = np.full((n_c, 2 ** depth), -1, np.int64)
         self._leaf_row[piece_body, leaf] = np.arange(len(self.piece_patch))
         lo = np.full((n_c, 2 ** depth, 3), np.inf)
@@ -165,12 +170,17 @@ class SurfaceReach:
         # ancestor in the level above the step, all its 2**step descendants at
         # once (B * nodes, 8 * 2**step): a box its descendants meet it meets too
         self._root = _faces(self._levels[0][0][:, 0], self._levels[0][1][:, 0])
+        # (a step ends at the patches' level: there each pair is tested along
+        # the patch's own axes too, before its pieces)
         self._steps = []
         level = 0
         while level + 1 < len(self._levels):
-            step = min(TREE_STEP, len(self._levels) - 1 - level)
+            end = patch_depth if level < patch_depth else len(self._levels) - 1
+            step = min(TREE_STEP, end - level)
             level += step
-            self._steps.append((step, _faces(*self._levels[level]).reshape(-1, 8 << step)))
+            self._steps.append((step, _faces(*self._levels[level]).reshape(-1, 8 << step), level == patch_depth))
+        self._patch_faces = _faces(self.axis_lo, self.axis_hi)
+        self._patch_centre, self._patch_half = 0.5 * (self.axis_lo + self.axis_hi), 0.5 * (self.axis_hi - self.axis_lo)
         self._axis_faces = _faces(self.piece_axis_lo, self.piece_axis_hi)
         self._axis_centre = 0.5 * (self.piece_axis_lo + self.piece_axis_hi)
         self._axis_half = 0.5 * (self.piece_axis_hi - self.piece_axis_lo)
@@ -264,35 +274,47 @@ class SurfaceReach:
         apart = _segment_faces(np.minimum(la, lb) - grow, np.maximum(la, lb) + grow)      # (T, 8)
         k = np.flatnonzero(_met(apart, self._root.take(c, axis=0)))   # near all of a body's patches
         apart, body, node = apart.take(k, axis=0), c.take(k), np.zeros(len(k), np.int64)
-        for step, faces in self._steps:                     # down the tree: the descendants of nodes met
+        for step, faces, patches in self._steps:            # down the tree: the descendants of nodes met
             nodes = len(faces) // n_c
             i, j = np.divmod(np.flatnonzero(_met(np.tile(apart, 1 << step),
                                                  faces.take(body * nodes + node, axis=0))), 1 << step)
             k, body, apart, node = k.take(i), body.take(i), apart.take(i, axis=0), (node.take(i) << step) + j
-        # the pairs met at the leaves, each segment again in its piece's own
-        # axes (a padding leaf's empty box met nothing) ...
+            if patches:                                     # the pairs that reach a patch's box: along its axes
+                row = self._patch_row.take(body * self._patch_row.shape[1] + node)
+                i = np.flatnonzero(self._along(la.take(k, axis=0), lb.take(k, axis=0), grow.take(k, axis=0), row,
+                                               self.axes, self._patch_faces, self._patch_centre, self._patch_half))
+                k, body, apart, node = k.take(i), body.take(i), apart.take(i, axis=0), node.take(i)
+        # the pairs met at the leaves, each segment again along its piece's own
+        # axes (a padding leaf's empty box met nothing)
         row = self._leaf_row.take(body * self._leaf_row.shape[1] + node)
-        axes, grow = self.piece_axes.take(row, axis=0), grow.take(k, axis=0)
-        pa, pb = np.einsum("tij,tj->ti", axes, la.take(k, axis=0)), np.einsum("tij,tj->ti", axes, lb.take(k, axis=0))
-        meet = np.flatnonzero(_met(_segment_faces(np.minimum(pa, pb) - grow, np.maximum(pa, pb) + grow),
-                                   self._axis_faces.take(row, axis=0)))
-        # ... and along the segment's direction crossed with each of those axes
-        # (with the box's own, every axis on which a segment and a box can lie
-        # apart): |m . L| beyond the box's reach along L and the growth times
-        # |L|, m the segment's midpoint from the box's centre, L = w x axis, w
-        # its half (w . L = 0: the segment projects to a point)
-        row, grow = row.take(meet), grow.take(meet, axis=0)[:, 0]
-        pa, pb = pa.take(meet, axis=0), pb.take(meet, axis=0)
-        w, half = 0.5 * (pb - pa), self._axis_half.take(row, axis=0)
-        m = 0.5 * (pa + pb) - self._axis_centre.take(row, axis=0)
+        near = self._along(la.take(k, axis=0), lb.take(k, axis=0), grow.take(k, axis=0), row, self.piece_axes,
+                           self._axis_faces, self._axis_centre, self._axis_half)
+        out = np.zeros((n_s, len(self.flexes)), bool)
+        out[s.take(k)[near], self.piece_patch.take(row[near])] = True
+        return out
+
+    @staticmethod
+    def _along(la: np.ndarray, lb: np.ndarray, grow: np.ndarray, row: np.ndarray, axes: np.ndarray,
+               faces: np.ndarray, centre: np.ndarray, half: np.ndarray) -> np.ndarray:
+        """(T,) True where segments (ends `la`, `lb` (T, 3) in the body's
+        frame, grown by `grow` (T, 1)) reach boxes `row` (T,) along the
+        boxes' own axes (`axes`, and the boxes as `_faces`, centres and
+        halves along them) and along the segment's direction crossed with
+        each axis (with the box's own, every axis on which a segment and a
+        box can lie apart)."""
+        axes = axes.take(row, axis=0)
+        pa, pb = np.einsum("tij,tj->ti", axes, la), np.einsum("tij,tj->ti", axes, lb)
+        meet = _met(_segment_faces(np.minimum(pa, pb) - grow, np.maximum(pa, pb) + grow), faces.take(row, axis=0))
+        # along L = w x axis, w the segment's half (w . L = 0: the segment
+        # projects to a point): |m . L| beyond the box's reach along L and
+        # the growth times |L|, m the segment's midpoint from the box's centre
+        w, half = 0.5 * (pb - pa), half.take(row, axis=0)
+        m = 0.5 * (pa + pb) - centre.take(row, axis=0)
         j, i = [1, 2, 0], [2, 0, 1]
         wj, wi, aw = w[:, j], w[:, i], np.abs(w)
         across = np.abs(m[:, j] * wi - m[:, i] * wj)
-        reach = half[:, j] * aw[:, i] + half[:, i] * aw[:, j] + grow[:, None] * np.sqrt(wj * wj + wi * wi)
-        near = ~(across > reach).any(axis=1)
-        out = np.zeros((n_s, len(self.flexes)), bool)
-        out[s.take(k).take(meet[near]), self.piece_patch.take(row[near])] = True
-        return out
+        reach = half[:, j] * aw[:, i] + half[:, i] * aw[:, j] + grow * np.sqrt(wj * wj + wi * wi)
+        return meet & ~(across > reach).any(axis=1)
 
     def leave_out(self, keep: np.ndarray) -> None:
         """Take the patches in `keep` (F,) bool into the next mj_flex and

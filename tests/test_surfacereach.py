@@ -170,12 +170,25 @@ def test_a_patch_left_out_is_beyond_the_contact_distance(patched, offset, turn, 
     _left_out_beyond_contact(patched, offset, turn, carrier, carrier_turn, far)
 
 
+def _along(a, b, g, axes, lo, hi) -> np.ndarray:
+    """Segments (ends a, b, grown by g) that reach a box (along `axes`, lo,
+    hi) along its axes and their direction crossed with each axis."""
+    pa, pb = a @ axes.T, b @ axes.T
+    along = ~((np.minimum(pa, pb) - g > hi) | (np.maximum(pa, pb) + g < lo)).any(1)
+    w, mid = 0.5 * (pb - pa), 0.5 * (pa + pb) - 0.5 * (lo + hi)
+    for axis in np.eye(3):
+        cross = np.cross(w, axis)
+        extent = np.abs(cross) @ (0.5 * (hi - lo)) + g[:, 0] * np.linalg.norm(cross, axis=1)
+        along &= ~(np.abs((mid * cross).sum(1)) > extent)
+    return along
+
+
 def _direct(reach: SurfaceReach, m: mujoco.MjModel, xpos: np.ndarray, xmat: np.ndarray) -> np.ndarray:
     """The reach test with neither the cull nor the tree: every segment
     against every piece of every patch, its box in its body's frame, then
-    along the piece's own axes and the segment's direction crossed with
-    them (a leaf's ancestors hold its box, so the tree prunes nothing it
-    would keep)."""
+    along the patch's and the piece's own axes and the segment's direction
+    crossed with them (a leaf's ancestors hold its box, so the tree prunes
+    nothing it would keep)."""
     d = mujoco.MjData(m)
     out = np.zeros((len(xpos), len(reach)), bool)
     g = reach._grow[:, None]
@@ -190,16 +203,9 @@ def _direct(reach: SurfaceReach, m: mujoco.MjModel, xpos: np.ndarray, xmat: np.n
             local = (pts - x[body]) @ r[body].reshape(3, 3)
             a, b = local[reach._segs[:, 0]], local[reach._segs[:, 1]]
             box = ~((np.minimum(a, b) - g > reach.piece_hi[p]) | (np.maximum(a, b) + g < reach.piece_lo[p])).any(1)
-            pa, pb = a @ reach.piece_axes[p].T, b @ reach.piece_axes[p].T
-            lo, hi = reach.piece_axis_lo[p], reach.piece_axis_hi[p]
-            along = ~((np.minimum(pa, pb) - g > hi) | (np.maximum(pa, pb) + g < lo)).any(1)
-            w, mid = 0.5 * (pb - pa), 0.5 * (pa + pb) - 0.5 * (lo + hi)
-            apart = np.zeros(len(w), bool)
-            for axis in np.eye(3):
-                cross = np.cross(w, axis)
-                extent = np.abs(cross) @ (0.5 * (hi - lo)) + g[:, 0] * np.linalg.norm(cross, axis=1)
-                apart |= np.abs((mid * cross).sum(1)) > extent
-            out[i, patch] |= (box & along & ~apart).any()
+            whole = _along(a, b, g, reach.axes[patch], reach.axis_lo[patch], reach.axis_hi[patch])
+            piece = _along(a, b, g, reach.piece_axes[p], reach.piece_axis_lo[p], reach.piece_axis_hi[p])
+            out[i, patch] |= (box & whole & piece).any()
     return out
 
 
