@@ -1,8 +1,9 @@
 """Index arithmetic shared by the vectorised passes.
 
 Many passes expand "group i has count[i] items starting at start[i]" into
-flat index arrays without a Python loop; the two functions here are that
-expansion, written once. This module holds no geometry.
+flat index arrays without a Python loop; `within` and `ranges` are that
+expansion, written once. `first_least` picks each group's least value
+without sorting. This module holds no geometry.
 """
 
 from __future__ import annotations
@@ -19,3 +20,46 @@ def within(count: np.ndarray) -> np.ndarray:
 def ranges(start: np.ndarray, count: np.ndarray) -> np.ndarray:
     """start[i] .. start[i] + count[i] - 1 for every group i, concatenated."""
     return np.repeat(np.asarray(start, np.int64), count) + within(count)
+
+
+TABLE_KEYS = 1 << 16
+"""`first_least` numbers the keys present through a table of this many
+entries at most ..."""
+
+TABLE_GROUPS = 1 << 18
+"""... and finds the least per (state, key) in tables of this many; beyond
+either it sorts."""
+
+
+def first_least(state: np.ndarray, key: np.ndarray, value: np.ndarray, keys: int) -> np.ndarray:
+    """The index of the least `value` of each distinct (state, key), the
+    first of equal ones, in (state, key) order: what sorting the rows by
+    (state, key, value, index) and taking each group's first gives.
+
+    `state`, `key` (n,) non-negative ints, `key` below `keys`; `value` (n,).
+    Without a sort (a sort of a few thousand rows by several keys costs
+    milliseconds): the keys present are numbered in order through a table,
+    then each group's least and its first row are found by unbuffered
+    minima into tables of (states x keys present); a sort when those
+    tables would be large, or a value is not finite."""
+    state, key = np.asarray(state, np.int64), np.asarray(key, np.int64)
+    value = np.asarray(value, float)
+    n = len(value)
+    if not n:
+        return np.zeros(0, np.int64)
+    if keys <= TABLE_KEYS and np.isfinite(value).all():
+        present = np.zeros(keys, bool)
+        present[key] = True
+        number = np.cumsum(present) - 1
+        groups = (int(state.max()) + 1) * (int(number[-1]) + 1)
+        if groups <= TABLE_GROUPS:
+            group = state * (int(number[-1]) + 1) + number.take(key)
+            least = np.full(groups, np.inf)
+            np.minimum.at(least, group, value)
+            hit = np.flatnonzero(value == least.take(group))
+            first = np.full(groups, n)
+            np.minimum.at(first, group.take(hit), hit)
+            return first[first < n]
+    order = np.lexsort((np.arange(n), value, key, state))
+    s, k = state[order], key[order]
+    return order[np.r_[True, (s[1:] != s[:-1]) | (k[1:] != k[:-1])]]

@@ -87,6 +87,14 @@ def point_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarr
     return row_norm(p - c), t, c
 
 
+def segment_parameter(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The parameter ``t`` alone of :func:`point_segment` (the same
+    operations, so the same bits), for callers that need neither the
+    distance nor the closest point."""
+    d = b - a
+    return np.clip(_safe_div(_dot(p - a, d), _dot(d, d)), 0.0, 1.0)
+
+
 def segment_segment(
     p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

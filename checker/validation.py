@@ -41,9 +41,9 @@ from typing import Protocol
 
 import numpy as np
 
-from checker.arrays import ranges
+from checker.arrays import first_least, ranges
 from checker.cable import polyline_arc_lengths, self_pair_excluded, tile_offsets
-from checker.closest import point_segment, row_norm
+from checker.closest import row_norm, segment_parameter
 from checker.events import AllowList
 from checker.records import Interference, PairType, severity_of
 from checker.scene_state import Exclusion
@@ -206,11 +206,12 @@ class SimulatorPairs:
             """(arc length of the projection, element start, element end) on
             cable cab for the contacts `rows`; the element's ends in material
             coordinates."""
-            i = offsets[cab] + np.clip(elem, 0, offsets[cab + 1] - offsets[cab] - 2)
+            i = offsets.take(cab) + np.clip(elem, 0, offsets.take(cab + 1) - offsets.take(cab) - 2)
             g = st[rows] * n + i
-            _, t, _ = point_segment(pos[rows], flat[g], flat[g + 1])
-            lo, hi = (s_all[g], s_all[g + 1]) if rest is None else (rest[i], rest[i + 1])
-            return s_all[g] + t * (s_all[g + 1] - s_all[g]), lo, hi
+            t = segment_parameter(pos[rows], flat.take(g, axis=0), flat.take(g + 1, axis=0))
+            at, after = s_all.take(g), s_all.take(g + 1)
+            lo, hi = (at, after) if rest is None else (rest.take(i), rest.take(i + 1))
+            return at + t * (after - at), lo, hi
 
         vertex = elem_a <= -2                      # a contact at a vertex: a span of no length there
         vert = -2 - elem_a
@@ -238,9 +239,7 @@ class SimulatorPairs:
         a, b = np.where(swap, b, a), np.where(swap, a, b)
         # the first least distance per (state, kind, a, b), as __call__ keeps
         u = len(look.names)
-        key = (kind * u + a) * u + b
-        o = np.lexsort((np.arange(len(dist)), dist, key, st))
-        head = o[np.r_[True, (st[o][1:] != st[o][:-1]) | (key[o][1:] != key[o][:-1])]]
+        head = first_least(st, (kind * u + a) * u + b, dist, len(look.kinds) * u * u)
         for i, k, x, y in zip(head.tolist(), kind[head].tolist(), a[head].tolist(), b[head].tolist()):
             out[st[i]][(look.kinds[k], look.names[x], look.names[y])] = (float(dist[i]), pos[i])
         return out

@@ -96,7 +96,6 @@ def mujoco_side(scene, repeat: int) -> dict:
     m2, d2 = built.detect, sim.detect_data
     d2.qpos[:] = d.qpos
     mujoco.mj_kinematics(m2, d2)
-    mujoco.mj_comPos(m2, d2)
     mujoco.mj_flex(m2, d2)
     out["mj_collision"] = median_time(lambda: mujoco.mj_collision(m2, d2), repeat)
     out["detect"] = median_time(lambda: sim.detect(d), repeat)
@@ -150,7 +149,7 @@ def side_by_side_table(sizes: BenchSizes) -> tuple[Table, dict]:
         "half the clearance, in a dynamic AABB tree; update = moving every piece, query = cable-part "
         "and cable-cable collide calls with a narrow test per broad-phase pair (pairs only, no distances).",
         "mj_collision: MuJoCo's broad and narrow phase on the detection model (every interaction "
-        "enabled, margin from the clearance) at the same state; detect adds mj_kinematics, mj_comPos, "
+        "enabled, margin from the clearance) at the same state; detect adds mj_kinematics, "
         "mj_flex and reading the contacts, as every validated step does.",
     ]
     return table, found

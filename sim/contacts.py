@@ -74,14 +74,11 @@ class ContactReader:
     @staticmethod
     def raw(data: mujoco.MjData) -> "RawContacts":
         """A copy of the contact arrays of `data` (after mj_collision), to be
-        named later (:meth:`read_many`); the data may be reused meanwhile."""
-        n = int(data.ncon)
-        con = data.contact
-        elem = np.array(con.elem[:n], int).reshape(n, 2)
-        vert = np.array(con.vert[:n], int).reshape(n, 2)
-        return RawContacts(np.array(con.geom[:n], int).reshape(n, 2), np.array(con.flex[:n], int).reshape(n, 2),
-                           np.where((elem < 0) & (vert >= 0), -2 - vert, elem), np.array(con.dist[:n], float),
-                           np.array(con.pos[:n], float).reshape(n, 3))
+        named later (:meth:`read_many`); the data may be reused meanwhile.
+        Copies alone: what the fields mean is worked out for a batch at once."""
+        con = data.contact                  # as many as data.ncon
+        return RawContacts(con.geom.copy(), con.flex.copy(), con.elem.copy(), con.vert.copy(), con.dist.copy(),
+                           con.pos.copy())
 
     def read_many(self, raws: list["RawContacts"], origin: np.ndarray) -> list[Contacts]:
         """The raw contacts of many steps (:meth:`raw`) with names; contact
@@ -89,11 +86,10 @@ class ContactReader:
         counts = np.array([len(r.dist) for r in raws], np.int64)
         if counts.sum() == 0:
             return [self._empty] * len(raws)
-        geom = np.concatenate([r.geom for r in raws])
-        flex = np.concatenate([r.flex for r in raws])
-        elem = np.concatenate([r.elem for r in raws])
-        dist = np.concatenate([r.dist for r in raws])
-        pos = np.concatenate([r.pos for r in raws]) + origin
+        both = RawContacts(*(np.concatenate([getattr(r, f) for r in raws])
+                             for f in ("geom", "flex", "elems", "verts", "dist", "pos")))
+        geom, flex, elem, dist = both.geom.astype(np.int64), both.flex.astype(np.int64), both.elem, both.dist
+        pos = both.pos + origin
         code = np.where(flex >= 0, flex, self._nflex + np.maximum(geom, 0))   # (n, 2) into the name table
         is_flex = (flex >= 0) & ~self._surface[code]                         # a cable's flex
         # Put the cable side first so a is always the cable.
@@ -101,7 +97,8 @@ class ContactReader:
         if swap.any():
             for arr in (code, is_flex, flex, elem):
                 arr[swap] = arr[swap][:, ::-1]
-        dist = dist + self._radius[code].sum(axis=1)                          # a surface's triangles are the mesh
+        extra = self._radius.take(code)
+        dist = dist + (extra[:, 0] + extra[:, 1])                             # a surface's triangles are the mesh
         ko = self._keepout[code]
         kind = np.where(is_flex[:, 0], np.where(is_flex[:, 1], 3 + (flex[:, 0] == flex[:, 1]), 1 + ko[:, 1]),
                         2 * (ko[:, 0] | ko[:, 1]))                           # codes into _KINDS
@@ -121,13 +118,22 @@ class ContactReader:
 
 @dataclass(frozen=True)
 class RawContacts:
-    """MuJoCo's contact arrays of one step, unnamed (model coordinates);
-    `elem` holds -2 - vertex for a flex side MuJoCo gives a vertex, not an
-    element: MuJoCo collides a flex with a plane vertex by vertex (a capsule
-    chain's distance to a plane is reached at a vertex, so it is exact)."""
+    """MuJoCo's contact arrays of one step as copied, unnamed (model
+    coordinates): geom, flex, elems and verts (n, 2) int32 (-1 for none),
+    dist (n,) and pos (n, 3)."""
 
     geom: np.ndarray
     flex: np.ndarray
-    elem: np.ndarray
+    elems: np.ndarray
+    verts: np.ndarray
     dist: np.ndarray
     pos: np.ndarray
+
+    @property
+    def elem(self) -> np.ndarray:
+        """(n, 2) the flex element of each side, -2 - vertex for a flex side
+        MuJoCo gives a vertex, not an element (MuJoCo collides a flex with a
+        plane vertex by vertex: a capsule chain's distance to a plane is
+        reached at a vertex, so it is exact), -1 for a geom side."""
+        elem, vert = self.elems.astype(np.int64), self.verts.astype(np.int64)
+        return np.where((elem < 0) & (vert >= 0), -2 - vert, elem)

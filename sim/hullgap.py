@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from checker.arrays import first_least
 from checker.validation import shared_codes
 from sim.built import Built
 from sim.contacts import Contacts
@@ -164,11 +165,9 @@ class HullGaps:
         elem = np.concatenate([c.elem_a for c in detected]).astype(np.int64)
         dist = np.concatenate([c.dist for c in detected]).astype(float)
         ok = (cable >= 0) & (part >= 0) & (elem >= 0)
-        k, dist = keys(state[ok], cable[ok], part[ok], elem[ok]), dist[ok]
-        order = np.lexsort((dist, k))
-        k, dist = k[order], dist[order]
-        first = np.r_[True, k[1:] != k[:-1]] if len(k) else np.zeros(0, bool)
-        k, surface = np.r_[k[first], -1], np.r_[dist[first], np.nan]   # a sentinel: found by none
+        state, own, dist = state[ok], keys(0, cable[ok], part[ok], elem[ok]), dist[ok]   # own: the key in a state
+        least = first_least(state, own, dist, ncab * npart * nel)     # in key order
+        k, surface = np.r_[keys(state[least], 0, 0, 0) + own[least], -1], np.r_[dist[least], np.nan]   # -1: found by none
 
         hs = np.repeat(np.arange(len(hulls)), [len(h.dist) for h in hulls])
         hc, hp, he, hd = (np.concatenate([getattr(h, f) for h in hulls]) for f in ("cable", "part", "elem", "dist"))

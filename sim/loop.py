@@ -16,7 +16,7 @@ the checker and the recorder read from.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
 import mujoco
@@ -45,6 +45,9 @@ class StepState:
         and end ride on (the frames clamped ends hold; `checker.twist`).
       hull: the simulation's contacts of cables with concave parts' hulls
         (`sim.hullgap`), or None when no part is watched.
+      xpos, xmat: (nbody, 3) and (nbody, 9) the simulation's body poses at
+        `qpos` (model coordinates) for the detection model's reach test
+        (`Simulation.collide_many`), or None when it has none.
     """
 
     step: int
@@ -56,6 +59,8 @@ class StepState:
     qpos: np.ndarray
     end_rot: np.ndarray | None = None
     hull: HullRows | None = None
+    xpos: np.ndarray | None = None
+    xmat: np.ndarray | None = None
 
 
 class Simulation:
@@ -171,8 +176,9 @@ class Simulation:
         found = self.detect(d) if (contacts and self.detect_data is not None) else None
         end_rot = d.xmat[self._end_bodies].reshape(-1, 2, 3, 3)
         hull = self.hull.rows(d) if self.hull is not None else None   # the last step's contacts
+        bodies = (d.xpos.copy(), d.xmat.copy()) if self.reach is not None else (None, None)
         return StepState(step, step * self.timestep, cables, poses, found, d.energy.copy(), d.qpos.copy(),
-                         end_rot, hull)
+                         end_rot, hull, *bodies)
 
     def detect(self, d: mujoco.MjData) -> Contacts:
         """MuJoCo's contacts for the positions in `d`, from the detection model."""
@@ -187,37 +193,52 @@ class Simulation:
         """The detection model's collision pass at `qpos`: its contacts, unnamed."""
         return self.collide_many([qpos])[0]
 
-    def collide_many(self, qposes: list[np.ndarray]) -> list[RawContacts]:
+    def collide_many(self, qposes: list[np.ndarray], poses: tuple[np.ndarray, np.ndarray] | None = None
+                     ) -> list[RawContacts]:
         """:meth:`collide` at each of `qposes`. The concave meshes' surface
         patches no cable can reach at a state are left out of its pass
         (`sim.surfacereach`: MuJoCo could find no contact on them), the
-        reach of all the states tested at once."""
+        reach of all the states tested at once, from `poses`: (S, nbody, 3)
+        xpos and (S, nbody, 9) xmat at those qposes (the simulation's, as
+        `StepState` carries them: the two models share their kinematic tree,
+        so mj_kinematics gives both the same poses bit for bit); None: the
+        detection model's own, computed here.
+
+        The pass is mj_kinematics, mj_flex and mj_collision: the detection
+        model's flexes compute no edge Jacobians (`sim.mjspec.never_stepped`),
+        the one reader of mj_comPos's output there, so it is not run."""
         m2, d2 = self.built.detect, self.detect_data
         reach = self.reach
-        keep = None
+        each: Iterable[int] = range(len(qposes))
         if reach is not None:
-            xpos = np.empty((len(qposes), m2.nbody, 3))
-            xmat = np.empty((len(qposes), m2.nbody, 9))
-            for i, qpos in enumerate(qposes):
-                d2.qpos[:] = qpos
-                mujoco.mj_kinematics(m2, d2)
-                xpos[i], xmat[i] = d2.xpos, d2.xmat
-            keep = reach.reachable(xpos, xmat)
+            if poses is None:
+                poses = self.detect_poses(qposes)
+            each = reach.leave_out_each(reach.reachable(*poses))   # writes only the patches that change
         out = []
+        raw = self.reader.raw
         try:
-            for i, qpos in enumerate(qposes):
-                d2.qpos[:] = qpos
+            for i in each:
+                d2.qpos[:] = qposes[i]
                 mujoco.mj_kinematics(m2, d2)
-                if keep is not None:
-                    reach.leave_out(keep[i])      # writes only the patches that change
-                mujoco.mj_comPos(m2, d2)
                 mujoco.mj_flex(m2, d2)
                 mujoco.mj_collision(m2, d2)
-                out.append(self.reader.raw(d2))
+                out.append(raw(d2))
         finally:
             if reach is not None:
                 reach.restore()
         return out
+
+    def detect_poses(self, qposes: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """The detection model's body poses at each of `qposes` after
+        mj_kinematics: (S, nbody, 3) xpos and (S, nbody, 9) xmat."""
+        m2, d2 = self.built.detect, self.detect_data
+        xpos = np.empty((len(qposes), m2.nbody, 3))
+        xmat = np.empty((len(qposes), m2.nbody, 9))
+        for i, qpos in enumerate(qposes):
+            d2.qpos[:] = qpos
+            mujoco.mj_kinematics(m2, d2)
+            xpos[i], xmat[i] = d2.xpos, d2.xmat
+        return xpos, xmat
 
     def collision_seconds(self) -> float:
         """Wall seconds of the detection model's collision passes so far, by

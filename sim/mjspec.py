@@ -20,7 +20,8 @@ Two models come out of one scene (`compile_model`'s `detect`):
   nothing the scene did not ask for pushes back;
 - the detection model, with the same bodies and degrees of freedom (so the
   simulation's qpos can be copied into it) but every interaction enabled and
-  margins set from the clearance. It is never stepped: `mj_kinematics` +
+  margins set from the clearance. It is never stepped (`never_stepped`
+  leaves out what only stepping reads): `mj_kinematics`, `mj_flex` and
   `mj_collision` on the simulated positions give MuJoCo's own view of every
   pair the checker may report, exact (a large contact `gap` in the simulation
   model would make MuJoCo's general convex collider inexact, see SPEC); a
@@ -189,12 +190,27 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
         model = spec.compile()
         if detect:  # concave meshes as their true surface, not MuJoCo's hull (sim.detection_mesh)
             model = add_surfaces(spec, model, bits.cable)
+            never_stepped(model)
     except Exception as e:  # MuJoCo's compiler raises ValueError with its message
         raise SceneError(scene.path, "(model)", f"MuJoCo cannot compile the scene: {e}") from None
     own_bits = np.zeros((model.ngeom, 2), np.int64)
     for g, contype, conaff in own:
         own_bits[g.id] = contype, conaff
     return model, own_bits
+
+
+def never_stepped(model: mujoco.MjModel) -> None:
+    """Leave out of the detection model what only stepping reads: its flexes'
+    edge equality, edge stiffness and damping and their damping. mj_flex
+    then skips their edges' Jacobians (it computes them only for a flex with
+    one of these), and nothing else of the pass reads them: the vertices,
+    element boxes, trees, edge lengths and contacts are the same, and the
+    pass needs no mj_comPos (the Jacobians were the only reader of its
+    output there)."""
+    model.flex_edgeequality[:] = 0
+    model.flex_edgestiffness[:] = 0.0
+    model.flex_edgedamping[:] = 0.0
+    model.flex_damping[:] = 0.0
 
 
 def _hold_vertices(spec: mujoco.MjSpec, plan: CablePlan, frames: Frames, rest: bool) -> None:

@@ -97,7 +97,8 @@ exclusion windows (the total change of element lengths a skipped step allows).""
 class Detector(Protocol):
     """MuJoCo's own contacts for a state (see :class:`sim.loop.Simulation`)."""
 
-    def collide_many(self, qposes: list[np.ndarray]) -> list[RawContacts]: ...
+    def collide_many(self, qposes: list[np.ndarray], poses: tuple[np.ndarray, np.ndarray] | None = None
+                     ) -> list[RawContacts]: ...
 
     def read_many(self, raws: list[RawContacts]) -> list[Contacts]: ...
 
@@ -155,8 +156,8 @@ class StepChecks:
       config: method, spacing and clearance.
       only: an assembly path for ``--only`` (see :class:`sim.run.RunOptions`), or None.
       advance: use the skip rule.
-      detector: MuJoCo's detection (``collide_many(qposes)`` for a batch's
-        states, then ``read_many(raws)`` to name their contacts: a
+      detector: MuJoCo's detection (``collide_many(qposes, poses)`` for a
+        batch's states and their body poses, then ``read_many(raws)`` to name their contacts: a
         :class:`sim.loop.Simulation`), or None (no validation).
       lap: lap(stage) ends a timed stage ("check", "sim", "validate").
     """
@@ -277,7 +278,10 @@ class StepChecks:
         (complete on a proven-clear step too: every other pair is clear);
         the contacts reduced to pairs for all the states at once."""
         # MuJoCo's collision pass on the detection model is validation work, timed as such
-        raws = self.detector.collide_many([state.qpos for state in states])
+        # the body poses the simulation computed at each state, when it kept them
+        poses = ((np.stack([s.xpos for s in states]), np.stack([s.xmat for s in states]))
+                 if all(s.xpos is not None and s.xmat is not None for s in states) else None)
+        raws = self.detector.collide_many([state.qpos for state in states], poses)
         contacts = self.detector.read_many(raws)
         if self.hull_gaps is not None:
             self.hull_gaps.take(np.array([s.t for s in states]), [s.hull for s in states], contacts)

@@ -1,11 +1,14 @@
-"""Index expansion (checker.arrays) against the Python loop it replaces."""
+"""Index expansion (checker.arrays) against the Python loop it replaces, and
+each group's first least value against a sort."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from checker import arrays
 from checker.arrays import ranges, within
 
 groups = st.lists(st.tuples(st.integers(-1000, 1000), st.integers(0, 6)), max_size=12)
@@ -21,3 +24,26 @@ def test_within_and_ranges_are_the_concatenated_aranges(drawn):
     assert got_within.dtype == np.int64 and got_ranges.dtype == np.int64
     assert got_within.tolist() == want_within
     assert got_ranges.tolist() == want_ranges
+
+
+def _sorted_first_least(state, key, value):
+    order = np.lexsort((np.arange(len(value)), value, key, state))
+    s, k = state[order], key[order]
+    return order[np.r_[True, (s[1:] != s[:-1]) | (k[1:] != k[:-1])]] if len(order) else order
+
+
+@pytest.mark.parametrize("keys", [5, 300, arrays.TABLE_KEYS + 1])
+@pytest.mark.parametrize("states", [1, 40, arrays.TABLE_GROUPS])
+def test_first_least_is_each_groups_first_least_value_in_group_order(keys, states):
+    """Without a sort (small tables) or with one (large ones, or a value not
+    finite): the rows a sort by (state, key, value, index) puts first in each
+    group, ties in value (drawn from few values) to the first row."""
+    rng = np.random.default_rng(keys + states)
+    n = 2000
+    state = np.sort(rng.integers(0, states, n))
+    key = rng.integers(0, keys, n)
+    value = rng.integers(0, 4, n).astype(float)
+    assert np.array_equal(arrays.first_least(state, key, value, keys), _sorted_first_least(state, key, value))
+    value[7] = np.nan
+    assert np.array_equal(arrays.first_least(state, key, value, keys), _sorted_first_least(state, key, value))
+    assert len(arrays.first_least(state[:0], key[:0], value[:0], keys)) == 0

@@ -6,7 +6,7 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from checker.closest import point_segment, point_triangle, segment_segment, segment_triangle
+from checker.closest import point_segment, point_triangle, segment_parameter, segment_segment, segment_triangle
 
 pytestmark = pytest.mark.filterwarnings("error")
 
@@ -141,3 +141,11 @@ def test_segment_triangle_matches_sampling_bound(p0, p1, a, b, c):
 def test_point_segment_zero_length():
     d, t, c = point_segment(np.array([[1.0, 1, 1]]), np.zeros((1, 3)), np.zeros((1, 3)))
     assert d[0] == pytest.approx(np.sqrt(3)) and t[0] == 0
+
+
+def test_segment_parameter_is_point_segments_parameter_bit_for_bit():
+    rng = np.random.default_rng(3)
+    p, a, b = rng.normal(size=(3, 500, 3))
+    b[:20] = a[:20]                                   # zero-length segments: parameter 0
+    t = segment_parameter(p, a, b)
+    assert np.array_equal(t, point_segment(p, a, b)[1]) and (t[:20] == 0.0).all()

@@ -88,3 +88,37 @@ def test_cable_pairs_put_a_cable_first():
     for c in crossing + coil:
         assert [tuple(x) for x in zip(c.table.kinds[c.codes[:, 0]], c.table.names[c.codes[:, 1]],
                                       c.table.names[c.codes[:, 2]])] == list(zip(c.kind, c.a, c.b))
+
+
+def test_raw_contacts_are_mujocos_arrays_and_vertices_read_as_elements():
+    """What `raw` copies is MuJoCo's contact arrays as they are; `elem` gives
+    -2 - vertex where MuJoCo names a flex vertex (a cable on a plane), and
+    naming a batch of copies reads the same as naming each on its own."""
+    import mujoco
+    import numpy as np
+
+    from sim.contacts import ContactReader
+
+    scene = load_scene(SCENES / "coil_self.toml")        # a coil lying on a plane, touching itself
+    built = build(scene)
+    sim = Simulation(built)
+    sim.reset()
+    sim.settle()
+    qposes = [s.qpos for k, s in zip(range(40), sim.steps(contacts=False)) if k % 4 == 0]
+    raws = sim.collide_many(qposes)
+    m, d = built.detect, sim.detect_data
+    for qpos, raw in zip(qposes, raws):
+        d.qpos[:] = qpos
+        mujoco.mj_forward(m, d)
+        n = d.ncon
+        con = d.contact
+        assert np.array_equal(raw.geom, con.geom[:n]) and np.array_equal(raw.flex, con.flex[:n])
+        assert np.array_equal(raw.dist, con.dist[:n]) and np.array_equal(raw.pos, con.pos[:n])
+        vertex = (con.elem[:n] < 0) & (con.vert[:n] >= 0)
+        assert np.array_equal(raw.elem, np.where(vertex, -2 - con.vert[:n], con.elem[:n]))
+    assert any(len(r.dist) for r in raws)
+    reader = ContactReader(built)
+    one = [reader.read_many([r], built.origin)[0] for r in raws]
+    for a, b in zip(one, reader.read_many(raws, built.origin)):
+        assert all(np.array_equal(getattr(a, f), getattr(b, f))
+                   for f in ("kind", "a", "b", "elem_a", "elem_b", "dist", "pos", "codes"))

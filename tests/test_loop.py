@@ -85,3 +85,45 @@ def test_the_detection_models_collision_time_is_mujocos_timer_of_its_passes():
     assert 0.0 < sim.collision_seconds() <= wall
     assert Simulation(build(parse_scene(_door(contact=True), Path("/virtual/door.toml")), detect=False)
                       ).collision_seconds() == 0.0
+
+
+def _robot_cell(duration: float):
+    """The robot cell example (concave meshes seen as patches), shortened."""
+    import dataclasses
+
+    from sim.scene import load_scene
+    scene = load_scene(Path(__file__).resolve().parents[1] / "scenes" / "robot_cell.toml")
+    return dataclasses.replace(scene, duration=duration, settle=0.02)
+
+
+def test_the_simulations_body_poses_are_the_detection_models_bit_for_bit():
+    """The states carry the simulation's body poses; the detection model,
+    with the same kinematic tree, puts its bodies at the same poses bit for
+    bit at the same qpos, so the reach test may take them, and the pass
+    finds the same contacts with them, without them, and with every patch in."""
+    built = build(_robot_cell(0.04))
+    assert built.model.nbody == built.detect.nbody
+    sim = Simulation(built)
+    sim.reset()
+    sim.settle()
+    states = list(sim.steps(contacts=False))
+    m2, d2 = built.detect, sim.detect_data
+    for s in states:
+        d2.qpos[:] = s.qpos
+        mujoco.mj_kinematics(m2, d2)
+        assert np.array_equal(s.xpos, d2.xpos) and np.array_equal(s.xmat, d2.xmat)
+    qposes = [s.qpos for s in states]
+    poses = (np.stack([s.xpos for s in states]), np.stack([s.xmat for s in states]))
+    assert all(np.array_equal(a, b) for a, b in zip(poses, sim.detect_poses(qposes)))
+
+    def fields(raws):
+        return [[r.geom, r.flex, r.elem, r.dist, r.pos] for r in raws]
+
+    given, own = sim.collide_many(qposes, poses), sim.collide_many(qposes)
+    every = Simulation(built, reach=False).collide_many(qposes)
+    assert sum(len(r.dist) for r in given) > 0
+    for a, b, c in zip(fields(given), fields(own), fields(every)):
+        assert all(np.array_equal(x, y) and np.array_equal(x, z) for x, y, z in zip(a, b, c))
+    # a simulation without a reach test keeps no poses
+    assert next(Simulation(build(parse_scene(_door(contact=True), Path("/virtual/door.toml")))).steps(
+        contacts=False)).xpos is None

@@ -63,3 +63,49 @@ def test_set_step_moves_the_time_constants_with_the_step(tmp_path):
     assert np.all(m.flex_solref[:, 0] == contact_time_constant(2.5e-4))
     edges = m.eq_type == int(mujoco.mjtEq.mjEQ_FLEX)
     assert edges.any() and np.all(m.eq_solref[edges, 0] == edge_time_constant(2.5e-4))
+
+
+def test_the_detection_model_computes_no_edge_jacobians_and_finds_the_same_contacts():
+    """The detection model's flexes carry no edge equality, stiffness or
+    damping (`never_stepped`): mj_flex computes no edge Jacobian there, and
+    its pass without mj_comPos finds the contacts, bit for bit and in order,
+    of a pass with them and mj_comPos."""
+    import copy
+    import dataclasses
+    from pathlib import Path as P
+
+    from sim.loop import Simulation
+    from sim.scene import load_scene
+    scene = load_scene(P(__file__).resolve().parents[1] / "scenes" / "robot_cell.toml")
+    built = build(dataclasses.replace(scene, duration=0.04, settle=0.02))   # hoses on an arm, always in contact
+    m = built.detect
+    assert not m.flex_edgeequality.any() and not m.flex_damping.any()
+    assert not m.flex_edgestiffness.any() and not m.flex_edgedamping.any()
+    cables = [c.flex_id for c in built.cables]
+    assert built.model.flex_edgeequality[cables].all() and built.model.flex_damping[cables].any()
+    ref = copy.deepcopy(m)                     # as compiled before: the simulation model's edge settings
+    for f in ("flex_edgeequality", "flex_edgestiffness", "flex_edgedamping", "flex_damping"):
+        getattr(ref, f)[cables] = getattr(built.model, f)[cables]
+    sim = Simulation(built)
+    sim.reset()
+    sim.settle()
+    qposes = [s.qpos for k, s in enumerate(sim.steps(contacts=False)) if k % 4 == 0]
+    d, dr = mujoco.MjData(m), mujoco.MjData(ref)
+    found = 0
+    for qpos in qposes:
+        d.qpos[:], dr.qpos[:] = qpos, qpos
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_flex(m, d)
+        mujoco.mj_collision(m, d)
+        mujoco.mj_kinematics(ref, dr)
+        mujoco.mj_comPos(ref, dr)
+        mujoco.mj_flex(ref, dr)
+        mujoco.mj_collision(ref, dr)
+        assert not d.flexedge_J.any() and dr.flexedge_J.any()
+        assert np.array_equal(d.flexedge_length, dr.flexedge_length)
+        assert d.ncon == dr.ncon
+        n = d.ncon
+        for f in ("geom", "flex", "elem", "vert", "dist", "pos", "frame", "includemargin"):
+            assert np.array_equal(getattr(d.contact, f)[:n], getattr(dr.contact, f)[:n]), f
+        found += n
+    assert found

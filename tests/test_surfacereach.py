@@ -16,7 +16,14 @@ from sim.build import build
 from sim.detection_mesh import SURFACE_PREFIX, surface_geoms
 from sim.loop import Simulation
 from sim.scene import load_scene
-from sim.surfacereach import REACH_SLACK, REACH_TOLERANCES, SurfaceReach, oriented_boxes
+from sim.surfacereach import (
+    PIECE_LEVELS,
+    REACH_SLACK,
+    REACH_TOLERANCES,
+    SurfaceReach,
+    oriented_boxes,
+    pieces,
+)
 from tests.strategies import coords, rotations
 from tests.test_detection_mesh import POCKET_FLOOR, u_mesh
 
@@ -130,7 +137,9 @@ def test_a_far_surface_is_left_out_and_the_contacts_are_the_same(cell):
     far = _placed(built, q0, "near", start + [0.0, 0.0, -0.05], np.eye(3))
     far = _placed(built, far, "far", start, np.eye(3))
     qposes = qposes[:2] + [far] + qposes[2:]
-    assert [_reachable(sim, q).tolist().count(True) for q in qposes[1:4]] == [1, 2, 1]
+    # (10 mm below, the pocket's floor is 13 mm from the cable's end: beyond the
+    # contact distance, and the pieces' boxes leave the near U out too)
+    assert [_reachable(sim, q).tolist().count(True) for q in qposes[1:4]] == [0, 1, 1]
     found = sim.collide_many(qposes)
     assert [_key(a) for a in found] == [_key(b) for b in _unfiltered(sim, qposes)]
     assert len(found[3].dist) and len(found[2].dist) and not len(found[0].dist)   # contacts, and states without
@@ -157,8 +166,76 @@ def test_a_patch_left_out_is_beyond_the_contact_distance(patched, offset, turn, 
     tree of boxes: a patch left out is beyond MuJoCo's contact distance,
     and the contacts are those of every patch in."""
     _, sim = patched
-    assert len(sim.reach) == 32 and len(sim.reach._levels) == 5
+    assert len(sim.reach) == 32 and len(sim.reach._levels) == 5 + PIECE_LEVELS
     _left_out_beyond_contact(patched, offset, turn, carrier, carrier_turn, far)
+
+
+def _along(a, b, g, axes, lo, hi) -> np.ndarray:
+    """Segments (ends a, b, grown by g) that reach a box (along `axes`, lo,
+    hi) along its axes and their direction crossed with each axis."""
+    pa, pb = a @ axes.T, b @ axes.T
+    along = ~((np.minimum(pa, pb) - g > hi) | (np.maximum(pa, pb) + g < lo)).any(1)
+    w, mid = 0.5 * (pb - pa), 0.5 * (pa + pb) - 0.5 * (lo + hi)
+    for axis in np.eye(3):
+        cross = np.cross(w, axis)
+        extent = np.abs(cross) @ (0.5 * (hi - lo)) + g[:, 0] * np.linalg.norm(cross, axis=1)
+        along &= ~(np.abs((mid * cross).sum(1)) > extent)
+    return along
+
+
+def _direct(reach: SurfaceReach, m: mujoco.MjModel, xpos: np.ndarray, xmat: np.ndarray) -> np.ndarray:
+    """The reach test with neither the cull nor the tree: every segment
+    against every piece of every patch, its box in its body's frame, then
+    along the patch's and the piece's own axes and the segment's direction
+    crossed with them (a leaf's ancestors hold its box, so the tree prunes
+    nothing it would keep)."""
+    d = mujoco.MjData(m)
+    out = np.zeros((len(xpos), len(reach)), bool)
+    g = reach._grow[:, None]
+    for i, (x, r) in enumerate(zip(xpos, xmat)):
+        d.xpos[:], d.xmat[:] = x, r
+        mujoco.mj_flex(m, d)
+        verts = np.concatenate([np.arange(m.flex_vertadr[c], m.flex_vertadr[c] + m.flex_vertnum[c])
+                                for c in np.flatnonzero(m.flex_dim == 1)])
+        pts = d.flexvert_xpos[verts]
+        for p, patch in enumerate(reach.piece_patch):
+            body = reach.bodies[patch]
+            local = (pts - x[body]) @ r[body].reshape(3, 3)
+            a, b = local[reach._segs[:, 0]], local[reach._segs[:, 1]]
+            box = ~((np.minimum(a, b) - g > reach.piece_hi[p]) | (np.maximum(a, b) + g < reach.piece_lo[p])).any(1)
+            whole = _along(a, b, g, reach.axes[patch], reach.axis_lo[patch], reach.axis_hi[patch])
+            piece = _along(a, b, g, reach.piece_axes[p], reach.piece_axis_lo[p], reach.piece_axis_hi[p])
+            out[i, patch] |= (box & whole & piece).any()
+    return out
+
+
+def test_the_cull_and_the_tree_keep_the_patches_a_direct_test_keeps(patched):
+    """The carrier and the two Us at poses drawn around the cable's end, many
+    states at once: the world-frame cull of sphere pairs and the steps down
+    the tree keep exactly the patches that testing every segment against
+    every piece keeps (some states keep none, some many)."""
+    built, sim = patched
+    m, d = built.detect, sim.detect_data
+    q0 = built.qpos0
+    jnt = built.model.body_jntadr[mujoco.mj_name2id(built.model, mujoco.mjtObj.mjOBJ_BODY, "carrier")]
+    end = q0[int(built.model.jnt_qposadr[jnt]):][:3]
+    rng = np.random.default_rng(7)
+    xpos, xmat = [], []
+    for _ in range(150):
+        turns = [np.linalg.qr(rng.normal(size=(3, 3)))[0] for _ in range(3)]
+        turns = [t * np.sign(np.linalg.det(t)) for t in turns]
+        qpos = _placed(built, q0, "near", end + rng.uniform(-0.1, 0.1, 3), turns[0])
+        qpos = _placed(built, qpos, "far", end + rng.uniform(-0.1, 0.1, 3), turns[1])
+        qpos = _placed(built, qpos, "carrier", end + rng.uniform(-0.05, 0.05, 3), turns[2])
+        d.qpos[:] = qpos
+        mujoco.mj_kinematics(m, d)
+        xpos.append(d.xpos.copy())
+        xmat.append(d.xmat.copy())
+    xpos, xmat = np.array(xpos), np.array(xmat)
+    got = sim.reach.reachable(xpos, xmat)
+    kept = got.sum(axis=1)
+    assert (kept == 0).any() and kept.max() >= 4
+    assert np.array_equal(got, _direct(sim.reach, m, xpos, xmat))
 
 
 def test_patches_are_left_out_one_by_one(patched):
@@ -351,3 +428,27 @@ def test_the_bound_keeps_every_surface_mujoco_touches_and_leaves_out_what_lies_b
         assert not kept
     if above < -1e-6:
         assert d.ncon                        # MuJoCo touches it: the case above is met
+
+
+@pytest.mark.parametrize("levels", [0, 1, 3])
+def test_every_triangle_lies_in_a_piece_of_its_patch(cell, levels):
+    """`pieces`: each triangle of a patch lies wholly in one of its patch's
+    pieces, in its box in the body's frame and along its axes; a patch has
+    2**levels pieces (halves of equal counts of triangles), fewer only when
+    it has fewer triangles."""
+    built, sim = cell
+    m, flexes = built.detect, sim.reach.flexes
+    patch, node, lo, hi, axes, axis_lo, axis_hi = pieces(m, flexes, levels)
+    assert np.bincount(patch, minlength=len(flexes)).max() <= 2 ** levels and (node < 2 ** levels).all()
+    eps = 1e-12
+    for f, flex in enumerate(flexes.tolist()):
+        verts = m.flex_vert[m.flex_vertadr[flex]:][:m.flex_vertnum[flex]]
+        tri = verts[m.flex_elem[m.flex_elemdataadr[flex]:][:3 * m.flex_elemnum[flex]].reshape(-1, 3)]
+        mine = np.flatnonzero(patch == f)
+        inside = np.zeros((len(tri), len(mine)), bool)
+        for k, p in enumerate(mine.tolist()):
+            along = tri @ axes[p].T
+            inside[:, k] = (((tri >= lo[p] - eps) & (tri <= hi[p] + eps)).all(axis=(1, 2))
+                            & ((along >= axis_lo[p] - eps) & (along <= axis_hi[p] + eps)).all(axis=(1, 2)))
+        assert inside.any(axis=1).all()
+        assert len(mine) == min(2 ** levels, len(tri))          # halves of equal counts: none empty
