@@ -13,7 +13,7 @@ running a 5 s pick-and-place. One run, recording on, gives side by side
 - hard events of a cable against a part riding the body one of its ends or
   clips is held by (its clamp's own link);
 - agreement with MuJoCo's contacts and the disagreements' reasons;
-- MuJoCo's own collision pass on the detection model (its timer, inside
+- MuJoCo's own collision pass on the detection model (its CPU time, inside
   the validation stage): validation's floor, and the ratio check +
   validation + recording would reach were the rest of validation free, or
   were all our own work free (MuJoCo's collision pass alone);

@@ -101,7 +101,7 @@ class Timing:
     CPU time of the thread that ran it (the simulation may step ahead on a
     thread of its own, `sim.ahead`: stages overlap, and waiting for the
     other side is no stage's time); `collision`: MuJoCo's own collision
-    passes on the detection model (its timer), a part of the validate stage
+    passes on the detection model (their CPU time), a part of the validate stage
     (what validation costs at least), or None when the run does not
     validate; `loop`: the wall-clock time of the step loop (simulating,
     checking, validating, the wear map and the recording to its close: the
