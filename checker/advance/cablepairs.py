@@ -4,7 +4,10 @@ After a full check, the gaps of cable pairs are kept per near element pair
 (one cable, within ``2 BLOCK`` elements: also proven apart by the chord
 bound at the state itself), per pair of body centres that candidates are
 charged to, and per pair of blocks of ``BLOCK`` elements for everything
-else (their boxes at the start, and at the state itself). Pairs whose
+else (their boxes at the start, and at the state itself; or at the state
+itself a separating axis between every two of their elements: two leads
+side by side turning together stay apart along the line between them
+while their oblique blocks' boxes overlap). Pairs whose
 condition fails can be named (:meth:`CablePairGaps.failing`) and left to
 the caller (:meth:`CablePairGaps.promote`). :meth:`CablePairGaps.clear`
 tests many states at once.
@@ -27,7 +30,7 @@ from checker.advance.common import (
     row_norm3,
 )
 from checker.cable import self_pair_window
-from checker.closest import row_norm
+from checker.closest import row_norm, segment_segment
 from checker.interference.hits import CableCandidates
 
 
@@ -347,7 +350,8 @@ class CablePairGaps:
         holds its blocks'; group pairs whose least gap exceeds the spread
         pass unlooked), one by one only in group pairs that do not pass
         whole, the boxes at this state only for block pairs failing the
-        box, and over runs of states of doubling length."""
+        box, the axes only for those still failing, and over runs of
+        states of doubling length."""
         n_s = len(dcc)
         ok = np.ones(n_s, bool)
         easy = diag < self._g_min_nb               # every relative motion is below every such gap
@@ -490,7 +494,43 @@ class CablePairGaps:
                 a, b = bi[bad], bj[bad]
                 sep = np.maximum(np.maximum(lo[b] - hi[a], lo[a] - hi[b]), 0.0)
                 blk_ok[bad] |= row_norm3(sep) > self._blk_rad[a] + self._blk_rad[b]
+                # or apart now by a separating axis between every two of their elements
+                bad = bad[~blk_ok[bad].all(axis=1)]
+                if len(bad):
+                    a, b = bi[bad], bj[bad]
+                    blk_ok[bad] |= self._axes_gap(x, a, b) > self._blk_rad[a] + self._blk_rad[b]
         return bi, bj, ~blk_ok
+
+    def _axes_gap(self, x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """(M, S): a lower bound on the distance between any place of block
+        a and any of block b (M,) at each state of x (N, 3, S): for every
+        two of their elements, the gap of their projections on the unit
+        vector between their closest points (package docstring, *axes*);
+        -inf for a block without elements."""
+        k = np.arange(self.BLOCK)
+        ea = self._blk_start[a][:, None] + k                                     # (M, K) elements
+        eb = self._blk_start[b][:, None] + k
+        ok = (ea < self._blk_last[a][:, None])[:, :, None] & (eb < self._blk_last[b][:, None])[:, None, :]
+        m, i, j = np.nonzero(ok)                                                 # m ascending
+        s = x.shape[2]
+        out = np.full((len(a), s), -np.inf)
+        if not len(m):
+            return out
+        e, f = ea[m, i], eb[m, j]
+
+        def rows(v: np.ndarray) -> np.ndarray:                                   # (P, 3, S) -> (P S, 3)
+            return np.ascontiguousarray(np.transpose(v, (0, 2, 1))).reshape(-1, 3)
+
+        p0, p1, q0, q1 = rows(x[e]), rows(x[e + 1]), rows(x[f]), rows(x[f + 1])
+        _, _, _, cp, cq = segment_segment(p0, p1, q0, q1)
+        v = cq - cp
+        length = row_norm(v)
+        n = v / np.where(length > 0.0, length, 1.0)[:, None]                    # 0 where they touch: gap 0
+        gap = (np.minimum(np.einsum("ij,ij->i", n, q0), np.einsum("ij,ij->i", n, q1))
+               - np.maximum(np.einsum("ij,ij->i", n, p0), np.einsum("ij,ij->i", n, p1))).reshape(len(m), s)
+        first = np.flatnonzero(np.r_[True, m[1:] != m[:-1]])
+        out[m[first]] = np.minimum.reduceat(gap, first, axis=0)
+        return out
 
     def _block_boxes(self, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Componentwise least and largest of v (N, 3, S) over each block's
