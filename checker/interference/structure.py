@@ -149,10 +149,11 @@ def point_distances(tab: PartTable, pk: np.ndarray, loc: np.ndarray, face_plane:
                 sk = sel[grp == g]
                 shape = tab.mesh_shapes[g]
                 lim = None if limit is None else limit[sk]
+                lower = None
                 if lim is not None and group is not None and not face_plane:
                     # each group's most promising point (least upper bound)
                     # exactly first: the others then need be exact only below it
-                    _, hi = distance_bounds(shape, loc[sk])
+                    lower, hi = distance_bounds(shape, loc[sk])
                     ids, inv = np.unique(group[sk], return_inverse=True)
                     o = np.lexsort((hi, inv))
                     lead = o[np.r_[True, inv[o][1:] != inv[o][:-1]]]
@@ -163,8 +164,9 @@ def point_distances(tab: PartTable, pk: np.ndarray, loc: np.ndarray, face_plane:
                     lim = np.minimum(lim, least[inv])
                     rest = np.ones(len(sk), bool)
                     rest[lead] = False
-                    sk, lim = sk[rest], lim[rest]
-                d[sk] = face_plane_distance(shape, loc[sk]) if face_plane else signed_distance(shape, loc[sk], lim)[0]
+                    sk, lim, lower = sk[rest], lim[rest], lower[rest]
+                d[sk] = face_plane_distance(shape, loc[sk]) if face_plane else \
+                    signed_distance(shape, loc[sk], lim, lower)[0]
         elif face_plane:
             d[sel] = face_plane_distance_batch(stype, tab.size.take(pk.take(sel), axis=0), loc.take(sel, axis=0))
         else:
