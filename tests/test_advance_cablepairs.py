@@ -375,7 +375,7 @@ def test_axes_gap_bounds_every_two_places(cables, t):
     gaps._ensure_blocks()
     nb = len(gaps._blk_start)
     a, b = (x.ravel() for x in np.meshgrid(np.arange(nb), np.arange(nb), indexing="ij"))
-    got = gaps._axes_gap(pts[:, :, None], a, b)[:, 0]
+    got = gaps._axes_gap(pts[:, :, None], a, b, np.zeros(len(a), np.int64))
     u = np.concatenate([[0.0, 0.5, 1.0], t])
     for m in range(len(a)):
         ea = np.arange(gaps._blk_start[a[m]], gaps._blk_last[a[m]])
@@ -396,5 +396,5 @@ def test_axes_gap_bounds_every_two_places(cables, t):
     adv.start(np.concatenate(cross), _NO_PARTS, checker.check_with_gaps(
         [CableState(f"c{k}", c, _R) for k, c in enumerate(cross)]).gaps, (z, z), np.zeros(0))
     adv._cable_gaps._ensure_blocks()
-    gap = adv._cable_gaps._axes_gap(np.concatenate(cross)[:, :, None], np.array([0]), np.array([1]))
-    assert abs(gap[0, 0] - 0.03) < 1e-12
+    gap = adv._cable_gaps._axes_gap(np.concatenate(cross)[:, :, None], np.array([0]), np.array([1]), np.array([0]))
+    assert abs(gap[0] - 0.03) < 1e-12

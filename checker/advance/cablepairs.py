@@ -494,42 +494,39 @@ class CablePairGaps:
                 a, b = bi[bad], bj[bad]
                 sep = np.maximum(np.maximum(lo[b] - hi[a], lo[a] - hi[b]), 0.0)
                 blk_ok[bad] |= row_norm3(sep) > self._blk_rad[a] + self._blk_rad[b]
-                # or apart now by a separating axis between every two of their elements
-                bad = bad[~blk_ok[bad].all(axis=1)]
-                if len(bad):
-                    a, b = bi[bad], bj[bad]
-                    blk_ok[bad] |= self._axes_gap(x, a, b) > self._blk_rad[a] + self._blk_rad[b]
+                # or apart now by a separating axis between every two of
+                # their elements, at the states the boxes leave failing
+                r, at = np.nonzero(~blk_ok[bad])
+                if len(r):
+                    a, b = bi[bad[r]], bj[bad[r]]
+                    gap = self._axes_gap(x, a, b, at)
+                    blk_ok[bad[r], at] = gap > (self._blk_rad[a] + self._blk_rad[b])[:, 0]
         return bi, bj, ~blk_ok
 
-    def _axes_gap(self, x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """(M, S): a lower bound on the distance between any place of block
-        a and any of block b (M,) at each state of x (N, 3, S): for every
-        two of their elements, the gap of their projections on the unit
-        vector between their closest points (package docstring, *axes*);
-        -inf for a block without elements."""
+    def _axes_gap(self, x: np.ndarray, a: np.ndarray, b: np.ndarray, at: np.ndarray) -> np.ndarray:
+        """(M,): a lower bound on the distance between any place of block
+        a and any of block b (M,) at state ``at`` (M,) of x (N, 3, S): for
+        every two of their elements, the gap of their projections on the
+        unit vector between their closest points (package docstring,
+        *axes*); -inf for a block without elements."""
         k = np.arange(self.BLOCK)
         ea = self._blk_start[a][:, None] + k                                     # (M, K) elements
         eb = self._blk_start[b][:, None] + k
         ok = (ea < self._blk_last[a][:, None])[:, :, None] & (eb < self._blk_last[b][:, None])[:, None, :]
         m, i, j = np.nonzero(ok)                                                 # m ascending
-        s = x.shape[2]
-        out = np.full((len(a), s), -np.inf)
+        out = np.full(len(a), -np.inf)
         if not len(m):
             return out
-        e, f = ea[m, i], eb[m, j]
-
-        def rows(v: np.ndarray) -> np.ndarray:                                   # (P, 3, S) -> (P S, 3)
-            return np.ascontiguousarray(np.transpose(v, (0, 2, 1))).reshape(-1, 3)
-
-        p0, p1, q0, q1 = rows(x[e]), rows(x[e + 1]), rows(x[f]), rows(x[f + 1])
+        e, f, s = ea[m, i], eb[m, j], np.asarray(at, np.int64)[m]
+        p0, p1, q0, q1 = x[e, :, s], x[e + 1, :, s], x[f, :, s], x[f + 1, :, s]   # (P, 3) each
         _, _, _, cp, cq = segment_segment(p0, p1, q0, q1)
         v = cq - cp
         length = row_norm(v)
         n = v / np.where(length > 0.0, length, 1.0)[:, None]                    # 0 where they touch: gap 0
         gap = (np.minimum(np.einsum("ij,ij->i", n, q0), np.einsum("ij,ij->i", n, q1))
-               - np.maximum(np.einsum("ij,ij->i", n, p0), np.einsum("ij,ij->i", n, p1))).reshape(len(m), s)
+               - np.maximum(np.einsum("ij,ij->i", n, p0), np.einsum("ij,ij->i", n, p1)))
         first = np.flatnonzero(np.r_[True, m[1:] != m[:-1]])
-        out[m[first]] = np.minimum.reduceat(gap, first, axis=0)
+        out[m[first]] = np.minimum.reduceat(gap, first)
         return out
 
     def _block_boxes(self, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
