@@ -376,6 +376,10 @@ def test_axes_gap_bounds_every_two_places(cables, t):
     nb = len(gaps._blk_start)
     a, b = (x.ravel() for x in np.meshgrid(np.arange(nb), np.arange(nb), indexing="ij"))
     got = gaps._axes_gap(pts[:, :, None], a, b, np.zeros(len(a), np.int64))
+    # with ``enough``, the spheres alone where they suffice: still a lower bound, the same verdict
+    enough = np.abs(t[0]) * 0.05 * np.ones(len(a))
+    cheap = gaps._axes_gap(pts[:, :, None], a, b, np.zeros(len(a), np.int64), enough)
+    assert np.array_equal(cheap > enough, got > enough) and np.all(cheap <= got)
     u = np.concatenate([[0.0, 0.5, 1.0], t])
     for m in range(len(a)):
         ea = np.arange(gaps._blk_start[a[m]], gaps._blk_last[a[m]])
@@ -388,7 +392,7 @@ def test_axes_gap_bounds_every_two_places(cables, t):
         places = np.sqrt(((pa[:, None] - pb[None]) ** 2).sum(axis=2)).min()
         e, f = np.repeat(ea, len(eb)), np.tile(eb, len(ea))
         seg = segment_segment(pts[e], pts[e + 1], pts[f], pts[f + 1])[0].min()
-        assert got[m] <= min(places, seg) + 1e-12
+        assert got[m] <= min(places, seg) + 1e-12 and cheap[m] <= min(places, seg) + 1e-12
     # two elements meeting at right angles 30 mm apart: the gap is their distance
     cross = [_line([0.0, 0, 0], [0.04, 0, 0], 5), _line([0.02, -0.02, 0.03], [0.02, 0.02, 0.03], 5)]
     adv = Advancement(np.array([0, 5, 10]), config.spacing * np.full(2, _R), np.zeros(0), _CLEAR, _STRETCH,

@@ -499,16 +499,21 @@ class CablePairGaps:
                 r, at = np.nonzero(~blk_ok[bad])
                 if len(r):
                     a, b = bi[bad[r]], bj[bad[r]]
-                    gap = self._axes_gap(x, a, b, at)
-                    blk_ok[bad[r], at] = gap > (self._blk_rad[a] + self._blk_rad[b])[:, 0]
+                    need = (self._blk_rad[a] + self._blk_rad[b])[:, 0]
+                    blk_ok[bad[r], at] = self._axes_gap(x, a, b, at, need) > need
         return bi, bj, ~blk_ok
 
-    def _axes_gap(self, x: np.ndarray, a: np.ndarray, b: np.ndarray, at: np.ndarray) -> np.ndarray:
+    def _axes_gap(self, x: np.ndarray, a: np.ndarray, b: np.ndarray, at: np.ndarray,
+                  enough: np.ndarray | None = None) -> np.ndarray:
         """(M,): a lower bound on the distance between any place of block
         a and any of block b (M,) at state ``at`` (M,) of x (N, 3, S): for
-        every two of their elements, the gap of their projections on the
-        unit vector between their closest points (package docstring,
-        *axes*); -inf for a block without elements."""
+        every two of their elements, the larger of the gap of their
+        midpoints' spheres (half an element's length holds its points) and
+        the gap of their projections on the unit vector between their
+        closest points (package docstring, *axes*); -inf for a block
+        without elements. ``enough`` (M,): element pairs whose spheres are
+        farther apart than that skip the axes (the spheres' gap is bound
+        enough)."""
         k = np.arange(self.BLOCK)
         ea = self._blk_start[a][:, None] + k                                     # (M, K) elements
         eb = self._blk_start[b][:, None] + k
@@ -519,12 +524,17 @@ class CablePairGaps:
             return out
         e, f, s = ea[m, i], eb[m, j], np.asarray(at, np.int64)[m]
         p0, p1, q0, q1 = x[e, :, s], x[e + 1, :, s], x[f, :, s], x[f + 1, :, s]   # (P, 3) each
-        _, _, _, cp, cq = segment_segment(p0, p1, q0, q1)
-        v = cq - cp
-        length = row_norm(v)
-        n = v / np.where(length > 0.0, length, 1.0)[:, None]                    # 0 where they touch: gap 0
-        gap = (np.minimum(np.einsum("ij,ij->i", n, q0), np.einsum("ij,ij->i", n, q1))
-               - np.maximum(np.einsum("ij,ij->i", n, p0), np.einsum("ij,ij->i", n, p1)))
+        gap = row_norm(0.5 * ((q0 + q1) - (p0 + p1))) - 0.5 * (row_norm(p1 - p0) + row_norm(q1 - q0))
+        axes = np.flatnonzero(gap <= enough[m]) if enough is not None else np.arange(len(m))
+        if len(axes):
+            p0, p1, q0, q1 = p0[axes], p1[axes], q0[axes], q1[axes]
+            _, _, _, cp, cq = segment_segment(p0, p1, q0, q1)
+            v = cq - cp
+            length = row_norm(v)
+            n = v / np.where(length > 0.0, length, 1.0)[:, None]                # 0 where they touch: gap 0
+            proj = (np.minimum(np.einsum("ij,ij->i", n, q0), np.einsum("ij,ij->i", n, q1))
+                    - np.maximum(np.einsum("ij,ij->i", n, p0), np.einsum("ij,ij->i", n, p1)))
+            gap[axes] = np.maximum(gap[axes], proj)
         first = np.flatnonzero(np.r_[True, m[1:] != m[:-1]])
         out[m[first]] = np.minimum.reduceat(gap, first)
         return out
