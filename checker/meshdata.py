@@ -133,13 +133,15 @@ def _reach_levels(centroids: np.ndarray, face_reach: np.ndarray, reach: float,
 
 
 def sd_mesh(m: MeshData, p: np.ndarray, limit: np.ndarray | None = None,
-             grid: bool = True) -> tuple[np.ndarray, np.ndarray]:
+             grid: bool = True, lower: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance and closest points of a mesh; ``grid`` False: the
-    k-d tree alone, for one-off queries that would only fill the bound grid."""
+    k-d tree alone, for one-off queries that would only fill the bound grid;
+    ``lower``: with ``limit``, the bound grid's lower bounds at p when the
+    caller has them already (:meth:`BoundGrid.bounds`)."""
     if len(p) == 0:
         return np.zeros(0), np.zeros((0, 3))
     if limit is not None:
-        lb = m.bound.lower(m, p)
+        lb = m.bound.lower(m, p) if lower is None else lower
         far = lb > limit + 1e-9 * (np.abs(limit) + m.bound.h)   # the caller's own comparison stays safe
         if far.any():
             d = lb.copy()

@@ -218,8 +218,8 @@ _MESH_MEMO = threading.local()
 """``shapes``: this thread's meshes by content, an OrderedDict (least recent first)."""
 
 
-def signed_distance(shape: Shape, points: np.ndarray,
-                    limit: np.ndarray | float | None = None) -> tuple[np.ndarray, np.ndarray]:
+def signed_distance(shape: Shape, points: np.ndarray, limit: np.ndarray | float | None = None,
+                    lower: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance from points to a shape's surface, negative inside.
 
     Args:
@@ -231,6 +231,9 @@ def signed_distance(shape: Shape, points: np.ndarray,
             (>= limit) and a NaN closest point instead of searching its
             nearest triangle (:class:`BoundGrid`). Points below the limit,
             and every primitive, get the exact answer.
+        lower: with ``limit`` on a mesh, the lower bounds of
+            :func:`distance_bounds` at the points when the caller has them
+            (not computed again).
 
     Returns:
         d: (n,) signed distance (unsigned for open meshes).
@@ -238,7 +241,8 @@ def signed_distance(shape: Shape, points: np.ndarray,
     """
     p = np.asarray(points, dtype=float).reshape(-1, 3)
     if shape.type is ShapeType.MESH:
-        return sd_mesh(shape.mesh, p, None if limit is None else np.broadcast_to(np.asarray(limit, float), len(p)))
+        return sd_mesh(shape.mesh, p, None if limit is None else np.broadcast_to(np.asarray(limit, float), len(p)),
+                       lower=lower)
     return signed_distance_batch(shape.type, np.broadcast_to(shape.size, (len(p), len(shape.size))), p)
 
 

@@ -319,17 +319,25 @@ class StepChecks:
                                         self._rest_length, self._bend_limit_nan, self.config.clearance)
             for i, recs in zip(flagged.tolist(), found):
                 records[i] = recs
-        if len(self._active[0]) or len(self._cable_active[0]):
-            # the points of the elements next to the active centres alone, once for both
-            keep = around_centres(np.concatenate([self._active[0], *self._cable_active]), pts.shape[1])
+        if len(self._active[0]):
+            # the active pairs state by state where their elements come near
+            # the part's box, and the points of those elements alone
+            checked_poses = poses[:, self.checked_parts]
+            si, ci, pi = self.checker.near_entries(pts, checked_poses, self._offsets, self._radii, self._active)
+            if len(si):
+                keep = np.zeros(pts.shape[:2], bool)
+                for shift in (-1, 0, 1):
+                    keep[si, np.clip(ci + shift, 0, pts.shape[1] - 1)] = True
+                dense = self.checker.densify_many(pts, self._offsets, self._radii, self._rest, keep)
+                found = self.checker.structure_many(names, self._radii, dense, checked_poses,
+                                                    self.exclusions, (si, ci, pi))
+                records = [a + b for a, b in zip(found, records)]
+        if len(self._cable_active[0]):
+            # the points of the elements next to the active centres alone
+            keep = around_centres(np.concatenate(self._cable_active), pts.shape[1])
             dense = self.checker.densify_many(pts, self._offsets, self._radii, self._rest, keep)
-            if len(self._active[0]):
-                found = self.checker.structure_many(names, self._radii, dense, poses[:, self.checked_parts],
-                                                    self.exclusions, self._active)
-                records = [a + b for a, b in zip(found, records)]
-            if len(self._cable_active[0]):
-                found = self.checker.cable_pairs_many(names, self._radii, dense, self._cable_active)
-                records = [a + b for a, b in zip(found, records)]
+            found = self.checker.cable_pairs_many(names, self._radii, dense, self._cable_active)
+            records = [a + b for a, b in zip(found, records)]
         active = self.part_checker.check_pairs_many(poses, *self._part_active) if len(self._part_active[0]) \
             else [[] for _ in range(n)]
         same = self.part_checker.replay_many(poses) if self.part_checker.has_same_body_records \

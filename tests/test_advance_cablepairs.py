@@ -9,8 +9,12 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from strategies import coords, polylines
 
 from checker.advance import Advancement
+from checker.closest import segment_segment
 from checker.interference import Checker
 from checker.records import PairType
 from checker.scene_state import CableState, CheckConfig
@@ -320,3 +324,81 @@ def test_blocks_stay_on_one_cable():
     cable = np.searchsorted(offsets, start, "right") - 1
     assert np.all(last < offsets[cable + 1]) and np.all(last - start <= gaps.BLOCK) and np.all(last > start)
     assert start.tolist() == [0, 4, 8, 12, 16, 20, 24, 28, 32, 36, 41, 44, 48, 52]
+
+
+def test_parallel_leads_turning_together_apart_by_the_axes():
+    """Two leads side by side turning together far about a distant axis:
+    their blocks' relative displacements pass every gap and their oblique
+    blocks' boxes overlap, yet every two of their elements are apart along
+    the line between their closest points (the axes), so the states are
+    proven clear; pushed within the clearance of each other, never."""
+    a = _line([0.0, 0, 0], [0.4, 0, 0], 41)                  # 10 mm elements
+    b = _line([0.0, 0.05, 0], [0.4, 0.05, 0], 41)            # 25 mm past the clearance: no candidate
+    checker, adv, _, offsets = _cable_adv([a, b])
+    pts = np.concatenate([a, b])
+    gaps = adv._cable_gaps
+    for angle in (0.6, 0.8, -0.7):
+        turned = _turn(pts, np.array([1.0, -1.0, 0.0]), angle)
+        assert not _pairwise(checker, turned, offsets)
+        assert adv.proven_clear(turned, _NO_PARTS)
+        x = turned[:, :, None]
+        bi, bj, bad = gaps._block_fails(x, x - pts[:, :, None], 1.0)
+        assert len(bi) and not bad.any()                      # block pairs tested, all apart
+        # the boxes alone (at the state) leave some of them failing
+        lo, hi = gaps._block_boxes(x)
+        sep = np.maximum(np.maximum(lo[bj] - hi[bi], lo[bi] - hi[bj]), 0.0)
+        assert (np.sqrt((sep ** 2).sum(axis=1))[:, 0] <= (gaps._blk_rad[bi] + gaps._blk_rad[bj])[:, 0]).any()
+    close = pts.copy()
+    close[41:] -= [0.0, 0.05 - 2 * _R - _CLEAR + 0.001, 0.0]      # 1 mm inside the clearance
+    turned = _turn(close, np.array([1.0, -1.0, 0.0]), 0.7)
+    assert _pairwise(checker, turned, offsets) and not adv.proven_clear(turned, _NO_PARTS)
+
+
+@settings(max_examples=300, deadline=None)
+@given(cables=st.lists(polylines(min_points=2, max_points=14, step=0.02), min_size=1, max_size=2),
+       t=coords(9, 0.0, 1.0))
+def test_axes_gap_bounds_every_two_places(cables, t):
+    """The axes' gap of two blocks never exceeds the distance of any two
+    places on them (brute force: places at drawn and fixed parameters on
+    every two of their elements, and the closest points of every two
+    elements); on elements meeting at an angle it is their distance."""
+    config = CheckConfig(clearance=_CLEAR)
+    checker = Checker([], config, horizon=_H, stretch=_STRETCH)
+    offsets = np.concatenate([[0], np.cumsum([len(c) for c in cables])])
+    radii = np.full(len(cables), _R)
+    adv = Advancement(offsets, config.spacing * radii, np.zeros(0), _CLEAR, _STRETCH, radii)
+    pts = np.concatenate(cables)
+    z = np.zeros(0, np.int64)
+    adv.start(pts, _NO_PARTS, checker.check_with_gaps([CableState(f"c{k}", c, _R) for k, c in enumerate(cables)]).gaps,
+              (z, z), np.zeros(0))
+    gaps = adv._cable_gaps
+    gaps._ensure_blocks()
+    nb = len(gaps._blk_start)
+    a, b = (x.ravel() for x in np.meshgrid(np.arange(nb), np.arange(nb), indexing="ij"))
+    got = gaps._axes_gap(pts[:, :, None], a, b, np.zeros(len(a), np.int64))
+    # with ``enough``, the spheres alone where they suffice: still a lower bound, the same verdict
+    enough = np.abs(t[0]) * 0.05 * np.ones(len(a))
+    cheap = gaps._axes_gap(pts[:, :, None], a, b, np.zeros(len(a), np.int64), enough)
+    assert np.array_equal(cheap > enough, got > enough) and np.all(cheap <= got)
+    u = np.concatenate([[0.0, 0.5, 1.0], t])
+    for m in range(len(a)):
+        ea = np.arange(gaps._blk_start[a[m]], gaps._blk_last[a[m]])
+        eb = np.arange(gaps._blk_start[b[m]], gaps._blk_last[b[m]])
+        if not len(ea) or not len(eb):
+            assert got[m] == -np.inf
+            continue
+        pa = (pts[ea][:, None] * (1 - u)[:, None] + pts[ea + 1][:, None] * u[:, None]).reshape(-1, 3)
+        pb = (pts[eb][:, None] * (1 - u)[:, None] + pts[eb + 1][:, None] * u[:, None]).reshape(-1, 3)
+        places = np.sqrt(((pa[:, None] - pb[None]) ** 2).sum(axis=2)).min()
+        e, f = np.repeat(ea, len(eb)), np.tile(eb, len(ea))
+        seg = segment_segment(pts[e], pts[e + 1], pts[f], pts[f + 1])[0].min()
+        assert got[m] <= min(places, seg) + 1e-12 and cheap[m] <= min(places, seg) + 1e-12
+    # two elements meeting at right angles 30 mm apart: the gap is their distance
+    cross = [_line([0.0, 0, 0], [0.04, 0, 0], 5), _line([0.02, -0.02, 0.03], [0.02, 0.02, 0.03], 5)]
+    adv = Advancement(np.array([0, 5, 10]), config.spacing * np.full(2, _R), np.zeros(0), _CLEAR, _STRETCH,
+                      np.full(2, _R))
+    adv.start(np.concatenate(cross), _NO_PARTS, checker.check_with_gaps(
+        [CableState(f"c{k}", c, _R) for k, c in enumerate(cross)]).gaps, (z, z), np.zeros(0))
+    adv._cable_gaps._ensure_blocks()
+    gap = adv._cable_gaps._axes_gap(np.concatenate(cross)[:, :, None], np.array([0]), np.array([1]), np.array([0]))
+    assert abs(gap[0] - 0.03) < 1e-12

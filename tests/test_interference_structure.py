@@ -150,3 +150,84 @@ def test_active_points_on_densified_states():
     centre = dense.src % n
     kk, want_it = np.nonzero(mark[:, centre] | (~dense.own & mark[:, centre + 1]))
     assert len(want_it) and np.array_equal(it, want_it) and np.array_equal(k, parts_u[kk])
+
+
+@settings(max_examples=60, deadline=None)
+@given(cable_sets(max_cables=3, max_points=10), part_sets(max_parts=4), st.data())
+def test_near_entries_drop_only_entries_no_point_of_which_passes_the_box(cables, parts, data):
+    """near_entries against brute force: every (state, centre, part) entry
+    it drops has no discrete point (of every state's full densification)
+    inside the part's local box grown by the cable radius and the
+    clearance; and structure_many on the entries it keeps, with the
+    points of their elements alone, gives every state's records of all
+    the entries, bits and places included."""
+    from checker.interference.discrete import around_centres
+    from checker.interference.structure import active_points
+
+    cfg = CheckConfig(clearance=data.draw(st.floats(0.0, 0.02)))
+    checker = Checker(parts, cfg)
+    n_s = data.draw(st.integers(1, 3))
+    moves = np.stack([np.concatenate([c.points + data.draw(coords(c.points.shape, -0.02, 0.02)) for c in cables])
+                      for _ in range(n_s)])
+    pose_sets = np.stack([[data.draw(poses()) @ p.pose if data.draw(st.booleans()) else p.pose for p in parts]
+                          for _ in range(n_s)])
+    offsets = np.concatenate([[0], np.cumsum([len(c.points) for c in cables])])
+    radii = np.array([c.radius for c in cables])
+    n = offsets[-1]
+    centres = np.repeat(np.arange(n), len(parts))
+    owners = np.tile(np.arange(len(parts)), n)
+    si, ci, pi = checker.near_entries(moves, pose_sets, offsets, radii, (centres, owners))
+    kept = set(zip(si.tolist(), ci.tolist(), pi.tolist()))
+    # brute force: every point of every entry in the part's frame against its grown box
+    dense = checker.densify_many(moves, offsets, radii)
+    it, k = active_points(dense.src, dense.own, centres, owners, n, n_s)
+    state, cab = dense.poly[it] // len(cables), dense.poly[it] % len(cables)
+    pose = pose_sets[state, k]
+    loc = np.einsum("ni,nij->nj", dense.p[it] - pose[:, :3, 3], pose[:, :3, :3])
+    lo, hi = checker.part_bounds()
+    thr = (radii[cab] + cfg.clearance)[:, None]
+    inside = ((loc >= lo[k] - thr) & (loc <= hi[k] + thr)).all(axis=1)
+    # an inside point belongs to its own centre's entry, or inside an element to the far centre's
+    centre = dense.src[it] % n
+    for j in np.flatnonzero(inside):
+        s_, c_, k_ = int(state[j]), int(centre[j]), int(k[j])
+        assert (s_, c_, k_) in kept or (not dense.own[it[j]] and (s_, c_ + 1, k_) in kept)
+    # the records of the kept entries, with the points of their elements alone
+    keep = np.zeros((n_s, n), bool)
+    for shift in (-1, 0, 1):
+        keep[si, np.clip(ci + shift, 0, n - 1)] = True
+    names = [c.name for c in cables]
+    if len(si):
+        got = checker.structure_many(names, radii, checker.densify_many(moves, offsets, radii, None, keep),
+                                     pose_sets, [], (si, ci, pi))
+    else:
+        got = [[] for _ in range(n_s)]
+    want = checker.structure_many(names, radii, dense, pose_sets, [], (centres, owners))
+    for g, w in zip(got, want):
+        assert [(r.type, r.a, r.b, r.min_distance, r.s) for r in g] == [(r.type, r.a, r.b, r.min_distance, r.s)
+                                                                        for r in w]
+        assert all(np.array_equal(a.where, b.where) for a, b in zip(g, w))
+    assert around_centres(ci, n).sum() >= len(np.unique(ci))
+
+
+def test_near_entries_keep_a_centre_whose_element_alone_comes_near():
+    """A cable passing a box: the centres away from it are kept only while
+    one of their two elements reaches the grown box (its points might
+    pass), the far ones dropped; turning the box away drops them all."""
+    box = PartState("box", Shape(ShapeType.BOX, [0.05, 0.05, 0.05]), pose())
+    xs = np.linspace(-0.3, 0.3, 7)                           # 100 mm elements
+    pts = np.stack([xs, np.zeros(7), np.full(7, 0.058)], axis=1)
+    checker = Checker([box], CheckConfig(clearance=0.005))
+    r = 0.002                                                # grown box: 7 mm past the part's
+    entries = (np.arange(7), np.zeros(7, np.int64))
+    off, radii = np.array([0, 7]), np.array([r])
+    si, ci, _ = checker.near_entries(pts[None], np.eye(4)[None, None], off, radii, entries)
+    assert len(si) == 0                                      # 8 mm above: farther than r + clearance (7 mm)
+    pts[:, 2] = 0.056                                        # 6 mm above: within 7 mm
+    si, ci, _ = checker.near_entries(pts[None], np.eye(4)[None, None], off, radii, entries)
+    # centre 3 lies over the box (|x| <= 57 mm), 2 and 4 (x -+100 mm) only
+    # through their element towards it, 1 and 5 not at all
+    assert ci.tolist() == [2, 3, 4]
+    away = pose(t=(0.0, 0.0, -0.5))
+    si, ci, _ = checker.near_entries(pts[None], away[None, None], off, radii, entries)
+    assert len(si) == 0

@@ -53,3 +53,22 @@ def test_sliver_mesh_nearest_and_segment_distance_are_the_brute_force_ones():
     fi = np.tile(np.arange(len(md.faces)), len(a))
     brute_s = segment_triangle(a[rows], b[rows], md.a[fi], md.b[fi], md.c[fi])[0].reshape(len(a), -1).min(axis=1)
     assert np.allclose(ds, brute_s, rtol=0, atol=1e-15)
+
+
+def test_limit_with_the_callers_lower_bounds_is_the_same_answer():
+    """signed_distance with a limit and the lower bounds the caller took from
+    distance_bounds answers as with the limit alone: exact below the limit,
+    the same bound beyond it."""
+    from checker.shapes import distance_bounds
+    rng = np.random.default_rng(11)
+    shape = mesh_shape(*(lambda m: (m.vertices, m.faces))(trimesh.creation.icosphere(2, 0.05)))
+    p = rng.normal(size=(400, 3)) * 0.05
+    limit = rng.uniform(0.0, 0.03, len(p))
+    lower, _ = distance_bounds(shape, p)
+    d0, c0 = signed_distance(shape, p, limit)
+    d1, c1 = signed_distance(shape, p, limit, lower)
+    exact, _ = signed_distance(shape, p)
+    assert np.array_equal(d0, d1) and np.array_equal(np.isnan(c0), np.isnan(c1))
+    near = exact < limit
+    assert near.any() and (~near).any() and np.array_equal(d1[near], exact[near])
+    assert np.all(d1[~near] <= exact[~near] + 1e-12)

@@ -55,7 +55,12 @@ no pair can have come within the clearance while
     ``L[A, B]`` the distance at k0 between the axis-aligned boxes of the
     blocks' centres, minus the largest radii of the two blocks and the
     clearance (capped at ``FAR_HORIZONS * H``); or the same distance at
-    step k itself is above 0,
+    step k itself is above 0; or at step k, for every element a of A and
+    b of B, the distance between their midpoints less half their lengths,
+    or the gap between their projections on the unit vector ``n`` from
+    the closest point of a to that of b (as
+    :func:`checker.closest.segment_segment` finds them), exceeds the two
+    blocks' largest radii and the clearance,
   - ``min(spread, 2 max dq) < FAR_HORIZONS * H`` when some block pairs are
     farther apart than that and left unlisted,
 - ``dq_i < g[i, k]`` for every part k that did not move, and for every
@@ -118,7 +123,13 @@ hence one bound for both centres (a centre riding with a turning part, next
 to one held still in the world, passes by the one and the other by the
 other, and the points between them by neither). Two conditions look at step k alone (the chord's ``S`` aside). Boxes:
 every place of a block lies in the convex hull of its centres, inside
-their bounding box. Chord: let two places on elements e and f
+their bounding box. Axes: every place of a block lies on one of its
+elements, within half the element's length of its midpoint; and for two
+segments and any unit vector ``n`` the distance of
+any two of their points is at least ``n`` times their difference, at least
+the least projection of the one's ends less the largest of the other's (a
+linear function is extreme on a segment at its ends); ``n`` need not be
+the exact closest points' direction. Chord: let two places on elements e and f
 be checked at step k, so their arc lengths differ by at least ``w`` (and by
 at least ``S``). Along the polyline between them the unit tangent turns by
 at most ``T`` in total, so every tangent lies within the angle ``T / 2`` of

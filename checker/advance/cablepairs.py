@@ -4,7 +4,10 @@ After a full check, the gaps of cable pairs are kept per near element pair
 (one cable, within ``2 BLOCK`` elements: also proven apart by the chord
 bound at the state itself), per pair of body centres that candidates are
 charged to, and per pair of blocks of ``BLOCK`` elements for everything
-else (their boxes at the start, and at the state itself). Pairs whose
+else (their boxes at the start, and at the state itself; or at the state
+itself a separating axis between every two of their elements: two leads
+side by side turning together stay apart along the line between them
+while their oblique blocks' boxes overlap). Pairs whose
 condition fails can be named (:meth:`CablePairGaps.failing`) and left to
 the caller (:meth:`CablePairGaps.promote`). :meth:`CablePairGaps.clear`
 tests many states at once.
@@ -27,7 +30,7 @@ from checker.advance.common import (
     row_norm3,
 )
 from checker.cable import self_pair_window
-from checker.closest import row_norm
+from checker.closest import row_norm, segment_segment
 from checker.interference.hits import CableCandidates
 
 
@@ -347,7 +350,8 @@ class CablePairGaps:
         holds its blocks'; group pairs whose least gap exceeds the spread
         pass unlooked), one by one only in group pairs that do not pass
         whole, the boxes at this state only for block pairs failing the
-        box, and over runs of states of doubling length."""
+        box, the axes only for those still failing, and over runs of
+        states of doubling length."""
         n_s = len(dcc)
         ok = np.ones(n_s, bool)
         easy = diag < self._g_min_nb               # every relative motion is below every such gap
@@ -490,7 +494,50 @@ class CablePairGaps:
                 a, b = bi[bad], bj[bad]
                 sep = np.maximum(np.maximum(lo[b] - hi[a], lo[a] - hi[b]), 0.0)
                 blk_ok[bad] |= row_norm3(sep) > self._blk_rad[a] + self._blk_rad[b]
+                # or apart now by a separating axis between every two of
+                # their elements, at the states the boxes leave failing
+                r, at = np.nonzero(~blk_ok[bad])
+                if len(r):
+                    a, b = bi[bad[r]], bj[bad[r]]
+                    need = (self._blk_rad[a] + self._blk_rad[b])[:, 0]
+                    blk_ok[bad[r], at] = self._axes_gap(x, a, b, at, need) > need
         return bi, bj, ~blk_ok
+
+    def _axes_gap(self, x: np.ndarray, a: np.ndarray, b: np.ndarray, at: np.ndarray,
+                  enough: np.ndarray | None = None) -> np.ndarray:
+        """(M,): a lower bound on the distance between any place of block
+        a and any of block b (M,) at state ``at`` (M,) of x (N, 3, S): for
+        every two of their elements, the larger of the gap of their
+        midpoints' spheres (half an element's length holds its points) and
+        the gap of their projections on the unit vector between their
+        closest points (package docstring, *axes*); -inf for a block
+        without elements. ``enough`` (M,): element pairs whose spheres are
+        farther apart than that skip the axes (the spheres' gap is bound
+        enough)."""
+        k = np.arange(self.BLOCK)
+        ea = self._blk_start[a][:, None] + k                                     # (M, K) elements
+        eb = self._blk_start[b][:, None] + k
+        ok = (ea < self._blk_last[a][:, None])[:, :, None] & (eb < self._blk_last[b][:, None])[:, None, :]
+        m, i, j = np.nonzero(ok)                                                 # m ascending
+        out = np.full(len(a), -np.inf)
+        if not len(m):
+            return out
+        e, f, s = ea[m, i], eb[m, j], np.asarray(at, np.int64)[m]
+        p0, p1, q0, q1 = x[e, :, s], x[e + 1, :, s], x[f, :, s], x[f + 1, :, s]   # (P, 3) each
+        gap = row_norm(0.5 * ((q0 + q1) - (p0 + p1))) - 0.5 * (row_norm(p1 - p0) + row_norm(q1 - q0))
+        axes = np.flatnonzero(gap <= enough[m]) if enough is not None else np.arange(len(m))
+        if len(axes):
+            p0, p1, q0, q1 = p0[axes], p1[axes], q0[axes], q1[axes]
+            _, _, _, cp, cq = segment_segment(p0, p1, q0, q1)
+            v = cq - cp
+            length = row_norm(v)
+            n = v / np.where(length > 0.0, length, 1.0)[:, None]                # 0 where they touch: gap 0
+            proj = (np.minimum(np.einsum("ij,ij->i", n, q0), np.einsum("ij,ij->i", n, q1))
+                    - np.maximum(np.einsum("ij,ij->i", n, p0), np.einsum("ij,ij->i", n, p1)))
+            gap[axes] = np.maximum(gap[axes], proj)
+        first = np.flatnonzero(np.r_[True, m[1:] != m[:-1]])
+        out[m[first]] = np.minimum.reduceat(gap, first)
+        return out
 
     def _block_boxes(self, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Componentwise least and largest of v (N, 3, S) over each block's

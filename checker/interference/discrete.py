@@ -137,15 +137,17 @@ def densify_many(pts: np.ndarray, offsets: np.ndarray, radii: np.ndarray, spacin
     coordinates (:attr:`CableState.rest_s` of every cable, concatenated),
     or None (the current arc lengths). ``keep``: (N,) bool, the centres
     whose points (their own, those inside the element after them) are
-    wanted in every state (each as without ``keep``), or None (all): the
-    callers need the elements next to their entries' centres whole, so
-    they keep each such centre and both its neighbours
-    (:func:`around_centres`)."""
+    wanted in every state, or (S, N) bool, in each state (each as without
+    ``keep``), or None (all): the callers need the elements next to their
+    entries' centres whole, so they keep each such centre and both its
+    neighbours (:func:`around_centres`)."""
     n_s, n = pts.shape[:2]
     radii = np.asarray(radii, float)
+    if keep is not None:
+        keep = np.asarray(keep, bool)
+        keep = keep.ravel() if keep.ndim == 2 else np.tile(keep, n_s)
     p, s, poly, _, src, own, frac = densify_batch(pts.reshape(-1, 3), tile_offsets(offsets, n_s),
-                                                  np.tile(spacing * radii, n_s), source=True,
-                                                  keep=None if keep is None else np.tile(keep, n_s))
+                                                  np.tile(spacing * radii, n_s), source=True, keep=keep)
     if rest is None:
         m = s
     else:

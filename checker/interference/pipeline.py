@@ -132,9 +132,23 @@ class Checker:
         """:func:`checker.interference.discrete.densify_many` at this checker's spacing."""
         return discrete.densify_many(pts, offsets, radii, self.config.spacing, rest, keep)
 
+    def near_entries(self, pts: np.ndarray, poses: np.ndarray, offsets: np.ndarray, radii: np.ndarray,
+                     active: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:func:`checker.interference.structure.near_entries` on this
+        checker's parts at its clearance: the (state, centre, part) entries
+        of :meth:`structure_many` whose points may come near the part, for
+        body centres pts (S, N, 3) of cables ``offsets`` (C + 1,) and
+        ``radii`` (C,), the parts' poses (S, K, 4, 4)."""
+        if self._tab is None:
+            z = np.zeros(0, np.int64)
+            return z, z, z
+        cable = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
+        return structure.near_entries(self._tab, pts, poses, cable[:-1] == cable[1:],
+                                      np.asarray(radii, float)[cable], self.config.clearance, active)
+
     def structure_many(self, names: Sequence[str], radii: np.ndarray, dense: DenseStates,
                        poses: np.ndarray, exclusions: Sequence[Exclusion],
-                       active: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
+                       active: tuple[np.ndarray, ...]) -> list[list[Interference]]:
         """:func:`checker.interference.structure.structure_many` on this checker's parts."""
         excl = self._exclusion_table(names, exclusions).excl if self._tab is not None else None
         return structure.structure_many(self._tab, self.config, excl, names, radii, dense, poses, active)

@@ -13,7 +13,9 @@ before any exact work. Narrow phases are batched per shape type (all
 primitives' segment searches in one call); meshes per mesh, the parts
 sharing one mesh in one call through the mesh's own tree.
 :func:`structure_many` takes given (body centre, part) pairs over many states
-at once and shares :func:`point_values` with the single-state pass.
+at once and shares :func:`point_values` with the single-state pass;
+:func:`near_entries` keeps of those pairs, state by state, the ones whose
+elements come near enough to the part's box for a point to be evaluated.
 
 Deliberately not here: part-part interference (:mod:`checker.parts`), cable
 pairs, the reduction to records (:mod:`checker.interference.hits`).
@@ -147,10 +149,11 @@ def point_distances(tab: PartTable, pk: np.ndarray, loc: np.ndarray, face_plane:
                 sk = sel[grp == g]
                 shape = tab.mesh_shapes[g]
                 lim = None if limit is None else limit[sk]
+                lower = None
                 if lim is not None and group is not None and not face_plane:
                     # each group's most promising point (least upper bound)
                     # exactly first: the others then need be exact only below it
-                    _, hi = distance_bounds(shape, loc[sk])
+                    lower, hi = distance_bounds(shape, loc[sk])
                     ids, inv = np.unique(group[sk], return_inverse=True)
                     o = np.lexsort((hi, inv))
                     lead = o[np.r_[True, inv[o][1:] != inv[o][:-1]]]
@@ -161,8 +164,9 @@ def point_distances(tab: PartTable, pk: np.ndarray, loc: np.ndarray, face_plane:
                     lim = np.minimum(lim, least[inv])
                     rest = np.ones(len(sk), bool)
                     rest[lead] = False
-                    sk, lim = sk[rest], lim[rest]
-                d[sk] = face_plane_distance(shape, loc[sk]) if face_plane else signed_distance(shape, loc[sk], lim)[0]
+                    sk, lim, lower = sk[rest], lim[rest], lower[rest]
+                d[sk] = face_plane_distance(shape, loc[sk]) if face_plane else \
+                    signed_distance(shape, loc[sk], lim, lower)[0]
         elif face_plane:
             d[sel] = face_plane_distance_batch(stype, tab.size.take(pk.take(sel), axis=0), loc.take(sel, axis=0))
         else:
@@ -273,8 +277,47 @@ def _add_structure(hits, tab, cable, part, value, where, s, record=None) -> None
         hits.add(kind, cable[o], part[o], value[o], where[o], s[o], None, None if record is None else record[o])
 
 
+def near_entries(tab: PartTable, pts: np.ndarray, poses: np.ndarray, valid: np.ndarray, rad: np.ndarray,
+                 limit: float, active: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The (state, centre, part) entries of active (centre, part) pairs at
+    S states some of whose points may pass :func:`point_values`'s box test.
+
+    The points of an entry (:func:`active_points`) lie on the elements next
+    to its centre: in part k's frame (an affine map) inside the
+    axis-aligned box of the centre and its neighbours on those elements.
+    Where that box lies farther than ``rad + limit`` outside the part's
+    local box on some axis, so does every such point, and the box test
+    drops them all; a margin of 1e-9 of the scene's extent covers the
+    rounding of the points' own coordinates (each a few ulp).
+
+    Args:
+        pts: (S, N, 3) body centres; poses: (S, K, 4, 4) the parts' poses.
+        valid: (N - 1,) element i joins centres i and i + 1 of one cable.
+        rad: (N,) the cable radius at each centre.
+        limit: the values kept (the clearance).
+        active: (centre, part) arrays.
+    """
+    ci, pi = (np.asarray(x, np.int64) for x in active)
+    n_s, n = pts.shape[:2]
+    if n_s == 0 or len(ci) == 0:
+        z = np.zeros(0, np.int64)
+        return z, z, z
+    before = np.where((ci > 0) & valid[np.maximum(ci - 1, 0)], ci - 1, ci)     # the elements' far ends
+    after = np.where((ci < n - 1) & valid[np.minimum(ci, n - 2)], ci + 1, ci)
+    rot = poses[:, pi, :3, :3]                                                 # (S, E, 3, 3)
+    trans = poses[:, :, :3, 3][:, pi]                                          # (S, E, 3)
+    u = [np.einsum("sei,seij->sej", pts[:, c] - trans, rot) for c in (before, ci, after)]
+    lo = np.minimum(np.minimum(u[0], u[1]), u[2])
+    hi = np.maximum(np.maximum(u[0], u[1]), u[2])
+    scale = max(float(np.abs(pts).max()), float(np.abs(trans).max()))
+    thr = (rad[ci] + limit + 1e-9 * (1.0 + scale))[:, None]
+    near = ((hi >= tab.lo[pi] - thr) & (lo <= tab.hi[pi] + thr)).all(axis=2)      # (S, E)
+    state, e = np.nonzero(near)
+    return state, ci[e], pi[e]
+
+
 def active_points(src: np.ndarray, own: np.ndarray, ci: np.ndarray, pi: np.ndarray,
-                  n: int, states: int) -> tuple[np.ndarray, np.ndarray]:
+                  n: int, states: int, si: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(point, part) pairs of discrete points and the parts they are active
     for, sorted by part and then point, each once: a point is active for part
     k when (its centre, k) is an active entry or, for a point inside an
@@ -296,14 +339,19 @@ def active_points(src: np.ndarray, own: np.ndarray, ci: np.ndarray, pi: np.ndarr
         ci, pi: the active entries (centre in a state, part).
         n: body centres per state.
         states: S, the states.
+        si: the state of each entry, or None (each entry in every state).
     """
     if len(ci) == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
     start = np.flatnonzero(own)                 # the own point of every present centre, in order
     present = src[start]
     end = np.r_[start[1:], len(src)]             # up to the next present centre's own point
-    g = (np.arange(states, dtype=np.int64)[:, None] * n + np.asarray(ci, np.int64)[None, :]).ravel()
-    k = np.broadcast_to(np.asarray(pi, np.int64), (states, len(ci))).ravel()
+    if si is None:
+        g = (np.arange(states, dtype=np.int64)[:, None] * n + np.asarray(ci, np.int64)[None, :]).ravel()
+        k = np.broadcast_to(np.asarray(pi, np.int64), (states, len(ci))).ravel()
+    else:
+        g = np.asarray(si, np.int64) * n + np.asarray(ci, np.int64)
+        k = np.asarray(pi, np.int64)
     o = np.lexsort((g, k))
     g, k = g[o], k[o]
     at = np.searchsorted(present, g)
@@ -324,7 +372,7 @@ def active_points(src: np.ndarray, own: np.ndarray, ci: np.ndarray, pi: np.ndarr
 
 def structure_many(tab: PartTable | None, config: CheckConfig, excl: tuple, names: Sequence[str],
                    radii: np.ndarray, dense: DenseStates, poses: np.ndarray,
-                   active: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
+                   active: tuple[np.ndarray, ...]) -> list[list[Interference]]:
     """The full check's cable-structure and keep-out records at many
     states at once, from the discrete points next to given body centres
     (method ``points``; to the bit).
@@ -339,20 +387,23 @@ def structure_many(tab: PartTable | None, config: CheckConfig, excl: tuple, name
         dense: the states' discrete points (:meth:`densify_many`).
         poses: (S, K, 4, 4) the parts' poses at every state.
         excl: the exclusion table (:meth:`Checker._exclusion_table`).
-        active: (centre index in a state, part index) arrays.
+        active: (centre index in a state, part index) arrays, each entry
+            in every state; or (state, centre, part) arrays, each entry in
+            its own state (:func:`near_entries`).
 
     Returns:
         per state, its records (worst first).
     """
     n_s, n, n_c, n_k = dense.states, dense.centres, dense.cables, (0 if tab is None else len(tab.names))
     out: list[list[Interference]] = [[] for _ in range(n_s)]
-    ci, pi = (np.asarray(x, np.int64) for x in active)
+    si = np.asarray(active[0], np.int64) if len(active) == 3 else None
+    ci, pi = (np.asarray(x, np.int64) for x in active[-2:])
     if n_s == 0 or len(ci) == 0 or tab is None:
         return out
     radii = np.asarray(radii, float)
     p, s, src, own = dense.p, dense.s, dense.src, dense.own
     state, cab = dense.poly // n_c, dense.poly % n_c
-    it, k = active_points(src, own, ci, pi, n, n_s)
+    it, k = active_points(src, own, ci, pi, n, n_s, si)
     q = state[it] * n_k + k
     rot = np.ascontiguousarray(poses[:, :, :3, :3]).reshape(-1, 3, 3)
     trans = np.ascontiguousarray(poses[:, :, :3, 3]).reshape(-1, 3)
