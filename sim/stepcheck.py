@@ -325,9 +325,7 @@ class StepChecks:
             checked_poses = poses[:, self.checked_parts]
             si, ci, pi = self.checker.near_entries(pts, checked_poses, self._offsets, self._radii, self._active)
             if len(si):
-                keep = np.zeros(pts.shape[:2], bool)
-                for shift in (-1, 0, 1):
-                    keep[si, np.clip(ci + shift, 0, pts.shape[1] - 1)] = True
+                keep = around_centres(ci, pts.shape[1], si, len(pts))
                 dense = self.checker.densify_many(pts, self._offsets, self._radii, self._rest, keep)
                 found = self.checker.structure_many(names, self._radii, dense, checked_poses,
                                                     self.exclusions, (si, ci, pi))

@@ -193,9 +193,7 @@ def test_near_entries_drop_only_entries_no_point_of_which_passes_the_box(cables,
         s_, c_, k_ = int(state[j]), int(centre[j]), int(k[j])
         assert (s_, c_, k_) in kept or (not dense.own[it[j]] and (s_, c_ + 1, k_) in kept)
     # the records of the kept entries, with the points of their elements alone
-    keep = np.zeros((n_s, n), bool)
-    for shift in (-1, 0, 1):
-        keep[si, np.clip(ci + shift, 0, n - 1)] = True
+    keep = around_centres(ci, n, si, n_s)
     names = [c.name for c in cables]
     if len(si):
         got = checker.structure_many(names, radii, checker.densify_many(moves, offsets, radii, None, keep),
@@ -208,6 +206,9 @@ def test_near_entries_drop_only_entries_no_point_of_which_passes_the_box(cables,
                                                                         for r in w]
         assert all(np.array_equal(a.where, b.where) for a, b in zip(g, w))
     assert around_centres(ci, n).sum() >= len(np.unique(ci))
+    # per state, each state's rows are the mask of its own centres alone
+    for st_ in range(n_s):
+        assert np.array_equal(keep[st_], around_centres(ci[si == st_], n))
 
 
 def test_near_entries_keep_a_centre_whose_element_alone_comes_near():

@@ -155,12 +155,16 @@ def densify_many(pts: np.ndarray, offsets: np.ndarray, radii: np.ndarray, spacin
     return DenseStates(p, s, m, poly, src, own, n_s, n, len(radii))
 
 
-def around_centres(centres: np.ndarray, n: int) -> np.ndarray:
+def around_centres(centres: np.ndarray, n: int, states: np.ndarray | None = None,
+                   n_states: int = 0) -> np.ndarray:
     """(n,) bool: the given body centres and both neighbours of each (the
     centres ``densify_many`` must keep for the elements next to them to be
-    whole: every point on them and both their ends)."""
-    keep = np.zeros(n, bool)
+    whole: every point on them and both their ends). With ``states`` (the
+    state of each centre, below ``n_states``): (n_states, n), each state's
+    centres and their neighbours in that state alone."""
     c = np.asarray(centres, np.int64)
+    keep = np.zeros(n, bool) if states is None else np.zeros((n_states, n), bool)
+    rows = () if states is None else (np.asarray(states, np.int64),)
     for shift in (-1, 0, 1):
-        keep[np.clip(c + shift, 0, max(n - 1, 0))] = True
+        keep[(*rows, np.clip(c + shift, 0, max(n - 1, 0)))] = True
     return keep
