@@ -3,7 +3,7 @@ as their own surface (sim.detection_mesh) against MuJoCo's convex hulls.
 
 The same simulated states (every `--every`-th step of the robot cell after
 settling) go through the detection model's collision pass (mj_kinematics,
-mj_flex, mj_collision, the contacts copied out: `Simulation.collide_many`,
+mj_flex, mj_collision, the contacts copied out: `Detector.collide_many`,
 a batch of 32 states at a time) four times, side by side in one run: with
 the meshes left to MuJoCo's convex hulls; as built, each non-convex
 collision mesh rigid flexes of its triangles, every surface in every pass;
@@ -30,6 +30,7 @@ import numpy as np
 import sim.detection_mesh
 import sim.mjspec
 from sim.build import build
+from sim.detector import Detector
 from sim.loop import Simulation
 from sim.scene import load_scene
 
@@ -66,7 +67,7 @@ def main(argv=None) -> None:
     rows, found = {}, {}
     for label, built, reach in (("hulls", hulls, True), ("surfaces, every one", surfaces, False),
                                 ("whole meshes in reach", whole, True), ("patches in reach", surfaces, True)):
-        detector = Simulation(built, reach=reach)
+        detector = Detector(built, reach=reach)
         best = np.inf
         for _ in range(args.repeat):
             t0 = time.process_time()

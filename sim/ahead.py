@@ -6,7 +6,9 @@ inside its functions (mj_step, mj_collision), so on a machine with two
 cores the next steps can be simulated while the last ones are checked:
 `StepsAhead` iterates a run's states from a worker thread into a bounded
 queue and hands them on in order, and the run's wall time tends to the
-larger of the two sides instead of their sum. The states are the same
+larger of the two sides instead of their sum. The worker starts with the
+run's settling (`before`), while the run still builds its detection model
+and prepares its checks, so the second core works through the set-up too. The states are the same
 objects, computed by the same code in the same order: the checks, events
 and report are those of the run in one thread (tests/test_ahead.py).
 
@@ -31,12 +33,26 @@ import queue
 import sys
 import threading
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 
 DEPTH = 256
-"""Most states simulated ahead of the checks (two of the run's longest batches):
-enough that the simulation never waits for a batch being checked, bounded so
-a slow check does not hold a whole run's states."""
+"""Most states simulated ahead of the checks by default (two of the run's
+longest batches): enough that the simulation never waits for a batch being
+checked, bounded so a slow check does not hold a whole run's states."""
+
+AHEAD_BYTES = 64 * 2 ** 20
+"""About the most memory the states simulated ahead may hold (`depth_for`)."""
+
+MAX_DEPTH = 4096
+"""Most states simulated ahead, however small they are."""
+
+
+def depth_for(state_bytes: int) -> int:
+    """How many states of about `state_bytes` each may be simulated ahead:
+    `AHEAD_BYTES` of them, at least `DEPTH` and at most `MAX_DEPTH`. A run
+    starts simulating before its checks are ready (`sim.run`), and a deeper
+    queue lets the simulation go on meanwhile instead of waiting."""
+    return int(min(max(AHEAD_BYTES // max(int(state_bytes), 1), DEPTH), MAX_DEPTH))
 
 SWITCH_INTERVAL = 0.0005
 """Seconds a thread holding the interpreter lock keeps it before handing it
@@ -62,16 +78,24 @@ class StepsAhead:
     a run early, end `states` itself: the states made until then are all
     handed on.)
 
+    `before`: called on the worker before the first state is made (a run
+    settles its simulation there while it prepares its checks); its CPU
+    time is kept apart, and an exception it raises is handed on as the
+    states' would be.
+
     Attributes:
       cpu: the worker's CPU seconds spent making the states so far (its
         thread's time, waits for the queue left out).
+      before_cpu: the worker's CPU seconds in `before`.
     """
 
-    def __init__(self, states: Iterable, depth: int = DEPTH):
+    def __init__(self, states: Iterable, depth: int = DEPTH, before: Callable[[], object] | None = None):
         self._states = states
+        self._before = before
         self._queue: queue.Queue = queue.Queue(maxsize=max(int(depth), 1))
         self._closed = threading.Event()
         self.cpu = 0.0
+        self.before_cpu = 0.0
         self._switch = sys.getswitchinterval()
         sys.setswitchinterval(min(self._switch, SWITCH_INTERVAL))
         self._thread = threading.Thread(target=self._work, name="cablecheck-simulation", daemon=True)
@@ -90,6 +114,12 @@ class StepsAhead:
     def _work(self) -> None:
         end: object = _END
         try:
+            if self._before is not None:
+                t = thread_cpu()
+                try:
+                    self._before()
+                finally:
+                    self.before_cpu += thread_cpu() - t
             it = iter(self._states)
             while not self._closed.is_set():
                 t = thread_cpu()

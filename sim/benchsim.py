@@ -93,12 +93,12 @@ def mujoco_side(scene, repeat: int) -> dict:
         checker = Checker(parts, cfg)
         out[method] = median_time(lambda: checker.check(cables, state.part_poses), repeat)
     d = sim.data
-    m2, d2 = built.detect, sim.detect_data
+    m2, d2 = built.detect, sim.detector.detect_data
     d2.qpos[:] = d.qpos
     mujoco.mj_kinematics(m2, d2)
     mujoco.mj_flex(m2, d2)
     out["mj_collision"] = median_time(lambda: mujoco.mj_collision(m2, d2), repeat)
-    out["detect"] = median_time(lambda: sim.detect(d), repeat)
+    out["detect"] = median_time(lambda: sim.detector.detect(d), repeat)
     out["contacts"] = int(d2.ncon)
     return out
 

@@ -7,7 +7,9 @@
    shape (`sim.cableplan`).
 3. Write and compile the simulation model, then the detection model
    (`sim.mjspec`, with the contact bits of `sim.contactbits` and the cable
-   parameters of `sim.cablephysics`).
+   parameters of `sim.cablephysics`). `build` does both; a run calls
+   `build_simulation` and later `with_detection`, so the simulation can
+   settle while the detection model is compiled (`sim.run`).
 4. Read the compiled model back as a `Built` (`sim.modelread`).
 5. Choose the simulation step from the cables' stiffness and the script's
    speeds, and warn about parts too fast for it (`sim.substeps`).
@@ -19,6 +21,8 @@ This module does not step, move or read the simulation; see `sim.loop`.
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 
@@ -59,9 +63,9 @@ from sim.substeps import (
 __all__ = [
     "Attachment", "Built", "CABLE_PREFIX", "CLAMP_EDGE", "CONTACT_SOLIMP", "CableModel", "ContactBits",
     "EDGE_IMPEDANCE", "EDGE_YIELD", "JointDrive", "MAX_SUBSTEPS", "PartModel", "SIM_MARGIN_FRACTION",
-    "Substeps", "bending_step", "build", "choose_substeps", "contact_time_constant", "default_segments",
-    "edge_time_constant", "first_bending_frequency", "held_speeds", "plan_cables", "rayleigh_damping", "scene_origin",
-    "tunnel_warnings",
+    "Substeps", "bending_step", "build", "build_simulation", "choose_substeps", "contact_time_constant",
+    "default_segments", "edge_time_constant", "first_bending_frequency", "held_speeds", "plan_cables",
+    "rayleigh_damping", "scene_origin", "tunnel_warnings", "with_detection",
 ]
 
 
@@ -80,14 +84,18 @@ def plan_cables(scene: Scene) -> tuple[Frames, dict[str, tuple[np.ndarray, np.nd
 def build(scene: Scene, detect: bool = True) -> Built:
     """Compile the simulation model (and, if `detect`, the detection model),
     then choose its step (`choose_substeps`)."""
-    frames, meshes, plans = plan_cables(scene)
+    planned = plan_cables(scene)
+    built = build_simulation(scene, planned)
+    return with_detection(built, planned) if detect else built
+
+
+def build_simulation(scene: Scene, planned: tuple) -> Built:
+    """`build` without the detection model, from the scene's `plan_cables`."""
+    frames, meshes, plans = planned
     origin = frames.origin
     sim, own_bits = compile_model(scene, plans, meshes, detect=False, frames=frames, rest=True)
     move_held(sim, plans, frames)
-    det = compile_model(scene, plans, meshes, detect=True, frames=frames)[0] if detect else None
-    if det is not None and (det.nq != sim.nq or det.ngeom != sim.ngeom):
-        raise RuntimeError("detection and simulation models differ in structure")
-    built = read_built(scene, sim, det, plans, origin, own_bits)
+    built = read_built(scene, sim, None, plans, origin, own_bits)
     poses = script_poses(built) if scene.effects.dynamics else None
     built.substeps = choose_substeps(built, poses)
     set_step(sim, built.substeps.step)
@@ -98,3 +106,14 @@ def build(scene: Scene, detect: bool = True) -> Built:
                            f"at most {MAX_SUBSTEPS} steps are taken per scene timestep; scene.timestep "
                            f"<= {need * MAX_SUBSTEPS:.3g} s would do",)
     return built
+
+
+def with_detection(built: Built, planned: tuple) -> Built:
+    """`built` (`build_simulation`) with its detection model, compiled from
+    the same `plan_cables`: a new record, `built` itself unchanged."""
+    scene = built.scene
+    frames, meshes, plans = planned
+    det = compile_model(scene, plans, meshes, detect=True, frames=frames)[0]
+    if det.nq != built.model.nq or det.ngeom != built.model.ngeom:
+        raise RuntimeError("detection and simulation models differ in structure")
+    return replace(built, detect=det)

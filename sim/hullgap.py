@@ -53,9 +53,9 @@ cover one substep of relative motion and MuJoCo's convex tolerance."""
 
 @dataclass(frozen=True)
 class HullRows:
-    """One state's simulation contacts of cable elements with concave parts'
-    hulls (`HullReader.rows`): cable and part indices into `HullGaps`' names,
-    the cable's element, and MuJoCo's distance (metres)."""
+    """One state's simulation contacts of cable elements with mesh parts'
+    hulls (`HullReader.rows`): the cable's index, the part's index in
+    `Built.parts`, the cable's element, and MuJoCo's distance (metres)."""
 
     cable: np.ndarray
     part: np.ndarray
@@ -78,29 +78,34 @@ class HullGap:
 
 
 class HullReader:
-    """Reads a state's simulation contacts of cables with the watched
-    parts' hulls (`rows`); the parts are `watched(built)`, in that order."""
+    """Reads a state's simulation contacts of cables with mesh parts' hulls
+    (`rows`); which of those parts are watched (`watched`) is decided by
+    `HullGaps`, from the detection model, which the simulation does not
+    need (a run steps it while the detection model is still being built)."""
 
     def __init__(self, flex_cable: np.ndarray, geom_part: np.ndarray):
         self._flex_cable, self._geom_part = flex_cable, geom_part
 
     @classmethod
     def of(cls, built: Built) -> HullReader | None:
-        """The reader for `built`'s simulation model, or None when no part is
-        watched (`watched`)."""
-        parts = watched(built)
-        if not parts:
+        """The reader for `built`'s simulation model, or None when no hull can
+        hold a cable (`could_hold`)."""
+        if not could_hold(built):
             return None
         m = built.model
+        meshes = [i for i, p in enumerate(built.parts) if m.geom_type[p.geom_id] == mujoco.mjtGeom.mjGEOM_MESH]
+        if not meshes:
+            return None
         flex_cable = np.full(m.nflex + 1, -1, np.int64)          # the last entry: "no flex" (-1)
         flex_cable[[c.flex_id for c in built.cables]] = np.arange(len(built.cables))
         geom_part = np.full(m.ngeom + 1, -1, np.int64)           # the last entry: "no geom" (-1)
-        geom_part[[p.geom_id for p in parts]] = np.arange(len(parts))
+        geom_part[[built.parts[i].geom_id for i in meshes]] = meshes
         return cls(flex_cable, geom_part)
 
     def rows(self, data: mujoco.MjData) -> HullRows:
         """The active contacts (dist <= includemargin) of `data` between a
-        cable element and a watched part's geom (its hull)."""
+        cable element and a mesh part's geom (its hull); `part` indexes
+        `Built.parts`."""
         n = int(data.ncon)
         con = data.contact
         flex = np.asarray(con.flex[:n], np.int64).reshape(n, 2)
@@ -116,17 +121,27 @@ class HullReader:
         return HullRows(c[keep], p[keep], e[keep], dist[keep])
 
 
+def could_hold(built: Built) -> bool:
+    """Whether the simulation can hold a cable on a part's hull at all: it
+    is stepped with cable-structure contact and has cables."""
+    scene = built.scene
+    return bool(built.cables) and scene.effects.dynamics and "cable-structure" in scene.effects.contact
+
+
 def watched(built: Built) -> list:
     """The parts (`sim.built.PartModel`) whose hull can hold a cable off
     their surface: those the detection model sees as their surface, when
     the simulation is stepped with cable-structure contact; none without a
     detection model (validation off) or without cables."""
-    scene = built.scene
-    if (built.detect is None or not built.cables or not scene.effects.dynamics
-            or "cable-structure" not in scene.effects.contact):
-        return []
-    geoms = set(surface_geoms(built.detect)[1].tolist())
-    return [p for p in built.parts if p.geom_id in geoms]
+    return [built.parts[i] for i in watched_indices(built)]
+
+
+def watched_indices(built: Built) -> np.ndarray:
+    """`watched`, as indices into `built.parts`."""
+    if built.detect is None or not could_hold(built) or not built.parts:
+        return np.zeros(0, np.int64)
+    geoms = np.array([p.geom_id for p in built.parts])
+    return np.flatnonzero(np.isin(geoms, surface_geoms(built.detect)[1]))
 
 
 class HullGaps:
@@ -135,7 +150,10 @@ class HullGaps:
     def __init__(self, built: Built):
         self._scene = built.scene
         self.cables = [c.name for c in built.cables]
-        self.parts = [p.name for p in watched(built)]
+        parts = watched_indices(built)
+        self.parts = [built.parts[i].name for i in parts]
+        self._watched = np.full(len(built.parts) + 1, -1, np.int64)   # Built.parts index -> watched index
+        self._watched[parts] = np.arange(len(parts))
         self._cable_names, self._cable_ids = _table(self.cables)
         self._part_names, self._part_ids = _table(self.parts)
         self._by_code: tuple | None = None      # (name table, cable and part per code)
@@ -171,6 +189,9 @@ class HullGaps:
 
         hs = np.repeat(np.arange(len(hulls)), [len(h.dist) for h in hulls])
         hc, hp, he, hd = (np.concatenate([getattr(h, f) for h in hulls]) for f in ("cable", "part", "elem", "dist"))
+        hp = self._watched[hp]                        # the rows' parts (Built.parts) as watched parts
+        mine = hp >= 0
+        hs, hc, hp, he, hd = hs[mine], hc[mine], hp[mine], he[mine], hd[mine]
         hk = keys(hs, hc, hp, he)
         at = np.minimum(np.searchsorted(k[:-1], hk), len(k) - 1)
         seen = k[at] == hk

@@ -16,18 +16,17 @@ the checker and the recorder read from.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
 from sim.build import Built
-from sim.ahead import thread_cpu
-from sim.contacts import ContactReader, Contacts, RawContacts
+from sim.contacts import Contacts
+from sim.detector import Detector
 from sim.hullgap import HullReader, HullRows
 from sim.motion import Motion
-from sim.surfacereach import SurfaceReach
 
 
 @dataclass(frozen=True, eq=False)
@@ -44,11 +43,11 @@ class StepState:
       qpos: the simulation's generalized positions (for detecting later).
       end_rot: (C, 2, 3, 3) world rotation of the bodies each cable's start
         and end ride on (the frames clamped ends hold; `checker.twist`).
-      hull: the simulation's contacts of cables with concave parts' hulls
-        (`sim.hullgap`), or None when no part is watched.
+      hull: the simulation's contacts of cables with mesh parts' hulls
+        (`sim.hullgap`), or None when not validated or no hull can hold one.
       xpos, xmat: (nbody, 3) and (nbody, 9) the simulation's body poses at
         `qpos` (model coordinates) for the detection model's reach test
-        (`Simulation.collide_many`), or None when it has none.
+        (`sim.detector.Detector.collide_many`), or None when not validated.
     """
 
     step: int
@@ -67,23 +66,30 @@ class StepState:
 class Simulation:
     """A built scene with its data, stepped by `steps()`.
 
-    `reach`: leave the concave meshes' surfaces no cable can reach out of a
-    state's detection pass (`sim.surfacereach`; the same contacts). False
-    collides every surface at every state (to compare the two)."""
+    `validate`: the states are to be compared with the detection model's
+    contacts, so each keeps what that comparison reads besides the cables:
+    with mesh parts, the simulation's body poses (`StepState.xpos`, `xmat`,
+    for the reach test) and its contacts of cables with those parts' hulls
+    (`StepState.hull`). None: when `built` has a
+    detection model. A run builds the detection model while the simulation
+    already settles (`sim.run`), so it says so itself.
 
-    def __init__(self, built: Built, reach: bool = True):
+    `detector`: the detection model's passes (`sim.detector.Detector`), when
+    `built` has one; `reach` is handed to it."""
+
+    def __init__(self, built: Built, reach: bool = True, validate: bool | None = None):
         self.built = built
         self.model = built.model
         self.data = mujoco.MjData(self.model)
         self.model.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
         self.motion = Motion(built)
-        self.detect_data = mujoco.MjData(built.detect) if built.detect is not None else None
-        surfaces = SurfaceReach(built.detect) if (reach and built.detect is not None) else None
-        self.reach = surfaces if surfaces is not None and len(surfaces) else None
-        self.reader = ContactReader(built)
-        self._collision = 0.0          # CPU seconds in the detection model's mj_collision
-        self.hull = HullReader.of(built)
+        self.detector = Detector(built, reach) if built.detect is not None else None
+        validate = (built.detect is not None) if validate is None else validate
+        self.hull = HullReader.of(built) if validate else None
         self._part_geoms = np.array([p.geom_id for p in built.parts], int)
+        # the reach test reads the body poses; it has something to leave out only with meshes
+        meshes = self.model.geom_type[self._part_geoms] == mujoco.mjtGeom.mjGEOM_MESH
+        self._poses = validate and bool(meshes.any())
         self._verts = [np.arange(c.vert_adr, c.vert_adr + c.count) for c in built.cables]
         self._end_bodies = np.array([[built.body_ids[c.start.body], built.body_ids[c.end.body]]
                                      for c in built.scene.cables], int).reshape(-1, 2)
@@ -93,6 +99,14 @@ class Simulation:
         self.step_size = scene.timestep / self.substeps  # the simulation model's timestep
         self.settle_steps = int(round(scene.settle / self.step_size)) if scene.effects.dynamics else 0
         self.total_steps = int(round(scene.duration / scene.timestep))
+
+    def state_bytes(self) -> int:
+        """About how many bytes one `StepState` of this simulation holds
+        (its arrays; how deep a queue of them may be, `sim.ahead`)."""
+        m = self.model
+        floats = (m.nq + 2 + 16 * len(self._part_geoms) + 3 * int(sum(len(v) for v in self._verts))
+                  + 18 * len(self._end_bodies) + (12 * m.nbody if self._poses else 0))
+        return 8 * floats
 
     def reset(self) -> None:
         """Routed shape, scripted targets at t = 0, no velocity."""
@@ -175,88 +189,12 @@ class Simulation:
         poses[:, :3, :3] = d.geom_xmat[self._part_geoms].reshape(-1, 3, 3)
         poses[:, :3, 3] = d.geom_xpos[self._part_geoms] + origin
         poses[:, 3, 3] = 1.0
-        found = self.detect(d) if (contacts and self.detect_data is not None) else None
+        found = self.detector.detect_qpos(d.qpos) if (contacts and self.detector is not None) else None
         end_rot = d.xmat[self._end_bodies].reshape(-1, 2, 3, 3)
         hull = self.hull.rows(d) if self.hull is not None else None   # the last step's contacts
-        bodies = (d.xpos.copy(), d.xmat.copy()) if self.reach is not None else (None, None)
+        bodies = (d.xpos.copy(), d.xmat.copy()) if self._poses else (None, None)
         return StepState(step, step * self.timestep, cables, poses, found, d.energy.copy(), d.qpos.copy(),
                          end_rot, hull, *bodies)
-
-    def detect(self, d: mujoco.MjData) -> Contacts:
-        """MuJoCo's contacts for the positions in `d`, from the detection model."""
-        return self.detect_qpos(d.qpos)
-
-    def detect_qpos(self, qpos: np.ndarray) -> Contacts:
-        """MuJoCo's contacts for the generalized positions `qpos` (of the
-        simulation model), from the detection model."""
-        return self.read_many([self.collide(qpos)])[0]
-
-    def collide(self, qpos: np.ndarray) -> RawContacts:
-        """The detection model's collision pass at `qpos`: its contacts, unnamed."""
-        return self.collide_many([qpos])[0]
-
-    def collide_many(self, qposes: list[np.ndarray], poses: tuple[np.ndarray, np.ndarray] | None = None
-                     ) -> list[RawContacts]:
-        """:meth:`collide` at each of `qposes`. The concave meshes' surface
-        patches no cable can reach at a state are left out of its pass
-        (`sim.surfacereach`: MuJoCo could find no contact on them), the
-        reach of all the states tested at once, from `poses`: (S, nbody, 3)
-        xpos and (S, nbody, 9) xmat at those qposes (the simulation's, as
-        `StepState` carries them: the two models share their kinematic tree,
-        so mj_kinematics gives both the same poses bit for bit); None: the
-        detection model's own, computed here.
-
-        The pass is mj_kinematics, mj_flex and mj_collision: the detection
-        model's flexes compute no edge Jacobians (`sim.mjspec.never_stepped`),
-        the one reader of mj_comPos's output there, so it is not run."""
-        m2, d2 = self.built.detect, self.detect_data
-        reach = self.reach
-        each: Iterable[int] = range(len(qposes))
-        if reach is not None:
-            if poses is None:
-                poses = self.detect_poses(qposes)
-            each = reach.leave_out_each(reach.reachable(*poses))   # writes only the patches that change
-        out = []
-        raw = self.reader.raw
-        collision = 0.0
-        try:
-            for i in each:
-                d2.qpos[:] = qposes[i]
-                mujoco.mj_kinematics(m2, d2)
-                mujoco.mj_flex(m2, d2)
-                t = thread_cpu()
-                mujoco.mj_collision(m2, d2)
-                collision += thread_cpu() - t
-                out.append(raw(d2))
-        finally:
-            self._collision += collision
-            if reach is not None:
-                reach.restore()
-        return out
-
-    def detect_poses(self, qposes: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-        """The detection model's body poses at each of `qposes` after
-        mj_kinematics: (S, nbody, 3) xpos and (S, nbody, 9) xmat."""
-        m2, d2 = self.built.detect, self.detect_data
-        xpos = np.empty((len(qposes), m2.nbody, 3))
-        xmat = np.empty((len(qposes), m2.nbody, 9))
-        for i, qpos in enumerate(qposes):
-            d2.qpos[:] = qpos
-            mujoco.mj_kinematics(m2, d2)
-            xpos[i], xmat[i] = d2.xpos, d2.xmat
-        return xpos, xmat
-
-    def collision_seconds(self) -> float:
-        """CPU seconds of the detection model's mj_collision so far (the
-        calling thread's, as the run's stages are counted: MuJoCo's own
-        timer is wall-clock, which on a busy machine counts time the thread
-        did not run); what :meth:`collide_many` costs at least; 0 without a
-        detection model."""
-        return self._collision
-
-    def read_many(self, raws: list[RawContacts]) -> list[Contacts]:
-        """Contacts of :meth:`collide` named, for many steps at once."""
-        return self.reader.read_many(raws, self.built.origin)
 
     def warnings(self) -> dict[str, int]:
         """MuJoCo warnings raised so far, by name, nonzero only."""

@@ -32,8 +32,9 @@ from checker.records import PairType, Severity
 from checker.scene_state import CheckConfig
 from checker.twist import TwistMeter, update_many
 from checker.wear import CableWear, WearMap
-from sim.ahead import StepsAhead, thread_cpu
-from sim.build import Built, build
+from sim.ahead import StepsAhead, depth_for, thread_cpu
+from sim.build import Built, build_simulation, plan_cables, with_detection
+from sim.detector import Detector
 from sim.jointspace import JointLog
 from sim.kinematic import KinematicSimulation
 from sim.loop import Simulation
@@ -146,47 +147,65 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
          start: float, warn: Callable[[str], None] | None) -> RunOutcome:
     validate = scene.check.validate
     static = not needs_model(scene)     # nothing calls for MuJoCo: no model is built (sim.staticbuild)
-    built = build_static(scene) if static else build(scene, detect=validate)
+    planned = None if static else plan_cables(scene)
+    # the simulation model first: the detection model is compiled while it settles
+    built = build_static(scene) if static else build_simulation(scene, planned)
     check_allow_names(scene, [p.name for p in built.parts] + [c.name for c in built.cables])
     if warn is not None:
         for w in built.warnings:
             warn(w)
-    sim = KinematicSimulation(built) if static else Simulation(built)
+    sim = KinematicSimulation(built) if static else Simulation(built, validate=validate)
     sim.reset()
     if progress:
         progress("settle", 0, max(sim.settle_steps, 1))
-    if not stop.asked:
-        sim.settle(None if progress is None else
-                   (lambda k: progress("settle", k, sim.settle_steps) if k % 50 == 0 else None),
-                   stop=lambda: stop.asked)
-    timer = _Timer()
-    config = CheckConfig(method=options.method or scene.check.method,
-                         spacing=options.spacing or scene.check.spacing,
-                         clearance=scene.check.clearance)
-    checks = StepChecks(built, config, options.only, options.advance,
-                        sim if validate else None, timer.lap)
-    timer.skip()          # preparing the checks is set-up, as building the model is: no stage's
-    settings = _settings(scene)
-    recorder = Recorder(built, options.record, checks.shapes, settings) if options.record else None
+
+    def settle() -> None:
+        if not stop.asked:
+            sim.settle(None if progress is None else
+                       (lambda k: progress("settle", k, sim.settle_steps) if k % 50 == 0 else None),
+                       stop=lambda: stop.asked)
+
     every = scene.check.every
-    # The recording samples the checked steps at about RECORD_RATE (and at
-    # every step where an event starts or ends): a viewer needs no 500 Hz.
-    # The wear map measures contact at the same rate (bends at every step).
-    record_stride = max(1, int(round(1.0 / (RECORD_RATE * every * scene.timestep))))
-    wear = WearMap([c.name for c in built.cables], [c.rest_s for c in built.cables],
-                   [c.radius for c in built.cables],
-                   [(p.name, shape) for p, shape in zip(built.parts, checks.shapes)],
-                   scene.check.clearance, checks.exclusions, stride=record_stride)
-    timer.skip()          # opening the recording is no step's cost (it was never timed)
-    tracker = EventTracker(hold=3 * every * scene.timestep, allow=checks.allow)
-    joints = JointLog(built, sim.motion)
-    out = _Checked(built, tracker, recorder, timer, progress, record_stride, sim.total_steps, joints, wear,
-                   checks.exclusions)
+    # the states until a stop is asked (polled before each state is made)
+    states = _until(sim.steps(contacts=False, every=every), lambda: stop.asked)
+    ahead = None
+    if options.overlap and scene.effects.dynamics and not static:
+        # dynamics: the simulation settles and steps ahead on a thread of its own (sim.ahead)
+        # while the detection model and the checks are prepared here
+        ahead = StepsAhead(states, depth_for(sim.state_bytes()), before=settle)
+    else:
+        settle()
+    try:
+        detector = None
+        if validate and not static:
+            built = with_detection(built, planned)
+            detector = Detector(built)
+        timer = _Timer()
+        config = CheckConfig(method=options.method or scene.check.method,
+                             spacing=options.spacing or scene.check.spacing,
+                             clearance=scene.check.clearance)
+        checks = StepChecks(built, config, options.only, options.advance, detector, timer.lap)
+        timer.skip()          # preparing the checks is set-up, as building the model is: no stage's
+        settings = _settings(scene)
+        recorder = Recorder(built, options.record, checks.shapes, settings) if options.record else None
+        # The recording samples the checked steps at about RECORD_RATE (and at
+        # every step where an event starts or ends): a viewer needs no 500 Hz.
+        # The wear map measures contact at the same rate (bends at every step).
+        record_stride = max(1, int(round(1.0 / (RECORD_RATE * every * scene.timestep))))
+        wear = WearMap([c.name for c in built.cables], [c.rest_s for c in built.cables],
+                       [c.radius for c in built.cables],
+                       [(p.name, shape) for p, shape in zip(built.parts, checks.shapes)],
+                       scene.check.clearance, checks.exclusions, stride=record_stride)
+        timer.skip()          # opening the recording is no step's cost (it was never timed)
+        tracker = EventTracker(hold=3 * every * scene.timestep, allow=checks.allow)
+        joints = JointLog(built, sim.motion)
+        out = _Checked(built, tracker, recorder, timer, progress, record_stride, sim.total_steps, joints, wear,
+                       checks.exclusions)
+    except BaseException:
+        if ahead is not None:
+            ahead.close()
+        raise
     complete = False
-    # the states until a stop is asked (polled before each step is simulated)
-    states = () if stop.asked else _until(sim.steps(contacts=False, every=every), lambda: stop.asked)
-    # dynamics: the simulation steps ahead on a thread of its own (sim.ahead)
-    ahead = StepsAhead(states) if (options.overlap and scene.effects.dynamics and not static) else None
     batch: list = []
     size = BATCH
     loop_start = time.perf_counter()
@@ -241,12 +260,14 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         physics_warnings=tuple(built.warnings) + ends.hull_warnings,
         substeps=built.substeps.count if built.substeps else 1,
         timing=Timing(time.perf_counter() - start, dict(timer.total),
-                      sim.collision_seconds() if (validate and not static) else None, loop_s),
+                      detector.collision_seconds() if detector is not None else None, loop_s),
         recording=options.record)
 
 
 def _until(states: Iterator, stop: Callable[[], bool]) -> Iterator:
-    """`states` until `stop()` (asked before each next state is made)."""
+    """`states` until `stop()` (asked before each state is made, the first too)."""
+    if stop():
+        return
     for state in states:
         yield state
         if stop():

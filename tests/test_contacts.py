@@ -53,7 +53,7 @@ def _contacts(scene, every=1):
     sim = Simulation(built)
     sim.reset()
     sim.settle()
-    return [sim.detect_qpos(state.qpos) for state in list(sim.steps(contacts=False))[::every]]
+    return [sim.detector.detect_qpos(state.qpos) for state in list(sim.steps(contacts=False))[::every]]
 
 
 def test_kinds_and_names(tmp_path):
@@ -105,8 +105,8 @@ def test_raw_contacts_are_mujocos_arrays_and_vertices_read_as_elements():
     sim.reset()
     sim.settle()
     qposes = [s.qpos for k, s in zip(range(40), sim.steps(contacts=False)) if k % 4 == 0]
-    raws = sim.collide_many(qposes)
-    m, d = built.detect, sim.detect_data
+    raws = sim.detector.collide_many(qposes)
+    m, d = built.detect, sim.detector.detect_data
     for qpos, raw in zip(qposes, raws):
         d.qpos[:] = qpos
         mujoco.mj_forward(m, d)

@@ -91,7 +91,7 @@ def _mujoco(scene):
     built = build(scene)
     sim = Simulation(built)
     sim.reset()
-    return built, sim.detect_qpos(built.qpos0)
+    return built, sim.detector.detect_qpos(built.qpos0)
 
 
 def test_the_u_is_concave_and_a_box_is_convex():
@@ -212,7 +212,7 @@ def test_a_surface_in_patches_has_the_contacts_of_the_whole_surface(tmp_path, mo
     assert set(surface_geoms(cut.detect)[1].tolist()) == {whole.parts[0].geom_id}
 
     def key(built, reach):
-        c = Simulation(built, reach=reach).detect_qpos(built.qpos0)
+        c = Simulation(built, reach=reach).detector.detect_qpos(built.qpos0)
         return sorted(zip(c.kind.tolist(), c.a.tolist(), c.b.tolist(), c.elem_a.tolist(), c.dist.tolist(),
                           map(tuple, c.pos.tolist())))
 

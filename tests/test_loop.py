@@ -77,18 +77,18 @@ def test_the_detection_models_collision_time_is_the_cpu_time_of_its_passes():
     built = build(parse_scene(_door(contact=True), Path("/virtual/door.toml")))
     sim = Simulation(built)
     sim.reset()
-    assert sim.collision_seconds() == 0.0
+    assert sim.detector.collision_seconds() == 0.0
     qposes = [sim.data.qpos.copy()] * 5
     start = time.thread_time()
-    sim.collide_many(qposes)
+    sim.detector.collide_many(qposes)
     cpu = time.thread_time() - start
-    assert sim.detect_data.timer[mujoco.mjtTimer.mjTIMER_POS_COLLISION].number == 5
-    first = sim.collision_seconds()
+    assert sim.detector.detect_data.timer[mujoco.mjtTimer.mjTIMER_POS_COLLISION].number == 5
+    first = sim.detector.collision_seconds()
     assert 0.0 < first <= cpu
-    sim.collide_many(qposes)
-    assert sim.collision_seconds() > first
+    sim.detector.collide_many(qposes)
+    assert sim.detector.collision_seconds() > first
     assert Simulation(build(parse_scene(_door(contact=True), Path("/virtual/door.toml")), detect=False)
-                      ).collision_seconds() == 0.0
+                      ).detector is None
 
 
 def _robot_cell(duration: float):
@@ -111,23 +111,23 @@ def test_the_simulations_body_poses_are_the_detection_models_bit_for_bit():
     sim.reset()
     sim.settle()
     states = list(sim.steps(contacts=False))
-    m2, d2 = built.detect, sim.detect_data
+    m2, d2 = built.detect, sim.detector.detect_data
     for s in states:
         d2.qpos[:] = s.qpos
         mujoco.mj_kinematics(m2, d2)
         assert np.array_equal(s.xpos, d2.xpos) and np.array_equal(s.xmat, d2.xmat)
     qposes = [s.qpos for s in states]
     poses = (np.stack([s.xpos for s in states]), np.stack([s.xmat for s in states]))
-    assert all(np.array_equal(a, b) for a, b in zip(poses, sim.detect_poses(qposes)))
+    assert all(np.array_equal(a, b) for a, b in zip(poses, sim.detector.detect_poses(qposes)))
 
     def fields(raws):
         return [[r.geom, r.flex, r.elem, r.dist, r.pos] for r in raws]
 
-    given, own = sim.collide_many(qposes, poses), sim.collide_many(qposes)
-    every = Simulation(built, reach=False).collide_many(qposes)
+    given, own = sim.detector.collide_many(qposes, poses), sim.detector.collide_many(qposes)
+    every = Simulation(built, reach=False).detector.collide_many(qposes)
     assert sum(len(r.dist) for r in given) > 0
     for a, b, c in zip(fields(given), fields(own), fields(every)):
         assert all(np.array_equal(x, y) and np.array_equal(x, z) for x, y, z in zip(a, b, c))
-    # a simulation without a reach test keeps no poses
+    # a simulation without a mesh part (no reach test) keeps no poses
     assert next(Simulation(build(parse_scene(_door(contact=True), Path("/virtual/door.toml")))).steps(
         contacts=False)).xpos is None

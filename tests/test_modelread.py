@@ -66,6 +66,6 @@ def test_visual_geoms_make_no_contacts_nor_events(tmp_path):
     data = arm_scene(tmp_path, visuals=True)
     sim, states = run_steps(data, tmp_path)
     visual_ids = {v.geom_id for v in sim.built.visuals}
-    raw = sim.collide(states[-1].qpos)
+    raw = sim.detector.collide(states[-1].qpos)
     assert not (set(raw.geom.ravel()) & visual_ids)
     assert all(not str(n).startswith(("link/shell", "stand/box0")) for s in states for n in s.contacts.b)

@@ -98,15 +98,15 @@ def _key(raw) -> list:
 
 def _unfiltered(sim: Simulation, qposes) -> list:
     every = Simulation(sim.built, reach=False)
-    assert every.reach is None
-    return every.collide_many(qposes)
+    assert every.detector.reach is None
+    return every.detector.collide_many(qposes)
 
 
 def _reachable(sim: Simulation, qpos: np.ndarray) -> np.ndarray:
-    m, d = sim.built.detect, sim.detect_data
+    m, d = sim.built.detect, sim.detector.detect_data
     d.qpos[:] = qpos
     mujoco.mj_kinematics(m, d)
-    return sim.reach.reachable(d.xpos[None].copy(), d.xmat[None].copy())[0]
+    return sim.detector.reach.reachable(d.xpos[None].copy(), d.xmat[None].copy())[0]
 
 
 def _placed(built, qpos: np.ndarray, body: str, pos, rot: np.ndarray) -> np.ndarray:
@@ -123,7 +123,7 @@ def _placed(built, qpos: np.ndarray, body: str, pos, rot: np.ndarray) -> np.ndar
 
 def test_a_far_surface_is_left_out_and_the_contacts_are_the_same(cell):
     built, sim = cell
-    assert len(sim.reach) == 2
+    assert len(sim.detector.reach) == 2
     q0 = built.qpos0
     names = {p.geom_id: p.name for p in built.parts}
     surfaces = [names[g] for g in surface_geoms(built.detect)[1].tolist()]
@@ -140,11 +140,12 @@ def test_a_far_surface_is_left_out_and_the_contacts_are_the_same(cell):
     # (10 mm below, the pocket's floor is 13 mm from the cable's end: beyond the
     # contact distance, and the pieces' boxes leave the near U out too)
     assert [_reachable(sim, q).tolist().count(True) for q in qposes[1:4]] == [0, 1, 1]
-    found = sim.collide_many(qposes)
+    found = sim.detector.collide_many(qposes)
     assert [_key(a) for a in found] == [_key(b) for b in _unfiltered(sim, qposes)]
     assert len(found[3].dist) and len(found[2].dist) and not len(found[0].dist)   # contacts, and states without
     m = built.detect
-    assert (m.flex_vertnum[sim.reach.flexes] > 0).all() and (m.flex_bvhadr[sim.reach.flexes] >= 0).all()
+    flexes = sim.detector.reach.flexes
+    assert (m.flex_vertnum[flexes] > 0).all() and (m.flex_bvhadr[flexes] >= 0).all()
 
 
 @settings(max_examples=60)
@@ -166,7 +167,7 @@ def test_a_patch_left_out_is_beyond_the_contact_distance(patched, offset, turn, 
     tree of boxes: a patch left out is beyond MuJoCo's contact distance,
     and the contacts are those of every patch in."""
     _, sim = patched
-    assert len(sim.reach) == 32 and len(sim.reach._levels) == 5 + PIECE_LEVELS
+    assert len(sim.detector.reach) == 32 and len(sim.detector.reach._levels) == 5 + PIECE_LEVELS
     _left_out_beyond_contact(patched, offset, turn, carrier, carrier_turn, far)
 
 
@@ -215,7 +216,7 @@ def test_the_cull_and_the_tree_keep_the_patches_a_direct_test_keeps(patched):
     the tree keep exactly the patches that testing every segment against
     every piece keeps (some states keep none, some many)."""
     built, sim = patched
-    m, d = built.detect, sim.detect_data
+    m, d = built.detect, sim.detector.detect_data
     q0 = built.qpos0
     jnt = built.model.body_jntadr[mujoco.mj_name2id(built.model, mujoco.mjtObj.mjOBJ_BODY, "carrier")]
     end = q0[int(built.model.jnt_qposadr[jnt]):][:3]
@@ -232,10 +233,10 @@ def test_the_cull_and_the_tree_keep_the_patches_a_direct_test_keeps(patched):
         xpos.append(d.xpos.copy())
         xmat.append(d.xmat.copy())
     xpos, xmat = np.array(xpos), np.array(xmat)
-    got = sim.reach.reachable(xpos, xmat)
+    got = sim.detector.reach.reachable(xpos, xmat)
     kept = got.sum(axis=1)
     assert (kept == 0).any() and kept.max() >= 4
-    assert np.array_equal(got, _direct(sim.reach, m, xpos, xmat))
+    assert np.array_equal(got, _direct(sim.detector.reach, m, xpos, xmat))
 
 
 def test_patches_are_left_out_one_by_one(patched):
@@ -246,13 +247,13 @@ def test_patches_are_left_out_one_by_one(patched):
     names = {p.geom_id: p.name for p in built.parts}
     near = np.array([names[g] == "near/u" for g in surface_geoms(built.detect)[1].tolist()])
     assert keep[near].any() and not keep[near].all() and not keep[~near].any()
-    found = sim.collide_many([built.qpos0])
+    found = sim.detector.collide_many([built.qpos0])
     assert len(found[0].dist) and _key(found[0]) == _key(_unfiltered(sim, [built.qpos0])[0])
 
 
 def test_a_patch_left_out_has_no_vertices_elements_tree_bits_or_body_and_restore_undoes_it(patched):
     built, sim = patched
-    m, reach = built.detect, sim.reach
+    m, reach = built.detect, sim.detector.reach
     compiled = [a.copy() for a in (m.flex_vertnum, m.flex_elemnum, m.flex_bvhadr, m.flex_contype,
                                    m.flex_conaffinity, m.flex_vertbodyid)]
     keep = np.arange(len(reach)) % 3 == 0
@@ -275,7 +276,7 @@ def test_a_patch_left_out_has_no_vertices_elements_tree_bits_or_body_and_restore
 
 def _left_out_beyond_contact(cell, offset, turn, carrier, carrier_turn, far):
     built, sim = cell
-    m, d = built.detect, sim.detect_data
+    m, d = built.detect, sim.detector.detect_data
     q0 = built.qpos0
     jnt = built.model.body_jntadr[mujoco.mj_name2id(built.model, mujoco.mjtObj.mjOBJ_BODY, "carrier")]
     end = q0[int(built.model.jnt_qposadr[jnt]):][:3]
@@ -288,7 +289,7 @@ def _left_out_beyond_contact(cell, offset, turn, carrier, carrier_turn, far):
     cable = built.cables[0]
     pts = d.flexvert_xpos[m.flex_vertadr[cable.flex_id]:][:cable.count]
     margin = float(m.flex_margin[cable.flex_id])
-    for f, kept in zip(sim.reach.flexes.tolist(), keep.tolist()):
+    for f, kept in zip(sim.detector.reach.flexes.tolist(), keep.tolist()):
         verts = d.flexvert_xpos[m.flex_vertadr[f]:][:m.flex_vertnum[f]]
         tri = verts[m.flex_elem[m.flex_elemdataadr[f]:][:3 * m.flex_elemnum[f]].reshape(-1, 3)]
         seg = np.repeat(np.arange(cable.count - 1), len(tri))
@@ -296,7 +297,7 @@ def _left_out_beyond_contact(cell, offset, turn, carrier, carrier_turn, far):
         dist = segment_triangle(pts[seg], pts[seg + 1], tri[t, 0], tri[t, 1], tri[t, 2])[0].min()
         gap = dist - cable.radius - float(m.flex_radius[f])
         assert kept or gap > margin, (f, gap)
-    assert _key(sim.collide_many([qpos])[0]) == _key(_unfiltered(sim, [qpos])[0])
+    assert _key(sim.detector.collide_many([qpos])[0]) == _key(_unfiltered(sim, [qpos])[0])
 
 
 @pytest.mark.parametrize("meets", [True, False])
@@ -437,7 +438,7 @@ def test_every_triangle_lies_in_a_piece_of_its_patch(cell, levels):
     2**levels pieces (halves of equal counts of triangles), fewer only when
     it has fewer triangles."""
     built, sim = cell
-    m, flexes = built.detect, sim.reach.flexes
+    m, flexes = built.detect, sim.detector.reach.flexes
     patch, node, lo, hi, axes, axis_lo, axis_hi = pieces(m, flexes, levels)
     assert np.bincount(patch, minlength=len(flexes)).max() <= 2 ** levels and (node < 2 ** levels).all()
     eps = 1e-12
