@@ -1,6 +1,7 @@
 """sim.ahead: states made on a worker thread come out in order, errors and
-early closes reach the consumer, the worker's CPU time is counted and the
-interpreter's switch interval is put back."""
+early closes reach the consumer, a set-up runs on the worker first, the
+worker's CPU time is counted (the set-up's apart), the queue is sized by the
+states' bytes and the interpreter's switch interval is put back."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sim.ahead import SWITCH_INTERVAL, StepsAhead
+from sim.ahead import AHEAD_BYTES, DEPTH, MAX_DEPTH, SWITCH_INTERVAL, StepsAhead, depth_for
 
 
 @settings(max_examples=25, deadline=None)
@@ -78,3 +79,41 @@ def test_switch_interval_is_short_while_running_and_put_back():
     list(ahead)
     ahead.close()
     assert sys.getswitchinterval() == before
+
+
+def test_before_runs_on_the_worker_first_and_its_cpu_is_kept_apart():
+    seen = []
+
+    def settle():
+        seen.append(("before", threading.current_thread().name))
+        t = time.thread_time()
+        while time.thread_time() - t < 0.03:      # 30 ms of the worker's CPU, before any state
+            pass
+
+    def states():
+        seen.append(("first", threading.current_thread().name))
+        yield from range(3)
+
+    with StepsAhead(states(), before=settle) as ahead:
+        assert list(ahead) == [0, 1, 2]
+    worker = "cablecheck-simulation"
+    assert seen == [("before", worker), ("first", worker)]
+    assert 0.03 <= ahead.before_cpu < 0.2 and ahead.cpu < 0.03
+
+
+def test_an_error_before_the_states_reaches_the_consumer():
+    def settle():
+        raise RuntimeError("the model is unstable")
+
+    made = []
+    ahead = StepsAhead((made.append(k) or k for k in range(3)), before=settle)
+    with pytest.raises(RuntimeError, match="unstable"):
+        list(ahead)
+    ahead.close()
+    assert made == []                              # no state is made after a failed set-up
+
+
+@pytest.mark.parametrize("state_bytes, depth", [(1, MAX_DEPTH), (AHEAD_BYTES // 1000, 1000),
+                                                (AHEAD_BYTES, DEPTH), (0, MAX_DEPTH)])
+def test_the_queue_holds_about_ahead_bytes_of_states_within_its_bounds(state_bytes, depth):
+    assert depth_for(state_bytes) == depth

@@ -107,3 +107,21 @@ def test_cable_pressed_into_a_plane_is_measured_exactly_by_both_sides(tmp_path):
 
 
 
+
+
+def test_a_detection_model_added_later_is_the_one_build_makes(tmp_path):
+    """A run builds the simulation first and adds the detection model while
+    the simulation settles: the same models as `build`, the first record
+    left without one."""
+    from sim.build import build, build_simulation, plan_cables, with_detection
+    scene = parse_scene(slider_scene(tmp_path), tmp_path / "s.toml")
+    planned = plan_cables(scene)
+    first = build_simulation(scene, planned)
+    later, whole = with_detection(first, planned), build(scene)
+    assert first.detect is None and later.detect is not None
+    for a, b in ((later.model, whole.model), (later.detect, whole.detect)):
+        assert (a.nq, a.nv, a.ngeom, a.nflex, a.nflexvert) == (b.nq, b.nv, b.ngeom, b.nflex, b.nflexvert)
+        assert np.array_equal(a.geom_size, b.geom_size) and np.array_equal(a.geom_margin, b.geom_margin)
+        assert np.array_equal(a.flex_margin, b.flex_margin) and np.array_equal(a.qpos0, b.qpos0)
+    assert later.substeps == whole.substeps and later.warnings == whole.warnings
+    assert later.model is first.model

@@ -6,6 +6,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+import trimesh
 from test_detection_mesh import u_mesh
 
 from sim.build import build
@@ -22,14 +23,23 @@ R = 0.005
 """Cable radius, metres (also the clearance)."""
 
 
-def _scene(tmp_path, dynamics: bool = True, validate: bool = True):
+def _scene(tmp_path, dynamics: bool = True, validate: bool = True, block: bool = False):
     """Two straight cables (r 5 mm) along y, held at y = +-0.1 (past the
     U's ends) 1 mm above the hull's top, within the simulation's contact
     margin, so each lies on the U's top: `over` in the middle, above the
     pocket (the hull's top face spans it there: the surface is the pocket's
     walls and floor, 15 mm and more away); `flat` at x = 0.03, on a prong's
-    top face, which the hull shares."""
+    top face, which the hull shares. `block`: a convex mesh part too, first,
+    out of the cables' way (a mesh whose hull is its surface: not watched)."""
     u_mesh().export(tmp_path / "u.stl")
+    trimesh.creation.box(extents=[0.02, 0.02, 0.02]).export(tmp_path / "block.stl")
+    extra = """
+[[parts]]
+name = "block"
+shape = "mesh"
+file = "block.stl"
+pos = [0.3, 0.3, 0.0]
+""" if block else ""
     z = 0.04 + R + 0.001
     cables = "".join(f"""
 [[cables]]
@@ -53,6 +63,7 @@ clearance = {R}
 validate = {str(validate).lower()}
 [[bodies]]
 name = "fixture"
+""" + extra + """
 [[parts]]
 name = "u"
 body = "fixture"
@@ -189,3 +200,18 @@ def test_only_active_simulation_contacts_of_cables_with_watched_hulls_are_read(g
     assert len(rows.dist) == sum(dist <= margin for _, _, dist, margin in mine) > 0
     assert set(rows.cable.tolist()) == {0, 1} and (rows.part == 0).all()
     assert mujoco.mjtGeom(int(gaps_built.model.geom_type[part])) == mujoco.mjtGeom.mjGEOM_MESH
+
+
+def test_hull_rows_of_a_mesh_part_that_is_not_watched_are_left_out(tmp_path):
+    """The simulation reads every mesh part's hull contacts (it runs before
+    the detection model exists); the gaps keep the watched parts' only."""
+    built = build(_scene(tmp_path, block=True))
+    block = [p.name for p in built.parts].index("block")
+    u = [p.name for p in built.parts].index("u")
+    g = HullGaps(built)
+    assert g.parts == ["u"] and block != u
+    g.take(np.array([0.5]), [_hulls([(0, block, 3, 0.001)])], [_contacts([])])
+    assert g.found() == []
+    g.take(np.array([0.6]), [_hulls([(0, u, 3, 0.001)])], [_contacts([])])
+    (found,) = g.found()
+    assert found.part == "u" and found.bounded
