@@ -103,9 +103,11 @@ class Timing:
     other side is no stage's time); `collision`: MuJoCo's own collision
     passes on the detection model (their CPU time), a part of the validate stage
     (what validation costs at least), or None when the run does not
-    validate; `loop`: the wall-clock time of the step loop (simulating,
-    checking, validating, the wear map and the recording to its close: the
-    run without building and settling), or None where not measured."""
+    validate; `loop`: the wall-clock time of the step loop (checking,
+    validating, the wear map and the recording to its close, and the
+    simulating they wait for: the run without building; the simulation
+    may have settled and stepped ahead on its own thread while the run
+    was still building), or None where not measured."""
 
     total: float
     stages: dict[str, float]
