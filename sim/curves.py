@@ -95,6 +95,18 @@ class Curve:
             return value, np.zeros_like(value)
         return self.value(t), self.rate(t)
 
+    def at_many(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """`at` at each of `times` (m,): (m, C) values and (m, C) rates, the
+        same numbers as `at` one time after the other (scipy evaluates each
+        time on its own), for two polynomial calls in all."""
+        t = np.asarray(times, float)
+        value = self.value(np.clip(t, self.start, self.end))
+        rate = np.zeros_like(value)
+        inside = (t > self.start) & (t < self.end)
+        if inside.any():
+            rate[inside] = self.rate(t[inside])
+        return value, rate
+
     def sample(self, times: np.ndarray) -> np.ndarray:
         """(m, C) values at the times (m,), held outside [start, end]."""
         return self.value(np.clip(np.asarray(times, float), self.start, self.end))

@@ -64,6 +64,19 @@ class HullRows:
 
 
 @dataclass(frozen=True)
+class HullRaw:
+    """One state's simulation contacts as MuJoCo lists them (`HullReader.raw`):
+    (n, 2) flex, geom and element of both sides, (n,) distance and
+    includemargin."""
+
+    flex: np.ndarray
+    geom: np.ndarray
+    elem: np.ndarray
+    dist: np.ndarray
+    margin: np.ndarray
+
+
+@dataclass(frozen=True)
 class HullGap:
     """A (cable, part) the simulation held on the part's hull: the largest
     gap to the surface (metres; `bounded`: the surface was beyond the
@@ -102,23 +115,43 @@ class HullReader:
         geom_part[[built.parts[i].geom_id for i in meshes]] = meshes
         return cls(flex_cable, geom_part)
 
+    @staticmethod
+    def raw(data: mujoco.MjData) -> HullRaw:
+        """The simulation's contacts as they are in `data` (copied), for
+        `rows_many` later: the simulation's thread only copies them."""
+        n = int(data.ncon)
+        con = data.contact
+        return HullRaw(np.array(con.flex[:n], np.int64).reshape(n, 2), np.array(con.geom[:n], np.int64).reshape(n, 2),
+                       np.array(con.elem[:n], np.int64).reshape(n, 2), np.array(con.dist[:n], float),
+                       np.array(con.includemargin[:n], float))
+
     def rows(self, data: mujoco.MjData) -> HullRows:
         """The active contacts (dist <= includemargin) of `data` between a
         cable element and a mesh part's geom (its hull); `part` indexes
         `Built.parts`."""
-        n = int(data.ncon)
-        con = data.contact
-        flex = np.asarray(con.flex[:n], np.int64).reshape(n, 2)
-        geom = np.asarray(con.geom[:n], np.int64).reshape(n, 2)
-        elem = np.asarray(con.elem[:n], np.int64).reshape(n, 2)
-        dist = np.asarray(con.dist[:n], float)
+        state, *rows = self.rows_many([self.raw(data)])
+        return HullRows(*rows)
+
+    def rows_many(self, raws: list[HullRaw | None]) -> tuple[np.ndarray, ...]:
+        """`rows` of many states' `raw` contacts (None: none) at once: the
+        state index of each row, then the `HullRows` fields, concatenated."""
+        raws = [r for r in raws]
+        counts = [0 if r is None else len(r.dist) for r in raws]
+        present = [r for r in raws if r is not None]
+        if not present or not sum(counts):
+            empty = np.zeros(0, np.int64)
+            return empty, empty, empty, empty, np.zeros(0)
+        state = np.repeat(np.arange(len(raws)), counts)
+        flex, geom, elem = (np.concatenate([getattr(r, f) for r in present]) for f in ("flex", "geom", "elem"))
+        dist = np.concatenate([r.dist for r in present])
+        margin = np.concatenate([r.margin for r in present])
         cable = self._flex_cable[flex]                # -1 indexes the "no flex" entry
         part = self._geom_part[np.where(flex >= 0, -1, geom)]
         side = (cable[:, 0] < 0).astype(np.int64)    # the cable's side
-        row = np.arange(n)
+        row = np.arange(len(dist))
         c, p, e = cable[row, side], part[row, 1 - side], elem[row, side]
-        keep = (c >= 0) & (p >= 0) & (e >= 0) & (dist <= np.asarray(con.includemargin[:n], float))
-        return HullRows(c[keep], p[keep], e[keep], dist[keep])
+        keep = (c >= 0) & (p >= 0) & (e >= 0) & (dist <= margin)
+        return state[keep], c[keep], p[keep], e[keep], dist[keep]
 
 
 def could_hold(built: Built) -> bool:
@@ -154,6 +187,7 @@ class HullGaps:
         self.parts = [built.parts[i].name for i in parts]
         self._watched = np.full(len(built.parts) + 1, -1, np.int64)   # Built.parts index -> watched index
         self._watched[parts] = np.arange(len(parts))
+        self._reader = HullReader.of(built)
         self._cable_names, self._cable_ids = _table(self.cables)
         self._part_names, self._part_ids = _table(self.parts)
         self._by_code: tuple | None = None      # (name table, cable and part per code)
@@ -165,13 +199,14 @@ class HullGaps:
         self._bounded = np.zeros(n, bool)
         self._t0, self._t1 = np.full(n, np.inf), np.full(n, -np.inf)
 
-    def take(self, times: np.ndarray, hulls: list[HullRows], detected: list[Contacts]) -> None:
-        """Compare a batch of states: their simulation hull contacts
-        (`rows`) with the detection model's named contacts at the same states."""
-        if not self.parts or not any(h is not None and len(h.dist) for h in hulls):
+    def take(self, times: np.ndarray, hulls: list[HullRaw | None], detected: list[Contacts]) -> None:
+        """Compare a batch of states: their simulation contacts (`HullReader.raw`,
+        None: none) with the detection model's named contacts at the same states."""
+        if not self.parts or self._reader is None:
             return
-        none = HullRows(*(np.zeros(0, np.int64),) * 3, np.zeros(0))
-        hulls = [none if h is None else h for h in hulls]
+        hs, hc, hp, he, hd = self._reader.rows_many(hulls)
+        if not len(hd):
+            return
         ncab, npart, nel = len(self.cables), len(self.parts), self._elems + 1
 
         def keys(state, cable, part, elem):
@@ -187,8 +222,6 @@ class HullGaps:
         least = first_least(state, own, dist, ncab * npart * nel)     # in key order
         k, surface = np.r_[keys(state[least], 0, 0, 0) + own[least], -1], np.r_[dist[least], np.nan]   # -1: found by none
 
-        hs = np.repeat(np.arange(len(hulls)), [len(h.dist) for h in hulls])
-        hc, hp, he, hd = (np.concatenate([getattr(h, f) for h in hulls]) for f in ("cable", "part", "elem", "dist"))
         hp = self._watched[hp]                        # the rows' parts (Built.parts) as watched parts
         mine = hp >= 0
         hs, hc, hp, he, hd = hs[mine], hc[mine], hp[mine], he[mine], hd[mine]

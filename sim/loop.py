@@ -25,8 +25,22 @@ import numpy as np
 from sim.build import Built
 from sim.contacts import Contacts
 from sim.detector import Detector
-from sim.hullgap import HullReader, HullRows
+from sim.hullgap import HullRaw, HullReader
 from sim.motion import Motion
+
+
+SCRIPT_BLOCK = 256
+"""Scene steps whose script times are evaluated at once (`script_times`)."""
+
+
+def script_times(ks: np.ndarray, substeps: int, step_size: float, timestep: float) -> np.ndarray:
+    """The times the loop sets the script at for scene steps `ks`, in order:
+    after each substep j < substeps of step k, ((k - 1) substeps + j)
+    step_size, then k timestep (the same floating-point products as
+    computing each one on its own)."""
+    j = np.arange(1, substeps)
+    inner = ((ks[:, None] - 1) * substeps + j[None, :]) * step_size
+    return np.concatenate([inner, (ks * timestep)[:, None]], axis=1).ravel()
 
 
 @dataclass(frozen=True, eq=False)
@@ -43,8 +57,9 @@ class StepState:
       qpos: the simulation's generalized positions (for detecting later).
       end_rot: (C, 2, 3, 3) world rotation of the bodies each cable's start
         and end ride on (the frames clamped ends hold; `checker.twist`).
-      hull: the simulation's contacts of cables with mesh parts' hulls
-        (`sim.hullgap`), or None when not validated or no hull can hold one.
+      hull: the simulation's contacts as MuJoCo lists them, copied (`sim.hullgap`
+        reads those of cables with mesh parts' hulls from them), or None when
+        not validated or no hull can hold a cable.
       xpos, xmat: (nbody, 3) and (nbody, 9) the simulation's body poses at
         `qpos` (model coordinates) for the detection model's reach test
         (`sim.detector.Detector.collide_many`), or None when not validated.
@@ -58,7 +73,7 @@ class StepState:
     energy: np.ndarray
     qpos: np.ndarray
     end_rot: np.ndarray | None = None
-    hull: HullRows | None = None
+    hull: HullRaw | None = None
     xpos: np.ndarray | None = None
     xmat: np.ndarray | None = None
 
@@ -90,7 +105,7 @@ class Simulation:
         # the reach test reads the body poses; it has something to leave out only with meshes
         meshes = self.model.geom_type[self._part_geoms] == mujoco.mjtGeom.mjGEOM_MESH
         self._poses = validate and bool(meshes.any())
-        self._verts = [np.arange(c.vert_adr, c.vert_adr + c.count) for c in built.cables]
+        self._verts = [slice(c.vert_adr, c.vert_adr + c.count) for c in built.cables]   # each cable's, in order
         self._end_bodies = np.array([[built.body_ids[c.start.body], built.body_ids[c.end.body]]
                                      for c in built.scene.cables], int).reshape(-1, 2)
         scene = built.scene
@@ -104,7 +119,7 @@ class Simulation:
         """About how many bytes one `StepState` of this simulation holds
         (its arrays; how deep a queue of them may be, `sim.ahead`)."""
         m = self.model
-        floats = (m.nq + 2 + 16 * len(self._part_geoms) + 3 * int(sum(len(v) for v in self._verts))
+        floats = (m.nq + 2 + 16 * len(self._part_geoms) + 3 * int(sum(c.count for c in self.built.cables))
                   + 18 * len(self._end_bodies) + (12 * m.nbody if self._poses else 0))
         return 8 * floats
 
@@ -154,22 +169,32 @@ class Simulation:
         dynamics = self.built.scene.effects.dynamics
         if dynamics:
             self.motion.apply(self.data, 0.0)  # settling froze the targets' velocity
-        for k in range(1, self.total_steps + 1):
-            if dynamics:
-                # The step carries the targets (at their pose and velocity at
-                # its start) and the cable to time k * dt. The cable's reaction
-                # moves a target's free joint a little within the step despite
-                # its armature (a panel flush on a floor read 1e-6 m inside it);
-                # the script's pose at k * dt then replaces what the step made
-                # of it, so targets follow their script exactly, and its
-                # velocity there carries the next step.
-                for j in range(1, self.substeps):
+        apply, sub = self.motion.apply_values, self.substeps
+        for first in range(1, self.total_steps + 1, SCRIPT_BLOCK):
+            # the script at every time the block's steps set it, in one evaluation
+            ks = np.arange(first, min(first + SCRIPT_BLOCK, self.total_steps + 1))
+            value, rate = self.motion.curve.at_many(script_times(ks, sub, self.step_size, self.timestep))
+            row = 0
+            for k in ks.tolist():
+                if dynamics:
+                    # The step carries the targets (at their pose and velocity at
+                    # its start) and the cable to time k * dt. The cable's reaction
+                    # moves a target's free joint a little within the step despite
+                    # its armature (a panel flush on a floor read 1e-6 m inside it);
+                    # the script's pose at k * dt then replaces what the step made
+                    # of it, so targets follow their script exactly, and its
+                    # velocity there carries the next step.
+                    for _ in range(1, sub):
+                        mujoco.mj_step(self.model, self.data)
+                        apply(self.data, value[row], rate[row])
+                        row += 1
                     mujoco.mj_step(self.model, self.data)
-                    self.motion.apply(self.data, ((k - 1) * self.substeps + j) * self.step_size)
-                mujoco.mj_step(self.model, self.data)
-            self.motion.apply(self.data, k * self.timestep)
-            if k % every == 0 or k == self.total_steps:
-                yield self.state(k, contacts)
+                else:
+                    row += sub - 1
+                apply(self.data, value[row], rate[row])
+                row += 1
+                if k % every == 0 or k == self.total_steps:
+                    yield self.state(k, contacts)
 
     def state(self, step: int, contacts: bool) -> StepState:
         """The current state as a StepState (no stepping)."""
@@ -191,7 +216,7 @@ class Simulation:
         poses[:, 3, 3] = 1.0
         found = self.detector.detect_qpos(d.qpos) if (contacts and self.detector is not None) else None
         end_rot = d.xmat[self._end_bodies].reshape(-1, 2, 3, 3)
-        hull = self.hull.rows(d) if self.hull is not None else None   # the last step's contacts
+        hull = self.hull.raw(d) if self.hull is not None else None   # the last step's contacts, as they are
         bodies = (d.xpos.copy(), d.xmat.copy()) if self._poses else (None, None)
         return StepState(step, step * self.timestep, cables, poses, found, d.energy.copy(), d.qpos.copy(),
                          end_rot, hull, *bodies)

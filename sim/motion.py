@@ -123,6 +123,12 @@ class Motion:
         value, rate = self.curve.at(t)
         if frozen:
             rate = np.zeros_like(rate)
+        self.apply_values(data, value, rate)
+
+    def apply_values(self, data: mujoco.MjData, value: np.ndarray, rate: np.ndarray) -> None:
+        """Put every scripted target at `value` with `rate` (one time's
+        `Curve.at`, or a row of `Curve.at_many`: the loop evaluates a block
+        of steps' times at once)."""
         data.qpos[self.base_qpos_adr] = self.base_qpos0
         data.qvel[self.base_dof_adr] = 0.0
         data.qpos[self._joint_qadr] = value[self._joint_idx]

@@ -57,3 +57,18 @@ def test_merge_keeps_each_motion_on_its_own_times():
     assert np.allclose(got[:, :2], a(np.clip(ts, 0.0, 3.0)), atol=1e-12)
     assert np.allclose(got[:, 2], b(np.clip(ts, 0.5, 2.0))[:, 0], atol=1e-12)
     assert np.allclose(got[:, 3], 7.0)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(-3.0, 3.0), min_size=2, max_size=6), st.sampled_from(["cubic", "linear"]),
+       st.lists(st.floats(-1.0, 7.0), min_size=1, max_size=30))
+def test_at_many_is_at_time_by_time_to_the_bit(ys, kind, ts):
+    """The loop evaluates a block of steps' times at once: the same bits as
+    one `at` after the other, breakpoints, ends and times outside included."""
+    times = np.arange(len(ys), dtype=float) * 1.3
+    ts = np.array(ts + [0.0, times[-1], times[1]])
+    curve = merge([interpolant(times, np.column_stack([ys, np.square(ys)]), kind)])
+    value, rate = curve.at_many(ts)
+    for t, v, r in zip(ts, value, rate):
+        one_v, one_r = curve.at(float(t))
+        assert np.array_equal(v, one_v) and np.array_equal(r, one_r)

@@ -11,7 +11,7 @@ from test_detection_mesh import u_mesh
 
 from sim.build import build
 from sim.contacts import Contacts
-from sim.hullgap import GAP_TOLERANCE, HullGaps, HullReader, HullRows, watched
+from sim.hullgap import GAP_TOLERANCE, HullGaps, HullRaw, HullReader, watched
 from sim.mjspec import SIM_MARGIN_FRACTION
 from sim.run import RunOptions, run_scene
 from sim.scene import load_scene
@@ -114,11 +114,17 @@ def _contacts(rows):
                     np.array(e), np.full(n, -1), np.array(d, float), np.zeros((n, 3)))
 
 
-def _hulls(rows):
-    """rows: (cable index, part index, element, dist) of the simulation."""
-    c, p, e, d = (np.array(x) for x in zip(*rows)) if rows else ([],) * 4
-    return HullRows(np.asarray(c, np.int64), np.asarray(p, np.int64), np.asarray(e, np.int64),
-                    np.asarray(d, float))
+def _hulls(built, rows):
+    """rows: (cable index, part index, element, dist) of the simulation, as
+    MuJoCo lists them (`HullReader.raw`): the cable on either side (in turn),
+    within the contact's margin."""
+    n = len(rows)
+    flex, geom, elem = (np.full((n, 2), -1, np.int64) for _ in range(3))
+    for i, (c, p, e, _) in enumerate(rows):
+        side = i % 2
+        flex[i, side], geom[i, 1 - side], elem[i, side] = built.cables[c].flex_id, built.parts[p].geom_id, e
+    dist = np.array([r[3] for r in rows], float)
+    return HullRaw(flex, geom, elem, dist, dist + 1e-3)
 
 
 @pytest.fixture(scope="module")
@@ -135,7 +141,7 @@ def test_gaps_are_element_by_element_the_surface_less_the_hull(gaps_built):
     # `flat` element 5 on the hull 1 mm, the surface 1 mm + tol / 2 (within the tolerance);
     # a surface contact of another element and another cable's hull contact do not pair up
     g.take(np.array([0.5]),
-           [_hulls([(over, 0, 3, 0.001), (over, 0, 4, 0.001), (flat, 0, 5, 0.001)])],
+           [_hulls(gaps_built, [(over, 0, 3, 0.001), (over, 0, 4, 0.001), (flat, 0, 5, 0.001)])],
            [_contacts([("over", "u", 3, 0.003), ("over", "u", 3, 0.0045), ("flat", "u", 5, 0.001 + tol / 2),
                        ("flat", "u", 6, 0.004)])])
     (found,) = g.found()
@@ -143,7 +149,7 @@ def test_gaps_are_element_by_element_the_surface_less_the_hull(gaps_built):
     assert found.gap == pytest.approx(R - 0.001) and found.bounded
     # later states: a larger measured gap wins and clears the bound; the span grows
     g.take(np.array([0.6, 0.7, 0.8]),
-           [_hulls([(over, 0, 3, 0.0)]), None, _hulls([(over, 0, 7, 0.0005)])],
+           [_hulls(gaps_built, [(over, 0, 3, 0.0)]), None, _hulls(gaps_built, [(over, 0, 7, 0.0005)])],
            [_contacts([("over", "u", 3, 0.0045)]), _contacts([]), _contacts([("over", "u", 7, 0.0006)])])
     (found,) = g.found()
     assert found.gap == pytest.approx(0.0045) and not found.bounded and (found.t_start, found.t_end) == (0.5, 0.6)
@@ -171,8 +177,8 @@ def test_contacts_numbered_by_a_shared_table_give_the_gaps_their_names_give(gaps
     by_name, by_code = HullGaps(gaps_built), HullGaps(gaps_built)
     over, flat = by_name.cables.index("over"), by_name.cables.index("flat")
     for k in range(6):
-        hulls = [_hulls([(over, 0, int(e), float(d)) for e, d in zip(rng.integers(0, 8, 3), rng.uniform(0, 2e-3, 3))]
-                        + [(flat, 0, 5, 0.001)])]
+        drawn = zip(rng.integers(0, 8, 3), rng.uniform(0, 2e-3, 3))
+        hulls = [_hulls(gaps_built, [(over, 0, int(e), float(d)) for e, d in drawn] + [(flat, 0, 5, 0.001)])]
         found = [_contacts([("over", "u", int(e), float(d)) for e, d in zip(rng.integers(0, 8, 4),
                                                                             rng.uniform(0, 5e-3, 4))]
                            + [("flat", "frame", 5, 0.003), ("flat", "u", 5, 0.004)])]
@@ -210,8 +216,25 @@ def test_hull_rows_of_a_mesh_part_that_is_not_watched_are_left_out(tmp_path):
     u = [p.name for p in built.parts].index("u")
     g = HullGaps(built)
     assert g.parts == ["u"] and block != u
-    g.take(np.array([0.5]), [_hulls([(0, block, 3, 0.001)])], [_contacts([])])
+    g.take(np.array([0.5]), [_hulls(built, [(0, block, 3, 0.001)])], [_contacts([])])
     assert g.found() == []
-    g.take(np.array([0.6]), [_hulls([(0, u, 3, 0.001)])], [_contacts([])])
+    g.take(np.array([0.6]), [_hulls(built, [(0, u, 3, 0.001)])], [_contacts([])])
     (found,) = g.found()
     assert found.part == "u" and found.bounded
+
+
+def test_many_states_raw_contacts_read_at_once_are_each_states_rows(gaps_built):
+    from sim.loop import Simulation
+    sim = Simulation(gaps_built)
+    sim.reset()
+    sim.settle()
+    raws, one = [], []
+    for state in sim.steps(contacts=False):
+        raws.append(state.hull)
+        one.append(sim.hull.rows_many([state.hull])[1:])
+    raws.insert(1, None)
+    one.insert(1, tuple(np.zeros(0) for _ in range(4)))
+    state, *rows = sim.hull.rows_many(raws)
+    assert len(state) and np.array_equal(state, np.repeat(np.arange(len(raws)), [len(r[0]) for r in one]))
+    for got, parts in zip(rows, zip(*one)):
+        assert np.array_equal(got, np.concatenate(parts))

@@ -7,9 +7,10 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
+import pytest
 
 from sim.build import build
-from sim.loop import Simulation
+from sim.loop import Simulation, script_times
 from sim.motion import Motion
 from sim.scene import euler_matrix, parse_scene
 
@@ -131,3 +132,14 @@ def test_the_simulations_body_poses_are_the_detection_models_bit_for_bit():
     # a simulation without a mesh part (no reach test) keeps no poses
     assert next(Simulation(build(parse_scene(_door(contact=True), Path("/virtual/door.toml")))).steps(
         contacts=False)).xpos is None
+
+
+@pytest.mark.parametrize("substeps, step_size, timestep", [(1, 0.002, 0.002), (2, 0.0005, 0.001),
+                                                           (3, 0.002 / 3, 0.002), (7, 1e-3 / 7, 1e-3)])
+def test_script_times_are_the_loops_products_in_order(substeps, step_size, timestep):
+    """The block of script times is, bit for bit and in order, what the loop
+    computed one substep after the other."""
+    ks = np.arange(40, 300)
+    one = [t for k in ks.tolist() for t in
+           [((k - 1) * substeps + j) * step_size for j in range(1, substeps)] + [k * timestep]]
+    assert np.array_equal(script_times(ks, substeps, step_size, timestep), np.array(one))
