@@ -8,9 +8,10 @@ cores the next steps can be simulated while the last ones are checked:
 queue and hands them on in order, and the run's wall time tends to the
 larger of the two sides instead of their sum. The worker starts with the
 run's settling (`before`), while the run still builds its detection model
-and prepares its checks, so the second core works through the set-up too. The states are the same
-objects, computed by the same code in the same order: the checks, events
-and report are those of the run in one thread (tests/test_ahead.py).
+and prepares its checks, so the second core works through the set-up too.
+The states are the same objects, computed by the same code in the same
+order: the checks, events and report are those of the run in one thread
+(tests/test_ahead.py).
 
 Why a thread and not a process: the states stay where they are made (no
 copy, no pickling), the simulation keeps its model, data and script, and a

@@ -85,9 +85,9 @@ class Simulation:
     contacts, so each keeps what that comparison reads besides the cables:
     with mesh parts, the simulation's body poses (`StepState.xpos`, `xmat`,
     for the reach test) and its contacts of cables with those parts' hulls
-    (`StepState.hull`). None: when `built` has a
-    detection model. A run builds the detection model while the simulation
-    already settles (`sim.run`), so it says so itself.
+    (`StepState.hull`). None: when `built` has a detection model. A run
+    builds the detection model while the simulation already settles
+    (`sim.run`), so it says so itself.
 
     `detector`: the detection model's passes (`sim.detector.Detector`), when
     `built` has one; `reach` is handed to it."""

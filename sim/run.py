@@ -3,10 +3,14 @@
 Data flows one way: scene -> models -> steps -> (cable body centres, part
 poses) -> per-cable measures, checks and MuJoCo's contacts (`sim.stepcheck`,
 a batch of consecutive steps at a time) -> events, report and recording.
-`run_scene` owns the order of those stages, their timing, and what happens
-on Ctrl-C: the loop stops after the step being simulated (its batch is
-checked first), the recording is finished and moved into place, and the
-report is written with `"complete": false`. The run hands on what it found
+With dynamics the simulation settles and steps on a thread of its own
+from the moment its model is built (`sim.ahead`), while this thread builds
+the detection model (`sim.build.with_detection`, `sim.detector`) and
+prepares the checks and the recording; the states come out in order, the
+same as on one thread. `run_scene` owns the order of those stages, their
+timing, and what happens on Ctrl-C: the loop stops after the step being
+simulated (its batch is checked first), the recording is finished and
+moved into place, and the report is written with `"complete": false`. The run hands on what it found
 as one frozen record (`sim.report.RunOutcome`), which `sim.report` turns
 into the report and writes.
 
