@@ -233,6 +233,12 @@ class Built:
     simulation model's timestep is the scene's divided by `substeps.count`."""
 
 
+def mesh_parts(built: Built) -> np.ndarray:
+    """Indices into `built.parts` of the mesh parts (MuJoCo collides each as
+    its convex hull; the detection model may see its surface)."""
+    return np.flatnonzero([p.shape == "mesh" for p in built.parts]).astype(np.int64)
+
+
 @dataclass(frozen=True)
 class Substeps:
     """How finely the simulation steps within one scene step.

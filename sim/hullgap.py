@@ -41,7 +41,7 @@ import numpy as np
 
 from checker.arrays import first_least
 from checker.validation import shared_codes
-from sim.built import Built
+from sim.built import Built, mesh_parts
 from sim.contacts import Contacts
 from sim.detection_mesh import surface_geoms
 
@@ -66,8 +66,8 @@ class HullRows:
 @dataclass(frozen=True)
 class HullRaw:
     """One state's simulation contacts as MuJoCo lists them (`HullReader.raw`):
-    (n, 2) flex, geom and element of both sides, (n,) distance and
-    includemargin."""
+    (n, 2) int32 flex, geom and element of both sides (-1 for none), (n,)
+    distance and includemargin."""
 
     flex: np.ndarray
     geom: np.ndarray
@@ -106,8 +106,8 @@ class HullReader:
         if not could_hold(built):
             return None
         m = built.model
-        meshes = [i for i, p in enumerate(built.parts) if m.geom_type[p.geom_id] == mujoco.mjtGeom.mjGEOM_MESH]
-        if not meshes:
+        meshes = mesh_parts(built)
+        if not len(meshes):
             return None
         flex_cable = np.full(m.nflex + 1, -1, np.int64)          # the last entry: "no flex" (-1)
         flex_cable[[c.flex_id for c in built.cables]] = np.arange(len(built.cables))
@@ -117,13 +117,11 @@ class HullReader:
 
     @staticmethod
     def raw(data: mujoco.MjData) -> HullRaw:
-        """The simulation's contacts as they are in `data` (copied), for
-        `rows_many` later: the simulation's thread only copies them."""
-        n = int(data.ncon)
-        con = data.contact
-        return HullRaw(np.array(con.flex[:n], np.int64).reshape(n, 2), np.array(con.geom[:n], np.int64).reshape(n, 2),
-                       np.array(con.elem[:n], np.int64).reshape(n, 2), np.array(con.dist[:n], float),
-                       np.array(con.includemargin[:n], float))
+        """The simulation's contacts as they are in `data` (copied, as
+        `sim.contacts.ContactReader.raw` copies them), for `rows_many` later:
+        the simulation's thread only copies them."""
+        con = data.contact                  # as many as data.ncon
+        return HullRaw(con.flex.copy(), con.geom.copy(), con.elem.copy(), con.dist.copy(), con.includemargin.copy())
 
     def rows(self, data: mujoco.MjData) -> HullRows:
         """The active contacts (dist <= includemargin) of `data` between a
@@ -135,14 +133,14 @@ class HullReader:
     def rows_many(self, raws: list[HullRaw | None]) -> tuple[np.ndarray, ...]:
         """`rows` of many states' `raw` contacts (None: none) at once: the
         state index of each row, then the `HullRows` fields, concatenated."""
-        raws = [r for r in raws]
         counts = [0 if r is None else len(r.dist) for r in raws]
         present = [r for r in raws if r is not None]
         if not present or not sum(counts):
             empty = np.zeros(0, np.int64)
             return empty, empty, empty, empty, np.zeros(0)
         state = np.repeat(np.arange(len(raws)), counts)
-        flex, geom, elem = (np.concatenate([getattr(r, f) for r in present]) for f in ("flex", "geom", "elem"))
+        flex, geom, elem = (np.concatenate([getattr(r, f) for r in present]).astype(np.int64)
+                            for f in ("flex", "geom", "elem"))
         dist = np.concatenate([r.dist for r in present])
         margin = np.concatenate([r.margin for r in present])
         cable = self._flex_cable[flex]                # -1 indexes the "no flex" entry
@@ -161,16 +159,11 @@ def could_hold(built: Built) -> bool:
     return bool(built.cables) and scene.effects.dynamics and "cable-structure" in scene.effects.contact
 
 
-def watched(built: Built) -> list:
-    """The parts (`sim.built.PartModel`) whose hull can hold a cable off
-    their surface: those the detection model sees as their surface, when
-    the simulation is stepped with cable-structure contact; none without a
-    detection model (validation off) or without cables."""
-    return [built.parts[i] for i in watched_indices(built)]
-
-
-def watched_indices(built: Built) -> np.ndarray:
-    """`watched`, as indices into `built.parts`."""
+def watched(built: Built) -> np.ndarray:
+    """Indices into `built.parts` of the parts whose hull can hold a cable
+    off their surface: those the detection model sees as their surface,
+    when the simulation is stepped with cable-structure contact; none
+    without a detection model (validation off) or without cables."""
     if built.detect is None or not could_hold(built) or not built.parts:
         return np.zeros(0, np.int64)
     geoms = np.array([p.geom_id for p in built.parts])
@@ -183,7 +176,7 @@ class HullGaps:
     def __init__(self, built: Built):
         self._scene = built.scene
         self.cables = [c.name for c in built.cables]
-        parts = watched_indices(built)
+        parts = watched(built)
         self.parts = [built.parts[i].name for i in parts]
         self._watched = np.full(len(built.parts) + 1, -1, np.int64)   # Built.parts index -> watched index
         self._watched[parts] = np.arange(len(parts))

@@ -23,6 +23,7 @@ import mujoco
 import numpy as np
 
 from sim.build import Built
+from sim.built import mesh_parts
 from sim.contacts import Contacts
 from sim.detector import Detector
 from sim.hullgap import HullRaw, HullReader
@@ -103,8 +104,7 @@ class Simulation:
         self.hull = HullReader.of(built) if validate else None
         self._part_geoms = np.array([p.geom_id for p in built.parts], int)
         # the reach test reads the body poses; it has something to leave out only with meshes
-        meshes = self.model.geom_type[self._part_geoms] == mujoco.mjtGeom.mjGEOM_MESH
-        self._poses = validate and bool(meshes.any())
+        self._poses = validate and bool(len(mesh_parts(built)))
         self._verts = [slice(c.vert_adr, c.vert_adr + c.count) for c in built.cables]   # each cable's, in order
         self._end_bodies = np.array([[built.body_ids[c.start.body], built.body_ids[c.end.body]]
                                      for c in built.scene.cables], int).reshape(-1, 2)

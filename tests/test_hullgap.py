@@ -97,9 +97,10 @@ def test_a_cable_on_the_hull_over_the_pocket_is_named_and_one_on_a_flat_face_is_
 
 
 def test_no_watch_without_a_detection_model_or_a_stepped_simulation(tmp_path):
-    assert [p.name for p in watched(build(_scene(tmp_path)))] == ["u"]
-    assert watched(build(_scene(tmp_path, dynamics=False))) == []
-    assert watched(build(_scene(tmp_path, validate=False), detect=False)) == []
+    built = build(_scene(tmp_path))
+    assert [built.parts[i].name for i in watched(built)] == ["u"]
+    assert watched(build(_scene(tmp_path, dynamics=False))).tolist() == []
+    assert watched(build(_scene(tmp_path, validate=False), detect=False)).tolist() == []
     assert HullReader.of(build(_scene(tmp_path, dynamics=False))) is None
 
 
