@@ -4,14 +4,16 @@
 and then for every step up to the scene's duration: the time, every cable's
 body centres in order from start to end, the world pose of every part, and,
 when asked for, MuJoCo's contacts from the detection model (every
-interaction enabled, margins from the clearance) fed the simulated positions.
+interaction enabled, margins from the clearance) fed the simulated positions
+(`sim.detector`, which also runs on its own for a run's batches).
 
 Simulate only what the scene calls for: with `effects.dynamics = false`
 nothing is stepped; the cables stay exactly as routed while scripted bodies
 move (forward kinematics only), so rigid parts can still be checked.
 
-This module does not check interference, log or report: it is the interface
-the checker and the recorder read from.
+This module does not check interference, log, report or hold the detection
+model's passes (`sim.detector`): it is the interface the checker and the
+recorder read from.
 """
 
 from __future__ import annotations

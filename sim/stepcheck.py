@@ -95,7 +95,7 @@ exclusion windows (the total change of element lengths a skipped step allows).""
 
 
 class Detector(Protocol):
-    """MuJoCo's own contacts for a state (see :class:`sim.loop.Simulation`)."""
+    """MuJoCo's own contacts for a state (see :class:`sim.detector.Detector`)."""
 
     def collide_many(self, qposes: list[np.ndarray], poses: tuple[np.ndarray, np.ndarray] | None = None
                      ) -> list[RawContacts]: ...
@@ -157,8 +157,9 @@ class StepChecks:
       only: an assembly path for ``--only`` (see :class:`sim.run.RunOptions`), or None.
       advance: use the skip rule.
       detector: MuJoCo's detection (``collide_many(qposes, poses)`` for a
-        batch's states and their body poses, then ``read_many(raws)`` to name their contacts: a
-        :class:`sim.loop.Simulation`), or None (no validation).
+        batch's states and their body poses, then ``read_many(raws)`` to
+        name their contacts: a :class:`sim.detector.Detector`), or None (no
+        validation).
       lap: lap(stage) ends a timed stage ("check", "sim", "validate").
     """
 
