@@ -57,12 +57,15 @@ BATCH = 32
 """Consecutive states checked together at the start of a run (a run's states
 arrive this many at a time); each later batch doubles, up to :data:`BATCH_MAX`."""
 
-BATCH_MAX = 128
+BATCH_MAX = 256
 """The longest batch. A proven-clear state costs mostly numpy's per-call
 overhead of the batch's calls (the bound, measures, twist, active pairs), so
 it shrinks as the batch grows (the door scene's check per step with fixed
 batches of 32 states 1.0, 64 0.86, 128 0.77, 256 0.73, side by side in one
-run on a loaded machine). A stop request waits for the batch being checked:
+run on a loaded machine; the robot cell's check 0.68-0.70 s with batches of
+at most 128, 0.61-0.67 s with 256, 0.59-0.62 s with 512, three runs each
+side by side, but 512 leaves more of the run's last batch to check after
+the simulation ends). A stop request waits for the batch being checked:
 the first batches stay short so a run stopped early stops at once, and a
 run's last batch, or an interrupted one's, is shorter."""
 
