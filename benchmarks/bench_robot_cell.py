@@ -6,9 +6,10 @@ fence, dressed with two hoses clipped to the upper arm and the forearm,
 running a 5 s pick-and-place. One run, recording on, gives side by side
 (the report's ``timing``):
 
-- check (with the wear map, made from its records) + validation +
-  recording against MuJoCo's simulation time (ratio), and the real-time
-  factor (simulated seconds per wall second);
+- check + validation + recording against MuJoCo's simulation time (the
+  ratio the robot-cell target is set on), the same with the wear map
+  (made from the check's records, a stage of its own in the report), and
+  the real-time factor (simulated seconds per wall second);
 - parts, pairs and events that come from the model's visual geoms (0 when
   the model is taken as it comes);
 - hard events of a cable against a part riding the body one of its ends or
@@ -79,7 +80,7 @@ def main(argv=None) -> None:
         profiler.disable()
 
     t = report["timing"]
-    # the wear map is made from the check's records: ours, counted with the check
+    # all our work at the steps: the check, the wear map made from its records, validation, recording
     overhead = t["check_s"] + t["wear_s"] + t["validate_s"] + t["record_s"]
     duration = report["settings"]["t_end"]
     events = report["events"]
@@ -101,7 +102,8 @@ def main(argv=None) -> None:
     print(f"  of validation, MuJoCo's collision pass (detection model): {col:.2f} s "
           f"({t['validate_collision_ms_per_step']:.2f} ms/step) = {col / sim_s:.2f} of the "
           f"simulation (validation's floor); the rest, ours: {t['validate_s'] - col:.2f} s")
-    print(f"  check + wear map + validation + recording / simulation = {overhead / sim_s:.2f} (target <= 1)")
+    print(f"  check + validation + recording / simulation = {(overhead - t['wear_s']) / sim_s:.2f} (target <= 1); "
+          f"with the wear map, check + wear map + validation + recording / simulation = {overhead / sim_s:.2f}")
     print(f"  with validation at its floor: (check + wear map + MuJoCo's collision pass + recording) / simulation = "
           f"{(t['check_s'] + t['wear_s'] + col + t['record_s']) / sim_s:.2f}; "
           f"MuJoCo's collision pass alone / simulation = {col / sim_s:.2f}")
@@ -113,7 +115,9 @@ def main(argv=None) -> None:
         t1 = one["timing"]
         print(f"  on one thread (nothing simulated ahead): whole run {t1['total_s']:.2f} s against "
               f"{t['total_s']:.2f} s, {t1['total_s'] / t['total_s']:.2f}x as long; "
-              f"its (check + wear map + validation + recording) / simulation = "
+              f"its (check + validation + recording) / simulation = "
+              f"{(t1['check_s'] + t1['validate_s'] + t1['record_s']) / max(t1['sim_s'], 1e-12):.2f}, "
+              f"with the wear map "
               f"{(t1['check_s'] + t1['wear_s'] + t1['validate_s'] + t1['record_s']) / max(t1['sim_s'], 1e-12):.2f}")
     print(f"  parts from visual geoms: {len(set(part_names) & visual_names)}, pairs: {len(pairs_visual)}, "
           f"events: {len(from_visual)} (target 0)")
