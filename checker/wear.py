@@ -348,11 +348,11 @@ class WearMap:
             self._started = True
             start = 1
         anchor, peak, peak_dist, thr = self._anchor, self._peak, self._peak_dist, self._threshold
-        for kk in k[start:]:
+        for kk in k[start:]:       # sequential: each step's reversals depend on the last
             away = row_norm(kk - anchor)
             further = away >= peak_dist
-            peak[further] = kk[further]
-            peak_dist[further] = away[further]
+            np.copyto(peak, kk, where=further[:, None])
+            np.fmax(peak_dist, away, out=peak_dist)          # away where further, else as it was (NaN too)
             back = ~further & (peak_dist > thr)
             if back.any():
                 back &= row_norm(kk - peak) > thr
