@@ -100,7 +100,7 @@ class Curve:
         same numbers as `at` one time after the other (scipy evaluates each
         time on its own), for two polynomial calls in all."""
         t = np.asarray(times, float)
-        value = self.value(np.clip(t, self.start, self.end))
+        value = self.sample(t)
         rate = np.zeros_like(value)
         inside = (t > self.start) & (t < self.end)
         if inside.any():
