@@ -13,9 +13,11 @@ evaluations, no loop over joints).
   cable's reaction does not push it around. Joints without a motion hold the
   model's own `qpos0` (MuJoCo's reference pose, the joints' `ref`).
 - `[[bodies]]` (free bodies in MuJoCo) follow their positions and euler
-  angles, each angle interpolated on its own (the loader unwraps them to
-  the short way between samples); the angular velocity handed to MuJoCo is
-  the body-frame rate of those angles. A body without a motion holds its
+  angles. Each angle is a channel of its own, interpolated as the numbers
+  are written (keys 0, 270, -270 turn +270 degrees, then 540 back: no
+  wrapping, no short way, no slerp), and only then turned into the body's
+  quaternion, at each time; the angular velocity handed to MuJoCo is the
+  body-frame rate of those angles. A body without a motion holds its
   `[[bodies]]` pose.
 
 Before its first sample and after its last one a motion holds that sample.

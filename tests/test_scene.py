@@ -799,8 +799,8 @@ def test_motion_file_in_scene_units(folder):
     assert tr.joints == ("elbow", "lift") and tr.bodies == ("drawer",)
     np.testing.assert_allclose(tr.joint_values, [[np.radians(10), 0.02], [np.radians(20), 0.03]])
     np.testing.assert_allclose(tr.body_pos[:, 0], [[1.0, 0.0, 0.0], [1.2, 0.0, 0.0]])
-    # rz unwrapped the short way (90 -> 190, not -170); rx, ry from [[bodies]]
-    np.testing.assert_allclose(tr.body_euler[:, 0], [[0, 0, 90], [0, 0, 190]])
+    # rz as written (90 -> -170: 260 degrees back, not 100 on); rx, ry from [[bodies]]
+    np.testing.assert_array_equal(tr.body_euler[:, 0], [[0, 0, 90], [0, 0, -170]])
     np.testing.assert_allclose(s.start_frames["drawer"][1], euler_matrix([0, 0, 90]), atol=1e-15)
 
 

@@ -269,7 +269,8 @@ class Trajectory:
       bodies: names of the `[[bodies]]` it drives.
       body_pos: (n, B, 3) world positions, metres.
       body_euler: (n, B, 3) world orientations, degrees (intrinsic x, y, z),
-        unwrapped: consecutive samples differ by at most 180 degrees per angle.
+        as written: consecutive samples may differ by any angle (0 then 270
+        is a turn of 270 degrees, not of -90).
       interpolation: "cubic" or "linear" (`sim.curves`).
     """
 

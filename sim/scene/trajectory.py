@@ -20,8 +20,10 @@ from sim.scene.records import KeyframeKey, Trajectory
 
 
 def make_trajectory(times, joints, values, bodies, pos, euler, interpolation) -> Trajectory:
-    """A read-only Trajectory; euler angles unwrapped (short way between samples)."""
-    euler = np.unwrap(np.asarray(euler, float), period=360.0, axis=0)
+    """A read-only Trajectory. Euler angles stay as written, never wrapped
+    nor unwrapped: keys 0, 270, -270 turn 270 degrees one way, then 540 back
+    (a turntable, a rotary axis or a cable drum may turn past 180 degrees
+    between two samples)."""
     arrays = [np.array(a, float) for a in (times, values, pos, euler)]
     for a in arrays:
         a.setflags(write=False)
