@@ -77,7 +77,10 @@ class TriangleForest:
         triangles is split at the median of its triangles' box centres along
         the longest axis of their extent (one sort by node, then centre,
         for all nodes of the level), its lower half becoming the left child.
-        Memory and time are O(T) per level, O(T log T) in all."""
+        The nodes are then numbered part by part: a part's tree is one
+        contiguous block, its root first, a node's children side by side
+        (``right == left + 1``). Memory and time are O(T) per level,
+        O(T log T) in all."""
         tri_lo = np.asarray(tri_lo, float).reshape(-1, 3)
         tri_hi = np.asarray(tri_hi, float).reshape(-1, 3)
         tri_part = np.asarray(tri_part, np.int64)
@@ -127,7 +130,6 @@ class TriangleForest:
         first = np.concatenate(n_first) if n_first else np.zeros(0, i64)
         count = np.concatenate(n_count) if n_count else np.zeros(0, i64)
         left = np.concatenate(n_left) if n_left else np.zeros(0, i64)
-        right = np.where(left >= 0, left + 1, -1)
         # node boxes: reduce each node's range of ``order`` (ranges of one level are disjoint)
         node_lo = np.empty((len(first), 3))
         node_hi = np.empty((len(first), 3))
@@ -143,6 +145,19 @@ class TriangleForest:
             bounds = np.r_[0, np.cumsum(co)[:-1]]
             node_lo[a + o] = np.minimum.reduceat(s_lo[idx], bounds, axis=0)
             node_hi[a + o] = np.maximum.reduceat(s_hi[idx], bounds, axis=0)
+        # renumber the nodes part by part (stably: each part's nodes keep their
+        # level order, a node's two children stay side by side), so that a part's
+        # tree is one contiguous block of nodes, root first (what ``tiled`` copies)
+        node_part = tri_part[order[first]] if len(first) else np.zeros(0, i64)
+        perm = np.argsort(node_part, kind="stable")           # new node -> old node
+        new_of = np.empty(len(perm), i64)
+        new_of[perm] = np.arange(len(perm), dtype=i64)
+        left = left[perm]
+        left = np.where(left >= 0, new_of[np.maximum(left, 0)], -1)
+        right = np.where(left >= 0, left + 1, -1)
+        first, count = first[perm], count[perm]
+        node_lo, node_hi = node_lo[perm], node_hi[perm]
+        root[has] = new_of[root[has]]
         leaf = left < 0
         return TriangleForest(
             node_lo=node_lo, node_hi=node_hi, left=left, right=right,
@@ -155,7 +170,7 @@ class TriangleForest:
         with its triangles renumbered in the same order."""
         idx = np.asarray(idx, np.int64)
         n_parts = len(self.root)
-        # each part's nodes are contiguous (built depth first, part by part)
+        # each part's nodes are one contiguous block starting at its root (see build)
         has = self.root >= 0
         node_end = np.full(n_parts, -1, np.int64)
         roots = self.root[has]

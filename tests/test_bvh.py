@@ -76,6 +76,47 @@ def test_forest_query_matches_brute_force():
     assert got == want
 
 
+@settings(max_examples=60)
+@given(st.lists(st.integers(0, 300), min_size=1, max_size=7), st.lists(st.integers(0, 6), min_size=1, max_size=12),
+       st.integers(0, 2**32 - 1))
+def test_tiled_forest_answers_as_brute_force_on_each_copy(counts, pick, seed):
+    """Trees of parts with different triangle counts (so of different depths,
+    laid out level by level across parts when built), tiled in any order with
+    repeats: each copy's query answers what brute force gives that part's
+    triangles, renumbered; every part's nodes form one block from its root."""
+    rng = np.random.default_rng(seed)
+    n = len(counts)
+    idx = np.array([p % n for p in pick])
+    part = np.repeat(np.arange(n), counts)
+    lo = rng.uniform(-10, 10, (len(part), 3))
+    hi = lo + rng.uniform(0, 1.5, (len(part), 3))
+    forest = TriangleForest.build(lo, hi, part, n)
+    for f in (forest, forest.tiled(idx)):
+        live = np.flatnonzero(f.root >= 0)
+        blocks = np.r_[f.root[live], len(f.left)]
+        inner = f.left >= 0
+        owner = np.repeat(live, np.diff(blocks))
+        assert np.array_equal(blocks[:-1], np.sort(f.root[live]))
+        assert np.all(owner[f.left[inner]] == owner[inner]) and np.all(f.right[inner] == f.left[inner] + 1)
+    tiled = forest.tiled(idx)
+    t_start = np.r_[0, np.cumsum(counts)]
+    new_start = np.r_[0, np.cumsum(np.array(counts)[idx])]
+    q = 50
+    q_part = rng.integers(0, len(idx), q)
+    q_lo = rng.uniform(-10, 10, (q, 3))
+    q_hi = q_lo + rng.uniform(0, 6, (q, 3))
+    qi, ti = tiled.query(q_part, q_lo, q_hi)
+    got = set(zip(qi.tolist(), (ti - new_start[q_part[qi]]).tolist()))
+    want = set()
+    for k in range(q):
+        p = idx[q_part[k]]
+        rows = np.arange(t_start[p], t_start[p + 1])
+        hit = np.all((lo[rows] <= q_hi[k]) & (q_lo[k] <= hi[rows]), axis=1)
+        want |= {(k, int(t - t_start[p])) for t in rows[hit]}
+    assert got == want
+    assert np.array_equal(tiled.tri_lo, lo[np.concatenate([np.arange(t_start[p], t_start[p + 1]) for p in idx])])
+
+
 def test_aabb_pairs_matches_brute_force():
     rng = np.random.default_rng(5)
     lo = rng.uniform(0, 20, (200, 3))
