@@ -169,6 +169,76 @@ def segment_segment(
     return dist, s, t, cp, cq
 
 
+
+def segment_segment_apart(
+    p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray,
+    u0: np.ndarray, u1: np.ndarray, v0: np.ndarray, v1: np.ndarray, gap: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Closest points between segments ``p0 p1`` and ``q0 q1`` among the
+    pairs of points at least ``gap`` apart in a coordinate along them.
+
+    The coordinate runs linearly along each segment: ``u`` from ``u0`` at
+    ``p0`` to ``u1 >= u0`` at ``p1``, ``v`` from ``v0`` at ``q0`` to ``v1 >=
+    v0`` at ``q1``; only pairs with ``v - u >= gap`` count (for two elements
+    of one polyline, u and v its arc length: places at least ``gap`` apart
+    along it). The squared distance is a convex quadratic over the unit
+    square of parameters and the allowed pairs are a half-plane of it, so:
+    when :func:`segment_segment`'s closest points are allowed they are the
+    answer; otherwise the least distance over the allowed pairs lies on the
+    half-plane's edge ``v - u = gap`` (a convex function has no other local
+    minimum on a convex set that misses its global one), a segment of
+    parameter pairs along which the difference of the two points is linear:
+    its least length is a point-segment distance (from the origin). When no
+    pair is allowed (``u0 + gap > v1``) the distance is ``inf`` and the
+    closest points are ``p0`` and ``q1``.
+
+    Args:
+        p0, p1, q0, q1: (n, 3) segment ends.
+        u0, u1, v0, v1, gap: (n,) the coordinates at the ends and the least
+            separation: finite, ``u1 > u0`` unless ``p0 == p1`` (the
+            coordinate grows along a segment that has length, as arc length
+            does), and likewise ``v1 > v0`` unless ``q0 == q1``.
+
+    Returns:
+        dist: (n,) least distance between allowed points (inf: none allowed).
+        s, t: (n,) parameters of the closest points on the first / second segment.
+        cp, cq: (n, 3) the closest points.
+    """
+    dist, s, t, cp, cq = segment_segment(p0, p1, q0, q1)
+    du, dv = u1 - u0, v1 - v0
+    u = u0 + s * du
+    v = v0 + t * dv
+    off = np.nonzero(~(v - u >= gap))[0]
+    if len(off) == 0:
+        return dist, s, t, cp, cq
+    P0, P1, Q0, Q1 = p0[off], p1[off], q0[off], q1[off]
+    U0, DU, V0, DV, G = u0[off], du[off], v0[off], dv[off], gap[off]
+    # allowed pairs on the edge: u in [lo, hi], v = u + gap
+    lo = np.maximum(U0, V0 - G)
+    hi = np.minimum(U0 + DU, V0 + DV - G)
+    empty = ~(lo <= hi)
+    hi = np.where(empty, lo, hi)
+
+    def params(x):       # parameters on both segments of the edge's pair at u = x
+        return (np.clip(_safe_div(x - U0, DU), 0.0, 1.0),
+                np.clip(_safe_div(x + G - V0, DV), 0.0, 1.0))
+
+    s_lo, t_lo = params(lo)
+    s_hi, t_hi = params(hi)
+    a_lo = P0 + s_lo[:, None] * (P1 - P0) - (Q0 + t_lo[:, None] * (Q1 - Q0))
+    a_hi = P0 + s_hi[:, None] * (P1 - P0) - (Q0 + t_hi[:, None] * (Q1 - Q0))
+    _, lam, _ = point_segment(np.zeros_like(a_lo), a_lo, a_hi)
+    s_e = s_lo + lam * (s_hi - s_lo)
+    t_e = t_lo + lam * (t_hi - t_lo)
+    s_e = np.where(empty, 0.0, s_e)
+    t_e = np.where(empty, 1.0, t_e)
+    cp_e = P0 + s_e[:, None] * (P1 - P0)
+    cq_e = Q0 + t_e[:, None] * (Q1 - Q0)
+    dist, s, t, cp, cq = dist.copy(), s.copy(), t.copy(), cp.copy(), cq.copy()
+    dist[off] = np.where(empty, np.inf, row_norm(cp_e - cq_e))
+    s[off], t[off], cp[off], cq[off] = s_e, t_e, cp_e, cq_e
+    return dist, s, t, cp, cq
+
 # Region codes of point_triangle: where on the triangle the closest point lies.
 REGION_FACE = 0
 REGION_EDGE_AB, REGION_EDGE_BC, REGION_EDGE_CA = 1, 2, 3

@@ -67,3 +67,18 @@ def part_sets(draw, max_parts: int = 4) -> list[PartState]:
     n = draw(st.integers(1, max_parts))
     return [PartState(f"p{k}", Shape(draw(st.sampled_from(PRIMITIVES)), draw(coords(3, 0.005, 0.05))),
                       draw(poses()), keepout=draw(st.booleans())) for k in range(n)]
+
+
+@st.composite
+def coils(draw, min_points: int = 8, max_points: int = 40) -> CableState:
+    """A cable "c" (radius 2-12 mm) wound as a drawn helix, tight enough
+    (coil radius 0.5-3 radii, pitch up to 4 radii a turn) that it comes back
+    within the clearance of itself near the self rule's window edge (pi r
+    + clearance along it), with drawn jitter on every point (up to 0.4 r)."""
+    r = draw(st.floats(0.002, 0.012))
+    n = draw(st.integers(min_points, max_points))
+    coil = draw(st.floats(0.5, 3.0)) * r
+    pitch = draw(st.floats(0.0, 4.0)) * r
+    turn = np.cumsum(draw(coords(n, 0.15, 1.2)))
+    pts = np.stack([coil * np.cos(turn), coil * np.sin(turn), pitch * turn / (2 * np.pi)], axis=1)
+    return CableState("c", pts + draw(coords((n, 3), -0.4 * r, 0.4 * r)), r)

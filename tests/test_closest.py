@@ -6,7 +6,14 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from checker.closest import point_segment, point_triangle, segment_parameter, segment_segment, segment_triangle
+from checker.closest import (
+    point_segment,
+    point_triangle,
+    segment_parameter,
+    segment_segment,
+    segment_segment_apart,
+    segment_triangle,
+)
 
 pytestmark = pytest.mark.filterwarnings("error")
 
@@ -149,3 +156,98 @@ def test_segment_parameter_is_point_segments_parameter_bit_for_bit():
     b[:20] = a[:20]                                   # zero-length segments: parameter 0
     t = segment_parameter(p, a, b)
     assert np.array_equal(t, point_segment(p, a, b)[1]) and (t[:20] == 0.0).all()
+
+
+def _edge_min(p0, p1, q0, q1, a, b):
+    """Least |P(s) - Q(t)| along the straight edge from parameters a = (s, t)
+    to b in the unit square: the difference is linear in the edge's own
+    parameter, so its least length is a 1-D quadratic's clamped minimum."""
+    def diff(w):
+        return (p0 + w[0] * (p1 - p0)) - (q0 + w[1] * (q1 - q0))
+    da, db = diff(a), diff(b)
+    g = db - da
+    gg = g @ g
+    lam = 0.0 if gg == 0 else min(1.0, max(0.0, -(da @ g) / gg))
+    return np.linalg.norm(da + lam * g)
+
+
+def seg_seg_apart_ref(p0, p1, q0, q1, u0, u1, v0, v1, gap):
+    """Least distance between points of two segments whose coordinates
+    (u along the first, v along the second, linear) satisfy v - u >= gap,
+    written independently of the product: the allowed parameter pairs are
+    the unit square cut by a half-plane, a convex polygon (clipped here
+    corner by corner); the convex quadratic's least value over it is at its
+    interior stationary point when that is allowed, else on one of the
+    polygon's edges. inf when nothing is allowed."""
+    def h(w):       # >= 0: allowed
+        return (v0 + w[1] * (v1 - v0)) - (u0 + w[0] * (u1 - u0)) - gap
+    square = [np.array(c, float) for c in ((0, 0), (1, 0), (1, 1), (0, 1))]
+    poly = []
+    for k in range(4):
+        a, b = square[k], square[(k + 1) % 4]
+        ha, hb = h(a), h(b)
+        if ha >= 0:
+            poly.append(a)
+        if (ha >= 0) != (hb >= 0):
+            poly.append(a + (ha / (ha - hb)) * (b - a))
+    if not poly:
+        return np.inf
+    cands = [_edge_min(p0, p1, q0, q1, poly[k], poly[(k + 1) % len(poly)]) for k in range(len(poly))]
+    d1, d2, r = p1 - p0, q1 - q0, p0 - q0
+    A = np.array([[d1 @ d1, -d1 @ d2], [-d1 @ d2, d2 @ d2]])
+    det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
+    if abs(det) > 1e-12 * (d1 @ d1) * (d2 @ d2) and (d1 @ d1) > 0 and (d2 @ d2) > 0:
+        b0, b1 = -d1 @ r, d2 @ r
+        s = (b0 * A[1, 1] - A[0, 1] * b1) / det
+        t = (A[0, 0] * b1 - A[1, 0] * b0) / det
+        if 0 <= s <= 1 and 0 <= t <= 1 and h((s, t)) >= 0:
+            cands.append(np.linalg.norm(p0 + s * d1 - q0 - t * d2))
+    return min(cands)
+
+
+start = st.floats(0, 10, allow_nan=False, allow_subnormal=False, width=64)
+span = st.one_of(st.just(0.0), st.floats(1e-3, 10, width=64))
+
+
+@settings(max_examples=300, deadline=None)
+@given(vec, vec, vec, vec, start, span, start, span, st.floats(-5, 25, width=64))
+def test_segment_segment_apart_matches_reference(p0, p1, q0, q1, u0, du, v0, dv, gap):
+    """The least distance over the allowed pairs against the polygon
+    reference; the closest points are allowed, on the segments and that far
+    apart; it is never below the unconstrained distance. (A coordinate that
+    does not grow along a segment comes with a segment of no length, the
+    function's precondition, as arc length along a polyline has it.)"""
+    p1 = p0 if du == 0 else p1
+    q1 = q0 if dv == 0 else q1
+    a = [np.array([x], float) for x in (u0, u0 + du, v0, v0 + dv, gap)]
+    d, s, t, cp, cq = segment_segment_apart(p0[None], p1[None], q0[None], q1[None], *a)
+    ref = seg_seg_apart_ref(p0, p1, q0, q1, u0, u0 + du, v0, v0 + dv, gap)
+    scale = 1 + np.max(np.abs([p0, p1, q0, q1]))
+    if np.isinf(ref):
+        assert np.isinf(d[0])
+        return
+    assert abs(d[0] - ref) <= 1e-9 * scale
+    assert 0 <= s[0] <= 1 and 0 <= t[0] <= 1
+    assert np.allclose(cp[0], p0 + s[0] * (p1 - p0)) and np.allclose(cq[0], q0 + t[0] * (q1 - q0))
+    assert abs(np.linalg.norm(cp[0] - cq[0]) - d[0]) <= 1e-12 * scale
+    # the closest pair is allowed (to rounding of the coordinates)
+    assert (v0 + t[0] * dv) - (u0 + s[0] * du) >= gap - 1e-12 * (1 + abs(gap) + u0 + du + v0 + dv)
+    assert d[0] >= segment_segment(p0[None], p1[None], q0[None], q1[None])[0][0] - 1e-12 * scale
+
+
+def test_segment_segment_apart_at_the_windows_edge():
+    """Two parallel unit segments 1 apart, coordinates 0..1 and 1.5..2.5:
+    with gap 2 the allowed pairs have t - s >= 0.5, the nearest of them
+    hypot(0.5, 1) apart on the half-plane's edge (the plain closest points,
+    1 apart at t = s, are not allowed); with gap 0.5 they are; with gap 3
+    nothing is (v - u is at most 2.5)."""
+    p0, p1 = np.array([[0.0, 0, 0]]), np.array([[1.0, 0, 0]])
+    q0, q1 = np.array([[0.0, 1, 0]]), np.array([[1.0, 1, 0]])
+    u0, u1, v0, v1 = (np.array([x]) for x in (0.0, 1.0, 1.5, 2.5))
+    d, s, t, _, _ = segment_segment_apart(p0, p1, q0, q1, u0, u1, v0, v1, np.array([2.0]))
+    # allowed: t - s >= 0.5; least |(s - t, -1)| = hypot(0.5, 1)
+    assert d[0] == pytest.approx(np.hypot(0.5, 1.0), abs=1e-15) and t[0] - s[0] == pytest.approx(0.5)
+    d, s, t, _, _ = segment_segment_apart(p0, p1, q0, q1, u0, u1, v0, v1, np.array([0.5]))
+    assert d[0] == pytest.approx(1.0, abs=1e-15)
+    d, *_ = segment_segment_apart(p0, p1, q0, q1, u0, u1, v0, v1, np.array([3.0]))
+    assert np.isinf(d[0])

@@ -5,6 +5,7 @@ import pytest
 import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_closest import seg_seg_apart_ref
 
 from checker.cable import densify, self_pair_excluded
 from checker.closest import segment_segment
@@ -94,7 +95,8 @@ def brute_points(cables, parts, cfg, exclusions=()):
 
 
 def brute_exact(cables, parts, cfg):
-    """O(n^2) reference for method exact: every element pair, every element-part pair."""
+    """O(n^2) reference for method exact: every element pair, every element-part pair
+    (self: the least distance over each element pair's places outside the window)."""
     best = {}
 
     def put(key, v):
@@ -104,13 +106,14 @@ def brute_exact(cables, parts, cfg):
     for a, (ca, (pa, sa)) in enumerate(zip(cables, dense)):
         r = ca.radius
         na = len(pa) - 1
+        # self: the documented rule literally, every element pair's places at
+        # least pi r + clearance apart along the cable (polygon reference)
+        window = np.pi * r + cfg.clearance
         for i in range(na):
             for j in range(i + 1, na):
-                d, s, t, _, _ = segment_segment(pa[i][None], pa[i + 1][None], pa[j][None], pa[j + 1][None])
-                s_i = sa[i] + s[0] * (sa[i + 1] - sa[i])
-                s_j = sa[j] + t[0] * (sa[j + 1] - sa[j])
-                if not self_pair_excluded(s_i, s_j, r, cfg.clearance):
-                    put((PairType.SELF, ca.name, ca.name), d[0] - 2 * r)
+                d = seg_seg_apart_ref(pa[i], pa[i + 1], pa[j], pa[j + 1], sa[i], sa[i + 1], sa[j], sa[j + 1],
+                                      window)
+                put((PairType.SELF, ca.name, ca.name), d - 2 * r)
         for b in range(a + 1, len(cables)):
             cb = cables[b]
             pb = dense[b][0]

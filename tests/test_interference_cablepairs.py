@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
-from strategies import cable_sets, coords, polylines
-from test_interference import as_dict, assert_same, brute_points
+from strategies import cable_sets, coils, coords, polylines
+from test_interference import as_dict, assert_same, brute_exact, brute_points
 
 from checker.cable import densify_batch
 from checker.interference import Checker, check_state
@@ -95,3 +95,53 @@ def test_points_near_field_equals_brute_force(lines, radius, clearance):
     cables = [CableState(f"c{k}", p, radius) for k, p in enumerate(lines)]
     cfg = CheckConfig(clearance=clearance)
     assert_same(as_dict(check_state(cables, [], cfg)), brute_points(cables, [], cfg), 1e-12)
+
+
+def _self_distance(records):
+    """The self record's distance (None: no self record)."""
+    found = [r.min_distance for r in records if r.type == PairType.SELF]
+    return found[0] if found else None
+
+
+@settings(max_examples=60, deadline=None)
+@given(coils(), st.floats(0.0, 2.0), st.sampled_from([1.0, 2.0, 4.0]))
+def test_self_rule_exact_never_misses_what_points_finds(cable, clearance_r, spacing):
+    """On drawn coils (which come back to themselves at the window's edge):
+    method exact's self record equals an every-element-pair reference of
+    the documented rule taken literally (the least distance over places at
+    least pi r + clearance apart along the cable, by clipping each pair's
+    parameter square: test_closest.seg_seg_apart_ref), method points' equals
+    the literal every-point-pair reference, and exact is never clear where
+    points is not, nor farther (points' places are places of exact's
+    elements)."""
+    r = cable.radius
+    cfg_p = CheckConfig(method="points", spacing=spacing, clearance=clearance_r * r)
+    cfg_e = CheckConfig(method="exact", spacing=spacing, clearance=clearance_r * r)
+    pts = check_state([cable], [], cfg_p)
+    exact = check_state([cable], [], cfg_e)
+    scale = 1e-12 * (1.0 + float(np.abs(cable.points).max()))
+    ref_p = brute_points([cable], [], cfg_p).get((PairType.SELF, "c", "c"))
+    ref_e = brute_exact([cable], [], cfg_e).get((PairType.SELF, "c", "c"))
+    d_p, d_e = _self_distance(pts), _self_distance(exact)
+    assert (d_p is None) == (ref_p is None) and (d_p is None or abs(d_p - ref_p) <= scale)
+    assert (d_e is None) == (ref_e is None) and (d_e is None or abs(d_e - ref_e) <= 1e3 * scale)
+    if d_p is not None:
+        assert d_e is not None and d_e <= d_p + scale
+
+
+def test_self_rule_at_the_windows_edge_a_hairpin():
+    """A hairpin of radius 4 mm, clearance 5 mm (window 4 pi + 5 along the
+    cable): a bend of 8 chords of a circle of radius 4 between two legs
+    that open from 8 mm apart at the bend to 10 mm 20 mm below. The legs'
+    elements are nearest at the bend, inside the window; past it, by
+    symmetry at a = (window - bend) / 2 down each leg, they are 8 + 2 a / L
+    apart (L the leg's length): exact finds that surface distance, points
+    (its points farther down) a larger one."""
+    bend = np.linspace(np.pi, 0.0, 9)
+    arc = np.stack([4.0 * np.cos(bend), 4.0 * np.sin(bend), np.zeros(9)], axis=1)
+    cable = CableState("c", np.concatenate([[[-5.0, -20.0, 0.0]], arc, [[5.0, -20.0, 0.0]]]), 4.0)
+    leg, bent = np.hypot(1.0, 20.0), 16 * 4.0 * np.sin(np.pi / 16)
+    a = (4.0 * np.pi + 5.0 - bent) / 2
+    d_e = _self_distance(check_state([cable], [], CheckConfig(method="exact", clearance=5.0)))
+    d_p = _self_distance(check_state([cable], [], CheckConfig(method="points", clearance=5.0)))
+    assert d_e == pytest.approx(2 * a / leg, abs=1e-12) and d_e < d_p - 0.4

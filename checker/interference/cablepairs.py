@@ -6,8 +6,10 @@ two points of one cable closer than ``2r`` interfere unless
 cable; second pass, a point against the midpoint of every element it is not
 a neighbour of. Two cables: the least distance over all point pairs, against
 ``r1 + r2``. Method ``exact``: element pairs as capsules, exact
-segment-segment distances, the exclusion rule applied at the closest
-points' arc lengths.
+segment-segment distances; along one cable the least distance over the two
+elements' places that the same rule keeps (at least the window apart in arc
+length, :func:`checker.closest.segment_segment_apart`), so exact finds every
+self pair points finds, at a distance no larger, the window's edge included.
 
 Pairs along one cable within a few places of each other (the near field)
 are taken by shifting the point arrays against themselves, one offset at a
@@ -34,7 +36,7 @@ import numpy as np
 
 from checker.arrays import ranges, within
 from checker.cable import self_pair_excluded, self_pair_window
-from checker.closest import row_norm, segment_segment
+from checker.closest import row_norm, segment_segment, segment_segment_apart
 from checker.interference.broad import (
     NEAR,
     SLACK,
@@ -228,7 +230,14 @@ def cable_pairs_exact(dp: Discrete, ch: Chunks, clearance: float, hits: Hits) ->
     exact segment-segment distance: the midpoints' distance minus the half
     lengths; along one cable also the chord between the pair's outer ends
     minus the arc length between them, plus the arc-length separation the
-    self rule requires (closest points nearer along the cable are excluded).
+    self rule requires.
+
+    Along one cable the value is the least distance between places of the
+    two elements at least :func:`~checker.cable.self_pair_window` apart in
+    arc length (:func:`~checker.closest.segment_segment_apart`), not the
+    elements' own closest places filtered by the rule: those may lie inside
+    the window while other places of the same elements, outside it, are
+    within the clearance (a tight bend's legs just past the window's edge).
     """
     p, s, cab, rad, seg = dp.p, dp.s, dp.cable, dp.radius, dp.seg
     if len(seg) == 0:
@@ -281,14 +290,24 @@ def cable_pairs_exact(dp: Discrete, ch: Chunks, clearance: float, hits: Hits) ->
     ia, ib = np.concatenate(ea), np.concatenate(eb)
     if len(ia) == 0:
         return
-    d, ta, tb, ca_, _ = segment_segment(p[ia], p[ia + 1], p[ib], p[ib + 1])
-    sa = s[ia] + ta * (s[ia + 1] - s[ia])
-    sb = s[ib] + tb * (s[ib + 1] - s[ib])
     same = cab[ia] == cab[ib]
     o = ~same
-    hits.add(PairType.CABLE_CABLE, cab[ia[o]], cab[ib[o]], d[o] - rad[ia[o]] - rad[ib[o]], ca_[o], sa[o], sb[o])
-    o = same & ~self_pair_excluded(sa, sb, rad[ia], clearance)
-    hits.add(PairType.SELF, cab[ia[o]], cab[ia[o]], d[o] - 2 * rad[ia[o]], ca_[o], sa[o], sb[o])
+    i, j = ia[o], ib[o]
+    d, ta, tb, ca_, _ = segment_segment(p[i], p[i + 1], p[j], p[j + 1])
+    sa = s[i] + ta * (s[i + 1] - s[i])
+    sb = s[j] + tb * (s[j + 1] - s[j])
+    hits.add(PairType.CABLE_CABLE, cab[i], cab[j], d - rad[i] - rad[j], ca_, sa, sb)
+    # one cable (i < j): the least distance over the places of the two
+    # elements at least the self rule's window apart along it, wherever
+    # the elements' own closest places are (those may lie inside the window
+    # while places of the same elements outside it are within the clearance)
+    i, j = ia[same], ib[same]
+    d, ta, tb, ca_, _ = segment_segment_apart(p[i], p[i + 1], p[j], p[j + 1], s[i], s[i + 1], s[j], s[j + 1],
+                                              reach[i])
+    sa = s[i] + ta * (s[i + 1] - s[i])
+    sb = s[j] + tb * (s[j + 1] - s[j])
+    o = np.isfinite(d)          # allowed by construction (the rule, to the bit at the window's edge)
+    hits.add(PairType.SELF, cab[i[o]], cab[i[o]], d[o] - 2 * rad[i[o]], ca_[o], sa[o], sb[o])
 
 
 def cable_pairs_many(clearance: float, names: Sequence[str], radii: np.ndarray, dense: DenseStates,
