@@ -101,13 +101,15 @@ class Exclusion:
     unstretched cable, or the current arc length where the cable has none)
     lies in ``[s_min, s_max]`` are not checked against ``part``: the
     attachment or clip zone. Measured along the material, the window holds
-    the same piece of cable however far the cable stretches.
+    the same piece of cable however far the cable stretches. ``window``
+    names it in reports ("start", "end", "clip N"; may be empty).
     """
 
     cable: str
     part: str
     s_min: float
     s_max: float
+    window: str = ""
 
 
 @dataclass(frozen=True)

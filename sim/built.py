@@ -38,6 +38,10 @@ class Attachment:
       hold: clamp (two vertices of one short edge are held, see
         `clamp_edges`) or pin (one vertex). Free anchors hold nothing and
         have no attachment.
+      window: the attachment window's name in reports: "start", "end" or
+        "clip N" (the cable's Nth clip as the scene lists them, from 1).
+      parts: the parts (names or assembly paths) the scene says it is
+        fastened to (`part`), or () for the parts it lies against.
     """
 
     kind: str
@@ -45,6 +49,8 @@ class Attachment:
     vertex: int
     s: float
     hold: Hold = Hold.CLAMP
+    window: str = ""
+    parts: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True, eq=False)

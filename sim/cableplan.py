@@ -47,12 +47,16 @@ def default_segments(length: float, radius: float) -> int:
 
 @dataclass(frozen=True)
 class Held:
-    """One held vertex: which end or clip, the body, the vertex, the hold kind."""
+    """One held vertex: which end or clip, the body, the vertex, the hold kind,
+    the window's name ("start", "end", "clip N": the cable's Nth clip, from 1,
+    as listed in the scene) and the parts the scene says it is fastened to."""
 
     kind: str      # "start", "end" or "clip"
     body: str
     vertex: int
     hold: Hold
+    window: str = ""
+    parts: tuple[str, ...] = ()
 
 
 @dataclass
@@ -90,13 +94,13 @@ def plan_cable(cable: CableDef, frames: Frames, where: str, scene: Scene,
     route[0] = frames.to_world(cable.start.body, cable.start.pos)
     route[-1] = frames.to_world(cable.end.body, cable.end.pos)
     clips = []
-    for clip in cable.clips:
+    for n, clip in enumerate(cable.clips, 1):
         point = frames.to_world(clip.body, clip.pos)
         k, s = _closest_arc(route, point)
-        clips.append((s, k, point, clip))
+        clips.append((s, k, point, clip, f"clip {n}"))
     clips.sort(key=lambda c: c[0])
     # Insert clip points (from the last, so earlier segment indices stay valid).
-    for s, k, point, clip in sorted(clips, key=lambda c: (c[1], c[0]), reverse=True):
+    for s, k, point, clip, _ in sorted(clips, key=lambda c: (c[1], c[0]), reverse=True):
         route = np.insert(route, k + 1, point, axis=0)
     keep = np.concatenate([[True], np.linalg.norm(np.diff(route, axis=0), axis=1) > 0])
     route = route[keep]
@@ -119,8 +123,9 @@ def plan_cable(cable: CableDef, frames: Frames, where: str, scene: Scene,
     measure = None if (depth is None or not slack) else depth.measure(cable.radius)
     cuts = [int(np.argmin(np.linalg.norm(route - c[2], axis=1))) for c in clips]
     clip_vertices = np.concatenate([[0], np.cumsum(counts)])[cuts]
-    anchors = ([(0, "start", cable.start)] + [(int(v), "clip", c[3]) for c, v in zip(clips, clip_vertices)]
-               + [(int(counts.sum()), "end", cable.end)])
+    anchors = ([(0, "start", cable.start, "start")]
+               + [(int(v), "clip", c[3], c[4]) for c, v in zip(clips, clip_vertices)]
+               + [(int(counts.sum()), "end", cable.end, "end")])
     droop = length
     for _ in range(2):
         # A clip's held edge along the corner's bisector leaves the route by a
@@ -140,7 +145,7 @@ def plan_cable(cable: CableDef, frames: Frames, where: str, scene: Scene,
     return CablePlan(cable, routed, straight, held)
 
 
-def clamp_edges(routed: np.ndarray, anchors: list[tuple[int, str, Anchor]],
+def clamp_edges(routed: np.ndarray, anchors: list[tuple[int, str, Anchor, str]],
                  edge: float) -> tuple[np.ndarray, list[Held]]:
     """Insert a short held edge at every clamp; list the held vertices.
 
@@ -160,17 +165,19 @@ def clamp_edges(routed: np.ndarray, anchors: list[tuple[int, str, Anchor]],
     points = [p for p in routed]
     held: list[Held] = []
     shift = 0
-    for vertex, kind, anchor in anchors:
+    for vertex, kind, anchor, window in anchors:
         v = vertex + shift
         if anchor.hold == Hold.FREE:
             continue
+        hold = (kind, anchor.body)
+        named = dict(hold=anchor.hold, window=window, parts=anchor.parts)
         if anchor.hold == Hold.PIN:
-            held.append(Held(kind, anchor.body, v, anchor.hold))
+            held.append(Held(*hold, v, **named))
             continue
         if kind == "end":
             t = points[v] - points[v - 1]
             points.insert(v, points[v] - edge * t / np.linalg.norm(t))
-            held += [Held(kind, anchor.body, v, anchor.hold), Held(kind, anchor.body, v + 1, anchor.hold)]
+            held += [Held(*hold, v, **named), Held(*hold, v + 1, **named)]
         else:
             out = points[v + 1] - points[v]
             t = out / np.linalg.norm(out)
@@ -180,7 +187,7 @@ def clamp_edges(routed: np.ndarray, anchors: list[tuple[int, str, Anchor]],
                 if np.linalg.norm(bisector) > 1e-9 and np.dot(bisector, out) > edge * np.linalg.norm(bisector):
                     t = bisector / np.linalg.norm(bisector)
             points.insert(v + 1, points[v] + edge * t)
-            held += [Held(kind, anchor.body, v, anchor.hold), Held(kind, anchor.body, v + 1, anchor.hold)]
+            held += [Held(*hold, v, **named), Held(*hold, v + 1, **named)]
         shift += 1
     return np.array(points), held
 
@@ -199,7 +206,8 @@ def cable_model(plan: CablePlan, flex_id: int, vert_adr: int, origin: np.ndarray
     n = len(plan.routed)
     seg = np.linalg.norm(np.diff(plan.straight, axis=0), axis=1)
     s = np.concatenate([[0.0], np.cumsum(seg)])
-    attachments = [Attachment(h.kind, h.body, h.vertex, float(s[h.vertex]), h.hold) for h in plan.held]
+    attachments = [Attachment(h.kind, h.body, h.vertex, float(s[h.vertex]), h.hold, h.window, h.parts)
+                   for h in plan.held]
     return CableModel(c.name, c.radius, flex_id, vert_adr, n, float(s[-1]), float(seg.max()),
                       plan.routed + origin, tuple(sorted(attachments, key=lambda a: a.vertex)),
                       c.min_bend_radius, s, n - 1 - sum(h.hold == Hold.CLAMP for h in plan.held) // 2)

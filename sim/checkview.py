@@ -2,7 +2,8 @@
 
 A built scene (:class:`sim.build.Built`) names its parts in MuJoCo's terms
 (geom types, sizes, MuJoCo's own mesh vertices, bodies); the checker takes
-:class:`checker.shapes.Shape` objects and a prepared
+:class:`checker.shapes.Shape` objects (placed at t = 0 by
+`start_part_poses`) and a prepared
 :class:`checker.partset.PartSet`. Both the run's checks (`sim.stepcheck`)
 and the sweep command (`sim.sweep`) translate through here, so they see the
 same parts, grouped into the same rigid groups, at the same precision.
@@ -19,11 +20,15 @@ from __future__ import annotations
 
 import difflib
 
+import mujoco
 import numpy as np
 
 from checker.partset import PartSet
 from checker.shapes import Shape, ShapeType, mesh_shape
 from sim.build import Built
+from sim.built import BodyTree
+from sim.kinematic import KinematicSimulation
+from sim.motion import Motion
 
 DEFAULT_PRECISION_M = 5e-4
 """Default precision: 0.5 mm (as in the sweep-verification paper), in metres."""
@@ -48,6 +53,27 @@ def part_shapes(built: Built) -> list[Shape]:
         else:
             out.append(Shape(ShapeType(p.shape), p.size))
     return out
+
+
+def start_part_poses(built: Built) -> np.ndarray:
+    """(P, 4, 4) scene-world pose of every part at t = 0, as the run's first
+    state puts it (the routed state with the script at its t = 0 pose): a
+    MuJoCo build's through `mj_kinematics`, a build without MuJoCo through
+    its own placing (`sim.kinematic`)."""
+    if isinstance(built.model, BodyTree):
+        sim = KinematicSimulation(built)
+        sim.reset()
+        return sim.state(0).part_poses
+    d = mujoco.MjData(built.model)
+    d.qpos[:] = built.qpos0
+    Motion(built).apply(d, 0.0, frozen=True)
+    mujoco.mj_kinematics(built.model, d)
+    geoms = np.array([p.geom_id for p in built.parts], np.int64)
+    poses = np.zeros((len(geoms), 4, 4))
+    poses[:, :3, :3] = d.geom_xmat[geoms].reshape(-1, 3, 3)
+    poses[:, :3, 3] = d.geom_xpos[geoms] + built.origin
+    poses[:, 3, 3] = 1.0
+    return poses
 
 
 def rigid_groups(built: Built) -> list[str]:

@@ -103,6 +103,7 @@ def print_summary(report: dict, report_path: Path) -> None:
               + (f", max twist {c['max_twist']:.3g} deg" if c.get("max_twist") is not None else "")
               + (f"  [{', '.join(flags)}]" if flags else ""))
     _print_events(report)
+    _print_excused(report)
     for c in report["cables"]:
         _print_wear(c["name"], c.get("wear"), units)
     v = report.get("validation")
@@ -152,6 +153,21 @@ def _print_events(report: dict, most: int = 10) -> None:
             print(f"         {_joint_cause(e, report.get('joint_units', {}))}")
     if len(events) > most:
         print(f"    ... {len(events) - most} more in the report")
+
+
+def _print_excused(report: dict, most: int = 5) -> None:
+    """What was allowed (`[[allow]]`) and what attachment windows excused: never clashes, never silent."""
+    units = report["units"]
+    allowed, excused = report.get("allowed", []), report.get("excused", [])
+    if allowed:
+        print(f"  {len(allowed)} allowed pair(s), not clashes: "
+              + "; ".join(f"{p['a']} / {p['b']} worst {p['min_distance']:.4g} {units} ({p['reason']})"
+                          for p in allowed[:most]) + (" ..." if len(allowed) > most else ""))
+    if excused:
+        print(f"  {len(excused)} contact(s) excused by attachment windows, not clashes: "
+              + "; ".join(f"{x['a']} {x['window']} / {x['b']} worst {x['min_distance']:.4g} {units} "
+                          f"at t {x['t_worst']:.3f} s" for x in excused[:most])
+              + (" ..." if len(excused) > most else ""))
 
 
 def _joint_cause(event: dict, joint_units: dict) -> str:

@@ -32,6 +32,7 @@ from checker.records import Severity
 
 if TYPE_CHECKING:
     from checker.events import AllowedWorst, Event, PairWorst
+    from checker.interference.excused import ExcusedWorst
     from checker.scene_state import CheckConfig
     from checker.validation import ValidationSummary
     from checker.wear import CableWear
@@ -135,6 +136,8 @@ class RunOutcome:
         maps each moving joint to its unit.
       pairs, allowed: every pair that came below the clearance / allowed
         pair, with its worst moment.
+      excused: every attachment window whose piece of cable came below the
+        clearance of a part it excuses, with its worst moment.
       event_hold: seconds a pair must stay clear before its event closes.
       validation: the comparison with MuJoCo's contacts, or None when the
         scene does not validate.
@@ -164,6 +167,7 @@ class RunOutcome:
     joint_units: dict[str, str] | None
     pairs: tuple[PairWorst, ...]
     allowed: tuple[AllowedWorst, ...]
+    excused: tuple[ExcusedWorst, ...]
     event_hold: float
     validation: ValidationSummary | None
     advance: AdvanceOutcome | None
@@ -290,12 +294,16 @@ def report_of(o: RunOutcome) -> dict:
             "soft": sum(e.severity is Severity.SOFT for e in o.events),
             "static": sum(e.phase is Phase.STATIC for e in o.events),
             "dynamic": sum(e.phase is Phase.DYNAMIC for e in o.events),
+            "excused": len(o.excused),
         },
         "events": events,
         "pairs": [{"type": p.type, "a": p.a, "b": p.b, "min_distance": p.min_distance / u, "t": p.t}
                   for p in _worst_first(o.pairs)],
         "allowed": [{"type": p.type, "a": p.a, "b": p.b, "min_distance": p.min_distance / u, "t": p.t,
                      "reason": p.reason} for p in _worst_first(o.allowed)],
+        "excused": [{"type": x.type, "a": x.a, "b": x.b, "window": x.window, "min_distance": x.min_distance / u,
+                     "t_worst": x.t, "where": np.asarray(x.where) / u, "s": x.s / u}
+                    for x in _worst_first(o.excused)],
     }
     if o.validation is not None:
         report["validation"] = _validation(o.validation, u)

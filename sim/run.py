@@ -44,7 +44,7 @@ from sim.kinematic import KinematicSimulation
 from sim.loop import Simulation
 from sim.record import Mark, Recorder, Settings, summary_text
 from sim.report import STAGES, CableOutcome, RunOutcome, Timing, report_of, write_report
-from sim.scene import Scene, check_allow_names
+from sim.scene import Scene, check_allow_names, check_fastened_names
 from sim.staticbuild import build_static, needs_model
 from sim.stepcheck import BATCH, BATCH_MAX, StepChecks
 from sim.stop import StopRequest
@@ -155,6 +155,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     # the simulation model first: the detection model is compiled while it settles
     built = build_static(scene) if static else build_simulation(scene, planned)
     check_allow_names(scene, [p.name for p in built.parts] + [c.name for c in built.cables])
+    check_fastened_names(scene, [p.name for p in built.parts])
     if warn is not None:
         for w in built.warnings:
             warn(w)
@@ -237,6 +238,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         closed = {id(ev) for ev in tracker.events}
         events = tuple(tracker.finish())
         worn = wear.result()
+        excused = checks.excused.worst()
         # where the mjcf model's joints move: their values per event
         event_joints = (tuple(joints.event_fields(e.t_start, e.t_end, e.t_worst, e.a, e.b) for e in events)
                         if joints else None)
@@ -246,7 +248,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
                 if id(ev) not in closed:
                     _log_end(recorder, ev, scene.scale, scene.units, at_end=True)
             recorder.finish(list(events), worn,
-                            summary_text(scene.name, settings, events, worn, scene.scale, complete),
+                            summary_text(scene.name, settings, events, worn, scene.scale, complete,
+                                         tuple(tracker.allowed.values()), excused),
                             None if event_joints is None else [f["joints"] for f in event_joints])
             recorder.close()
             timer.lap("record")
@@ -258,7 +261,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         steps=out.steps, checked=out.checked, t_end=out.t_last, cables=out.cables(worn),
         events=events, event_joints=event_joints,
         joint_units=dict(zip(joints.names, joints.units)) if joints else None,
-        pairs=tuple(tracker.pairs.values()), allowed=tuple(tracker.allowed.values()), event_hold=tracker.hold,
+        pairs=tuple(tracker.pairs.values()), allowed=tuple(tracker.allowed.values()), excused=excused,
+        event_hold=tracker.hold,
         validation=ends.validation, advance=ends.advance,
         warnings=sim.warnings(), part_warnings=ends.part_warnings,
         physics_warnings=tuple(built.warnings) + ends.hull_warnings,

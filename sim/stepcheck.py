@@ -39,18 +39,22 @@ from checker.cable import CableMeasures, taut_margin
 from checker.events import AllowList, AllowRule
 from checker.interference import Checker, single_records_many
 from checker.interference.discrete import around_centres
+from checker.interference.excused import ExcusedLog, ExcusedWorst
 from checker.parts import PartChecker
 from checker.recheck import Recheck
 from checker.records import Interference, PairType
+from checker.interference.structure import PartTable, point_distances
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+from checker.shapes import Shape
 from checker.validation import SimulatorPairs, Validation, ValidationSummary
 from sim.build import Built
-from sim.checkview import DEFAULT_PRECISION_M, part_set, part_shapes, selection
+from sim.checkview import DEFAULT_PRECISION_M, part_set, part_shapes, selection, start_part_poses
 from sim.contacts import Contacts, RawContacts
 from sim.detection_mesh import hull_parts
 from sim.hullgap import HullGaps
 from sim.loop import StepState
 from sim.report import AdvanceOutcome
+from sim.scene import covers
 
 
 BATCH = 32
@@ -143,12 +147,15 @@ class ChecksOutcome:
       validation: the comparison with MuJoCo's contacts, or None when off.
       part_warnings: what preparing the parts found (open meshes, ...).
       hull_warnings: cables the simulation held on a concave part's convex hull.
+      excused: every attachment window that came below the clearance of
+        the part it excuses, with its worst moment.
     """
 
     advance: AdvanceOutcome | None
     validation: ValidationSummary | None
     part_warnings: tuple[str, ...]
     hull_warnings: tuple[str, ...]
+    excused: tuple[ExcusedWorst, ...] = ()
 
 
 class StepChecks:
@@ -180,7 +187,7 @@ class StepChecks:
         focus = selection(rigid, only, "--only") if only is not None else None
         skipped_pairs = part_pairs_skipped(built)
         self.part_checker = PartChecker(rigid, scene.check.clearance, focus, skipped_pairs)
-        self.exclusions = attachment_exclusions(built)
+        self.exclusions = attachment_exclusions(built, shapes)
         # With --only, cables are checked against that assembly's parts alone.
         self.checked_parts = checked = (np.ones(len(built.parts), bool) if focus is None
                                         else np.asarray(focus, bool))
@@ -225,6 +232,9 @@ class StepChecks:
         self._radii = radii
         # material coordinate (rest arc length) of every body centre: the exclusion windows' measure
         self._rest = np.concatenate([c.rest_s for c in built.cables]) if built.cables else np.zeros(0)
+        # what the attachment windows leave out of the checks, measured on its own
+        self.excused = ExcusedLog(self.exclusions, self.checker.parts, self._names, offsets, self._rest, radii,
+                                  config.clearance)
         self.allow = AllowList(AllowRule(r.a, r.b, r.reason) for r in scene.allow)
         self._simulator_pairs = SimulatorPairs(self.exclusions, config.clearance)
         self.validation = Validation(scene.check.clearance, config.method,
@@ -272,6 +282,8 @@ class StepChecks:
             if j < len(states):
                 out.append(self._full(states[j], pts[j], poses[j], strain[j], bend[j]))
                 j += 1
+        if self.excused:
+            self.excused.add(np.array([s.t for s in states]), pts, poses[:, self.checked_parts])
         self.lap("check")
         if self.detector is not None:
             self._validate(states, pts, out)
@@ -428,7 +440,8 @@ class StepChecks:
             advance=None if adv is None else AdvanceOutcome(self.horizon, self.stretch, adv.full, adv.skipped),
             validation=self.validation.summary() if validated else None,
             part_warnings=tuple(self.rigid.warnings),
-            hull_warnings=tuple(self.hull_gaps.warnings()) if self.hull_gaps else ())
+            hull_warnings=tuple(self.hull_gaps.warnings()) if self.hull_gaps else (),
+            excused=self.excused.worst())
 
     def _second_opinion(self, opinions, i: int):
         """Builds the second opinions on a disagreement at the batch's state i
@@ -471,36 +484,78 @@ def part_pairs_skipped(built: Built) -> np.ndarray:
     return skip
 
 
-def attachment_exclusions(built: Built) -> list[Exclusion]:
-    """Windows along each cable's material where touching a part is expected.
+def attachment_exclusions(built: Built, shapes: Sequence[Shape] | None = None,
+                          poses: np.ndarray | None = None) -> list[Exclusion]:
+    """Windows along each cable's material where touching a part is expected:
+    the parts each end and clip is fastened to, and nothing else.
 
-    Around every held vertex (start, end, clip), `check.attach_zone` cable
-    radii of rest arc length either side, widened to whole elements (so
+    A window spans `check.attach_zone` cable radii of rest arc length either
+    side of the held vertices of one end or clip (a clamp holds two, its
+    short edge; a pin one; a free end none), widened to whole elements (so
     that MuJoCo's contacts, one per element, can be filtered by the same
-    window), against every part riding the same body, and with
-    `check.attach_links` = N also every part of a body within N joints of it
-    (:func:`neighbour_bodies`). The windows are in the cable's material
-    coordinate (rest arc length, :attr:`CableModel.rest_s`), not its current
-    arc length: a stretched cable keeps the same elements excused. Only
-    held vertices count: a clamp holds two (its short edge), a pin one, a
-    free end none."""
+    window), in the cable's material coordinate (:attr:`CableModel.rest_s`:
+    a stretched cable keeps the same elements excused). It excuses:
+
+    - the parts the scene names for that end or clip (`part`: names or
+      assembly paths), when it names any; else
+    - the parts of its holding body, and with `check.attach_links` = N of
+      every body within N joints of it (:func:`neighbour_bodies`), that a
+      held vertex lies within the cable radius plus the clearance of, at
+      t = 0 (the routed state: `shapes` and `poses`, `sim.checkview`'s
+      part shapes and :func:`~sim.checkview.start_part_poses`, computed
+      when not given). An end on `world` excuses the fixture it is clamped
+      in, never every fixed part nearby.
+
+    Every other part near an end is checked like anywhere else. Each window
+    is named ("start", "end", "clip N") so the report can list what it
+    excused."""
     zone = built.scene.check.attach_zone
     links = built.scene.check.attach_links
-    parts_on: dict[int, list[str]] = {}
+    reach = built.scene.check.clearance
     m = built.model
-    for p in built.parts:
-        parts_on.setdefault(int(m.geom_bodyid[p.geom_id]), []).append(p.name)
+    names = [p.name for p in built.parts]
+    part_body = np.array([int(m.geom_bodyid[p.geom_id]) for p in built.parts], np.int64)
+    table = None
     out = []
     for c in built.cables:
+        windows: dict[str, list] = {}
         for att in c.attachments:
-            bodies = neighbour_bodies(m, built.body_ids[att.body], links)
-            lo = c.rest_s[np.searchsorted(c.rest_s, att.s - zone * c.radius, side="right") - 1] \
-                if att.s - zone * c.radius > 0 else 0.0
-            hi = c.rest_s[min(np.searchsorted(c.rest_s, att.s + zone * c.radius), c.count - 1)]
-            for body in bodies:
-                for part in parts_on.get(body, ()):
-                    out.append(Exclusion(c.name, part, float(lo), float(hi)))
-    return sorted(set(out), key=lambda e: (e.cable, e.part, e.s_min))
+            windows.setdefault(att.window, []).append(att)
+        for window, held in windows.items():
+            s_held = np.array([a.s for a in held])
+            lo_s, hi_s = s_held.min() - zone * c.radius, s_held.max() + zone * c.radius
+            lo = c.rest_s[np.searchsorted(c.rest_s, lo_s, side="right") - 1] if lo_s > 0 else 0.0
+            hi = c.rest_s[min(np.searchsorted(c.rest_s, hi_s), c.count - 1)]
+            if held[0].parts:
+                fastened = np.flatnonzero([any(covers(n, (p,)) for n in held[0].parts) for p in names])
+            else:
+                bodies = neighbour_bodies(m, built.body_ids[held[0].body], links)
+                near = np.flatnonzero(np.isin(part_body, bodies))
+                if table is None and len(near):
+                    table = _start_table(built, shapes, poses)
+                points = c.routed[[a.vertex for a in held]]
+                fastened = near[held_within(table, near, points, c.radius + reach)] if len(near) else near
+            out += [Exclusion(c.name, names[k], float(lo), float(hi), window) for k in fastened.tolist()]
+    return sorted(set(out), key=lambda e: (e.cable, e.part, e.s_min, e.window))
+
+
+def _start_table(built: Built, shapes: Sequence[Shape] | None, poses: np.ndarray | None) -> PartTable:
+    """Every built part placed at t = 0, as a checker's part table."""
+    shapes = part_shapes(built) if shapes is None else shapes
+    poses = start_part_poses(built) if poses is None else poses
+    return PartTable([PartState(p.name, sh, pose, p.keepout) for p, sh, pose in zip(built.parts, shapes, poses)])
+
+
+def held_within(table: PartTable, parts: np.ndarray, points: np.ndarray, reach: float) -> np.ndarray:
+    """(len(parts),) bool: some of the world ``points`` (n, 3) lies within
+    ``reach`` of part k's surface (or inside it), for each k of ``parts``."""
+    k = np.repeat(np.asarray(parts, np.int64), len(points))
+    x = np.tile(np.asarray(points, float).reshape(-1, 3), (len(parts), 1))
+    loc = table.to_local(k, x)
+    inside_box = ((loc >= table.lo[k] - reach) & (loc <= table.hi[k] + reach)).all(axis=1)
+    d = np.full(len(k), np.inf)
+    d[inside_box] = point_distances(table, k[inside_box], loc[inside_box], False)
+    return (d <= reach).reshape(len(parts), len(points)).any(axis=1)
 
 
 def neighbour_bodies(model, body: int, links: int) -> list[int]:

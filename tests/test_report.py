@@ -14,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from checker.events import AllowedWorst, Event, PairWorst, Phase
+from checker.interference.excused import ExcusedWorst
 from checker.records import PairType, Severity, severity_of
 from checker.scene_state import CheckConfig
 from checker.validation import Disagreement, Reason, ValidationSummary
@@ -75,6 +76,8 @@ def _outcome(**changes) -> RunOutcome:
                PairWorst(PairType.CABLE_STRUCTURE, "lead", "frame/floor", -0.001, 0.01, np.zeros(3))),
         allowed=(AllowedWorst(PairType.CABLE_STRUCTURE, "lead", "frame/wall", -0.002, 0.0, np.zeros(3),
                               "held by a clip"),),
+        excused=(ExcusedWorst(PairType.CABLE_STRUCTURE, "lead", "frame/clamp", "start", -0.003, 0.02,
+                              np.array([0.0, 0.0, 0.001]), 0.001),),
         event_hold=0.006, validation=_validation(),
         advance=AdvanceOutcome(horizon=0.01, stretch=0.002, full_checks=10, proven_clear_steps=40),
         warnings={}, part_warnings=(), physics_warnings=(), substeps=1,
@@ -90,7 +93,7 @@ def _json(report: dict) -> str:
 
 # The SPEC's keys in the report's order (the golden reports are compared as text).
 TOP = ["schema", "scene", "units", "complete", "mujoco", "settings", "summary", "events", "pairs", "allowed",
-       "validation", "cables", "warnings", "timing", "recording", "joint_units", "part_warnings", "interrupted",
+       "excused", "validation", "cables", "warnings", "timing", "recording", "joint_units", "part_warnings", "interrupted",
        "physics_warnings"]
 SETTINGS = ["method", "spacing", "spacing_radii", "clearance", "attach_zone_radii", "event_hold_s", "timestep",
             "settle", "duration", "dynamics", "gravity", "contact", "steps", "checked_steps", "t_end", "units",
@@ -119,13 +122,16 @@ def test_enums_are_the_reports_strings():
     r = json.loads(_json(report_of(_outcome())))
     assert [(e["type"], e["severity"], e["phase"]) for e in r["events"]] == [
         ("cable-structure", "hard", "static"), ("self", "soft", "dynamic")]
-    assert r["summary"] == {"hard": 1, "soft": 1, "static": 1, "dynamic": 1}
+    assert r["summary"] == {"hard": 1, "soft": 1, "static": 1, "dynamic": 1, "excused": 1}
     assert r["validation"]["reasons"] == {"between points": 6}
     assert r["validation"]["disagreements"][0]["reason"] == "between points"
     assert r["validation"]["disagreements"][0]["type"] == "cable-structure"
     # pairs and allowed pairs worst first
     assert [p["type"] for p in r["pairs"]] == ["cable-structure", "self"]
     assert r["allowed"][0]["reason"] == "held by a clip"
+    # what an attachment window excused: the pair, the window, its worst distance and time, in scene units
+    assert r["excused"] == [{"type": "cable-structure", "a": "lead", "b": "frame/clamp", "window": "start",
+                             "min_distance": -3.0, "t_worst": 0.02, "where": [0.0, 0.0, 1.0], "s": 1.0}]
 
 
 def test_lengths_in_scene_units_and_twist_in_degrees():
@@ -147,12 +153,12 @@ def test_lengths_in_scene_units_and_twist_in_degrees():
 
 def test_a_run_that_checked_nothing_reports_nulls():
     r = json.loads(_json(report_of(_outcome(cables=(_cable(checked=False),), checked=0, steps=0, events=(),
-                                            pairs=(), complete=False, interrupted="SIGINT"))))
+                                            pairs=(), excused=(), complete=False, interrupted="SIGINT"))))
     c = r["cables"][0]
     assert c["max_strain"] is None and c["min_bend_radius"] is None and c["max_twist"] is None
     assert c["rest_points"] == [] and c["final_points"] == []
     assert r["complete"] is False and r["interrupted"] == "SIGINT"
-    assert r["summary"] == {"hard": 0, "soft": 0, "static": 0, "dynamic": 0}
+    assert r["summary"] == {"hard": 0, "soft": 0, "static": 0, "dynamic": 0, "excused": 0}
     assert r["timing"]["check_ms_per_step"] == pytest.approx(600.0)   # per step: at least one
 
 

@@ -98,7 +98,7 @@ def test_block_pressing_on_a_cable_gives_the_analytic_event(tmp_path: Path, meth
     assert event["t_end"] == event["t_worst"] == pytest.approx(0.2)
     assert event["min_distance"] == pytest.approx(gap - SPEED * 0.2, abs=1e-9)
     assert 0.05 - 1e-9 <= event["where"][0] <= 0.15 + 1e-9 and event["where"][2] == pytest.approx(height)
-    assert report["summary"] == {"hard": 1, "soft": 0, "static": 0, "dynamic": 1}
+    assert report["summary"] == {"hard": 1, "soft": 0, "static": 0, "dynamic": 1, "excused": 0}
     assert [(p["type"], p["min_distance"]) for p in report["pairs"]] == [
         ("cable-structure", pytest.approx(gap - SPEED * 0.2, abs=1e-9))]
     cable = report["cables"][0]

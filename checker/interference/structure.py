@@ -253,8 +253,18 @@ def structure_exact_pairs(dp, tab, config, excl, hits, i0: np.ndarray, pk: np.nd
     mid = point_distances(tab, pk, 0.5 * (a + b), False, config.clearance + half + dp.radius[i0])
     near = mid - half - dp.radius[i0] < config.clearance
     it, pk, i0, a, b = it[near], pk[near], i0[near], a[near], b[near]
-    d = np.full(len(it), np.inf)
-    t = np.zeros(len(it))
+    d, t = segment_distances(tab, pk, a, b)
+    where = p[i0] + t[:, None] * (p[i0 + 1] - p[i0])
+    s_at = s[i0] + t * (s[i0 + 1] - s[i0])
+    _add_structure(hits, tab, dp.cable[i0], pk, d - dp.radius[i0], where, s_at)
+
+
+def segment_distances(tab: PartTable, pk: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Least signed distance (n,) of local segments ``a b`` (n, 3) to parts
+    ``pk`` (n,), and the parameter (n,) of the deepest or nearest point:
+    each mesh's rows in one call, all primitives' in one."""
+    d = np.full(len(pk), np.inf)
+    t = np.zeros(len(pk))
     is_mesh = tab.type[pk] == SHAPE_CODE[ShapeType.MESH]
     sel = np.nonzero(is_mesh)[0]
     grp = tab.mesh_group[pk[sel]]
@@ -266,9 +276,7 @@ def structure_exact_pairs(dp, tab, config, excl, hits, i0: np.ndarray, pk: np.nd
     if len(sel):
         d[sel], t[sel] = segment_signed_distance_mixed(
             tab.type[pk[sel]], tab.size[pk[sel]], a[sel], b[sel])
-    where = p[i0] + t[:, None] * (p[i0 + 1] - p[i0])
-    s_at = s[i0] + t * (s[i0 + 1] - s[i0])
-    _add_structure(hits, tab, dp.cable[i0], pk, d - dp.radius[i0], where, s_at)
+    return d, t
 
 
 def _add_structure(hits, tab, cable, part, value, where, s, record=None) -> None:

@@ -4,8 +4,9 @@
 phase, start, end, worst distance and time, joint values where given), so
 selecting a row's time jumps there. `events`: one text entry at the start
 and one at the end of each event, level by severity. `summary`: a markdown
-document at t = 0 (settings, the clashes worst first, the most worn place
-of each cable and what it touches). The log is buffered and sent, like the
+document at t = 0 (settings, the clashes worst first, the allowed pairs and
+the contacts attachment windows excused, the most worn place of each cable
+and what it touches). The log is buffered and sent, like the
 list, in columns when the recording is closed.
 
 Not here: deciding events (`checker.events`) or wear (`checker.wear`).
@@ -68,9 +69,10 @@ def send_clash_list(rec: rr.RecordingStream, events: list, joints: list[dict], u
 
 
 def summary_text(scene: str, settings: Settings, events: list, wear: list, unit: float,
-                 complete: bool = True) -> str:
-    """The run's summary as markdown: settings, the clashes worst first, the
-    most worn place of each cable and what it touches."""
+                 complete: bool = True, allowed: tuple = (), excused: tuple = ()) -> str:
+    """The run's summary as markdown: settings, the clashes worst first, what
+    was allowed (`[[allow]]`) and what the attachment windows excused, worst
+    first, the most worn place of each cable and what it touches."""
     units = settings.units
     lines = [f"# {scene}", "",
              f"- scene file: `{settings.scene_file}`",
@@ -87,6 +89,18 @@ def summary_text(scene: str, settings: Settings, events: list, wear: list, unit:
                          f"{e.t_worst:.3f} |")
     else:
         lines.append("## No interference")
+    if allowed:
+        lines += ["", f"## {len(allowed)} allowed pair(s) (never clashes)", "",
+                  "| type | pair | worst | at s | reason |", "|---|---|---|---|---|"]
+        for p in sorted(allowed, key=lambda p: p.min_distance):
+            lines.append(f"| {p.type} | {pair_text(p.a, p.b)} | {p.min_distance / unit:.4g} {units} | "
+                         f"{p.t:.3f} | {p.reason} |")
+    if excused:
+        lines += ["", f"## {len(excused)} contact(s) excused by attachment windows (never clashes)", "",
+                  "| type | pair | window | worst | at s |", "|---|---|---|---|---|"]
+        for x in sorted(excused, key=lambda x: x.min_distance):
+            lines.append(f"| {x.type} | {pair_text(x.a, x.b)} | {x.window} | {x.min_distance / unit:.4g} {units} | "
+                         f"{x.t:.3f} |")
     lines += ["", "## Wear (per arc-length bin of each cable)", ""]
     for w in wear:
         k = w.most_worn()

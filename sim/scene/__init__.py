@@ -37,7 +37,9 @@ between neighbouring samples, so the samples bound the whole motion.
 `[[allow]]` names (`AllowDef`) must cover a scene part or cable (by name or
 assembly path prefix) or, with an mjcf model, begin with one of its bodies:
 its geoms' part names are the builder's, so those are checked against the
-built parts once the model exists (`check_allow_names`).
+built parts once the model exists (`check_allow_names`). So must a cable
+end's or clip's `part` (the parts it is fastened to: a part name or assembly
+path, `check_fastened_names`).
 
 Where things are: `load` (`load_scene`, `parse_scene`: the tables in order),
 `reader` (single values), one module per table (`settings`, `parts`,
@@ -49,6 +51,7 @@ nothing (`sim.run`).
 """
 
 from sim.scene.allow import check_allow_names, covers, unknown_name
+from sim.scene.cables import check_fastened_names
 from sim.scene.errors import SceneError
 from sim.scene.format import (ANGLES, BODY_AXES, DEFAULT_CLEARANCE, DEFAULT_DAMPING,
                               DEFAULT_DENSITY, DEFAULT_YOUNG, DEGENERATE, INTERACTIONS, LARGEST,
@@ -66,6 +69,6 @@ __all__ = [
     "POINTS_LENGTH_TOLERANCE", "ROUTE_TOLERANCE", "SELF_CONTACT_ELEMENT", "SHAPE_SIZES", "UNITS",
     "AllowDef", "Anchor", "BodyDef", "BodyKey", "CableDef", "CheckSettings", "Effects", "Hold",
     "JointKey", "KeyframeKey", "Limits", "MotionDef", "PartDef", "Scene", "SceneError",
-    "Trajectory", "check_allow_names", "covers", "euler_matrix", "load_scene", "parse_scene",
+    "Trajectory", "check_allow_names", "check_fastened_names", "covers", "euler_matrix", "load_scene", "parse_scene",
     "unknown_name",
 ]

@@ -41,14 +41,14 @@ def covers(pattern: str, names) -> bool:
     return any(n == pattern or n.startswith(prefix) for n in names)
 
 
-def unknown_name(name: str, names) -> str:
-    """The problem text for an `[[allow]]` name that covers nothing, with the
-    closest part, assembly path or cable name as a hint."""
+def unknown_name(name: str, names, what: str = "part, assembly path or cable") -> str:
+    """The problem text for a name (of an `[[allow]]` rule, or a cable end's
+    `part`) that covers nothing, with the closest known name as a hint."""
     known = sorted({"/".join(n.split("/")[:k]) for n in names for k in range(1, n.count("/") + 2)})
     close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
     hint = f"did you mean {close[0]!r}?" if close else f"{len(known)} names known, e.g. " + \
         ", ".join(repr(k) for k in known[:5])
-    return f"no part, assembly path or cable named {name!r} ({hint})"
+    return f"no {what} named {name!r} ({hint})"
 
 
 def check_allow_names(scene: Scene, names) -> None:

@@ -14,24 +14,44 @@ from typing import Any
 
 import numpy as np
 
-from sim.scene.errors import describe, fmt
+from sim.scene.allow import covers, unknown_name
+from sim.scene.errors import SceneError, describe, fmt
 from sim.scene.format import (ANCHOR_KEYS, CABLE_KEYS, DEFAULT_DAMPING, DEFAULT_DENSITY,
                               DEFAULT_YOUNG, DEGENERATE, POINTS_LENGTH_TOLERANCE,
                               ROUTE_TOLERANCE, SELF_CONTACT_ELEMENT, ZERO3, Hold)
 from sim.scene.frames import from_world, to_world
 from sim.scene.parts import body_ref
 from sim.scene.reader import Reader
-from sim.scene.records import Anchor, CableDef
+from sim.scene.records import Anchor, CableDef, Scene
 
 
 def read_anchor(r: Reader, value: Any, where: str, with_pos: bool = True) -> Anchor:
     """A cable end or clip: the body it rides on, its position there, how it holds."""
-    t = r.table(value, where, ANCHOR_KEYS if with_pos else ("body", "hold"))
+    t = r.table(value, where, ANCHOR_KEYS if with_pos else ("body", "hold", "part"))
     hold = Hold(r.string(t.get("hold", "clamp"), f"{where}.hold",
                          tuple(h.value for h in Hold)))
     return Anchor(body=body_ref(r, t.get("body", "world"), f"{where}.body"),
                   pos=r.position(t.get("pos", [0, 0, 0]), f"{where}.pos")
-                  if with_pos else ZERO3, hold=hold)
+                  if with_pos else ZERO3, hold=hold, parts=read_fastened(r, t, where, hold))
+
+
+def read_fastened(r: Reader, t: dict, where: str, hold: Hold) -> tuple[str, ...]:
+    """An anchor's `part`: one part name or assembly path, or a list of them
+    (names checked against the parts by `check_fastened_names`)."""
+    if "part" not in t:
+        return ()
+    value = t["part"]
+    key = f"{where}.part"
+    if hold == Hold.FREE:
+        raise r.error(key, "a free end holds nothing, so it is fastened to no part "
+                           "(use hold = \"clamp\" or \"pin\", or drop part)")
+    if isinstance(value, list):
+        if not value:
+            raise r.error(key, "expected a part name or a non-empty list of them, got an empty list")
+        names = tuple(r.name(v, f"{key}[{i}]") for i, v in enumerate(value))
+    else:
+        names = (r.name(value, key),)
+    return tuple(dict.fromkeys(names))
 
 
 def read_cable(r: Reader, value: dict, where: str, dynamics: bool = True) -> CableDef:
@@ -55,7 +75,8 @@ def read_cable(r: Reader, value: dict, where: str, dynamics: bool = True) -> Cab
                               f"not allowed with 'points': the {key} is "
                               f"points[{0 if key == 'start' else -1}] (give only body)")
             anchor = read_anchor(r, t.get(key, {}), f"{where}.{key}", with_pos=False)
-            ends.append(Anchor(anchor.body, from_world(r.frames, anchor.body, point), anchor.hold))
+            ends.append(Anchor(anchor.body, from_world(r.frames, anchor.body, point), anchor.hold,
+                               anchor.parts))
         start, end = ends
         via = np.zeros((0, 3))
         via.setflags(write=False)
@@ -139,3 +160,26 @@ def read_cable(r: Reader, value: dict, where: str, dynamics: bool = True) -> Cab
                                   positive=True) if "twist_stiffness" in t else None),
         damping=r.number(t.get("damping", DEFAULT_DAMPING), f"{where}.damping",
                          nonnegative=True))
+
+
+def anchors_of(cable: CableDef) -> list[tuple[str, Anchor]]:
+    """A cable's anchors with their key names: ("start", ...), ("clips[i]", ...), ("end", ...)."""
+    return ([("start", cable.start)] + [(f"clips[{i}]", c) for i, c in enumerate(cable.clips)]
+            + [("end", cable.end)])
+
+
+def check_fastened_names(scene: Scene, part_names, bodies=()) -> None:
+    """Raise SceneError when a cable end's or clip's `part` covers none of
+    `part_names` (a name or an assembly path prefix). `bodies`: at load
+    time, the mjcf model's bodies, whose geoms' part names are the
+    builder's: a name beginning with one passes then and is checked again
+    against the built parts."""
+    names = list(part_names)
+    bodies = set(bodies)
+    for i, cable in enumerate(scene.cables):
+        for key, anchor in anchors_of(cable):
+            for k, name in enumerate(anchor.parts):
+                if covers(name, names) or (bodies and name.split("/")[0] in bodies):
+                    continue
+                at = f"cables[{i}].{key}.part" + (f"[{k}]" if len(anchor.parts) > 1 else "")
+                raise SceneError(scene.path, at, unknown_name(name, names, "part or assembly path"))

@@ -98,7 +98,7 @@ PART_KEYS = ("name", "body", "shape", "size", "pos", "euler", "file", "scale", "
 CABLE_KEYS = ("name", "radius", "start", "end", "via", "length", "points", "clips",
                "segments", "young", "density", "min_bend_radius", "twist_stiffness",
                "damping")
-ANCHOR_KEYS = ("body", "pos", "hold")
+ANCHOR_KEYS = ("body", "pos", "hold", "part")
 MOTION_KEYS = ("body", "joint", "file", "keys", "angles", "interpolation", "time_scale")
 BODY_KEY_KEYS = ("t", "pos", "euler")
 JOINT_KEY_KEYS = ("t", "value", "key")

@@ -19,7 +19,7 @@ from types import MappingProxyType
 import numpy as np
 
 from sim.scene.allow import read_allow
-from sim.scene.cables import read_cable
+from sim.scene.cables import check_fastened_names, read_cable
 from sim.scene.errors import SceneError
 from sim.scene.format import SCENE_KEYS, TOP_KEYS, UNITS
 from sim.scene.frames import euler_matrix, frame, mjcf_frames
@@ -118,8 +118,11 @@ def read_scene(r: Reader, data: dict) -> Scene:
     names = [p.name for p in parts] + [c.name for c in cables]
     allow = tuple(read_allow(r, a, f"allow[{i}]", names)
                   for i, a in enumerate(r.tables(data.get("allow", []), "allow")))
-    return Scene(path=r.file, name=name, units=units, scale=r.scale,
-                 duration=duration, timestep=timestep, settle=settle, mjcf=mjcf,
-                 effects=effects, check=check, bodies=bodies, parts=parts,
-                 cables=cables, motions=motions, allow=allow,
-                 start_frames=MappingProxyType(dict(r.frames)), limits=limits)
+    scene = Scene(path=r.file, name=name, units=units, scale=r.scale,
+                  duration=duration, timestep=timestep, settle=settle, mjcf=mjcf,
+                  effects=effects, check=check, bodies=bodies, parts=parts,
+                  cables=cables, motions=motions, allow=allow,
+                  start_frames=MappingProxyType(dict(r.frames)), limits=limits)
+    check_fastened_names(scene, [p.name for p in parts],
+                         (set(r.mjcf.bodies) | {"world"}) if r.mjcf is not None else ())
+    return scene

@@ -164,11 +164,17 @@ class Anchor:
         body's frame at t = 0 to shape the initial route.
       pos: (3,) position in that body's frame, metres.
       hold: clamp (position and tangent), pin (position) or free.
+      parts: the parts (names or assembly paths) the scene says the point
+        is fastened to (`part`): its attachment window excuses these alone.
+        Empty: the parts of its body (and its neighbours, `attach_links`)
+        that the held point lies within the cable radius plus the
+        clearance of (`sim.stepcheck.attachment_exclusions`).
     """
 
     body: str
     pos: tuple[float, float, float] = ZERO3
     hold: Hold = Hold.CLAMP
+    parts: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
