@@ -10,6 +10,9 @@ the new distance must class the pair as the simulator did.
 - :meth:`StateRecheck.hull`: a cable against the convex hull of a mesh part
   (method ``exact``, or ``points`` first, cheaper): MuJoCo collides meshes
   as their convex hulls, so a concave mesh's pocket or hole is solid to it.
+- :meth:`StateRecheck.near`: the pair with method ``exact`` found up to a
+  limit beyond the clearance: the distance of a side that is clear, to show
+  a disagreement lies at the clearance's boundary.
 
 Only the cables and the part of the pair are checked, with the run's
 clearance and exclusion windows; the per-part checkers and hull shapes are
@@ -89,15 +92,19 @@ class Recheck:
         states = [_StateCables(template, spans, x) for x in points]
         return BatchRecheck(self, states, np.asarray(poses, float), (points, spans))
 
-    def _checker(self, k: int, hull: bool, exact: bool = True) -> Checker:
-        key = (k, hull, exact)
+    def _checker(self, k: int, hull: bool, exact: bool = True, config: CheckConfig | None = None) -> Checker:
+        """Part k's one-part checker: its shape or hull, method exact or
+        points at the run's settings, or at ``config`` (kept by its
+        clearance: one per limit asked)."""
+        key = (k, hull, exact) if config is None else (k, hull, exact, config.clearance)
         if key not in self._checkers:
             p = self.parts[k]
             if hull and k not in self._hulls:
                 self._hulls[k] = convex_hull_shape(p.shape)
             shape = self._hulls[k] if hull else p.shape
-            self._checkers[key] = Checker([PartState(p.name, shape, np.eye(4), p.keepout)],
-                                          self.config if exact else self.points)
+            if config is None:
+                config = self.config if exact else self.points
+            self._checkers[key] = Checker([PartState(p.name, shape, np.eye(4), p.keepout)], config)
         return self._checkers[key]
 
 
@@ -199,6 +206,27 @@ class StateRecheck:
         """A cable against the convex hull of the mesh part b, with method
         exact (or, cheaper, points at the run's spacing)."""
         return self._part(key, hull=True, exact=exact) if key[0] in _PART_TYPES else None
+
+    def near(self, key: tuple[str, str, str], limit: float) -> float | None:
+        """The pair (type, a, b) with method exact, its distance when below
+        ``limit`` (>= the clearance) rather than below the clearance. The
+        check runs with ``limit`` as its clearance: attachment windows stay
+        as given, the self rule's window grows by ``limit - clearance`` (a
+        self pair just past the run's window may then be missed, never one
+        invented)."""
+        kind, a, b = key
+        cfg = replace(self.owner.config, clearance=max(float(limit), self.owner.config.clearance))
+        if kind in _PART_TYPES:
+            k = self.owner.index.get(b)
+            if k is None or a not in self.cables:
+                return None
+            found = self.owner._checker(k, False, True, cfg).check([self.cables[a]], self.poses[k][None],
+                                                                  self.owner.exclusions)
+            return _distance(found, key)
+        names = [a] if kind == PairType.SELF else [a, b]
+        if any(n not in self.cables for n in names):
+            return None
+        return _distance(Checker([], cfg).check([self.cables[n] for n in names]), key)
 
     def _part(self, key: tuple[str, str, str], hull: bool, exact: bool = True) -> float | None:
         _, a, b = key

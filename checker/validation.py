@@ -7,28 +7,32 @@ rule (`checker.records.severity_of`), so exactly as events are.
 Simulator contacts are first filtered with the checker's own rules: contacts
 of elements inside an attachment window (`Exclusion`, aligned to elements by
 the caller so both sides leave out the same piece of cable) are expected, and
-self contacts
-between places closer along the cable than `self_pair_excluded` allows are
-near neighbours, not interference. The position of a contact along a cable
-is found by projecting the contact point onto its element.
+self contacts are held to the checker's self rule (two places of one cable
+count only when at least `self_pair_window` apart along it). The position of
+a contact along a cable is found by projecting the contact point onto its
+element. A simulator measures an element pair once, at its closest places:
+where those lie inside the self window while other places of the same two
+elements lie outside it, the pair is measured again over those places alone
+(on the simulator's own elements, its distance plus how much farther apart
+they are), and kept only where they overlap, as the simulator reports self
+contacts (see :attr:`Reason.SELF_NO_MARGIN`).
 
-Every disagreement gets a reason (:class:`Reason`) only once it is checked:
-distances that agree within 2 % of the clearance but straddle a class
-boundary; a mesh part whose convex hull (what MuJoCo collides) classes the
-pair as MuJoCo does; with method points, method exact classing it as MuJoCo
-does. Any other disagreement is ``unexplained`` and counted apart. Counts
-are kept for the whole run with the largest distance difference on pairs
-both sides saw, and every disagreement is kept as an interval per pair
-(consecutive compared steps with one reason: start, end, worst).
+Every disagreement gets a reason (:class:`Reason`) only once its claim is
+checked (the claims and their checks are listed there); any other
+disagreement is ``unexplained`` and counted apart. Counts are kept for the
+whole run with the largest distance difference on pairs both sides saw, and
+every disagreement is kept as an interval per pair (consecutive compared
+steps with one reason: start, end, worst).
 
 Pairs the scene allows (``[[allow]]``) are left out of the comparison (they
 are never reported as interference, so there is nothing to agree on) and
 counted apart.
 
 This module takes plain arrays: it does not know MuJoCo's data structures
-(the simulation side maps contacts to names) and does not compute geometry
-beyond projecting a contact point onto a segment; the second opinions come
-from :mod:`checker.recheck` through the caller.
+(the simulation side maps contacts to names) and computes no geometry beyond
+projecting a contact point onto a segment and measuring a self contact's two
+elements again (:mod:`checker.closest`); the second opinions come from
+:mod:`checker.recheck` through the caller.
 """
 
 from __future__ import annotations
@@ -42,8 +46,8 @@ from typing import Protocol
 import numpy as np
 
 from checker.arrays import first_least, ranges
-from checker.cable import polyline_arc_lengths, self_pair_excluded, tile_offsets
-from checker.closest import row_norm, segment_parameter
+from checker.cable import polyline_arc_lengths, self_pair_excluded, self_pair_window, tile_offsets
+from checker.closest import row_norm, segment_parameter, segment_segment, segment_segment_apart
 from checker.events import AllowList
 from checker.records import Interference, PairType, severity_of
 from checker.scene_state import Exclusion
@@ -223,8 +227,24 @@ class SimulatorPairs:
         on_b = np.flatnonzero((cb >= 0) & (elem_b >= 0))   # on a cable's element: cable-cable and self
         s_b = np.zeros(len(cb))
         s_b[on_b] = place(cb[on_b], elem_b[on_b], on_b)[0]
-        drop = (kind == look.self_kind) & self_pair_excluded(s_a, s_b, np.asarray(radii, float)[ca],
-                                                             self.clearance)
+        radius = np.asarray(radii, float)[ca]
+        drop = (kind == look.self_kind) & self_pair_excluded(s_a, s_b, radius, self.clearance)
+        # the self rule's places, not the element pair's closest ones: a
+        # dropped self contact whose elements reach past the window is
+        # measured again over the places outside it
+        edge = np.flatnonzero(drop & ~vertex & (elem_b >= 0) & (cb == ca))
+        if len(edge):
+            def start(rows, elem):       # global index of each row's element start
+                cab = ca[rows]
+                return st[rows] * n + offsets.take(cab) + np.clip(elem[rows], 0, offsets.take(cab + 1)
+                                                                  - offsets.take(cab) - 2)
+            d_new, at = past_window(flat, s_all, start(edge, elem_a), start(edge, elem_b), dist[edge],
+                                    self_pair_window(radius[edge], self.clearance))
+            kept = d_new < 0.0
+            rows = edge[kept]
+            dist, pos = dist.copy(), pos.copy()
+            dist[rows], pos[rows] = d_new[kept], at[kept]
+            drop[rows] = False
         if len(self._ex_lo):
             structure = look.structure[kind]
             if structure.any():
@@ -303,23 +323,73 @@ class _Lookups:
     cable_kind: int
 
 
-class Reason(StrEnum):
-    """Why the two sides class a pair differently; each one checked before it
-    is given (:meth:`Validation.explain`). The values are the report's.
+def past_window(flat: np.ndarray, s: np.ndarray, ga: np.ndarray, gb: np.ndarray, dist: np.ndarray,
+                window: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Self contacts measured over the self rule's places alone.
 
-    - ``at a boundary``: both distances agree within 2 % of the clearance
-      but fall either side of 0 or of the clearance;
+    A simulator reports one distance per element pair, at the pair's closest
+    places. For contacts whose two elements, (``flat[ga]``, ``flat[ga + 1]``)
+    and (``flat[gb]``, ``flat[gb + 1]``) with arc lengths ``s``, hold places
+    at least ``window`` apart along the cable, this is the contact's
+    ``dist`` plus how much farther apart the nearest such places are than
+    the elements' closest ones (both measured on these elements,
+    :func:`~checker.closest.segment_segment_apart`), and the midpoint of
+    those places; inf where no such places exist.
+
+    Args:
+        flat: (N, 3) every state's body centres; s: (N,) their arc lengths.
+        ga, gb: (n,) each contact's two elements, by their first centre.
+        dist: (n,) the contacts' distances; window: (n,) the self window.
+
+    Returns:
+        (n,) distances and (n, 3) places.
+    """
+    lo, hi = np.minimum(ga, gb), np.maximum(ga, gb)
+    p0, p1, q0, q1 = flat.take(lo, axis=0), flat.take(lo + 1, axis=0), flat.take(hi, axis=0), flat.take(hi + 1, axis=0)
+    plain = segment_segment(p0, p1, q0, q1)[0]
+    d, _, _, cp, cq = segment_segment_apart(p0, p1, q0, q1, s.take(lo), s.take(lo + 1), s.take(hi),
+                                            s.take(hi + 1), window)
+    return dist + (d - plain), 0.5 * (cp + cq)
+
+
+BOUNDARY_SHARE = 0.02
+"""A disagreement is at a boundary when the distances lie within this share
+of the clearance of the class boundary they fall either side of."""
+
+
+class Reason(StrEnum):
+    """Why the two sides class a pair differently. Each is a claim, given only
+    once it is checked (:meth:`Validation.explain`, in this order); the
+    values are the report's. ``tol`` is :data:`BOUNDARY_SHARE` of the
+    clearance ``c``.
+
+    - ``at a boundary``: the pair lies within ``tol`` of the class boundary
+      the two sides fall either side of. Both distances known: they differ
+      by at most ``tol`` (so each is within ``tol`` of the 0 or ``c`` between
+      them). One side clear (no record, or no contact, below ``c``): the other
+      side's distance is within ``tol`` below ``c``, and the clear side is
+      checked too: method exact's distance, found up to ``c + tol``, is
+      within ``tol`` of ``c``.
     - ``convex hull``: MuJoCo collides a mesh as its convex hull, and the
-      cable's distance to the hull (method exact) classes the pair as MuJoCo
-      does;
-    - ``between points``: the contact or crossing falls between discrete
-      points: method exact classes the pair as MuJoCo does;
+      cable's distance to the hull classes the pair as MuJoCo does.
+    - ``between points`` (method points): the contact or crossing falls
+      between discrete points: method exact classes the pair as MuJoCo does
+      and finds it nearer than the discrete points did (they missed it, or
+      found it farther).
+    - ``self, no margin``: a self pair the checker finds within the clearance
+      and MuJoCo not at all, and method exact's distance (the checker's own
+      with method exact) is within the clearance without overlap (``0 <= d <
+      c``): MuJoCo 4's flex self-collision reports a cable's contacts with
+      itself only where its elements overlap (no margin: measured, crossings
+      of one cable 2, 0.3 and 0.01 mm apart gave no contact, 0.3 mm deep
+      gave one at -0.3 mm).
     - ``unexplained``: no check explains it.
     """
 
     AT_BOUNDARY = "at a boundary"
     CONVEX_HULL = "convex hull"
     BETWEEN_POINTS = "between points"
+    SELF_NO_MARGIN = "self, no margin"
     UNEXPLAINED = "unexplained"
 
 
@@ -330,6 +400,10 @@ class Recheck(Protocol):
     def exact(self, key: tuple[str, str, str]) -> float | None: ...
 
     def hull(self, key: tuple[str, str, str], exact: bool = True) -> float | None: ...
+
+    def near(self, key: tuple[str, str, str], limit: float) -> float | None:
+        """Method exact's distance when below ``limit`` (>= the clearance), else None."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -505,32 +579,39 @@ class Validation:
 
     def explain(self, key: tuple[str, str, str], dc: float | None, dm: float | None,
                 second: Callable[[], Recheck | None] = lambda: None) -> tuple[Reason, float | None]:
-        """Why the two sides disagree on this pair, and the distance that
-        shows it (None for a boundary): each reason is checked, in order,
-
-        - at a boundary: both distances known, within 2 % of the clearance;
-        - convex hull (a mesh part): the cable's distance to the mesh's
-          convex hull (discrete points, then method exact) classes the pair
-          as MuJoCo does;
-        - between points (method points): method exact classes the pair as
-          MuJoCo does;
-        - else unexplained."""
+        """Why the two sides disagree on this pair (checker ``dc``, MuJoCo
+        ``dm``; None: clear), and the distance that shows it (None where the
+        two distances themselves do): each :class:`Reason` is checked in
+        turn, its claim verified; else unexplained. ``second`` gives the
+        second opinions (None: nothing can be checked but the distances
+        themselves)."""
         c = self.clearance
+        tol = BOUNDARY_SHARE * max(c, 1e-12)
         cm = severity_of(dm, c)
         kind, _, b = key
-        if dc is not None and dm is not None and abs(dc - dm) <= 0.02 * max(c, 1e-12):
+        if dc is not None and dm is not None and abs(dc - dm) <= tol:
             return Reason.AT_BOUNDARY, None
         opinion = second()
+        if (dc is None) != (dm is None) and c - tol <= _least(dc, dm) and opinion is not None:
+            d = opinion.near(key, c + tol)                # the clear side's distance, up to c + tol
+            if d is not None and abs(d - c) <= tol:
+                return Reason.AT_BOUNDARY, d
+        exact = None
         if opinion is not None:
             if kind in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) and b in self.mesh_parts:
-                for exact in (False, True):        # discrete points first: cheaper, often enough
-                    d = opinion.hull(key, exact)
+                for by_exact in (False, True):        # discrete points first: cheaper, often enough
+                    d = opinion.hull(key, by_exact)
                     if severity_of(d, c) == cm:
                         return Reason.CONVEX_HULL, d
             if self.method == "points":
-                d = opinion.exact(key)
-                if severity_of(d, c) == cm:
-                    return Reason.BETWEEN_POINTS, d
+                exact = opinion.exact(key)
+                if severity_of(exact, c) == cm and _least(exact, None) < _least(dc, None):
+                    return Reason.BETWEEN_POINTS, exact
+        if self.method == "exact":
+            exact = dc
+        if (kind == PairType.SELF and dm is None and dc is not None and exact is not None
+                and 0.0 <= exact < c and 0.0 <= dc):
+            return Reason.SELF_NO_MARGIN, exact
         return Reason.UNEXPLAINED, None
 
     @property

@@ -78,3 +78,38 @@ def test_a_batchs_answers_are_each_states_alone(recheck):
     alone = [recheck.at(s, p).hull(key, exact=False) for s, p in zip(states, poses)]
     assert [batch.at(i).hull(key, exact=False) for i in range(3)] == alone
     assert alone[0] < 0 and alone[2] is None
+
+
+def test_near_finds_a_clear_sides_distance_up_to_the_limit(recheck):
+    """A cable 0.05 beyond the clearance of a sphere, two cables 0.05 beyond
+    it from each other: clear for exact, found by ``near`` up to 5.1 at the
+    closed-form distance; beyond the limit, still None."""
+    past_ball = _cable("d", [100.0, -50.0, 16.05], [100.0, 50.0, 16.05])
+    e, f = _cable("e", [-50.0, 0, 200.0], [50.0, 0, 200.0]), _cable("f", [0, -50.0, 207.05], [0, 50.0, 207.05])
+    state = recheck.at([past_ball, e, f], np.array([np.eye(4), _pose(100.0)]))
+    assert state.exact((CS, "d", "ball")) is None and state.exact((CC, "e", "f")) is None
+    assert state.near((CS, "d", "ball"), 5.1) == pytest.approx(5.05, abs=1e-9)
+    assert state.near((CC, "e", "f"), 5.1) == pytest.approx(5.05, abs=1e-9)
+    assert state.near((CS, "d", "ball"), 5.02) is None and state.near((CC, "e", "f"), 5.0) is None
+    assert state.near((CS, "d", "nothing"), 5.1) is None and state.near((CS, "gone", "ball"), 5.1) is None
+
+
+def test_near_on_a_self_pair_measures_with_the_wider_window(recheck):
+    """A hairpin of radius 1 bent round a circle of radius 7 (33 points, 32
+    chords): places on the bend a window w apart along it are 14 sin(w / 14)
+    apart (to the chords' sagitta). At the clearance 5 (w = pi + 5) that is
+    5.7 between surfaces, clear; ``near`` up to a limit L measures with w =
+    pi + L: the bend's own places that far apart, the wider window's
+    answer (and nothing nearer, the legs being 12 apart)."""
+    bend = np.linspace(np.pi, 0.0, 33)
+    arc = np.stack([7.0 * np.cos(bend), 7.0 * np.sin(bend), np.zeros(33)], axis=1)
+    legs = np.linspace(-40.0, 0.0, 9)[:-1]
+    pts = np.concatenate([np.stack([np.full(8, -7.0), legs, np.zeros(8)], 1), arc,
+                          np.stack([np.full(8, 7.0), legs[::-1], np.zeros(8)], 1)])
+    state = recheck.at([CableState("h", pts, 1.0)], np.array([np.eye(4), _pose(100.0)]))
+    key = (PairType.SELF, "h", "h")
+    assert state.exact(key) is None
+    chord_arc = 32 * 14.0 * np.sin(np.pi / 64) / (7.0 * np.pi)    # polyline length per unit of the circle's arc
+    for limit in (11.0, 11.9):
+        w = (np.pi + limit) / chord_arc                        # the window, as arc of the circle
+        assert state.near(key, limit) == pytest.approx(14.0 * np.sin(w / 14.0) - 2.0, abs=0.03)
