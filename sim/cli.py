@@ -48,6 +48,12 @@ def _cmd_check(args: argparse.Namespace) -> int:
     from sim.scene import load_scene
 
     scene = load_scene(args.scene)
+    warnings = scene.warnings
+    if "cable-structure" in scene.effects.contact and scene.cables:
+        from sim.build import plan_cables            # MuJoCo loads only for a scene whose cables collide
+        from sim.routecheck import route_warnings
+
+        warnings += route_warnings(scene, *plan_cables(scene))
     if not args.quiet:
         steps = round(scene.duration / scene.timestep)
         print(f"{args.scene}: valid scene {scene.name!r} ({scene.units}): {len(scene.cables)} cable(s), "
@@ -55,6 +61,8 @@ def _cmd_check(args: argparse.Namespace) -> int:
               f"{'y' if len(scene.bodies) == 1 else 'ies'}, {len(scene.motions)} motion(s)"
               + (f", on {scene.mjcf.name}" if scene.mjcf else "")
               + f"; {scene.duration:g} s in {steps} steps of {scene.timestep:g} s")
+    for w in warnings:
+        print(f"warning: {args.scene}: {w}", file=sys.stderr)
     return EXIT_OK
 
 

@@ -40,7 +40,7 @@ def _body_name(m: mujoco.MjModel, bid: int) -> str:
     return m.body(bid).name or ("world" if bid == 0 else f"body{bid}")
 
 
-def _geom_names(m: mujoco.MjModel, geoms: list[int]) -> list[str]:
+def geom_names(m: mujoco.MjModel, geoms: list[int]) -> list[str]:
     """Names of one body's geoms (all colliding, or all visual), in model order:
     `<body>/<geom name>`, else `<body>/<mesh name>`, else `<body>/<type><k>`
     with k the geom's index among `geoms`; names that would repeat within the
@@ -84,7 +84,7 @@ def _geom_parts(scene: Scene, m: mujoco.MjModel, own_bits: np.ndarray) -> tuple[
             visual.add(g)
         per_body.setdefault((int(m.geom_bodyid[g]), is_visual), []).append(g)
     for (bid, _), geoms in per_body.items():
-        for g, name in zip(geoms, _geom_names(m, geoms)):
+        for g, name in zip(geoms, geom_names(m, geoms)):
             named[g] = (name, _body_name(m, bid), False)
     parts, visuals, seen = [], [], {}
     for g in sorted(named):

@@ -17,7 +17,7 @@ import numpy as np
 
 from checker.shapes import Shape, ShapeType, least_signed_distance, mesh_shape
 from sim.mjspec import base_spec
-from sim.modelread import SHAPES, mesh_arrays
+from sim.modelread import SHAPES, geom_names, mesh_arrays
 from sim.scene import Scene, euler_matrix
 from sim.startframes import Frames
 
@@ -28,11 +28,13 @@ class Obstacles:
 
     Scene parts that are not keep-outs, and the base mjcf model's colliding
     geoms (compiled once more on their own for their local poses and sizes)
-    on the bodies whose t = 0 frames the scene knows. Only built when some
-    cable has slack and `cable-structure` contact is on."""
+    on the bodies whose t = 0 frames the scene knows, each with its part
+    name (`names`). Only built when `cable-structure` contact is on: for a
+    cable with slack to droop, or to find a route through a part
+    (`sim.routecheck`)."""
 
     def __init__(self, scene: Scene, frames: Frames, meshes: dict):
-        shapes, rot, pos = [], [], []
+        shapes, rot, pos, names = [], [], [], []
 
         def place(body: str, local_pos, local_rot) -> None:
             p, r = frames.poses[body]
@@ -48,8 +50,14 @@ class Obstacles:
             else:
                 shapes.append(Shape(ShapeType(part.shape), np.asarray(part.size, float) if part.size else np.zeros(3)))
             place(part.body, part.pos, euler_matrix(part.euler))
+            names.append(part.name)
         if scene.mjcf is not None:
             m = base_spec(scene).compile()
+            colliding: dict[int, list[int]] = {}     # body -> its colliding geoms: the builder's part names
+            for g in range(m.ngeom):
+                if int(m.geom_type[g]) in SHAPES and not (m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0):
+                    colliding.setdefault(int(m.geom_bodyid[g]), []).append(g)
+            geom_name = {g: n for gs in colliding.values() for g, n in zip(gs, geom_names(m, gs))}
             for g in range(m.ngeom):
                 gtype = int(m.geom_type[g])
                 body = m.body(int(m.geom_bodyid[g])).name or "world"
@@ -64,7 +72,9 @@ class Obstacles:
                 local = np.zeros(9)
                 mujoco.mju_quat2Mat(local, m.geom_quat[g])
                 place(body, m.geom_pos[g], local.reshape(3, 3))
+                names.append(geom_name[g])
         self.shapes = shapes
+        self.names = names
         self.rot = np.asarray(rot, float).reshape(-1, 3, 3)
         self.pos = np.asarray(pos, float).reshape(-1, 3)
         # world boxes (a plane's is infinite): only parts whose box comes

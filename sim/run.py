@@ -44,6 +44,7 @@ from sim.kinematic import KinematicSimulation
 from sim.loop import Simulation
 from sim.record import Mark, Recorder, Settings, summary_text
 from sim.report import STAGES, CableOutcome, RunOutcome, Timing, report_of, write_report
+from sim.routecheck import route_warnings
 from sim.scene import Scene, check_allow_names, check_fastened_names
 from sim.staticbuild import build_static, needs_model
 from sim.stepcheck import BATCH, BATCH_MAX, StepChecks
@@ -152,12 +153,13 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     validate = scene.check.validate
     static = not needs_model(scene)     # nothing calls for MuJoCo: no model is built (sim.staticbuild)
     planned = None if static else plan_cables(scene)
+    noted = scene.warnings + (() if static else route_warnings(scene, *planned))   # before any step
     # the simulation model first: the detection model is compiled while it settles
     built = build_static(scene) if static else build_simulation(scene, planned)
     check_allow_names(scene, [p.name for p in built.parts] + [c.name for c in built.cables])
     check_fastened_names(scene, [p.name for p in built.parts])
     if warn is not None:
-        for w in built.warnings:
+        for w in noted + tuple(built.warnings):
             warn(w)
     sim = KinematicSimulation(built) if static else Simulation(built, validate=validate)
     sim.reset()
@@ -265,7 +267,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         event_hold=tracker.hold,
         validation=ends.validation, advance=ends.advance,
         warnings=sim.warnings(), part_warnings=ends.part_warnings,
-        physics_warnings=tuple(built.warnings) + ends.hull_warnings,
+        physics_warnings=noted + tuple(built.warnings) + ends.hull_warnings,
         substeps=built.substeps.count if built.substeps else 1,
         timing=Timing(time.perf_counter() - start, dict(timer.total),
                       detector.collision_seconds() if detector is not None else None, loop_s),

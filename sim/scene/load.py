@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import re
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 from types import MappingProxyType
 
@@ -29,6 +30,7 @@ from sim.scene.parts import expand_nodes, read_body, read_part
 from sim.scene.reader import Reader
 from sim.scene.records import Scene
 from sim.scene.settings import read_check, read_effects, read_limits, within_limits
+from sim.scene.units import check_units
 
 
 def load_scene(path: str | Path) -> Scene:
@@ -114,7 +116,6 @@ def read_scene(r: Reader, data: dict) -> Scene:
             raise r.error(f"cables[{i}].name", f"{cable.name!r} is also the name of "
                           f"parts[{part_index[cable.name]}]; names must differ")
     limits = read_limits(r, data.get("limits", {}))
-    within_limits(r, limits, duration + settle, timestep, check, cables)
     names = [p.name for p in parts] + [c.name for c in cables]
     allow = tuple(read_allow(r, a, f"allow[{i}]", names)
                   for i, a in enumerate(r.tables(data.get("allow", []), "allow")))
@@ -123,6 +124,8 @@ def read_scene(r: Reader, data: dict) -> Scene:
                   effects=effects, check=check, bodies=bodies, parts=parts,
                   cables=cables, motions=motions, allow=allow,
                   start_frames=MappingProxyType(dict(r.frames)), limits=limits)
+    warnings = check_units(scene)          # a size no unit makes sense of first: it says which unit
+    within_limits(r, limits, duration + settle, timestep, check, cables)
     check_fastened_names(scene, [p.name for p in parts],
                          (set(r.mjcf.bodies) | {"world"}) if r.mjcf is not None else ())
-    return scene
+    return replace(scene, warnings=warnings) if warnings else scene

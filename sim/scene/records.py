@@ -342,6 +342,8 @@ class Scene:
         name -> (origin (3,) metres, rotation (3, 3)), for
         "world", each `[[bodies]]` body and each named mjcf body. Read-only.
       limits: the sizes the scene was checked against.
+      warnings: what loading found unusual but runnable (sizes unusual in
+        the declared units, `sim.scene.units`), one sentence each.
     """
 
     path: Path
@@ -362,3 +364,4 @@ class Scene:
     start_frames: Mapping[str, tuple[np.ndarray, np.ndarray]] = field(
         default_factory=lambda: MappingProxyType({}))
     limits: Limits = Limits()
+    warnings: tuple[str, ...] = ()
