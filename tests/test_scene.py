@@ -912,10 +912,7 @@ def test_keyframes_need_an_mjcf_model(folder):
 
 
 def test_plane_takes_an_optional_drawing_size_in_scene_units(folder):
-    data = copy.deepcopy(BASE)
-    data["scene"]["units"] = "mm"
-    for cable in data["cables"]:
-        cable.pop("segments", None)
+    data = to_mm(BASE)
     put(data, "parts.2.size", [500, 200])
     assert parse(data, folder).parts[2].size == (0.5, 0.2)
     put(data, "parts.2.size", [500, 0, 20])
