@@ -18,21 +18,30 @@ queried against the other part's tree), and only then exact triangle tests.
 Two primitives (box, sphere, capsule, cylinder, ellipsoid) are measured on
 their true shapes by :func:`checker.convex.convex_pairs` (exact, or a signed
 distance never above the true one); only two boxes that are apart go on to
-their (exact) triangles. Every other pair (a mesh on either side), per pair,
-in this order:
+their (exact) triangles. Every other pair (a mesh on either side), per pair:
 
-- surfaces crossing properly (:func:`checker.tritri.triangles_cross`) or a
-  containment probe of one part strictly inside the other (a part inside
-  another, coincident parts; 002's containment) -> overlap, hard. The
-  reported ``min_distance`` is minus the deepest probe's depth (a lower
-  bound on the penetration); when surfaces cross with no probe inside, it is
-  minus the touching tolerance (``checker.partset.TOUCH`` of the pair's size);
-- else the least triangle-triangle distance less both parts' tessellation
-  errors (a mesh beside a curved primitive: never above the true distance),
-  when above the touching tolerance and below the clearance -> soft; below
-  minus the touching tolerance -> hard (an overlap no deeper than the
-  errors cannot be ruled out).
-- Touching (shared faces, shared edges, a corner on a face, parts meshed
+- overlap, hard, when any of these is found (each a certificate, never a
+  guess): surfaces crossing properly (:func:`checker.tritri.triangles_cross`,
+  whether or not any vertex lies inside: a pin through a plate, a bar through
+  a bracket's foot); a containment probe of one part strictly inside the
+  other (a part inside another, coincident parts; 002's containment); a point
+  of a mesh's triangles more than the touching tolerance inside a curved
+  primitive's true shape. The reported ``min_distance`` is minus a lower
+  bound on the penetration depth (no translation shorter than it separates
+  the parts): the deepest point of one part found inside the other, among
+  the probes, the midpoints of the runs of edges through the other part
+  (edges cut at their piercings of its faces, :func:`_edge_runs`: the
+  steel-structure paper's outline edges against faces) and the deepest
+  point of a mesh's triangles in a curved primitive; at least the touching
+  tolerance (a crossing is hard however shallow the points found);
+- else the least distance: between triangles (exact; meshes and boxes have
+  no tessellation error), or for a mesh beside a curved primitive from the
+  mesh's triangles to the primitive's true shape (:func:`_true_surface`:
+  per triangle its edges' exact segment distances and the support point of
+  the primitive towards its plane, so exact), soft below the clearance. So a
+  curved primitive near a mesh is hard only where a point of the mesh lies
+  inside it, and never clear while one does;
+- touching (shared faces, shared edges, a corner on a face, parts meshed
   flush against each other, within the touching tolerance) is contact, not
   interference: mating parts of an assembly touch by design, so no record.
 
@@ -41,8 +50,9 @@ their normal: a primitive's support point (exact), a mesh's lowest vertex
 (exact). A pair involving a keep-out zone is of type ``keepout``
 with ``a`` the entering part and ``b`` the zone (two zones: in input order);
 other pairs are ``part-part`` with ``a`` before ``b`` in input order. ``where``
-is the deepest probe, the crossing or the midpoint of the closest points,
-world coordinates; ``s`` is 0 (parts have no arc length).
+is the deepest edge run's midpoint, the crossing, the deepest point of a
+mesh in a curved primitive or the midpoint of the closest points, world
+coordinates; ``s`` is 0 (parts have no arc length).
 
 Not here: cables (:mod:`checker.interference`), time and events.
 """
@@ -55,11 +65,13 @@ import numpy as np
 
 from checker.arrays import ranges
 from checker.bvh import aabb_pairs, assembly_pairs, obb_overlap, prefix_hits, transformed_aabb
-from checker.convex import convex_pairs, support
+from checker.convex import CONVEX, convex_pairs, support
 from checker.partset import Placement, PartSet
 from checker.records import Interference, PairType, severity_of
+from checker.shapes import segment_signed_distance_batch
 from checker.sweep import probes_inside_batch
-from checker.tritri import triangle_distance, triangles_cross
+from checker.closest import row_norm
+from checker.tritri import edge_piercings, triangle_distance, triangles_cross
 
 
 def candidate_pairs(parts: PartSet, placed: Placement, clearance: float,
@@ -167,42 +179,229 @@ def _triangle_pairs(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndar
     return ti[r2], tj, row[r2]
 
 
-def _triangle_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray,
-                     clearance: float) -> tuple[np.ndarray, np.ndarray]:
-    """Signed values (n,) and places (n, 3) of part pairs from their triangles and probes.
+def _first_per_row(row: np.ndarray, value: np.ndarray) -> np.ndarray:
+    """Indices of the least ``value`` of each distinct ``row`` (rows ascending)."""
+    if not len(row):
+        return np.zeros(0, np.int64)
+    order = np.lexsort((value, row))
+    return order[np.r_[True, row[order][1:] != row[order][:-1]]]
 
-    Crossing surfaces or a probe inside: minus the deepest probe's depth (or
-    minus the touching tolerance). Else the least triangle distance, less the
-    tessellation errors of both parts (so never more than the true distance);
-    such a value below minus the touching tolerance is a possible overlap no
-    deeper than those errors, reported as one."""
+
+def _edge_runs(parts: PartSet, placed: Placement, n: int, i: np.ndarray, j: np.ndarray, row: np.ndarray,
+               ti: np.ndarray, tj: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points inside the other part along edges that pierce it, per pair row.
+
+    For the crossing triangle pairs given (triangle ``ti`` of part
+    ``i[row]`` against ``tj`` of ``j[row]``, world corners ``a``, ``b``),
+    every edge of either triangle is cut at all its piercings of the other
+    part's triangles (:func:`checker.tritri.edge_piercings`); the midpoint of
+    each run between two consecutive piercings is measured against the other
+    part's true shape. An edge whose ends are outside the other part enters
+    and leaves it, so a crossing with no corner inside has such a run
+    inside. A point of one part at depth ``t`` inside the other means no
+    translation shorter than ``t`` separates them: ``-sd`` is a lower bound
+    on the penetration depth.
+
+    Returns:
+        deep: (n,) the least signed distance of those midpoints per pair
+            row (inf where none is inside a closed part).
+        at: (n, 3) that midpoint (world).
+    """
+    deep = np.full(n, np.inf)
+    at = np.zeros((n, 3))
+    m = len(row)
+    if not m:
+        return deep, at
+    src, dst = np.concatenate([a, b]), np.concatenate([b, a])
+    side = np.repeat(np.array([0, 1]), m)               # 0: an edge of i's triangle, 1: of j's
+    r2, tri = np.concatenate([row, row]), np.concatenate([ti, tj])
+    pair, edge, s = edge_piercings(src, dst)
+    if not len(pair):
+        return deep, at
+    # the piercings of one edge (row, side, triangle, edge) in order along it
+    cols = (r2[pair], side[pair], tri[pair], edge)
+    order = np.lexsort((s,) + cols[::-1])
+    same = np.ones(len(order) - 1, bool)
+    for c in cols:
+        cs = c[order]
+        same &= cs[1:] == cs[:-1]
+    first, second = order[:-1][same], order[1:][same]
+    if not len(first):
+        return deep, at
+    pm, em = pair[first], edge[first]
+    mid = 0.5 * (s[first] + s[second])
+    p0 = src[pm, em]
+    pts = p0 + mid[:, None] * (src[pm, (em + 1) % 3] - p0)
+    rr = r2[pm]
+    other = np.where(side[pm] == 0, j[rr], i[rr])
+    sd, _ = parts.signed_distance(other, placed.local(other, pts[:, None, :])[:, 0])
+    sd = np.where(parts.closed[other], sd, np.inf)
+    best = _first_per_row(rr, sd)
+    deep[rr[best]] = sd[best]
+    at[rr[best]] = pts[best]
+    return deep, at
+
+
+def _in_triangle(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray, nrm: np.ndarray) -> np.ndarray:
+    """(m,) bool: points p (m, 3) of the planes of triangles a b c (unnormalised normals ``nrm``) lie in them (closed)."""
+    out = np.ones(len(p), bool)
+    for u, v in ((a, b), (b, c), (c, a)):
+        out &= np.einsum("mj,mj->m", np.cross(v - u, p - u), nrm) >= 0.0
+    return out
+
+
+def _true_surface(parts: PartSet, placed: Placement, prim: np.ndarray,
+                  tri: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Least signed distance of each triangle (a mesh's) to a curved primitive's true shape.
+
+    The signed distance to a convex solid S is convex, so over a triangle T
+    its least value is reached on an edge of T, or inside T where the plane
+    P of T is nearest S (or cuts it):
+
+    - edges: the least signed distance along each edge, exact per primitive
+      (:func:`checker.shapes.segment_signed_distance_batch`);
+    - S wholly on one side of P: the distance from P to S is the height of
+      S's support point towards P (:func:`checker.convex.support`); when its
+      foot on P lies in T, that is T's distance (if not, a point of P nearest
+      S in T would make a segment of such points reaching T's edges, which
+      the edges then give);
+    - S cut by P: the segment between S's lowest and highest support points
+      along P's normal lies in S and meets P at a point z of S; if S's
+      section by P reaches T's inside without touching its edges it lies
+      wholly inside T, so z is in T: its signed distance (<= 0) is then T's
+      overlap (a point of T in S, so minus it is a lower bound on the
+      penetration).
+
+    Args:
+        prim: (m,) the primitive part of each row (box, sphere, capsule,
+            cylinder, ellipsoid).
+        tri: (m, 3, 3) triangles (world).
+
+    Returns:
+        value: (m,) the least signed distance (exact to the primitives'
+            segment distances, about 1e-13 of an edge; an overlap through
+            T's inside: the signed distance of a point of T in S, <= 0).
+        x: (m, 3) the point of T where it is reached (world).
+        q: (m, 3) the point of S's surface nearest x (world).
+    """
+    m = len(prim)
+    t = placed.local(prim, tri)
+    kind, size = parts.convex_kind[prim], parts.sd_groups[2][prim]
+    # the three edges, one call per primitive type
+    a, b = t.reshape(-1, 3), t[:, [1, 2, 0]].reshape(-1, 3)
+    k3, s3 = np.repeat(kind, 3), np.repeat(size, 3, axis=0)
+    ev, et = np.empty(3 * m), np.empty(3 * m)
+    for k in np.unique(kind):
+        sel = np.flatnonzero(k3 == k)
+        ev[sel], et[sel] = segment_signed_distance_batch(CONVEX[k], s3[sel], a[sel], b[sel])
+    best = np.argmin(ev.reshape(m, 3), axis=1) + 3 * np.arange(m)
+    value = ev[best]
+    x = a[best] + et[best, None] * (b[best] - a[best])
+    # the face: S's support points along the plane's normal
+    nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    ln = row_norm(nrm)
+    flat = ln > 0
+    u = nrm / np.where(flat, ln, 1.0)[:, None]
+    u = np.where(flat[:, None], u, [0.0, 0.0, 1.0])
+    h = np.einsum("mj,mj->m", u, t[:, 0])
+    _, low = support(kind, size, -u)
+    _, high = support(kind, size, u)
+    lo_h = np.einsum("mj,mj->m", u, low) - h
+    hi_h = np.einsum("mj,mj->m", u, high) - h
+    front, behind = lo_h >= 0.0, hi_h <= 0.0
+    cut = ~front & ~behind
+    frac = np.where(cut, -lo_h / np.where(cut, hi_h - lo_h, 1.0), 0.0)
+    z = low + frac[:, None] * (high - low)
+    pick = np.where(front[:, None], low, np.where(behind[:, None], high, z))
+    foot = pick - (np.einsum("mj,mj->m", u, pick) - h)[:, None] * u
+    face = flat & _in_triangle(foot, t[:, 0], t[:, 1], t[:, 2], nrm)
+    face_val = np.where(front, lo_h, -hi_h)
+    rows = np.flatnonzero(face & cut)
+    if len(rows):
+        face_val[rows] = parts.signed_distance(prim[rows], foot[rows])[0]
+    lower = face & (face_val < value)
+    value = np.where(lower, face_val, value)
+    x = np.where(lower[:, None], foot, x)
+    _, q = parts.signed_distance(prim, x)
+    world = placed.world(prim, np.stack([x, q], axis=1))
+    return value, world[:, 0], world[:, 1]
+
+
+def _triangle_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray,
+                     clearance: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Signed values (n,), places (n, 3) and hard flags (n,) of part pairs
+    with a mesh (or two boxes apart), from their triangles and probes.
+
+    Hard (an overlap found): surfaces crossing, a probe strictly inside, a
+    point of a mesh's triangles more than the touching tolerance inside a
+    curved primitive's true shape. The value is then minus a lower bound on
+    the penetration depth, the deepest point of one part found inside the
+    other (probes, runs of edges through the other, the mesh's triangles in a
+    curved primitive), but at least the touching tolerance. Else the least
+    distance: between triangles (exact for meshes and boxes), or to a curved
+    primitive's true shape (a lower bound, at convergence the distance; see
+    :func:`_true_surface`), never below minus the touching tolerance (an
+    overlap that was not found is not reported hard)."""
     n = len(i)
     dist = np.full(n, np.inf)
     where = np.zeros((n, 3))
     crossing = np.zeros(n, bool)
-    ti, tj, row = _triangle_pairs(parts, placed, i, j, clearance + parts.error[i] + parts.error[j])
+    touch = parts.touch(i, j)
+    err = parts.error[i] + parts.error[j]
+    run_deep, run_at = np.full(n, np.inf), np.zeros((n, 3))
+    ti, tj, row = _triangle_pairs(parts, placed, i, j, clearance + err)
+    d = np.zeros(0)
+    p = q = np.zeros((0, 3))
+    rest = np.zeros(0, bool)
     if len(row):
         a = _world_triangles(parts, placed, i[row], ti)
         b = _world_triangles(parts, placed, j[row], tj)
-        cr = triangles_cross(a, b, parts.touch(i[row], j[row]))
+        cr = triangles_cross(a, b, touch[row])
         crossing[row[cr]] = True
         where[row[cr]] = 0.5 * (a[cr].mean(axis=1) + b[cr].mean(axis=1))
+        run_deep, run_at = _edge_runs(parts, placed, n, i, j, row[cr], ti[cr], tj[cr], a[cr], b[cr])
         rest = ~cr & ~crossing[row]
         d, p, q = triangle_distance(a[rest], b[rest])
         r = row[rest]
-        order = np.lexsort((d, r))
-        first = order[np.r_[True, r[order][1:] != r[order][:-1]]] if len(order) else order
+        first = _first_per_row(r, d)
         dist[r[first]] = d[first]
-        mid = 0.5 * (p[first] + q[first])
-        where[r[first]] = np.where(crossing[r[first]][:, None], where[r[first]], mid)
+        where[r[first]] = 0.5 * (p[first] + q[first])
     # containment probes of every pair, both ways, in one batch
     deep = probes_inside_batch(parts, placed, np.concatenate([i, j]), np.concatenate([j, i]))
     deep = np.minimum(deep[:n], deep[n:])
-    inside = np.isfinite(deep)
-    touch = parts.touch(i, j)
-    hard = inside | crossing
-    value = np.where(hard, np.where(inside, deep, -touch), dist - parts.error[i] - parts.error[j])
-    return value, where
+    value = dist - err                      # curved rows far from the clearance keep this lower bound
+    hard = np.isfinite(deep) | crossing
+    # a mesh beside a curved primitive (not already found overlapping): its
+    # triangles against the primitive's true shape
+    curved = (err > 0) & ~hard & (value < clearance + touch)
+    true_deep = np.full(n, np.inf)
+    if curved.any() and rest.any():
+        r = row[rest]
+        use = curved[r]
+        r, d = r[use], d[use]
+        prim_i = parts.error[i[r]] > 0                   # the curved part is i (else j)
+        mesh_tri = np.where(prim_i, tj[rest][use], ti[rest][use])
+        # each mesh triangle once per pair, at its nearest tessellation triangle
+        key = _first_per_row(r * len(parts.tris) + mesh_tri, d)
+        r, d, mesh_tri, prim_i = r[key], d[key], mesh_tri[key], prim_i[key]
+        # only triangles that can hold the pair's least true distance (the
+        # tessellation lies inside the true shape, within ``err`` of it)
+        need = d - err[r] <= dist[r]
+        r, mesh_tri, prim_i = r[need], mesh_tri[need], prim_i[need]
+        prim = np.where(prim_i, i[r], j[r])
+        mesh = np.where(prim_i, j[r], i[r])
+        v, x, xq = _true_surface(parts, placed, prim, _world_triangles(parts, placed, mesh, mesh_tri))
+        best = _first_per_row(r, v)
+        rb = r[best]
+        true_deep[rb] = v[best]
+        value[rb] = np.maximum(v[best], -touch[rb])
+        where[rb] = 0.5 * (x[best] + xq[best])
+        hard |= true_deep < -touch
+    worst = np.minimum(np.minimum(deep, run_deep), np.where(true_deep < -touch, true_deep, np.inf))
+    run_best = (run_deep <= deep) & np.isfinite(run_deep)
+    where = np.where(run_best[:, None], run_at, where)
+    value = np.where(hard, -np.maximum(-np.minimum(worst, 0.0), touch), value)
+    return value, where, hard
 
 
 def check_parts(parts: PartSet, placed: Placement, clearance: float,
@@ -254,11 +453,12 @@ def _check_indexed(parts: PartSet, placed: Placement, clearance: float, focus, p
                                            kind[b], size[b], placed.rot[b], placed.pos[b], clearance)
             value[conv], where[conv] = sd, w
             tri[conv[~apart]] = False
+        touch = parts.touch(i, j)
+        hard = value < -touch
         rows = np.flatnonzero(tri)
         if len(rows):
-            value[rows], where[rows] = _triangle_values(parts, placed, i[rows], j[rows], clearance)
-        touch = parts.touch(i, j)
-        for k in np.flatnonzero((value < -touch) | ((touch < value) & (value < clearance))):  # records only
+            value[rows], where[rows], hard[rows] = _triangle_values(parts, placed, i[rows], j[rows], clearance)
+        for k in np.flatnonzero(hard | ((touch < value) & (value < clearance))):  # records only
             out.append((int(i[k]), int(j[k]), _record(parts, int(i[k]), int(j[k]), float(value[k]), where[k],
                                                       clearance)))
     out.extend(_plane_records(parts, placed, clearance, focus, pair_mask))

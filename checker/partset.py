@@ -29,7 +29,7 @@ import numpy as np
 from checker.arrays import ranges
 from checker.bvh import Assemblies, TriangleForest, assembly_boxes, transformed_aabb
 from checker.convex import CONVEX
-from checker.shapes import Shape, ShapeType
+from checker.shapes import Shape, ShapeType, signed_distance, signed_distance_batch
 from checker.tessellate import part_surfaces
 
 TOUCH = 1e-6
@@ -256,6 +256,27 @@ class PartSet:
         types = [CONVEX.index(t) for t in (ShapeType.SPHERE, ShapeType.CAPSULE, ShapeType.CYLINDER)]
         round_ellipsoid = (kind == CONVEX.index(ShapeType.ELLIPSOID)) & (size[:, 0] == size[:, 1])
         return np.isin(kind, types) | round_ellipsoid
+
+    def signed_distance(self, part: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Signed distances (n,) of points (n, 3), each in the frame of its
+        part ``part`` (n,), to that part's true shape (negative inside; an
+        open mesh's are unsigned), and the closest surface points (n, 3) in
+        the same frames: one call per primitive type and per distinct mesh
+        (:attr:`sd_groups`)."""
+        part = np.asarray(part, np.int64)
+        points = np.asarray(points, float).reshape(-1, 3)
+        key, kinds, size = self.sd_groups
+        kb = key[part]
+        sd = np.empty(len(part))
+        closest = np.empty((len(part), 3))
+        for k in np.unique(kb):     # one call per primitive type or distinct mesh
+            sel = np.flatnonzero(kb == k)
+            stype, shape = kinds[k]
+            if shape is not None:
+                sd[sel], closest[sel] = signed_distance(shape, points[sel])
+            else:
+                sd[sel], closest[sel] = signed_distance_batch(stype, size[part[sel]], points[sel])
+        return sd, closest
 
     def touch(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Touching tolerance (absolute) of part pairs ``a``, ``b`` (n,)."""

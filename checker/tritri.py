@@ -9,6 +9,11 @@
   coplanar triangles (faces lying on each other) all answer False. This is
   the boundary rule of the rigid-part checks: parts whose surfaces only touch
   are at distance 0 (soft when a clearance is set, never hard).
+- :func:`edge_piercings`: where the edges of one triangle pass through the
+  other (strictly from one side of its plane to the other, at a point of
+  the closed triangle): the part-part check cuts an edge at its piercings
+  of a part's surface to find points inside that part (the
+  steel-structure paper's outline edges against faces).
 - :func:`triangle_distance`: the distance between non-crossing triangles as
   the least of the 6 corner-triangle and 9 edge-edge distances, with the
   closest points.
@@ -113,6 +118,38 @@ def triangles_cross(t1: np.ndarray, t2: np.ndarray, tol: np.ndarray | float | No
     overlap = np.minimum(a_hi, b_hi) - np.maximum(a_lo, b_lo)
     out[rows] = good & (overlap > tol[rows])
     return out
+
+
+def edge_piercings(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where edges of triangles ``src`` pass through triangles ``dst`` (both (n, 3, 3)).
+
+    Edge k of ``src[m]`` runs from corner k to corner k + 1. It pierces
+    ``dst[m]`` when its ends lie strictly on opposite sides of the plane of
+    ``dst[m]`` and the crossing point lies in the closed triangle (edge-side
+    tests with the unnormalised normal, so no tolerance and no division but
+    the one along the edge). An edge in the plane, or ending on it, does not
+    pierce it; a zero-area ``dst`` is never pierced.
+
+    Returns:
+        pair, edge: (k,) the row m and the edge (0, 1, 2) of each piercing.
+        s: (k,) its parameter along the edge, in (0, 1).
+    """
+    n = len(src)
+    if n == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
+    k = np.arange(3)
+    p0, p1 = src[:, k], src[:, (k + 1) % 3]                    # (n, 3, 3): edge, coordinate
+    d0, d1, d2 = dst[:, 0], dst[:, 1], dst[:, 2]
+    nrm = np.cross(d1 - d0, d2 - d0)
+    h0 = np.einsum("nkj,nj->nk", p0 - d0[:, None], nrm)
+    h1 = np.einsum("nkj,nj->nk", p1 - d0[:, None], nrm)
+    cut = (np.sign(h0) * np.sign(h1) < 0) & (np.einsum("nj,nj->n", nrm, nrm) > 0)[:, None]
+    s = np.where(cut, h0 / np.where(cut, h0 - h1, 1.0), 0.0)
+    x = p0 + s[..., None] * (p1 - p0)
+    for u, v in ((d0, d1), (d1, d2), (d2, d0)):
+        cut &= np.einsum("nkj,nj->nk", np.cross((v - u)[:, None, :], x - u[:, None, :]), nrm) >= 0.0
+    pair, edge = np.nonzero(cut)
+    return pair, edge, s[pair, edge]
 
 
 def triangle_distance(t1: np.ndarray, t2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

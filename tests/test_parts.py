@@ -288,3 +288,166 @@ def test_pairs_at_many_states_are_each_states_own_check(seed):
                 assert all(np.array_equal(g.where, w.where) for g, w in zip(recs, want))
             found += len(got)
         assert found > 5
+
+
+# ---- assemblies against an independent reference (python-fcl, closed forms) ----
+
+import fcl  # noqa: E402
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+from strategies import rotations  # noqa: E402
+
+_PLATE = trimesh.creation.box((60.0, 40.0, 5.0))
+_FOOT = trimesh.creation.box((50.0, 30.0, 5.0))
+_PIN = trimesh.creation.cylinder(3.0, 30.0, sections=32)
+_BAR = trimesh.creation.box((6.0, 80.0, 6.0))
+_TORUS = trimesh.creation.torus(30.0, 6.0, major_sections=48, minor_sections=16)
+_SLAB = trimesh.creation.box((80.0, 80.0, 10.0))
+
+
+def _fcl(tm, shape, t, scale):
+    """A python-fcl object of a trimesh mesh (or a primitive ``shape``) scaled and posed by t."""
+    if shape is None:
+        geom = fcl.BVHModel()
+        geom.beginModel(len(tm.vertices), len(tm.faces))
+        geom.addSubModel(np.asarray(tm.vertices, float) * scale, np.asarray(tm.faces, np.int32))
+        geom.endModel()
+    else:
+        s = np.asarray(shape.size, float)
+        geom = {ShapeType.BOX: lambda: fcl.Box(*(2 * s)), ShapeType.SPHERE: lambda: fcl.Sphere(s[0]),
+                ShapeType.CYLINDER: lambda: fcl.Cylinder(s[0], 2 * s[1]),
+                ShapeType.CAPSULE: lambda: fcl.Capsule(s[0], 2 * s[1]),
+                ShapeType.ELLIPSOID: lambda: fcl.Ellipsoid(*s)}[shape.type]()
+    return fcl.CollisionObject(geom, fcl.Transform(t[:3, :3], t[:3, 3]))
+
+
+def _scaled_mesh(tm, scale):
+    return mesh_shape(np.asarray(tm.vertices) * scale, np.asarray(tm.faces))
+
+
+def _carry(rot, far, scale):
+    t = np.eye(4)
+    t[:3, :3] = rot
+    t[:3, 3] = np.array([1.0, -0.7, 0.4]) * far * scale
+    return t
+
+
+def _turned(axis, angle, pos):
+    from scipy.spatial.transform import Rotation
+    t = np.eye(4)
+    t[:3, :3] = Rotation.from_rotvec(np.asarray(axis, float) * angle).as_matrix()
+    t[:3, 3] = pos
+    return t
+
+
+@settings(max_examples=25)
+@given(rotations(), st.sampled_from([0.0, 1e4]), st.sampled_from([1.0, 1e-3]), st.sampled_from([0.1, 2.0]),
+       st.booleans(), st.floats(-14.0, 14.0), st.floats(0.0, 2 * np.pi), st.floats(-0.3, 0.3))
+def test_pins_through_plates_and_bars_through_feet_are_hard(rot, far, scale, depth, primitive, y, spin, tilt):
+    """A pin cutting into a plate's side and a bar through a bracket's foot
+    (mesh or primitive; no vertex of either inside the other), in mm or m,
+    far from the origin: python-fcl finds them colliding and the check
+    reports them hard, its depth a lower bound (the pin moved out by
+    ``depth`` along x, the bar by ``depth`` along z, clears them); moved
+    out a further ``depth``, neither is hard and fcl finds no collision."""
+    carry = _carry(rot, far, scale)
+    pin = Shape(ShapeType.CYLINDER, [3.0 * scale, 15.0 * scale]) if primitive else _scaled_mesh(_PIN, scale)
+    bar = Shape(ShapeType.BOX, [3.0 * scale, 40.0 * scale, 3.0 * scale]) if primitive else _scaled_mesh(_BAR, scale)
+    cases = [("plate", _PLATE, "pin", _PIN, pin, lambda out: _turned([0, 0, 1], spin, np.array([33.0 - depth + out, y, 0.0]) * scale)),
+             ("foot", _FOOT, "bar", _BAR, bar, lambda out: _turned([0, 0, 1], tilt, np.array([y, 0.0, 5.5 - depth + out]) * scale))]
+    for name_a, tm_a, name_b, tm_b, shape_b, place in cases:
+        ps = PartSet.build([name_a, name_b], [_scaled_mesh(tm_a, scale), shape_b], tolerance=0.25 * scale)
+        for out, overlapping in ((0.0, True), (2 * depth, False)):
+            poses = np.array([carry, carry @ place(out)])
+            ref = fcl.collide(_fcl(tm_a, None, poses[0], scale), _fcl(tm_b, shape_b if primitive else None, poses[1], scale),
+                              fcl.CollisionRequest(), fcl.CollisionResult())
+            assert bool(ref) == overlapping
+            recs = check_parts(ps, ps.place(poses), 0.05 * scale)
+            hard = [r for r in recs if r.severity.value == "hard"]
+            if overlapping:
+                assert len(hard) == 1 and 0 < -hard[0].min_distance <= depth * scale * (1 + 1e-9) + 1e-12 * far * scale
+            else:
+                assert not hard
+
+
+_CURVED = [(Shape(ShapeType.SPHERE, [4.0]), 4.0, None), (Shape(ShapeType.CYLINDER, [4.0, 8.0]), 4.0, [1, 0, 0]),
+           (Shape(ShapeType.CYLINDER, [4.0, 8.0]), 8.0, None), (Shape(ShapeType.CAPSULE, [3.0, 6.0]), 3.0, [1, 0, 0]),
+           (Shape(ShapeType.ELLIPSOID, [6.0, 4.0, 3.0]), 3.0, None)]
+
+
+def _scaled(shape, scale):
+    return Shape(shape.type, list(np.asarray(shape.size) * scale))
+
+
+@settings(max_examples=30)
+@given(rotations(), st.sampled_from([0.0, 1e4]), st.sampled_from([1.0, 1e-3]), st.integers(0, len(_CURVED) - 1),
+       st.floats(0.1, 0.5), st.floats(-20, 20), st.floats(-20, 20), st.floats(0, 2 * np.pi))
+def test_curved_primitives_near_a_mesh_face_are_soft_at_their_gap(rot, far, scale, k, gap, x, y, spin):
+    """A sphere, a cylinder (side or end), a capsule or an ellipsoid 0.1 to
+    0.5 mm above a mesh slab's face (its distance is the gap, by
+    construction; fcl agrees to 1e-5 mm), with a coarse tessellation (0.25
+    mm, more than the gap): soft, never hard, at the gap to rounding (1e-11
+    mm near the origin, 1e-9 mm 1e4 away), never above it."""
+    shape, lift, axis = _CURVED[k]
+    local = _turned([0, 0, 1], spin, np.array([x, y, 5.0 + lift + gap]) * scale)
+    if axis is not None:
+        local = local @ _turned(axis, np.pi / 2, np.zeros(3))
+    carry = _carry(rot, far, scale)
+    poses = np.array([carry, carry @ local])
+    sh = _scaled(shape, scale)
+    if scale == 1.0:                     # (fcl's curved shapes in m are off by up to 1e-3 of the gap)
+        ref = fcl.distance(_fcl(_SLAB, None, poses[0], scale), _fcl(None, sh, poses[1], scale),
+                           fcl.DistanceRequest(), fcl.DistanceResult())
+        assert ref == pytest.approx(gap, abs=1e-5)
+    ps = PartSet.build(["slab", "c"], [_scaled_mesh(_SLAB, scale), sh], tolerance=0.25 * scale)
+    recs = check_parts(ps, ps.place(poses), 1.0 * scale)
+    assert [(r.a, r.b, r.severity.value) for r in recs] == [("slab", "c", "soft")]
+    rounding = 1e-13 * (100.0 + far) * scale                 # of coordinates up to 100 + far
+    assert recs[0].min_distance == pytest.approx(gap * scale, abs=rounding)
+    assert recs[0].min_distance <= gap * scale + rounding
+
+
+@settings(max_examples=30)
+@given(rotations(), st.integers(0, len(_CURVED) - 1), st.floats(0.0, 2 * np.pi), st.floats(-1.0, 1.0),
+       st.floats(-0.5, 1.0))
+def test_curved_primitives_near_a_torus_against_fcl(rot, k, around, tilt, gap):
+    """A curved primitive at a drawn pose near a torus mesh (from
+    trimesh.creation.torus), overlapping it by up to 0.5 mm or up to 1 mm
+    clear (placed by bisection on fcl's distance): hard where it overlaps by
+    more than 1e-3 mm (fcl collides too; the depth never above the overlap),
+    never hard where fcl finds it clear, and there at fcl's distance to 2e-5
+    mm, never above it (fcl's capsules measure up to 6e-6 mm high: a capsule
+    0.8125 mm from the torus by fcl is 0.81249379 by fcl's own spheres along
+    its axis, 0.81249379 here)."""
+    shape, lift, _ = _CURVED[k]
+    t = np.eye(4)
+    t[:3, :3] = rot
+    # the primitive's centre along a direction from the tube's circle, from the tube's
+    # surface (fcl sees the mesh as a surface: a part wholly inside it does not collide)
+    # out to where fcl says `gap`
+    d = np.array([np.cos(around) * np.cos(tilt), np.sin(around) * np.cos(tilt), np.sin(tilt)])
+    ring = np.array([np.cos(around), np.sin(around), 0.0]) * 30.0
+    slab = _fcl(_TORUS, None, np.eye(4), 1.0)
+
+    def dist_at(c):
+        t[:3, 3] = ring + d * c
+        return fcl.distance(slab, _fcl(None, shape, t, 1.0), fcl.DistanceRequest(), fcl.DistanceResult())
+
+    lo, hi = 6.0, 30.0                    # bisect the centre's offset to the drawn gap (fcl's distance)
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if dist_at(mid) <= max(gap, 0.0) + 1e-9 else (lo, mid)   # (fcl: ~0 overlapping)
+    c = hi if gap >= 0 else hi + gap
+    ref = dist_at(c)
+    poses = np.array([np.eye(4), t.copy()])
+    ref_hit = fcl.collide(slab, _fcl(None, shape, poses[1], 1.0), fcl.CollisionRequest(), fcl.CollisionResult())
+    ps = PartSet.build(["torus", "c"], [_scaled_mesh(_TORUS, 1.0), shape], tolerance=0.25)
+    recs = check_parts(ps, ps.place(poses), 2.0)
+    got = {r.severity.value: r.min_distance for r in recs}
+    touch = float(ps.touch(np.array([0]), np.array([1]))[0])
+    if gap < -1e-3:
+        assert ref_hit and "hard" in got and -got["hard"] <= -gap + 1e-6
+    else:
+        assert "hard" not in got
+        if ref > touch + 2e-5:
+            assert not ref_hit and got["soft"] == pytest.approx(ref, abs=2e-5) and got["soft"] <= ref + 1e-9

@@ -135,10 +135,12 @@ class PartPairGaps:
       on a hinge pin, a panel swinging round the knuckle's axis: nothing
       moves); the corners of the other part's box are turned (a part
       without a box keeps the radius bound, not turned). The distance of
-      the true shapes is the same at both poses; the check measures a
-      curved part's inscribed tessellation less its error, at most
-      ``error[i] + error[j]`` below the true distance, so this bound is
-      held to ``g - error[i] - error[j]``.
+      the true shapes is the same at both poses, and the part-part check
+      measures a curved part on its true shape (against a primitive,
+      :mod:`checker.convex`; against a mesh, the mesh's triangles against
+      the true shape, :mod:`checker.parts`), never above the true distance;
+      this bound is still held to ``g - error[i] - error[j]`` (the
+      tessellation errors), a margin on the safe side.
 
     Each is a bound on the drop of the distance (1-Lipschitz in the points),
     so the pair stays outside the clearance while any one holds. Any
