@@ -28,7 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline, PchipInterpolator, PPoly
 
-INTERPOLATIONS = ("cubic", "linear")
+from sim.scene.format import INTERPOLATIONS
+
 """Values of `[[motion]] interpolation`; the first is the default."""
 
 

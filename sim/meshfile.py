@@ -20,7 +20,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import trimesh
 
 GLTF_SUFFIXES = (".glb", ".gltf")
 """File suffixes read as a node tree."""
@@ -76,6 +75,8 @@ def stl_problem(path: Path) -> str | None:
 
 def mesh_nodes(path: Path) -> list[MeshNode]:
     """The meshes of a file (see the module docstring), glTF nodes sorted by path."""
+    import trimesh   # half a second to import: only a scene with a mesh part pays it
+
     path = Path(path)
     if path.suffix.lower() == ".stl":
         problem = stl_problem(path)

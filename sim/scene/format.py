@@ -23,6 +23,9 @@ INTERACTIONS = ("cable-structure", "cable-cable", "self", "part-part")
 """Names allowed in `effects.contact`."""
 
 METHODS = ("points", "exact")
+
+INTERPOLATIONS = ("cubic", "linear")
+"""How a motion's samples are joined (`sim.curves`), the default first."""
 """Values allowed in `check.method`."""
 
 DEFAULT_CLEARANCE = 0.005

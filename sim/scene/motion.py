@@ -15,9 +15,8 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from sim.curves import INTERPOLATIONS
 from sim.scene.errors import SceneError, describe, fmt
-from sim.scene.format import ANGLES, BODY_AXES, BODY_KEY_KEYS, JOINT_KEY_KEYS, MOTION_KEYS
+from sim.scene.format import ANGLES, BODY_AXES, BODY_KEY_KEYS, INTERPOLATIONS, JOINT_KEY_KEYS, MOTION_KEYS
 from sim.scene.mjcf import DRIVEN
 from sim.scene.reader import Reader
 from sim.scene.records import BodyDef, BodyKey, JointKey, KeyframeKey, MotionDef, Trajectory

@@ -15,8 +15,6 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-import trimesh
-
 from sim.meshfile import MeshFileError, is_tree, mesh_nodes
 from sim.scene.errors import describe
 from sim.scene.format import BODY_KEYS, PART_KEYS, SHAPE_SIZES
@@ -139,6 +137,8 @@ def check_mesh(r: Reader, path: Path, where: str, closed: bool) -> None:
     nodes = read_mesh_nodes(r, path, where)
     if not closed:
         return
+    import trimesh   # loaded already by mesh_nodes (sim.meshfile): only a scene with meshes imports it
+
     for node in nodes:
         if not trimesh.Trimesh(node.vertices, node.faces).is_watertight:
             label = f"{path.name}" + (f" node {node.path!r}" if node.path else "")

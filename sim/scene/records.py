@@ -15,9 +15,8 @@ from typing import Mapping
 
 import numpy as np
 
-from sim.curves import INTERPOLATIONS
 from sim.scene.format import (DEFAULT_CLEARANCE, DEFAULT_DAMPING, DEFAULT_DENSITY,
-                              DEFAULT_YOUNG, ZERO3, Hold)
+                              DEFAULT_YOUNG, INTERPOLATIONS, ZERO3, Hold)
 
 
 @dataclass(frozen=True)
@@ -217,6 +216,12 @@ class CableDef:
     route: np.ndarray | None = None
     twist_stiffness: float | None = None
     damping: float = DEFAULT_DAMPING
+
+    @property
+    def route_length(self) -> float:
+        """Length of the route at t = 0 (`route`, else `points`), metres."""
+        line = np.asarray(self.route if self.route is not None else self.points, float)
+        return float(np.linalg.norm(np.diff(line, axis=0), axis=1).sum())
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,6 @@ from typing import Any
 
 import numpy as np
 
-from sim.route import polyline_length
 from sim.scene.errors import describe, fmt
 from sim.scene.format import (CHECK_KEYS, DEFAULT_CLEARANCE, EFFECTS_KEYS, INTERACTIONS,
                               LIMIT_KEYS, METHODS)
@@ -71,7 +70,7 @@ def within_limits(r: Reader, limits: Limits, seconds: float, timestep: float,
                           "elements = ...)")
     if check.method != "points" or not cables:
         return
-    lengths = np.array([c.length or polyline_length(c.route) for c in cables])
+    lengths = np.array([c.length or c.route_length for c in cables])
     radii = np.array([c.radius for c in cables])
     points = lengths / (check.spacing * radii) + 1.0
     if points.sum() > limits.points:

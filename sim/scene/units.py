@@ -98,8 +98,7 @@ def check_units(scene: Scene) -> tuple[str, ...]:
             warnings.append(f"{key} = {fmt(r / scene.scale)} {unit} is an unusual cable radius "
                             f"(usual {fmt(RADIUS_USUAL[0] * 1000)} mm to {fmt(RADIUS_USUAL[1] * 1000)} mm)"
                             + _likely(r, *RADIUS_USUAL, scene))
-        length = c.length if c.length is not None else float(np.linalg.norm(np.diff(
-            np.asarray(c.route if c.route is not None else c.points, float), axis=0), axis=1).sum())
+        length = c.length if c.length is not None else c.route_length
         key = f"cables[{i}].length" if c.length is not None else f"cables[{i}] (the route's length)"
         if not LENGTH_REFUSE[0] <= length <= LENGTH_REFUSE[1]:
             raise SceneError(scene.path, key, f"{fmt(length / scene.scale)} {unit} is no cable length "
