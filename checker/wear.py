@@ -32,8 +32,9 @@ a pair in contact is never missed). For each named cable-structure pair the
 cable's elements whose box meets the part's are measured against it (exact
 segment to shape distance, :func:`checker.shapes.segment_signed_distance`;
 for a mesh the element's ends and middle); for cable-cable and self pairs
-the element pairs whose bounding spheres meet (self: farther apart along
-the cable than :func:`checker.cable.self_pair_window`), exactly. Keep-outs
+the element pairs whose bounding spheres meet, exactly (self: the checker's
+self rule, the nearest of the two elements' places at least
+:func:`checker.cable.self_pair_window` apart along the cable). Keep-outs
 are clearance zones, not surfaces, and make no wear; an attachment window
 (the cable held in a part) is not contact either. Cost: one vectorised
 distance call per pair in contact per batch of steps; nothing when nothing
@@ -58,7 +59,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from checker.cable import self_pair_window
-from checker.closest import row_norm, segment_segment
+from checker.closest import row_norm, segment_segment, segment_segment_apart
 from checker.records import Interference, PairType
 from checker.scene_state import Exclusion
 from checker.shapes import Shape, ShapeType, signed_distance, segment_signed_distance
@@ -316,11 +317,26 @@ class WearMap:
         ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
         gap = row_norm(ma[:, :, None, :] - mb[:, None, :, :]) - ha[:, :, None] - hb[:, None, :]
         st, ia, ib = np.nonzero(gap < self.radii[c] + self.radii[b] + self.clearance)
-        if b == c:   # places of one cable close along it are its own bends, not contact
-            mid = 0.5 * (self.rest_s[c][1:] + self.rest_s[c][:-1])
-            far = np.abs(mid[ia] - mid[ib]) > self_pair_window(self.radii[c], self.clearance)
-            st, ia, ib = st[far], ia[far], ib[far]
-        dist, u, v, cp, cq = segment_segment(pa[st, ia], pa[st, ia + 1], pb[st, ib], pb[st, ib + 1])
+        if b == c:
+            # the checker's self rule (checker.cable.self_pair_excluded): only
+            # places at least the window apart along the cable's centreline
+            # count, the nearest such places of each element pair
+            # (segment_segment_apart), wherever the elements' own closest
+            # places lie; elements wholly within the window are its own bends
+            s = np.zeros((m, na + 1))
+            np.cumsum(row_norm(pa[:, 1:] - pa[:, :-1]), axis=1, out=s[:, 1:])
+            w = self_pair_window(self.radii[c], self.clearance)
+            lo, hi = np.minimum(ia, ib), np.maximum(ia, ib)
+            reach = s[st, hi + 1] - s[st, lo] >= w
+            st, ia, ib, lo, hi = st[reach], ia[reach], ib[reach], lo[reach], hi[reach]
+            dist, u, v, cp, cq = segment_segment_apart(
+                pa[st, lo], pa[st, lo + 1], pa[st, hi], pa[st, hi + 1], s[st, lo], s[st, lo + 1], s[st, hi],
+                s[st, hi + 1], np.full(len(st), w))
+            swap = ia > ib                   # the pair as asked: element ia first
+            u, v = np.where(swap, v, u), np.where(swap, u, v)
+            cp, cq = np.where(swap[:, None], cq, cp), np.where(swap[:, None], cp, cq)
+        else:
+            dist, u, v, cp, cq = segment_segment(pa[st, ia], pa[st, ia + 1], pb[st, ib], pb[st, ib + 1])
         near = (dist - self.radii[c] - self.radii[b]) < self.clearance
         st, ia, ib, u, v, cp, cq = st[near], ia[near], ib[near], u[near], v[near], cp[near], cq[near]
         hit_a, hit_b = np.zeros((m, na), bool), np.zeros((m, nb), bool)

@@ -170,3 +170,37 @@ def test_a_cable_on_a_floor_plane_far_from_the_origin_in_mm():
     np.testing.assert_allclose(w.contact_time[:11], 1.0, atol=1e-9)
     np.testing.assert_allclose(w.sliding[:11], 0.2, rtol=1e-6)
     assert not w.contact_time[11:].any()
+
+
+def test_self_contact_follows_the_checkers_self_rule():
+    """A hairpin (radius 4 mm, clearance 5 mm) whose legs open at 30 degrees
+    past a bend of 5 mm: its only self contact lies just past the self
+    window's edge (pi r + clearance along the cable). The elements in
+    contact for one second are exactly those that, by an every-pair
+    reference of the rule (the least distance over two elements' places at
+    least the window apart, test_closest.seg_seg_apart_ref), come within the
+    clearance of another; none else."""
+    from test_closest import seg_seg_apart_ref
+    r, clear = 0.004, 0.005
+    th = np.radians(30.0)
+    bend = np.linspace(np.pi, 0.0, 9)
+    arc = np.stack([0.005 * np.cos(bend), 0.06 + 0.005 * np.sin(bend), np.zeros(9)], 1)
+    down = np.array([-np.sin(th), -np.cos(th), 0.0])
+    pts = np.concatenate([[arc[0] + down * k * 0.01 for k in range(6, 0, -1)], arc,
+                          [arc[-1] + down * [-1, 1, 1] * k * 0.01 for k in range(1, 7)]])
+    s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))]
+    w = np.pi * r + clear
+    n = len(pts) - 1
+    want = np.zeros(n, bool)
+    for i in range(n):
+        for j in range(i + 1, n):
+            if seg_seg_apart_ref(pts[i], pts[i + 1], pts[j], pts[j + 1], s[i], s[i + 1], s[j], s[j + 1], w) \
+                    < 2 * r + clear:
+                want[i] = want[j] = True
+    assert 0 < want.sum() < n
+    wear = WearMap(["c"], [s], [r], [], clear)
+    for k in range(11):
+        wear.update(0.1 * k, [pts], np.zeros((0, 4, 4)), [_record("c", "c", PairType.SELF)])
+    got = wear.result()[0].contact_time
+    np.testing.assert_allclose(got[want], 1.0, atol=1e-12)
+    assert not got[~want].any()
