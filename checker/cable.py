@@ -294,6 +294,14 @@ def self_pair_excluded(s_a: np.ndarray, s_b: np.ndarray, radius: float | np.ndar
     this excludes exactly the adjacent points and keeps every point two or
     more places away.
 
+    The rule is about places, whatever finds them: method ``points`` applies
+    it to its discrete points and element midpoints, method ``exact`` to
+    every place of two elements (the nearest pair at least the window apart,
+    :func:`checker.closest.segment_segment_apart`), and so do the comparison
+    with MuJoCo's contacts and the wear map (docs/self-check.md). The arc
+    length is along the centreline as it is now: the bend argument above is
+    about the cable's present shape.
+
     Args:
         s_a, s_b: arc lengths (broadcastable arrays), same units as radius.
         radius: the cable's radius (scalar or broadcastable array).
