@@ -10,9 +10,14 @@ Subcommands:
 
 Exit status: 0 when nothing reaches the `--fail-on` level, 1 when something
 does, 2 for bad input (the message names the file, the key and the
-problem; never a traceback), 130 when interrupted with Ctrl-C and 143 when
-terminated with SIGTERM (the report, marked incomplete, and the recording are
-still written). Output paths are checked before any work starts.
+problem; never a traceback), 3 when the simulation diverged (the report's
+`physics_error` names when, the cable or body and the likely cause), 4 when
+a run failed with an error (the report's `error` holds its type, message
+and traceback; any other command prints one line and exits 4 too), 130
+when interrupted with Ctrl-C and 143 when terminated with SIGTERM (for a
+run in each of the last four, the report, marked incomplete, and the
+recording are still written). Tracebacks are printed only with the environment variable
+`CABLECHECK_TRACEBACK` set. Output paths are checked before any work starts.
 
 This module runs the sub-commands and maps their outcomes and errors to
 exit statuses. The arguments are parsed by `sim.cliargs`, progress and
@@ -32,6 +37,14 @@ from sim.cliargs import build_parser
 from sim.cliprint import ProgressBar, StudyBar, print_study, print_summary, print_sweep
 
 EXIT_OK, EXIT_FAIL, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
+EXIT_DIVERGED, EXIT_ERROR = 3, 4
+
+TRACEBACK_ENV = "CABLECHECK_TRACEBACK"
+"""Set (to anything but empty or 0): an error's traceback is printed too."""
+
+
+def _show_traceback() -> bool:
+    return os.environ.get(TRACEBACK_ENV, "") not in ("", "0")
 
 
 def version() -> str:
@@ -92,6 +105,16 @@ def _cmd_run(args: argparse.Namespace, stop: StopRequest) -> int:
         bar.done()
     if not args.quiet:
         print_summary(result, report)
+    if result.get("physics_error"):
+        print(f"cablecheck: {result['physics_error']['message']} (report: {report})", file=sys.stderr)
+        return EXIT_DIVERGED
+    if result.get("error"):
+        e = result["error"]
+        if _show_traceback():
+            print(e["traceback"], end="", file=sys.stderr)
+        print(f"cablecheck: error: the run failed: {e['type']}: {e['message']} (report, with the traceback: "
+              f"{report}; {TRACEBACK_ENV}=1 prints it)", file=sys.stderr)
+        return EXIT_ERROR
     if not result["complete"]:
         return EXIT_TERMINATED if result.get("interrupted") == "SIGTERM" else EXIT_INTERRUPTED
     return EXIT_FAIL if _fails(result, args.fail_on) else EXIT_OK
@@ -229,6 +252,14 @@ def _main(args: argparse.Namespace, stop: StopRequest) -> int:
     except KeyboardInterrupt:
         print("cablecheck: interrupted", file=sys.stderr)
         return EXIT_TERMINATED if stop.signal_name == "SIGTERM" else EXIT_INTERRUPTED
+    except Exception as e:   # never a bare traceback (a run writes its own report, sim.run)
+        if _show_traceback():
+            import traceback
+
+            traceback.print_exc()
+        print(f"cablecheck: error: {args.command} failed: {type(e).__name__}: {e} "
+              f"({TRACEBACK_ENV}=1 prints the traceback)", file=sys.stderr)
+        return EXIT_ERROR
     return EXIT_BAD_INPUT
 
 

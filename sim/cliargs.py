@@ -22,12 +22,17 @@ outputs:
   recording  recordings/<scene name>.rrd unless --record/--no-record; open it
              with `rerun FILE`.
   report     JSON beside the recording (same name, .json) unless --report.
-  Both are written atomically: an interrupted run (Ctrl-C) still leaves a
-  readable recording and a report with "complete": false.
+  Both are written atomically: an interrupted, diverged or failed run still
+  leaves a readable recording and a report with "complete": false.
 
 exit status:
   0  nothing reached the --fail-on level    1  something did
   2  bad input (file, key and problem are printed)
+  3  the simulation diverged (NaN, infinite or runaway state, or MuJoCo found
+     it unstable): the report holds "physics_error" (time, cable or body,
+     likely cause: units, stiffness against the timestep, a body teleported)
+  4  the run failed with an error: the report holds "error" (type, message,
+     traceback; CABLECHECK_TRACEBACK=1 also prints the traceback)
   130  interrupted (Ctrl-C)    143  terminated (SIGTERM)
 """
 

@@ -87,7 +87,10 @@ class StudyBar:
 def print_summary(report: dict, report_path: Path) -> None:
     units = report["units"]
     s = report["settings"]
-    status = "complete" if report["complete"] else "INTERRUPTED (report marked incomplete)"
+    status = ("complete" if report["complete"] else
+              "DIVERGED (report marked incomplete)" if report.get("physics_error") else
+              "FAILED (report marked incomplete)" if report.get("error") else
+              "INTERRUPTED (report marked incomplete)")
     print(f"{report['scene']}: {status}, {s['steps']} steps to t = {s['t_end']:.3f} s, "
           f"{s['checked_steps']} checked, method {s['method']}")
     for c in report["cables"]:

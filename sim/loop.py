@@ -11,9 +11,15 @@ Simulate only what the scene calls for: with `effects.dynamics = false`
 nothing is stepped; the cables stay exactly as routed while scripted bodies
 move (forward kinematics only), so rigid parts can still be checked.
 
+MuJoCo's automatic reset is off: a simulation that goes unstable (NaN,
+infinite or huge values, `sim.divergence.BAD_WARNINGS`) keeps its bad
+values instead of jumping back to its initial state unremarked; settling
+stops at once and `steps()` yields that state, carrying the warning
+(`StepState.unstable`), as its last.
+
 This module does not check interference, log, report or hold the detection
-model's passes (`sim.detector`): it is the interface the checker and the
-recorder read from.
+model's passes (`sim.detector`), nor judge a divergence (`sim.divergence`):
+it is the interface the checker and the recorder read from.
 """
 
 from __future__ import annotations
@@ -28,6 +34,7 @@ from sim.build import Built
 from sim.built import mesh_parts
 from sim.contacts import Contacts
 from sim.detector import Detector
+from sim.divergence import BAD_WARNINGS, Instability
 from sim.hullgap import HullRaw, HullReader
 from sim.motion import Motion
 
@@ -66,6 +73,8 @@ class StepState:
       xpos, xmat: (nbody, 3) and (nbody, 9) the simulation's body poses at
         `qpos` (model coordinates) for the detection model's reach test
         (`sim.detector.Detector.collide_many`), or None when not validated.
+      unstable: MuJoCo's first instability warning, when the simulation
+        went unstable up to this state (it is then the last state), else None.
     """
 
     step: int
@@ -79,6 +88,7 @@ class StepState:
     hull: HullRaw | None = None
     xpos: np.ndarray | None = None
     xmat: np.ndarray | None = None
+    unstable: Instability | None = None
 
 
 class Simulation:
@@ -100,6 +110,8 @@ class Simulation:
         self.model = built.model
         self.data = mujoco.MjData(self.model)
         self.model.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+        # bad values stay bad (no silent reset to the initial state): sim.divergence names them
+        self.model.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
         self.motion = Motion(built)
         self.detector = Detector(built, reach) if built.detect is not None else None
         validate = (built.detect is not None) if validate is None else validate
@@ -116,6 +128,19 @@ class Simulation:
         self.step_size = scene.timestep / self.substeps  # the simulation model's timestep
         self.settle_steps = int(round(scene.settle / self.step_size)) if scene.effects.dynamics else 0
         self.total_steps = int(round(scene.duration / scene.timestep))
+        self.instability: Instability | None = None
+        self._t0 = self.settle_steps * self.step_size   # simulation time of scene time 0
+
+    def unstable(self) -> Instability | None:
+        """MuJoCo's first instability warning so far (`sim.divergence.BAD_WARNINGS`), or None."""
+        if self.instability is None:
+            warning = self.data.warning
+            for k in BAD_WARNINGS:
+                if warning[k].number:
+                    self.instability = Instability(mujoco.mjtWarning(k).name, int(warning[k].lastinfo),
+                                                   float(self.data.time - self._t0))
+                    break
+        return self.instability
 
     def state_bytes(self) -> int:
         """About how many bytes one `StepState` of this simulation holds
@@ -129,6 +154,8 @@ class Simulation:
         """Routed shape, scripted targets at t = 0, no velocity."""
         d = self.data
         mujoco.mj_resetData(self.model, d)
+        self.instability = None
+        self._t0 = self.settle_steps * self.step_size
         d.qpos[:] = self.built.qpos0
         self.motion.apply(d, 0.0, frozen=True)
         mujoco.mj_forward(self.model, d)
@@ -145,13 +172,17 @@ class Simulation:
         velocities are set to zero (kinetic damping, the dynamic relaxation
         method of Cundall and of Barnes for form finding): the state then
         descends towards the nearest equilibrium, which is where damped
-        motion would come to rest, without any force being added."""
+        motion would come to rest, without any force being added.
+
+        A simulation that goes unstable stops settling at once (`unstable`)."""
         d = self.data
         previous = 0.0
         for k in range(self.settle_steps):
             if stop is not None and stop():
                 return
             mujoco.mj_step(self.model, d)
+            if self.unstable() is not None:
+                return
             self.motion.apply(d, 0.0, frozen=True)  # exactly where the script holds them
             kinetic = float(d.energy[1])  # at the start of the step just taken
             if kinetic < previous:  # past a peak
@@ -166,8 +197,12 @@ class Simulation:
 
         `reset` and `settle` must have run. Steps that are not yielded are
         still simulated. Each scene step is `substeps` simulation steps
-        (`sim.build.choose_substeps`)."""
+        (`sim.build.choose_substeps`). A simulation that goes unstable
+        (`unstable`) yields the step it was found at and ends there."""
+        self._t0 = float(self.data.time)      # settling may have ended early
         yield self.state(0, contacts)
+        if self.instability is not None:      # while settling
+            return
         dynamics = self.built.scene.effects.dynamics
         if dynamics:
             self.motion.apply(self.data, 0.0)  # settling froze the targets' velocity
@@ -195,6 +230,9 @@ class Simulation:
                     row += sub - 1
                 apply(self.data, value[row], rate[row])
                 row += 1
+                if dynamics and self.unstable() is not None:
+                    yield self.state(k, contacts)
+                    return
                 if k % every == 0 or k == self.total_steps:
                     yield self.state(k, contacts)
 
@@ -221,7 +259,7 @@ class Simulation:
         hull = self.hull.raw(d) if self.hull is not None else None   # the last step's contacts, as they are
         bodies = (d.xpos.copy(), d.xmat.copy()) if self._poses else (None, None)
         return StepState(step, step * self.timestep, cables, poses, found, d.energy.copy(), d.qpos.copy(),
-                         end_rot, hull, *bodies)
+                         end_rot, hull, *bodies, unstable=self.instability)
 
     def warnings(self) -> dict[str, int]:
         """MuJoCo warnings raised so far, by name, nonzero only."""

@@ -11,6 +11,12 @@ it over the target, so a reader never sees a half-written report and an
 earlier report is replaced only by a complete one. Numbers become plain
 floats rounded to 1e-12, and non-finite values become null: JSON has no NaN.
 
+A run that diverged carries its `physics_error` (`sim.divergence.PhysicsError`:
+when, the cable or body, the likely cause) and one that failed its `error`
+(:class:`RunError`: type, message, traceback); both are marked incomplete.
+:func:`failed_report` is the report of a run that failed before it had
+anything to report but the error.
+
 This module does not run, measure or decide anything: what is hard, taut or
 bent too far is in the record already. It does not import MuJoCo.
 """
@@ -32,6 +38,7 @@ from checker.records import Severity
 
 if TYPE_CHECKING:
     from checker.events import AllowedWorst, Event, PairWorst
+    from sim.divergence import PhysicsError
     from checker.interference.excused import ExcusedWorst
     from checker.scene_state import CheckConfig
     from checker.validation import ValidationSummary
@@ -114,6 +121,27 @@ class Timing:
     stages: dict[str, float]
     collision: float | None = None
     loop: float | None = None
+    divergence: float | None = None
+    """CPU seconds of the divergence scan (`sim.divergence`), a part of the
+    check stage, or None where the simulation does not step."""
+
+
+@dataclass(frozen=True)
+class RunError:
+    """An error that ended a run.
+
+    Attributes:
+      type: the exception's class name.
+      message: its message.
+      traceback: the traceback, as Python prints it.
+      t: the time of the last checked step when it was raised, or None
+        (raised before any step was checked).
+    """
+
+    type: str
+    message: str
+    traceback: str
+    t: float | None
 
 
 @dataclass(frozen=True)
@@ -149,6 +177,8 @@ class RunOutcome:
       substeps: simulation substeps per timestep.
       timing: the run's wall-clock seconds and its stages' CPU seconds.
       recording: the recording's path, or None.
+      physics_error: where and why the simulation diverged, or None.
+      error: the error that ended the run, or None.
     """
 
     scene: Scene
@@ -177,6 +207,8 @@ class RunOutcome:
     substeps: int
     timing: Timing
     recording: Path | None
+    physics_error: PhysicsError | None = None
+    error: RunError | None = None
 
 
 def _worst_first(rows):
@@ -241,7 +273,60 @@ def _timing(t: Timing, steps: int, checked: int) -> dict:
     if t.collision is not None:
         out["validate_collision_s"] = t.collision
         out["validate_collision_ms_per_step"] = 1e3 * t.collision / per_check
+    if t.divergence is not None:
+        out["divergence_s"] = t.divergence
+        out["divergence_ms_per_step"] = 1e3 * t.divergence / per_check
     return out
+
+
+_SCALED_SIGNS = ("runaway-far", "runaway-speed")
+"""Signs of a divergence whose value is a length (or a length per second)."""
+
+
+def _physics_error(e: PhysicsError, u: float) -> dict:
+    """The report's `physics_error` (`value`: a distance or a speed in scene
+    units, or a stretch ratio)."""
+    return {"t": e.t, "step": e.step, "settling": e.settling, "sign": e.sign, "cable": e.cable,
+            "vertex": e.vertex, "body": e.body, "warning": e.warning,
+            "value": None if e.value is None else e.value / u if e.sign in _SCALED_SIGNS else e.value,
+            "cause": e.cause, "detail": e.detail,
+            "message": e.message()}
+
+
+def _error(e: RunError) -> dict:
+    return {"type": e.type, "message": e.message, "t": e.t, "traceback": e.traceback}
+
+
+def failed_report(scene: Scene, error: RunError, warnings: dict[str, int], total: float,
+                  recording: Path | None) -> dict:
+    """The report of a run that failed before any step was checked: the
+    scene, `"complete": false`, the error and MuJoCo's warnings, every
+    list empty (the recording, if named, may not exist)."""
+    from sim.cli import version   # the product version (the command line owns it)
+
+    return {
+        "schema": SCHEMA, "scene": scene.name, "units": scene.units, "complete": False,
+        "mujoco": _mujoco_version(),
+        "settings": {"units": scene.units, "clearance": scene.check.clearance / scene.scale,
+                     "timestep": scene.timestep, "duration": scene.duration, "steps": 0, "checked_steps": 0,
+                     "scene_file": str(scene.path), "version": version()},
+        "summary": {"hard": 0, "soft": 0, "static": 0, "dynamic": 0, "excused": 0},
+        "events": [], "pairs": [], "allowed": [], "excused": [], "cables": [],
+        "warnings": dict(warnings), "timing": {"total_s": total},
+        "recording": str(recording) if recording else None,
+        "interrupted": None, "physics_error": None, "error": _error(error),
+    }
+
+
+def _mujoco_version() -> str | None:
+    from importlib.metadata import PackageNotFoundError, version
+
+    for name in ("mujoco-core", "mujoco"):
+        try:
+            return version(name)
+        except PackageNotFoundError:
+            continue
+    return None
 
 
 def report_of(o: RunOutcome) -> dict:
@@ -319,6 +404,8 @@ def report_of(o: RunOutcome) -> dict:
         "part_warnings": list(o.part_warnings),
         "interrupted": o.interrupted,
         "physics_warnings": list(o.physics_warnings),
+        "physics_error": None if o.physics_error is None else _physics_error(o.physics_error, u),
+        "error": None if o.error is None else _error(o.error),
     })
     return report
 

@@ -14,6 +14,19 @@ moved into place, and the report is written with `"complete": false`. The run ha
 as one frozen record (`sim.report.RunOutcome`), which `sim.report` turns
 into the report and writes.
 
+A run never ends in a bare traceback or a wrong "complete". Each batch of
+states is first scanned for a diverged simulation (`sim.divergence`): the
+states before the first diverged one are checked, the run stops there and
+its outcome carries the `PhysicsError`. An error raised while stepping or
+checking stops the run the same way, its outcome carrying the error
+(`sim.report.RunError`: type, message, traceback); `run_scene` also writes
+a report for an error raised before the first step (bad input, the
+scene's `SceneError` and the options' errors, is still raised). In every
+case the recording is finished and moved into place and the report is
+marked incomplete. MuJoCo's own messages are taken for the whole run
+(`sim.mjlog`): counted by kind in the report, never printed or written to
+`MUJOCO_LOG.TXT`.
+
 This module does not parse arguments or print (see `cli`), holds no
 geometry of its own (distances come from `checker`) and does not lay out
 the report.
@@ -22,6 +35,7 @@ the report.
 from __future__ import annotations
 
 import time
+import traceback
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -39,13 +53,16 @@ from checker.wear import CableWear, WearMap
 from sim.ahead import StepsAhead, depth_for, thread_cpu
 from sim.build import Built, build_simulation, plan_cables, with_detection
 from sim.detector import Detector
+from sim.divergence import DivergenceWatch, PhysicsError
 from sim.jointspace import JointLog
 from sim.kinematic import KinematicSimulation
 from sim.loop import Simulation
+from sim.mjlog import MujocoMessages, warning_counts
 from sim.record import Mark, Recorder, Settings, summary_text
-from sim.report import STAGES, CableOutcome, RunOutcome, Timing, report_of, write_report
+from sim.report import (STAGES, CableOutcome, RunError, RunOutcome, Timing, failed_report, report_of,
+                        write_report)
 from sim.routecheck import route_warnings
-from sim.scene import Scene, check_allow_names, check_fastened_names
+from sim.scene import Scene, SceneError, check_allow_names, check_fastened_names
 from sim.staticbuild import build_static, needs_model
 from sim.stepcheck import BATCH, BATCH_MAX, StepChecks
 from sim.stop import StopRequest
@@ -122,11 +139,24 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     caller that listens from earlier on (the command line, from its start)
     passes its `stop`; a stop already asked runs nothing but the report.
     `warn` is given each physics warning (`sim.build.Built.warnings`: a part
-    too fast for the timestep, ...) before the simulation starts."""
+    too fast for the timestep, ...) before the simulation starts.
+
+    A diverged simulation or an error while stepping or checking ends the
+    run with its report marked incomplete and holding `physics_error` or
+    `error` (module docstring); an error raised before the first step
+    does too, unless it is bad input (`SceneError`, the options'
+    `OptionError`, `OutputPathError`), which is raised."""
     start = time.perf_counter()
 
     def reported(stop: StopRequest) -> dict:
-        report = report_of(_run(scene, options, progress, stop, start, warn))
+        with MujocoMessages() as messages:
+            try:
+                report = report_of(_run(scene, options, progress, stop, start, warn, messages))
+            except Exception as exc:
+                if _bad_input(exc):
+                    raise
+                report = failed_report(scene, run_error(exc), warning_counts([], messages),
+                                       time.perf_counter() - start, options.record)
         write_report(report, options.report)   # still under the stop request: a first signal waits
         return report
 
@@ -140,16 +170,31 @@ def run_outcome(scene: Scene, options: RunOptions, progress: Progress | None = N
                 stop: StopRequest | None = None, warn: Callable[[str], None] | None = None) -> RunOutcome:
     """`run_scene` without the report: run `scene`, write its recording (when
     `options.record`) and return the run's outcome record (`options.report`
-    is not written)."""
+    is not written). An error raised before the first step is raised."""
     start = time.perf_counter()
-    if stop is not None:
-        return _run(scene, options, progress, stop, start, warn)
-    with StopRequest() as stop:
-        return _run(scene, options, progress, stop, start, warn)
+    with MujocoMessages() as messages:
+        if stop is not None:
+            return _run(scene, options, progress, stop, start, warn, messages)
+        with StopRequest() as stop:
+            return _run(scene, options, progress, stop, start, warn, messages)
+
+
+def _bad_input(exc: BaseException) -> bool:
+    """`exc` is the scene's or the options' fault (the command line's exit status 2)."""
+    from sim.checkview import OptionError
+    from sim.outputs import OutputPathError
+
+    return isinstance(exc, (SceneError, OptionError, OutputPathError))
+
+
+def run_error(exc: BaseException, t: float | None = None) -> RunError:
+    """`exc` as the report holds it: type, message, traceback and when."""
+    return RunError(type(exc).__name__, str(exc),
+                    "".join(traceback.format_exception(type(exc), exc, exc.__traceback__)), t)
 
 
 def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: StopRequest,
-         start: float, warn: Callable[[str], None] | None) -> RunOutcome:
+         start: float, warn: Callable[[str], None] | None, messages: MujocoMessages) -> RunOutcome:
     validate = scene.check.validate
     static = not needs_model(scene)     # nothing calls for MuJoCo: no model is built (sim.staticbuild)
     planned = None if static else plan_cables(scene)
@@ -163,6 +208,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
             warn(w)
     sim = KinematicSimulation(built) if static else Simulation(built, validate=validate)
     sim.reset()
+    # only a simulation that steps can diverge
+    watch = DivergenceWatch(built, scene.settle) if scene.effects.dynamics and not static else None
     if progress:
         progress("settle", 0, max(sim.settle_steps, 1))
 
@@ -213,6 +260,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
             ahead.close()
         raise
     complete = False
+    diverged: PhysicsError | None = None
+    error: RunError | None = None
     batch: list = []
     size = BATCH
     loop_start = time.perf_counter()
@@ -221,18 +270,24 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
             # states are checked BATCH at a time at first, then each batch
             # twice the last up to BATCH_MAX (sim.stepcheck): the last state
             # of the run closes its batch, and an interrupted run's last
-            # states are checked after the loop
+            # states are checked after the loop; an unstable simulation's
+            # last state closes its batch at once
             batch.append(state)
-            if len(batch) < size and state.step < sim.total_steps:
+            if len(batch) < size and state.step < sim.total_steps and state.unstable is None:
                 continue
-            _check_batch(batch, checks, out, timer, ahead)
+            diverged = _check_batch(batch, checks, out, timer, ahead, watch)
             batch = []
+            if diverged is not None:
+                break
             size = min(2 * size, max(BATCH, BATCH_MAX))
         if batch:
-            _check_batch(batch, checks, out, timer, ahead)
-        complete = not stop.asked
+            diverged = _check_batch(batch, checks, out, timer, ahead, watch)
+        complete = not stop.asked and diverged is None
     except KeyboardInterrupt:
         complete = False    # a second Ctrl-C: the batch being checked is left out
+    except Exception as exc:   # the run ends with the error in its report
+        complete = False
+        error = run_error(exc, out.t_last if out.checked else None)
     finally:
         if ahead is not None:
             ahead.close()
@@ -266,12 +321,15 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         pairs=tuple(tracker.pairs.values()), allowed=tuple(tracker.allowed.values()), excused=excused,
         event_hold=tracker.hold,
         validation=ends.validation, advance=ends.advance,
-        warnings=sim.warnings(), part_warnings=ends.part_warnings,
+        warnings=warning_counts([getattr(sim, "data", None), detector.detect_data if detector else None],
+                                messages),
+        part_warnings=ends.part_warnings,
         physics_warnings=noted + tuple(built.warnings) + ends.hull_warnings,
         substeps=built.substeps.count if built.substeps else 1,
         timing=Timing(time.perf_counter() - start, dict(timer.total),
-                      detector.collision_seconds() if detector is not None else None, loop_s),
-        recording=options.record)
+                      detector.collision_seconds() if detector is not None else None, loop_s,
+                      watch.seconds if watch is not None else None),
+        recording=options.record, physics_error=diverged, error=error)
 
 
 def _until(states: Iterator, stop: Callable[[], bool]) -> Iterator:
@@ -285,14 +343,21 @@ def _until(states: Iterator, stop: Callable[[], bool]) -> Iterator:
 
 
 def _check_batch(batch: list, checks: StepChecks, out: "_Checked", timer: _Timer,
-                 ahead: StepsAhead | None) -> None:
-    """Check a batch of states and take it in; the time since the last
-    lap was the simulation's, or with `ahead` the wait for it (no stage's)."""
+                 ahead: StepsAhead | None, watch: DivergenceWatch | None) -> PhysicsError | None:
+    """Check a batch of states and take it in, up to its first diverged
+    state (`sim.divergence`), which is returned; the time since the last
+    lap was the simulation's, or with `ahead` the wait for it (no stage's).
+    The divergence scan is part of the check stage."""
     if ahead is None:
         timer.lap("sim")
     else:
         timer.skip()
-    out.take(batch, checks.run(batch))
+    found = watch.scan(batch) if watch is not None else None
+    if found is not None:
+        batch = batch[:found[0]]
+    if batch:
+        out.take(batch, checks.run(batch))
+    return None if found is None else found[1]
 
 
 def _clamped(anchor) -> bool:

@@ -38,7 +38,9 @@ class Row:
       values: the varied values, one per ``[[vary]]`` key.
       status: done, failed or not run.
       exit_status: what `cablecheck run` of this variant exits with under
-        ``--fail-on hard`` (0 or 1); None unless done.
+        ``--fail-on hard`` (0 or 1; 3 for a diverged simulation, 4 for a
+        run that failed with an error); None for a variant not run or
+        interrupted.
       hard, soft: event counts.
       worst_distance: the smallest signed surface distance of any pair that
         came within the clearance (scene units), excluding bend and taut;
@@ -77,6 +79,15 @@ COLUMNS = ("status", "exit_status", "hard", "soft", "worst_distance", "max_strai
 """Row fields after the id and the varied values, in the order results.csv gives them."""
 
 
+def _stopped(report: dict) -> str:
+    """Why an incomplete run stopped: its divergence, its error, or the signal."""
+    if report.get("physics_error"):
+        return report["physics_error"]["message"]
+    if report.get("error"):
+        return f"the run failed: {report['error']['type']}: {report['error']['message']}"
+    return f"the run stopped early ({report.get('interrupted') or 'incomplete'})"
+
+
 def row_from_report(id: str, values: tuple, report: dict, report_path: str | None = None,
                     recording: str | None = None) -> Row:
     """The study row of a variant's report (see `Row` for each field); a
@@ -90,8 +101,9 @@ def row_from_report(id: str, values: tuple, report: dict, report_path: str | Non
     complete = report.get("complete", True)
     return Row(
         id=id, values=tuple(values), status=Status.DONE if complete else Status.FAILED,
-        error=None if complete else f"the run stopped early ({report.get('interrupted') or 'incomplete'})",
-        exit_status=(1 if summary["hard"] > 0 else 0) if complete else None,
+        error=None if complete else _stopped(report),
+        exit_status=(1 if summary["hard"] > 0 else 0) if complete else
+        3 if report.get("physics_error") else 4 if report.get("error") else None,
         hard=summary["hard"], soft=summary["soft"],
         worst_distance=min(distances) if distances else None,
         max_strain=max(strains, key=abs) if strains else None,

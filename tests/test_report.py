@@ -94,7 +94,7 @@ def _json(report: dict) -> str:
 # The SPEC's keys in the report's order (the golden reports are compared as text).
 TOP = ["schema", "scene", "units", "complete", "mujoco", "settings", "summary", "events", "pairs", "allowed",
        "excused", "validation", "cables", "warnings", "timing", "recording", "joint_units", "part_warnings", "interrupted",
-       "physics_warnings"]
+       "physics_warnings", "physics_error", "error"]
 SETTINGS = ["method", "spacing", "spacing_radii", "clearance", "attach_zone_radii", "event_hold_s", "timestep",
             "settle", "duration", "dynamics", "gravity", "contact", "steps", "checked_steps", "t_end", "units",
             "scene_file", "version", "advance", "substeps"]
@@ -239,3 +239,26 @@ def test_the_detection_models_collision_time_is_reported_with_validation_only():
     assert r["validate_collision_s"] == 0.125
     assert r["validate_collision_ms_per_step"] == pytest.approx(1e3 * 0.125 / 50)
     assert "validate_collision_s" not in report_of(_outcome())["timing"]
+
+
+def test_physics_error_and_error_in_scene_units():
+    """A divergence's place, cause and measure (a distance in scene units, a
+    stretch as a ratio) and a run's error, as the report holds them."""
+    from sim.divergence import Cause, PhysicsError, Sign
+    from sim.report import RunError
+
+    far = PhysicsError(0.5, 250, False, Sign.FAR, "lead", 4, "cables/lead_4", None, 12.5, Cause.UNITS,
+                       "motion[0] moves 'slider' ...")
+    r = json.loads(_json(report_of(_outcome(complete=False, physics_error=far))))
+    e = r["physics_error"]
+    assert e["value"] == pytest.approx(12500.0) and e["sign"] == "runaway-far" and e["cause"] == "units"
+    assert (e["t"], e["step"], e["settling"], e["cable"], e["vertex"]) == (0.5, 250, False, "lead", 4)
+    assert e["message"] == far.message() and "12.5 m from the scene" in e["message"] and r["error"] is None
+    stretched = replace(far, sign=Sign.STRETCHED, value=4.0, cause=Cause.STIFFNESS)
+    e = json.loads(_json(report_of(_outcome(complete=False, physics_error=stretched))))["physics_error"]
+    assert e["value"] == 4.0 and e["cause"] == "stiffness-timestep"
+    err = RunError("IndexError", "index 7 is out of bounds", "Traceback (most recent call last): ...", 0.04)
+    r = json.loads(_json(report_of(_outcome(complete=False, error=err))))
+    assert r["error"] == {"type": "IndexError", "message": "index 7 is out of bounds", "t": 0.04,
+                          "traceback": "Traceback (most recent call last): ..."} and r["physics_error"] is None
+    assert report_of(_outcome())["physics_error"] is None

@@ -1,0 +1,294 @@
+"""A run that diverges or fails says so (sim.divergence, sim.mjlog, sim.run, sim.cli):
+a metre scene with a millimetre value through the command line (exit 3,
+`physics_error` naming time, cable and cause, no MUJOCO_LOG.TXT), MuJoCo's
+instability warning named down to the cable vertex, the scan of a batch on
+drawn states, the likely causes, an error forced into a run (exit 4, the
+error in an incomplete report, a readable recording) and a sound scene not
+flagged."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+
+from sim.build import build
+from sim.cli import EXIT_DIVERGED, EXIT_ERROR, main
+from sim.divergence import Cause, DivergenceWatch, PhysicsError, Sign, likely_cause, unit_outliers
+from sim.loop import Simulation
+from sim.mjlog import MujocoMessages, message_kind, warning_counts
+from sim.scene import load_scene
+from sim.studyresult import row_from_report
+
+from tests.test_cli import SMALL, _assert_rrd_has
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# SMALL in metres, the slider's key written in millimetres: it drags the
+# cable's end 250 m in 0.2 s (meant: 250 mm). Today's code went NaN on it
+# (MuJoCo's mjWARN_BADQACC at t = 0.109 s) and reported it complete.
+UNITS_MIXED = """
+[scene]
+name = "units-mixed"
+units = "m"
+duration = 0.2
+settle = 0.2
+
+[effects]
+contact = ["cable-structure"]
+
+[[bodies]]
+name = "slider"
+
+[[parts]]
+name = "frame/floor"
+shape = "box"
+size = [0.3, 0.1, 0.005]
+pos = [0.15, 0, -0.005]
+
+[[cables]]
+name = "lead"
+radius = 0.003
+start = { pos = [0, 0, 0.1] }
+end = { body = "slider", pos = [0.2, 0, 0.1] }
+length = 0.26
+segments = 12
+
+[[motion]]
+body = "slider"
+keys = [ { t = 0.0, pos = [0, 0, 0] }, { t = 0.2, pos = [%s, 0, 0] } ]
+"""
+
+
+def _scene(tmp_path: Path, text: str, name: str = "scene.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_divergent_scene_exits_3_naming_time_cable_and_units(tmp_path: Path):
+    scene = _scene(tmp_path, UNITS_MIXED % "250")
+    report = tmp_path / "out" / "r.json"
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env.pop("CABLECHECK_TRACEBACK", None)
+    done = subprocess.run([sys.executable, "-m", "sim.cli", "run", str(scene), "--no-record",
+                           "--report", str(report), "--quiet"], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == EXIT_DIVERGED, done.stderr
+    r = json.loads(report.read_text())
+    assert r["complete"] is False and r["error"] is None
+    e = r["physics_error"]
+    assert e["cable"] == "lead" and 0 <= e["vertex"] <= 13
+    assert 0.0 < e["t"] <= 0.2 and not e["settling"]
+    assert e["sign"] in {s.value for s in Sign} and e["cause"] == "units"
+    assert "motion[0]" in e["detail"] and "250" in e["detail"]
+    # the run stopped at the divergence: nothing after it was checked
+    assert r["settings"]["t_end"] < e["t"] and r["settings"]["steps"] < e["step"]
+    assert "diverged" in done.stderr and "Traceback" not in done.stderr
+    assert not list(tmp_path.rglob("MUJOCO_LOG.TXT"))
+    row = row_from_report("v0", (250,), r)       # as a study's variant
+    assert row.exit_status == EXIT_DIVERGED and row.error == e["message"]
+
+
+def test_mujoco_instability_names_the_vertex_and_writes_no_log(tmp_path: Path, monkeypatch):
+    """A NaN velocity injected into one cable vertex after settling: the
+    simulation stops at the step MuJoCo finds it unstable (no reset to the
+    routed shape), the scan names that cable vertex, the warnings are
+    counted by kind and nothing is written to the working directory."""
+    monkeypatch.chdir(tmp_path)
+    built = build(load_scene(_scene(tmp_path, SMALL)), detect=False)
+    with MujocoMessages() as messages:
+        sim = Simulation(built)
+        sim.reset()
+        sim.settle()
+        c = built.cables[0]
+        body = int(built.model.flex_vertbodyid[c.vert_adr + 5])
+        dof = int(built.model.body_dofadr[body])
+        states = []
+        for state in sim.steps(contacts=False):
+            states.append(state)
+            if state.step == 3:
+                sim.data.qvel[dof] = np.nan
+        counts = warning_counts([sim.data], messages)
+    assert states[-1].unstable is not None and all(s.unstable is None for s in states[:-1])
+    assert states[-1].step == 4 < sim.total_steps
+    assert not np.isfinite(sim.data.qpos).all()          # left as it is, not reset
+    found = DivergenceWatch(built, built.scene.settle).scan(states)
+    assert found is not None and found[0] == len(states) - 1
+    e = found[1]
+    assert e.sign is Sign.UNSTABLE and e.warning.startswith("mjWARN_BADQ")
+    assert (e.cable, e.vertex) == ("lead", 5) and e.t == pytest.approx(states[-1].t)
+    assert counts.get(e.warning, 0) >= 1
+    assert not list(tmp_path.glob("MUJOCO_LOG.TXT"))
+
+
+class _State:
+    """What the scan reads of a `sim.loop.StepState`."""
+
+    def __init__(self, step, t, cables, poses, qpos, unstable=None):
+        self.step, self.t, self.cables, self.part_poses, self.qpos = step, t, cables, poses, qpos
+        self.unstable = unstable
+
+
+@pytest.fixture(scope="module")
+def small_built(tmp_path_factory):
+    return build(load_scene(_scene(tmp_path_factory.mktemp("small"), SMALL)), detect=False)
+
+
+def _states(built, n: int, dt: float = 0.002) -> list:
+    rest = [c.routed.copy() for c in built.cables]
+    poses = np.tile(np.eye(4), (len(built.parts), 1, 1))
+    # a slow sag: sound
+    return [_State(k, k * dt, [p + [0.0, 0.0, -1e-4 * k] for p in rest], poses.copy(), np.zeros(built.model.nq))
+            for k in range(n)]
+
+
+@pytest.mark.parametrize("kind", ["nan", "far", "fast", "stretch"])
+@pytest.mark.parametrize("at", [0, 3, 7])
+def test_scan_finds_the_first_bad_state_and_vertex(small_built, kind: str, at: int):
+    states = _states(small_built, 10)
+    watch = DivergenceWatch(small_built, 0.2)
+    assert watch.scan(states[:2]) is None               # sound, and remembered for speeds
+    states = states[2:]
+    n = small_built.cables[0].count
+    v = 7
+    if kind == "nan":
+        states[at].cables[0][v, 1] = np.nan
+    elif kind == "far":      # beyond ten times the scene's reach, at a sound speed over a long gap
+        states[at].cables[0][v] += [0.0, 0.0, 1e4]
+        for s in states[at:]:
+            s.t += 1e3
+    elif kind == "fast":     # the whole cable, within the reach but at 2 km/s
+        states[at].cables[0][:] += [0.0, 0.0, 2000.0 * 0.002]
+    else:                    # an element three and a half times its rest length, slowly
+        states[at].cables[0][v + 1:] += [0.0, 3.5 * small_built.cables[0].element_length, 0.0]
+        for s in states[at:]:
+            s.t += 10.0
+    later = states[at + 1:]
+    for s in later:          # later states worse still: the first one is named
+        s.cables[0][:] = np.nan
+    found = watch.scan(states)
+    assert found is not None
+    k, e = found
+    assert k == at and isinstance(e, PhysicsError) and e.cable == "lead"
+    assert e.sign is {"nan": Sign.NON_FINITE, "far": Sign.FAR, "fast": Sign.FAST,
+                      "stretch": Sign.STRETCHED}[kind]
+    if kind == "fast":       # every vertex alike
+        assert e.value == pytest.approx(2000.0, rel=1e-3)
+    else:
+        assert e.vertex == v
+    assert 0 <= e.vertex < n and e.t == states[at].t
+
+
+def test_scan_passes_sound_states_and_a_carried_cable(small_built):
+    """A cable carried far by its held end (a long travel) is no runaway."""
+    states = _states(small_built, 40)
+    for s in states:
+        s.cables[0] = s.cables[0] + [50.0 * s.t, 0.0, 0.0]   # 50 m/s, all of it
+    watch = DivergenceWatch(small_built, 0.2)
+    assert watch.scan(states[:20]) is None and watch.scan(states[20:]) is None
+
+
+def test_likely_causes(tmp_path: Path):
+    units = load_scene(_scene(tmp_path, UNITS_MIXED % "250", "u.toml"))
+    built = build(units, detect=False)
+    assert unit_outliers(units, built)[0][1].startswith("motion[0]")
+    assert likely_cause(built, "lead")[0] is Cause.UNITS
+    # 2 m in 4 ms, in proportion with the cable but faster than 64 substeps can follow
+    fast = load_scene(_scene(tmp_path, (UNITS_MIXED % "2").replace("t = 0.2, pos", "t = 0.004, pos"), "f.toml"))
+    built = build(fast, detect=False)
+    assert built.substeps.capped and not unit_outliers(fast, built)
+    cause, detail = likely_cause(built, "lead")
+    assert cause is Cause.TELEPORT and "'slider'" in detail
+    stiff = load_scene(_scene(tmp_path, (UNITS_MIXED % "0.02").replace(
+        "segments = 12", "segments = 60\nyoung = 5e14").replace("settle = 0.2", "settle = 0.2\ntimestep = 0.01"),
+        "s.toml"))
+    built = build(stiff, detect=False)
+    assert built.substeps.capped
+    assert likely_cause(built, "lead")[0] is Cause.STIFFNESS
+    sound = load_scene(_scene(tmp_path, SMALL, "ok.toml"))
+    assert likely_cause(build(sound, detect=False), "lead")[0] is Cause.UNKNOWN
+
+
+def test_message_kinds_and_handler_restored():
+    assert message_kind(mujoco.mju_warningText(int(mujoco.mjtWarning.mjWARN_BADQACC), 12)
+                        + " Time = 0.3093.") == "mjWARN_BADQACC"
+    assert message_kind("Linesearch objective is not convex") == "Linesearch objective is not convex"
+    assert message_kind("Something at 12 went 3.5e-3 wrong. Time = 1.0.") == "Something at # went # wrong."
+    before, logged = mujoco.get_mju_user_warning(), mujoco.MjLogConfig.get().logto_file
+    with MujocoMessages() as m:
+        assert not mujoco.MjLogConfig.get().logto_file
+        m._take("Linesearch objective is not convex")
+        m._take("Linesearch objective is not convex")
+    assert mujoco.get_mju_user_warning() is before and mujoco.MjLogConfig.get().logto_file == logged
+    assert warning_counts([], m) == {"Linesearch objective is not convex": 2}
+
+
+def test_forced_error_exits_4_with_the_error_in_an_incomplete_report(tmp_path: Path, monkeypatch, capsys):
+    import sim.stepcheck
+
+    calls = []
+
+    def boom(self, batch):
+        calls.append(len(batch))
+        if len(calls) == 2:
+            raise IndexError("index 7 is out of bounds for axis 0 with size 7")
+        return real(self, batch)
+
+    real = sim.stepcheck.StepChecks.run
+    monkeypatch.setattr(sim.stepcheck.StepChecks, "run", boom)
+    monkeypatch.delenv("CABLECHECK_TRACEBACK", raising=False)
+    monkeypatch.chdir(tmp_path)
+    scene = _scene(tmp_path, SMALL.replace("duration = 0.2", "duration = 1.0"))
+    record, report = tmp_path / "r.rrd", tmp_path / "r.json"
+    assert main(["run", str(scene), "--record", str(record), "--report", str(report), "--quiet"]) == EXIT_ERROR
+    r = json.loads(report.read_text())
+    assert r["complete"] is False and r["physics_error"] is None
+    assert r["error"]["type"] == "IndexError" and "out of bounds" in r["error"]["message"]
+    assert "Traceback" in r["error"]["traceback"] and "boom" in r["error"]["traceback"]
+    assert r["settings"]["checked_steps"] == calls[0] and r["error"]["t"] == pytest.approx(r["settings"]["t_end"])
+    err = capsys.readouterr().err
+    assert "IndexError" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    _assert_rrd_has(record, ["/world/cables/lead"])
+    assert not list(tmp_path.glob("MUJOCO_LOG.TXT"))
+
+
+def test_error_before_any_step_exits_4_with_a_report(tmp_path: Path, monkeypatch, capsys):
+    import sim.run
+
+    def broken(*a, **k):
+        raise RuntimeError("the model builder broke")
+
+    monkeypatch.setattr(sim.run, "build_simulation", broken)
+    monkeypatch.setenv("CABLECHECK_TRACEBACK", "1")
+    report = tmp_path / "r.json"
+    assert main(["run", str(_scene(tmp_path, SMALL)), "--no-record", "--report", str(report),
+                 "--quiet"]) == EXIT_ERROR
+    r = json.loads(report.read_text())
+    assert r["complete"] is False and r["error"]["type"] == "RuntimeError"
+    assert r["events"] == [] and r["settings"]["checked_steps"] == 0
+    err = capsys.readouterr().err
+    assert "Traceback" in err and "the model builder broke" in err     # asked for, with the env var
+
+
+def test_bad_input_still_exits_2(tmp_path: Path, capsys):
+    bad = _scene(tmp_path, SMALL.replace("radius = 3.0", "radius = -3.0"))
+    assert main(["run", str(bad), "--no-record", "--report", str(tmp_path / "r.json")]) == 2
+    assert "cables[0].radius" in capsys.readouterr().err
+    assert not (tmp_path / "r.json").exists()
+
+
+def test_sound_scene_is_not_flagged(tmp_path: Path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    report = tmp_path / "r.json"
+    assert main(["run", str(_scene(tmp_path, SMALL)), "--no-record", "--report", str(report), "--quiet"]) in (0, 1)
+    r = json.loads(report.read_text())
+    assert r["complete"] is True and r["physics_error"] is None and r["error"] is None
+    assert r["timing"]["divergence_s"] >= 0.0 and r["warnings"] == {}
+    assert not list(tmp_path.glob("MUJOCO_LOG.TXT"))
