@@ -220,7 +220,10 @@ def _main(args: argparse.Namespace, stop: StopRequest) -> int:
         if args.command == "run":
             return _cmd_run(args, stop)
         if args.command == "sweep":
-            return _cmd_sweep(args)
+            from sim.mjlog import log_file_off   # a run takes MuJoCo's messages itself (sim.run)
+
+            with log_file_off():
+                return _cmd_sweep(args)
         if args.command == "study":
             return _cmd_study(args, stop)
         if args.command == "bench":
@@ -229,7 +232,10 @@ def _main(args: argparse.Namespace, stop: StopRequest) -> int:
 
             check_folder(args.out, "--out")  # MuJoCo and matplotlib load only when needed
 
-            run_bench(QUICK if args.quick else FULL, out=args.out)
+            from sim.mjlog import log_file_off
+
+            with log_file_off():
+                run_bench(QUICK if args.quick else FULL, out=args.out)
             return EXIT_OK
     except SceneError as e:
         print(f"cablecheck: error: {e}", file=sys.stderr)
@@ -240,7 +246,7 @@ def _main(args: argparse.Namespace, stop: StopRequest) -> int:
     except ValueError as e:
         from sim.checkview import OptionError   # --only of a run, the sweep's options
         if not isinstance(e, OptionError):
-            raise
+            return _failed(args, e)
         print(f"cablecheck: error: {args.scene}: {e.option}: {e.problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except OSError as e:
@@ -253,14 +259,20 @@ def _main(args: argparse.Namespace, stop: StopRequest) -> int:
         print("cablecheck: interrupted", file=sys.stderr)
         return EXIT_TERMINATED if stop.signal_name == "SIGTERM" else EXIT_INTERRUPTED
     except Exception as e:   # never a bare traceback (a run writes its own report, sim.run)
-        if _show_traceback():
-            import traceback
-
-            traceback.print_exc()
-        print(f"cablecheck: error: {args.command} failed: {type(e).__name__}: {e} "
-              f"({TRACEBACK_ENV}=1 prints the traceback)", file=sys.stderr)
-        return EXIT_ERROR
+        return _failed(args, e)
     return EXIT_BAD_INPUT
+
+
+def _failed(args: argparse.Namespace, e: Exception) -> int:
+    """An unexpected error of a command: one line on stderr (the traceback
+    only with `TRACEBACK_ENV` set), exit status 4."""
+    if _show_traceback():
+        import traceback
+
+        traceback.print_exception(type(e), e, e.__traceback__)
+    print(f"cablecheck: error: {args.command} failed: {type(e).__name__}: {e} "
+          f"({TRACEBACK_ENV}=1 prints the traceback)", file=sys.stderr)
+    return EXIT_ERROR
 
 
 if __name__ == "__main__":

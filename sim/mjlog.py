@@ -15,6 +15,9 @@ its counter counts them all) and from the messages that belong to no
 counted kind (for example the solver's "Linesearch objective is not
 convex"), keyed by their text with numbers replaced by '#'.
 
+Outside a run (the other commands, the tests) `log_file_off` keeps only
+the file away: MuJoCo still prints its messages.
+
 This module does not decide what a warning means for the run (see
 `sim.divergence`) and does not stop anything.
 """
@@ -24,6 +27,8 @@ from __future__ import annotations
 import re
 import threading
 from collections import Counter
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 import mujoco
 
@@ -80,23 +85,37 @@ class MujocoMessages:
     def __enter__(self) -> "MujocoMessages":
         self._old_handler = mujoco.get_mju_user_warning()
         mujoco.set_mju_user_warning(self._take)
-        config = mujoco.MjLogConfig.get()
-        self._old_file = bool(config.logto_file)
-        config.logto_file = False
-        config.set()
+        self._old_file = _set_log_file(False)
         return self
 
     def __exit__(self, *exc) -> None:
         mujoco.set_mju_user_warning(self._old_handler)
-        config = mujoco.MjLogConfig.get()
-        config.logto_file = self._old_file
-        config.set()
+        _set_log_file(self._old_file)
 
     def others(self) -> dict[str, int]:
         """Counts of the messages that are not one of MuJoCo's counted kinds."""
         names = {name for _, name in _KINDS}
         with self._lock:
             return {k: n for k, n in self.counts.items() if k not in names}
+
+
+def _set_log_file(on: bool) -> bool:
+    """Turn the default handler's `MUJOCO_LOG.TXT` on or off; return what it was."""
+    config = mujoco.MjLogConfig.get()
+    old = bool(config.logto_file)
+    config.logto_file = on
+    config.set()
+    return old
+
+
+@contextmanager
+def log_file_off() -> Iterator[None]:
+    """MuJoCo's default handler writes no `MUJOCO_LOG.TXT` while entered (it still prints)."""
+    old = _set_log_file(False)
+    try:
+        yield
+    finally:
+        _set_log_file(old)
 
 
 def data_warnings(data: mujoco.MjData | None) -> dict[str, int]:

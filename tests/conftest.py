@@ -1,10 +1,22 @@
 """Test configuration: hypothesis runs without deadlines (2-core CI shares the
-machine) and, under CI, with a fixed seed so a red run can be reproduced."""
+machine) and, under CI, with a fixed seed so a red run can be reproduced;
+MuJoCo's default warning handler writes no MUJOCO_LOG.TXT into the
+repository while the tests step models of their own (a run takes MuJoCo's
+messages itself, `sim.mjlog`)."""
 
 import os
 
+import pytest
 from hypothesis import settings
 
 settings.register_profile("default", deadline=None)
 settings.register_profile("ci", deadline=None, derandomize=True, print_blob=True)
 settings.load_profile("ci" if os.environ.get("CI") else "default")
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _no_mujoco_log_file():
+    from sim.mjlog import log_file_off
+
+    with log_file_off():
+        yield

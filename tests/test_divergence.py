@@ -96,7 +96,18 @@ def test_divergent_scene_exits_3_naming_time_cable_and_units(tmp_path: Path):
     assert row.exit_status == EXIT_DIVERGED and row.error == e["message"]
 
 
-def test_mujoco_instability_names_the_vertex_and_writes_no_log(tmp_path: Path, monkeypatch):
+@pytest.fixture
+def log_file_on():
+    """MuJoCo's default handler writes MUJOCO_LOG.TXT again for the test
+    (the tests keep it off, tests/conftest.py)."""
+    from sim.mjlog import _set_log_file
+
+    old = _set_log_file(True)
+    yield
+    _set_log_file(old)
+
+
+def test_mujoco_instability_names_the_vertex_and_writes_no_log(tmp_path: Path, monkeypatch, log_file_on):
     """A NaN velocity injected into one cable vertex after settling: the
     simulation stops at the step MuJoCo finds it unstable (no reset to the
     routed shape), the scan names that cable vertex, the warnings are
@@ -126,6 +137,17 @@ def test_mujoco_instability_names_the_vertex_and_writes_no_log(tmp_path: Path, m
     assert (e.cable, e.vertex) == ("lead", 5) and e.t == pytest.approx(states[-1].t)
     assert counts.get(e.warning, 0) >= 1
     assert not list(tmp_path.glob("MUJOCO_LOG.TXT"))
+
+
+def test_without_the_messages_taken_mujoco_writes_its_log(tmp_path: Path, monkeypatch, log_file_on):
+    """The control of the test above: MuJoCo's default handler leaves the file."""
+    monkeypatch.chdir(tmp_path)
+    m = mujoco.MjModel.from_xml_string('<mujoco><worldbody><body><freejoint/><geom size=".1"/></body>'
+                                       '</worldbody></mujoco>')
+    d = mujoco.MjData(m)
+    d.qpos[0] = np.nan
+    mujoco.mj_step(m, d)
+    assert (tmp_path / "MUJOCO_LOG.TXT").exists()
 
 
 class _State:
@@ -292,3 +314,18 @@ def test_sound_scene_is_not_flagged(tmp_path: Path, monkeypatch):
     assert r["complete"] is True and r["physics_error"] is None and r["error"] is None
     assert r["timing"]["divergence_s"] >= 0.0 and r["warnings"] == {}
     assert not list(tmp_path.glob("MUJOCO_LOG.TXT"))
+
+
+def test_a_command_that_fails_prints_one_line_and_exits_4(tmp_path: Path, monkeypatch, capsys):
+    import sim.sweep
+
+    def broken(*a, **k):
+        raise ValueError("a bug, not an option")
+
+    monkeypatch.setattr(sim.sweep, "sweep_scene", broken)
+    monkeypatch.delenv("CABLECHECK_TRACEBACK", raising=False)
+    code = main(["sweep", str(_scene(tmp_path, SMALL)), "--part", "frame/floor", "--direction", "0,0,1",
+                 "--distance", "10", "--report", str(tmp_path / "s.json")])
+    err = capsys.readouterr().err
+    assert code == EXIT_ERROR and "ValueError: a bug, not an option" in err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
