@@ -150,11 +150,14 @@ class PhysicsError:
         """One line: when, where, what and the likely cause."""
         where = (f"cable {self.cable!r}" + (f" (vertex {self.vertex})" if self.vertex is not None else "")
                  if self.cable is not None else f"body {self.body!r}" if self.body is not None else "the model")
-        what = {Sign.UNSTABLE: f"MuJoCo found the simulation unstable ({self.warning})",
-                Sign.NON_FINITE: "positions became NaN or infinite",
-                Sign.FAR: f"a point ran away to {self.value:.4g} m from the scene",
-                Sign.FAST: f"a point ran away at {self.value:.4g} m/s",
-                Sign.STRETCHED: f"an element stretched to {self.value:.4g} times its length"}[self.sign]
+        if self.sign is Sign.UNSTABLE:
+            what = f"MuJoCo found the simulation unstable ({self.warning})"
+        elif self.sign is Sign.NON_FINITE:
+            what = "positions became NaN or infinite"
+        else:
+            what = {Sign.FAR: "a point ran away to {:.4g} m from the scene",
+                    Sign.FAST: "a point ran away at {:.4g} m/s",
+                    Sign.STRETCHED: "an element stretched to {:.4g} times its length"}[self.sign].format(self.value)
         when = f"while settling (t = {self.t:.4g} s)" if self.settling else f"at t = {self.t:.4g} s"
         return f"the simulation diverged {when} in {where}: {what}; likely cause: {self.cause.value}: {self.detail}"
 

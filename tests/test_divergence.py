@@ -329,3 +329,44 @@ def test_a_command_that_fails_prints_one_line_and_exits_4(tmp_path: Path, monkey
     err = capsys.readouterr().err
     assert code == EXIT_ERROR and "ValueError: a bug, not an option" in err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_run_stopped_by_mujocos_instability_counts_it(tmp_path: Path, monkeypatch, log_file_on):
+    """End to end through the command: a NaN velocity left in one cable
+    vertex after settling; MuJoCo finds the first step unstable, the run
+    stops there (exit 3) with the warning named and counted, the rest
+    state checked, and no MUJOCO_LOG.TXT although the default handler
+    would write one."""
+    import sim.loop
+
+    settle = sim.loop.Simulation.settle
+
+    def poisoned(self, *a, **k):
+        settle(self, *a, **k)
+        c = self.built.cables[0]
+        self.data.qvel[int(self.model.body_dofadr[int(self.model.flex_vertbodyid[c.vert_adr + 5])])] = np.nan
+
+    monkeypatch.setattr(sim.loop.Simulation, "settle", poisoned)
+    monkeypatch.chdir(tmp_path)
+    report = tmp_path / "r.json"
+    assert main(["run", str(_scene(tmp_path, SMALL)), "--no-record", "--report", str(report),
+                 "--quiet"]) == EXIT_DIVERGED
+    r = json.loads(report.read_text())
+    e = r["physics_error"]
+    assert r["complete"] is False and e["sign"] == "mujoco-unstable"
+    assert (e["cable"], e["vertex"], e["step"]) == ("lead", 5, 1) and e["t"] == pytest.approx(0.002)
+    assert e["warning"].startswith("mjWARN_BADQ") and r["warnings"].get(e["warning"], 0) >= 1
+    assert e["cause"] == "unknown"                     # nothing in the scene explains it
+    assert r["settings"]["checked_steps"] == 1 and r["cables"][0]["rest_points"]
+    assert not list(tmp_path.glob("MUJOCO_LOG.TXT"))
+
+
+@pytest.mark.parametrize("sign", list(Sign))
+def test_every_sign_has_its_one_line(sign: Sign):
+    value = None if sign in (Sign.UNSTABLE, Sign.NON_FINITE) else 12.5
+    warning = "mjWARN_BADQACC" if sign is Sign.UNSTABLE else None
+    e = PhysicsError(-0.1, 0, True, sign, None, None, "slider", warning, value, Cause.TELEPORT, "too fast")
+    line = e.message()
+    assert "\n" not in line and "while settling (t = -0.1 s)" in line and "body 'slider'" in line
+    assert line.endswith("likely cause: teleport: too fast")
+    assert ("12.5" in line) == (value is not None) and ((warning or "") in line)
