@@ -304,9 +304,13 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
             for ev in events:  # each event still open at the end gets its one end entry
                 if id(ev) not in closed:
                     _log_end(recorder, ev, scene.scale, scene.units, at_end=True)
-            recorder.finish(list(events), worn,
-                            summary_text(scene.name, settings, events, worn, scene.scale, complete,
-                                         tuple(tracker.allowed.values()), excused),
+            summary = summary_text(scene.name, settings, events, worn, scene.scale, complete,
+                                   tuple(tracker.allowed.values()), excused)
+            stopped = _stopped_entry(diverged, error, out.t_last)
+            if stopped is not None:          # why the run stopped: in the log and the summary
+                recorder.log_event(stopped[0], stopped[1], "ERROR")
+                summary += f"\n\n**{stopped[1]}**\n"
+            recorder.finish(list(events), worn, summary,
                             None if event_joints is None else [f["joints"] for f in event_joints])
             recorder.close()
             timer.lap("record")
@@ -330,6 +334,16 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
                       detector.collision_seconds() if detector is not None else None, loop_s,
                       watch.seconds if watch is not None else None),
         recording=options.record, physics_error=diverged, error=error)
+
+
+def _stopped_entry(diverged: PhysicsError | None, error: RunError | None, t_last: float
+                   ) -> tuple[float, str] | None:
+    """The recording's entry for a run stopped by a divergence or an error: (time, text)."""
+    if diverged is not None:
+        return max(diverged.t, 0.0), diverged.message()
+    if error is not None:
+        return (error.t if error.t is not None else t_last), f"the run failed: {error.type}: {error.message}"
+    return None
 
 
 def _until(states: Iterator, stop: Callable[[], bool]) -> Iterator:

@@ -27,6 +27,7 @@ from sim.scene import load_scene
 from sim.studyresult import row_from_report
 
 from tests.test_cli import SMALL, _assert_rrd_has
+from tests.test_record import _rows
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -74,10 +75,10 @@ def _scene(tmp_path: Path, text: str, name: str = "scene.toml"):
 
 def test_divergent_scene_exits_3_naming_time_cable_and_units(tmp_path: Path):
     scene = _scene(tmp_path, UNITS_MIXED % "250")
-    report = tmp_path / "out" / "r.json"
+    report, record = tmp_path / "out" / "r.json", tmp_path / "out" / "r.rrd"
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     env.pop("CABLECHECK_TRACEBACK", None)
-    done = subprocess.run([sys.executable, "-m", "sim.cli", "run", str(scene), "--no-record",
+    done = subprocess.run([sys.executable, "-m", "sim.cli", "run", str(scene), "--record", str(record),
                            "--report", str(report), "--quiet"], cwd=tmp_path, env=env,
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == EXIT_DIVERGED, done.stderr
@@ -92,6 +93,11 @@ def test_divergent_scene_exits_3_naming_time_cable_and_units(tmp_path: Path):
     assert r["settings"]["t_end"] < e["t"] and r["settings"]["steps"] < e["step"]
     assert "diverged" in done.stderr and "Traceback" not in done.stderr
     assert not list(tmp_path.rglob("MUJOCO_LOG.TXT"))
+    # the recording is finished and says why it stopped, when
+    (entry,) = [x for x in _rows(record, "/events") if "diverged" in x["TextLog:text"][0]]
+    assert entry["TextLog:text"] == [e["message"]] and entry["TextLog:level"] == ["ERROR"]
+    assert entry["t"] == pytest.approx(e["t"])
+    assert e["message"] in _rows(record, "/summary")[0]["TextDocument:text"][0]
     row = row_from_report("v0", (250,), r)       # as a study's variant
     assert row.exit_status == EXIT_DIVERGED and row.error == e["message"]
 
@@ -278,6 +284,8 @@ def test_forced_error_exits_4_with_the_error_in_an_incomplete_report(tmp_path: P
     err = capsys.readouterr().err
     assert "IndexError" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
     _assert_rrd_has(record, ["/world/cables/lead"])
+    failed = [x for x in _rows(record, "/events") if "the run failed: IndexError" in x["TextLog:text"][0]]
+    assert len(failed) == 1 and failed[0]["t"] == pytest.approx(r["error"]["t"])
     assert not list(tmp_path.glob("MUJOCO_LOG.TXT"))
 
 
