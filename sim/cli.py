@@ -112,8 +112,8 @@ def _cmd_run(args: argparse.Namespace, stop: StopRequest) -> int:
         e = result["error"]
         if _show_traceback():
             print(e["traceback"], end="", file=sys.stderr)
-        print(f"cablecheck: error: the run failed: {e['type']}: {e['message']} (report, with the traceback: "
-              f"{report}; {TRACEBACK_ENV}=1 prints it)", file=sys.stderr)
+        print(f"cablecheck: error: the run failed: {e['type']}: {_one_line(e['message'])} (report, with the "
+              f"traceback: {report}; {TRACEBACK_ENV}=1 prints it)", file=sys.stderr)
         return EXIT_ERROR
     if not result["complete"]:
         return EXIT_TERMINATED if result.get("interrupted") == "SIGTERM" else EXIT_INTERRUPTED
@@ -270,9 +270,14 @@ def _failed(args: argparse.Namespace, e: Exception) -> int:
         import traceback
 
         traceback.print_exception(type(e), e, e.__traceback__)
-    print(f"cablecheck: error: {args.command} failed: {type(e).__name__}: {e} "
+    print(f"cablecheck: error: {args.command} failed: {type(e).__name__}: {_one_line(str(e))} "
           f"({TRACEBACK_ENV}=1 prints the traceback)", file=sys.stderr)
     return EXIT_ERROR
+
+
+def _one_line(text: str) -> str:
+    """`text` with its line breaks and runs of spaces made single spaces."""
+    return " ".join(text.split())
 
 
 if __name__ == "__main__":

@@ -266,7 +266,7 @@ def test_forced_error_exits_4_with_the_error_in_an_incomplete_report(tmp_path: P
     def boom(self, batch):
         calls.append(len(batch))
         if len(calls) == 2:
-            raise IndexError("index 7 is out of bounds for axis 0 with size 7")
+            raise IndexError("index 7 is out of bounds\n  for axis 0 with size 7")
         return real(self, batch)
 
     real = sim.stepcheck.StepChecks.run
