@@ -378,3 +378,25 @@ def test_every_sign_has_its_one_line(sign: Sign):
     assert "\n" not in line and "while settling (t = -0.1 s)" in line and "body 'slider'" in line
     assert line.endswith("likely cause: teleport: too fast")
     assert ("12.5" in line) == (value is not None) and ((warning or "") in line)
+
+
+def test_error_on_the_simulation_thread_exits_4(tmp_path: Path, monkeypatch):
+    """Raised while the simulation steps ahead on its own thread (sim.ahead):
+    handed to the run, which checks the states made before it and stops."""
+    import sim.loop
+
+    state = sim.loop.Simulation.state
+
+    def broken(self, step, contacts):
+        if step == 40:
+            raise IndexError("a stock arm's mesh link")
+        return state(self, step, contacts)
+
+    monkeypatch.setattr(sim.loop.Simulation, "state", broken)
+    report = tmp_path / "r.json"
+    assert main(["run", str(_scene(tmp_path, SMALL)), "--no-record", "--report", str(report),
+                 "--quiet"]) == EXIT_ERROR
+    r = json.loads(report.read_text())
+    assert r["complete"] is False and r["error"]["type"] == "IndexError"
+    assert "sim/loop.py" in r["error"]["traceback"] or "sim\\loop.py" in r["error"]["traceback"]
+    assert r["settings"]["checked_steps"] <= 40 and r["settings"]["steps"] < 40
