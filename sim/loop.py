@@ -130,11 +130,12 @@ class Simulation:
         self.total_steps = int(round(scene.duration / scene.timestep))
         self.instability: Instability | None = None
         self._t0 = self.settle_steps * self.step_size   # simulation time of scene time 0
+        self._warning = self.data.warning               # MuJoCo's counters, read after every step
 
     def unstable(self) -> Instability | None:
         """MuJoCo's first instability warning so far (`sim.divergence.BAD_WARNINGS`), or None."""
         if self.instability is None:
-            warning = self.data.warning
+            warning = self._warning
             for k in BAD_WARNINGS:
                 if warning[k].number:
                     self.instability = Instability(mujoco.mjtWarning(k).name, int(warning[k].lastinfo),
