@@ -325,8 +325,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         pairs=tuple(tracker.pairs.values()), allowed=tuple(tracker.allowed.values()), excused=excused,
         event_hold=tracker.hold,
         validation=ends.validation, advance=ends.advance,
-        warnings=warning_counts([getattr(sim, "data", None), detector.detect_data if detector else None],
-                                messages),
+        warnings=warning_counts([sim.data if isinstance(sim, Simulation) else None,   # a static check has none
+                                 detector.detect_data if detector else None], messages),
         part_warnings=ends.part_warnings,
         physics_warnings=noted + tuple(built.warnings) + ends.hull_warnings,
         substeps=built.substeps.count if built.substeps else 1,
