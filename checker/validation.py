@@ -359,17 +359,18 @@ of the clearance of the class boundary they fall either side of."""
 
 class Reason(StrEnum):
     """Why the two sides class a pair differently. Each is a claim, given only
-    once it is checked (:meth:`Validation.explain`, in this order); the
-    values are the report's. ``tol`` is :data:`BOUNDARY_SHARE` of the
-    clearance ``c``.
+    once it is checked (:meth:`Validation.explain`, which says in which
+    order); the values are the report's. ``tol`` is :data:`BOUNDARY_SHARE`
+    of the clearance ``c``.
 
     - ``at a boundary``: the pair lies within ``tol`` of the class boundary
       the two sides fall either side of. Both distances known: they differ
       by at most ``tol`` (so each is within ``tol`` of the 0 or ``c`` between
       them). One side clear (no record, or no contact, below ``c``): the other
-      side's distance is within ``tol`` below ``c``, and the clear side is
-      checked too: method exact's distance, found up to ``c + tol``, is
-      within ``tol`` of ``c``.
+      side's distance is within ``tol`` below ``c``, and the pair's distance
+      by method exact, found up to ``c + tol``, is within ``tol`` of ``c``
+      too (with method points a pair exact classes as MuJoCo does is
+      ``between points`` first).
     - ``convex hull``: MuJoCo collides a mesh as its convex hull, and the
       cable's distance to the hull classes the pair as MuJoCo does.
     - ``between points`` (method points): the contact or crossing falls
@@ -581,10 +582,12 @@ class Validation:
                 second: Callable[[], Recheck | None] = lambda: None) -> tuple[Reason, float | None]:
         """Why the two sides disagree on this pair (checker ``dc``, MuJoCo
         ``dm``; None: clear), and the distance that shows it (None where the
-        two distances themselves do): each :class:`Reason` is checked in
-        turn, its claim verified; else unexplained. ``second`` gives the
-        second opinions (None: nothing can be checked but the distances
-        themselves)."""
+        two distances themselves do): each claim of :class:`Reason` is
+        checked in turn, the most specific first: at a boundary with both
+        distances known, convex hull, between points, at a boundary with
+        one side clear, self with no margin; else unexplained. ``second``
+        gives the second opinions (None: nothing can be checked but the
+        distances themselves)."""
         c = self.clearance
         tol = BOUNDARY_SHARE * max(c, 1e-12)
         cm = severity_of(dm, c)
@@ -592,11 +595,7 @@ class Validation:
         if dc is not None and dm is not None and abs(dc - dm) <= tol:
             return Reason.AT_BOUNDARY, None
         opinion = second()
-        if (dc is None) != (dm is None) and c - tol <= _least(dc, dm) and opinion is not None:
-            d = opinion.near(key, c + tol)                # the clear side's distance, up to c + tol
-            if d is not None and abs(d - c) <= tol:
-                return Reason.AT_BOUNDARY, d
-        exact = None
+        exact = dc if self.method == "exact" else None
         if opinion is not None:
             if kind in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) and b in self.mesh_parts:
                 for by_exact in (False, True):        # discrete points first: cheaper, often enough
@@ -607,8 +606,12 @@ class Validation:
                 exact = opinion.exact(key)
                 if severity_of(exact, c) == cm and _least(exact, None) < _least(dc, None):
                     return Reason.BETWEEN_POINTS, exact
-        if self.method == "exact":
-            exact = dc
+            # one side clear, the other just below the clearance: the pair's
+            # distance by method exact, found up to c + tol, within tol of c
+            if (dc is None) != (dm is None) and c - tol <= _least(dc, dm):
+                d = opinion.near(key, c + tol)
+                if d is not None and abs(d - c) <= tol:
+                    return Reason.AT_BOUNDARY, d
         if (kind == PairType.SELF and dm is None and dc is not None and exact is not None
                 and 0.0 <= exact < c and 0.0 <= dc):
             return Reason.SELF_NO_MARGIN, exact

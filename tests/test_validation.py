@@ -514,16 +514,21 @@ def test_self_no_margin_only_for_a_soft_self_pair_exact_confirms():
 
 def test_boundary_with_both_distances():
     """The issue's pair: MuJoCo just below the clearance, the checker clear
-    (true distance 5.000000000000001): a boundary case once the clear side's
-    distance, found up to the clearance + 2 %, is within 2 % of it; the
-    other way round too. Not where the clear side is farther (or cannot be
-    measured), nor where the known side is not within 2 % of the clearance."""
+    (true distance 5.000000000000001): a boundary case once the pair's
+    distance by method exact, found up to the clearance + 2 %, is within 2 %
+    of it; the other way round too. Not where that is farther (or cannot be
+    measured), nor where the known side is not within 2 % of the clearance;
+    with method points, 'between points' where exact classes the pair as
+    MuJoCo does."""
     c = 5.0
     tol = 0.02 * c
     mj = np.nextafter(c, 0.0)
     o = _Opinion(near=5.000000000000001)
     assert _reason(None, mj, o, CC_KEY) == (Reason.AT_BOUNDARY, 5.000000000000001)
-    assert o.calls == [("near", CC_KEY, c + tol)]
+    assert ("near", CC_KEY, c + tol) in o.calls
+    # exact classes it as MuJoCo does, points missed it: the more specific claim first
+    assert _reason(None, 4.95, _Opinion(exact=4.95, near=4.95), CC_KEY) == (Reason.BETWEEN_POINTS, 4.95)
+    assert _reason(None, 4.95, _Opinion(exact=4.95, near=4.95), CC_KEY, method="exact") == (Reason.AT_BOUNDARY, 4.95)
     assert _reason(mj, None, _Opinion(near=mj), CC_KEY) == (Reason.AT_BOUNDARY, mj)
     assert _reason(None, 4.95, _Opinion(near=5.08), CC_KEY)[0] is Reason.AT_BOUNDARY
     assert _reason(None, 4.95, _Opinion(near=5.2), CC_KEY)[0] is Reason.UNEXPLAINED    # beyond c + tol
@@ -599,7 +604,7 @@ def test_self_contact_past_the_window_is_measured_over_its_places():
         got = simulator_pairs(_contacts([("self", "c", "c", 0, 3, dist, at)]), {"c": (pts, 1.0)}, (), 0.5)
         if dist + apart - plain < 0:
             assert got[SELF][0] == pytest.approx(dist + apart - plain, abs=1e-12)
-            assert abs(got[SELF][1][0]) < 1e-12 and got[SELF][1][1] < 0                # between the legs, below the bend
+            assert abs(got[SELF][1][0]) < 1e-12 and got[SELF][1][1] < 0      # between the legs, below the bend
         else:
             assert got == {}
     assert simulator_pairs(_contacts([("self", "c", "c", 1, 2, -1.5, at)]), {"c": (pts, 1.0)}, (), 0.5) == {}
