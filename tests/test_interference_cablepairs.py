@@ -107,8 +107,8 @@ def _self_distance(records):
 
 
 @settings(max_examples=60, deadline=None)
-@given(coils(), st.floats(0.0, 2.0), st.sampled_from([1.0, 2.0, 4.0]))
-def test_self_rule_exact_never_misses_what_points_finds(cable, clearance_r, spacing):
+@given(coils(), st.floats(0.0, 2.0), st.sampled_from([1.0, 2.0, 4.0]), st.sampled_from([0.0, 1e4]))
+def test_self_rule_exact_never_misses_what_points_finds(cable, clearance_r, spacing, far):
     """On drawn coils (which come back to themselves at the window's edge):
     method exact's self record equals an every-element-pair reference of
     the documented rule taken literally (the least distance over places at
@@ -116,8 +116,9 @@ def test_self_rule_exact_never_misses_what_points_finds(cable, clearance_r, spac
     parameter square: test_closest.seg_seg_apart_ref), method points' equals
     the literal every-point-pair reference, and exact is never clear where
     points is not, nor farther (points' places are places of exact's
-    elements)."""
+    elements); also with the coil 10,000 radii from the origin."""
     r = cable.radius
+    cable = CableState("c", cable.points + far * r * np.array([0.6, -0.8, 0.3]), r)
     cfg_p = CheckConfig(method="points", spacing=spacing, clearance=clearance_r * r)
     cfg_e = CheckConfig(method="exact", spacing=spacing, clearance=clearance_r * r)
     pts = check_state([cable], [], cfg_p)
