@@ -239,3 +239,8 @@ class EventTracker:
     def open_pairs(self) -> list[PairKey]:
         """Pairs with an event still open."""
         return list(self._open)
+
+    def worst_at(self, t: float) -> list[tuple[PairKey, float]]:
+        """(pair, t_start) of each open event whose worst so far is the step at time t
+        (it deepened there, or started there)."""
+        return [(k, ev.t_start) for k, ev in self._open.items() if ev.t_worst == t]

@@ -441,6 +441,18 @@ class _Checked:
             self.max_strain = np.where(np.abs(first) > np.abs(self.max_strain), first, self.max_strain)
             self.max_stretch = np.maximum(self.max_stretch, strain.max(axis=0))
             self.min_bend = np.minimum(self.min_bend, np.stack([r.bend for r in results]).min(axis=0))
+        # the events first, the whole batch: the last state at which each event's worst
+        # deepened within the batch is then recorded too (its worst instant, as the report has it)
+        changes = []
+        deepest: dict[tuple, int] = {}    # (pair, t_start) -> the batch's state where that event last deepened
+        for k, (state, res) in enumerate(zip(states, results)):
+            started, closed = self.tracker.update(state.t, res.records)
+            changes.append(([(key, self.tracker.standing(key)) for key in started], closed))
+            if recorder and (res.records or closed):
+                for event in self.tracker.worst_at(state.t):
+                    deepest[event] = k
+        worst_states = set(deepest.values())
+        self.timer.lap("check")
         for k, (state, res) in enumerate(zip(states, results)):
             if state.step == 0:
                 self.rest_points = state.cables
@@ -448,16 +460,18 @@ class _Checked:
                     self.timer.lap("check")
                     recorder.log_static(state.part_poses, state.cables, state.qpos)
                     self.timer.lap("record")      # the scene's static data: recording, not checking
-            started, closed = self.tracker.update(state.t, res.records)
+            started, closed = changes[k]
             if res.near is not None:
                 self.pending_near = res.near     # a full check's candidates, shown at the next frame
             self.timer.lap("check")
-            sampled = self.checked % self.record_stride == 0 or state.step == self.total_steps
+            # a regular sample, the last step, or an event's worst so far: a whole frame
+            sampled = (self.checked % self.record_stride == 0 or state.step == self.total_steps
+                       or k in worst_states)
             if recorder and (sampled or started or closed):
                 allow = self.tracker.allow   # allowed pairs are drawn as clear
                 shown = (replace(res, records=[r for r in res.records if not allow.match(self.tracker.key(r))])
                          if allow else res)
-                _record_step(recorder, state, shown, started, closed, self.tracker, self.near,
+                _record_step(recorder, state, shown, started, closed, self.near,
                              self.pending_near, scale, self.built.scene.units, sampled)
                 self.pending_near = None
                 if self.joints:
@@ -501,10 +515,11 @@ def _twist_moment(defn, radius: float, length: float, twist: float) -> float:
     return float(shear * polar * twist / length)
 
 
-def _record_step(recorder: Recorder, state, res, started, closed, tracker: EventTracker,
-                 near: "_NearPairs", pending, unit: float, units: str, sampled: bool = True) -> None:
+def _record_step(recorder: Recorder, state, res, started, closed, near: "_NearPairs", pending,
+                 unit: float, units: str, sampled: bool = True) -> None:
     """One recorded frame: the step's clashes as marks, the pairs evaluated
-    near the clearance (approach history), contacts, agreement, event entries."""
+    near the clearance (approach history), contacts, agreement, event entries
+    (`started`: (pair, its event as it started) for the events starting here)."""
     marks = [Mark(PairType(r.type).value, r.a, r.b, float(r.min_distance), Severity(r.severity).value,
                   np.asarray(r.where), float(r.s), r.s_b) for r in res.records]
     recorder.log_step(state.t, state.cables, state.part_poses, marks, strain=res.strain, bend=res.bend,
@@ -513,8 +528,7 @@ def _record_step(recorder: Recorder, state, res, started, closed, tracker: Event
         recorder.log_contacts(res.contacts.pos)
     if res.agreement is not None:
         recorder.log_scalar("validation/agreement", res.agreement, label="agreement with MuJoCo")
-    for key in started:
-        ev = tracker.standing(key)
+    for _, ev in started:
         recorder.log_event(state.t, f"{ev.type} {_pair(ev.a, ev.b)} starts: distance "
                            f"{ev.min_distance / unit:.4g} {units}", _LEVEL[ev.severity])
     for ev in closed:

@@ -18,6 +18,7 @@ from rerun.chunk import RrdReader
 
 from sim.cli import main, version
 from sim.record import KEEPOUT_COLOUR, PART_COLOUR, SPOT, STATE_COLOURS, wear_colours
+from sim.record.style import pair_path
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -337,14 +338,21 @@ def test_a_style_given_once_rides_in_the_first_row(pinch):
 def test_frames_recorded_for_an_event_alone_keep_only_what_changes(pinch):
     """Frames between the run's samples (every 10 ms here) are recorded where an
     event starts or ends: there a cable's shape is kept only if its state
-    colours change, and the cable's measures (strain, bend, twist) not at all."""
+    colours change, and the cable's measures (strain, bend, twist) not at all.
+    An event's worst instant is a whole frame (its shape and measures), and so
+    is, in each checked batch, the last state at which an event deepened (its
+    worst so far: the batch cannot know the states after it)."""
     report, record = pinch
+    (ev,) = report["events"]
     on_grid = lambda t: abs(t / 0.01 - round(t / 0.01)) < 1e-6 or t == pytest.approx(report["settings"]["t_end"])
+    deepening = lambda t: ev["t_start"] - 1e-9 <= t <= ev["t_worst"] + 1e-9      # noqa: E731
     strain = [r["t"] for r in _rows(record, "/cables/strain/loop") if r["t"] is not None]
-    assert strain and all(on_grid(t) for t in strain)
+    assert strain and all(on_grid(t) or deepening(t) for t in strain)
+    deepest = {t for t in strain if not on_grid(t)}
+    on_grid = lambda t: (abs(t / 0.01 - round(t / 0.01)) < 1e-6 or t == pytest.approx(report["settings"]["t_end"])  # noqa: E731
+                         or t in deepest)
     rows = [r for r in _rows(record, "/world/cables/loop") if r["t"] is not None]
     off = [k for k, r in enumerate(rows) if not on_grid(r["t"])]
-    (ev,) = report["events"]
     assert rows[off[0]]["t"] == pytest.approx(ev["t_start"])          # the clash shows when it starts
     for k in off:
         assert rows[k]["LineStrips3D:colors"] != rows[k - 1]["LineStrips3D:colors"]
@@ -395,3 +403,19 @@ def test_plane_is_drawn_sized_to_the_scene_or_as_given():
     tilted[:3, :3] = [[0, 0, 1], [0, 1, 0], [-1, 0, 0]]     # normal along +x: local x is world -z
     assert np.allclose(plane_half_sizes(np.zeros(3), tilted, pts), [0.36, 0.6])
     assert np.allclose(plane_half_sizes(np.array([0.5, 0.25, 0.1]), pose, pts), [0.5, 0.25])
+
+
+@pytest.mark.parametrize("fixture", ["pinch", "crossing"])
+def test_every_events_worst_instant_is_a_frame_with_the_reports_distance(fixture, request):
+    """The clash list's time, scrubbed to, shows the report's distance: each
+    event's worst state is recorded at its exact time (not the sample
+    before it), with the pair's distance and spot as the report has them."""
+    report, record = request.getfixturevalue(fixture)
+    assert report["events"]
+    for event in report["events"]:
+        kind, a, b = event["type"], event["a"], event["b"]
+        rows = [r for r in _rows(record, f"/checks/{pair_path(kind, a, b)}/distance") if r["t"] is not None]
+        at = [r for r in rows if abs(r["t"] - event["t_worst"]) < 1e-9]
+        assert len(at) == 1, (event, [r["t"] for r in rows][:20])
+        value = at[0]["Scalars:scalars"][0]
+        assert value == pytest.approx(event["min_distance"], rel=1e-9, abs=1e-12)
