@@ -451,3 +451,39 @@ def test_curved_primitives_near_a_torus_against_fcl(rot, k, around, tilt, gap):
         assert "hard" not in got
         if ref > touch + 2e-5:
             assert not ref_hit and got["soft"] == pytest.approx(ref, abs=2e-5) and got["soft"] <= ref + 1e-9
+
+
+_MESHES = [trimesh.creation.torus(30.0, 6.0, major_sections=24, minor_sections=10), trimesh.creation.box((60, 40, 4)),
+           trimesh.creation.cylinder(3.0, 80.0, sections=24), trimesh.creation.annulus(10.0, 20.0, 8.0, sections=24),
+           trimesh.creation.box((50, 30, 5))]
+
+
+@settings(max_examples=12)
+@given(st.lists(st.tuples(st.integers(0, 6), st.integers(0, 6)), min_size=1, max_size=6), st.integers(1, 24),
+       st.integers(0, 2**32 - 1))
+def test_pairs_of_meshes_at_many_states_are_each_states_own_check(pairs, n_states, seed):
+    """check_pairs_many on any subset of pairs among meshes with trees of
+    different depths (a torus, plates, a rod, an annulus) and curved
+    primitives, at many states drawn near each other: each state's records
+    are those of check_parts of those pairs at that state alone (the trees
+    laid out per state must be those parts' trees: a subset used to crash
+    with an IndexError or answer another part's nodes)."""
+    rng = np.random.default_rng(seed)
+    shapes = [mesh_shape(np.asarray(m.vertices), np.asarray(m.faces)) for m in _MESHES]
+    shapes += [Shape(ShapeType.CYLINDER, [2.0, 10.0]), Shape(ShapeType.SPHERE, [5.0])]
+    names = [f"p{k}" for k in range(len(shapes))]
+    ps = PartSet.build(names, shapes, keepout=[k == 5 for k in range(len(shapes))], tolerance=0.1)
+    ij = sorted({(min(a, b), max(a, b)) for a, b in pairs if a != b})
+    if not ij:
+        return
+    i, j = (np.array(x, np.int64) for x in zip(*ij))
+    from scipy.spatial.transform import Rotation
+    batch = np.tile(np.eye(4), (n_states, len(shapes), 1, 1))
+    batch[:, :, :3, :3] = Rotation.random(n_states * len(shapes), random_state=seed % 2**31).as_matrix().reshape(
+        n_states, len(shapes), 3, 3)
+    batch[:, :, :3, 3] = rng.uniform(-25, 25, (n_states, len(shapes), 3))
+    pc = PartChecker(ps, 2.0)
+    many = pc.check_pairs_many(batch, i, j)
+    for poses, got in zip(batch, many):
+        want = check_parts(ps, ps.place(poses), 2.0, pairs=(i, j))
+        assert _records(got) == _records(want)
