@@ -487,3 +487,43 @@ def test_pairs_of_meshes_at_many_states_are_each_states_own_check(pairs, n_state
     for poses, got in zip(batch, many):
         want = check_parts(ps, ps.place(poses), 2.0, pairs=(i, j))
         assert _records(got) == _records(want)
+
+
+@pytest.mark.parametrize("primitive", [False, True])
+def test_rods_and_bars_through_a_foot_are_hard_at_every_step_they_overlap(primitive):
+    """A rod crossing a bracket's foot from side to side (its axis through
+    the foot's thickness, no vertex of either inside the other) and a bar
+    lowered through it, step by step, checked state by state and in one
+    batch of states: hard at every step the overlap (closed form, from the
+    rod's or bar's offset) is at least 0.1 mm, never hard where it is clear
+    by 0.1 mm, the depth never above the overlap."""
+    foot = _scaled_mesh(_FOOT, 1.0)
+    rod = Shape(ShapeType.CYLINDER, [3.0, 15.0]) if primitive else _scaled_mesh(_PIN, 1.0)
+    bar = Shape(ShapeType.BOX, [3.0, 40.0, 3.0]) if primitive else _scaled_mesh(_BAR, 1.0)
+    ps = PartSet.build(["foot", "rod", "bar"], [foot, rod, bar], groups=["f", "r", "b"], tolerance=0.25)
+    n = 300
+    x = np.linspace(-40.0, 40.0, n)                    # the rod's axis crosses the foot's 50 mm along x
+    z = np.linspace(12.0, -12.0, n)                    # the bar's centre, lowered through its 5 mm
+    poses = np.tile(np.eye(4), (n, 3, 1, 1))
+    poses[:, 1, :3, 3] = np.stack([x, np.full(n, 4.0), np.zeros(n)], axis=1)
+    poses[:, 2, :3, 3] = np.stack([np.full(n, 7.0), np.zeros(n), z], axis=1)
+    # the penetration depth (the shortest move apart) along the motion: the rod's 3 mm radius
+    # into the foot's |x| <= 25, else 14 along y (the 32-gon inscribed within 0.015 mm of the
+    # circle); the bar's 3 mm half height into the foot's |z| <= 2.5 (moved up or down)
+    slack = 0.0 if primitive else 0.015
+    rod_depth = np.minimum(28.0 - np.abs(x), 14.0) - slack
+    bar_depth = 5.5 - np.abs(z)
+    pc = PartChecker(ps, 0.5)
+    i, j = np.array([0, 0]), np.array([1, 2])
+    many = pc.check_pairs_many(poses, i, j)
+    hits = 0
+    for k in range(n):
+        for recs in (many[k], check_parts(ps, ps.place(poses[k]), 0.5, pairs=(i, j))):
+            hard = {r.b: -r.min_distance for r in recs if r.severity.value == "hard" and r.a == "foot"}
+            for name, depth in (("rod", rod_depth[k]), ("bar", bar_depth[k])):
+                if depth >= 0.1:
+                    assert name in hard and hard[name] <= depth + slack + 1e-9, (k, name)
+                    hits += 1
+                elif depth <= -0.1:
+                    assert name not in hard, (k, name)
+    assert hits > 300
