@@ -39,6 +39,7 @@ import traceback
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -58,7 +59,6 @@ from sim.jointspace import JointLog
 from sim.kinematic import KinematicSimulation
 from sim.loop import Simulation
 from sim.mjlog import MujocoMessages, warning_counts
-from sim.record import Mark, Recorder, Settings, summary_text
 from sim.report import (STAGES, CableOutcome, RunError, RunOutcome, Timing, failed_report, report_of,
                         write_report)
 from sim.routecheck import route_warnings
@@ -66,6 +66,9 @@ from sim.scene import Scene, SceneError, check_allow_names, check_fastened_names
 from sim.staticbuild import build_static, needs_model
 from sim.stepcheck import BATCH, BATCH_MAX, StepChecks
 from sim.stop import StopRequest
+
+if TYPE_CHECKING:
+    from sim.record import Recorder
 
 RECORD_RATE = 100.0
 """Recorded frames per simulated second (checks still run at every checked step)."""
@@ -240,8 +243,13 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
                              clearance=scene.check.clearance)
         checks = StepChecks(built, config, options.only, options.advance, detector, timer.lap)
         timer.skip()          # preparing the checks is set-up, as building the model is: no stage's
-        settings = _settings(scene)
-        recorder = Recorder(built, options.record, checks.shapes, settings) if options.record else None
+        scene_file, product = str(scene.path), _version()
+        recorder = None
+        if options.record:
+            from sim import record     # rerun loads (half a second) only for a run that records
+
+            settings = record.Settings(scene.units, scene.check.clearance, scene_file, product)
+            recorder = record.Recorder(built, options.record, checks.shapes, settings)
         # The recording samples the checked steps at about RECORD_RATE (and at
         # every step where an event starts or ends): a viewer needs no 500 Hz.
         # The wear map measures contact at the same rate (bends at every step).
@@ -304,7 +312,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
             for ev in events:  # each event still open at the end gets its one end entry
                 if id(ev) not in closed:
                     _log_end(recorder, ev, scene.scale, scene.units, at_end=True)
-            summary = summary_text(scene.name, settings, events, worn, scene.scale, complete,
+            summary = record.summary_text(scene.name, settings, events, worn, scene.scale, complete,
                                    tuple(tracker.allowed.values()), excused)
             stopped = _stopped_entry(diverged, error, out.t_last)
             if stopped is not None:          # why the run stopped: in the log and the summary
@@ -317,7 +325,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         loop_s = time.perf_counter() - loop_start
     ends = checks.outcome(validated=scene.check.validate)
     return RunOutcome(
-        scene=scene, config=config, scene_file=settings.scene_file, version=settings.version,
+        scene=scene, config=config, scene_file=scene_file, version=product,
         mujoco=mujoco.__version__, complete=complete, interrupted=stop.signal_name,
         steps=out.steps, checked=out.checked, t_end=out.t_last, cables=out.cables(worn),
         events=events, event_joints=event_joints,
@@ -520,6 +528,8 @@ def _record_step(recorder: Recorder, state, res, started, closed, near: "_NearPa
     """One recorded frame: the step's clashes as marks, the pairs evaluated
     near the clearance (approach history), contacts, agreement, event entries
     (`started`: (pair, its event as it started) for the events starting here)."""
+    from sim.record import Mark      # imported already by the run's Recorder (a recording run)
+
     marks = [Mark(PairType(r.type).value, r.a, r.b, float(r.min_distance), Severity(r.severity).value,
                   np.asarray(r.where), float(r.s), r.s_b) for r in res.records]
     recorder.log_step(state.t, state.cables, state.part_poses, marks, strain=res.strain, bend=res.bend,
@@ -615,7 +625,7 @@ class _NearPairs:
         return out
 
 
-def _settings(scene: Scene) -> Settings:
+def _version() -> str:
     from sim.cli import version   # the product version (the command line owns it)
 
-    return Settings(scene.units, scene.check.clearance, str(scene.path), version())
+    return version()
