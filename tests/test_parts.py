@@ -527,3 +527,28 @@ def test_rods_and_bars_through_a_foot_are_hard_at_every_step_they_overlap(primit
                 elif depth <= -0.1:
                     assert name not in hard, (k, name)
     assert hits > 300
+
+
+def test_degenerate_triangles_near_curved_primitives_and_crossings_raise_nothing():
+    """A mesh with zero-area triangles (a repeated corner, three corners on a
+    line) beside and through curved primitives and a box: no warning, no
+    NaN; the sphere above the slab is soft at its gap, the one through it
+    hard, the box through it hard."""
+    import warnings
+
+    v = np.asarray(_SLAB.vertices, float)
+    f = np.asarray(_SLAB.faces)
+    extra_v = np.array([[0.0, 0.0, 5.0], [1.0, 0.0, 5.0], [2.0, 0.0, 5.0]])
+    faces = np.vstack([f, [[0, 0, 1]], len(v) + np.array([[0, 1, 2]])])
+    slab = mesh_shape(np.vstack([v, extra_v]), faces)
+    shapes = [slab, Shape(ShapeType.SPHERE, [4.0]), Shape(ShapeType.CYLINDER, [2.0, 20.0]), box(3.0, 3.0, 20.0),
+              Shape(ShapeType.ELLIPSOID, [5.0, 3.0, 2.0])]
+    poses = [pose(), pose(0.5, 0.0, 9.3), pose(20.0, 5.0, 0.0), pose(-20.0, 0.0, 0.0), pose(0.0, 20.0, -7.2)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with np.errstate(all="raise"):
+            got = check([(f"p{k}", s) for k, s in enumerate(shapes)], poses, clearance=1.0)
+    assert all(np.isfinite(d) for _, _, d in got.values())
+    assert got[("p0", "p1")][1] == "soft" and got[("p0", "p1")][2] == pytest.approx(0.3, abs=1e-12)
+    assert got[("p0", "p2")][1] == "hard" and got[("p0", "p3")][1] == "hard"
+    assert got[("p0", "p4")][1] == "soft" and got[("p0", "p4")][2] == pytest.approx(0.2, abs=1e-12)
