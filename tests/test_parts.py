@@ -552,3 +552,68 @@ def test_degenerate_triangles_near_curved_primitives_and_crossings_raise_nothing
     assert got[("p0", "p1")][1] == "soft" and got[("p0", "p1")][2] == pytest.approx(0.3, abs=1e-12)
     assert got[("p0", "p2")][1] == "hard" and got[("p0", "p3")][1] == "hard"
     assert got[("p0", "p4")][1] == "soft" and got[("p0", "p4")][2] == pytest.approx(0.2, abs=1e-12)
+
+
+_ASSEMBLY_MESHES = {"torus": _TORUS, "box": trimesh.creation.box((30.0, 20.0, 8.0)),
+                    "cylinder": trimesh.creation.cylinder(6.0, 24.0, sections=20),
+                    "annulus": trimesh.creation.annulus(5.0, 12.0, 6.0, sections=20),
+                    "icosphere": trimesh.creation.icosphere(2, 9.0)}
+_ASSEMBLY_PRIMITIVES = {"sphere": Shape(ShapeType.SPHERE, [5.0]), "cylinder_p": Shape(ShapeType.CYLINDER, [4.0, 9.0]),
+                        "capsule": Shape(ShapeType.CAPSULE, [3.0, 7.0]),
+                        "ellipsoid": Shape(ShapeType.ELLIPSOID, [8.0, 5.0, 3.0]),
+                        "box_p": Shape(ShapeType.BOX, [6.0, 4.0, 3.0])}
+
+
+@settings(max_examples=30)
+@given(st.sampled_from(sorted(_ASSEMBLY_MESHES)), st.sampled_from(sorted(_ASSEMBLY_MESHES) + sorted(_ASSEMBLY_PRIMITIVES)),
+       rotations(), rotations(), rotations(), st.floats(-1.0, 1.0), st.sampled_from([0.0, 3e3]))
+def test_meshes_against_meshes_and_primitives_by_fcl(name_a, name_b, rot_a, rot_b, rot_d, gap, far):
+    """A mesh (torus, box, cylinder, annulus, icosphere from
+    trimesh.creation) and a mesh or primitive at drawn orientations, the
+    second brought along a drawn direction to a drawn gap by python-fcl's
+    distance (the first place, coming in, where fcl says that gap), or
+    pushed that far further in: clear by 0.01 mm or more, never hard and at
+    fcl's distance (2e-5 mm; fcl's curved primitives run up to 6e-6 mm
+    high) when below the clearance, never above it; in by 0.01 mm or more,
+    fcl collides and the check is hard, its depth at most the push (moving
+    back by it separates the parts)."""
+    mesh_a = _ASSEMBLY_MESHES[name_a]
+    mesh_b = _ASSEMBLY_MESHES.get(name_b)
+    shape_b = _ASSEMBLY_PRIMITIVES.get(name_b)
+    base = _carry(rot_a, far, 1.0)
+    obj_a = _fcl(mesh_a, None, base, 1.0)
+    direction = rot_d[:, 0]
+    t = np.eye(4)
+    t[:3, :3] = rot_b
+
+    def at(c):
+        t[:3, 3] = base[:3, 3] + direction * c
+        return t.copy()
+
+    def fcl_distance(c):
+        return fcl.distance(obj_a, _fcl(mesh_b, shape_b, at(c), 1.0), fcl.DistanceRequest(), fcl.DistanceResult())
+
+    target = max(gap, 0.0)
+    cs = np.linspace(80.0, 0.0, 161)                # coming in from far: the first offset within the gap
+    k = next((k for k, c in enumerate(cs) if fcl_distance(c) <= target + 1e-9), None)
+    if k is None or k == 0:
+        return
+    lo, hi = cs[k], cs[k - 1]
+    for _ in range(45):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if fcl_distance(mid) <= target + 1e-9 else (lo, mid)
+    c = hi if gap >= 0 else hi + gap
+    poses = np.array([base, at(c)])
+    ref = fcl_distance(c)
+    hit = fcl.collide(obj_a, _fcl(mesh_b, shape_b, poses[1], 1.0), fcl.CollisionRequest(), fcl.CollisionResult())
+    shape_b_here = _scaled_mesh(mesh_b, 1.0) if shape_b is None else shape_b
+    ps = PartSet.build(["a", "b"], [_scaled_mesh(mesh_a, 1.0), shape_b_here], tolerance=0.25)
+    recs = check_parts(ps, ps.place(poses), 2.0)
+    got = {r.severity.value: r.min_distance for r in recs}
+    rounding = 1e-12 * (100.0 + far)
+    if gap >= 0.01:
+        assert not hit and "hard" not in got
+        if ref < 2.0 - 2e-5:
+            assert got["soft"] == pytest.approx(ref, abs=2e-5 + rounding) and got["soft"] <= ref + rounding
+    elif gap <= -0.01:
+        assert hit and "hard" in got and -got["hard"] <= -gap + 1e-6 + rounding
