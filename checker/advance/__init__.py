@@ -71,7 +71,8 @@ no pair can have come within the clearance while
   part pair that can move relative to the other (part-part, keep-out
   between parts), ``rel`` the move of one part in the other's own frame
   (modulo turns about that part's axis where it is a solid of revolution,
-  less both tessellation errors: :class:`~checker.advance.partpairs.PartPairGaps`),
+  less both tessellation errors as a margin:
+  :class:`~checker.advance.partpairs.PartPairGaps`),
   or the same box separation at step k itself above the clearance,
   except the pairs the caller leaves out of the bound and checks itself at
   every step (*active* part pairs, within the clearance at k0),

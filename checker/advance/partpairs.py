@@ -78,11 +78,13 @@ class PartSolids:
     Attributes:
         lo, hi: (P, 3) bounds in the part's own frame of everything the
             checks measure of it (cables against its solid, parts against
-            its triangles); infinite for a plane.
+            its triangles or, curved, its true shape: both within the box
+            ``PartSet`` grows by the tessellation error); infinite for a plane.
         axial: (P,) bool, the part is unchanged by any turn about its
             frame's z axis (:attr:`checker.partset.PartSet.axial`).
-        error: (P,) how far below the true distance the part-part check
-            may measure the part (its tessellation error).
+        error: (P,) the part's tessellation error, held off the turned
+            bound as a margin (the part-part check measures curved parts
+            on their true shapes, never above the true distance).
     """
 
     lo: np.ndarray
