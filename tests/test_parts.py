@@ -547,7 +547,9 @@ def test_degenerate_triangles_near_curved_primitives_and_crossings_raise_nothing
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         with np.errstate(all="raise"):
-            got = check([(f"p{k}", s) for k, s in enumerate(shapes)], poses, clearance=1.0)
+            ps = PartSet.build([f"p{k}" for k in range(len(shapes))], shapes, tolerance=0.25)
+            got = {(r.a, r.b): (r.type.value, r.severity.value, r.min_distance)
+                   for r in check_parts(ps, ps.place(np.array(poses)), 1.0)}
     assert all(np.isfinite(d) for _, _, d in got.values())
     assert got[("p0", "p1")][1] == "soft" and got[("p0", "p1")][2] == pytest.approx(0.3, abs=1e-12)
     assert got[("p0", "p2")][1] == "hard" and got[("p0", "p3")][1] == "hard"
