@@ -339,9 +339,11 @@ def _triangle_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.nda
     other (probes, runs of edges through the other, the mesh's triangles in a
     curved primitive), but at least the touching tolerance. Else the least
     distance: between triangles (exact for meshes and boxes), or to a curved
-    primitive's true shape (a lower bound, at convergence the distance; see
-    :func:`_true_surface`), never below minus the touching tolerance (an
-    overlap that was not found is not reported hard)."""
+    primitive's true shape (:func:`_true_surface`; pairs whose tessellations
+    are farther apart than the clearance and both errors keep that distance
+    less the errors, a lower bound past the clearance). ``where``: the
+    deepest point's run or the curved primitive's nearest point where one of
+    those is the deepest found, else the crossing or the closest points."""
     n = len(i)
     dist = np.full(n, np.inf)
     where = np.zeros((n, 3))
@@ -397,8 +399,9 @@ def _triangle_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.nda
         value[rb] = np.maximum(v[best], -touch[rb])
         where[rb] = 0.5 * (x[best] + xq[best])
         hard |= true_deep < -touch
-    worst = np.minimum(np.minimum(deep, run_deep), np.where(true_deep < -touch, true_deep, np.inf))
-    run_best = (run_deep <= deep) & np.isfinite(run_deep)
+    true_hard = np.where(true_deep < -touch, true_deep, np.inf)
+    worst = np.minimum(np.minimum(deep, run_deep), true_hard)
+    run_best = (run_deep <= deep) & (run_deep <= true_hard) & np.isfinite(run_deep)
     where = np.where(run_best[:, None], run_at, where)
     value = np.where(hard, -np.maximum(-np.minimum(worst, 0.0), touch), value)
     return value, where, hard
