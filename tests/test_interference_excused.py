@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from helpers import examples
 
 from checker.interference.excused import ExcusedLog
 from checker.records import PairType
@@ -45,7 +46,7 @@ def _rotation(rng: np.random.Generator) -> np.ndarray:
     return q * np.sign(np.diag(r))
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=examples(40), deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n_states=st.integers(1, 6), scale=st.sampled_from([1.0, 1e3]),
        far=st.sampled_from([0.0, 1e3]))
 def test_each_windows_worst_is_the_sampled_least(seed, n_states, scale, far):

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from helpers import examples
 
 from sim.cli import main
 from sim.scene import SceneError, load_scene
@@ -106,7 +107,7 @@ def test_the_example_scenes_raise_no_unit_warning(path):
     assert load_scene(path).warnings == ()
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=examples(40), deadline=None)
 @given(radius=st.floats(1e-4, 0.05), scale=st.floats(0.2, 5.0), mm=st.booleans())
 def test_plausible_cells_in_either_unit_never_warn(tmp_path_factory, radius, scale, mm):
     """Any cell of everyday sizes (radius 0.1-50 mm, the cell 0.2-5 times
