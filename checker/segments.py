@@ -7,8 +7,11 @@ segment's length; the ellipsoid finds the root of the derivative (the
 outward normal at the closest point dotted with the segment) by
 safeguarded secant steps to 1e-14 of the segment's length. Meshes are
 exact while the segment stays outside; a penetrating segment's depth is
-the deepest of nine evenly spaced samples (a lower bound on the true
-depth). Not here: point queries (:mod:`checker.primitives`,
+searched from the deepest of nine evenly spaced samples by golden section
+between its neighbours: exact (1e-13 of that stretch) where the depth is
+concave along the segment, as inside a convex mesh, and never shallower
+than the samples in a concave one (there the deepest point between other
+samples can be missed). Not here: point queries (:mod:`checker.primitives`,
 :mod:`checker.meshdata`), poses (:mod:`checker.shapes`).
 """
 
@@ -302,6 +305,20 @@ def segment_sd_mesh(m: MeshData, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarr
         ds = ds.reshape(len(cand), len(ts))
         j = np.argmin(ds, axis=1)
         dmin = ds[np.arange(len(cand)), j]
+        tmin = ts[j]
+        # the deepest sample's neighbours bracket the deepest point where the
+        # depth is concave along the segment (inside a convex mesh: the least
+        # of its face planes' distances); a golden-section search there finds
+        # it to 1e-13 of the bracket, never shallower than the sample
+        lo, hi = ts[np.maximum(j - 1, 0)], ts[np.minimum(j + 1, len(ts) - 1)]
+        ca, cd = a[cand], (b - a)[cand]
+
+        def depth(u):
+            return sd_mesh(m, ca + (lo + u * (hi - lo))[:, None] * cd)[0]
+
+        dg, ug = _golden_min(depth, len(cand))
+        deeper = dg < dmin
+        dmin, tmin = np.where(deeper, dg, dmin), np.where(deeper, lo + ug * (hi - lo), tmin)
         d[cand] = np.minimum(dmin, 0.0)
-        t[cand] = np.where(dmin < 0.0, ts[j], tu[cand])
+        t[cand] = np.where(dmin < 0.0, tmin, tu[cand])
     return d, t

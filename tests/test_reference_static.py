@@ -51,14 +51,16 @@ widened to whole elements). Then for every cable-part pair
 and every cable-cable pair below the clearance is reported at its distance,
 none above it.
 
-Three product bugs found this way are pinned by strict xfail tests at the
-end of this file, and the drawn scenes step around them (so the property
-test stays green and still checks everything else):
+Three product bugs were found this way; each has a test of its own at the
+end of this file (a strict xfail while it stands, and the drawn scenes step
+around it so the property test stays green and still checks everything
+else):
 
 - a part frame within 1e-6 of its body's is measured where MuJoCo's
   compiler snaps it (drawn frames are kept 1e-5 away or put exactly on it);
-- an element through a mesh is measured at the deepest of nine samples
-  (such elements are held between the true depth and their shallower end);
+- an element through a mesh was measured at the deepest of nine samples
+  (fixed: checker.segments searches between them; drawn meshes are convex,
+  and their depths are now held to the reference like any other);
 - an ellipsoid whose two shortest semi-axes are equal reads a wrong depth
   next to its centre (drawn ellipsoids have them 5 % apart).
 
@@ -588,8 +590,8 @@ def covers(pattern: str, name: str) -> bool:
 def element_distances(part: RefPart, pts: np.ndarray, radius: float, horizon: float) -> tuple[np.ndarray, np.ndarray]:
     """Per element, the exact least signed distance less the radius, or (for
     elements provably beyond `horizon`) a lower bound above it; and what the
-    product may answer at most: the same, but for an element entering a
-    mesh, the shallower of its ends (no deeper than touching) (see
+    product may answer at most: the same (an element through a convex mesh
+    is measured at its deepest point too: see
     test_a_segment_through_a_mesh_is_measured_at_its_deepest_point)."""
     a, b = pts[:-1], pts[1:]
     out = np.empty(len(a))
@@ -597,8 +599,6 @@ def element_distances(part: RefPart, pts: np.ndarray, radius: float, horizon: fl
     for i in range(len(a)):
         bound = point_segment(part.centre, a[i], b[i]) - part.bound - radius
         out[i] = upper[i] = bound if bound > horizon else part.segment_sdf(a[i], b[i]) - radius
-        if part.shape == "mesh" and out[i] <= -radius:
-            upper[i] = min(part.point_sdf(a[i]), part.point_sdf(b[i]), 0.0) - radius
     return out, upper
 
 
@@ -868,8 +868,6 @@ segments = 2
 """
 
 
-@pytest.mark.xfail(strict=True, reason="product bug: an element through a mesh is measured at the deepest of nine "
-                   "samples along it (checker.segments.segment_sd_mesh), not at its deepest point")
 def test_a_segment_through_a_mesh_is_measured_at_its_deepest_point(tmp_path):
     """A box mesh (half-size 0.03125) centred at y = 0.01, a straight cable
     along y through its centre in two elements (and two short clamp edges):

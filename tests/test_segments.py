@@ -118,3 +118,31 @@ def test_segment_plane_and_mesh():
     assert np.allclose(dm[outside], db[outside], atol=1e-12)
     # Penetration: never reported clear, and no deeper than the truth.
     assert np.all(dm[~outside] <= 0) and np.all(dm[~outside] >= db[~outside] - 1e-12)
+
+
+def _box_sd(x: np.ndarray, half: np.ndarray) -> np.ndarray:
+    q = np.abs(x) - half
+    return np.linalg.norm(np.maximum(q, 0.0), axis=-1) + np.minimum(q.max(axis=-1), 0.0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), scale=st.sampled_from([1.0, 1e3]))
+def test_segment_through_a_convex_mesh_is_measured_at_its_deepest_point(seed, scale):
+    """A box mesh's depth along segments through it, against the box's closed
+    form minimised along the segment by scipy (the depth inside a convex
+    mesh is concave along a segment, so one bounded search finds it): nine
+    samples alone missed up to a few per cent of the depth."""
+    rng = np.random.default_rng(seed)
+    half = rng.uniform(0.01, 0.05, 3) * scale
+    box = trimesh.creation.box(extents=2 * half)
+    shape = mesh_shape(np.asarray(box.vertices), np.asarray(box.faces))
+    a = rng.uniform(-1.5, 1.5, (40, 3)) * half
+    b = a + rng.normal(scale=0.04 * scale, size=(40, 3))
+    d, t = segment_signed_distance(shape, a, b)
+    for i in range(len(a)):
+        f = lambda s: float(_box_sd(a[i] + s * (b[i] - a[i]), half))  # noqa: E731
+        r = minimize_scalar(f, bounds=(0.0, 1.0), method="bounded", options={"xatol": 1e-13})
+        ref = min(r.fun, f(0.0), f(1.0))
+        assert d[i] == pytest.approx(ref, abs=1e-9 * scale), (i, d[i], ref)
+        # the reported place is at that depth
+        assert f(t[i]) == pytest.approx(d[i], abs=1e-9 * scale)
