@@ -96,6 +96,13 @@ evaluated at every state cost a batch about what one does (numpy's
 per-call overhead), far less than the full checks they spare a small scene
 (the door scene: 5 full checks with a budget of 5 pairs, 1 with 64)."""
 
+CHUNK_POINTS = 1_000_000
+"""The discrete points (summed over states) the states proven clear are
+evaluated in at most at once: a long cable lying on a part keeps its every
+point active, and a batch of 256 states of a 150 m wire at 1 mm spacing
+would hold 38 million points (gigabytes) in one pass. Fewer states a pass
+give the same records: each proven-clear state is evaluated on its own."""
+
 ADVANCE_STRETCH_RADII = 0.25
 """... and up to this many (smallest) cable radii of arc length inside the
 exclusion windows (the total change of element lengths a skipped step allows)."""
@@ -249,6 +256,9 @@ class StepChecks:
         self._bend_limit = limit
         self._bend_limit_nan = np.where(np.isfinite(limit), limit, np.nan)
         self._has_bend_limit = np.isfinite(limit)
+        # states a proven-clear pass takes at most (CHUNK_POINTS): a state's discrete points at rest
+        per_state = float(np.sum(self._rest_length / (config.spacing * radii))) + len(radii) if len(radii) else 1.0
+        self._chunk = max(1, int(CHUNK_POINTS // max(per_state, 1.0)))
 
     def run(self, states: Sequence[StepState]) -> list[StepResult]:
         """Check consecutive states (oldest first); one result per state, in order."""
@@ -274,8 +284,8 @@ class StepChecks:
                 centre, built_part = cleared.active.structure
                 self._active = (centre, self._checker_index[built_part])   # (centre, checker part)
                 self._cable_active = cleared.active.cable
-            if k:
-                part = slice(j, j + k)
+            for lo in range(j, j + k, self._chunk):     # at most CHUNK_POINTS points a pass
+                part = slice(lo, min(lo + self._chunk, j + k))
                 out += self._proven_clear(states[part], pts[part], poses[part], single[part],
                                           radius_at[part], strain[part], bend[part])
             j += k

@@ -106,3 +106,41 @@ def test_attach_links_excuse_the_clamp_links_neighbours(tmp_path):
         windows.append({body[e.part] for e in attachment_exclusions(built) if e.s_min <= s <= e.s_max})
     assert windows[0] == {"upper_arm"}
     assert windows[1] == {"upper_arm", "forearm", "tool", "shoulder"}
+
+
+def test_a_long_cable_on_a_floor_is_checked_in_passes_of_bounded_points(tmp_path, monkeypatch):
+    """A 15 m wire of 0.5 mm radius lying on a floor keeps its every discrete
+    point (15,000 a state) active: the states proven clear are evaluated in
+    passes of at most CHUNK_POINTS points, the same records however small
+    the passes (here 1, 2 and the default 66 states a pass)."""
+    import sim.stepcheck
+
+    path = tmp_path / "wire.toml"
+    path.write_text("""
+[scene]
+name = "wire"
+units = "m"
+duration = 0.1
+settle = 0.2
+
+[effects]
+contact = ["cable-structure"]
+
+[[parts]]
+name = "floor"
+shape = "plane"
+
+[[cables]]
+name = "wire"
+radius = 0.0005
+start = { pos = [0, 0, 0.002] }
+end = { pos = [15, 0, 0.002] }
+""")
+    scene = load_scene(path)
+    reports = []
+    for chunk in (15_000, 30_000, sim.stepcheck.CHUNK_POINTS):
+        monkeypatch.setattr(sim.stepcheck, "CHUNK_POINTS", chunk)
+        rep = run_scene(scene, RunOptions(report=tmp_path / f"{chunk}.json", record=None))
+        reports.append(_strip(_comparable(rep)))
+    assert reports[0]["advance"]["proven_clear_steps"] > 0 and reports[0]["events"]
+    assert reports[0] == reports[1] == reports[2]
