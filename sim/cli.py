@@ -97,7 +97,7 @@ def _cmd_run(args: argparse.Namespace, stop: StopRequest) -> int:
 
     options = RunOptions(report=report, record=record, method=args.method, spacing=args.spacing,
                          only=args.only, advance=not args.full_every_step)
-    bar = ProgressBar(enabled=not args.quiet)
+    bar = ProgressBar(enabled=not args.quiet, timestep=scene.timestep)
     try:
         result = run_scene(scene, options, progress=bar, stop=stop,
                            warn=None if args.quiet else (lambda w: print(f"warning: {w}", file=sys.stderr)))

@@ -23,38 +23,61 @@ def _position(values, units: str) -> str:
 
 
 class ProgressBar:
-    """A one-line progress display on stderr, redrawn at most 10 times a second."""
+    """A one-line progress display on stderr, redrawn at most 10 times a second.
 
-    def __init__(self, enabled: bool):
+    With the scene's `timestep` (seconds a step), a run's line also says the
+    simulated time, the rate against real time and the time left, once the
+    run has gone on for `RATE_AFTER` seconds (before that a rate says little)."""
+
+    RATE_AFTER = 2.0
+
+    def __init__(self, enabled: bool, timestep: float | None = None):
         self.enabled = enabled
         self.tty = sys.stderr.isatty()
+        self.timestep = timestep
         self._last = 0.0
         self._shown = False
         self._last_pct = -1
+        self._start: tuple[float, float] | None = None     # (wall clock, step) when the run stage began
+
+    def _rate(self, done: float, total: float, now: float) -> str:
+        """", t = 1.26 of 3 s, 0.85x real time, 2 s left" for the run stage, or ""."""
+        if self.timestep is None or self._start is None:
+            return ""
+        wall, first = now - self._start[0], self._start[1]
+        text = f", t = {done * self.timestep:.3g} of {total * self.timestep:.3g} s"
+        if wall < self.RATE_AFTER or done <= first:
+            return text
+        per_step = wall / (done - first)
+        return text + (f", {self.timestep / per_step:.2g}x real time, "
+                       f"{per_step * (total - done):.0f} s left")
 
     def __call__(self, stage: str, done: float, total: float) -> None:
         if not self.enabled or total <= 0:
             return
         frac = min(max(done / total, 0.0), 1.0)
         now = time.monotonic()
+        if stage == "run" and self._start is None:
+            self._start = (now, done)
+        rate = self._rate(done, total, now) if stage == "run" else ""
         if self.tty:
             if now - self._last < 0.1 and frac < 1.0:
                 return
             self._last = now
             bar = "#" * int(30 * frac)
             label = "settling " if stage == "settle" else "simulating"
-            sys.stderr.write(f"\r{label} [{bar:<30}] {100 * frac:5.1f}%")
+            sys.stderr.write(f"\r{label} [{bar:<30}] {100 * frac:5.1f}%{rate}   ")
             sys.stderr.flush()
             self._shown = True
         else:
             pct = int(frac * 4) * 25  # a line every quarter when not on a terminal
             if stage == "run" and pct != self._last_pct:
                 self._last_pct = pct
-                sys.stderr.write(f"simulating: {pct}%\n")
+                sys.stderr.write(f"simulating: {pct}%{rate}\n")
 
     def done(self) -> None:
         if self._shown:
-            sys.stderr.write("\r" + " " * 60 + "\r")
+            sys.stderr.write("\r" + " " * 110 + "\r")
             sys.stderr.flush()
 
 

@@ -5,6 +5,7 @@ end-to-end output of real runs is checked in tests/test_cli.py."""
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import pytest
@@ -90,6 +91,22 @@ def test_progress_off_a_terminal_is_a_line_per_quarter(capsys, enabled):
     bar.done()
     lines = capsys.readouterr().err.splitlines()
     assert lines == ([f"simulating: {p}%" for p in (0, 25, 50, 75, 100)] if enabled else [])
+
+
+def test_a_runs_progress_says_simulated_time_rate_and_time_left(capsys, monkeypatch):
+    """100 steps of 10 ms, a step every 0.1 s of wall clock (0.1x real time):
+    past 2 s of running the line says where it is, how fast and how long is left."""
+    clock = [0.0]
+    monkeypatch.setattr(time, "monotonic", lambda: clock[0])
+    bar = ProgressBar(enabled=True, timestep=0.01)
+    bar.tty = False
+    for k in range(101):
+        clock[0] = 0.1 * k
+        bar("run", k, 100)
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0] == "simulating: 0%, t = 0 of 1 s"
+    assert lines[2] == "simulating: 50%, t = 0.5 of 1 s, 0.1x real time, 5 s left"
+    assert lines[-1] == "simulating: 100%, t = 1 of 1 s, 0.1x real time, 0 s left"
 
 
 def test_a_run_stopped_before_its_first_step_prints_without_a_traceback(tmp_path: Path, capsys):
