@@ -2,7 +2,8 @@
 
 Box, sphere, cylinder, capsule and plane are closed-form; the ellipsoid
 solves its one-dimensional Lagrange equation by safeguarded Newton
-iteration to about 1e-12 of its largest radius. Sizes follow MuJoCo's
+iteration, in a variable that keeps its digits next to the centre, to a
+few units in the last place of the distance. Sizes follow MuJoCo's
 convention (box half-extents, sphere radius, cylinder and capsule
 ``(radius, half_length)`` along local z, ellipsoid radii, a plane as the
 solid half-space ``z < 0``), one row of ``size`` per point, so every part of
@@ -42,6 +43,9 @@ def _unit_or(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:
 
 
 _EX = np.array([1.0, 0.0, 0.0])
+_EZ = np.array([0.0, 0.0, 1.0])
+# the ellipsoid root's relative tolerance (a few units in the last place)
+_ELL_TOL = 1e-15
 
 
 def _sd_box_value(h: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -119,90 +123,103 @@ def _sd_plane(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return p[:, 2].copy(), cl
 
 
-def sd_ellipsoid(e: np.ndarray, p: np.ndarray, t0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def sd_ellipsoid(e: np.ndarray, p: np.ndarray, u0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Signed distance to ellipsoids with radii ``e`` (m, 3).
 
-    The closest point is ``x_i = e_i^2 y_i / (t + e_i^2)`` where ``t`` is the
-    root of ``F(t) = sum (e_i y_i / (t + e_i^2))^2 - 1`` above ``-min e_i^2``
-    (Eberly, "Distance from a point to an ellipse, an ellipsoid, or a
-    hyperellipsoid"), solved in the first octant by Newton steps kept inside a
-    shrinking bracket (bisection when a step leaves it) until the step is below
-    1e-14 of the problem's squared scale. ``F`` is convex and decreasing, so
-    from the bracket's lower end Newton converges monotonically; ``t0`` (a
-    previous root for a nearby point) warm-starts it. The component along the
-    smallest radius is taken from the surface equation near the pole (points
-    inside, near the plane of the two larger radii: the degenerate case).
+    The closest point is ``x_i = e_i^2 y_i / (u + c_i)`` with
+    ``c_i = e_i^2 - m^2`` (``m`` the smallest radius, so ``c_i >= 0`` and 0
+    exactly on the smallest radii's axes), where ``u`` is the root of
+    ``F(u) = sum (e_i y_i / (u + c_i))^2 - 1`` in ``u >= 0`` (Eberly,
+    "Distance from a point to an ellipse, an ellipsoid, or a
+    hyperellipsoid", his ``t`` shifted by ``m^2``), solved in the first
+    octant. Working in ``u`` rather than ``t = u - m^2`` keeps the
+    denominators free of cancellation: deep inside, near the centre, ``u`` is
+    about ``m |y|`` and would be lost in the rounding of ``t + m^2`` (it
+    was: a ball read -1.0000221 at (1e-12, 0, 1e-14) of a unit ball). Newton
+    steps kept inside a shrinking bracket (a step below it goes to its lower
+    end, one above it bisects) run until the step is below 1e-15 of ``u``:
+    ``F`` is convex and decreasing, so from the bracket's lower end Newton
+    converges monotonically. The lower end is the largest of ``0`` and
+    ``|e y|_S - max_S c`` over the axis sets S = {smallest}, {two smallest},
+    {all} (so a ball's root is exact from the start and no denominator of a
+    nonzero term is ever zero); ``u0`` (a previous root for a nearby point)
+    warm-starts it. Where ``F(0) <= 0`` (a point inside with no component
+    along the smallest radii, in their medial region) the root is 0 and the
+    closest point's component along the smallest radii comes from the
+    surface equation; so does it, along the point's own direction in their
+    axes, wherever it is large (at least half the smallest radius), which
+    keeps it exact for points on the principal planes.
 
-    Returns (d (m,), closest (m, 3), t (m,)).
+    Returns (d (m,), closest (m, 3), u (m,)).
     """
     sgn = np.where(p >= 0.0, 1.0, -1.0)
     y = np.abs(p)
     order = np.argsort(-e, axis=1)
     es = np.take_along_axis(e, order, axis=1)
     ys = np.take_along_axis(y, order, axis=1)
-    e2 = es * es
-    emin2 = e2[:, 2]
+    emin = es[:, 2:]
+    # Coordinates below 1e-100 of the smallest radius count as 0: the
+    # distance moves by no more than they do (far below its rounding), and
+    # nothing underflows below.
+    ys = np.where(ys < 1e-100 * emin, 0.0, ys)
+    c = (es - emin) * (es + emin)            # e_i^2 - m^2 without cancellation; c[:, 2] == 0
     ey = es * ys
-    lo = np.maximum(np.max(ey - e2, axis=1), -emin2)
-    hi = np.maximum(-emin2 + row_norm(ey), lo)
-    tol = 1e-14 * np.maximum(e2[:, 0], np.max(ey, axis=1))
-    t = lo.copy() if t0 is None else np.clip(t0, lo, hi)
-    act = np.nonzero(hi - lo > tol)[0]
+    ey2 = ey * ey
+    lo = np.maximum(np.maximum(ey[:, 2], np.sqrt(ey2[:, 1] + ey2[:, 2]) - c[:, 1]),
+                    np.maximum(row_norm(ey) - c[:, 0], 0.0))
+    hi = np.maximum(row_norm(ey), lo)
+    u = lo.copy() if u0 is None else np.clip(u0, lo, hi)
+    act = np.nonzero(hi - lo > _ELL_TOL * hi)[0]
     # the unconverged points' state, compacted: written back as they converge
-    ta, la, ha, e2a, eya, tola = t[act], lo[act], hi[act], e2[act], ey[act], tol[act]
+    ua, la, ha, ca, eya = u[act], lo[act], hi[act], c[act], ey[act]
     for _ in range(200):
         if len(act) == 0:
             break
-        den = ta[:, None] + e2a
-        ok = den > 0
-        regular = ok.all()                                   # no point at a pole: fewer operations, same values
-        safe = den if regular else np.where(ok, den, 1.0)
-        r = (eya if regular else np.where(ok, eya, 0.0)) / safe
+        # where ey > 0, u + c > 0 (u is at least the lower end): a zero
+        # denominator has a zero term (u = 0 on the smallest radii's axes)
+        den = ua[:, None] + ca
+        if not (den > 0.0).all():
+            den = np.where(den > 0.0, den, 1.0)
+        r = eya / den
         r2 = r * r
         f = ((r2[:, 0] + r2[:, 1]) + r2[:, 2]) - 1.0        # np.sum's order, written out
-        q = r2 / safe
+        q = r2 / den
         df = -2.0 * ((q[:, 0] + q[:, 1]) + q[:, 2])
-        if regular:
-            lo_a = np.where(f > 0, ta, la)
-            hi_a = np.where(f <= 0, ta, ha)
-            step_ok = df < 0
-        else:
-            # At the pole with y_min > 0, F is +inf.
-            at_pole = ~ok & (eya > 0)
-            pole = at_pole[:, 0] | at_pole[:, 1] | at_pole[:, 2]
-            lo_a = np.where((f > 0) | pole, ta, la)
-            hi_a = np.where((f <= 0) & ~pole, ta, ha)
-            step_ok = ~pole & (df < 0)
-        tn = ta - (f / df if step_ok.all() else np.where(step_ok, f, 0.0) / np.where(step_ok, df, -1.0))
-        mid = 0.5 * (lo_a + hi_a)
-        # a tiny Newton step far from the root (F steep near the pole: a point
-        # on a principal plane by rounding) is no convergence: bisect instead
-        small = np.abs(tn - ta) <= tola
-        stalled = small & (np.abs(f) > 1e-10)
-        tn = np.where(~step_ok | (tn < lo_a) | (tn > hi_a) | stalled, mid, tn)
-        conv = ((np.abs(tn - ta) <= tola) & ~stalled) | (hi_a - lo_a <= tola)
+        la = np.where(f > 0.0, ua, la)
+        ha = np.where(f <= 0.0, ua, ha)
+        step_ok = df < 0.0
+        tn = ua - np.where(step_ok, f, 0.0) / np.where(step_ok, df, -1.0)
+        # Newton from the right (a warm start) lands left of the root: below
+        # the bracket it tries the lower end (the root itself where F <= 0
+        # there, a point inside in the medial region: u = 0)
+        tn = np.where(~step_ok | (tn > ha), 0.5 * (la + ha), np.maximum(tn, la))
+        conv = (np.abs(tn - ua) <= _ELL_TOL * tn) | (ha - la <= _ELL_TOL * ha)
         if conv.any():
             done = act[conv]
-            t[done], lo[done], hi[done] = tn[conv], lo_a[conv], hi_a[conv]
+            u[done] = tn[conv]
             go = ~conv
             act = act[go]
-            ta, la, ha, e2a, eya, tola = tn[go], lo_a[go], hi_a[go], e2a[go], eya[go], tola[go]
+            ua, la, ha, ca, eya = tn[go], la[go], ha[go], ca[go], eya[go]
         else:
-            ta, la, ha = tn, lo_a, hi_a
-    t[act], lo[act], hi[act] = ta, la, ha
-    den = t[:, None] + e2
-    ok = den > 0.0
-    x = np.where(ok, e2 * ys, 0.0) / np.where(ok, den, 1.0)
-    # The smallest axis at or near the pole (points inside, near the plane of
-    # the larger radii) is better taken from the surface equation.
-    rest = 1.0 - (x[:, 0] / es[:, 0]) ** 2 - (x[:, 1] / es[:, 1]) ** 2
-    use_eq = (rest >= 0.25) | (den[:, 2] <= 1e-6 * e2[:, 2])
-    x[:, 2] = np.where(use_eq, es[:, 2] * np.sqrt(np.maximum(rest, 0.0)), x[:, 2])
+            ua = tn
+    u[act] = ua
+    den = u[:, None] + c
+    x = es * (ey / np.where(den > 0.0, den, 1.0))
+    # The smallest radii's components from the surface equation, along the
+    # point's direction in their axes (the last axis when it has none there).
+    pole = c == 0.0
+    rest = 1.0 - np.sum(np.where(pole, 0.0, x / es) ** 2, axis=1)
+    use_eq = (u == 0.0) | (rest >= 0.25)
+    yp = np.where(pole, ys, 0.0)
+    ymax = np.max(yp, axis=1)
+    dirn = _unit_or(yp / np.where(ymax > 0.0, ymax, 1.0)[:, None], _EZ)
+    xeq = (es[:, 2] * np.sqrt(np.maximum(rest, 0.0)))[:, None] * dirn
+    x = np.where(use_eq[:, None] & pole, xeq, x)
     inv = np.argsort(order, axis=1)
     cl = np.take_along_axis(x, inv, axis=1) * sgn
     d = row_norm(p - cl)
     inside = np.sum((p / e) ** 2, axis=1) < 1.0
-    return np.where(inside, -d, d), cl, t
+    return np.where(inside, -d, d), cl, u
 
 
 def signed_distance_batch(stype: ShapeType, size: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

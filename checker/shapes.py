@@ -9,11 +9,11 @@ batches at once:
 - :func:`signed_distance`: points -> signed distance to the surface (negative
   inside) and the closest surface point. Box, sphere, cylinder, capsule and
   plane are closed-form; the ellipsoid solves its one-dimensional Lagrange
-  equation by safeguarded Newton iteration to about 1e-12 of its largest
-  radius; meshes find the exact nearest triangle through a k-d tree over
-  triangle centroids with a proven cut-off, and take the sign from the angle
-  weighted pseudonormal of the closest feature (Baerentzen and Aanaes 2005),
-  which is exact for closed, consistently oriented meshes.
+  equation by safeguarded Newton iteration to a few units in the last place
+  (next to its centre too); meshes find the exact nearest triangle through a
+  k-d tree over triangle centroids with a proven cut-off, and take the sign
+  from the angle weighted pseudonormal of the closest feature (Baerentzen and
+  Aanaes 2005), which is exact for closed, consistently oriented meshes.
 - :func:`segment_signed_distance`: segments -> the least signed distance over
   the segment and the parameter where it is reached, i.e. the signed distance
   between a capsule's axis and the part. For convex shapes the signed distance

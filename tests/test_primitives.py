@@ -2,9 +2,13 @@
 consistency, optimality against dense surface samples, exact zeros, degenerate
 points, half-space, face planes, translation and scale."""
 
+from decimal import Decimal, localcontext
+
 import numpy as np
 import pytest
 import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from shaperefs import SIZES
 
 from checker.shapes import Shape, ShapeType, face_plane_distance, signed_distance
@@ -140,3 +144,155 @@ def test_translation_and_scale_invariance_of_point_distances():
         d0, _ = signed_distance(Shape(stype, size), p)
         d1, _ = signed_distance(Shape(stype, np.array(size) * 1000), p * 1000)
         assert np.allclose(d1, d0 * 1000, rtol=1e-12, atol=1e-9)
+
+
+# ---------------------------------------------------------------------------
+# The ellipsoid against an independent reference: points near the centre, on
+# the axes and principal planes, with equal, nearly equal and distinct radii.
+
+
+def _ellipsoid_reference(e, p) -> float:
+    """Signed distance to the ellipsoid of radii ``e`` in 80-digit decimal
+    arithmetic: Eberly's Lagrange root ``t`` of
+    ``sum (e_i y_i / (t + e_i^2))^2 = 1`` above ``-m^2`` (``m`` the smallest
+    radius) by bisection in ``t`` itself (at 80 digits ``t + e_i^2`` keeps
+    its digits for points 1e-20 of ``m`` from the centre). A point inside
+    with no component along the smallest radii, where the sum stays below 1
+    at ``t = -m^2``, has its closest point at ``t = -m^2``, the smallest
+    radii's component from the surface equation."""
+    with localcontext() as ctx:
+        ctx.prec = 80
+        es = [Decimal(float(v)) for v in e]
+        y = [abs(Decimal(float(v))) for v in p]
+        m2 = min(es) ** 2
+        terms = [i for i in range(3) if y[i] != 0]
+        inside = sum((yi / ei) ** 2 for yi, ei in zip(y, es)) < 1
+        if not terms:
+            return -float(min(es))
+
+        def excess(t):
+            return sum((es[i] * y[i] / (t + es[i] ** 2)) ** 2 for i in terms) - 1
+
+        pole = [i for i in range(3) if es[i] ** 2 == m2]
+        if all(y[i] == 0 for i in pole) and excess(-m2) <= 0:
+            x = [es[i] ** 2 * y[i] / (es[i] ** 2 - m2) if i not in pole else Decimal(0) for i in range(3)]
+            rest = 1 - sum((x[i] / es[i]) ** 2 for i in range(3))
+            d2 = sum((x[i] - y[i]) ** 2 for i in range(3)) + m2 * max(rest, Decimal(0))
+            return -float(d2.sqrt())
+        lo = -m2
+        hi = -m2 + sum((es[i] * y[i]) ** 2 for i in terms).sqrt()
+        for _ in range(400):
+            mid = (lo + hi) / 2
+            if excess(mid) > 0:
+                lo = mid
+            else:
+                hi = mid
+        t = (lo + hi) / 2
+        d = sum((es[i] ** 2 * y[i] / (t + es[i] ** 2) - y[i]) ** 2 for i in range(3)).sqrt()
+        return -float(d) if inside else float(d)
+
+
+@st.composite
+def _radii(draw):
+    """Ellipsoid radii in m or mm: distinct, two or three equal (shortest,
+    longest or all), or two nearly equal (a few ulps to 1e-3 apart)."""
+    base = draw(st.floats(0.003, 0.04)) * draw(st.sampled_from([1.0, 1000.0]))
+    e = [base * draw(st.floats(0.5, 2.0)) for _ in range(3)]
+    kind = draw(st.sampled_from(["distinct", "equal2", "equal3", "near"]))
+    i, j = draw(st.permutations(range(3)))[:2]
+    if kind == "equal3":
+        e = [e[0]] * 3
+    elif kind == "equal2":
+        e[j] = e[i]
+    elif kind == "near":
+        if draw(st.booleans()):
+            e[j] = e[i] * (1.0 + draw(st.integers(1, 8)) * 2.0**-52)
+        else:
+            e[j] = e[i] * (1.0 + 10.0 ** draw(st.floats(-12.0, -3.0)))
+    return np.array(e)
+
+
+@st.composite
+def _near_points(draw, e):
+    """Points near the centre (1e-16 to 1e-3 of the smallest radius), some
+    on an axis or a principal plane (coordinates exactly 0), and a few
+    anywhere inside or outside."""
+    pts = []
+    for _ in range(draw(st.integers(1, 6))):
+        # each coordinate 0 (on an axis or a plane) or 1e-3 to 1 of the scale
+        v = np.array([draw(st.sampled_from([0.0, 1.0, -1.0, 1.0, -1.0])) * draw(st.floats(1e-3, 1.0))
+                      for _ in range(3)])
+        scale = 10.0 ** draw(st.floats(-16.0, -3.0)) * min(e)
+        pts.append(v * scale)
+    for _ in range(draw(st.integers(0, 2))):
+        v = np.array([draw(st.floats(-2.0, 2.0)) for _ in range(3)])
+        pts.append(np.where(np.abs(v) < 1e-3, 0.0, v) * e)
+    return np.array(pts)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.data())
+def test_ellipsoid_matches_a_high_precision_reference_near_the_centre(data):
+    from checker.primitives import sd_ellipsoid
+
+    e = data.draw(_radii())
+    p = data.draw(_near_points(e))
+    d, cl, _ = sd_ellipsoid(np.broadcast_to(e, p.shape), p)
+    ref = np.array([_ellipsoid_reference(e, q) for q in p])
+    assert np.all(np.isfinite(d)) and np.all(np.isfinite(cl))
+    assert np.all(np.abs(d - ref) <= 2e-15 * max(e)), (e, p, d, ref)
+    # the closest point is on the surface and at |d|
+    assert np.all(np.abs(np.linalg.norm(p - cl, axis=1) - np.abs(d)) <= 2e-15 * max(e))
+    assert np.all(np.abs(np.sqrt(np.sum((cl / e) ** 2, axis=1)) - 1.0) <= 2e-15)
+
+
+@given(st.floats(0.003, 40.0), st.floats(1.0, 3.0), st.floats(-16.0, -3.0), st.floats(0.0, 2 * np.pi),
+       st.floats(-1.0, 1.0))
+@settings(max_examples=200, deadline=None)
+def test_ellipsoid_closed_forms_near_the_centre(b, ratio, lg, ang, w):
+    """A ball: d = |p| - r. A prolate spheroid (two shortest radii b equal,
+    the third a >= b): on its equal radii's plane d = |p| - b; on its long
+    axis, d = -b sqrt(1 - y^2 / (a^2 - b^2)) inside the medial segment
+    (|y| < (a^2 - b^2) / a), |y| - a past it."""
+    from checker.primitives import sd_ellipsoid
+
+    r = 10.0**lg * b
+    ball = np.array([[b, b, b]] * 3)
+    p = np.array([[r * np.cos(ang), r * np.sin(ang), 0.0], [r * w, 0.0, r * np.sqrt(1 - w * w)], [0.0, 0.0, r]])
+    assert np.all(np.abs(sd_ellipsoid(ball, p)[0] - (np.linalg.norm(p, axis=1) - b)) <= 1e-15 * b)
+    a = ratio * b
+    for k in range(3):                    # the long axis along x, y or z
+        e = np.full(3, b)
+        e[k] = a
+        plane = np.zeros((2, 3))
+        plane[:, [(k + 1) % 3, (k + 2) % 3]] = [[r * np.cos(ang), r * np.sin(ang)], [r, 0.0]]
+        d = sd_ellipsoid(np.broadcast_to(e, plane.shape), plane)[0]
+        assert np.all(np.abs(d - (np.linalg.norm(plane, axis=1) - b)) <= 1e-15 * a)
+        on = np.zeros((1, 3))
+        on[0, k] = r * w
+        d = sd_ellipsoid(e[None], on)[0]
+        c = (a - b) * (a + b)
+        # inside the medial segment (|y| < c / a) off the axis; past it, the pole
+        ref = -b * np.sqrt(1.0 - (r * w) ** 2 / c) if abs(r * w) < c / a else abs(r * w) - a
+        assert abs(d[0] - ref) <= 1e-15 * a
+
+
+def test_ellipsoid_with_equal_shortest_radii_is_exact_next_to_its_centre():
+    """The regression: a ball read -1.0000221 at (1e-12, 0, 1e-14), and a
+    spheroid [0.02, 0.04, 0.02] was off by up to 1e-3 m next to its centre
+    (5e-5 at (-5, -4, -3) 1e-16, 3e-6 at (8, 0, -3) 1e-15)."""
+    ball = Shape(ShapeType.ELLIPSOID, np.array([1.0, 1.0, 1.0]))
+    p = np.array([[1e-12, 0.0, 1e-14], [0.0, 0.0, 0.0], [1e-15, 0.0, 0.0], [0.0, -1e-300, 0.0]])
+    d, cl = signed_distance(ball, p)
+    assert np.all(np.abs(d - (np.linalg.norm(p, axis=1) - 1.0)) <= 2.3e-16)   # an ulp of 1
+    assert np.allclose(np.linalg.norm(cl, axis=1), 1.0, rtol=0, atol=1e-16)
+    egg = Shape(ShapeType.ELLIPSOID, np.array([0.02, 0.04, 0.02]))
+    for s in (1e-18, 1e-16, 1e-15, 1e-14, 1e-12, 1e-9, 1e-6):
+        q = np.array([[s, 0.0, 0.0], [0.0, 0.0, s], [s, 0.0, s], [s, s, s], [0.0, s, 0.0], [-s, 0.0, 3 * s],
+                      [-5 * s, -4 * s, -3 * s], [8 * s, 0.0, -3 * s], [0.2 * s, 1.8 * s, 0.1 * s]])
+        d, _ = signed_distance(egg, q)
+        ref = np.array([_ellipsoid_reference([0.02, 0.04, 0.02], x) for x in q])
+        assert np.all(np.abs(d - ref) <= 1e-17), (s, d - ref)
+        # in mm
+        d, _ = signed_distance(Shape(ShapeType.ELLIPSOID, np.array([20.0, 40.0, 20.0])), q * 1000)
+        assert np.all(np.abs(d - ref * 1000) <= 1e-14), (s, d - ref * 1000)
