@@ -96,7 +96,7 @@ def _cmd_run(args: argparse.Namespace, stop: StopRequest) -> int:
     from sim.run import RunOptions, run_scene  # MuJoCo and rerun load only when needed
 
     options = RunOptions(report=report, record=record, method=args.method, spacing=args.spacing,
-                         only=args.only, advance=not args.full_every_step)
+                         only=args.only, advance=not args.full_every_step, baseline=args.baseline)
     bar = ProgressBar(enabled=not args.quiet, timestep=scene.timestep)
     try:
         result = run_scene(scene, options, progress=bar, stop=stop,
@@ -207,6 +207,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _main(args: argparse.Namespace, stop: StopRequest) -> int:
     try:   # numpy, MuJoCo and trimesh load here, with the signals already taken
+        from sim.baseline import BaselineError
         from sim.outputs import OutputPathError
         from sim.scene import SceneError
         from sim.studyrun import StudyRunError
@@ -240,7 +241,7 @@ def _main(args: argparse.Namespace, stop: StopRequest) -> int:
     except SceneError as e:
         print(f"cablecheck: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except OutputPathError as e:
+    except (OutputPathError, BaselineError) as e:
         print(f"cablecheck: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except ValueError as e:

@@ -71,6 +71,9 @@ def build_parser(version: str) -> argparse.ArgumentParser:
                           "check, but the pairs already near the clearance, checks only those: the "
                           "same events, pairs and MuJoCo comparison, several times faster")
     run.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    run.add_argument("--baseline", type=Path, metavar="EARLIER.json",
+                     help="an earlier run's report: mark each clash new or still present, and list "
+                          "the earlier ones now resolved (matched by pair and place along the cable)")
     run.add_argument("--only", metavar="PATH",
                      help="check only interference involving this assembly path (a part name or "
                           "prefix): its parts against the rest, and cables against its parts")

@@ -129,6 +129,7 @@ def print_summary(report: dict, report_path: Path) -> None:
               + (f", max twist {c['max_twist']:.3g} deg" if c.get("max_twist") is not None else "")
               + (f"  [{', '.join(flags)}]" if flags else ""))
     _print_events(report)
+    _print_baseline(report)
     _print_excused(report)
     for c in report["cables"]:
         _print_wear(c["name"], c.get("wear"), units)
@@ -172,13 +173,29 @@ def _print_events(report: dict, most: int = 10) -> None:
     for e in sorted(events, key=lambda e: (e["severity"] != "hard", e["min_distance"]))[:most]:
         pair = e["a"] if e["a"] == e["b"] else f"{e['a']} / {e['b']}"
         where = _position(e["where"], units)
-        print(f"    {e['severity'].upper():4} {e['phase']:7} {e['type']:15} {pair}: "
+        status = f"[{e['status']}] " if "status" in e else ""
+        print(f"    {status}{e['severity'].upper():4} {e['phase']:7} {e['type']:15} {pair}: "
               f"t {e['t_start']:.3f}-{e['t_end']:.3f} s, worst {e['min_distance']:.4g} {units} "
               f"at t {e['t_worst']:.3f} s, ({where}), s = {e['s']:.4g} {units}")
         if e["severity"] == "hard" and e.get("joint_ranges"):
             print(f"         {_joint_cause(e, report.get('joint_units', {}))}")
     if len(events) > most:
         print(f"    ... {len(events) - most} more in the report")
+
+
+def _print_baseline(report: dict, most: int = 5) -> None:
+    """Against an earlier run (--baseline): how many clashes are new, still present, resolved."""
+    b = report.get("baseline")
+    if not b:
+        return
+    units = report["units"]
+    print(f"  against {b['report']}: {b['new']} new, {b['present']} still present, {b['resolved']} resolved")
+    for e in b["resolved_events"][:most]:
+        pair = e["a"] if e["a"] == e["b"] else f"{e['a']} / {e['b']}"
+        print(f"    [resolved] {e['severity'].upper():4} {e['type']:15} {pair}: was {e['min_distance']:.4g} {units} "
+              f"at t {e['t_worst']:.3f} s, s = {e['s']:.4g} {units}")
+    if len(b["resolved_events"]) > most:
+        print(f"    ... {len(b['resolved_events']) - most} more in the report")
 
 
 def _print_excused(report: dict, most: int = 5) -> None:

@@ -35,11 +35,13 @@ import numpy as np
 
 from checker.events import Phase
 from checker.records import Severity
+from sim.baseline import resolved_rows
 
 if TYPE_CHECKING:
     from checker.events import AllowedWorst, Event, PairWorst
     from sim.divergence import PhysicsError
     from checker.interference.excused import ExcusedWorst
+    from sim.baseline import Comparison
     from checker.scene_state import CheckConfig
     from checker.validation import ValidationSummary
     from checker.wear import CableWear
@@ -166,6 +168,8 @@ class RunOutcome:
         pair, with its worst moment.
       excused: every attachment window whose piece of cable came below the
         clearance of a part it excuses, with its worst moment.
+      baseline: with `--baseline`, this run's events against an earlier
+        run's (`sim.baseline`): each event's status and the resolved ones.
       event_hold: seconds a pair must stay clear before its event closes.
       validation: the comparison with MuJoCo's contacts, or None when the
         scene does not validate.
@@ -209,6 +213,7 @@ class RunOutcome:
     recording: Path | None
     physics_error: PhysicsError | None = None
     error: RunError | None = None
+    baseline: Comparison | None = None
 
 
 def _worst_first(rows):
@@ -342,6 +347,8 @@ def report_of(o: RunOutcome) -> dict:
                "min_distance": e.min_distance / u, "where": np.asarray(e.where) / u, "s": e.s / u}
         if o.event_joints is not None:
             row.update(o.event_joints[k])
+        if o.baseline is not None:
+            row["status"] = o.baseline.status[k].value
         events.append(row)
     report = {
         "schema": SCHEMA,
@@ -390,6 +397,9 @@ def report_of(o: RunOutcome) -> dict:
                      "t_worst": x.t, "where": np.asarray(x.where) / u, "s": x.s / u}
                     for x in _worst_first(o.excused)],
     }
+    if o.baseline is not None:        # the clashes against an earlier run (--baseline)
+        report["baseline"] = {"report": str(o.baseline.path), **o.baseline.counts(),
+                              "resolved_events": resolved_rows(o.baseline, u)}
     if o.validation is not None:
         report["validation"] = _validation(o.validation, u)
     report.update({

@@ -52,6 +52,7 @@ from checker.scene_state import CheckConfig
 from checker.twist import TwistMeter, update_many
 from checker.wear import CableWear, WearMap
 from sim.ahead import StepsAhead, depth_for, thread_cpu
+from sim.baseline import BaselineError, compare, load_baseline
 from sim.build import Built, build_simulation, plan_cables, with_detection
 from sim.detector import Detector
 from sim.divergence import DivergenceWatch, PhysicsError
@@ -106,6 +107,7 @@ class RunOptions:
     only: str | None = None
     advance: bool = True
     overlap: bool = True
+    baseline: Path | None = None
 
 
 Progress = Callable[[str, float, float], None]
@@ -187,7 +189,7 @@ def _bad_input(exc: BaseException) -> bool:
     from sim.checkview import OptionError
     from sim.outputs import OutputPathError
 
-    return isinstance(exc, (SceneError, OptionError, OutputPathError))
+    return isinstance(exc, (SceneError, OptionError, OutputPathError, BaselineError))
 
 
 def run_error(exc: BaseException, t: float | None = None) -> RunError:
@@ -198,6 +200,7 @@ def run_error(exc: BaseException, t: float | None = None) -> RunError:
 
 def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: StopRequest,
          start: float, warn: Callable[[str], None] | None, messages: MujocoMessages) -> RunOutcome:
+    baseline = load_baseline(options.baseline) if options.baseline is not None else None   # bad input first
     validate = scene.check.validate
     static = not needs_model(scene)     # nothing calls for MuJoCo: no model is built (sim.staticbuild)
     planned = None if static else plan_cables(scene)
@@ -304,6 +307,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         events = tuple(tracker.finish())
         worn = wear.result()
         excused = checks.excused.worst()
+        compared = (compare(events, {c.name: c.radius for c in built.cables}, baseline)
+                    if baseline is not None else None)
         # where the mjcf model's joints move: their values per event
         event_joints = (tuple(joints.event_fields(e.t_start, e.t_end, e.t_worst, e.a, e.b) for e in events)
                         if joints else None)
@@ -313,13 +318,14 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
                 if id(ev) not in closed:
                     _log_end(recorder, ev, scene.scale, scene.units, at_end=True)
             summary = record.summary_text(scene.name, settings, events, worn, scene.scale, complete,
-                                   tuple(tracker.allowed.values()), excused)
+                                          tuple(tracker.allowed.values()), excused, compared)
             stopped = _stopped_entry(diverged, error, out.t_last)
             if stopped is not None:          # why the run stopped: in the log and the summary
                 recorder.log_event(stopped[0], stopped[1], "ERROR")
                 summary += f"\n\n**{stopped[1]}**\n"
             recorder.finish(list(events), worn, summary,
-                            None if event_joints is None else [f["joints"] for f in event_joints])
+                            None if event_joints is None else [f["joints"] for f in event_joints],
+                            None if compared is None else [s.value for s in compared.status])
             recorder.close()
             timer.lap("record")
         loop_s = time.perf_counter() - loop_start
@@ -331,7 +337,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         events=events, event_joints=event_joints,
         joint_units=dict(zip(joints.names, joints.units)) if joints else None,
         pairs=tuple(tracker.pairs.values()), allowed=tuple(tracker.allowed.values()), excused=excused,
-        event_hold=tracker.hold,
+        event_hold=tracker.hold, baseline=compared,
         validation=ends.validation, advance=ends.advance,
         warnings=warning_counts([sim.data if isinstance(sim, Simulation) else None,   # a static check has none
                                  detector.detect_data if detector else None], messages),

@@ -51,25 +51,29 @@ def send_log(rec: rr.RecordingStream, entries: list[tuple[float, str, str]]) -> 
                               column(rr.TextLog.descriptor_level(), strings([e[2] for e in entries]))])
 
 
-def send_clash_list(rec: rr.RecordingStream, events: list, joints: list[dict], unit: float, units: str) -> None:
-    """The clash list: one row per event at its worst time, one column per field."""
+def send_clash_list(rec: rr.RecordingStream, events: list, joints: list[dict], unit: float, units: str,
+                    status: list[str] | None = None) -> None:
+    """The clash list: one row per event at its worst time, one column per field
+    (`status`: against a baseline run, per event; "-" without one)."""
     if not events:
         return
-    rows = sorted(zip(events, joints), key=lambda r: float(r[0].t_worst))
-    ev = [e for e, _ in rows]
+    status = status if status is not None else ["-"] * len(events)
+    rows = sorted(zip(events, joints, status), key=lambda r: float(r[0].t_worst))
+    ev = [e for e, _, _ in rows]
     fields = {"type": strings([e.type for e in ev]), "pair": strings([pair_text(e.a, e.b) for e in ev]),
               "severity": strings([e.severity for e in ev]), "phase": strings([e.phase for e in ev]),
               "start_s": floats([e.t_start for e in ev]), "end_s": floats([e.t_end for e in ev]),
               "worst_distance": floats([e.min_distance / unit for e in ev]),
               "worst_time_s": floats([e.t_worst for e in ev]), "units": strings([units] * len(ev)),
-              "joints": strings([", ".join(f"{k} {v:.4g}" for k, v in j.items()) or "-" for _, j in rows])}
+              "joints": strings([", ".join(f"{k} {v:.4g}" for k, v in j.items()) or "-" for _, j, _ in rows]),
+              "status": strings([s for _, _, s in rows])}
     # the list's columns, as `rr.AnyValues` names them (a component per field, no archetype)
     rec.send_columns("clashes", indexes=[sim_time(np.array([float(e.t_worst) for e in ev]))],
                      columns=[column(rr.ComponentDescriptor(name), values) for name, values in fields.items()])
 
 
 def summary_text(scene: str, settings: Settings, events: list, wear: list, unit: float,
-                 complete: bool = True, allowed: tuple = (), excused: tuple = ()) -> str:
+                 complete: bool = True, allowed: tuple = (), excused: tuple = (), baseline=None) -> str:
     """The run's summary as markdown: settings, the clashes worst first, what
     was allowed (`[[allow]]`) and what the attachment windows excused, worst
     first, the most worn place of each cable and what it touches."""
@@ -80,15 +84,25 @@ def summary_text(scene: str, settings: Settings, events: list, wear: list, unit:
              f"- cablecheck {settings.version}" + ("" if complete else " (run interrupted: incomplete)"), ""]
     if events:
         hard = sum(e.severity == "hard" for e in events)
+        status = dict(zip(map(id, events), baseline.status)) if baseline is not None else {}
         lines += [f"## {len(events)} clash(es): {hard} hard, {len(events) - hard} soft", "",
-                  "| # | severity | type | pair | phase | start s | end s | worst | at s |",
-                  "|---|---|---|---|---|---|---|---|---|"]
+                  "| # | severity | type | pair | phase | start s | end s | worst | at s |" + (" status |" if status else ""),
+                  "|---|---|---|---|---|---|---|---|---|" + ("---|" if status else "")]
         for n, e in enumerate(sorted(events, key=lambda e: (e.severity != "hard", e.min_distance)), 1):
             lines.append(f"| {n} | {e.severity} | {e.type} | {pair_text(e.a, e.b)} | {e.phase} | "
                          f"{e.t_start:.3f} | {e.t_end:.3f} | {e.min_distance / unit:.4g} {units} | "
-                         f"{e.t_worst:.3f} |")
+                         f"{e.t_worst:.3f} |" + (f" {status[id(e)].value} |" if status else ""))
     else:
         lines.append("## No interference")
+    if baseline is not None:
+        counts = baseline.counts()
+        lines += ["", f"## Against `{baseline.path}`: {counts['new']} new, {counts['present']} still present, "
+                      f"{counts['resolved']} resolved"]
+        if baseline.resolved:
+            lines += ["", "| resolved | type | pair | worst then | at s then |", "|---|---|---|---|---|"]
+            for e in sorted(baseline.resolved, key=lambda e: e.min_distance):
+                lines.append(f"| {e.severity} | {e.type} | {pair_text(e.a, e.b)} | {e.min_distance / unit:.4g} {units} | "
+                             f"{e.t_worst:.3f} |")
     if allowed:
         lines += ["", f"## {len(allowed)} allowed pair(s) (never clashes)", "",
                   "| type | pair | worst | at s | reason |", "|---|---|---|---|---|"]

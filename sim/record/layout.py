@@ -23,7 +23,7 @@ from sim.build import Built
 from sim.record.style import SPOT, STATE_COLOURS, STATES, escape, pair_text
 
 CLASH_COLUMNS = ("type", "pair", "severity", "phase", "start_s", "end_s", "worst_distance", "worst_time_s",
-                 "units", "joints")
+                 "units", "joints", "status")
 """The clash list's columns, in order."""
 VIEWPOINTS = 6
 """Clashes (worst first) that get a saved viewpoint of their own."""

@@ -100,6 +100,7 @@ class Recorder:
         self._rest: list[np.ndarray] | None = None
         self._events: list = []
         self._event_joints: list[dict] = []
+        self._event_status: list[str] | None = None
         self._wear: list = []
         self._summary = ""
 
@@ -193,12 +194,15 @@ class Recorder:
         self._log.append((float(t), text, level))
 
     # -- at the end -------------------------------------------------------
-    def finish(self, events: list, wear: list, summary: str, joints: list[dict] | None = None) -> None:
+    def finish(self, events: list, wear: list, summary: str, joints: list[dict] | None = None,
+               status: list[str] | None = None) -> None:
         """The run's events (clash list and viewpoints), wear map
         (:class:`checker.wear.CableWear` per cable), summary text and, where
         the mjcf model's joints move, each event's joint values at its worst
-        time (name -> value, in the events' order)."""
+        time (name -> value, in the events' order) and, against a baseline
+        run, each event's status (new or present)."""
         self._events = list(events)
+        self._event_status = status
         self._wear = list(wear)
         self._summary = summary
         self._event_joints = joints or [{} for _ in self._events]
@@ -230,7 +234,7 @@ class Recorder:
             self.series.send(rec, times)
             send_limit_lines(rec, self.built, times, self.settings.clearance, self.unit, self.settings.units)
         send_log(rec, self._log)
-        send_clash_list(rec, self._events, self._event_joints, self.unit, self.settings.units)
+        send_clash_list(rec, self._events, self._event_joints, self.unit, self.settings.units, self._event_status)
         send_wear(rec, self.built, self._wear, self._rest, self.unit)
         doc = rr.TextDocument
         rec.send_columns("summary", indexes=[sim_time(np.zeros(1))],
