@@ -60,6 +60,22 @@ sets them again."""
 PLANE_GRID = 0.1
 """Grid spacing MuJoCo draws on a plane part given no size, metres."""
 
+CABLE_PRIORITY = 1
+"""Contact priority of a cable that sets no `friction`: above the parts'
+MuJoCo default 0, so its contacts take the cable's solref and solimp
+(`sim.cablephysics.contact_time_constant`) and MuJoCo's default friction 1.0."""
+
+FRICTION_PRIORITY = 2
+"""Contact priority of a cable or part that sets `friction`. MuJoCo takes a
+contact's friction (and solref, solimp, condim) from the side of higher
+priority, and where the priorities are equal the element-wise maximum of
+the frictions: so a side that sets friction wins over one that does not
+(a cable's 0.3 on a part without friction is 0.3, not MuJoCo's default 1.0
+of the part), and where both set one the larger applies (MuJoCo's rule).
+A part that sets friction carries the cables' contact solref, solimp and
+condim (and solmix 0: the cable's mix where they meet at equal priority),
+so only the friction changes."""
+
 SIM_MARGIN_FRACTION = 0.25
 """Contact margin in the simulation model, as a fraction of the thinnest cable radius."""
 
@@ -95,6 +111,11 @@ def _set_options(spec: mujoco.MjSpec, scene: Scene) -> None:
     opt.timestep = scene.timestep
     opt.integrator = mujoco.mjtIntegrator.mjINT_DISCRETE  # rod elasticity needs it (SPEC)
     opt.solver = mujoco.mjtSolver.mjSOL_NEWTON
+    # Elliptic friction cones: Coulomb friction the same in every direction of
+    # the contact plane. MuJoCo's default pyramidal cone lets a cable with
+    # friction 0.3 slide down a 15 degree slope (tan 15 = 0.27) along some
+    # azimuths (tests/test_friction.py).
+    opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     opt.tolerance = 1e-8
     opt.iterations = max(opt.iterations, 100)
     opt.gravity = [0.0, 0.0, -9.81] if scene.effects.gravity else [0.0, 0.0, 0.0]
@@ -175,10 +196,12 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
             verts, faces = meshes[part.name]
             spec.add_mesh(name=f"mesh:{part.name}", uservert=verts.ravel().tolist(),
                           userface=faces.ravel().tolist())
-            parent.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"mesh:{part.name}", **common)
+            geom = parent.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"mesh:{part.name}", **common)
         else:
             gtype = getattr(mujoco.mjtGeom, f"mjGEOM_{part.shape.upper()}")
-            parent.add_geom(type=gtype, size=part_size(part), **common)
+            geom = parent.add_geom(type=gtype, size=part_size(part), **common)
+        if part.friction is not None:
+            _set_friction(geom, part.friction, scene.timestep)
 
     if plans:
         child = mujoco.MjSpec.from_string(_cables_xml(plans, scene, bits, detect, margin))
@@ -197,6 +220,21 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
     for g, contype, conaff in own:
         own_bits[g.id] = contype, conaff
     return model, own_bits
+
+
+def _set_friction(geom, friction: float, timestep: float) -> None:
+    """A part's geom that sets `friction` (see FRICTION_PRIORITY)."""
+    geom.priority = FRICTION_PRIORITY
+    geom.friction = [friction, geom.friction[1], geom.friction[2]]
+    geom.condim = 3
+    geom.solmix = 0.0
+    geom.solref = [contact_time_constant(timestep), 1.0]
+    geom.solimp = list(CONTACT_SOLIMP)
+
+
+def _friction_geoms(m: mujoco.MjModel) -> np.ndarray:
+    """The geoms of parts that set friction (`_set_friction`)."""
+    return (m.geom_priority == FRICTION_PRIORITY) & (m.geom_solmix == 0.0)
 
 
 def never_stepped(model: mujoco.MjModel) -> None:
@@ -264,6 +302,10 @@ def _cables_xml(plans: list[CablePlan], scene: Scene, bits: ContactBits, detect:
         pins = sorted({h.vertex for h in plan.held})
         pin = f'<pin id="{" ".join(map(str, pins))}"/>' if pins else ""
         elements = " ".join(f"{i} {i + 1}" for i in range(n - 1))
+        if c.friction is None:
+            friction = f'priority="{CABLE_PRIORITY}"'
+        else:
+            friction = f'priority="{FRICTION_PRIORITY}" friction="{c.friction!r} 0.005 0.0001"'
         # inertiabox: the vertex bodies only slide, so their rotational
         # inertia never acts; the cable's radius keeps it well scaled.
         parts.append(f"""
@@ -274,7 +316,7 @@ def _cables_xml(plans: list[CablePlan], scene: Scene, bits: ContactBits, detect:
     <elasticity young="{c.young!r}" damping="{rayleigh_damping(c, length)!r}"{_shear(c)}/>
     <contact selfcollide="{selfcollide}" contype="{contype}" conaffinity="{conaff}"
              margin="{margin!r}" condim="3" solref="{contact_solref!r} 1"
-             solimp="{_fmt(CONTACT_SOLIMP)}" priority="1"/>
+             solimp="{_fmt(CONTACT_SOLIMP)}" {friction}/>
   </flexcomp>""")
     return "<mujoco><worldbody>" + "".join(parts) + "\n</worldbody></mujoco>"
 
@@ -300,5 +342,6 @@ def set_step(m: mujoco.MjModel, step: float) -> None:
     of the edge equalities and of the cables' contacts)."""
     m.opt.timestep = step
     m.flex_solref[:, 0] = contact_time_constant(step)
+    m.geom_solref[_friction_geoms(m), 0] = contact_time_constant(step)
     flex_eq = m.eq_type == int(mujoco.mjtEq.mjEQ_FLEX)
     m.eq_solref[flex_eq, 0] = edge_time_constant(step)

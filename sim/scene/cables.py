@@ -159,7 +159,9 @@ def read_cable(r: Reader, value: dict, where: str, dynamics: bool = True) -> Cab
         twist_stiffness=(r.number(t["twist_stiffness"], f"{where}.twist_stiffness",
                                   positive=True) if "twist_stiffness" in t else None),
         damping=r.number(t.get("damping", DEFAULT_DAMPING), f"{where}.damping",
-                         nonnegative=True))
+                         nonnegative=True),
+        friction=(r.number(t["friction"], f"{where}.friction", nonnegative=True)
+                  if "friction" in t else None))
 
 
 def anchors_of(cable: CableDef) -> list[tuple[str, Anchor]]:

@@ -43,6 +43,12 @@ E = 4e7 Pa; we round to 5e7."""
 DEFAULT_DENSITY = 1500.0
 """Cable density when absent, kg/m^3: PVC (~1400) with some copper and air."""
 
+DEFAULT_FRICTION = 1.0
+"""Sliding friction of a contact where neither the cable nor the part (nor
+the other cable) sets `friction`: MuJoCo's default geom friction. Where
+one side sets it, that side's; where both do, the larger (MuJoCo's rule
+for geoms of equal priority; see `sim.mjspec`)."""
+
 DEFAULT_DAMPING = 0.02
 """`damping` when absent: fraction of critical damping of a cable's first
 bending mode (see `sim.build.rayleigh_damping` and docs/physics.md). 2 % is
@@ -97,10 +103,11 @@ EFFECTS_KEYS = ("dynamics", "gravity", "contact")
 CHECK_KEYS = ("method", "spacing", "clearance", "every", "validate", "attach_zone", "attach_links")
 ALLOW_KEYS = ("a", "b", "reason")
 BODY_KEYS = ("name", "pos", "euler")
-PART_KEYS = ("name", "body", "shape", "size", "pos", "euler", "file", "scale", "keepout")
+PART_KEYS = ("name", "body", "shape", "size", "pos", "euler", "file", "scale", "keepout",
+             "friction")
 CABLE_KEYS = ("name", "radius", "start", "end", "via", "length", "points", "clips",
                "segments", "young", "density", "min_bend_radius", "twist_stiffness",
-               "damping")
+               "damping", "friction")
 ANCHOR_KEYS = ("body", "pos", "hold", "part")
 MOTION_KEYS = ("body", "joint", "file", "keys", "angles", "interpolation", "time_scale")
 BODY_KEY_KEYS = ("t", "pos", "euler")

@@ -100,7 +100,9 @@ def read_part(r: Reader, value: dict, where: str) -> PartDef:
                    shape=shape, size=size,
                    pos=r.position(t.get("pos", [0, 0, 0]), f"{where}.pos"),
                    euler=r.vector(t.get("euler", [0, 0, 0]), f"{where}.euler"),
-                   file=file, mesh_scale=mesh_scale, keepout=keepout)
+                   file=file, mesh_scale=mesh_scale, keepout=keepout,
+                   friction=(r.number(t["friction"], f"{where}.friction", nonnegative=True)
+                             if "friction" in t else None))
 
 
 def plane_size(r: Reader, value: Any, where: str) -> tuple[float, ...]:

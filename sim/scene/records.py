@@ -139,6 +139,9 @@ class PartDef:
       node: for a part expanded from a glTF / GLB file, the mesh node's path
         in the file's node tree (the part is named ``<entry name>/<node>``);
         None otherwise.
+      friction: sliding friction coefficient of its contacts with cables, or
+        None: the cable's alone (`sim.mjspec`: where both set one, MuJoCo's
+        rule takes the larger).
     """
 
     name: str
@@ -151,6 +154,7 @@ class PartDef:
     mesh_scale: float = 1.0
     keepout: bool = False
     node: str | None = None
+    friction: float | None = None
 
 
 @dataclass(frozen=True)
@@ -199,6 +203,9 @@ class CableDef:
         `points`. Filled by the loader; None only for hand-built records.
       twist_stiffness: shear modulus G of the torsion, Pa, or None for
         MuJoCo's default E / 2 (see docs/twist.md).
+      friction: sliding friction coefficient of its contacts, or None: the
+        other side's where it sets one, else MuJoCo's default 1.0 (where
+        both sides set one, the larger: MuJoCo's rule; `sim.mjspec`).
     """
 
     name: str
@@ -216,6 +223,7 @@ class CableDef:
     route: np.ndarray | None = None
     twist_stiffness: float | None = None
     damping: float = DEFAULT_DAMPING
+    friction: float | None = None
 
     @property
     def route_length(self) -> float:
