@@ -112,9 +112,10 @@ def _set_options(spec: mujoco.MjSpec, scene: Scene) -> None:
     opt.integrator = mujoco.mjtIntegrator.mjINT_DISCRETE  # rod elasticity needs it (SPEC)
     opt.solver = mujoco.mjtSolver.mjSOL_NEWTON
     # Elliptic friction cones: Coulomb friction the same in every direction of
-    # the contact plane. MuJoCo's default pyramidal cone lets a cable with
-    # friction 0.3 slide down a 15 degree slope (tan 15 = 0.27) along some
-    # azimuths (tests/test_friction.py).
+    # the contact plane. MuJoCo's default pyramidal cone bounds |f1| + |f2| by
+    # mu N in the contact frame (mu / sqrt 2 between its axes) and lets a
+    # cable with friction 0.3 slide down a 15 degree slope (tan 15 = 0.27)
+    # along some azimuths (tests/test_friction.py, docs/physics.md).
     opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     opt.tolerance = 1e-8
     opt.iterations = max(opt.iterations, 100)

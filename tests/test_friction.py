@@ -167,9 +167,10 @@ def test_friction_of_a_tilted_box_part_holds_and_frictionless_slides_freely():
 
 
 def test_pyramidal_cone_would_let_the_cable_slide_at_15_degrees():
-    """Why the elliptic cone: MuJoCo's default pyramidal cone approximates
-    the friction circle by a square in the contact frame, too wide along its
-    diagonals (measured 263 mm at 35 degrees to x)."""
+    """Why the elliptic cone: MuJoCo's default pyramidal cone (condim 3)
+    bounds the friction force by |f_1| + |f_2| <= mu N in the contact frame,
+    mu / (cos 35 + sin 35) = 0.215 < tan 15 at 35 degrees to its axes
+    (measured 263 mm in 1 s at 35 degrees to x)."""
     data, n = _incline_scene(15.0, 35.0)
     built = build(_parse(data), detect=False)
     built.model.opt.cone = mujoco.mjtCone.mjCONE_PYRAMIDAL
@@ -189,7 +190,12 @@ def capstan_ratio(mu: float, wrap: float, part: bool = False) -> float:
     along the cable's legs: the feeding end 50 mm towards the drum and the
     pulling end 60 mm away in 1 s, so the cable slides round the drum and
     stretches. The tensions are the edge-length equality forces of an edge
-    in the middle of each straight leg, averaged over the last half second."""
+    in the middle of each straight leg, averaged over the last half second.
+
+    Every sliding contact carries exactly mu N here; the setup is the one
+    where the cable's own dynamics stay out of the way (docs/physics.md:
+    a 1 ms step with the default damping reads 6.7 % low, a cable 7-70
+    times denser 15-35 % low, mu = 1 about 50 % low)."""
     drum, r, leg, T = 0.05, 0.002, 0.1, 1.0
     rc = drum + r
     angs = np.linspace(np.pi / 2 + wrap / 2, np.pi / 2 - wrap / 2, 24)
