@@ -204,7 +204,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     validate = scene.check.validate
     static = not needs_model(scene)     # nothing calls for MuJoCo: no model is built (sim.staticbuild)
     planned = None if static else plan_cables(scene)
-    noted = scene.warnings + (() if static else route_warnings(scene, *planned))   # before any step
+    noted = scene.warnings
     # the simulation model first: the detection model is compiled while it settles
     built = build_static(scene) if static else build_simulation(scene, planned)
     check_allow_names(scene, [p.name for p in built.parts] + [c.name for c in built.cables])
@@ -236,6 +236,12 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     else:
         settle()
     try:
+        # the routed shapes against the parts they collide with, while the simulation settles
+        routes = () if static else route_warnings(scene, *planned)
+        if warn is not None:
+            for w in routes:
+                warn(w)
+        noted += routes
         detector = None
         if validate and not static:
             built = with_detection(built, planned)
