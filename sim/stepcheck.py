@@ -40,10 +40,10 @@ from checker.events import AllowList, AllowRule
 from checker.interference import Checker, single_records_many
 from checker.interference.discrete import around_centres
 from checker.interference.excused import ExcusedLog, ExcusedWorst
+from checker.interference.structure import PartTable, point_distances
 from checker.parts import PartChecker
 from checker.recheck import Recheck
 from checker.records import Interference, PairType
-from checker.interference.structure import PartTable, point_distances
 from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from checker.shapes import Shape
 from checker.validation import SimulatorPairs, Validation, ValidationSummary
