@@ -30,8 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.closest import row_norm
-from checker.interference.structure import PartTable, point_distances, segment_distances
+from checker.interference.structure import PartTable, segment_distances, segments_within
 from checker.records import PairType
 from checker.scene_state import Exclusion, PartState
 
@@ -124,15 +123,7 @@ class ExcusedLog:
         wa, wb = pts[:, i0].reshape(-1, 3), pts[:, i0 + 1].reshape(-1, 3)
         a = np.einsum("ni,nij->nj", wa - trans, rot)
         b = np.einsum("ni,nij->nj", wb - trans, rot)
-        # beyond the clearance on some axis of the part's box: not searched
-        thr = (rad + self.clearance)[:, None]
-        near = ((np.maximum(a, b) >= tab.lo[pk] - thr) & (np.minimum(a, b) <= tab.hi[pk] + thr)).all(axis=1)
-        idx = np.flatnonzero(near)
-        # signed distance is 1-Lipschitz: the midpoint's less half the length bounds the element's
-        half = 0.5 * row_norm(b[idx] - a[idx])
-        limit = self.clearance + half + rad[idx]
-        mid = point_distances(tab, pk[idx], 0.5 * (a[idx] + b[idx]), False, limit)
-        idx = idx[mid - half - rad[idx] < self.clearance]
+        idx = segments_within(tab, pk, a, b, rad, self.clearance)    # the others provably beyond it
         if len(idx) == 0:
             return
         d, t = segment_distances(tab, pk[idx], a[idx], b[idx])

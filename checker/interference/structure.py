@@ -236,27 +236,34 @@ def structure_exact_pairs(dp, tab, config, excl, hits, i0: np.ndarray, pk: np.nd
     candidates gives the same records (the filters below only drop elements
     farther than the clearance)."""
     p, s = dp.p, dp.s
-    it = i0
-    if len(it) == 0:
+    if len(i0) == 0:
         return
     a = tab.to_local(pk, p[i0])
     b = tab.to_local(pk, p[i0 + 1])
-    thr = (dp.radius[i0] + config.clearance)[:, None]
-    box_ok = np.all((np.maximum(a, b) >= tab.lo[pk] - thr) & (np.minimum(a, b) <= tab.hi[pk] + thr), axis=1)
     # Cuts were inserted at the window ends, so an element is in a window
     # exactly when its midpoint is.
-    box_ok &= ~excluded(dp.cable[i0], pk, 0.5 * (dp.m[i0] + dp.m[i0 + 1]), excl)
-    it, pk, i0, a, b = it[box_ok], pk[box_ok], i0[box_ok], a[box_ok], b[box_ok]
-    # Signed distance is 1-Lipschitz: the midpoint's distance minus the half
-    # length bounds the segment's from below, so far segments skip the search.
-    half = 0.5 * row_norm(b - a)
-    mid = point_distances(tab, pk, 0.5 * (a + b), False, config.clearance + half + dp.radius[i0])
-    near = mid - half - dp.radius[i0] < config.clearance
-    it, pk, i0, a, b = it[near], pk[near], i0[near], a[near], b[near]
+    keep = np.flatnonzero(~excluded(dp.cable[i0], pk, 0.5 * (dp.m[i0] + dp.m[i0 + 1]), excl))
+    near = keep[segments_within(tab, pk[keep], a[keep], b[keep], dp.radius[i0[keep]], config.clearance)]
+    pk, i0, a, b = pk[near], i0[near], a[near], b[near]
     d, t = segment_distances(tab, pk, a, b)
     where = p[i0] + t[:, None] * (p[i0 + 1] - p[i0])
     s_at = s[i0] + t * (s[i0 + 1] - s[i0])
     _add_structure(hits, tab, dp.cable[i0], pk, d - dp.radius[i0], where, s_at)
+
+
+def segments_within(tab: PartTable, pk: np.ndarray, a: np.ndarray, b: np.ndarray, rad: np.ndarray,
+                    limit: float) -> np.ndarray:
+    """Indices of the local segments ``a b`` (n, 3) whose signed distance to
+    parts ``pk`` (n,), less ``rad`` (n,), may lie below ``limit``: those
+    within ``rad + limit`` of the part's local box whose midpoint's distance
+    less half their length (signed distance is 1-Lipschitz, so that bounds
+    the segment's from below) is below it too. The others need no search."""
+    thr = (rad + limit)[:, None]
+    box = np.all((np.maximum(a, b) >= tab.lo[pk] - thr) & (np.minimum(a, b) <= tab.hi[pk] + thr), axis=1)
+    idx = np.flatnonzero(box)
+    half = 0.5 * row_norm(b[idx] - a[idx])
+    mid = point_distances(tab, pk[idx], 0.5 * (a[idx] + b[idx]), False, limit + half + rad[idx])
+    return idx[mid - half - rad[idx] < limit]
 
 
 def segment_distances(tab: PartTable, pk: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
