@@ -150,7 +150,8 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     run with its report marked incomplete and holding `physics_error` or
     `error` (module docstring); an error raised before the first step
     does too, unless it is bad input (`SceneError`, the options'
-    `OptionError`, `OutputPathError`), which is raised."""
+    `OptionError`, `OutputPathError`, a `--baseline` that is no report:
+    `BaselineError`), which is raised."""
     start = time.perf_counter()
 
     def reported(stop: StopRequest) -> dict:
@@ -467,7 +468,7 @@ class _Checked:
         deepest: dict[tuple, int] = {}    # (pair, t_start) -> the batch's state where that event last deepened
         for k, (state, res) in enumerate(zip(states, results)):
             started, closed = self.tracker.update(state.t, res.records)
-            changes.append(([(key, self.tracker.standing(key)) for key in started], closed))
+            changes.append(([self.tracker.standing(key) for key in started], closed))
             if recorder and (res.records or closed):
                 for event in self.tracker.worst_at(state.t):
                     deepest[event] = k
@@ -539,7 +540,7 @@ def _record_step(recorder: Recorder, state, res, started, closed, near: "_NearPa
                  unit: float, units: str, sampled: bool = True) -> None:
     """One recorded frame: the step's clashes as marks, the pairs evaluated
     near the clearance (approach history), contacts, agreement, event entries
-    (`started`: (pair, its event as it started) for the events starting here)."""
+    (`started`: the events starting here, as they started)."""
     from sim.record import Mark      # imported already by the run's Recorder (a recording run)
 
     marks = [Mark(PairType(r.type).value, r.a, r.b, float(r.min_distance), Severity(r.severity).value,
@@ -550,7 +551,7 @@ def _record_step(recorder: Recorder, state, res, started, closed, near: "_NearPa
         recorder.log_contacts(res.contacts.pos)
     if res.agreement is not None:
         recorder.log_scalar("validation/agreement", res.agreement, label="agreement with MuJoCo")
-    for _, ev in started:
+    for ev in started:
         recorder.log_event(state.t, f"{ev.type} {_pair(ev.a, ev.b)} starts: distance "
                            f"{ev.min_distance / unit:.4g} {units}", _LEVEL[ev.severity])
     for ev in closed:

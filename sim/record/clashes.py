@@ -54,19 +54,19 @@ def send_log(rec: rr.RecordingStream, entries: list[tuple[float, str, str]]) -> 
 def send_clash_list(rec: rr.RecordingStream, events: list, joints: list[dict], unit: float, units: str,
                     status: list[str] | None = None) -> None:
     """The clash list: one row per event at its worst time, one column per field
-    (`status`: against a baseline run, per event; "-" without one)."""
+    (`status`: against a baseline run, per event; no such column without one)."""
     if not events:
         return
-    status = status if status is not None else ["-"] * len(events)
-    rows = sorted(zip(events, joints, status), key=lambda r: float(r[0].t_worst))
+    rows = sorted(zip(events, joints, status or [None] * len(events)), key=lambda r: float(r[0].t_worst))
     ev = [e for e, _, _ in rows]
     fields = {"type": strings([e.type for e in ev]), "pair": strings([pair_text(e.a, e.b) for e in ev]),
               "severity": strings([e.severity for e in ev]), "phase": strings([e.phase for e in ev]),
               "start_s": floats([e.t_start for e in ev]), "end_s": floats([e.t_end for e in ev]),
               "worst_distance": floats([e.min_distance / unit for e in ev]),
               "worst_time_s": floats([e.t_worst for e in ev]), "units": strings([units] * len(ev)),
-              "joints": strings([", ".join(f"{k} {v:.4g}" for k, v in j.items()) or "-" for _, j, _ in rows]),
-              "status": strings([s for _, _, s in rows])}
+              "joints": strings([", ".join(f"{k} {v:.4g}" for k, v in j.items()) or "-" for _, j, _ in rows])}
+    if status is not None:
+        fields["status"] = strings([s for _, _, s in rows])
     # the list's columns, as `rr.AnyValues` names them (a component per field, no archetype)
     rec.send_columns("clashes", indexes=[sim_time(np.array([float(e.t_worst) for e in ev]))],
                      columns=[column(rr.ComponentDescriptor(name), values) for name, values in fields.items()])

@@ -23,8 +23,8 @@ from sim.build import Built
 from sim.record.style import SPOT, STATE_COLOURS, STATES, escape, pair_text
 
 CLASH_COLUMNS = ("type", "pair", "severity", "phase", "start_s", "end_s", "worst_distance", "worst_time_s",
-                 "units", "joints", "status")
-"""The clash list's columns, in order."""
+                 "units", "joints")
+"""The clash list's columns, in order (and "status" last, against a baseline run)."""
 VIEWPOINTS = 6
 """Clashes (worst first) that get a saved viewpoint of their own."""
 
@@ -96,8 +96,9 @@ def _scene_eye(bounds, unit: float) -> rrb.EyeControls3D:
 
 
 def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance: float, unit: float,
-              units: str) -> rrb.Blueprint:
-    """The layout of a finished run (`clearance` in metres)."""
+              units: str, status: bool = False) -> rrb.Blueprint:
+    """The layout of a finished run (`clearance` in metres; `status`: the
+    clash list has a status column, against a baseline run)."""
     bounds = extent.bounds
     spots = [spot_style()]          # made once, the default of every 3D view
     tabs = [rrb.Spatial3DView(name="Scene", origin="world", eye_controls=_scene_eye(bounds, unit),
@@ -135,7 +136,8 @@ def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance:
         rrb.DataframeView(name="Clash list (select a row's time to jump)", origin="clashes",
                           query=rrb.archetypes.DataframeQuery(
                               timeline="sim_time", select=["sim_time", *[ComponentColumnSelector(
-                                  entity_path="/clashes", component=c) for c in CLASH_COLUMNS]])),
+                                  entity_path="/clashes", component=c)
+                                  for c in CLASH_COLUMNS + (("status",) if status else ())]])),
         rrb.TextLogView(name="Events", origin="events"),
         rrb.TextDocumentView(name="Summary", origin="summary"),
     )

@@ -243,7 +243,8 @@ class Recorder:
         extent = Extent(bounds, self.series.lowest("checks/"), frozenset(p.split("/")[0] for p in self.series.series),
                         any(p.startswith("cables/twist/") for p in self.series.series))
         rec.send_blueprint(blueprint(self.built, self._events, self._wear, extent, self.settings.clearance,
-                                     self.unit, self.settings.units), make_active=True, make_default=True)
+                                     self.unit, self.settings.units, self._event_status is not None),
+                           make_active=True, make_default=True)
 
     def _send_contacts(self, times: np.ndarray) -> None:
         """MuJoCo's contact points, one column, their style (3 px, the
