@@ -10,14 +10,16 @@ queries (:mod:`checker.segments`), poses (:mod:`checker.shapes`).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
-from scipy.spatial import cKDTree
 
 from checker.closest import cross, row_norm
 from checker.meshgrid import BoundGrid
 from checker.meshnearest import mesh_nearest, mesh_sign
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,6 +72,9 @@ class MeshData:
     @staticmethod
     def build(vertices: np.ndarray, faces: np.ndarray) -> MeshData:
         """Check closure with trimesh, orient outward, precompute normals and tree."""
+        import trimesh   # a third of a second to import: only a mesh part pays it
+        from scipy.spatial import cKDTree   # loaded already by trimesh
+
         tm = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
         closed = bool(tm.is_watertight and tm.is_winding_consistent)
         if closed and tm.volume < 0:
@@ -118,6 +123,8 @@ reach_max / 2^5."""
 
 def _reach_levels(centroids: np.ndarray, face_reach: np.ndarray, reach: float,
                   levels: int = REACH_LEVELS, ratio: float = 2.0) -> tuple:
+    from scipy.spatial import cKDTree   # loaded already by trimesh (MeshData.build)
+
     if not len(face_reach) or reach <= 0:
         return ((reach, np.arange(len(face_reach)), cKDTree(centroids)),) if len(face_reach) else ()
     floor = reach * ratio ** -(levels - 1)

@@ -26,7 +26,6 @@ from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
 import numpy as np
-import trimesh
 
 from checker.interference import Checker
 from checker.interference.discrete import discretise
@@ -42,6 +41,8 @@ _PART_TYPES = (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)
 def convex_hull_shape(shape: Shape) -> Shape:
     """The convex hull of a mesh shape, as a closed mesh shape (trimesh's
     Qhull wrapper)."""
+    import trimesh   # a third of a second to import: only a mesh part's hull pays it
+
     hull = trimesh.convex.convex_hull(np.asarray(shape.vertices, float))
     return mesh_shape(np.asarray(hull.vertices), np.asarray(hull.faces))
 

@@ -50,7 +50,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-import trimesh
 
 # The modules below do the work; their public names are re-exported here,
 # where the rest of the checker has always imported them from.
@@ -198,6 +197,8 @@ def mesh_shape(vertices: np.ndarray, faces: np.ndarray) -> Shape:
         memo = _MESH_MEMO.shapes = OrderedDict()
     shape = memo.get(key)
     if shape is None:
+        import trimesh   # a third of a second to import: only a mesh part pays it
+
         tm = trimesh.Trimesh(vertices=v, faces=f, process=True)
         tm.update_faces(tm.nondegenerate_faces())
         tm.update_faces(tm.unique_faces())

@@ -26,7 +26,6 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-import trimesh
 
 from checker.shapes import Shape, ShapeType
 
@@ -68,38 +67,89 @@ def _segments_for(radius: float, tolerance: float, angle_factor: float) -> tuple
     return n, float(radius * (1.0 - np.cos(angle_factor * np.pi / n)))
 
 
-def _sphere_grid(n: int) -> trimesh.Trimesh:
-    """Unit UV sphere with n segments around and n / 2 rings."""
-    return trimesh.creation.uv_sphere(radius=1.0, count=[n // 2 + 1, n])
+MERGE_DIGITS = 8
+"""Template vertices equal to this many decimals are one vertex (trimesh's
+merge tolerance, 1e-8: the poles of a revolved profile, its seam)."""
 
 
-def _clean(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
-    """Merged, non-degenerate, outward-wound triangles; and whether they close a volume."""
-    tm = trimesh.Trimesh(vertices=vertices, faces=faces, process=True)
-    tm.update_faces(tm.nondegenerate_faces())
-    tm.remove_unreferenced_vertices()
-    if tm.volume < 0:
-        tm.invert()
-    return np.asarray(tm.vertices, float), np.asarray(tm.faces, np.int64), bool(tm.is_watertight)
+def _revolved(profile: np.ndarray, sections: int) -> tuple[np.ndarray, np.ndarray]:
+    """The closed surface of revolution of ``profile`` (m, 2: radius, z,
+    from the bottom pole up) about z, in ``sections`` slices: vertices
+    slice by slice, profile point by profile point; in each slice, between
+    profile points k and k + 1, triangles (k, k + m, k + 1) and (k + 1, k +
+    m, k + m + 1), the last slice closing on the first; then coincident
+    vertices merged (`_merged`). The same vertices, faces and order as
+    trimesh's ``creation`` primitives cleaned (tests/test_tessellate.py
+    compares every template), without importing trimesh."""
+    theta = np.linspace(0.0, 2.0 * np.pi, sections + 1)[:-1]
+    r, z = profile[:, 0], profile[:, 1]
+    v = np.column_stack([(np.cos(theta)[:, None] * r[None, :]).ravel(),
+                         (np.sin(theta)[:, None] * r[None, :]).ravel(), np.tile(z, sections)])
+    m = len(profile)
+    k = np.arange(m - 1)
+    quads = np.stack([np.stack([k, k + m, k + 1], axis=1), np.stack([k + 1, k + m, k + m + 1], axis=1)],
+                     axis=1).reshape(-1, 3)
+    f = ((quads[None] + (m * np.arange(sections))[:, None, None]) % len(v)).reshape(-1, 3)
+    return _merged(v, f)
+
+
+def _merged(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices equal to ``MERGE_DIGITS`` decimals made one (the first of
+    them kept, in order of first use), and the faces left with three
+    distinct corners."""
+    key = np.round(v * 10.0 ** MERGE_DIGITS).astype(np.int64)
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    f = rank[inverse.ravel()][f]
+    f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2])]
+    return v[first[order]], f
+
+
+def _outward(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Faces wound outward (reversed if their signed volume is negative), and
+    whether they close a volume (every edge on exactly two faces)."""
+    a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
+    if np.einsum("ij,ij->", a, np.cross(b, c)) < 0:
+        f = f[:, ::-1]
+    edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    _, count = np.unique(edges, axis=0, return_counts=True)
+    return np.ascontiguousarray(f, np.int64), bool(len(f)) and bool(np.all(count == 2))
+
+
+def _profile(kind: ShapeType, n: int) -> tuple[np.ndarray, int]:
+    """The profile (radius, z) and the slices around of a curved primitive's
+    template with ``n`` segments (see `_template`)."""
+    if kind in (ShapeType.SPHERE, ShapeType.ELLIPSOID):
+        rings = n // 2 + 1
+        t = np.linspace(0.0, np.pi, rings + rings % 2)
+        return np.column_stack([np.sin(t), -np.cos(t)]), 2 * n
+    if kind is ShapeType.CYLINDER:
+        return np.array([[0.0, -1.0], [1.0, -1.0], [1.0, 1.0], [0.0, 1.0]]), n
+    t = np.concatenate([np.linspace(-0.5 * np.pi, 0.0, n // 2 + 1), np.linspace(0.0, 0.5 * np.pi, n // 2 + 1)])
+    profile = np.column_stack([np.cos(t), np.sin(t)])
+    half = len(profile) // 2
+    profile[:half, 1] -= 1.0
+    profile[half:, 1] += 1.0
+    return profile, n
 
 
 @lru_cache(maxsize=None)
 def _template(kind: ShapeType, n: int) -> tuple[np.ndarray, np.ndarray, bool]:
     """Unit surface of a curved primitive with ``n`` segments, built once per (kind, n).
 
-    Sphere and ellipsoid: the unit sphere (scaled per axis by the radii).
-    Cylinder: radius 1, half length 1 (scaled by radius, radius, half length).
-    Capsule: radius 1, half length 1; a vertex (x, y, z) of it becomes
-    ``(r x, r y, sign(z) (h + r (|z| - 1)))`` (each cap moved as a whole).
-    Scaling by positive factors keeps the faces non-degenerate, the winding
-    outward and the surface closed, so the per-part surfaces need no cleaning."""
-    if kind in (ShapeType.SPHERE, ShapeType.ELLIPSOID):
-        tm = _sphere_grid(n)
-    elif kind is ShapeType.CYLINDER:
-        tm = trimesh.creation.cylinder(radius=1.0, height=2.0, sections=n)
-    else:
-        tm = trimesh.creation.capsule(height=2.0, radius=1.0, count=[n, n])
-    v, f, closed = _clean(np.asarray(tm.vertices), np.asarray(tm.faces))
+    Sphere and ellipsoid: the unit sphere, ``n // 2 + 1`` meridian points
+    (rounded up to even) pole to pole and ``2 n`` slices around (scaled per
+    axis by the radii). Cylinder: radius 1, half length 1, ``n`` slices
+    (scaled by radius, radius, half length). Capsule: radius 1, half length
+    1, ``n // 2 + 1`` points per quarter circle of each cap, ``n`` slices; a
+    vertex (x, y, z) of it becomes ``(r x, r y, sign(z) (h + r (|z| - 1)))``
+    (each cap moved as a whole). Scaling by positive factors keeps the faces
+    non-degenerate, the winding outward and the surface closed, so the
+    per-part surfaces need no cleaning."""
+    v, f = _revolved(*_profile(kind, n))
+    f, closed = _outward(v, f)
     v.setflags(write=False)
     f.setflags(write=False)
     return v, f, closed
@@ -218,10 +268,18 @@ def part_surfaces(shapes: list[Shape], tolerance: float) -> Surfaces:
                     closed, plane, error)
 
 
+_BOX_FACES = ((1, 3, 0), (4, 1, 0), (0, 3, 2), (2, 4, 0), (1, 7, 3), (5, 1, 4),
+              (5, 7, 1), (3, 7, 2), (6, 4, 2), (2, 7, 6), (6, 5, 4), (7, 5, 6))
+"""The cube's 12 outward triangles over its corners in binary order (x, y, z
+from -1 to 1): trimesh's ``creation.box``, written out so that a scene of
+boxes does not import trimesh (tests/test_tessellate.py holds them equal)."""
+
+
 @lru_cache(maxsize=None)
 def _unit_box() -> tuple[np.ndarray, np.ndarray, bool]:
-    tm = trimesh.creation.box(extents=[2.0, 2.0, 2.0])
-    v, f = np.asarray(tm.vertices, float), np.asarray(tm.faces, np.int64)
+    """The cube [-1, 1]^3: vertices (8, 3), faces (12, 3), closed."""
+    v = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
+    f = np.array(_BOX_FACES, np.int64)
     v.setflags(write=False)
     f.setflags(write=False)
     return v, f, True

@@ -49,7 +49,6 @@ from __future__ import annotations
 
 import mujoco
 import numpy as np
-import trimesh
 
 SURFACE_PREFIX = "detect/surface:"
 """Name prefix of the rigid flexes; the geom id follows, then `/` and the
@@ -71,6 +70,8 @@ one in 2D); added back to MuJoCo's distances by `sim.contacts`."""
 def is_convex(vertices: np.ndarray, faces: np.ndarray) -> bool:
     """The mesh is a closed convex surface (trimesh: watertight, and every
     vertex behind every face's plane): its hull is itself."""
+    import trimesh   # a third of a second to import: only a scene with a mesh part pays it
+
     mesh = trimesh.Trimesh(np.asarray(vertices, float), np.asarray(faces, int), process=False)
     return bool(mesh.is_convex)
 

@@ -68,3 +68,45 @@ def test_boxes_and_meshes_are_exact_and_share_nothing_mutable():
 def test_bad_tolerance_is_refused():
     with pytest.raises(ValueError):
         part_surfaces([Shape(ShapeType.SPHERE, [1.0])], 0.0)
+
+
+def _trimesh_template(kind, n):
+    """A template as trimesh's primitives make it, cleaned by trimesh (how
+    `checker.tessellate` made them before it built them itself)."""
+    if kind is ShapeType.SPHERE:
+        tm = trimesh.creation.uv_sphere(radius=1.0, count=[n // 2 + 1, n])
+    elif kind is ShapeType.CYLINDER:
+        tm = trimesh.creation.cylinder(radius=1.0, height=2.0, sections=n)
+    else:
+        tm = trimesh.creation.capsule(height=2.0, radius=1.0, count=[n, n])
+    tm = trimesh.Trimesh(vertices=np.asarray(tm.vertices), faces=np.asarray(tm.faces), process=True)
+    tm.update_faces(tm.nondegenerate_faces())
+    tm.remove_unreferenced_vertices()
+    if tm.volume < 0:
+        tm.invert()
+    return np.asarray(tm.vertices, float), np.asarray(tm.faces, np.int64), bool(tm.is_watertight)
+
+
+@pytest.mark.parametrize("kind", [ShapeType.SPHERE, ShapeType.CYLINDER, ShapeType.CAPSULE])
+def test_templates_equal_trimeshs_to_the_bit(kind):
+    """Templates across the segment counts a part can get have trimesh's
+    vertices, faces and order, bit for bit, built without trimesh (every
+    even count from MIN_SEGMENTS to MAX_SEGMENTS was compared once, 1:20
+    min; these take seconds)."""
+    from checker.tessellate import MAX_SEGMENTS, MIN_SEGMENTS, _template
+
+    for n in (MIN_SEGMENTS, MIN_SEGMENTS + 2, 18, 24, 34, 50, 64, 98, 130, MAX_SEGMENTS - 2, MAX_SEGMENTS):
+        v, f, closed = _template(kind, n)
+        rv, rf, rclosed = _trimesh_template(kind, n)
+        assert v.tobytes() == rv.tobytes() and v.shape == rv.shape, n
+        assert f.tobytes() == rf.tobytes() and f.shape == rf.shape, n
+        assert closed and rclosed, n
+
+
+def test_unit_box_equals_trimeshs():
+    from checker.tessellate import _unit_box
+
+    v, f, closed = _unit_box()
+    tm = trimesh.creation.box(extents=[2.0, 2.0, 2.0])
+    assert v.tobytes() == np.asarray(tm.vertices, float).tobytes()
+    assert f.tobytes() == np.asarray(tm.faces, np.int64).tobytes() and closed
