@@ -24,11 +24,14 @@ knows nothing of MuJoCo, joints or bodies: it interpolates columns of numbers.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.interpolate import CubicHermiteSpline, PchipInterpolator, PPoly
 
 from sim.scene.format import INTERPOLATIONS
+
+if TYPE_CHECKING:
+    from scipy.interpolate import PPoly
 
 """Values of `[[motion]] interpolation`; the first is the default."""
 
@@ -37,6 +40,8 @@ def interpolant(times: np.ndarray, values: np.ndarray, kind: str) -> PPoly:
     """The piecewise polynomial through samples `values` (n, C) at strictly
     increasing `times` (n,), of `kind` (see the module docstring), defined on
     [times[0], times[-1]] (a single sample: a constant on [t, t + 1])."""
+    from scipy.interpolate import CubicHermiteSpline, PchipInterpolator, PPoly   # a run loads it, `check` does not
+
     times = np.asarray(times, float)
     values = np.asarray(values, float).reshape(len(times), -1)
     if len(times) == 1:
@@ -60,6 +65,8 @@ def interpolant(times: np.ndarray, values: np.ndarray, kind: str) -> PPoly:
 
 def _held(poly: PPoly, start: float, end: float) -> PPoly:
     """`poly` extended to [start, end] by holding its end values (zero slope)."""
+    from scipy.interpolate import PPoly   # loaded already by the interpolant it extends
+
     x, c = poly.x, poly.c
     if start < x[0]:
         head = np.zeros((4, 1) + c.shape[2:])
@@ -116,6 +123,8 @@ class Curve:
 def merge(polys: list[PPoly]) -> Curve:
     """One Curve whose channels are those of `polys` in order, each held
     before its first and after its last breakpoint. At least one poly."""
+    from scipy.interpolate import PPoly   # loaded already by the interpolants it merges
+
     start = min(p.x[0] for p in polys)
     end = max(p.x[-1] for p in polys)
     held = [_held(p, start, end) for p in polys]

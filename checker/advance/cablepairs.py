@@ -19,7 +19,6 @@ Deliberately not here: cables against parts, part pairs, the run of states
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from checker.advance.common import (
     FAR_HORIZONS,
@@ -201,6 +200,8 @@ class CablePairGaps:
             if nb <= 64:                                # few blocks: every pair
                 gi, gj = np.triu_indices(ng)
             else:
+                from scipy.spatial import cKDTree   # a fifth of a second to import: loaded where a tree is built
+
                 radius = 2.0 * float(reach.max()) + self.clearance + far
                 self._blk_radius = radius
                 tree = cKDTree(centre)

@@ -17,7 +17,6 @@ Deliberately not here: cable pairs, part pairs, the run of states
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from checker.advance.common import FAR_HORIZONS, Layout, Start, bracket
 from checker.arrays import ranges
@@ -207,6 +206,8 @@ class CentrePartGaps:
             reach = (cap + np.sqrt(3.0) * 0.5 * float(seg.max()) + float(self._rad.max()) + self.clearance
                      + 1e-9 * (1.0 + float(np.abs(pts).max())))
             kb = np.nonzero(bounded)[0]
+            from scipy.spatial import cKDTree   # a fifth of a second to import: loaded where a tree is built
+
             # every (part, midpoint) pair within the largest radius, then each part's own
             found = cKDTree(self._pos[kb]).sparse_distance_matrix(
                 cKDTree(mid), reach + float(self._rho[kb].max()), output_type="ndarray")
