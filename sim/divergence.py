@@ -225,7 +225,8 @@ def likely_cause(built: Built, cable: str | None) -> tuple[Cause, str]:
     sub = built.substeps
     if sub is not None and built.cables:
         names = [cable] if cable in sub.needed else list(sub.needed)
-        short = [n for n in names if sub.needed[n] < sub.step * (1 - 1e-9)]
+        # a part too fast for the step is named before running (tunnel_warnings)
+        short = [n for n in names if sub.needed[n] < sub.step * (1 - 1e-9) and sub.reasons[n][0] != "contact"]
         if short:
             worst = min(short, key=lambda n: sub.needed[n])
             kind, speed, element = sub.reasons[worst]

@@ -1,11 +1,12 @@
 """How finely the simulation steps, and which parts move too fast for it.
 
 `choose_substeps` divides the scene's timestep so that every cable's
-edges stay stiffer than its bending (`bending_step`) and its fastest held
+edges stay stiffer than its bending (`bending_step`), its fastest held
 point moves a small fraction of an element per step (`held_speeds`, from
-the script sampled through forward kinematics, `script_poses`);
-`tunnel_warnings` names parts fast enough to carry a cable through
-themselves within one step. docs/physics.md explains the numbers.
+the script sampled through forward kinematics, `script_poses`) and, where
+parts push cables, no moving part travels more than the cable's radius
+in a step (`part_speeds`); `tunnel_warnings` names parts still fast enough
+to carry a cable through themselves within one step. docs/physics.md explains the numbers.
 
 This module reads a built model and evaluates the script on its own data;
 it does not step the simulation nor change the model (the step is set by
@@ -28,6 +29,10 @@ the run warns (the scene's timestep should be smaller)."""
 SPEED_FRACTION = 0.05
 """Largest fraction of a cable's element that its fastest held point may
 travel in one simulation step (see `choose_substeps`)."""
+
+CONTACT_FRACTION = 1.0
+"""Largest fraction of a cable's radius that a moving part may travel in one
+simulation step when cable-structure contact pushes (see `choose_substeps`)."""
 
 SPEED_SAMPLES = 400
 """Samples of the script over its duration when measuring held points' speeds."""
@@ -100,6 +105,36 @@ def held_speeds(built: Built, poses=None) -> dict[str, float]:
     return out
 
 
+def part_speeds(built: Built, poses=None) -> list[tuple[PartModel, np.ndarray, float]]:
+    """Each moving part that can push a cable: the part, its box's
+    half-extents (`_part_extent`) and the fastest speed of the box's corners
+    over the script, m/s (keepout parts and planes left out)."""
+    times, xpos, xmat = poses if poses is not None else script_poses(built)
+    m = built.model
+    out = []
+    if len(times) < 2:
+        return out
+    for part in built.parts:
+        half = _part_extent(m, part)
+        if part.keepout or half is None:
+            continue
+        corners = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T * half
+        rot = np.zeros(9)
+        mujoco.mju_quat2Mat(rot, m.geom_quat[part.geom_id])
+        local = m.geom_pos[part.geom_id] + corners @ rot.reshape(3, 3).T
+        body = np.full(len(local), int(m.geom_bodyid[part.geom_id]))
+        v = _max_speed(times, xpos, xmat, body, local)
+        if v > 0.0:
+            out.append((part, half, v))
+    return out
+
+
+def _pushes(built: Built) -> bool:
+    """Whether the simulation is stepped with cable-structure contact and has cables."""
+    scene = built.scene
+    return bool(scene.effects.dynamics and "cable-structure" in scene.effects.contact and built.cables)
+
+
 def _part_extent(m: mujoco.MjModel, part: PartModel) -> np.ndarray | None:
     """Half-extents (3,) of a part's box in its geom frame (None for a plane)."""
     size = m.geom_size[part.geom_id]
@@ -117,42 +152,32 @@ def _part_extent(m: mujoco.MjModel, part: PartModel) -> np.ndarray | None:
 def tunnel_warnings(built: Built, poses=None) -> list[str]:
     """Parts that move too fast for the simulation step to stop a cable.
 
-    A contact pushes only once a cable overlaps a part and removes the
-    approach speed within one step (`contact_time_constant`), so a part
-    moving at v overlaps a cable by up to v h before carrying it; once
-    v h exceeds the cable's radius plus half the part's thickness the
-    cable's centreline can be past the part's middle and is pushed out the
-    far side. Checked for every moving part against every cable when
-    cable-structure contact pushes back; the warning names the speed, the
-    thickness and the timestep that would do (scene units)."""
-    scene, m = built.scene, built.model
-    if not scene.effects.dynamics or "cable-structure" not in scene.effects.contact or not built.cables:
-        return []
-    times, xpos, xmat = poses if poses is not None else script_poses(built)
-    if len(times) < 2:
+    A contact pushes only once a cable overlaps a part (the simulation has
+    no contact margin, `sim.mjspec.SIM_MARGIN_FRACTION`), so a part moving
+    at v overlaps a cable by up to v h before the contact acts. Measured
+    (a plate lifted through a sagging cable, r 2 and 4 mm, plates 1 to 10
+    mm thick, 1 to 8 m/s): carried in every case with v h up to the
+    cable's radius; a plate 10 mm thick went through a 2 mm cable at 3 m/s
+    with v h = 6 mm, below the radius plus half the thickness, and 1 mm
+    plates at 1.5 radii a step. `choose_substeps` keeps v h within the
+    radius; this names the parts for which `MAX_SUBSTEPS` cannot, with the
+    speed and the timestep that would do (scene units)."""
+    scene = built.scene
+    if not _pushes(built):
         return []
     h = built.model.opt.timestep
+    count = built.substeps.count if built.substeps is not None else 1
     thinnest = min(c.radius for c in built.cables)
+    reach = CONTACT_FRACTION * thinnest
     unit = scene.units
     out = []
-    for part in built.parts:
-        half = _part_extent(m, part)
-        if part.keepout or half is None:
-            continue
-        corners = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T * half
-        rot = np.zeros(9)
-        mujoco.mju_quat2Mat(rot, m.geom_quat[part.geom_id])
-        local = m.geom_pos[part.geom_id] + corners @ rot.reshape(3, 3).T
-        body = np.full(len(local), int(m.geom_bodyid[part.geom_id]))
-        v = _max_speed(times, xpos, xmat, body, local)
-        reach = thinnest + float(half.min())
-        if v * h > reach:
-            need = reach / v
+    for part, half, v in part_speeds(built, poses):
+        if v * h > reach * (1.0 + 1e-9):
             out.append(f"part {part.name!r} moves at up to {v / scene.scale:.4g} {unit}/s: a simulation "
                        f"step of {h:.3g} s carries it {v * h / scene.scale:.4g} {unit}, more than the "
-                       f"thinnest cable's radius plus half its thickness ({thinnest / scene.scale:.4g} + "
-                       f"{half.min() / scene.scale:.4g} {unit}), so a cable can pass through it; "
-                       f"scene.timestep <= {need:.3g} s would do")
+                       f"thinnest cable's radius ({thinnest / scene.scale:.4g} {unit}; the part is "
+                       f"{2.0 * half.min() / scene.scale:.4g} {unit} thick), so a cable can pass through it; "
+                       f"scene.timestep <= {reach / v * count:.3g} s would do")
     return out
 
 
@@ -173,19 +198,28 @@ def choose_substeps(built: Built, poses=None) -> Substeps:
       instantly) within 0.2 % strain, and the same at 20 Hz within 0.5 %
       (measured: 5 Hz 0.55 % at h = 2 ms, 0.17 % at 1 ms; 20 Hz 3.7 % at
       2 ms, 0.5 % at 0.25 ms).
+    And where cable-structure contact pushes, contact: a contact acts only
+    once a part overlaps a cable, so no moving part may travel more than
+    `CONTACT_FRACTION` of the cable's radius in a step (v the fastest
+    part's speed, `part_speeds`; measured in `tunnel_warnings`).
     The scene's timestep is divided by the smallest whole number that meets
     every cable's need, at most `MAX_SUBSTEPS`."""
     scene = built.scene
     dt = scene.timestep
     needed, reasons = {}, {}
     speeds = held_speeds(built, poses) if scene.effects.dynamics else {}
+    parts = max((v for _, _, v in part_speeds(built, poses)), default=0.0) if _pushes(built) else 0.0
     defs = {c.name: c for c in scene.cables}
     for c in built.cables:
         bend = bending_step(c, defs[c.name])
         v = speeds.get(c.name, 0.0)
         speed = SPEED_FRACTION * c.element_length / v if v > 0.0 else np.inf
-        needed[c.name] = float(min(bend, speed))
-        reasons[c.name] = ("bending" if bend <= speed else "speed", v, c.element_length)
+        contact = CONTACT_FRACTION * c.radius / parts if parts > 0.0 else np.inf
+        needed[c.name] = float(min(bend, speed, contact))
+        if contact < min(bend, speed):
+            reasons[c.name] = ("contact", parts, c.element_length)
+        else:
+            reasons[c.name] = ("bending" if bend <= speed else "speed", v, c.element_length)
     h = min(needed.values(), default=dt)
     count = max(1, int(np.ceil(dt / h * (1.0 - 1e-9)))) if scene.effects.dynamics else 1
     capped = count > MAX_SUBSTEPS

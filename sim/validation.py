@@ -20,6 +20,8 @@ physics_validation.py tabulates them per element count (docs/physics.md).
 - `bowed_rod`: a 200 GPa, 3 mm steel rod of 0.6 m clamped between ends
   0.5 m apart; its length change.
 - `plate`: a plate lifted through a sagging cable; whether it carries it.
+- `resting`: a cable laid on a floor or over a drum under gravity; its settled
+  gap to the surface as a fraction of its radius.
 
 It deliberately holds no thresholds: deciding what passes is the tests'
 business.
@@ -238,10 +240,10 @@ def bowed_rod(elements: int | None = None) -> Result:
                    wall, built, sim)
 
 
-def plate(speed: float, half_thickness: float = 0.005, timestep: float = 0.002) -> Result:
+def plate(speed: float, half_thickness: float = 0.005, timestep: float = 0.002, radius: float = 0.004) -> Result:
     """A 0.3 m square plate lifted at `speed` from below through the middle of
-    a 1 m cable sagging over 0.8 m; measured 1.0 when the cable ends above
-    the plate's mid-plane all along it (carried), else 0.0."""
+    a 1 m cable (of `radius`) sagging over 0.8 m; measured 1.0 when the cable
+    ends above the plate's mid-plane all along it (carried), else 0.0."""
     z0, z1 = 0.55, 1.1
     duration = (z1 - z0) / speed
     scene = _scene({
@@ -251,7 +253,7 @@ def plate(speed: float, half_thickness: float = 0.005, timestep: float = 0.002) 
         "parts": [{"name": "plate", "body": "lift", "shape": "box", "size": [0.15, 0.15, half_thickness]}],
         "motion": [{"body": "lift", "interpolation": "linear",
                     "keys": [{"t": 0, "pos": [0.4, 0, z0]}, {"t": duration, "pos": [0.4, 0, z1]}]}],
-        "cables": [{"name": "c", "radius": 0.004, "start": {"pos": [0, 0, 1]}, "end": {"pos": [0.8, 0, 1]},
+        "cables": [{"name": "c", "radius": radius, "start": {"pos": [0, 0, 1]}, "end": {"pos": [0.8, 0, 1]},
                     "length": 1.0}]})
     built, sim, state, _ = settled(scene)
     t0 = time.perf_counter()
@@ -263,3 +265,54 @@ def plate(speed: float, half_thickness: float = 0.005, timestep: float = 0.002) 
     carried = bool(pts[over, 2].min() > s.part_poses[0][2, 3])
     return _result(f"plate {speed:g} m/s", built.cables[0].elements, 1.0 if carried else 0.0, None, wall, built, sim,
                    warned=bool(built.warnings))
+
+
+DRUM = 0.05
+"""Radius of the drum of `resting`, metres."""
+
+
+def resting(radius: float, units: str = "m", shape: str = "box", duration: float = 0.5,
+            timestep: float = 0.002) -> Result:
+    """A 0.2 m cable of `radius` (metres; free ends, 8 elements) dropped from
+    a radius above onto a part, in a scene written in `units`, then left
+    under gravity for `duration`: on a floor (`shape` "box", 0.1 m thick, or
+    "plane"), lying straight; on a drum ("cylinder", radius `DRUM`, axis
+    across the cable), draped over it and held by friction. Measured: the
+    gap between the cable's surface and the part's, over the radius: on the
+    floor from the body centres' heights (mean; `extra` the least and
+    largest), on the drum from each element's nearest place to the axis, of
+    the elements that lie on it (within a radius).
+    0 is resting on the surface, negative inside it."""
+    k = {"m": 1.0, "mm": 1000.0}[units]
+    if shape == "cylinder":
+        # the straight cable's middle a radius above the drum's top; the drum along y
+        z0, part = DRUM + 2.0 * radius, {"name": "drum", "shape": "cylinder", "size": [DRUM * k, 0.05 * k],
+                                         "euler": [90, 0, 0]}
+    else:
+        z0, part = 2.0 * radius, {"name": "floor", "shape": shape}
+        if shape == "box":
+            part.update(size=[0.3 * k, 0.3 * k, 0.05 * k], pos=[0, 0, -0.05 * k])
+    pts = [[x * k, 0.0, z0 * k] for x in (-0.1, 0.0, 0.1)]
+    scene = _scene({
+        "scene": {"name": "resting", "units": units, "duration": duration, "settle": 0.0, "timestep": timestep},
+        "effects": {"contact": ["cable-structure"]}, "parts": [part],
+        "cables": [{"name": "c", "radius": radius * k, "points": pts, "segments": 8,
+                    "start": {"hold": "free"}, "end": {"hold": "free"}}]})
+    built = build(scene, detect=False)
+    sim = Simulation(built)
+    sim.reset()
+    t0 = time.perf_counter()
+    for s in sim.steps(contacts=False):
+        pass
+    wall = (time.perf_counter() - t0) / duration
+    pts = s.cables[0]
+    if shape == "cylinder":     # each element's nearest place to the drum's axis (y)
+        a, d = pts[:-1][:, [0, 2]], np.diff(pts, axis=0)[:, [0, 2]]
+        t = np.clip(-(a * d).sum(axis=1) / (d * d).sum(axis=1), 0.0, 1.0)
+        gap = (np.linalg.norm(a + t[:, None] * d, axis=1) - DRUM - radius) / radius
+        gap = gap[gap < 1.0]
+    else:
+        gap = (pts[:, 2] - radius) / radius
+    return _result(f"resting on a {'drum' if shape == 'cylinder' else shape}", built.cables[0].elements,
+                   float(gap.mean()), None, wall, built, sim, least=float(gap.min()), largest=float(gap.max()),
+                   radius=radius, units=units, touching=int(len(gap)))

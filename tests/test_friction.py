@@ -10,7 +10,9 @@ radius, 1.5 mm normal to the slope, and creep) and 326 mm at 20 (0.295 m for
 exact Coulomb friction: sliding friction 2 % low), at every azimuth; with
 MuJoCo's default pyramidal cone it slid 263 mm at 15 degrees with the slope at
 35 degrees to x. Capstan, mu = 0.3: 2.566 for e^(0.3 pi) = 2.566 (half a
-turn), 1.62 for 1.60 (a quarter).
+turn), 1.62 for 1.60 (a quarter). Without the contact margin (the resting
+cable on the surface, tests/test_resting.py): 0.05 mm at 15 degrees, 295.4 mm
+at 20; capstan 2.555 and 1.606.
 """
 
 from __future__ import annotations

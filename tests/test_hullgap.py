@@ -12,7 +12,6 @@ from test_detection_mesh import u_mesh
 from sim.build import build
 from sim.contacts import Contacts
 from sim.hullgap import GAP_TOLERANCE, HullGaps, HullRaw, HullReader, watched
-from sim.mjspec import SIM_MARGIN_FRACTION
 from sim.run import RunOptions, run_scene
 from sim.scene import load_scene
 
@@ -25,9 +24,9 @@ R = 0.005
 
 def _scene(tmp_path, dynamics: bool = True, validate: bool = True, block: bool = False):
     """Two straight cables (r 5 mm) along y, held at y = +-0.1 (past the
-    U's ends) 1 mm above the hull's top, within the simulation's contact
-    margin, so each lies on the U's top: `over` in the middle, above the
-    pocket (the hull's top face spans it there: the surface is the pocket's
+    U's ends) on the hull's top (the simulation has no contact margin,
+    sim.mjspec.SIM_MARGIN_FRACTION), so each lies on the U's top: `over`
+    in the middle, above the pocket (the hull's top face spans it there: the surface is the pocket's
     walls and floor, 15 mm and more away); `flat` at x = 0.03, on a prong's
     top face, which the hull shares. `block`: a convex mesh part too, first,
     out of the cables' way (a mesh whose hull is its surface: not watched)."""
@@ -40,7 +39,7 @@ shape = "mesh"
 file = "block.stl"
 pos = [0.3, 0.3, 0.0]
 """ if block else ""
-    z = 0.04 + R + 0.001
+    z = 0.04 + R
     cables = "".join(f"""
 [[cables]]
 name = "{name}"
@@ -80,16 +79,14 @@ def test_a_cable_on_the_hull_over_the_pocket_is_named_and_one_on_a_flat_face_is_
     assert "cable 'over'" in w and "part 'u'" in w and "from t = 0.000 to 0.020 s" in w
     # the pocket's surface is beyond the clearance there: the gap is the
     # clearance less the hull distance, a bound; the cable rests on the hull
-    # at about the simulation's contact margin (the geom's and the cable's,
-    # summed), less the contact's give
-    margin = 2 * SIM_MARGIN_FRACTION * R
+    # (no contact margin), less the contact's give: within 2 % of its radius
     gap = float(w.split("more than ")[1].split(" m ")[0])
-    assert R - margin < gap < R - 0.5 * margin
+    assert gap == pytest.approx(R, abs=0.02 * R)
     # the checker and MuJoCo's detection agree: `over` is clear of the U's
     # surface, `flat` lies within the clearance of the prong's top, as far
     # from it as `over` from the hull (both rest on the hull's top plane)
     assert [(e["a"], e["b"]) for e in rep["events"]] == [("flat", "u")]
-    assert rep["events"][0]["min_distance"] == pytest.approx(R - gap, abs=0.02 * margin)
+    assert rep["events"][0]["min_distance"] == pytest.approx(R - gap, abs=0.02 * R)
     assert rep["validation"]["agreement"] == 1.0
     from sim.cliprint import print_summary
     print_summary(rep, tmp_path / "r.json")

@@ -201,12 +201,15 @@ def test_robot_cell_dress_pack_is_clear_and_agrees_with_mujoco(robot_cell):
     assert {e["type"] for e in report["events"]} <= {"cable-structure"}
     # MuJoCo collides a mesh geom as its convex hull, and the hoses pass within
     # the clearance of the links' hulls where the meshes are concave (the air
-    # hose rests about 3 mm from link 4's hull all run long, well clear of the
-    # mesh). The detection model sees the meshes' own surfaces
-    # (sim.detection_mesh): both sides class every pair alike.
+    # hose rests on link 4's hull all run long, well clear of the mesh). The
+    # detection model sees the meshes' own surfaces (sim.detection_mesh).
+    # The hoses rest on the links at contact (docs/physics.md, Resting
+    # contact; they floated 3 mm off before), so where the contact's give
+    # puts an element just inside and the checker's points just outside,
+    # the two sides differ at the boundary: every such step is explained.
     v = report["validation"]
-    assert v["pair_steps"] > 0 and v["agree"] == v["pair_steps"], v["reasons"]
-    assert v["reasons"] == {} and v["unexplained"] == 0
+    assert v["pair_steps"] > 0 and v["unexplained"] == 0, v["reasons"]
+    assert {getattr(k, "value", k) for k in v["reasons"]} <= {"at a boundary", "between points"}, v["reasons"]
 
 
 def test_robot_cell_trajectory_file_drives_every_joint_within_its_range():

@@ -1,6 +1,7 @@
 """How finely the simulation steps (sim.substeps): held points' speeds
 against the script's closed form, the step divided to meet the fastest
-cable's need, and a part fast enough to pass through a cable named."""
+cable's need (a moving part's speed against its radius among them), and a
+part too fast for any step named."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from buildscenes import slider_scene
 from sim.build import build
 from sim.scene import parse_scene
 from sim.substeps import (
+    CONTACT_FRACTION,
     MAX_SUBSTEPS,
     SPEED_FRACTION,
     bending_step,
@@ -62,21 +64,32 @@ def test_a_stiff_cable_is_stepped_for_its_bending(tmp_path):
     assert choose_substeps(finer).needed["c"] == pytest.approx(sub.needed["c"] * ratio, rel=1e-12)
 
 
-def test_a_thin_plate_fast_enough_to_pass_through_the_cable_is_named(tmp_path):
-    """A plate on its own body (the cable's held points stay slow, so the
-    step stays the scene's 2 ms) at 1.5 x 2 m / 0.2 s = 15 m/s moves 30 mm a
-    step, more than the cable's radius plus half its thickness (5 mm)."""
+def test_a_thin_plate_fast_enough_to_pass_through_the_cable_is_stepped_for_or_named(tmp_path):
+    """A plate on its own body (the cable's held points stay slow): at
+    1.5 x 2 m / 0.2 s = 15 m/s it would move 30 mm in the scene's 2 ms step,
+    more than the cable's radius (4 mm): the step is divided so that it
+    moves at most the radius (`CONTACT_FRACTION`), 8 steps of 0.25 ms. At
+    1.5 x 400 m / 0.2 s = 3000 m/s not even `MAX_SUBSTEPS` do: named, with
+    the timestep that would do."""
     data = slider_scene(tmp_path)
     data["bodies"].append({"name": "shuttle"})
     data["parts"].append({"name": "shuttle/plate", "body": "shuttle", "shape": "box",
                           "size": [0.001, 0.05, 0.05], "pos": [0.5, 0.0, 0.3]})
     data["motion"].append({"body": "shuttle", "keys": [{"t": 0, "pos": [0, 0, 0]}, {"t": 0.2, "pos": [0.02, 0, 0]}]})
-    assert tunnel_warnings(build(parse_scene(data, tmp_path / "s.toml"))) == []
+    slow = build(parse_scene(data, tmp_path / "s.toml"))
+    assert tunnel_warnings(slow) == [] and slow.model.opt.timestep == slow.scene.timestep
     data["motion"][1]["keys"][1]["pos"] = [2.0, 0, 0]
     built = build(parse_scene(data, tmp_path / "s.toml"))
-    assert built.model.opt.timestep == built.scene.timestep
+    v = built.substeps.reasons["c"][1]
+    assert built.substeps.reasons["c"][0] == "contact" and v == pytest.approx(15.0, rel=1e-3)
+    assert built.substeps.count == int(np.ceil(built.scene.timestep * v / (CONTACT_FRACTION * 0.004)))
+    assert v * built.model.opt.timestep <= CONTACT_FRACTION * 0.004 and tunnel_warnings(built) == []
+    data["motion"][1]["keys"][1]["pos"] = [400.0, 0, 0]
+    built = build(parse_scene(data, tmp_path / "s.toml"))
+    assert built.substeps.count == MAX_SUBSTEPS and built.substeps.capped
     (warning,) = tunnel_warnings(built)
-    assert warning.startswith("part 'shuttle/plate' moves at up to 15 m/s")
-    assert "(0.004 + 0.001 m)" in warning and "scene.timestep <= 0.000333 s would do" in warning
+    assert warning.startswith("part 'shuttle/plate' moves at up to 3000 m/s")
+    assert "(0.004 m; the part is 0.002 m thick)" in warning
+    assert "scene.timestep <= 8.53e-05 s would do" in warning
     data["effects"]["contact"] = []
     assert tunnel_warnings(build(parse_scene(data, tmp_path / "s.toml"))) == []
