@@ -5,7 +5,8 @@
 Runs every case of `sim.validation` (catenary sag, small-deflection
 cantilever, large-deflection elastica, hanging-chain first mode, U-cable
 swing damping, stretch under fast ends at 5 and 20 Hz, a bowed steel rod in
-compression, a plate lifted through a cable at rising speeds), prints one
+compression, a plate lifted through a cable at rising speeds, a cable
+resting on a floor and on a drum), prints one
 table with the measured value, the closed-form reference, the error and the
 cost (wall seconds per simulated second, measured in this run, side by side),
 and writes it to <out>/physics_validation.csv, a plot to
@@ -66,6 +67,15 @@ def run(quick: bool = False) -> list[dict]:
     for speed in (1.0, 3.0, 5.0, 8.0):
         r = validation.plate(speed)
         rows.append(_row(r, f"1 = carried; 10 mm plate; warned before running: {r.extra['warned']}"))
+    for half in (0.005, 0.001):
+        r = validation.plate(3.0, half_thickness=half, radius=0.002)
+        rows.append(_row(r, f"1 = carried; {2000 * half:g} mm plate, r 2 mm; warned before running: "
+                            f"{r.extra['warned']}"))
+    for shape, units in (("box", "m"), ("box", "mm"), ("plane", "m"), ("cylinder", "m")):
+        for radius in (0.002, 0.004):
+            r = validation.resting(radius, units, shape)
+            rows.append(_row(r, f"gap / r (mean; least {r.extra['least']:+.5f}, largest {r.extra['largest']:+.5f}); "
+                                f"r {1000 * radius:g} mm, units {units}"))
     return rows
 
 
