@@ -18,15 +18,16 @@ writing. Children get a bytecode cache of their own
 an installed package has its ``.pyc`` files, whatever
 ``PYTHONDONTWRITEBYTECODE`` says here (``--no-bytecode`` times the sources
 compiled on every start instead). ``--before REV`` times git revision
-REV's ``sim`` and ``checker`` (exported to a temporary folder, run as
-``python -m sim.cli``) in the same session, alternating with this
-checkout. The figures, the date, the load (``uptime``) before and after
+REV's ``sim`` and ``checker`` (exported to a temporary folder, run
+through the same entry point from there) in the same session, alternating with this
+checkout; ``--rev REV`` times revision REV in place of this checkout (its
+committed code alone, without the changes of the working tree). The figures, the date, the load (``uptime``) before and after
 and the commands are printed; ``--doc FILE`` also writes them into FILE
 between the markers ``<!-- bench_startup -->`` and ``<!-- /bench_startup
 -->`` (added at the end if absent).
 
 Run: python benchmarks/bench_startup.py [--repeat N] [--static C,P] [--record]
-       [--before REV] [--no-bytecode] [--doc docs/performance.md]
+       [--rev REV] [--before REV] [--no-bytecode] [--doc docs/performance.md]
 
 Timings depend on the machine and its load: the targets (issue 30) are
 for a quiet machine; a load above 0.5 is reported beside the figures.
@@ -65,14 +66,18 @@ def static_scene(cables: int, parts: int, folder: Path) -> Path:
     return write_scene(data, folder / f"static_{cables}x{parts}.toml")
 
 
+ENTRY = "import sys; from sim.cli import main; sys.exit(main())"
+"""What the installed ``cablecheck`` script runs."""
+
+
 def command_prefix(tree: Path | None) -> list[str]:
     """How the command is started: the installed ``cablecheck`` beside this
-    interpreter (as a user runs it), or ``python -m sim.cli`` for an
-    exported tree."""
-    if tree is None:
-        script = Path(sys.executable).parent / "cablecheck"
-        return [str(script)] if script.exists() else [sys.executable, "-m", "sim.cli"]
-    return [sys.executable, "-m", "sim.cli"]
+    interpreter (as a user runs it), or for an exported tree the same entry
+    point run from that tree's folder."""
+    script = Path(sys.executable).parent / "cablecheck"
+    if tree is None and script.exists():
+        return [str(script)]
+    return [sys.executable, "-c", ENTRY]
 
 
 def child_env(tree: Path | None, cache: Path | None) -> dict:
@@ -105,6 +110,12 @@ def export(rev: str) -> Path:
                              check=True, capture_output=True).stdout
     subprocess.run(["tar", "-x", "-C", str(folder)], input=archive, check=True)
     return folder
+
+
+def revision(rev: str) -> str:
+    """The short hash of git revision ``rev``."""
+    return subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short", rev], check=True,
+                          capture_output=True, text=True).stdout.strip()
 
 
 def load() -> str:
@@ -190,6 +201,7 @@ def main() -> int:
     ap.add_argument("--repeat", type=int, default=7, help="timed runs per command (after one warm-up)")
     ap.add_argument("--static", default="100,300", help="cables,parts of the static scene")
     ap.add_argument("--record", action="store_true", help="also time the static run writing its recording")
+    ap.add_argument("--rev", default=None, help="time this git revision in place of this checkout")
     ap.add_argument("--before", default=None, help="a git revision timed beside this checkout")
     ap.add_argument("--no-bytecode", action="store_true", help="compile the sources on every start")
     ap.add_argument("--doc", type=Path, default=None, help="write the figures into this Markdown file")
@@ -198,8 +210,10 @@ def main() -> int:
     work = Path(tempfile.mkdtemp(prefix="bench_startup_"))
     trees: dict[str, Path | None] = {"this checkout": None}
     try:
+        if a.rev:
+            trees = {f"{a.rev} ({revision(a.rev)})": export(a.rev)}
         if a.before:
-            trees[f"before ({a.before})"] = export(a.before)
+            trees[f"before: {a.before} ({revision(a.before)})"] = export(a.before)
         static, report = static_scene(cables, parts, work), work / "report.json"
         caches = {label: None if a.no_bytecode else Path(tempfile.mkdtemp(prefix="pyc_", dir=work))
                   for label in trees}
