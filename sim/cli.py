@@ -154,7 +154,7 @@ def _cmd_study(args: argparse.Namespace, stop: StopRequest) -> int:
     scenes = check_variants(study, found)   # every variant's scene, before anything runs
     bundle, datas = make_bundle(study.scene_path, [v.data for v in found])
     from sim.studyplot import write_outputs
-    from sim.studyrun import VariantTask, run_variants
+    from sim.studyrun import StudyRunError, VariantTask, run_variants
 
     tasks = [VariantTask(id=v.id, data=d, record=not args.no_record) for v, d in zip(found, datas)]
     where = (f"the Dask scheduler at {args.scheduler}" if args.scheduler else
@@ -164,11 +164,15 @@ def _cmd_study(args: argparse.Namespace, stop: StopRequest) -> int:
               flush=True)
     bar = StudyBar(enabled=not args.quiet)
     try:
-        rows, complete = run_variants(tasks, {v.id: v.values for v in found}, bundle, folder,
-                                      workers=args.workers, scheduler=args.scheduler, stop=stop,
-                                      progress=bar)
-    finally:
-        bar.done()
+        try:
+            rows, complete = run_variants(tasks, {v.id: v.values for v in found}, bundle, folder,
+                                          workers=args.workers, scheduler=args.scheduler, stop=stop,
+                                          progress=bar)
+        finally:
+            bar.done()
+    except StudyRunError as e:   # a cluster that cannot be used
+        print(f"cablecheck: error: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     units = scenes[0].units
     window = None
     if len(study.vary) == 1 and study.vary[0].path.endswith(".length") and \
@@ -206,11 +210,10 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _main(args: argparse.Namespace, stop: StopRequest) -> int:
-    try:   # numpy, MuJoCo and trimesh load here, with the signals already taken
+    try:   # numpy and MuJoCo load here, with the signals already taken
         from sim.baseline import BaselineError
         from sim.outputs import OutputPathError
         from sim.scene import SceneError
-        from sim.studyrun import StudyRunError
     except KeyboardInterrupt:
         print("cablecheck: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
@@ -252,9 +255,6 @@ def _main(args: argparse.Namespace, stop: StopRequest) -> int:
         return EXIT_BAD_INPUT
     except OSError as e:
         print(f"cablecheck: error: {e.filename or ''}: {e.strerror or e}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except StudyRunError as e:   # a cluster that cannot be used
-        print(f"cablecheck: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("cablecheck: interrupted", file=sys.stderr)
