@@ -128,6 +128,7 @@ def print_summary(report: dict, report_path: Path) -> None:
               f"{'straight' if bend is None else f'{bend:.4g} {units}'}"
               + (f", max twist {c['max_twist']:.3g} deg" if c.get("max_twist") is not None else "")
               + (f"  [{', '.join(flags)}]" if flags else ""))
+        _print_closest(report, c["name"], units)
     _print_events(report)
     _print_baseline(report)
     _print_excused(report)
@@ -196,6 +197,19 @@ def _print_baseline(report: dict, most: int = 5) -> None:
               f"at t {e['t_worst']:.3f} s, s = {e['s']:.4g} {units}")
     if len(b["resolved_events"]) > most:
         print(f"    ... {len(b['resolved_events']) - most} more in the report")
+
+
+def _print_closest(report: dict, cable: str, units: str) -> None:
+    """A cable's closest approach to anything, clash or not (the report's `closest`)."""
+    closest = report.get("closest")
+    if not closest:
+        return
+    row = next((x for x in closest["cables"] if x["cable"] == cable), None)
+    if row is None or row["min_distance"] is None:
+        print(f"    closest approach: nothing within {closest['reach']:.4g} {units}")
+        return
+    print(f"    closest approach: {row['min_distance']:.4g} {units} to {row['other']} at t {row['t']:.3f} s, "
+          f"{row['s']:.4g} {units} along")
 
 
 def _print_excused(report: dict, most: int = 5) -> None:

@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from checker.events import Phase
+from checker.interference.margins import per_cable
 from checker.records import Severity
 from sim.baseline import resolved_rows
 
@@ -41,6 +42,7 @@ if TYPE_CHECKING:
     from checker.events import AllowedWorst, Event, PairWorst
     from sim.divergence import PhysicsError
     from checker.interference.excused import ExcusedWorst
+    from checker.interference.margins import Closest
     from sim.baseline import Comparison
     from checker.scene_state import CheckConfig
     from checker.validation import ValidationSummary
@@ -168,6 +170,10 @@ class RunOutcome:
         pair, with its worst moment.
       excused: every attachment window whose piece of cable came below the
         clearance of a part it excuses, with its worst moment.
+      closest: every pair's closest approach within `margin_reach`
+        (`checker.interference.margins`: sampled every `margin_interval`
+        simulated seconds and refined around each pair's best sample; a pair
+        that came below the clearance as its worst event has it).
       baseline: with `--baseline`, this run's events against an earlier
         run's (`sim.baseline`): each event's status and the resolved ones.
       event_hold: seconds a pair must stay clear before its event closes.
@@ -214,6 +220,9 @@ class RunOutcome:
     physics_error: PhysicsError | None = None
     error: RunError | None = None
     baseline: Comparison | None = None
+    closest: tuple[Closest, ...] = ()
+    margin_reach: float = 0.0
+    margin_interval: float = 0.0
 
 
 def _worst_first(rows):
@@ -248,6 +257,25 @@ def _cable_row(c: CableOutcome, u: float) -> dict:
         "wear": _wear_row(c.wear, u),
         "max_twist": None if c.max_twist is None else float(np.degrees(c.max_twist)),
         "max_twist_moment": c.max_twist_moment,
+    }
+
+
+def _closest(o: RunOutcome, u: float) -> dict:
+    """Closest approaches: how far and how often they were measured, every
+    pair within reach (nearest first) and each cable's nearest (None: nothing
+    within reach)."""
+    cables = per_cable(o.closest, [c.name for c in o.cables])
+    return {
+        "reach": o.margin_reach / u,
+        "sampled_every_s": o.margin_interval,
+        "pairs": [{"type": c.type, "a": c.a, "b": c.b, "min_distance": c.min_distance / u, "t": c.t,
+                   "where": np.asarray(c.where) / u, "s": c.s / u, "s_b": _scaled(c.s_b, u)}
+                  for c in o.closest],
+        "cables": [{"cable": c.name, "other": None, "type": None, "min_distance": None, "t": None, "s": None}
+                   if x is None else
+                   {"cable": x.cable, "other": x.other, "type": x.type, "min_distance": x.min_distance / u,
+                    "t": x.t, "s": x.s / u}
+                   for c, x in zip(o.cables, cables)],
     }
 
 
@@ -397,6 +425,7 @@ def report_of(o: RunOutcome) -> dict:
                      "t_worst": x.t, "where": np.asarray(x.where) / u, "s": x.s / u}
                     for x in _worst_first(o.excused)],
     }
+    report["closest"] = _closest(o, u)
     if o.baseline is not None:        # the clashes against an earlier run (--baseline)
         report["baseline"] = {"report": str(o.baseline.path), **o.baseline.counts(),
                               "resolved_events": resolved_rows(o.baseline, u)}

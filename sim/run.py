@@ -47,6 +47,7 @@ import numpy as np
 from checker.arrays import ranges
 from checker.cable import TAUT_STRAIN
 from checker.events import Event, EventTracker
+from checker.interference.margins import with_events
 from checker.records import PairType, Severity
 from checker.scene_state import CheckConfig
 from checker.twist import TwistMeter, update_many
@@ -344,6 +345,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         events=events, event_joints=event_joints,
         joint_units=dict(zip(joints.names, joints.units)) if joints else None,
         pairs=tuple(tracker.pairs.values()), allowed=tuple(tracker.allowed.values()), excused=excused,
+        closest=with_events(ends.closest, events), margin_reach=ends.margin_reach,
+        margin_interval=ends.margin_interval,
         event_hold=tracker.hold, baseline=compared,
         validation=ends.validation, advance=ends.advance,
         warnings=warning_counts([sim.data if isinstance(sim, Simulation) else None,   # a static check has none

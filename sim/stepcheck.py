@@ -40,6 +40,7 @@ from checker.events import AllowList, AllowRule
 from checker.interference import Checker, single_records_many
 from checker.interference.discrete import around_centres
 from checker.interference.excused import ExcusedLog, ExcusedWorst
+from checker.interference.margins import Closest, MarginLog
 from checker.interference.structure import PartTable, point_distances
 from checker.parts import PartChecker
 from checker.recheck import Recheck
@@ -103,6 +104,19 @@ point active, and a batch of 256 states of a 150 m wire at 1 mm spacing
 would hold 38 million points (gigabytes) in one pass. Fewer states a pass
 give the same records: each proven-clear state is evaluated on its own."""
 
+MARGIN_INTERVAL = 0.05
+"""Closest approaches (:class:`checker.interference.margins.MarginLog`)
+are sampled about this often in simulated seconds (and at a batch's first
+and last state), then refined around each pair's best sample: on the robot
+cell a sampled state costs about as much as ten proven clear ones."""
+
+MARGIN_REACH_CLEARANCES = 3.0
+"""Closest approaches are kept out to this many clearances ..."""
+
+MARGIN_REACH_RADII = 2.0
+"""... and at least this many of the largest cable radii (a scene whose
+clearance is 0 still reports its margins)."""
+
 ADVANCE_STRETCH_RADII = 0.25
 """... and up to this many (smallest) cable radii of arc length inside the
 exclusion windows (the total change of element lengths a skipped step allows)."""
@@ -156,6 +170,11 @@ class ChecksOutcome:
       hull_warnings: cables the simulation held on a concave part's convex hull.
       excused: every attachment window that came below the clearance of
         the part it excuses, with its worst moment.
+      closest: every cable-part and cable-cable pair that came within
+        ``margin_reach``, with its closest approach (sampled, see
+        :data:`MARGIN_INTERVAL`).
+      margin_reach, margin_interval: how far and how often closest
+        approaches were measured (metres, seconds).
     """
 
     advance: AdvanceOutcome | None
@@ -163,6 +182,9 @@ class ChecksOutcome:
     part_warnings: tuple[str, ...]
     hull_warnings: tuple[str, ...]
     excused: tuple[ExcusedWorst, ...] = ()
+    closest: tuple[Closest, ...] = ()
+    margin_reach: float = 0.0
+    margin_interval: float = MARGIN_INTERVAL
 
 
 class StepChecks:
@@ -242,6 +264,11 @@ class StepChecks:
         # what the attachment windows leave out of the checks, measured on its own
         self.excused = ExcusedLog(self.exclusions, self.checker.parts, self._names, offsets, self._rest, radii,
                                   config.clearance)
+        # every pair's closest approach within the reach, clash or not
+        self.margin_reach = max(MARGIN_REACH_CLEARANCES * config.clearance,
+                                MARGIN_REACH_RADII * float(radii.max()) if len(radii) else 0.0)
+        self.margins = MarginLog(self.checker.parts, self._names, offsets, self._rest, radii, self.exclusions,
+                                 self.margin_reach, config)
         self.allow = AllowList(AllowRule(r.a, r.b, r.reason) for r in scene.allow)
         self._simulator_pairs = SimulatorPairs(self.exclusions, config.clearance)
         self.validation = Validation(scene.check.clearance, config.method,
@@ -292,8 +319,10 @@ class StepChecks:
             if j < len(states):
                 out.append(self._full(states[j], pts[j], poses[j], strain[j], bend[j]))
                 j += 1
+        times = np.array([s.t for s in states])
         if self.excused:
-            self.excused.add(np.array([s.t for s in states]), pts, poses[:, self.checked_parts])
+            self.excused.add(times, pts, poses[:, self.checked_parts])
+        self.margins.add(times, pts, poses[:, self.checked_parts], margin_samples(times, MARGIN_INTERVAL))
         self.lap("check")
         if self.detector is not None:
             self._validate(states, pts, out)
@@ -451,12 +480,27 @@ class StepChecks:
             validation=self.validation.summary() if validated else None,
             part_warnings=tuple(self.rigid.warnings),
             hull_warnings=tuple(self.hull_gaps.warnings()) if self.hull_gaps else (),
-            excused=self.excused.worst())
+            excused=self.excused.worst(), closest=self.margins.closest(),
+            margin_reach=self.margin_reach)
 
     def _second_opinion(self, opinions, i: int):
         """Builds the second opinions on a disagreement at the batch's state i
         (only when the validation asks: most states have none)."""
         return lambda: opinions().at(i)
+
+
+def margin_samples(times: np.ndarray, interval: float) -> np.ndarray:
+    """The states of a batch at ``times`` (S,) whose closest approaches are
+    measured: the first in each ``interval`` of simulated time, and the
+    batch's first and last (so every stretch between two samples lies in
+    one batch)."""
+    n = len(times)
+    if n == 0:
+        return np.zeros(0, np.int64)
+    slot = np.floor(np.asarray(times, float) / interval)
+    first = np.r_[True, slot[1:] != slot[:-1]]
+    first[-1] = True
+    return np.flatnonzero(first)
 
 
 def cable_states(built: Built, points: list[np.ndarray]) -> list[CableState]:

@@ -93,7 +93,7 @@ def _json(report: dict) -> str:
 
 # The SPEC's keys in the report's order (the golden reports are compared as text).
 TOP = ["schema", "scene", "units", "complete", "mujoco", "settings", "summary", "events", "pairs", "allowed",
-       "excused", "validation", "cables", "warnings", "timing", "recording", "joint_units", "part_warnings", "interrupted",
+       "excused", "closest", "validation", "cables", "warnings", "timing", "recording", "joint_units", "part_warnings", "interrupted",
        "physics_warnings", "physics_error", "error"]
 SETTINGS = ["method", "spacing", "spacing_radii", "clearance", "attach_zone_radii", "event_hold_s", "timestep",
             "settle", "duration", "dynamics", "gravity", "contact", "steps", "checked_steps", "t_end", "units",

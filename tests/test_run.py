@@ -202,3 +202,28 @@ def test_a_stopped_run_checks_every_step_simulated_ahead(tmp_path: Path):
     steps = report["settings"]["steps"]
     assert 30 <= steps <= round(scene.duration / scene.timestep)
     assert report["settings"]["checked_steps"] == steps + 1
+
+
+@pytest.mark.parametrize("method", ["points", "exact"])
+def test_a_clear_run_reports_its_closest_approach(tmp_path: Path, method: str, capsys):
+    # the block stops 8 mm above the cable's surface at t = 0.2 s: no event,
+    # its closest approach there, in closed form
+    height, radius = 0.0, 0.002
+    report = run_scene(_press(tmp_path, method, height, radius), RunOptions(report=tmp_path / "r.json", record=None))
+    assert report["events"] == []
+    closest = report["closest"]
+    assert closest["reach"] == pytest.approx(3 * CLEARANCE)
+    (pair,) = closest["pairs"]
+    gap = BOTTOM - SPEED * 0.2 - height - radius
+    assert (pair["type"], pair["a"], pair["b"]) == ("cable-structure", "lead", "press/block")
+    assert pair["min_distance"] == pytest.approx(gap, abs=1e-9) and pair["t"] == pytest.approx(0.2)
+    assert 0.05 - 1e-9 <= pair["where"][0] <= 0.15 + 1e-9 and pair["s"] == pytest.approx(pair["where"][0])
+    (cable,) = closest["cables"]
+    assert (cable["cable"], cable["other"], cable["min_distance"]) == ("lead", "press/block", pair["min_distance"])
+
+
+def test_a_run_farther_than_the_reach_says_nothing_came_near(tmp_path: Path):
+    report = run_scene(_press(tmp_path, "points", -0.03, 0.002), RunOptions(report=tmp_path / "r.json", record=None))
+    assert report["closest"]["pairs"] == []
+    assert report["closest"]["cables"] == [{"cable": "lead", "other": None, "type": None, "min_distance": None,
+                                            "t": None, "s": None}]
