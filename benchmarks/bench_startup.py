@@ -11,9 +11,10 @@ untimed warm-up (median, least and most, seconds of wall time):
    checked as drooped), written here as TOML;
 3. (``--record``) the same run writing its recording as well.
 
-The report's own ``timing.total_s`` of the static run is shown beside it:
-the rest of the process is the interpreter, the imports and the report's
-writing. Children get a bytecode cache of their own
+Beside the wall time: the median CPU seconds of the process (user and
+system, all its threads, numpy's BLAS threads starting up among them) and
+the report's own ``timing.total_s`` of the static run (the rest of the
+process is the interpreter, the imports and the report's writing). Children get a bytecode cache of their own
 (``PYTHONPYCACHEPREFIX``, a temporary folder, warmed by the first run), as
 an installed package has its ``.pyc`` files, whatever
 ``PYTHONDONTWRITEBYTECODE`` says here (``--no-bytecode`` times the sources
@@ -93,14 +94,19 @@ def child_env(tree: Path | None, cache: Path | None) -> dict:
     return env
 
 
-def timed(cmd: list[str], env: dict, cwd: Path) -> float:
-    """Wall seconds of one run of ``cmd`` (its output discarded); an exit status above 1 is an error."""
+def timed(cmd: list[str], env: dict, cwd: Path) -> tuple[float, float]:
+    """Wall seconds and CPU seconds (user + system, all its threads) of one
+    run of ``cmd`` (its output discarded); an exit status above 1 is an error."""
     t0 = time.perf_counter()
-    proc = subprocess.run(cmd, env=env, cwd=cwd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    wall = time.perf_counter() - t0
-    if proc.returncode not in (0, 1):
-        raise RuntimeError(f"{shlex.join(cmd)} exited {proc.returncode}: {proc.stderr.strip()[-300:]}")
-    return wall
+    with tempfile.TemporaryFile("w+") as err:
+        proc = subprocess.Popen(cmd, env=env, cwd=cwd, stdout=subprocess.DEVNULL, stderr=err)
+        _, status, usage = os.wait4(proc.pid, 0)
+        wall = time.perf_counter() - t0
+        code = os.waitstatus_to_exitcode(status)
+        if code not in (0, 1):
+            err.seek(0)
+            raise RuntimeError(f"{shlex.join(cmd)} exited {code}: {err.read().strip()[-300:]}")
+    return wall, usage.ru_utime + usage.ru_stime
 
 
 def export(rev: str) -> Path:
@@ -154,19 +160,22 @@ def measure(trees: dict[str, Path | None], todo: list[tuple[str, list[str]]], re
     rows = []
     for name, args in todo:
         walls: dict[str, list[float]] = {label: [] for label in trees}
+        cpus: dict[str, list[float]] = {label: [] for label in trees}
         totals: dict[str, list[float]] = {label: [] for label in trees}
         for label, tree in trees.items():       # warm-up: bytecode, disk cache
             timed(command_prefix(tree) + args, child_env(tree, caches[label]), tree or REPO)
         for _ in range(repeat):
             for label, tree in trees.items():
-                walls[label].append(timed(command_prefix(tree) + args, child_env(tree, caches[label]),
-                                          tree or REPO))
+                wall, cpu = timed(command_prefix(tree) + args, child_env(tree, caches[label]), tree or REPO)
+                walls[label].append(wall)
+                cpus[label].append(cpu)
                 if args[0] == "run":
                     totals[label].append(json.loads(report.read_text())["timing"]["total_s"])
         for label in trees:
             w = walls[label]
             rows.append({"tree": label, "case": name, "command": shown(args, static, report),
                          "median_s": statistics.median(w), "min_s": min(w), "max_s": max(w),
+                         "cpu_s": statistics.median(cpus[label]),
                          "run_total_s": statistics.median(totals[label]) if totals[label] else None,
                          "target_s": TARGETS.get(name)})
     return rows
@@ -174,13 +183,13 @@ def measure(trees: dict[str, Path | None], todo: list[tuple[str, list[str]]], re
 
 def table(rows: list[dict]) -> str:
     """The rows as a Markdown table."""
-    lines = ["| tree | command | median s | least s | most s | report total_s | target s |",
-             "|---|---|---:|---:|---:|---:|---:|"]
+    lines = ["| tree | command | median s | least s | most s | CPU s | report total_s | target s |",
+             "|---|---|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         total = "-" if r["run_total_s"] is None else f"{r['run_total_s']:.3f}"
         target = "-" if r["target_s"] is None else f"{r['target_s']:.1f}"
         lines.append(f"| {r['tree']} | `{r['command']}` | {r['median_s']:.3f} | {r['min_s']:.3f} | "
-                     f"{r['max_s']:.3f} | {total} | {target} |")
+                     f"{r['max_s']:.3f} | {r['cpu_s']:.3f} | {total} | {target} |")
     return "\n".join(lines)
 
 
