@@ -1,6 +1,6 @@
 """Start-up: the wall time of short commands, whole processes as a user runs them.
 
-Two commands, each timed as a subprocess ``--repeat`` times after one
+The commands, each timed as a subprocess ``--repeat`` times after one
 untimed warm-up (median, least and most, seconds of wall time):
 
 1. ``cablecheck check scenes/drawer.toml``;
@@ -14,18 +14,19 @@ untimed warm-up (median, least and most, seconds of wall time):
 Beside the wall time: the median CPU seconds of the process (user and
 system, all its threads, numpy's BLAS threads starting up among them) and
 the report's own ``timing.total_s`` of the static run (the rest of the
-process is the interpreter, the imports and the report's writing). Children get a bytecode cache of their own
-(``PYTHONPYCACHEPREFIX``, a temporary folder, warmed by the first run), as
-an installed package has its ``.pyc`` files, whatever
-``PYTHONDONTWRITEBYTECODE`` says here (``--no-bytecode`` times the sources
-compiled on every start instead). ``--before REV`` times git revision
-REV's ``sim`` and ``checker`` (exported to a temporary folder, run
-through the same entry point from there) in the same session, alternating with this
-checkout; ``--rev REV`` times revision REV in place of this checkout (its
-committed code alone, without the changes of the working tree). The figures, the date, the load (``uptime``) before and after
-and the commands are printed; ``--doc FILE`` also writes them into FILE
-between the markers ``<!-- bench_startup -->`` and ``<!-- /bench_startup
--->`` (added at the end if absent).
+process is the interpreter, the imports and the report's writing). Children
+get a bytecode cache of their own (``PYTHONPYCACHEPREFIX``, a temporary
+folder, warmed by the first run), as an installed package has its ``.pyc``
+files, whatever ``PYTHONDONTWRITEBYTECODE`` says here (``--no-bytecode``
+times the sources compiled on every start instead). ``--before REV`` times
+git revision REV's ``sim`` and ``checker`` (exported to a temporary folder,
+run through the same entry point from there) in the same session,
+alternating with this checkout; ``--rev REV`` times revision REV in place
+of this checkout (its committed code alone, without the changes of the
+working tree). The figures, the date, the load (``uptime``) before and
+after and the commands are printed; ``--doc FILE`` also writes them into
+FILE between the markers ``<!-- bench_startup -->`` and ``<!--
+/bench_startup -->`` (added at the end if absent).
 
 Run: python benchmarks/bench_startup.py [--repeat N] [--static C,P] [--record]
        [--rev REV] [--before REV] [--no-bytecode] [--doc docs/performance.md]
