@@ -113,7 +113,11 @@ def with_detection(built: Built, planned: tuple) -> Built:
     the same `plan_cables`: a new record, `built` itself unchanged."""
     scene = built.scene
     frames, meshes, plans = planned
-    det = compile_model(scene, plans, meshes, detect=True, frames=frames)[0]
+    # compiled on the rest shape as the simulation is, then held where it holds:
+    # on the routed shape a held end could fold exactly back onto the free
+    # vertices' rest line, which MuJoCo refuses (a degenerate flex hinge)
+    det = compile_model(scene, plans, meshes, detect=True, frames=frames, rest=True)[0]
+    move_held(det, plans, frames)
     if det.nq != built.model.nq or det.ngeom != built.model.ngeom:
         raise RuntimeError("detection and simulation models differ in structure")
     return replace(built, detect=det)

@@ -3,7 +3,8 @@
 A cable's routed shape (`sim.route`) has every route point and clip as a
 vertex and droops to make up the cable's length, clear of the parts it
 collides with when those are handed in (`sim.obstacles`). A clamp holds a
-short edge (`clamp_edges`), a pin one vertex, a free anchor nothing. The
+short edge (`clamp_edges`) along its `tangent`, else the route's direction
+(`route_direction`), a pin one vertex, a free anchor nothing. The
 rest shape is straight along the route's first element: MuJoCo's rod keeps
 as rest curvature whatever bend its qpos0 has, so the cable is built
 straight and put into the routed shape through qpos, and bending energy is
@@ -21,7 +22,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from sim.built import Attachment, CableModel
-from sim.route import initial_shape, polyline_length, run_elements
+from sim.route import initial_shape, polyline_length, route_lengths, run_elements
 from sim.scene import Anchor, CableDef, Hold, Scene, SceneError
 from sim.startframes import Frames
 
@@ -123,19 +124,43 @@ def plan_cable(cable: CableDef, frames: Frames, where: str, scene: Scene,
     measure = None if (depth is None or not slack) else depth.measure(cable.radius)
     cuts = [int(np.argmin(np.linalg.norm(route - c[2], axis=1))) for c in clips]
     clip_vertices = np.concatenate([[0], np.cumsum(counts)])[cuts]
+    waypoints = [0] + cuts + [len(route) - 1]
     anchors = ([(0, "start", cable.start, "start")]
                + [(int(v), "clip", c[3], c[4]) for c, v in zip(clips, clip_vertices)]
                + [(int(counts.sum()), "end", cable.end, "end")])
+    clamped = np.zeros(len(route), bool)
+    given = {}
+    for w, (_, _, anchor, _) in zip(waypoints, anchors):
+        if anchor.hold == Hold.CLAMP:
+            clamped[w] = True
+            if anchor.tangent is not None:
+                given[w] = np.asarray(frames.poses[anchor.body][1], float) @ np.asarray(anchor.tangent, float)
+    directions = [given.get(w, route_direction(route, w)) for w in waypoints]
+    anchors = [a + (t,) for a, t in zip(anchors, directions)]
+    # the route leaving its clamps along given tangents is longer than its
+    # chords; a `points` route is the centreline as given: its held edges
+    # alone turn to the tangents
+    if cable.points is not None:
+        given = {}
+    needed = float(route_lengths(route, counts, given).sum())
+    if cable.length is None:
+        length = max(length, needed)
+    elif length < needed * (1.0 - 1e-9):
+        raise SceneError(scene.path, f"{where}.length",
+                         f"{length / scene.scale:.6g} {scene.units} is shorter than the route leaving "
+                         f"its clamps along their tangents ({needed / scene.scale:.6g} {scene.units}); "
+                         "lengthen the cable or change the tangents")
     droop = length
-    for _ in range(2):
-        # A clip's held edge along the corner's bisector leaves the route by a
-        # little; with slack the second pass droops that much less, so the
-        # cable keeps its length (to second order in the clamp edge).
-        drooped = initial_shape(route, droop, counts, depth=measure)
+    for _ in range(6):
+        # A clamp's held edge along its tangent leaves the drooped shape by a
+        # little (most at a clip on a corner, or a coarse run drooping
+        # steeply); with slack the next pass droops that much less, so the
+        # cable keeps its length (each pass to second order in the clamp edge).
+        drooped = initial_shape(route, droop, counts, depth=measure, clamped=clamped, tangents=given)
         shortest = float(np.linalg.norm(np.diff(drooped, axis=0), axis=1).min())
         routed, held = clamp_edges(drooped, anchors, CLAMP_EDGE * shortest)
         excess = polyline_length(routed) - length
-        if not slack or abs(excess) <= 1e-12 * length or droop - excess < total:
+        if not (slack or given) or abs(excess) <= 1e-12 * length or droop - excess < needed:
             break
         droop -= excess
     seg = np.linalg.norm(np.diff(routed, axis=0), axis=1)
@@ -145,7 +170,23 @@ def plan_cable(cable: CableDef, frames: Frames, where: str, scene: Scene,
     return CablePlan(cable, routed, straight, held)
 
 
-def clamp_edges(routed: np.ndarray, anchors: list[tuple[int, str, Anchor, str]],
+def route_direction(route: np.ndarray, w: int) -> np.ndarray:
+    """The route's direction at waypoint `w` (of travel, start to end): its
+    run's chord at an end; at a clip the bisector of the chords either side
+    (so a route turning at a clip bends by half the turn on either side of
+    the clamp), the outgoing chord where the route turns back on itself."""
+    out = route[min(w + 1, len(route) - 1)] - route[min(w, len(route) - 2)]
+    out = out / np.linalg.norm(out)
+    if w == 0 or w == len(route) - 1:
+        return out
+    into = route[w] - route[w - 1]
+    bisector = out + into / np.linalg.norm(into)
+    if np.linalg.norm(bisector) > 1e-9 and np.dot(bisector, out) > 1e-9 * np.linalg.norm(bisector):
+        return bisector / np.linalg.norm(bisector)
+    return out
+
+
+def clamp_edges(routed: np.ndarray, anchors: list[tuple],
                  edge: float) -> tuple[np.ndarray, list[Held]]:
     """Insert a short held edge at every clamp; list the held vertices.
 
@@ -155,17 +196,19 @@ def clamp_edges(routed: np.ndarray, anchors: list[tuple[int, str, Anchor, str]],
     first half element rigid and clamps the rod half an element too far in:
     measured, a cantilever deflected 1.6 / N too little with N elements.
     Instead a clamp holds an edge of length `edge` (CLAMP_EDGE of an
-    element) along the route's tangent at the held point, inside the cable:
+    element) along the clamp's tangent at the held point, inside the cable:
     the next vertex's bending then stands for the rod from the clamp on.
     At the end the edge leads into the end point, at a clip it leaves the
-    clip point along the bisector of the route's corner there (so a route
-    turning at a clip bends by half the turn on either side of the clamp,
-    not all of it on one). A pin holds the one vertex, a free anchor
+    clip point. The tangent is an anchor's fifth item (unit, of travel from
+    start to end: the given `tangent` or the route's, `route_direction`);
+    without one, the drooped shape's: its end elements, at a clip the bisector
+    of its corner there. A pin holds the one vertex, a free anchor
     nothing."""
     points = [p for p in routed]
     held: list[Held] = []
     shift = 0
-    for vertex, kind, anchor, window in anchors:
+    for vertex, kind, anchor, window, *direction in anchors:
+        tangent = direction[0] if direction else None
         v = vertex + shift
         if anchor.hold == Hold.FREE:
             continue
@@ -175,7 +218,7 @@ def clamp_edges(routed: np.ndarray, anchors: list[tuple[int, str, Anchor, str]],
             held.append(Held(*hold, v, **named))
             continue
         if kind == "end":
-            t = points[v] - points[v - 1]
+            t = points[v] - points[v - 1] if tangent is None else tangent
             points.insert(v, points[v] - edge * t / np.linalg.norm(t))
             held += [Held(*hold, v, **named), Held(*hold, v + 1, **named)]
         else:
@@ -186,6 +229,8 @@ def clamp_edges(routed: np.ndarray, anchors: list[tuple[int, str, Anchor, str]],
                 bisector = t + into / np.linalg.norm(into)
                 if np.linalg.norm(bisector) > 1e-9 and np.dot(bisector, out) > edge * np.linalg.norm(bisector):
                     t = bisector / np.linalg.norm(bisector)
+            if tangent is not None:
+                t = tangent / np.linalg.norm(tangent)
             points.insert(v + 1, points[v] + edge * t)
             held += [Held(*hold, v, **named), Held(*hold, v + 1, **named)]
         shift += 1

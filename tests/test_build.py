@@ -99,10 +99,14 @@ def test_cable_pressed_into_a_plane_is_measured_exactly_by_both_sides(tmp_path):
     data = floor_scene("plane", pressed=2.0)
     data["effects"]["dynamics"] = False
     report = run_scene(parse_scene(data, tmp_path / "s.toml"), RunOptions(report=tmp_path / "r.json", record=tmp_path / "r.rrd"))
-    (event,) = report["events"]
+    # the floor's; the cable's own V at the pressed via (its clamped ends leave
+    # along the route, so its runs snake more steeply into the via) is not this test's
+    (event,) = [e for e in report["events"] if e["b"] == "floor"]
     assert (event["a"], event["b"], event["severity"]) == ("c", "floor", "hard")
     assert np.isclose(event["min_distance"], -2.0, atol=1e-9)
-    assert report["validation"]["agreement"] == 1.0 and report["validation"]["max_distance_error"] < 1e-9
+    v = report["validation"]   # both sides agree on the floor; MuJoCo sees no self pair within the clearance
+    assert v["agree"] == v["compared_steps"] and v["mujoco_only"] == 0 and v["unexplained"] == 0
+    assert set(v["reasons"]) <= {"self, no margin"} and v["max_distance_error"] < 1e-9
     assert (tmp_path / "r.rrd").stat().st_size > 0
 
 

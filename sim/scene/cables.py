@@ -27,12 +27,30 @@ from sim.scene.records import Anchor, CableDef, Scene
 
 def read_anchor(r: Reader, value: Any, where: str, with_pos: bool = True) -> Anchor:
     """A cable end or clip: the body it rides on, its position there, how it holds."""
-    t = r.table(value, where, ANCHOR_KEYS if with_pos else ("body", "hold", "part"))
+    t = r.table(value, where, ANCHOR_KEYS if with_pos else ("body", "hold", "tangent", "part"))
     hold = Hold(r.string(t.get("hold", "clamp"), f"{where}.hold",
                          tuple(h.value for h in Hold)))
     return Anchor(body=body_ref(r, t.get("body", "world"), f"{where}.body"),
                   pos=r.position(t.get("pos", [0, 0, 0]), f"{where}.pos")
-                  if with_pos else ZERO3, hold=hold, parts=read_fastened(r, t, where, hold))
+                  if with_pos else ZERO3, hold=hold, parts=read_fastened(r, t, where, hold),
+                  tangent=read_tangent(r, t, where, hold))
+
+
+def read_tangent(r: Reader, t: dict, where: str, hold: Hold) -> tuple[float, float, float] | None:
+    """An anchor's `tangent`: the direction a clamp holds the cable in, in its
+    body's frame, as a unit vector (any length but zero is accepted); None
+    when absent (the route's direction, `sim.cableplan`)."""
+    if "tangent" not in t:
+        return None
+    key = f"{where}.tangent"
+    if hold != Hold.CLAMP:
+        raise r.error(key, f"a {'pinned point turns freely' if hold == Hold.PIN else 'free end is not held'}, "
+                           "so it holds no direction (use hold = \"clamp\", or drop tangent)")
+    v = np.array(r.vector(t["tangent"], key), float)
+    if not np.abs(v).max() > 0.0:
+        raise r.error(key, "must not be the zero vector (it gives the cable's direction)")
+    v /= np.abs(v).max()  # first, so tiny components do not underflow in the norm
+    return tuple(float(x) for x in v / np.linalg.norm(v))
 
 
 def read_fastened(r: Reader, t: dict, where: str, hold: Hold) -> tuple[str, ...]:
@@ -76,7 +94,7 @@ def read_cable(r: Reader, value: dict, where: str, dynamics: bool = True) -> Cab
                               f"points[{0 if key == 'start' else -1}] (give only body)")
             anchor = read_anchor(r, t.get(key, {}), f"{where}.{key}", with_pos=False)
             ends.append(Anchor(anchor.body, from_world(r.frames, anchor.body, point), anchor.hold,
-                               anchor.parts))
+                               anchor.parts, anchor.tangent))
         start, end = ends
         via = np.zeros((0, 3))
         via.setflags(write=False)

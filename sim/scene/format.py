@@ -59,7 +59,7 @@ swinging for many periods."""
 class Hold(str, Enum):
     """How an end or clip holds the cable (SPEC, additions)."""
 
-    CLAMP = "clamp"   # position and tangent
+    CLAMP = "clamp"   # position and tangent (the cable's direction)
     PIN = "pin"       # position only, free to turn
     FREE = "free"     # not held: the position only shapes the initial route
 
@@ -108,7 +108,7 @@ PART_KEYS = ("name", "body", "shape", "size", "pos", "euler", "file", "scale", "
 CABLE_KEYS = ("name", "radius", "start", "end", "via", "length", "points", "clips",
                "segments", "young", "density", "min_bend_radius", "twist_stiffness",
                "damping", "friction")
-ANCHOR_KEYS = ("body", "pos", "hold", "part")
+ANCHOR_KEYS = ("body", "pos", "hold", "tangent", "part")
 MOTION_KEYS = ("body", "joint", "file", "keys", "angles", "interpolation", "time_scale")
 BODY_KEY_KEYS = ("t", "pos", "euler")
 JOINT_KEY_KEYS = ("t", "value", "key")

@@ -167,6 +167,9 @@ class Anchor:
         body's frame at t = 0 to shape the initial route.
       pos: (3,) position in that body's frame, metres.
       hold: clamp (position and tangent), pin (position) or free.
+      tangent: (3,) unit vector, the direction a clamp holds the cable in
+        at this point (the direction of travel from start to end), in the
+        body's frame; None: the route's (`sim.cableplan`). Clamps only.
       parts: the parts (names or assembly paths) the scene says the point
         is fastened to (`part`): its attachment window excuses these alone.
         Empty: the parts of its body (and its neighbours, `attach_links`)
@@ -178,6 +181,7 @@ class Anchor:
     pos: tuple[float, float, float] = ZERO3
     hold: Hold = Hold.CLAMP
     parts: tuple[str, ...] = ()
+    tangent: tuple[float, float, float] | None = None
 
 
 @dataclass(frozen=True, eq=False)
