@@ -11,9 +11,9 @@ When the cable is longer than its route it cannot lie straight along it:
 `initial_shape` lets every run of two or more elements droop by the same
 ratio of extra length, as a half sine over the run (zero at its waypoints),
 whose height is found by root finding so that the run's elements have the
-run's share of the length; at a waypoint a clamp holds the bump is
-flattened, so the cable leaves the clamp along the run's chord (the route's
-direction, the clamp's default), and a run of two or more elements leaving a
+run's share of the length; at a waypoint where a clamp holds the run's
+chord (the route's direction, a clamp's default at an end) the bump is
+flattened, so the cable leaves the clamp along it, and a run of two or more elements leaving a
 clamp given another direction first bends to it (a cubic Hermite curve,
 `hermite`; `route_lengths` says how much longer that makes the route). A
 run droops downwards (sideways for a vertical run) unless that takes it deeper into a part the cable collides with than
@@ -27,9 +27,9 @@ it takes world points.
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import lru_cache
 
 import numpy as np
-from scipy.optimize import brentq
 
 from checker.cable import arc_length
 
@@ -91,11 +91,20 @@ def _bump(x: np.ndarray, held: int) -> np.ndarray:
     return np.sin(np.pi * x)
 
 
+@lru_cache(maxsize=256)
 def _profile(ratio: float, count: int, held: int = 0) -> np.ndarray:
     """(count + 1, 2) points of a unit run drooped to length `ratio`: (along
     the chord, across it), evenly spaced along the bump (`_bump`), whose height is
     found by Brent's method so that the `count` elements have length `ratio`
-    to 1e-12 relative."""
+    to 1e-12 relative. Read-only, and found once per (ratio, count, held): the
+    cables of a harness share a few (100 cables x 300 parts: 200 runs, 2)."""
+    out = _find_profile(ratio, count, held)
+    out.setflags(write=False)
+    return out
+
+
+def _find_profile(ratio: float, count: int, held: int) -> np.ndarray:
+    """`_profile`, found afresh."""
     x = np.linspace(0.0, 1.0, _DENSE)
     bump = _bump(x, held)
 
@@ -108,6 +117,8 @@ def _profile(ratio: float, count: int, held: int = 0) -> np.ndarray:
     def excess(h: float) -> float:
         # measured on the resampled points: their chords are the cable's elements
         return float(np.linalg.norm(np.diff(shape(h), axis=0), axis=1).sum()) - ratio
+
+    from scipy.optimize import brentq   # scipy, a third of a second to import: only a run with slack pays it
 
     hi = ratio
     while excess(hi) < 0.0:
@@ -187,6 +198,8 @@ def _bent_run(a, b, t0, t1, count: int, target: float, across: np.ndarray, held:
 
     if excess(0.0) >= 0.0:
         return shape(0.0)
+    from scipy.optimize import brentq   # scipy, a third of a second to import: only a run with slack pays it
+
     hi = 1.0
     while excess(hi) < 0.0:
         hi *= 2.0
@@ -208,8 +221,9 @@ def initial_shape(route: np.ndarray, length: float, counts: np.ndarray,
       down: the direction a run droops in by preference.
       depth: how deep a vertex would be in the parts the cable collides
         with; None: droop towards `down` whatever is there.
-      clamped: (W,) bool, the waypoints a clamp holds: a run droops with
-        zero slope there, leaving along its chord. None: none.
+      clamped: (W,) bool, the waypoints where a clamp holds the cable along
+        the runs' chords (or a given tangent): a run droops with zero slope
+        there, leaving along its chord. None: none.
       tangents: waypoint index -> unit direction (of travel, start to end)
         a clamp given a `tangent` holds the cable in there.
 
