@@ -97,7 +97,8 @@ def _profile(ratio: float, count: int, held: int = 0) -> np.ndarray:
     the chord, across it), evenly spaced along the bump (`_bump`), whose height is
     found by Brent's method so that the `count` elements have length `ratio`
     to 1e-12 relative. Read-only, and found once per (ratio, count, held): the
-    cables of a harness share a few (100 cables x 300 parts: 200 runs, 2)."""
+    cables of a harness share a few (the static harness of 100 cables x 300
+    parts asks for 1,200, 27 of them distinct)."""
     out = _find_profile(ratio, count, held)
     out.setflags(write=False)
     return out
