@@ -143,31 +143,37 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 def _cmd_study(args: argparse.Namespace, stop: StopRequest) -> int:
     from sim.bundle import make_bundle
     from sim.outputs import check_folder
-    from sim.study import check_variants, load_study, variants
+    from sim.study import Method, check_study_names, check_variants, load_study, variants
     from sim.studyresult import fails, length_window
 
     check_folder(args.out, "--out")
     study = load_study(args.study)
     folder = args.out / study.name
     check_folder(folder, "study folder (--out/<name>)")
-    found = variants(study)
+    found = variants(study)   # a search's: the corners of its box
     scenes = check_variants(study, found)   # every variant's scene, before anything runs
-    bundle, datas = make_bundle(study.scene_path, [v.data for v in found])
+    check_study_names(study, scenes[0])
+    searching = study.search.method is Method.OPTIMISE
     from sim.studyplot import write_outputs
-    from sim.studyrun import StudyRunError, VariantTask, run_variants
+    from sim.studyrun import StudyRunError, VariantTask, run_search, run_variants
 
-    tasks = [VariantTask(id=v.id, data=d, record=not args.no_record) for v, d in zip(found, datas)]
     where = (f"the Dask scheduler at {args.scheduler}" if args.scheduler else
              f"{args.workers or os.cpu_count() or 1} local worker process(es)")
     if not args.quiet:
-        print(f"study {study.name}: {len(tasks)} variant(s) of {study.scene_path} on {where}",
-              flush=True)
+        what = (f"a search of at most {study.search.budget} run(s)" if searching else f"{len(found)} variant(s)")
+        print(f"study {study.name}: {what} of {study.scene_path} on {where}", flush=True)
     bar = StudyBar(enabled=not args.quiet)
     try:
         try:
-            rows, complete = run_variants(tasks, {v.id: v.values for v in found}, bundle, folder,
-                                          workers=args.workers, scheduler=args.scheduler, stop=stop,
-                                          progress=bar)
+            if searching:
+                rows, complete = run_search(study, not args.no_record, folder, workers=args.workers,
+                                            scheduler=args.scheduler, stop=stop, progress=bar)
+            else:
+                bundle, datas = make_bundle(study.scene_path, [v.data for v in found])
+                tasks = [VariantTask(id=v.id, data=d, record=not args.no_record) for v, d in zip(found, datas)]
+                rows, complete = run_variants(tasks, {v.id: v.values for v in found}, bundle, folder,
+                                              workers=args.workers, scheduler=args.scheduler, stop=stop,
+                                              progress=bar, judged=(study.requirements, study.goal))
         finally:
             bar.done()
     except StudyRunError as e:   # a cluster that cannot be used
@@ -175,7 +181,7 @@ def _cmd_study(args: argparse.Namespace, stop: StopRequest) -> int:
         return EXIT_BAD_INPUT
     units = scenes[0].units
     window = None
-    if len(study.vary) == 1 and study.vary[0].path.endswith(".length") and \
+    if not searching and len(study.vary) == 1 and study.vary[0].path.endswith(".length") and \
             study.vary[0].path.startswith("cables[") and all(
                 isinstance(x, (int, float)) and not isinstance(x, bool) for x in study.vary[0].values):
         window = length_window(rows)

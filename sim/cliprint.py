@@ -316,6 +316,34 @@ def print_study(study, rows, units: str, window, complete: bool, paths: dict) ->
                 (window.clean, "neither taut nor in hard contact nor bent too tight")
             print(f"  recommended: {window.recommended:g} {units}: of the lengths tried {kind} "
                   f"({', '.join(f'{x:g}' for x in pool)}), the nearest to the window's middle")
+    if complete and (study.requirements or study.goal):
+        _print_answer(study, rows, units)
     if not complete:
-        print("  INTERRUPTED: the tables hold the variants that finished (the others: not run)")
+        print("  INTERRUPTED: the tables hold the variants that finished (the others: not run); no answer")
     print(f"  results: {paths['csv']}  (also {paths['json'].name}, {paths['png'].name})")
+
+
+def _print_answer(study, rows, units: str) -> None:
+    """The study's answer in one line: the best variant, whether it keeps
+    every requirement and by what margin (each requirement's beside)."""
+    from sim.study import format_value
+    from sim.studyresult import Status, best_row
+
+    best = best_row(rows)
+    runs = sum(r.status is not Status.NOT_RUN for r in rows)
+    if best is None:
+        print(f"  answer: none of the {runs} run(s) finished")
+        return
+    where = ", ".join(f"{v.key} = {format_value(x)}" for v, x in zip(study.vary, best.values))
+    each = "; ".join(f"{q.label}: {'>= ' if low else ''}{'-' if m is None else format(m, '.4g')}"
+                     for q, m, low in zip(study.requirements, best.margins, best.at_least))
+    goal = "" if study.goal is None or best.objective is None else \
+        f", {study.goal.label}: {abs(best.objective):.4g}"
+    if not study.requirements:
+        print(f"  answer: {where}{goal} (best of {runs} run(s))")
+    elif best.satisfied:
+        print(f"  answer: {where} keeps every requirement, least margin {best.margin:.4g} {units}"
+              f"{goal} (best of {runs} run(s); {each})")
+    else:
+        print(f"  answer: none of the {runs} run(s) keeps every requirement; the best, {where}, "
+              f"misses by {-best.margin:.4g} {units} ({each})")

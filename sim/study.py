@@ -46,9 +46,11 @@ from pathlib import Path
 from typing import Any
 
 from sim.scene import LARGEST, Scene, SceneError, load_scene, parse_scene
+from sim.studygoal import Goal, GoalError, Requirement, check_names, parse_goal, parse_requirements
 
-_STUDY_KEYS = ("study", "vary")
+_STUDY_KEYS = ("study", "vary", "require", "goal", "search")
 _HEAD_KEYS = ("name", "scene", "mode")
+_SEARCH_KEYS = ("method", "budget")
 _VARY_KEYS = ("key", "values", "from", "to", "count")
 NAME_FIELDS = ("name", "body", "joint", "file")
 """Fields that name an entry of an array of tables, tried in this order."""
@@ -70,6 +72,21 @@ class Mode(Enum):
     ZIP = "zip"     # the i-th value of every key together
 
 
+class Method(Enum):
+    """How a study picks its variants (``[search] method``)."""
+
+    GRID = "grid"           # the [[vary]] values, as `Mode` combines them
+    OPTIMISE = "optimise"   # rounds of runs in the keys' ranges, zooming in (`sim.studysearch`)
+
+
+@dataclass(frozen=True)
+class SearchPlan:
+    """``[search]``: the method and, for optimise, the most runs."""
+
+    method: Method = Method.GRID
+    budget: int | None = None
+
+
 @dataclass(frozen=True)
 class Vary:
     """One varied key.
@@ -81,13 +98,17 @@ class Vary:
         complaints to this key.
       steps: the path's steps into the scene's TOML dict: str keys of
         tables, int indices of arrays.
-      values: the values, as TOML gives them (numbers, strings, arrays).
+      values: the values, as TOML gives them (numbers, strings, arrays);
+        for a search, its range's two ends.
+      bounds: a single number's range (from, to) when the entry gives one,
+        else None: what a search varies it in.
     """
 
     key: str
     path: str
     steps: tuple[str | int, ...]
     values: tuple[Any, ...]
+    bounds: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -101,6 +122,9 @@ class Study:
       scene_data: the scene file as `tomllib` reads it (not modified).
       mode: how the varied keys combine.
       vary: the varied keys, in file order.
+      requirements, goal: what must hold and what to make best
+        (`sim.studygoal`).
+      search: how the variants are picked.
     """
 
     path: Path
@@ -109,6 +133,9 @@ class Study:
     scene_data: dict
     mode: Mode
     vary: tuple[Vary, ...]
+    requirements: tuple[Requirement, ...] = ()
+    goal: Goal | None = None
+    search: SearchPlan = SearchPlan()
 
 
 @dataclass(frozen=True)
@@ -157,7 +184,14 @@ def load_study(path: str | Path) -> Study:
     entries = data["vary"]
     if not isinstance(entries, list) or not entries or not all(isinstance(e, dict) for e in entries):
         raise StudyError(path, "vary", "expected one or more [[vary]] tables")
-    vary = tuple(_vary(e, path, f"vary[{i}]", scene_data, scene_path) for i, e in enumerate(entries))
+    search = _search(data.get("search"), path)
+    vary = tuple(_vary(e, path, f"vary[{i}]", scene_data, scene_path, search.method)
+                 for i, e in enumerate(entries))
+    try:
+        requirements = parse_requirements(data.get("require"))
+        goal = parse_goal(data.get("goal"))
+    except GoalError as e:
+        raise StudyError(path, e.args[0], e.args[1]) from None
     seen: dict[tuple, int] = {}
     for i, v in enumerate(vary):
         if v.steps in seen:
@@ -171,10 +205,18 @@ def load_study(path: str | Path) -> Study:
                                  f"key: {len(v.values)} here, {len(vary[0].values)} in vary[0]")
     count = (len(vary[0].values) if mode is Mode.ZIP
              else math.prod(len(v.values) for v in vary))
-    if count > MAX_VARIANTS:
+    if count > MAX_VARIANTS and search.method is Method.GRID:
         raise StudyError(path, "vary", f"{count} variants, more than {MAX_VARIANTS}")
     return Study(path=path, name=name, scene_path=scene_path, scene_data=scene_data,
-                 mode=mode, vary=vary)
+                 mode=mode, vary=vary, requirements=requirements, goal=goal, search=search)
+
+
+def variant_at(study: Study, id: str, values: tuple[Any, ...]) -> Variant:
+    """The scene with one value per varied key set (a search's point)."""
+    data = copy.deepcopy(study.scene_data)
+    for v, value in zip(study.vary, values):
+        _set(data, v.steps, copy.deepcopy(value))
+    return Variant(id=id, values=tuple(values), data=data)
 
 
 def variants(study: Study) -> tuple[Variant, ...]:
@@ -183,13 +225,7 @@ def variants(study: Study) -> tuple[Variant, ...]:
     combos = (list(zip(*columns)) if study.mode is Mode.ZIP
               else list(itertools.product(*columns)))
     width = max(3, len(str(len(combos) - 1)))
-    out = []
-    for k, values in enumerate(combos):
-        data = copy.deepcopy(study.scene_data)
-        for v, value in zip(study.vary, values):
-            _set(data, v.steps, copy.deepcopy(value))
-        out.append(Variant(id=f"{k:0{width}d}", values=tuple(values), data=data))
-    return tuple(out)
+    return tuple(variant_at(study, f"{k:0{width}d}", values) for k, values in enumerate(combos))
 
 
 def check_variants(study: Study, variants: tuple[Variant, ...]) -> tuple[Scene, ...]:
@@ -207,6 +243,22 @@ def check_variants(study: Study, variants: tuple[Variant, ...]) -> tuple[Scene, 
             raise StudyError(study.path, _culprit(study, variant, e.key),
                              f"scene {study.scene_path}: {e.key}: {e.problem}") from None
     return tuple(scenes)
+
+
+def check_study_names(study: Study, scene: Scene) -> None:
+    """StudyError for a requirement or goal naming no cable or part of the
+    scene (with an mjcf model, a name beginning with one of its bodies
+    passes: its geoms' parts are named at the build)."""
+    from sim.scene.mjcf import compile_mjcf   # only a study naming parts of an mjcf model compiles it
+
+    cables = {c.name for c in scene.cables}
+    parts = {p.name for p in scene.parts}
+    found = check_names(study.requirements, study.goal, cables, parts)
+    if found is not None and scene.mjcf is not None:
+        bodies = set(compile_mjcf(scene.path, Path(scene.mjcf)).bodies)
+        found = check_names(study.requirements, study.goal, cables, parts, bodies)
+    if found is not None:
+        raise StudyError(study.path, *found)
 
 
 def _culprit(study: Study, variant: Variant, scene_key: str) -> str:
@@ -267,7 +319,26 @@ def _table(value: Any, file: Path, where: str, allowed: tuple[str, ...],
     return value
 
 
-def _vary(entry: dict, file: Path, where: str, scene: dict, scene_path: Path) -> Vary:
+def _search(table: Any, file: Path) -> SearchPlan:
+    if table is None:
+        return SearchPlan()
+    _table(table, file, "search", _SEARCH_KEYS, ())
+    text = table.get("method", "grid")
+    try:
+        method = Method(text if isinstance(text, str) else None)
+    except ValueError:
+        raise StudyError(file, "search.method", f"must be 'grid' or 'optimise', got {text!r}") from None
+    budget = table.get("budget")
+    if method is Method.OPTIMISE:
+        if not isinstance(budget, int) or isinstance(budget, bool) or budget < 2:
+            raise StudyError(file, "search.budget", f"a search needs a budget of at least 2 runs, got {budget!r}")
+    elif budget is not None:
+        raise StudyError(file, "search.budget", "only a search (method = 'optimise') has a budget")
+    return SearchPlan(method, budget)
+
+
+def _vary(entry: dict, file: Path, where: str, scene: dict, scene_path: Path,
+          method: Method = Method.GRID) -> Vary:
     _table(entry, file, where, _VARY_KEYS, ("key",))
     key = entry["key"]
     if not isinstance(key, str) or not key.strip():
@@ -276,6 +347,20 @@ def _vary(entry: dict, file: Path, where: str, scene: dict, scene_path: Path) ->
         steps, path = resolve(scene, key)
     except KeyError as e:
         raise StudyError(file, f"{where}.key", f"{key!r}: {e.args[0]} in {scene_path}") from None
+    if method is Method.OPTIMISE:
+        # a search varies a number within a range: from and to, no count
+        for k in ("from", "to"):
+            if k not in entry:
+                raise StudyError(file, f"{where}.{k}", "missing (a search varies a key from one number to another)")
+            if not _is_number(entry[k]):
+                raise StudyError(file, f"{where}.{k}", f"expected a finite number, got {entry[k]!r}")
+        for k in ("values", "count"):
+            if k in entry:
+                raise StudyError(file, f"{where}.{k}", "a search picks its own values: give from and to only")
+        lo, hi = float(entry["from"]), float(entry["to"])
+        if not lo < hi:
+            raise StudyError(file, f"{where}.to", f"must be above from ({lo:g}), got {hi:g}")
+        return Vary(key=key, path=path, steps=tuple(steps), values=(lo, hi), bounds=(lo, hi))
     ranged = [k for k in ("from", "to", "count") if k in entry]
     if ("values" in entry) == bool(ranged):
         raise StudyError(file, where, "give either 'values' or 'from', 'to' and 'count'")

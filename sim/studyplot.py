@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from sim.study import Study, format_value
-from sim.studyresult import COLUMNS, Row, Status, Window
+from sim.studyresult import COLUMNS, Row, Status, Window, best_row
 
 SCHEMA = "cablecheck.study/1"
 
@@ -51,10 +51,12 @@ def results_csv(study: Study, rows: list[Row]) -> str:
     """The CSV text: header id, the vary keys, COLUMNS; one line per row (empty cells for None)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["id", *(v.key for v in study.vary), *COLUMNS])
+    w.writerow(["id", *(v.key for v in study.vary), *COLUMNS,
+                *(f"margin: {q.label}" for q in study.requirements)])
     for r in rows:
+        margins = r.margins or (None,) * len(study.requirements)
         w.writerow([r.id, *(format_value(x) for x in r.values),
-                    *(_cell(getattr(r, c)) for c in COLUMNS)])
+                    *(_cell(getattr(r, c)) for c in COLUMNS), *(_cell(m) for m in margins)])
     return buf.getvalue()
 
 
@@ -74,6 +76,7 @@ def study_json(study: Study, rows: list[Row], *, complete: bool, units: str, win
                settings: dict[str, Any]) -> dict:
     """The study.json document."""
     out_rows = []
+    best = best_row(rows) if (study.requirements or study.goal) else None
     for r in rows:
         d = asdict(r)
         d["status"] = r.status.value
@@ -93,6 +96,14 @@ def study_json(study: Study, rows: list[Row], *, complete: bool, units: str, win
         "free_of_hard": [r.id for r in rows if r.status is Status.DONE and r.hard == 0],
         "window": None if window is None else {**asdict(window), "clean": list(window.clean),
                                                "quiet": list(window.quiet), "key": study.vary[0].key},
+        "search": {"method": study.search.method.value, "budget": study.search.budget},
+        "requirements": [q.label for q in study.requirements],
+        "goal": None if study.goal is None else study.goal.label,
+        "runs": sum(r.status is not Status.NOT_RUN for r in rows),
+        # no answer from a study that did not finish
+        "best": None if best is None or not complete else {
+            "id": best.id, "values": {v.key: x for v, x in zip(study.vary, best.values)},
+            "margin": best.margin, "satisfied": best.satisfied, "objective": best.objective},
     }
 
 
@@ -110,23 +121,34 @@ def plot(path: Path, study: Study, rows: list[Row], units: str) -> None:
 
     done = [r for r in rows if r.status is Status.DONE]
     ncol = len(study.vary)
-    fig, axes = plt.subplots(len(PLOTTED), ncol, figsize=(4.2 * ncol, 2.0 * len(PLOTTED)),
+    plotted = PLOTTED + ((("margin", "least margin"),) if study.requirements else ())
+    best = best_row(rows) if (study.requirements or study.goal) else None
+    searched = study.search.method.value == "optimise"
+    fig, axes = plt.subplots(len(plotted), ncol, figsize=(4.2 * ncol, 2.0 * len(plotted)),
                              squeeze=False, sharex="col")
     for j, v in enumerate(study.vary):
         numeric = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v.values)
         labels = [format_value(x) for x in v.values]
         xs = [(float(r.values[j]) if numeric else labels.index(format_value(r.values[j]))) for r in done]
-        for i, (field, label) in enumerate(PLOTTED):
+        for i, (field, label) in enumerate(plotted):
             ax = axes[i][j]
             pts = sorted((x, getattr(r, field)) for x, r in zip(xs, done)
                          if getattr(r, field) is not None)
             if pts:
-                ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-" if ncol == 1 else "o",
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-" if ncol == 1 and not searched else "o",
                         markersize=4)
+            if field == "margin":        # below the line a requirement fails
+                ax.axhline(0.0, color="tab:red", linestyle="--", linewidth=1, label="requirement")
+            if best is not None and getattr(best, field) is not None:
+                bx = float(best.values[j]) if numeric else labels.index(format_value(best.values[j]))
+                ax.plot([bx], [getattr(best, field)], "*", color="tab:green", markersize=11,
+                        label="best" if i == 0 else None)
+                if i == 0:
+                    ax.legend(fontsize=6, loc="best")
             if field in ("hard", "soft"):
                 ax.yaxis.set_major_locator(MaxNLocator(integer=True))
                 ax.set_ylim(-0.3, max([1] + [p[1] for p in pts]) + 0.3)
-            unit = f" ({units})" if field in ("worst_distance", "min_bend_radius") else ""
+            unit = f" ({units})" if field in ("worst_distance", "min_bend_radius", "margin") else ""
             if j == 0:
                 ax.set_ylabel(label + unit, fontsize=8)
             ax.grid(alpha=0.3)

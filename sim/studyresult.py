@@ -13,9 +13,12 @@ This module is pure bookkeeping on report dicts: it runs nothing (see
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from enum import Enum
 from typing import Any
+
+from sim.studygoal import Goal, Requirement, judge
 
 SHAPE_TYPES = ("bend", "taut")
 """Event types about one cable's shape, not a distance between surfaces."""
@@ -54,6 +57,15 @@ class Row:
       run_time_s: the run's own wall time (its report's timing.total_s).
       error: the failure, in words, for a failed or unrun variant.
       report, recording: the variant's output files (paths as text), or None.
+      satisfied: every requirement of the study holds (None: not run, or
+        no requirement).
+      margin: the least margin over the requirements, scene units
+        (negative where one fails; None: not run or no requirement).
+      objective: the goal's value, larger is better (a length or wear to
+        make least is negated); None without a goal or a run.
+      margins: per requirement, its margin (None where unbounded).
+      at_least: per requirement, its margin is a lower bound (nothing of
+        the two came within the run's reach).
     """
 
     id: str
@@ -72,10 +84,25 @@ class Row:
     error: str | None = None
     report: str | None = None
     recording: str | None = None
+    satisfied: bool | None = None
+    margin: float | None = None
+    objective: float | None = None
+    margins: tuple[float | None, ...] = ()
+    at_least: tuple[bool, ...] = ()
+
+    def score(self) -> tuple:
+        """Larger is better: finished first, then requirements met, then the
+        goal (else the margin), then the margin (see `sim.studygoal.Judgement`)."""
+        if self.status is not Status.DONE:
+            return (False, False, -math.inf, -math.inf)
+        m = -math.inf if self.margin is None else self.margin
+        second = self.objective if self.objective is not None else m
+        return (True, bool(self.satisfied) if self.satisfied is not None else True, second, m)
 
 
 COLUMNS = ("status", "exit_status", "hard", "soft", "worst_distance", "max_strain",
-           "min_bend_radius", "taut", "bend_violation", "agreement", "run_time_s", "error")
+           "min_bend_radius", "taut", "bend_violation", "agreement", "run_time_s", "satisfied", "margin",
+           "objective", "error")
 """Row fields after the id and the varied values, in the order results.csv gives them."""
 
 
@@ -89,9 +116,12 @@ def _stopped(report: dict) -> str:
 
 
 def row_from_report(id: str, values: tuple, report: dict, report_path: str | None = None,
-                    recording: str | None = None) -> Row:
-    """The study row of a variant's report (see `Row` for each field); a
-    report marked incomplete is a failed row (with what it measured)."""
+                    recording: str | None = None, requirements: tuple[Requirement, ...] = (),
+                    goal: Goal | None = None) -> Row:
+    """The study row of a variant's report (see `Row` for each field),
+    judged against the study's requirements and goal; a report marked
+    incomplete is a failed row (with what it measured)."""
+    judged = judge(report, requirements, goal) if (requirements or goal) and report.get("complete", True) else None
     summary = report["summary"]
     distances = [p["min_distance"] for p in report.get("pairs", ()) if p["type"] not in SHAPE_TYPES]
     cables = report.get("cables", ())
@@ -112,7 +142,23 @@ def row_from_report(id: str, values: tuple, report: dict, report_path: str | Non
         bend_violation=any(c.get("bend_violation", False) for c in cables),
         agreement=None if validation is None else validation.get("agreement"),
         run_time_s=report.get("timing", {}).get("total_s"),
-        report=report_path, recording=recording)
+        report=report_path, recording=recording,
+        satisfied=None if judged is None or not requirements else judged.satisfied,
+        margin=None if judged is None or not requirements else _finite(judged.margin),
+        objective=None if judged is None else judged.objective,
+        margins=() if judged is None else tuple(_finite(m) for m in judged.margins),
+        at_least=() if judged is None else judged.at_least)
+
+
+def _finite(x: float) -> float | None:
+    return x if math.isfinite(x) else None
+
+
+def best_row(rows: list[Row]) -> Row | None:
+    """The finished row scoring highest (`Row.score`: requirements met,
+    then the goal, then the margin); the first of equals; None if none finished."""
+    done = [r for r in rows if r.status is Status.DONE]
+    return max(done, key=Row.score) if done else None
 
 
 def fails(row: Row, level: str) -> bool:

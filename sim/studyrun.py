@@ -134,7 +134,7 @@ def run_variant(task: VariantTask, bundle: Bundle) -> VariantOutput:
 
 def run_variants(tasks: list[VariantTask], values: dict[str, tuple], bundle: Bundle, out: Path, *,
                  workers: int | None = None, scheduler: str | None = None,
-                 stop=None, progress: Progress | None = None) -> tuple[list[Row], bool]:
+                 stop=None, progress: Progress | None = None, judged: tuple = ((), None)) -> tuple[list[Row], bool]:
     """Run every task on the cluster; write each variant's outputs under
     `out`/variants/<id>/ as it arrives. Returns the rows in task order and
     whether every task was run (False after a stop request: unfinished
@@ -142,45 +142,62 @@ def run_variants(tasks: list[VariantTask], values: dict[str, tuple], bundle: Bun
 
     `workers`: size of the embedded cluster (default: the number of cores);
     `scheduler`: address of a running one instead. `stop` has an `asked`
-    attribute polled while waiting (`sim.stop.StopRequest`)."""
+    attribute polled while waiting (`sim.stop.StopRequest`). `judged`: the
+    study's (requirements, goal) each row is judged by."""
+    clear_variants(out)
+    with cluster(workers, scheduler) as client:
+        return run_batch(client, tasks, values, bundle, out, stop=stop, progress=progress, judged=judged)
+
+
+def clear_variants(out: Path) -> None:
+    """A study rewrites its own folder: no stale variants."""
     folder = Path(out) / "variants"
     if folder.exists():
-        shutil.rmtree(folder)   # a study rewrites its own folder: no stale variants
+        shutil.rmtree(folder)
+
+
+def run_batch(client, tasks: list[VariantTask], values: dict[str, tuple], bundle: Bundle, out: Path, *,
+              stop=None, progress: Progress | None = None, judged: tuple = ((), None),
+              done: int = 0, total: int | None = None) -> tuple[list[Row], bool]:
+    """`run_variants` on an open `cluster`: one batch of a study (a search
+    runs several); `done` and `total` count the study's variants for
+    `progress`."""
+    folder = Path(out) / "variants"
     rows: dict[str, Row] = {}
     complete = True
-    with _client(workers, scheduler) as client:
-        from distributed import Event
+    total = len(tasks) if total is None else total
+    from distributed import Event
 
-        shared = client.scatter(bundle, broadcast=False, hash=False)
-        tag = os.urandom(4).hex()
-        stopped = Event(f"cablecheck-stop-{tag}", client=client)
-        futures = {client.submit(run_variant, replace(t, stop_event=stopped.name), shared,
-                                 key=f"cablecheck-{tag}-{t.id}", pure=False,
-                                 priority=len(tasks) - k): t   # in study order
-                   for k, t in enumerate(tasks)}
-        failed = 0
-        try:
-            while futures:
-                if stop is not None and stop.asked:
-                    complete = False
-                    break
-                done = [f for f in futures if f.done()]
-                if not done:
-                    time.sleep(POLL_S)
-                    continue
-                for f in done:
-                    t = futures.pop(f)
-                    rows[t.id] = _collect(f, t, values[t.id], folder / t.id)
-                    failed += rows[t.id].status is Status.FAILED
-                    f.release()
-                    if progress:
-                        progress(len(rows), len(tasks), failed)
-        except KeyboardInterrupt:   # a second Ctrl-C: stop waiting at once
-            complete = False
-        finally:
-            if futures:
-                stopped.set()   # running variants end at their next look (their reports are dropped)
-                client.cancel(list(futures))
+    shared = client.scatter(bundle, broadcast=False, hash=False)
+    tag = os.urandom(4).hex()
+    stopped = Event(f"cablecheck-stop-{tag}", client=client)
+    futures = {client.submit(run_variant, replace(t, stop_event=stopped.name), shared,
+                             key=f"cablecheck-{tag}-{t.id}", pure=False,
+                             priority=len(tasks) - k): t   # in study order
+               for k, t in enumerate(tasks)}
+    failed = 0
+    try:
+        while futures:
+            if stop is not None and stop.asked:
+                complete = False
+                break
+            finished = [f for f in futures if f.done()]
+            if not finished:
+                time.sleep(POLL_S)
+                continue
+            for f in finished:
+                t = futures.pop(f)
+                rows[t.id] = _collect(f, t, values[t.id], folder / t.id, judged)
+                failed += rows[t.id].status is Status.FAILED
+                f.release()
+                if progress:
+                    progress(done + len(rows), total, failed)
+    except KeyboardInterrupt:   # a second Ctrl-C: stop waiting at once
+        complete = False
+    finally:
+        if futures:
+            stopped.set()   # running variants end at their next look (their reports are dropped)
+            client.cancel(list(futures))
     for t in tasks:
         if t.id not in rows:
             rows[t.id] = Row(id=t.id, values=values[t.id], status=Status.NOT_RUN,
@@ -188,7 +205,7 @@ def run_variants(tasks: list[VariantTask], values: dict[str, tuple], bundle: Bun
     return [rows[t.id] for t in tasks], complete
 
 
-def _collect(future, task: VariantTask, values: tuple, folder: Path) -> Row:
+def _collect(future, task: VariantTask, values: tuple, folder: Path, judged: tuple) -> Row:
     """The row of a finished future; its report and recording written under `folder`."""
     try:
         output: VariantOutput = future.result()
@@ -207,11 +224,11 @@ def _collect(future, task: VariantTask, values: tuple, folder: Path) -> Row:
     path = folder / "report.json"
     write_report(report, path)
     return row_from_report(task.id, values, report, str(path),
-                           None if recording is None else str(recording))
+                           None if recording is None else str(recording), *judged)
 
 
 @contextmanager
-def _client(workers: int | None, scheduler: str | None):
+def cluster(workers: int | None, scheduler: str | None):
     """A Dask client on the embedded cluster or on `scheduler`; closed on leaving."""
     from distributed import Client, LocalCluster
 
@@ -260,3 +277,39 @@ def _sigint_ignored():
         yield
     finally:
         signal.signal(signal.SIGINT, old)
+
+
+def run_search(study, record: bool, out: Path, *, workers: int | None = None, scheduler: str | None = None,
+               stop=None, progress: Progress | None = None) -> tuple[list[Row], bool]:
+    """A study's search (``[search] method = "optimise"``): rounds of
+    variants in the varied keys' ranges on one cluster, each round's points
+    proposed by `sim.studysearch.Search` from the rows so far
+    (`sim.studyresult.Row.score`), until the budget is spent. Returns every
+    row in the order run and whether the search ran to its end."""
+    from sim.bundle import make_bundle
+    from sim.study import variant_at
+    from sim.studysearch import Search
+
+    lo = [v.bounds[0] for v in study.vary]
+    hi = [v.bounds[1] for v in study.vary]
+    budget = study.search.budget
+    clear_variants(out)
+    rows: list[Row] = []
+    complete = True
+    with cluster(workers, scheduler) as client:
+        batch = max(1, len(client.scheduler_info().get("workers", {})))
+        search = Search(lo, hi, budget, batch)
+        points = search.first()
+        width = max(3, len(str(budget - 1)))
+        while points and complete:
+            found = [variant_at(study, f"{len(rows) + k:0{width}d}", tuple(float(x) for x in p))
+                     for k, p in enumerate(points)]
+            bundle, datas = make_bundle(study.scene_path, [v.data for v in found])
+            tasks = [VariantTask(id=v.id, data=d, record=record) for v, d in zip(found, datas)]
+            got, complete = run_batch(client, tasks, {v.id: v.values for v in found}, bundle, out, stop=stop,
+                                      progress=progress, judged=(study.requirements, study.goal),
+                                      done=len(rows), total=budget)
+            rows += got
+            search.tell(points, [r.score() for r in got])
+            points = search.next()
+    return rows, complete

@@ -350,3 +350,58 @@ def test_ctrl_c_keeps_finished_variants(tiny, tmp_path):
     rows = _rows(tmp_path / "out" / "int")
     assert [r["status"] for r in rows] == ["done", "not run", "not run"]
     assert json.loads((tmp_path / "out" / "int" / "study.json").read_text())["complete"] is False
+
+
+def test_a_search_answers_with_the_best_variant_and_its_margin(tiny, tmp_path, capsys):
+    """A search over the tiny drawer's cable length that must never be
+    taut and should be as short as possible: every run is kept, and the
+    answer is the shortest run that is not taut, with its margin."""
+    study = write_text(tmp_path / "s.toml", f'[study]\nname = "short"\nscene = "{tiny.parent}/scene/tiny.toml"\n'
+                       '[[vary]]\nkey = "cables.power.length"\nfrom = 540\nto = 700\n'
+                       '[[require]]\ntaut = false\n[goal]\nminimise = "length"\n'
+                       '[search]\nmethod = "optimise"\nbudget = 4\n')
+    assert main(["study", str(study), "--workers", "2", "--out", str(tmp_path), "--no-record",
+                 "--fail-on", "never"]) == 0
+    printed = capsys.readouterr().out
+    rows = _rows(tmp_path / "short")
+    assert len(rows) == 4 and all(r["status"] == "done" for r in rows)
+    assert all(540 <= float(r["cables.power.length"]) <= 700 for r in rows)
+    for r in rows:    # the margin: the strain left before taut, times the length
+        report = json.loads((tmp_path / "short" / "variants" / r["id"] / "report.json").read_text())
+        (cable,) = report["cables"]
+        left = (TAUT_STRAIN - cable["max_strain"]) * cable["length"]
+        assert float(r["margin: never taut"]) == pytest.approx(left)
+        assert (r["satisfied"] == "true") == (left >= 0) == (not cable["taut"])
+    kept = [r for r in rows if r["satisfied"] == "true"]
+    shortest = min(kept, key=lambda r: float(r["cables.power.length"]))
+    doc = json.loads((tmp_path / "short" / "study.json").read_text())
+    assert doc["runs"] == 4 and doc["search"] == {"method": "optimise", "budget": 4}
+    assert doc["best"]["id"] == shortest["id"] and doc["best"]["satisfied"] is True
+    assert doc["best"]["values"] == {"cables.power.length": float(shortest["cables.power.length"])}
+    assert doc["requirements"] == ["never taut"] and doc["goal"] == "least length"
+    assert f"answer: cables.power.length = {float(shortest['cables.power.length']):.10g} keeps every requirement" \
+        in printed
+
+
+@pytest.mark.parametrize("vary, search, key, words", [
+    ('key = "cables.power.length"\nvalues = [600, 700]', 'method = "optimise"\nbudget = 4', "vary[0].from", "missing"),
+    ('key = "cables.power.length"\nfrom = 600\nto = 700\ncount = 3', 'method = "optimise"\nbudget = 4',
+     "vary[0].count", "picks its own values"),
+    ('key = "cables.power.length"\nfrom = 700\nto = 600', 'method = "optimise"\nbudget = 4', "vary[0].to", "above"),
+    ('key = "cables.power.length"\nfrom = 600\nto = 700', 'method = "optimise"', "search.budget", "at least 2"),
+    ('key = "cables.power.length"\nvalues = [600]', 'budget = 4', "search.budget", "only a search"),
+    ('key = "cables.power.length"\nvalues = [600]', 'method = "bayes"', "search.method", "'optimise'"),
+])
+def test_a_bad_search_exits_2_naming_its_key(tmp_path, capsys, vary, search, key, words):
+    path = _study(tmp_path, f"[[vary]]\n{vary}\n[search]\n{search}\n")
+    assert main(["study", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert key in err and words in err and "Traceback" not in err
+
+
+def test_a_requirement_naming_nothing_in_the_scene_exits_2(tmp_path, capsys):
+    path = _study(tmp_path, '[[vary]]\nkey = "cables.power.length"\nvalues = [600]\n'
+                            '[[require]]\nclearance = 5\nbetween = ["power", "drawr"]\n')
+    assert main(["study", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "require[0].between" in err and "'drawr' names no cable or part" in err
