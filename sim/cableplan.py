@@ -128,15 +128,21 @@ def plan_cable(cable: CableDef, frames: Frames, where: str, scene: Scene,
     anchors = ([(0, "start", cable.start, "start")]
                + [(int(v), "clip", c[3], c[4]) for c, v in zip(clips, clip_vertices)]
                + [(int(counts.sum()), "end", cable.end, "end")])
-    clamped = np.zeros(len(route), bool)
     given = {}
     for w, (_, _, anchor, _) in zip(waypoints, anchors):
-        if anchor.hold == Hold.CLAMP:
-            clamped[w] = True
-            if anchor.tangent is not None:
-                given[w] = np.asarray(frames.poses[anchor.body][1], float) @ np.asarray(anchor.tangent, float)
+        if anchor.hold == Hold.CLAMP and anchor.tangent is not None:
+            given[w] = np.asarray(frames.poses[anchor.body][1], float) @ np.asarray(anchor.tangent, float)
     directions = [given.get(w, route_direction(route, w)) for w in waypoints]
     anchors = [a + (t,) for a, t in zip(anchors, directions)]
+    # the droop leaves a clamp along the run's chord where that is the
+    # clamp's direction: at a clip on a corner (the bisector) it keeps the
+    # half sine, as a clamp given another direction bends the run to it
+    clamped = np.zeros(len(route), bool)
+    for w, (_, _, anchor, _, t) in zip(waypoints, anchors):
+        if anchor.hold == Hold.CLAMP:
+            ahead = route[min(w + 1, len(route) - 1)] - route[min(w, len(route) - 2)]
+            behind = route[max(w, 1)] - route[max(w - 1, 0)]
+            clamped[w] = w in given or all(np.dot(t, c) > (1.0 - 1e-12) * np.linalg.norm(c) for c in (ahead, behind))
     # the route leaving its clamps along given tangents is longer than its
     # chords; a `points` route is the centreline as given: its held edges
     # alone turn to the tangents
