@@ -143,10 +143,18 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 def _cmd_study(args: argparse.Namespace, stop: StopRequest) -> int:
     from sim.bundle import make_bundle
     from sim.outputs import check_folder
-    from sim.study import Method, check_study_names, check_variants, load_study, variants
+    from sim.study import Method, check_study_names, check_variants, load_study, variants, varied_cables
     from sim.studyresult import fails, length_window
 
+    from sim.studycluster import StudyRunError, check_address
+
     check_folder(args.out, "--out")
+    if args.scheduler is not None:
+        try:   # the address's form, its host and TLS settings, before any work
+            check_address(args.scheduler)
+        except StudyRunError as e:
+            print(f"cablecheck: error: {e}", file=sys.stderr)
+            return EXIT_BAD_INPUT
     study = load_study(args.study)
     folder = args.out / study.name
     check_folder(folder, "study folder (--out/<name>)")
@@ -155,7 +163,7 @@ def _cmd_study(args: argparse.Namespace, stop: StopRequest) -> int:
     check_study_names(study, scenes[0])
     searching = study.search.method is Method.OPTIMISE
     from sim.studyplot import write_outputs
-    from sim.studyrun import StudyRunError, VariantTask, run_search, run_variants
+    from sim.studyrun import VariantTask, run_search, run_variants
 
     where = (f"the Dask scheduler at {args.scheduler}" if args.scheduler else
              f"{args.workers or os.cpu_count() or 1} local worker process(es)")
@@ -167,24 +175,26 @@ def _cmd_study(args: argparse.Namespace, stop: StopRequest) -> int:
         try:
             if searching:
                 rows, complete = run_search(study, not args.no_record, folder, workers=args.workers,
-                                            scheduler=args.scheduler, stop=stop, progress=bar)
+                                            scheduler=args.scheduler, stop=stop, progress=bar,
+                                            resume=args.resume)
             else:
                 bundle, datas = make_bundle(study.scene_path, [v.data for v in found])
                 tasks = [VariantTask(id=v.id, data=d, record=not args.no_record) for v, d in zip(found, datas)]
                 rows, complete = run_variants(tasks, {v.id: v.values for v in found}, bundle, folder,
                                               workers=args.workers, scheduler=args.scheduler, stop=stop,
-                                              progress=bar, judged=(study.requirements, study.goal))
+                                              progress=bar, judged=(study.requirements, study.goal),
+                                              resume=args.resume)
         finally:
             bar.done()
     except StudyRunError as e:   # a cluster that cannot be used
         print(f"cablecheck: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     units = scenes[0].units
-    window = None
-    if not searching and len(study.vary) == 1 and study.vary[0].path.endswith(".length") and \
+    window = None   # no window, and no recommendation, from an interrupted study
+    if complete and not searching and len(study.vary) == 1 and study.vary[0].path.endswith(".length") and \
             study.vary[0].path.startswith("cables[") and all(
                 isinstance(x, (int, float)) and not isinstance(x, bool) for x in study.vary[0].values):
-        window = length_window(rows)
+        window = length_window(rows, cable=varied_cables(study)[0])   # the varied cable's own answer
     settings = {"fail_on": args.fail_on, "record": not args.no_record,
                 "cluster": args.scheduler or f"local, {args.workers or os.cpu_count() or 1} workers",
                 "version": version()}

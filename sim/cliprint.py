@@ -320,7 +320,8 @@ def print_study(study, rows, units: str, window, complete: bool, paths: dict) ->
         _print_answer(study, rows, units)
     if not complete:
         print("  INTERRUPTED: the tables hold the variants that finished (the others: not run); no answer")
-    print(f"  results: {paths['csv']}  (also {paths['json'].name}, {paths['png'].name})")
+    also = ", ".join(paths[k].name for k in ("json", "png", "map") if k in paths)
+    print(f"  results: {paths['csv']}  (also {also})")
 
 
 def _print_answer(study, rows, units: str) -> None:

@@ -4,9 +4,10 @@
 ``[[vary]]`` entries into the scenes to run, as a full grid (the default:
 every combination, the first key varying slowest) or ``mode = "zip"`` (the
 i-th value of every key together); `check_variants` parses every variant's
-scene with `sim.scene.parse_scene` before anything runs, so a bad key or
-value is reported once, up front, naming the study file, the ``[[vary]]``
-key, the value and the scene's own complaint.
+scene with `sim.scene.parse_scene` and plans its cables (`sim.build.plan_cables`)
+before anything runs, so a bad key or value is reported once, up front,
+naming the study file, the ``[[vary]]`` key, the value and the scene's own
+complaint.
 
 Study file::
 
@@ -229,20 +230,31 @@ def variants(study: Study) -> tuple[Variant, ...]:
 
 
 def check_variants(study: Study, variants: tuple[Variant, ...]) -> tuple[Scene, ...]:
-    """Parse every variant's scene; raise StudyError naming the study file,
-    the varied key, the value and the scene's problem for the first bad one.
+    """Check every variant's scene (`check_variant`); raise StudyError naming
+    the study file, the varied key, the value and the scene's problem for
+    the first bad one.
 
     The unvaried scene is loaded first: a problem of its own is reported as
     the scene's (a SceneError), not blamed on a varied value."""
     load_scene(study.scene_path)
-    scenes = []
-    for variant in variants:
-        try:
-            scenes.append(parse_scene(variant.data, study.scene_path))
-        except SceneError as e:
-            raise StudyError(study.path, _culprit(study, variant, e.key),
-                             f"scene {study.scene_path}: {e.key}: {e.problem}") from None
-    return tuple(scenes)
+    return tuple(check_variant(study, v) for v in variants)
+
+
+def check_variant(study: Study, variant: Variant) -> Scene:
+    """Parse a variant's scene and plan its cables as a run would before it
+    simulates (`sim.build.plan_cables`: a length shorter than the route
+    through its clips and tangents is refused there); StudyError naming the
+    study file, the varied key, the value and the scene's problem."""
+    try:
+        scene = parse_scene(variant.data, study.scene_path)
+        if scene.cables:
+            from sim.build import plan_cables   # MuJoCo loads only for a study of cables
+
+            plan_cables(scene)
+    except SceneError as e:
+        raise StudyError(study.path, _culprit(study, variant, e.key),
+                         f"scene {study.scene_path}: {e.key}: {e.problem}") from None
+    return scene
 
 
 def check_study_names(study: Study, scene: Scene) -> None:

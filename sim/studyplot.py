@@ -23,8 +23,8 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from sim.study import Study, format_value
-from sim.studyresult import COLUMNS, Row, Status, Window, best_row
+from sim.study import Study, format_value, varied_cables
+from sim.studyresult import CABLE_COLUMNS, COLUMNS, Row, Status, Window, best_row
 
 SCHEMA = "cablecheck.study/1"
 
@@ -39,24 +39,87 @@ def write_outputs(folder: Path, study: Study, rows: list[Row], *, complete: bool
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     paths = {"csv": folder / "results.csv", "json": folder / "study.json", "png": folder / "study.png"}
+    if _mapped(study):
+        paths["map"] = folder / "study_map.png"
     _atomic_text(paths["csv"], results_csv(study, rows))
     _atomic_text(paths["json"], json.dumps(study_json(study, rows, complete=complete, units=units,
                                                       window=window, settings=settings),
                                            indent=1, allow_nan=False) + "\n")
-    plot(paths["png"], study, rows, units)
+    plot(paths["png"], study, rows, units, window)
+    if "map" in paths:
+        plot_map(paths["map"], study, rows, units)
     return paths
+
+
+def _numeric(values) -> bool:
+    return all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in values)
+
+
+def _mapped(study: Study) -> bool:
+    """Two number keys: the runs also drawn as a map of the two."""
+    return len(study.vary) == 2 and all(_numeric(v.values) for v in study.vary)
+
+
+def plot_map(path: Path, study: Study, rows: list[Row], units: str) -> None:
+    """study_map.png: the two varied keys as axes, each run a dot coloured
+    by its least margin (with requirements; else its worst distance), the
+    runs that keep every requirement ringed, failed runs crossed, the best
+    starred."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    done = [r for r in rows if r.status is Status.DONE]
+    field, label = ("margin", f"least margin ({units})") if study.requirements else \
+        ("worst_distance", f"worst distance ({units})")
+    fig, ax = plt.subplots(figsize=(6.0, 4.8))
+    shown = [r for r in done if getattr(r, field) is not None]
+    if shown:
+        values = [getattr(r, field) for r in shown]
+        top = max(abs(v) for v in values) or 1.0
+        dots = ax.scatter([float(r.values[0]) for r in shown], [float(r.values[1]) for r in shown], c=values,
+                          cmap="RdYlGn", vmin=-top, vmax=top, s=50, edgecolors="k", linewidths=0.4)
+        fig.colorbar(dots, ax=ax, label=label)
+    kept = [r for r in done if r.satisfied]
+    if kept:
+        ax.scatter([float(r.values[0]) for r in kept], [float(r.values[1]) for r in kept], s=140,
+                   facecolors="none", edgecolors="tab:green", linewidths=1.2, label="keeps every requirement")
+    bad = [r for r in rows if r.status is not Status.DONE]
+    if bad:
+        ax.scatter([float(r.values[0]) for r in bad], [float(r.values[1]) for r in bad], marker="x",
+                   color="k", label="failed or not run")
+    best = best_row(rows) if (study.requirements or study.goal) else None
+    if best is not None:
+        ax.plot([float(best.values[0])], [float(best.values[1])], "*", color="tab:blue", markersize=16,
+                label="best")
+    ax.set_xlabel(study.vary[0].key, fontsize=8)
+    ax.set_ylabel(study.vary[1].key, fontsize=8)
+    ax.grid(alpha=0.3)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7, loc="best")
+    ax.set_title(f"study {study.name}: {len(done)} of {len(rows)} runs", fontsize=10)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    write_atomic(Path(path), buf.getvalue())
 
 
 def results_csv(study: Study, rows: list[Row]) -> str:
     """The CSV text: header id, the vary keys, COLUMNS; one line per row (empty cells for None)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
+    cables = varied_cables(study)
     w.writerow(["id", *(v.key for v in study.vary), *COLUMNS,
-                *(f"margin: {q.label}" for q in study.requirements)])
+                *(f"margin: {q.label}" for q in study.requirements),
+                *(f"{name}: {c}" for name in cables for c in CABLE_COLUMNS)])
     for r in rows:
         margins = r.margins or (None,) * len(study.requirements)
+        per = [r.cable(name) for name in cables]
         w.writerow([r.id, *(format_value(x) for x in r.values),
-                    *(_cell(getattr(r, c)) for c in COLUMNS), *(_cell(m) for m in margins)])
+                    *(_cell(getattr(r, c)) for c in COLUMNS), *(_cell(m) for m in margins),
+                    *(_cell(None if x is None else getattr(x, c)) for x in per for c in CABLE_COLUMNS)])
     return buf.getvalue()
 
 
@@ -107,12 +170,14 @@ def study_json(study: Study, rows: list[Row], *, complete: bool, units: str, win
     }
 
 
-def plot(path: Path, study: Study, rows: list[Row], units: str) -> None:
+def plot(path: Path, study: Study, rows: list[Row], units: str, window: Window | None = None) -> None:
     """study.png: one column per varied key, one row of axes per plotted field.
 
     A key with number values is the x axis as it is; any other (arrays,
     strings) is drawn against the value's position in its list, labelled
-    with the values."""
+    with the values. A length window is shaded with its recommendation
+    marked; the least margin has the requirements' line; the best run is
+    starred."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -137,6 +202,17 @@ def plot(path: Path, study: Study, rows: list[Row], units: str) -> None:
             if pts:
                 ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-" if ncol == 1 and not searched else "o",
                         markersize=4)
+            if window is not None and j == 0 and window.shortest is not None and window.longest is not None \
+                    and window.shortest <= window.longest:
+                ax.axvspan(window.shortest, window.longest, color="tab:green", alpha=0.12,
+                           label="window" if i == 0 else None)
+                if window.recommended is not None:
+                    ax.axvline(window.recommended, color="tab:green", linewidth=1.2,
+                               label="recommended" if i == 0 else None)
+                if i == 0:
+                    ax.legend(fontsize=6, loc="best")
+            if field == "worst_distance":   # below the line: hard contact
+                ax.axhline(0.0, color="tab:red", linestyle=":", linewidth=1)
             if field == "margin":        # below the line a requirement fails
                 ax.axhline(0.0, color="tab:red", linestyle="--", linewidth=1, label="requirement")
             if best is not None and getattr(best, field) is not None:

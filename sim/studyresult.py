@@ -14,7 +14,7 @@ This module is pure bookkeeping on report dicts: it runs nothing (see
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import Enum
 from typing import Any
 
@@ -30,6 +30,59 @@ class Status(Enum):
     DONE = "done"          # ran to the end; its report is there
     FAILED = "failed"      # raised an error (see `Row.error`)
     NOT_RUN = "not run"    # the study was interrupted before it finished
+
+
+@dataclass(frozen=True)
+class CableRow:
+    """One cable of a variant (scene units).
+
+    Attributes:
+      name: the cable.
+      hard, soft: events of this cable with another thing or itself (bend
+        and taut are not counted here: see the flags).
+      closest: its least distance to anything within the run's reach (None:
+        nothing came within it); closest_to: what.
+      max_strain, taut, min_bend_radius, bend_violation, max_twist: as the
+        report's cable row (twist in degrees; None where undefined).
+      wear: the most sliding at one place of the cable (None: no contact).
+    """
+
+    name: str
+    hard: int
+    soft: int
+    closest: float | None
+    closest_to: str | None
+    max_strain: float | None
+    taut: bool
+    min_bend_radius: float | None
+    bend_violation: bool
+    max_twist: float | None
+    wear: float | None
+
+
+CABLE_COLUMNS = ("hard", "soft", "closest", "closest_to", "max_strain", "taut", "min_bend_radius",
+                 "bend_violation", "max_twist", "wear")
+"""`CableRow` fields in results.csv, one set per varied cable ("<cable>: <field>")."""
+
+
+def cable_rows(report: dict) -> tuple[CableRow, ...]:
+    """Each cable of a report, in its order."""
+    closest = {c["cable"]: c for c in (report.get("closest") or {}).get("cables", ())}
+    out = []
+    for c in report.get("cables", ()):
+        name = c["name"]
+        mine = [e for e in report.get("events", ()) if e["type"] not in SHAPE_TYPES
+                and (e["a"] == name or (e["type"] in ("cable-cable", "self") and e["b"] == name))]
+        near = closest.get(name) or {}
+        worn = (c.get("wear") or {}).get("most_worn")
+        out.append(CableRow(
+            name=name, hard=sum(e["severity"] == "hard" for e in mine),
+            soft=sum(e["severity"] == "soft" for e in mine),
+            closest=near.get("min_distance"), closest_to=near.get("other"),
+            max_strain=c.get("max_strain"), taut=bool(c.get("taut", False)),
+            min_bend_radius=c.get("min_bend_radius"), bend_violation=bool(c.get("bend_violation", False)),
+            max_twist=c.get("max_twist"), wear=None if not worn else worn["sliding"]))
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -66,6 +119,7 @@ class Row:
       margins: per requirement, its margin (None where unbounded).
       at_least: per requirement, its margin is a lower bound (nothing of
         the two came within the run's reach).
+      cables: per cable, its own answers (`CableRow`), in the scene's order.
     """
 
     id: str
@@ -89,6 +143,10 @@ class Row:
     objective: float | None = None
     margins: tuple[float | None, ...] = ()
     at_least: tuple[bool, ...] = ()
+    cables: tuple[CableRow, ...] = ()
+
+    def cable(self, name: str) -> CableRow | None:
+        return next((c for c in self.cables if c.name == name), None)
 
     def score(self) -> tuple:
         """Larger is better: finished first, then requirements met, then the
@@ -147,11 +205,20 @@ def row_from_report(id: str, values: tuple, report: dict, report_path: str | Non
         margin=None if judged is None or not requirements else _finite(judged.margin),
         objective=None if judged is None else judged.objective,
         margins=() if judged is None else tuple(_finite(m) for m in judged.margins),
-        at_least=() if judged is None else judged.at_least)
+        at_least=() if judged is None else judged.at_least,
+        cables=cable_rows(report))
 
 
 def _finite(x: float) -> float | None:
     return x if math.isfinite(x) else None
+
+
+def _as_cable(row: Row, name: str) -> Row:
+    """The row with one cable's events and flags in place of every cable's."""
+    c = row.cable(name)
+    if c is None:
+        return row
+    return replace(row, hard=c.hard, soft=c.soft, taut=c.taut, bend_violation=c.bend_violation)
 
 
 def best_row(rows: list[Row]) -> Row | None:
@@ -211,11 +278,15 @@ class Window:
         return self.recommended is not None
 
 
-def length_window(rows: list[Row], index: int = 0) -> Window:
+def length_window(rows: list[Row], index: int = 0, cable: str | None = None) -> Window:
     """The interference-free window over the finished rows, the length
     being `values[index]`: shortest length not taut, longest length with
-    no hard contact and no bend violation."""
+    no hard contact and no bend violation. With `cable`, of that cable
+    alone (the one whose length varies: another cable's contact is not
+    this one's answer); else of every cable."""
     done = sorted((r for r in rows if r.status is Status.DONE), key=lambda r: r.values[index])
+    if cable is not None:
+        done = [_as_cable(r, cable) for r in done]
     lengths = [float(r.values[index]) for r in done]
     untaut = [L for L, r in zip(lengths, done) if not r.taut]
     shortest = min(untaut) if untaut else None

@@ -37,12 +37,26 @@ def test_row_from_report_reduces_the_report():
               "pairs": [{"type": "taut", "min_distance": -30.0},
                         {"type": "cable-structure", "min_distance": -2.5},
                         {"type": "self", "min_distance": 1.0}],
-              "cables": [{"max_strain": 0.01, "min_bend_radius": 40.0, "taut": False,
-                          "bend_violation": False},
-                         {"max_strain": -0.03, "min_bend_radius": None, "taut": True,
-                          "bend_violation": False}],
+              "events": [{"type": "cable-structure", "a": "hose", "b": "frame", "severity": "hard"},
+                         {"type": "cable-cable", "a": "hose", "b": "lead", "severity": "soft"},
+                         {"type": "self", "a": "lead", "b": "lead", "severity": "soft"},
+                         {"type": "taut", "a": "lead", "b": "lead", "severity": "hard"}],
+              "closest": {"reach": 15.0, "pairs": [], "cables": [
+                  {"cable": "hose", "other": "frame", "min_distance": -2.5},
+                  {"cable": "lead", "other": None, "min_distance": None}]},
+              "cables": [{"name": "hose", "max_strain": 0.01, "min_bend_radius": 40.0, "taut": False,
+                          "bend_violation": False, "max_twist": 12.0,
+                          "wear": {"most_worn": {"sliding": 4.0}}},
+                         {"name": "lead", "max_strain": -0.03, "min_bend_radius": None, "taut": True,
+                          "bend_violation": False, "wear": {"most_worn": None}}],
               "validation": {"agreement": 0.99}, "timing": {"total_s": 1.5}}
     r = row_from_report("007", (650,), report)
+    hose, lead = r.cables
+    assert (hose.name, hose.hard, hose.soft, hose.closest, hose.closest_to) == ("hose", 1, 1, -2.5, "frame")
+    assert (hose.max_twist, hose.wear, hose.taut) == (12.0, 4.0, False)
+    assert (lead.hard, lead.soft, lead.closest, lead.wear, lead.taut) == (0, 2, None, None, True)   # taut is a flag
+    # the window of one cable: the lead's contact is not the hose's answer
+    assert length_window([r], cable="lead").longest == 650 and length_window([r]).longest is None
     assert (r.exit_status, r.hard, r.soft, r.worst_distance) == (1, 1, 2, -2.5)
     assert (r.max_strain, r.min_bend_radius, r.taut, r.bend_violation) == (-0.03, 40.0, True, False)
     assert (r.agreement, r.run_time_s, r.status) == (0.99, 1.5, Status.DONE)
