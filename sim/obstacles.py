@@ -6,8 +6,9 @@ with, or the first steps would only push it back out. `Obstacles.measure`
 gives the droop a depth function: how far a cable of a given radius would
 sink into the nearest such part.
 
-This module does not route cables (see `sim.cableplan`); it compiles an
-mjcf base model on its own only to know its geoms' local poses and sizes.
+This module does not route cables (see `sim.cableplan`); it reads an mjcf
+base model (compiled once, `sim.scene.mjcf.base_model`) only to know its
+geoms' local poses and sizes.
 """
 
 from __future__ import annotations
@@ -16,9 +17,9 @@ import mujoco
 import numpy as np
 
 from checker.shapes import Shape, ShapeType, least_signed_distance, mesh_shape
-from sim.mjspec import base_spec
 from sim.modelread import SHAPES, geom_names, mesh_arrays
 from sim.scene import Scene, euler_matrix
+from sim.scene.mjcf import base_model
 from sim.startframes import Frames
 
 
@@ -27,7 +28,7 @@ class Obstacles:
     coordinates: what an initial shape must not droop into (`sim.route`).
 
     Scene parts that are not keep-outs, and the base mjcf model's colliding
-    geoms (compiled once more on their own for their local poses and sizes)
+    geoms (the model the scene reader compiled, for their local poses and sizes)
     on the bodies whose t = 0 frames the scene knows, each with its part
     name (`names`). Only built when `cable-structure` contact is on: for a
     cable with slack to droop, or to find a route through a part
@@ -52,7 +53,7 @@ class Obstacles:
             place(part.body, part.pos, euler_matrix(part.euler))
             names.append(part.name)
         if scene.mjcf is not None:
-            m = base_spec(scene).compile()
+            m = base_model(scene.mjcf)
             colliding: dict[int, list[int]] = {}     # body -> its colliding geoms: the builder's part names
             for g in range(m.ngeom):
                 if int(m.geom_type[g]) in SHAPES and not (m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0):
