@@ -35,6 +35,8 @@ the step (see `sim.substeps`) nor read the compiled model back (see
 
 from __future__ import annotations
 
+from xml.sax.saxutils import quoteattr
+
 import mujoco
 import numpy as np
 
@@ -318,7 +320,7 @@ def _cables_xml(plans: list[CablePlan], scene: Scene, bits: ContactBits, detect:
         # inertiabox: the vertex bodies only slide, so their rotational
         # inertia never acts; the cable's radius keeps it well scaled.
         parts.append(f"""
-  <flexcomp name="{c.name}" type="direct" dim="1" radius="{c.radius!r}" mass="{mass!r}"
+  <flexcomp name={quoteattr(c.name)} type="direct" dim="1" radius="{c.radius!r}" mass="{mass!r}"
             inertiabox="{2.0 * c.radius!r}" point="{_fmt(plan.straight)}" element="{elements}">
     {pin}
     <edge equality="true" solref="{edge_time_constant(scene.timestep)!r} 1" solimp="{edge_solimp(plan)}"/>

@@ -13,6 +13,7 @@ from hypothesis import given
 from strategies import coords
 
 from sim.build import build
+from sim.built import CABLE_PREFIX
 from sim.cablephysics import contact_time_constant, edge_time_constant
 from sim.mjspec import PLANE_GRID, SIM_MARGIN_FRACTION, euler_quat, part_size, set_step
 from sim.scene import euler_matrix, parse_scene
@@ -109,3 +110,13 @@ def test_the_detection_model_computes_no_edge_jacobians_and_finds_the_same_conta
             assert np.array_equal(getattr(d.contact, f)[:n], getattr(dr.contact, f)[:n]), f
         found += n
     assert found
+
+
+@pytest.mark.parametrize("name", ['pow"er <1>', "a & b", "it's > x"])
+def test_names_with_xml_characters_build_as_written(tmp_path, name):
+    # the cables are written into the model as MJCF text: names are quoted, not pasted
+    data = slider_scene(tmp_path)
+    data["cables"][0]["name"] = name
+    built = build(parse_scene(data, tmp_path / "s.toml"))
+    assert [c.name for c in built.cables] == [name]
+    assert mujoco.mj_name2id(built.model, mujoco.mjtObj.mjOBJ_FLEX, CABLE_PREFIX + name) >= 0
