@@ -257,6 +257,21 @@ def check_variant(study: Study, variant: Variant) -> Scene:
     return scene
 
 
+def varied_cables(study: Study) -> tuple[str, ...]:
+    """The cables whose own keys the study varies (``cables[i]...``), in the
+    scene's order; every cable when some varied key is not a cable's (a
+    motion's, a part's: it may move any of them)."""
+    cables = study.scene_data.get("cables", [])
+    names = [c.get("name") for c in cables if isinstance(c, dict)]
+    found = set()
+    for v in study.vary:
+        m = re.match(r"cables\[(\d+)\]", v.path)
+        if m is None:
+            return tuple(names)
+        found.add(int(m.group(1)))
+    return tuple(n for i, n in enumerate(names) if i in found)
+
+
 def check_study_names(study: Study, scene: Scene) -> None:
     """StudyError for a requirement or goal naming no cable or part of the
     scene (with an mjcf model, a name beginning with one of its bodies
