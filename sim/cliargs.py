@@ -117,6 +117,9 @@ def build_parser(version: str) -> argparse.ArgumentParser:
                     help="exit 1 when a variant has interference of this severity or worse "
                          "(default: hard)")
     st.add_argument("--no-record", action="store_true", help="write no recordings, reports only")
+    st.add_argument("--resume", action="store_true",
+                    help="keep the variants a previous run of this study finished with the same scene "
+                         "(scene data and files hashed) and run only the rest (default: start afresh)")
     st.add_argument("--quiet", action="store_true", help="print nothing but errors")
     bench = sub.add_parser("bench", help="what accuracy costs in time: tables, CSV and a plot",
                            description="Measure discretisation accuracy, physics resolution, scale, "

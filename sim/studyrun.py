@@ -2,22 +2,39 @@
 
 `run_variants` submits one task per variant and collects the outcomes as
 they finish. Each task (`run_variant`) gets the variant's scene dict and the
-scene's files as bytes (`sim.bundle`, scattered to the cluster once), writes
-them into a temporary folder on the worker, parses and runs the scene with
-`sim.run.run_scene`, and returns the report and the recording as bytes: the
-workers need no shared disk, and the same inputs give the same numbers
-wherever they run. The client writes each variant's report and recording
-into ``<out>/variants/<id>/`` as soon as it arrives.
+scene's files as bytes (`sim.bundle`), writes them into a temporary folder
+on the worker, parses and runs the scene with `sim.run.run_scene`, and
+returns the report and the recording as bytes: the workers need no shared
+disk, and the same inputs give the same numbers wherever they run. The
+client writes each variant's report and recording into
+``<out>/variants/<id>/`` as soon as it arrives, and last its
+``variant.json``: the hash of the variant's scene dict and files
+(`scene_hash`), by which ``--resume`` keeps it.
 
-The embedded cluster (`--workers`) is a `distributed.LocalCluster` of worker
-processes with one thread each, listening on 127.0.0.1 only, without a
-dashboard; its worker processes ignore SIGINT, so a Ctrl-C in the terminal
-reaches only the study, which cancels what has not finished (variants
+The scene's files reach the cluster as one task of their own, which every
+variant's task depends on: Dask copies its result to each worker that runs
+a variant, and since the scheduler keeps the task itself, a worker that dies
+takes nothing with it: its variants, and the files if no other worker held
+them, run again elsewhere (on a running scheduler, once a worker is there).
+A variant whose worker dies `distributed.scheduler.allowed-failures` + 1
+times is a failed row (KilledWorker).
+
+Each variant runs on its worker's one task thread, with no simulation
+stepped ahead on another (`RunOptions(overlap=False)`), so N workers run N
+variants on N cores. Python's imports stay loaded in a worker between its
+variants; its first variant pays them.
+
+Temporary folders: a variant's lies under the embedded cluster's study
+folder (`sim.studycluster`, removed when the study ends) or else in the
+worker's temporary folder, named ``cablecheck-variant-<host>-<pid>-<id>-*``;
+each variant first removes such folders of processes of this host that no
+longer exist (a worker killed mid-variant).
+
+A Ctrl-C (the study's stop request) cancels what has not finished: variants
 already running see the study's Dask `Event` set and stop within half a
-second, on any cluster), closes the cluster and keeps what has finished. Dask's nanny starts worker processes with
-OMP / MKL / OpenBLAS threads set to 1 (`distributed.nanny.pre-spawn-environ`).
-A variant that raises, or whose worker dies, becomes a failed row with its
-error; the others go on.
+second, on any cluster; what finished is kept. A variant that raises, or
+whose worker dies too often, becomes a failed row with its error; the others
+go on. The cluster itself: `sim.studycluster`.
 
 This module does not parse study files (see `sim.study`), reduce reports to
 rows (`sim.studyresult`) or write the study's tables and plot (`sim.studyplot`).
@@ -25,39 +42,36 @@ rows (`sim.studyresult`) or write the study's tables and plot (`sim.studyplot`).
 
 from __future__ import annotations
 
+import hashlib
 import json
-import logging
 import os
 import shutil
-import signal
+import socket
 import tempfile
-import threading
 import time
 from collections.abc import Callable
-from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from sim.bundle import Bundle, materialise
+from sim.studycluster import Cluster, StudyRunError, cluster, workers_of   # noqa: F401 (StudyRunError: the callers')
 from sim.studyplot import write_atomic
 from sim.studyresult import Row, Status, row_from_report
 
 POLL_S = 0.05
 """How often the client looks for finished variants and a stop request, seconds."""
 
-WORKER_WAIT_S = 60.0
-"""How long a study on a running scheduler waits for its first worker, seconds."""
-
 Progress = Callable[[int, int, int], None]
 """progress(finished, total, failed): called as variants finish."""
 
-
-class StudyRunError(Exception):
-    """The cluster could not be used (a scheduler that cannot be reached, no worker)."""
-
-
 STOP_POLL_S = 0.5
 """How often a running variant asks whether its study was stopped, seconds."""
+
+TEMP_PREFIX = "cablecheck-variant-"
+"""A variant's temporary folder's name begins so (then host, process id, variant id)."""
+
+VARIANT_FILE = "variant.json"
+"""Written last into a finished variant's folder: its id and `scene_hash`."""
 
 
 @dataclass(frozen=True)
@@ -71,12 +85,15 @@ class VariantTask:
       stop_event: name of the study's Dask `Event`, set when the study is
         stopped: a running variant then ends within `STOP_POLL_S` seconds
         (a cancelled Dask task that has started would run on to its end).
+      temp_root: the folder to make the variant's temporary folder in
+        (None: the worker's temporary folder).
     """
 
     id: str
     data: dict
     record: bool
     stop_event: str | None = None
+    temp_root: str | None = None
 
 
 class _EventStop:
@@ -108,18 +125,27 @@ class VariantOutput:
     Attributes:
       report: the report file's bytes (JSON).
       recording: the recording's bytes, or None without one.
+      task_s: the task's wall time on its worker (files written, scene
+        parsed, run, outputs read), seconds.
+      pid: the worker process's id.
     """
 
     report: bytes
     recording: bytes | None
+    task_s: float = 0.0
+    pid: int = 0
 
 
 def run_variant(task: VariantTask, bundle: Bundle) -> VariantOutput:
     """Run one variant in a temporary folder on this machine (a Dask task)."""
-    from sim.run import RunOptions, run_scene   # loads MuJoCo on the worker
+    from sim.run import RunOptions, run_scene   # loaded once per worker process, kept after
     from sim.scene import parse_scene
 
-    with tempfile.TemporaryDirectory(prefix=f"cablecheck-variant-{task.id}-") as tmp:
+    t0 = time.perf_counter()
+    root = task.temp_root if task.temp_root and os.path.isdir(task.temp_root) else tempfile.gettempdir()
+    remove_stale_temp(root)
+    prefix = f"{TEMP_PREFIX}{_host()}-{os.getpid()}-{task.id}-"
+    with tempfile.TemporaryDirectory(prefix=prefix, dir=root) as tmp:
         scene_path = materialise(bundle, Path(tmp) / "scene")
         scene = parse_scene(task.data, scene_path)
         report = Path(tmp) / "out" / "report.json"
@@ -128,13 +154,66 @@ def run_variant(task: VariantTask, bundle: Bundle) -> VariantOutput:
         # a worker is one thread, one core's share of the cluster: its run
         # stays on that thread (no simulation stepped ahead, sim.ahead)
         run_scene(scene, RunOptions(report=report, record=record, overlap=False), stop=stop)
-        return VariantOutput(report=report.read_bytes(),
-                             recording=record.read_bytes() if record else None)
+        return VariantOutput(report=report.read_bytes(), recording=record.read_bytes() if record else None,
+                             task_s=time.perf_counter() - t0, pid=os.getpid())
+
+
+def _host() -> str:
+    """This machine's name as it may stand in a folder name."""
+    return "".join(c if c.isalnum() else "_" for c in socket.gethostname())[:40] or "host"
+
+
+def remove_stale_temp(root: str | Path) -> list[Path]:
+    """Remove the variants' temporary folders in `root` left by processes of
+    this host, owned by this user, that no longer exist (a worker killed
+    mid-variant); return them."""
+    gone = []
+    mine = f"{TEMP_PREFIX}{_host()}-"
+    try:
+        entries = list(os.scandir(root))
+    except OSError:
+        return gone
+    for entry in entries:
+        if not entry.name.startswith(mine):
+            continue
+        pid = entry.name[len(mine):].split("-", 1)[0]
+        try:
+            if not pid.isdigit() or entry.stat(follow_symlinks=False).st_uid != os.getuid() \
+                    or _alive(int(pid)):
+                continue
+        except OSError:
+            continue
+        shutil.rmtree(entry.path, ignore_errors=True)
+        gone.append(Path(entry.path))
+    return gone
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:   # another user's process
+        return True
+    return True
+
+
+def scene_hash(data: dict, bundle: Bundle) -> str:
+    """SHA-256 of a variant's scene dict (canonical JSON) and of its scene's
+    files (names and bytes): equal hashes, the same run."""
+    h = hashlib.sha256()
+    h.update(json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=True).encode())
+    h.update(bundle.scene.encode() + b"\0")
+    for name, content in bundle.files:
+        h.update(name.encode() + b"\0" + str(len(content)).encode() + b"\0")
+        h.update(content)
+    return h.hexdigest()
 
 
 def run_variants(tasks: list[VariantTask], values: dict[str, tuple], bundle: Bundle, out: Path, *,
                  workers: int | None = None, scheduler: str | None = None,
-                 stop=None, progress: Progress | None = None, judged: tuple = ((), None)) -> tuple[list[Row], bool]:
+                 stop=None, progress: Progress | None = None, judged: tuple = ((), None),
+                 resume: bool = False) -> tuple[list[Row], bool]:
     """Run every task on the cluster; write each variant's outputs under
     `out`/variants/<id>/ as it arrives. Returns the rows in task order and
     whether every task was run (False after a stop request: unfinished
@@ -143,10 +222,17 @@ def run_variants(tasks: list[VariantTask], values: dict[str, tuple], bundle: Bun
     `workers`: size of the embedded cluster (default: the number of cores);
     `scheduler`: address of a running one instead. `stop` has an `asked`
     attribute polled while waiting (`sim.stop.StopRequest`). `judged`: the
-    study's (requirements, goal) each row is judged by."""
-    clear_variants(out)
-    with cluster(workers, scheduler) as client:
-        return run_batch(client, tasks, values, bundle, out, stop=stop, progress=progress, judged=judged)
+    study's (requirements, goal) each row is judged by. `resume`: keep the
+    variants already in `out` whose scene hash is the task's (see
+    `run_batch`); without it, `out`/variants is emptied first."""
+    with cluster(workers, scheduler, stop) as cl:
+        if not resume:
+            clear_variants(out)
+        rows, complete = run_batch(cl, tasks, values, bundle, out, stop=stop, progress=progress,
+                                   judged=judged, resume=resume)
+    if complete:
+        prune_variants(out, [r.id for r in rows])
+    return rows, complete
 
 
 def clear_variants(out: Path) -> None:
@@ -156,26 +242,79 @@ def clear_variants(out: Path) -> None:
         shutil.rmtree(folder)
 
 
-def run_batch(client, tasks: list[VariantTask], values: dict[str, tuple], bundle: Bundle, out: Path, *,
+def prune_variants(out: Path, ids: list[str]) -> None:
+    """Remove the folders under `out`/variants that are not of `ids` (a
+    resumed study's leftovers of another expansion)."""
+    folder = Path(out) / "variants"
+    keep = set(ids)
+    if folder.is_dir():
+        for sub in folder.iterdir():
+            if sub.name not in keep:
+                shutil.rmtree(sub) if sub.is_dir() else sub.unlink()
+
+
+def kept_row(task: VariantTask, values: tuple, digest: str, folder: Path, judged: tuple) -> Row | None:
+    """The row of a variant already finished in `folder` with this scene
+    hash (and a recording if the task wants one), from its report; else None."""
+    try:
+        kept = json.loads((folder / VARIANT_FILE).read_text())
+        report = json.loads((folder / "report.json").read_text())
+    except (OSError, ValueError):
+        return None
+    if not isinstance(kept, dict) or kept.get("scene_sha256") != digest or kept.get("id") != task.id:
+        return None
+    recording = folder / "recording.rrd"
+    if task.record and not recording.is_file():
+        return None
+    return row_from_report(task.id, values, report, str(folder / "report.json"),
+                           str(recording) if task.record else None, *judged)
+
+
+def _identity(bundle: Bundle) -> Bundle:
+    """The task the scene's files travel as: its spec stays with the
+    scheduler, so a worker's death loses nothing that cannot be rerun."""
+    return bundle
+
+
+def run_batch(cl: Cluster, tasks: list[VariantTask], values: dict[str, tuple], bundle: Bundle, out: Path, *,
               stop=None, progress: Progress | None = None, judged: tuple = ((), None),
-              done: int = 0, total: int | None = None) -> tuple[list[Row], bool]:
+              done: int = 0, total: int | None = None, resume: bool = False) -> tuple[list[Row], bool]:
     """`run_variants` on an open `cluster`: one batch of a study (a search
     runs several); `done` and `total` count the study's variants for
-    `progress`."""
+    `progress`. With `resume`, a variant whose folder holds a finished run
+    of the same scene hash (`kept_row`) is not run again: its row is read
+    from its report."""
     folder = Path(out) / "variants"
     rows: dict[str, Row] = {}
     complete = True
     total = len(tasks) if total is None else total
-    from distributed import Event
-
-    shared = client.scatter(bundle, broadcast=False, hash=False)
-    tag = os.urandom(4).hex()
-    stopped = Event(f"cablecheck-stop-{tag}", client=client)
-    futures = {client.submit(run_variant, replace(t, stop_event=stopped.name), shared,
-                             key=f"cablecheck-{tag}-{t.id}", pure=False,
-                             priority=len(tasks) - k): t   # in study order
-               for k, t in enumerate(tasks)}
+    client = cl.client
+    digests = {t.id: scene_hash(t.data, bundle) for t in tasks}
     failed = 0
+    todo = []
+    for t in tasks:
+        row = kept_row(t, values[t.id], digests[t.id], folder / t.id, judged) if resume else None
+        if row is None:
+            todo.append(t)
+            continue
+        rows[t.id] = row
+        failed += row.status is Status.FAILED
+        if progress:
+            progress(done + len(rows), total, failed)
+    futures = {}
+    stopped = None
+    if todo:
+        from distributed import Event
+
+        tag = os.urandom(4).hex()
+        shared = client.submit(_identity, bundle, key=f"cablecheck-{tag}-files", pure=False,
+                               priority=len(todo) + 1)
+        stopped = Event(f"cablecheck-stop-{tag}", client=client)
+        futures = {client.submit(run_variant, replace(t, stop_event=stopped.name, temp_root=cl.temp_root), shared,
+                                 key=f"cablecheck-{tag}-{t.id}", pure=False,
+                                 priority=len(todo) - k): t   # in study order
+                   for k, t in enumerate(todo)}
+        del shared   # the variants' tasks hold the files' task
     try:
         while futures:
             if stop is not None and stop.asked:
@@ -187,7 +326,7 @@ def run_batch(client, tasks: list[VariantTask], values: dict[str, tuple], bundle
                 continue
             for f in finished:
                 t = futures.pop(f)
-                rows[t.id] = _collect(f, t, values[t.id], folder / t.id, judged)
+                rows[t.id] = _collect(f, t, values[t.id], folder / t.id, judged, digests[t.id])
                 failed += rows[t.id].status is Status.FAILED
                 f.release()
                 if progress:
@@ -205,8 +344,9 @@ def run_batch(client, tasks: list[VariantTask], values: dict[str, tuple], bundle
     return [rows[t.id] for t in tasks], complete
 
 
-def _collect(future, task: VariantTask, values: tuple, folder: Path, judged: tuple) -> Row:
-    """The row of a finished future; its report and recording written under `folder`."""
+def _collect(future, task: VariantTask, values: tuple, folder: Path, judged: tuple, digest: str) -> Row:
+    """The row of a finished future; its report and recording written under
+    `folder` (emptied first), then its `VARIANT_FILE`."""
     try:
         output: VariantOutput = future.result()
     except Exception as e:   # its own error, its worker's death (KilledWorker), or cancelled
@@ -214,7 +354,9 @@ def _collect(future, task: VariantTask, values: tuple, folder: Path, judged: tup
                    error=f"{type(e).__name__}: {e}".strip())
     from sim.report import write_report
 
-    folder.mkdir(parents=True, exist_ok=True)
+    if folder.exists():
+        shutil.rmtree(folder)
+    folder.mkdir(parents=True)
     report = json.loads(output.report)
     recording = None
     if output.recording is not None:
@@ -223,93 +365,63 @@ def _collect(future, task: VariantTask, values: tuple, folder: Path, judged: tup
     report["recording"] = None if recording is None else str(recording)
     path = folder / "report.json"
     write_report(report, path)
+    write_atomic(folder / VARIANT_FILE, (json.dumps({"id": task.id, "scene_sha256": digest,
+                                                     "task_s": output.task_s}, indent=1) + "\n").encode())
     return row_from_report(task.id, values, report, str(path),
                            None if recording is None else str(recording), *judged)
 
 
-@contextmanager
-def cluster(workers: int | None, scheduler: str | None):
-    """A Dask client on the embedded cluster or on `scheduler`; closed on leaving."""
-    from distributed import Client, LocalCluster
-
-    if scheduler is not None:
-        try:
-            client = Client(scheduler, timeout="10s")
-        except (OSError, TimeoutError) as e:
-            raise StudyRunError(f"cannot reach the Dask scheduler at {scheduler}: {e}") from None
-        try:
-            try:
-                client.wait_for_workers(1, timeout=WORKER_WAIT_S)
-            except TimeoutError:
-                raise StudyRunError(f"no Dask worker joined the scheduler at {scheduler} within "
-                                    f"{WORKER_WAIT_S:g} s (start one: dask worker {scheduler})") from None
-            yield client
-        finally:
-            client.close()
-        return
-    n = workers or os.cpu_count() or 1
-    with _sigint_ignored():   # worker processes inherit the ignored SIGINT (see module docstring)
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                               dashboard_address=None, silence_logs=logging.ERROR)
-    try:
-        client = Client(cluster)
-        try:
-            yield client
-        finally:
-            client.close()
-    finally:
-        try:   # waits for running tasks a few seconds, then ends their processes
-            cluster.close()
-        except KeyboardInterrupt:   # a second Ctrl-C: the worker processes, daemonic, end with us
-            pass
-
-
-@contextmanager
-def _sigint_ignored():
-    """SIGINT ignored while child processes are started (Python keeps an
-    ignored SIGINT ignored at its start-up); the caller's handler is back on
-    leaving. A Ctrl-C in those seconds is not seen. A no-op off the main thread."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
-
-
 def run_search(study, record: bool, out: Path, *, workers: int | None = None, scheduler: str | None = None,
-               stop=None, progress: Progress | None = None) -> tuple[list[Row], bool]:
+               stop=None, progress: Progress | None = None, resume: bool = False) -> tuple[list[Row], bool]:
     """A study's search (``[search] method = "optimise"``): rounds of
     variants in the varied keys' ranges on one cluster, each round's points
     proposed by `sim.studysearch.Search` from the rows so far
     (`sim.studyresult.Row.score`), until the budget is spent. Returns every
-    row in the order run and whether the search ran to its end."""
+    row in the order run and whether the search ran to its end.
+
+    Each round's scenes are checked (`sim.study.check_variant`) before the
+    round runs; a point the scene refuses is a failed row with the scene's
+    complaint, not run. `resume` keeps finished variants as `run_batch`
+    does: the search proposes the same points from the same rows."""
     from sim.bundle import make_bundle
-    from sim.study import variant_at
+    from sim.scene import SceneError
+    from sim.study import check_variant, variant_at
     from sim.studysearch import Search
 
     lo = [v.bounds[0] for v in study.vary]
     hi = [v.bounds[1] for v in study.vary]
     budget = study.search.budget
-    clear_variants(out)
     rows: list[Row] = []
     complete = True
-    with cluster(workers, scheduler) as client:
-        batch = max(1, len(client.scheduler_info().get("workers", {})))
+    with cluster(workers, scheduler, stop) as cl:
+        if not resume:
+            clear_variants(out)
+        batch = max(1, workers_of(cl.client))
         search = Search(lo, hi, budget, batch)
         points = search.first()
         width = max(3, len(str(budget - 1)))
         while points and complete:
             found = [variant_at(study, f"{len(rows) + k:0{width}d}", tuple(float(x) for x in p))
                      for k, p in enumerate(points)]
-            bundle, datas = make_bundle(study.scene_path, [v.data for v in found])
-            tasks = [VariantTask(id=v.id, data=d, record=record) for v, d in zip(found, datas)]
-            got, complete = run_batch(client, tasks, {v.id: v.values for v in found}, bundle, out, stop=stop,
-                                      progress=progress, judged=(study.requirements, study.goal),
-                                      done=len(rows), total=budget)
-            rows += got
-            search.tell(points, [r.score() for r in got])
+            refused: dict[str, Row] = {}
+            for v in found:
+                try:
+                    check_variant(study, v)
+                except SceneError as e:
+                    refused[v.id] = Row(id=v.id, values=v.values, status=Status.FAILED, error=str(e))
+            runnable = [v for v in found if v.id not in refused]
+            got: dict[str, Row] = dict(refused)
+            if runnable:
+                bundle, datas = make_bundle(study.scene_path, [v.data for v in runnable])
+                tasks = [VariantTask(id=v.id, data=d, record=record) for v, d in zip(runnable, datas)]
+                ran, complete = run_batch(cl, tasks, {v.id: v.values for v in runnable}, bundle, out, stop=stop,
+                                          progress=progress, judged=(study.requirements, study.goal),
+                                          done=len(rows) + len(refused), total=budget, resume=resume)
+                got.update((r.id, r) for r in ran)
+            batch_rows = [got[v.id] for v in found]
+            rows += batch_rows
+            search.tell(points, [r.score() for r in batch_rows])
             points = search.next()
+    if complete:
+        prune_variants(out, [r.id for r in rows])
     return rows, complete
