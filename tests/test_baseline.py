@@ -136,15 +136,15 @@ def test_a_file_that_is_no_report_is_bad_input(tmp_path, capsys, text, problem):
 
 
 def test_the_recording_says_each_clashs_status(tmp_path):
-    from tests.test_record import _rows
+    from tests.test_record import _clash_rows, _rows
 
     _run(_scene(tmp_path, "before", {"jig/a": (100, 12), "jig/b": (300, 10)}), tmp_path / "before.json")
     after = _scene(tmp_path, "after", {"jig/a": (100, 60), "jig/b": (300, 8), "jig/c": (200, 12)})
     record = tmp_path / "after.rrd"
     assert main(["run", str(after), "--record", str(record), "--quiet", "--fail-on", "never",
                  "--report", str(tmp_path / "after.json"), "--baseline", str(tmp_path / "before.json")]) == 0
-    rows = [r for r in _rows(record, "/clashes") if r["t"] is not None]
-    assert sorted((r["pair"][0], r["status"][0]) for r in rows) == [("lead / jig/b", "present"),
-                                                                    ("lead / jig/c", "new")]
+    rows = _clash_rows(record)
+    assert sorted((r["a"], r["b"], r["status"]) for r in rows) == [("lead", "jig/b", "present"),
+                                                                   ("lead", "jig/c", "new")]
     summary = " ".join(str(v) for r in _rows(record, "/summary") for v in r.values())
     assert "1 new, 1 still present, 1 resolved" in summary and "jig/a" in summary

@@ -17,7 +17,7 @@ import pytest
 from rerun.chunk import RrdReader
 
 from sim.cli import main, version
-from sim.record import KEEPOUT_COLOUR, PART_COLOUR, SPOT, STATE_COLOURS, wear_colours
+from sim.record import CLASH_COLUMNS, KEEPOUT_COLOUR, PART_COLOUR, SPOT, STATE_COLOURS, wear_colours
 from sim.record.style import pair_path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -47,6 +47,25 @@ def _rows(record: Path, entity: str) -> list[dict]:
             row["t"] = None if times[i] is None else float(times[i])
             rows.append(row)
     return sorted(rows, key=lambda r: (r["t"] is not None, r["t"] or 0.0))
+
+
+def _clash_rows(record: Path) -> list[dict]:
+    """The clash list's rows in its order (rank on the `clash` sequence): {column: value, "t": worst time s,
+    "clash": rank}, from its entities `clashes/<column>` (one per column), each column's header under "headers"."""
+    rows: dict[int, dict] = {}
+    for chunk in RrdReader(record).stream():
+        if not chunk.entity_path.startswith("/clashes/"):
+            continue
+        name = chunk.entity_path.split("/")[-1]
+        batch = chunk.to_record_batch()
+        (header,) = [k for k in batch.schema.names if "RowId" not in k and k not in ("sim_time", "clash")]
+        ranks = batch.column("clash").to_pylist()
+        t = batch.column("sim_time").cast(pa.int64()).to_numpy() * 1e-9
+        for rank, when, value in zip(ranks, t, batch.column(header).to_pylist()):
+            row = rows.setdefault(rank, {"clash": rank, "t": float(when), "headers": {}})
+            row[name] = value[0]
+            row["headers"][name] = header
+    return [rows[k] for k in sorted(rows)]
 
 
 def _view_defaults(record: Path) -> list[dict]:
@@ -102,8 +121,12 @@ def test_properties_hold_units_clearance_scene_file_and_version(pinch):
 
 def test_only_the_simulation_timeline_is_written(pinch):
     _, record = pinch
-    timelines = {t for c in RrdReader(record).stream() for t in c.timeline_names}
+    timelines = {t for c in RrdReader(record).stream() if not c.entity_path.startswith("/clashes/")
+                 for t in c.timeline_names}
     assert timelines == {"sim_time"}
+    # the clash list's rows also carry their rank, on a sequence of its own
+    assert {t for c in RrdReader(record).stream() if c.entity_path.startswith("/clashes/")
+            for t in c.timeline_names} == {"sim_time", "clash"}
 
 
 def test_the_spot_is_labelled_with_pair_and_distance_in_its_own_colour(pinch):
@@ -154,14 +177,97 @@ def test_only_the_elements_near_the_spot_take_the_state_colour(pinch):
 
 def test_the_clash_list_has_one_row_per_event_at_its_worst_time(pinch):
     report, record = pinch
-    rows = _rows(record, "/clashes")
+    rows = _clash_rows(record)
     assert len(rows) == len(report["events"]) == 1
     (row,), (ev,) = rows, report["events"]
-    assert row["t"] == pytest.approx(ev["t_worst"])
-    assert (row["type"], row["pair"], row["severity"], row["phase"]) == \
-        (["cable-structure"], ["loop / drawer/back"], ["hard"], ["dynamic"])
-    assert row["start_s"] == [pytest.approx(ev["t_start"])] and row["end_s"] == [pytest.approx(ev["t_end"])]
-    assert row["worst_distance"] == [pytest.approx(ev["min_distance"])]
+    assert row["t"] == pytest.approx(ev["t_worst"]) and row["clash"] == 1
+    # short names (`back` is the only part so called), the full paths beside
+    assert (row["type"], row["pair"], row["severity"], row["phase"], row["a"], row["b"]) == \
+        ("cable-structure", "loop / back", "hard", "dynamic", "loop", "drawer/back")
+    assert row["start"] == pytest.approx(ev["t_start"]) and row["end"] == pytest.approx(ev["t_end"])
+    assert row["worst_distance"] == round(ev["min_distance"], 2) and row["headers"]["worst_distance"] == "mm"
+    assert "status" not in row                              # only against a baseline run
+
+
+def test_the_clash_view_shows_the_layouts_columns_in_order(pinch):
+    """rerun's dataframe view orders columns by entity (`entity_order`), one
+    entity's components alphabetically: the layout names one entity per
+    column, in CLASH_COLUMNS' order, and selects the rank and the worst time."""
+    _, record = pinch
+    reader = RrdReader(record)
+    (store,) = reader.blueprints()
+    queries = []
+    for chunk in reader.stream(store=store):
+        batch = chunk.to_record_batch()
+        if "DataframeQuery:entity_order" in batch.schema.names:
+            queries.append({k: batch.column(k).to_pylist()[0] for k in batch.schema.names if ":" in k})
+    (query,) = queries
+    columns = [c for c in CLASH_COLUMNS if c != "status"]
+    assert query["DataframeQuery:entity_order"] == [[f"/clashes/{c}" for c in columns]]
+    assert query["DataframeQuery:timeline"] == ["clash"]
+    (select,) = query["DataframeQuery:select"]
+    assert select["time_columns"] == ["clash", "sim_time"]
+    assert [c["entity_path"] for c in select["component_columns"]] == [f"/clashes/{c}" for c in columns]
+    headers = _clash_rows(record)[0]["headers"]
+    assert [c["component"] for c in select["component_columns"]] == [headers[c] for c in columns]
+
+
+class _Event:
+    def __init__(self, a, b, severity, distance, t, kind="cable-structure"):
+        self.a, self.b, self.severity, self.min_distance, self.t_worst = a, b, severity, distance, t
+        self.type, self.phase, self.t_start, self.t_end = kind, "dynamic", t - 0.1, t + 0.1
+
+
+def _clash_list(tmp_path: Path, events: list, unit: float, units: str, status=None, names=()) -> list[dict]:
+    import uuid
+
+    import rerun as rr
+
+    from sim.record.clashes import send_clash_list
+    path = tmp_path / f"list_{units}.rrd"
+    rec = rr.RecordingStream(application_id="list", recording_id=uuid.uuid4())
+    rec.save(str(path))
+    send_clash_list(rec, events, [{} for _ in events], unit, units, status, names)
+    rec.disconnect()
+    return _clash_rows(path)
+
+
+def test_the_clash_list_reads_at_a_glance_with_shared_prefixes(tmp_path: Path):
+    """Two hoses against two uprights of one frame: short names tell them
+    apart, the rows go hard before soft then deepest first (not by time),
+    distances are rounded to 0.01 mm, the pair's header is as wide as the
+    longest pair (the view sizes a column to its header)."""
+    up1, up2 = "machine/frame/upright_1", "machine/frame/upright_2"
+    events = [_Event("hose_left", up1, "hard", -0.000889260512, 0.27),
+              _Event("hose_right", up2, "soft", 0.00007517234, 0.10),
+              _Event("hose_left", up2, "hard", -0.002135284391, 0.438),
+              _Event("hose_right", "hose_right", "hard", -0.0024997195, 0.51, kind="taut"),
+              _Event("hose_right", up1, "hard", -0.000889264, 0.20)]
+    rows = _clash_list(tmp_path, events, 1e-3, "mm", status=["new", "present", "new", "new", "present"],
+                       names=["machine/frame/base", up1, up2])
+    assert [r["clash"] for r in rows] == [1, 2, 3, 4, 5]
+    assert [r["pair"] for r in rows] == ["hose_right", "hose_left / upright_2", "hose_right / upright_1",
+                                         "hose_left / upright_1", "hose_right / upright_2"]
+    assert [r["severity"] for r in rows] == ["hard"] * 4 + ["soft"]
+    assert [r["worst_distance"] for r in rows] == [-2.5, -2.14, -0.89, -0.89, 0.08]
+    assert [r["t"] for r in rows] == pytest.approx([0.51, 0.438, 0.20, 0.27, 0.10])     # equal depth: earlier first
+    assert [r["status"] for r in rows] == ["new", "new", "present", "new", "present"]
+    assert [(r["a"], r["b"]) for r in rows][1] == ("hose_left", up2)
+    headers = rows[0]["headers"]
+    assert headers["worst_distance"] == "mm" and headers["start"] == headers["end"] == "s"
+    assert len(headers["pair"]) >= len("hose_right / upright_2") + 2 and headers["pair"].startswith("cable / other")
+    # in metres, 0.01 mm is five decimals
+    rows_m = _clash_list(tmp_path, events, 1.0, "m")
+    assert [r["worst_distance"] for r in rows_m] == [-0.0025, -0.00214, -0.00089, -0.00089, 0.00008]
+    assert rows_m[0]["headers"]["worst_distance"] == "m" and "status" not in rows_m[0]
+
+
+def test_short_names_keep_the_levels_that_tell_names_apart():
+    from sim.record.style import short_names
+    got = short_names(["machine/frame/upright_1", "machine/frame/upright_2", "left/rail", "right/rail", "hose",
+                       "drawer/back"])
+    assert got == {"machine/frame/upright_1": "upright_1", "machine/frame/upright_2": "upright_2",
+                   "left/rail": "left/rail", "right/rail": "right/rail", "hose": "hose", "drawer/back": "back"}
 
 
 def test_the_event_log_has_one_start_and_one_end_per_event_levelled_by_severity(pinch, crossing):
@@ -240,10 +346,59 @@ def test_the_wear_map_is_in_the_report_and_the_recording(pinch):
     assert len(strip["LineStrips3D:colors"]) == n
 
 
+class _Wear:
+    def __init__(self, name, sliding, contact_time):
+        self.name, self.sliding, self.contact_time = name, np.asarray(sliding, float), np.asarray(contact_time, float)
+
+
+def test_wear_is_on_one_scale_for_the_run_with_a_noise_floor():
+    """The same sliding is the same colour on two cables, whichever slid
+    most; the top of the scale is the run's most; sliding at or below the
+    floor (rounding noise: 9e-16 m here) is grey like no contact."""
+    from sim.record.wearview import ROUNDING_ULPS, SLIDING_FLOOR, wear_scale
+    a = _Wear("a", [0.0, 9e-16, 0.002, 0.010], [0.0, 0.5, 0.5, 0.5])
+    b = _Wear("b", [0.002, 0.030, 0.0], [0.5, 0.5, 0.5])
+    steps, extent = 1000, 0.5
+    scale = wear_scale([a, b], 1e-3, "mm", steps, extent)
+    assert (scale.measure, scale.units) == ("sliding", "mm") and scale.top == pytest.approx(30.0)
+    rounding = steps * ROUNDING_ULPS * np.finfo(float).eps * extent
+    assert scale.floor == pytest.approx(max(SLIDING_FLOOR * 0.030, rounding) / 1e-3)
+    ca = wear_colours(a.sliding, a.contact_time, scale, 1e-3)
+    cb = wear_colours(b.sliding, b.contact_time, scale, 1e-3)
+    grey = (200, 200, 200)
+    assert tuple(ca[2]) == tuple(cb[0])                  # 2 mm on either cable
+    assert tuple(cb[1]) == (253, 231, 37)                 # the run's most: the top colour
+    assert tuple(ca[3]) != tuple(cb[1])                   # a's own most is not the top
+    assert tuple(ca[0]) == grey and tuple(ca[1]) == grey  # no contact; rounding noise
+    assert tuple(cb[2]) == grey                           # in contact, slid nothing
+    # a run whose sliding is all noise is coloured by contact time (s), nothing under a floor
+    still = wear_scale([_Wear("c", [9e-16, 0.0], [0.2, 0.4])], 1e-3, "mm", steps, extent)
+    assert (still.measure, still.top, still.floor, still.units) == ("contact_time", 0.4, 0.0, "s")
+    assert "0.4 s" in still.legend() and "30 mm" in scale.legend()
+
+
+def test_the_wear_view_names_each_cable_draws_the_parts_and_a_legend(pinch):
+    report, record = pinch
+    (name,) = _rows(record, "/wear_map/loop/name")
+    assert name["Points3D:labels"] == ["loop"]
+    entities = _entities(record)
+    assert "/wear_map/parts/drawer/back" in entities      # what the loop touches, as at t = 0
+    assert not any(e.startswith("/wear_map/parts/cabinet") for e in entities)
+    (values,) = _rows(record, "/wear_map/legend/values")
+    top = max(report["cables"][0]["wear"]["sliding"])
+    assert f"{top:.3g} mm sliding" in values["Points3D:labels"][2] and values["Points3D:labels"][0] == "0"
+    assert "grey" in values["Points3D:labels"][3] and " mm" in values["Points3D:labels"][3]
+    (bar,) = _rows(record, "/wear_map/legend/bar")
+    assert len(bar["LineStrips3D:colors"]) == len(bar["LineStrips3D:strips"]) > 10
+
+
 def test_wear_colours_grey_where_untouched():
     c = wear_colours(np.array([0.0, 0.0, 1.0, 2.0]), np.array([0.0, 1.0, 1.0, 1.0]))
-    assert tuple(c[0]) == (200, 200, 200) and tuple(c[1]) != (200, 200, 200)
-    assert tuple(c[3]) == (253, 231, 37)
+    assert tuple(c[0]) == (200, 200, 200) and tuple(c[1]) == (200, 200, 200)   # touched, slid nothing
+    assert tuple(c[2]) != (200, 200, 200) and tuple(c[3]) == (253, 231, 37)
+    # nothing slid: over contact time
+    c = wear_colours(np.zeros(3), np.array([0.0, 1.0, 2.0]))
+    assert tuple(c[0]) == (200, 200, 200) and tuple(c[1]) != (200, 200, 200) and tuple(c[2]) == (253, 231, 37)
     assert not np.isnan(wear_colours(np.zeros(3), np.zeros(3)).astype(float)).any()
 
 
@@ -313,11 +468,11 @@ def test_a_cable_lying_on_a_plate_with_one_end_sliding_wears_only_where_it_touch
     assert (contact[always] > duration - 0.011).all() and contact.max() <= duration + 1e-9
     assert (sliding[always] > 30.0).all() and sliding.max() <= 60.0 + 1.0   # the end travels 60 mm
     assert wear["most_worn"]["touches"] == "plate"
-    # the recording's wear map colours the untouched bins grey, the others not
+    # the recording's wear map colours the untouched bins grey, and those that slid (not under the floor) not
     (strip,) = _rows(record, "/wear_map/lead")
     grey = int.from_bytes(bytes([200, 200, 200, 255]), "big")
     colours = np.array(strip["LineStrips3D:colors"], np.uint32)
-    assert (colours[never] == grey).all() and not (colours[contact > 0] == grey).any()
+    assert (colours[never] == grey).all() and not (colours[sliding > 1e-3 * sliding.max()] == grey).any()
 
 
 def test_a_style_given_once_rides_in_the_first_row(pinch):

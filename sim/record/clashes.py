@@ -1,8 +1,11 @@
 """The review recording's lists: the clash list, the event log and the summary.
 
-`clashes`: one row per event at its worst time (type, pair, severity,
-phase, start, end, worst distance and time, joint values where given), so
-selecting a row's time jumps there. `events`: one text entry at the start
+`clashes/<column>`: one row per event, worst first (hard before soft, then
+deepest), ranked on the `clash` sequence and at its worst time on
+`sim_time` (so selecting a row's time jumps there): severity, the pair in
+short names, the worst distance in scene units to 0.01 mm, status (against
+a baseline run), type, phase, start, end, joint values where given, and
+the pair's full paths; an entity per column, in the layout's order. `events`: one text entry at the start
 and one at the end of each event, level by severity. `summary`: a markdown
 document at t = 0 (settings, the clashes worst first, the allowed pairs and
 the contacts attachment windows excused, the most worn place of each cable
@@ -21,7 +24,8 @@ import rerun as rr
 
 from sim.record.columns import column, floats, strings
 from sim.record.columns import times as sim_time
-from sim.record.style import pair_text
+from sim.record.layout import CLASH_TIMELINE, clash_headers
+from sim.record.style import pair_text, short_pairs
 
 
 @dataclass(frozen=True)
@@ -51,25 +55,53 @@ def send_log(rec: rr.RecordingStream, entries: list[tuple[float, str, str]]) -> 
                               column(rr.TextLog.descriptor_level(), strings([e[2] for e in entries]))])
 
 
+def distance_decimals(unit: float) -> int:
+    """Decimals that give 0.01 mm (0.00001 m) in scene units of `unit` metres
+    (2 in mm, 5 in m)."""
+    return max(0, int(round(-np.log10(DISTANCE_STEP / unit))))
+
+
+DISTANCE_STEP = 1e-5
+"""The clash list's distances are rounded to this (metres): 0.01 mm."""
+
+
+def clash_order(events: list) -> list[int]:
+    """The clash list's order: hard before soft, then deepest (least
+    distance) first, then earliest."""
+    return sorted(range(len(events)), key=lambda k: (events[k].severity != "hard", float(events[k].min_distance),
+                                                     float(events[k].t_worst)))
+
+
 def send_clash_list(rec: rr.RecordingStream, events: list, joints: list[dict], unit: float, units: str,
-                    status: list[str] | None = None) -> None:
-    """The clash list: one row per event at its worst time, one column per field
-    (`status`: against a baseline run, per event; no such column without one)."""
+                    status: list[str] | None = None, names=()) -> None:
+    """The clash list: one row per event, worst first (:func:`clash_order`),
+    indexed by its rank on the `clash` sequence and its worst time on
+    `sim_time`; one entity per column (`clashes/<column>`, in the layout's
+    order, see :data:`sim.record.layout.CLASH_COLUMNS`): pairs by short names
+    (:func:`sim.record.style.short_names`, among `names` and the events'),
+    the full paths in `a` and `b`; distances in scene units rounded to 0.01 mm.
+    `status`: against a baseline run, per event; no such column without one."""
     if not events:
         return
-    rows = sorted(zip(events, joints, status or [None] * len(events)), key=lambda r: float(r[0].t_worst))
-    ev = [e for e, _, _ in rows]
-    fields = {"type": strings([e.type for e in ev]), "pair": strings([pair_text(e.a, e.b) for e in ev]),
-              "severity": strings([e.severity for e in ev]), "phase": strings([e.phase for e in ev]),
-              "start_s": floats([e.t_start for e in ev]), "end_s": floats([e.t_end for e in ev]),
-              "worst_distance": floats([e.min_distance / unit for e in ev]),
-              "worst_time_s": floats([e.t_worst for e in ev]), "units": strings([units] * len(ev)),
-              "joints": strings([", ".join(f"{k} {v:.4g}" for k, v in j.items()) or "-" for _, j, _ in rows])}
-    if status is not None:
-        fields["status"] = strings([s for _, _, s in rows])
-    # the list's columns, as `rr.AnyValues` names them (a component per field, no archetype)
-    rec.send_columns("clashes", indexes=[sim_time(np.array([float(e.t_worst) for e in ev]))],
-                     columns=[column(rr.ComponentDescriptor(name), values) for name, values in fields.items()])
+    order = clash_order(events)
+    ev = [events[k] for k in order]
+    pairs = short_pairs(ev, names)
+    digits = distance_decimals(unit)
+    values = {"severity": strings([e.severity for e in ev]),
+              "pair": strings(pairs),
+              "worst_distance": floats(np.round([e.min_distance / unit for e in ev], digits)),
+              "status": strings([status[k] for k in order]) if status is not None else None,
+              "type": strings([e.type for e in ev]), "phase": strings([e.phase for e in ev]),
+              "start": floats([e.t_start for e in ev]), "end": floats([e.t_end for e in ev]),
+              "joints": strings([", ".join(f"{k} {v:.4g}" for k, v in joints[k].items()) or "-" for k in order]),
+              "a": strings([e.a for e in ev]), "b": strings([e.b for e in ev])}
+    index = [rr.TimeColumn(CLASH_TIMELINE, sequence=np.arange(1, len(ev) + 1)),
+             sim_time(np.array([float(e.t_worst) for e in ev]))]
+    headers = clash_headers(units, max(map(len, pairs)))
+    for name, header in headers.items():
+        if values[name] is not None:
+            rec.send_columns(f"clashes/{name}", indexes=index, columns=[column(rr.ComponentDescriptor(header),
+                                                                               values[name])])
 
 
 def summary_text(scene: str, settings: Settings, events: list, wear: list, unit: float,

@@ -20,11 +20,29 @@ import rerun.blueprint as rrb
 from rerun.blueprint.components import ComponentColumnSelector
 
 from sim.build import Built
-from sim.record.style import SPOT, STATE_COLOURS, STATES, escape, pair_text
+from sim.record.style import SPOT, STATE_COLOURS, STATES, escape, pair_text, short_pairs
 
-CLASH_COLUMNS = ("type", "pair", "severity", "phase", "start_s", "end_s", "worst_distance", "worst_time_s",
-                 "units", "joints")
-"""The clash list's columns, in order (and "status" last, against a baseline run)."""
+CLASH_COLUMNS = ("severity", "pair", "worst_distance", "status", "type", "phase", "start", "end", "joints", "a", "b")
+"""The clash list's columns, in order, after its rank (`clash`) and worst
+time (`sim_time`); each is an entity, `clashes/<column>` ("status" only
+against a baseline run). rerun's dataframe view orders a view's columns by
+entity (`entity_order`), and one entity's components alphabetically
+whatever the selection's order: hence an entity per column."""
+CLASH_TIMELINE = "clash"
+"""The clash list's index: its rows' rank, worst first (a sequence); each
+row's `sim_time` cell jumps to its worst time."""
+PAIR_HEADER = "cable / other"
+
+
+def clash_headers(units: str, pair_width: int) -> dict[str, str]:
+    """Each clash list column's component name, the header under its entity
+    path: the unit where there is one. The dataframe view sizes a column to
+    its headers and cuts longer values short, so the pair's header is padded
+    to the longest pair (`pair_width` characters, and the quotes the view
+    puts round text)."""
+    return {"severity": "severity", "pair": PAIR_HEADER.ljust(pair_width + 2), "worst_distance": units,
+            "status": "status", "type": "type", "phase": "phase", "start": "s", "end": "s", "joints": "joints",
+            "a": "full path", "b": "full path"}
 VIEWPOINTS = 6
 """Clashes (worst first) that get a saved viewpoint of their own."""
 
@@ -95,10 +113,12 @@ def _scene_eye(bounds, unit: float) -> rrb.EyeControls3D:
                              look_target=centre / unit, eye_up=[0.0, 0.0, 1.0])
 
 
-def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance: float, unit: float,
-              units: str, status: bool = False) -> rrb.Blueprint:
-    """The layout of a finished run (`clearance` in metres; `status`: the
-    clash list has a status column, against a baseline run)."""
+def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance: float, scale, unit: float,
+              units: str, status: bool = False, names=()) -> rrb.Blueprint:
+    """The layout of a finished run (`clearance` in metres; `scale`: the wear
+    map's :class:`sim.record.wearview.WearScale`; `status`: the
+    clash list has a status column, against a baseline run; `names`: the
+    scene's names that the clash list's short names are told apart among)."""
     bounds = extent.bounds
     spots = [spot_style()]          # made once, the default of every 3D view
     tabs = [rrb.Spatial3DView(name="Scene", origin="world", eye_controls=_scene_eye(bounds, unit),
@@ -111,7 +131,7 @@ def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance:
             name=f"#{n} {ev.severity} {pair_text(ev.a, ev.b)} @ {ev.t_worst:.3f} s", origin="world",
             eye_controls=_eye(bounds, np.asarray(ev.where, float), reach, unit), defaults=spots))
     if wear:
-        tabs.append(rrb.Spatial3DView(name="Wear map (sliding; grey: no contact)", origin="wear_map"))
+        tabs.append(rrb.Spatial3DView(name=f"Wear map: {scale.legend()}", origin="wear_map"))
     clear = clearance / unit
     low = min(extent.lowest_distance if extent.lowest_distance is not None else 0.0, 0.0)
     limits = [c.min_bend_radius for c in built.cables if c.min_bend_radius is not None]
@@ -132,12 +152,14 @@ def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance:
         *[rrb.BarChartView(name=f"Wear {w.name}: {m} per bin ({unit_})", origin=f"wear/{escape(w.name)}/{m}")
           for w in wear for m, unit_ in (("contact_time", "s"), ("sliding", units), ("bend_cycles", "cycles"))],
     ]
+    columns = [c for c in CLASH_COLUMNS if status or c != "status"]
+    headers = clash_headers(units, max(map(len, short_pairs(events, names)), default=0))
     lists = rrb.Tabs(
-        rrb.DataframeView(name="Clash list (select a row's time to jump)", origin="clashes",
+        rrb.DataframeView(name="Clash list, worst first (click a row's sim_time to jump)", origin="clashes",
                           query=rrb.archetypes.DataframeQuery(
-                              timeline="sim_time", select=["sim_time", *[ComponentColumnSelector(
-                                  entity_path="/clashes", component=c)
-                                  for c in CLASH_COLUMNS + (("status",) if status else ())]])),
+                              timeline=CLASH_TIMELINE, select=[CLASH_TIMELINE, "sim_time", *[ComponentColumnSelector(
+                                  entity_path=f"/clashes/{c}", component=headers[c]) for c in columns]],
+                              entity_order=[f"/clashes/{c}" for c in columns])),
         rrb.TextLogView(name="Events", origin="events"),
         rrb.TextDocumentView(name="Summary", origin="summary"),
     )

@@ -40,7 +40,7 @@ from sim.record.marks import ClashMarks, Mark
 from sim.record.scene import SceneGeometry
 from sim.record.series import SeriesSet, send_limit_lines
 from sim.record.style import CONTACT_COLOUR, escape, pair_path, pair_text
-from sim.record.wearview import send_wear
+from sim.record.wearview import WearScale, send_wear, wear_scale
 
 
 @cache
@@ -98,6 +98,7 @@ class Recorder:
         self._dim_changes: list[tuple[int, bool]] = []
         self._log: list[tuple[float, str, str]] = []
         self._rest: list[np.ndarray] | None = None
+        self._poses0: np.ndarray | None = None
         self._events: list = []
         self._event_joints: list[dict] = []
         self._event_status: list[str] | None = None
@@ -112,6 +113,7 @@ class Recorder:
         floor and frame the camera; `qpos` (the simulation's, at t = 0) poses
         the visual geoms."""
         self._rest = [np.asarray(c, float) for c in cables] if cables is not None else None
+        self._poses0 = np.asarray(part_poses, float)
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         self.scene.log_static(self.rec, np.asarray(part_poses, float), self._rest, qpos)
 
@@ -234,17 +236,42 @@ class Recorder:
             self.series.send(rec, times)
             send_limit_lines(rec, self.built, times, self.settings.clearance, self.unit, self.settings.units)
         send_log(rec, self._log)
-        send_clash_list(rec, self._events, self._event_joints, self.unit, self.settings.units, self._event_status)
-        send_wear(rec, self.built, self._wear, self._rest, self.unit)
+        names = self.names
+        send_clash_list(rec, self._events, self._event_joints, self.unit, self.settings.units, self._event_status,
+                        names)
+        scale = self.wear_scale()
+        send_wear(rec, self.built, self._wear, self._rest, self.unit, scale, self._touched_parts())
         doc = rr.TextDocument
         rec.send_columns("summary", indexes=[sim_time(np.zeros(1))],
                          columns=[column(doc.descriptor_text(), strings([self._summary])),
                                   column(doc.descriptor_media_type(), strings(["text/markdown"]))])
         extent = Extent(bounds, self.series.lowest("checks/"), frozenset(p.split("/")[0] for p in self.series.series),
                         any(p.startswith("cables/twist/") for p in self.series.series))
-        rec.send_blueprint(blueprint(self.built, self._events, self._wear, extent, self.settings.clearance,
-                                     self.unit, self.settings.units, self._event_status is not None),
+        rec.send_blueprint(blueprint(self.built, self._events, self._wear, extent, self.settings.clearance, scale,
+                                     self.unit, self.settings.units, self._event_status is not None, names),
                            make_active=True, make_default=True)
+
+    def wear_scale(self) -> WearScale:
+        """The wear map's one scale for the run (its rounding floor from the
+        run's steps and the scene's largest coordinate)."""
+        scene = self.built.scene
+        steps = int(np.ceil(float(getattr(scene, "duration", 0.0)) / float(getattr(scene, "timestep", 1.0))))
+        bounds = self.scene.bounds
+        extent = float(np.abs(np.concatenate(bounds)).max()) if bounds is not None else 1.0
+        return wear_scale(self._wear, self.unit, self.settings.units, steps, extent)
+
+    def _touched_parts(self) -> dict:
+        """The parts some cable's wear names as touched: name -> (shape, pose at t = 0)."""
+        touched = {t for w in self._wear for t in w.touches if t is not None}
+        if self._poses0 is None:
+            return {}
+        return {p.name: (self.scene.shape(p, pose), pose) for p, pose in zip(self.built.parts, self._poses0)
+                if p.name in touched}
+
+    @property
+    def names(self) -> list[str]:
+        """The scene's cables' and parts' names (the clash list's short names are told apart among them)."""
+        return [c.name for c in self.built.cables] + [p.name for p in self.built.parts]
 
     def _send_contacts(self, times: np.ndarray) -> None:
         """MuJoCo's contact points, one column, their style (3 px, the

@@ -53,3 +53,29 @@ def pair_path(kind: str, a: str, b: str) -> str:
 def pair_text(a: str, b: str) -> str:
     """A pair as people read it: `a / b` (a self pair: `a`)."""
     return a if a == b else f"{a} / {b}"
+
+
+def short_names(names) -> dict[str, str]:
+    """Each name shortened to its last assembly levels, as few as tell it
+    apart from every other name given: `machine/frame/upright_1` beside
+    `machine/frame/upright_2` reads `upright_1`; a last level shared with
+    another name keeps its parents until the two differ (`left/rail`,
+    `right/rail`)."""
+    full = sorted(set(names))
+    levels = {n: n.split("/") for n in full}
+    short = {}
+    for n in full:
+        parts = levels[n]
+        for k in range(1, len(parts) + 1):
+            tail = parts[-k:]
+            if not any(m != n and levels[m][-k:] == tail for m in full):
+                break
+        short[n] = "/".join(tail)
+    return short
+
+
+def short_pairs(events: list, names=()) -> list[str]:
+    """Each event's pair in short names (:func:`short_names` among `names`
+    and the events' own), as :func:`pair_text` writes it."""
+    short = short_names([*names, *(e.a for e in events), *(e.b for e in events)])
+    return [pair_text(short[e.a], short[e.b]) for e in events]
