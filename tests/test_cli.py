@@ -381,6 +381,6 @@ def test_event_positions_print_at_the_scene_units_precision_far_from_the_origin(
                  "--fail-on", "never"]) == 0
     out_far = capsys.readouterr().out
     assert "cable-structure" in out_near and "e+07" not in out_far
-    row = next(line for line in out_far.splitlines() if "post" in line)
+    row = next(line for line in out_far.splitlines() if "post" in line and "cable-structure" in line)
     x = float(row.split("(")[1].split(",")[0])
     assert abs(x - offset) < 1000 and len(row.split("(")[1].split(",")[0].split(".")[1]) == 2
