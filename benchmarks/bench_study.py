@@ -18,15 +18,32 @@ the interference-free window against the geometry: the largest distance
 between the cable's ends over the drawer's motion (a shorter cable must be
 stretched, taut beyond 1 %).
 
+``--scaling`` instead times the study itself on one worker and on two
+(`cablecheck study --workers 1` and `--workers 2`, whole commands,
+alternating, ``--repeat`` times each, reports and recordings written) and
+prints the ratio (target: two workers at least 1.6 times as fast as one on
+a 2-core machine, issue 27), the date, the load (``uptime``) before and
+after, the command, and what a variant costs on its worker beyond its run
+(`variant.json`'s ``task_s`` less the report's ``timing.total_s``: the
+files written, the scene parsed, the outputs read back), the first variant
+of each worker apart from the rest (the rest show that a worker keeps its
+imports loaded between variants; and the same variant three times on one
+fresh worker). ``--doc FILE`` writes that block into
+FILE between ``<!-- bench_study -->`` and ``<!-- /bench_study -->``.
+
 Run: python benchmarks/bench_study.py [--workers N]
+     python benchmarks/bench_study.py --scaling [--repeat N] [--doc README.md]
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import datetime
 import json
 import os
+import shlex
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -45,6 +62,9 @@ from sim.studyplot import results_csv
 ROOT = Path(__file__).resolve().parents[1]
 STUDY = ROOT / "scenes" / "studies" / "drawer_length_study.toml"
 TARGET = 0.6
+SCALING_TARGET = 1.6
+"""Two workers at least this many times as fast as one (issue 27, on 2 cores)."""
+BEGIN, END = "<!-- bench_study -->", "<!-- /bench_study -->"
 
 
 def largest_end_distance(scene) -> float:
@@ -56,10 +76,105 @@ def largest_end_distance(scene) -> float:
     return float(np.max(np.linalg.norm(ends - np.asarray(cable.start.pos), axis=1))) / scene.scale
 
 
+def load() -> str:
+    """`uptime`'s load averages."""
+    return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip().split("load average: ")[-1]
+
+
+def overheads(folder: Path) -> tuple[list[float], list[float]]:
+    """Per variant of a finished study folder, its task's wall time on its
+    worker less its run's own (seconds): (first variant of each worker, the rest)."""
+    first, rest, seen = [], [], set()
+    for sub in sorted((folder / "variants").iterdir()):
+        stored = json.loads((sub / "variant.json").read_text())
+        report = json.loads((sub / "report.json").read_text())
+        extra = stored["task_s"] - report["timing"]["total_s"]
+        (rest if stored["worker_pid"] in seen else first).append(extra)
+        seen.add(stored["worker_pid"])
+    return first, rest
+
+
+def same_variant_thrice(study) -> list[float]:
+    """The example's variant 002 three times, one after another, on one
+    fresh worker of an embedded cluster: each task's wall time on the worker."""
+    from sim.bundle import make_bundle
+    from sim.studycluster import cluster
+    from sim.studyrun import VariantTask, run_variant
+
+    found = variants(study)
+    bundle, datas = make_bundle(study.scene_path, [v.data for v in found])
+    with cluster(1, None) as cl:
+        task = VariantTask(id=found[2].id, data=datas[2], record=True, temp_root=cl.temp_root)
+        return [cl.client.submit(run_variant, task, bundle, pure=False).result().task_s for _ in range(3)]
+
+
+def scaling(repeat: int, doc: Path | None) -> None:
+    """`--scaling`: the study on one worker against two (see the module docstring)."""
+    study = load_study(STUDY)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    times: dict[int, list[float]] = {1: [], 2: []}
+    extra: dict[int, tuple[list[float], list[float]]] = {1: ([], []), 2: ([], [])}
+    before = load()
+    started = datetime.datetime.now().astimezone()
+    with tempfile.TemporaryDirectory(prefix="bench-study-") as tmp:
+        for k in range(repeat):
+            for n in (1, 2) if k % 2 == 0 else (2, 1):
+                out = Path(tmp) / f"w{n}-{k}"
+                t0 = time.perf_counter()
+                subprocess.run([sys.executable, "-m", "sim.cli", "study", str(STUDY), "--workers", str(n),
+                                "--out", str(out), "--quiet", "--fail-on", "never"], env=env, check=True)
+                times[n].append(time.perf_counter() - t0)
+                first, rest = overheads(out / study.name)
+                extra[n][0].extend(first)
+                extra[n][1].extend(rest)
+    warm = same_variant_thrice(study)
+    after = load()
+    one, two = statistics.median(times[1]), statistics.median(times[2])
+    busy = max(float(x.strip(",")) for x in (before.split()[0], after.split()[0]))
+    lines = [
+        f"Measured {started:%Y-%m-%d %H:%M %Z} on {os.cpu_count()} cores: `cablecheck study` of "
+        f"{STUDY.relative_to(ROOT)} ({len(variants(study))} variants of the drawer, 4 s each, reports "
+        f"and recordings), whole commands, {repeat} of each alternating; load before `{before}`, "
+        f"after `{after}`" + (" (not quiet)" if busy > 0.5 else "") + ".",
+        f"Command: `python benchmarks/bench_study.py {shlex.join(sys.argv[1:])}`",
+        "",
+        "| workers | median s | min s | max s | speed-up |",
+        "|---|---|---|---|---|",
+    ]
+    for n in (1, 2):
+        lines.append(f"| {n} | {statistics.median(times[n]):.1f} | {min(times[n]):.1f} | {max(times[n]):.1f} | "
+                     f"{one / statistics.median(times[n]):.2f} |")
+    firsts = extra[1][0] + extra[2][0]
+    rests = extra[1][1] + extra[2][1]
+    lines += ["", f"Two workers: {one / two:.2f} times as fast as one (target {SCALING_TARGET}). A variant's "
+              f"cost on its worker beyond its run: first variant of a worker median "
+              f"{statistics.median(firsts):.2f} s (n = {len(firsts)}), every later one "
+              f"{statistics.median(rests):.2f} s (n = {len(rests)}, max {max(rests):.2f} s). The same "
+              f"variant three times on one fresh worker: {', '.join(f'{t:.2f}' for t in warm)} s (the first "
+              "pays the imports; the worker keeps them)."]
+    text = "\n".join(lines)
+    print(text)
+    print(json.dumps({"times": times, "first_extra_s": firsts, "later_extra_s": rests, "same_variant_s": warm}))
+    if doc is not None:
+        old = doc.read_text()
+        block = f"{BEGIN}\n{text}\n{END}"
+        if BEGIN in old and END in old:
+            head, rest = old.split(BEGIN, 1)
+            doc.write_text(head + block + rest.split(END, 1)[1])
+        else:
+            doc.write_text(old.rstrip("\n") + "\n\n" + block + "\n")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--scaling", action="store_true", help="time the study on one worker against two")
+    ap.add_argument("--repeat", type=int, default=3, help="--scaling: runs of each")
+    ap.add_argument("--doc", type=Path, default=None, help="--scaling: write the figures into this Markdown file")
     args = ap.parse_args()
+    if args.scaling:
+        scaling(args.repeat, args.doc)
+        return
     study = load_study(STUDY)
     found = variants(study)
     check_variants(study, found)

@@ -221,7 +221,8 @@ def _local(n: int, root: str):
         # no dashboard; the scheduler's HTTP server (health and metrics
         # routes, started whatever dashboard_address says) on a free port of 127.0.0.1
         local = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                             dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": False},
+                             dashboard_address="127.0.0.1:0",
+                             scheduler_kwargs={"dashboard": False, "local_directory": root},
                              silence_logs=logging.ERROR, local_directory=root)
     try:
         client = Client(local)

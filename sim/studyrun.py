@@ -11,13 +11,16 @@ client writes each variant's report and recording into
 ``variant.json``: the hash of the variant's scene dict and files
 (`scene_hash`), by which ``--resume`` keeps it.
 
-The scene's files reach the cluster as one task of their own, which every
-variant's task depends on: Dask copies its result to each worker that runs
-a variant, and since the scheduler keeps the task itself, a worker that dies
-takes nothing with it: its variants, and the files if no other worker held
-them, run again elsewhere (on a running scheduler, once a worker is there).
-A variant whose worker dies `distributed.scheduler.allowed-failures` + 1
-times is a failed row (KilledWorker).
+The scene's files reach the cluster once per batch, as a Dask `Variable`
+kept by the scheduler; a worker fetches them at its first variant of the
+batch and keeps them (`_files`, by their hash). The variants' tasks depend
+on no data held by a worker: the scheduler hands them to whichever worker
+is free (data a task depended on would draw every task to the one worker
+holding it, which is how two workers came to be slower than one), and a
+worker that dies takes nothing with it: its variant runs again elsewhere (on
+a running scheduler, once a worker is there). A variant whose worker dies
+`distributed.scheduler.allowed-failures` + 1 times is a failed row
+(KilledWorker).
 
 Each variant runs on its worker's one task thread, with no simulation
 stepped ahead on another (`RunOptions(overlap=False)`), so N workers run N
@@ -87,6 +90,8 @@ class VariantTask:
         (a cancelled Dask task that has started would run on to its end).
       temp_root: the folder to make the variant's temporary folder in
         (None: the worker's temporary folder).
+      files: (name of the Dask `Variable` holding the scene's files,
+        their `bundle_hash`), or None: the files are given to `run_variant`.
     """
 
     id: str
@@ -94,6 +99,7 @@ class VariantTask:
     record: bool
     stop_event: str | None = None
     temp_root: str | None = None
+    files: tuple[str, str] | None = None
 
 
 class _EventStop:
@@ -136,12 +142,43 @@ class VariantOutput:
     pid: int = 0
 
 
-def run_variant(task: VariantTask, bundle: Bundle) -> VariantOutput:
-    """Run one variant in a temporary folder on this machine (a Dask task)."""
+_FILES: dict[str, Bundle] = {}
+"""A worker's scene files by `bundle_hash`: the last `_FILES_KEPT` batches'."""
+
+_FILES_KEPT = 2
+
+
+def _files(name: str, digest: str) -> Bundle:
+    """The scene's files of a batch: kept from an earlier variant on this
+    worker, else fetched from the scheduler's `Variable` `name`."""
+    if digest not in _FILES:
+        from distributed import Variable
+
+        doc = Variable(name).get(timeout=60)
+        _FILES[digest] = Bundle(scene=doc["scene"], files=tuple((n, bytes(b)) for n, b in doc["files"]))
+        while len(_FILES) > _FILES_KEPT:
+            del _FILES[next(iter(_FILES))]
+    return _FILES[digest]
+
+
+def bundle_hash(bundle: Bundle) -> str:
+    """SHA-256 of a bundle's scene name and files (names and bytes)."""
+    h = hashlib.sha256(bundle.scene.encode() + b"\0")
+    for name, content in bundle.files:
+        h.update(name.encode() + b"\0" + str(len(content)).encode() + b"\0")
+        h.update(content)
+    return h.hexdigest()
+
+
+def run_variant(task: VariantTask, bundle: Bundle | None = None) -> VariantOutput:
+    """Run one variant in a temporary folder on this machine (a Dask task);
+    its scene's files are `bundle`, or else fetched as `task.files` says."""
     from sim.run import RunOptions, run_scene   # loaded once per worker process, kept after
     from sim.scene import parse_scene
 
     t0 = time.perf_counter()
+    if bundle is None:
+        bundle = _files(*task.files)
     root = task.temp_root if task.temp_root and os.path.isdir(task.temp_root) else tempfile.gettempdir()
     remove_stale_temp(root)
     prefix = f"{TEMP_PREFIX}{_host()}-{os.getpid()}-{task.id}-"
@@ -200,13 +237,10 @@ def _alive(pid: int) -> bool:
 
 def scene_hash(data: dict, bundle: Bundle) -> str:
     """SHA-256 of a variant's scene dict (canonical JSON) and of its scene's
-    files (names and bytes): equal hashes, the same run."""
+    files (`bundle_hash`): equal hashes, the same run."""
     h = hashlib.sha256()
     h.update(json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=True).encode())
-    h.update(bundle.scene.encode() + b"\0")
-    for name, content in bundle.files:
-        h.update(name.encode() + b"\0" + str(len(content)).encode() + b"\0")
-        h.update(content)
+    h.update(bundle_hash(bundle).encode())
     return h.hexdigest()
 
 
@@ -270,12 +304,6 @@ def kept_row(task: VariantTask, values: tuple, digest: str, folder: Path, judged
                            str(recording) if task.record else None, *judged)
 
 
-def _identity(bundle: Bundle) -> Bundle:
-    """The task the scene's files travel as: its spec stays with the
-    scheduler, so a worker's death loses nothing that cannot be rerun."""
-    return bundle
-
-
 def run_batch(cl: Cluster, tasks: list[VariantTask], values: dict[str, tuple], bundle: Bundle, out: Path, *,
               stop=None, progress: Progress | None = None, judged: tuple = ((), None),
               done: int = 0, total: int | None = None, resume: bool = False) -> tuple[list[Row], bool]:
@@ -302,19 +330,20 @@ def run_batch(cl: Cluster, tasks: list[VariantTask], values: dict[str, tuple], b
         if progress:
             progress(done + len(rows), total, failed)
     futures = {}
-    stopped = None
+    stopped = shared = None
     if todo:
-        from distributed import Event
+        from distributed import Event, Variable
 
         tag = os.urandom(4).hex()
-        shared = client.submit(_identity, bundle, key=f"cablecheck-{tag}-files", pure=False,
-                               priority=len(todo) + 1)
+        shared = Variable(f"cablecheck-files-{tag}", client=client)   # kept by the scheduler
+        shared.set({"scene": bundle.scene, "files": [[n, b] for n, b in bundle.files]})
+        files = (shared.name, bundle_hash(bundle))
         stopped = Event(f"cablecheck-stop-{tag}", client=client)
-        futures = {client.submit(run_variant, replace(t, stop_event=stopped.name, temp_root=cl.temp_root), shared,
+        futures = {client.submit(run_variant, replace(t, stop_event=stopped.name, temp_root=cl.temp_root,
+                                                      files=files),
                                  key=f"cablecheck-{tag}-{t.id}", pure=False,
                                  priority=len(todo) - k): t   # in study order
                    for k, t in enumerate(todo)}
-        del shared   # the variants' tasks hold the files' task
     try:
         while futures:
             if stop is not None and stop.asked:
@@ -337,6 +366,8 @@ def run_batch(cl: Cluster, tasks: list[VariantTask], values: dict[str, tuple], b
         if futures:
             stopped.set()   # running variants end at their next look (their reports are dropped)
             client.cancel(list(futures))
+        if shared is not None:
+            shared.delete()
     for t in tasks:
         if t.id not in rows:
             rows[t.id] = Row(id=t.id, values=values[t.id], status=Status.NOT_RUN,
@@ -366,7 +397,8 @@ def _collect(future, task: VariantTask, values: tuple, folder: Path, judged: tup
     path = folder / "report.json"
     write_report(report, path)
     write_atomic(folder / VARIANT_FILE, (json.dumps({"id": task.id, "scene_sha256": digest,
-                                                     "task_s": output.task_s}, indent=1) + "\n").encode())
+                                                     "task_s": output.task_s, "worker_pid": output.pid},
+                                                    indent=1) + "\n").encode())
     return row_from_report(task.id, values, report, str(path),
                            None if recording is None else str(recording), *judged)
 

@@ -167,20 +167,25 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
+SCHEDULER_ARGS = ("--host", "127.0.0.1", "--no-dashboard", "--dashboard-address", "127.0.0.1:0")
+WORKER_ARGS = ("--host", "127.0.0.1", "--nthreads", "1", "--no-dashboard", "--dashboard-address", "127.0.0.1:0")
+"""The README's: every socket on 127.0.0.1 (the HTTP servers too)."""
+
+
 @pytest.fixture(scope="module")
 def scheduler():
-    """`dask scheduler` and two `dask worker` processes on 127.0.0.1, stopped afterwards."""
+    """`dask scheduler` and two `dask worker` processes on 127.0.0.1 (as the README starts
+    them, without the nanny), stopped afterwards."""
     from distributed import Client
 
     port = _free_port()
     address = f"tcp://127.0.0.1:{port}"
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
     quiet = dict(env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    procs = [subprocess.Popen([sys.executable, "-m", "dask", "scheduler", "--host", "127.0.0.1",
-                               "--port", str(port), "--no-dashboard"], **quiet)]
+    procs = [subprocess.Popen([sys.executable, "-m", "dask", "scheduler", *SCHEDULER_ARGS, "--port", str(port)],
+                              **quiet)]
     try:
-        procs += [subprocess.Popen([sys.executable, "-m", "dask", "worker", address, "--host",
-                                    "127.0.0.1", "--nthreads", "1", "--no-dashboard", "--no-nanny"],
+        procs += [subprocess.Popen([sys.executable, "-m", "dask", "worker", address, *WORKER_ARGS, "--no-nanny"],
                                    **quiet)
                   for _ in range(2)]
         deadline = time.monotonic() + 60
@@ -217,8 +222,16 @@ COMPARED = ("id", "cables.power.length", "status", "exit_status", "hard", "soft"
 
 @pytest.fixture(scope="module")
 def local_run(tiny, tmp_path_factory):
+    """The tiny study on the embedded cluster, its temporary folders in a
+    folder of its own: empty again at the end."""
+    import tempfile
+
     out = tmp_path_factory.mktemp("local")
-    assert main(["study", str(tiny), "--workers", "2", "--out", str(out), "--quiet"]) == 0
+    temp = tmp_path_factory.mktemp("temp")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(tempfile, "tempdir", str(temp))
+        assert main(["study", str(tiny), "--workers", "2", "--out", str(out), "--quiet"]) == 0
+    assert not list(temp.iterdir())   # the embedded cluster's folder, with the variants', is gone
     return out / "tiny"
 
 
@@ -405,3 +418,163 @@ def test_a_requirement_naming_nothing_in_the_scene_exits_2(tmp_path, capsys):
     assert main(["study", str(path), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert "require[0].between" in err and "'drawr' names no cable or part" in err
+
+
+# -- robust execution (issue 27 item 5) ----------------------------------------------------------
+
+def _env() -> dict:
+    return {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+
+
+def _worker(address: str, tmp: Path) -> subprocess.Popen:
+    """A `dask worker` without a nanny (a SIGKILL ends it for good), its temporary folder `tmp`."""
+    return subprocess.Popen([sys.executable, "-m", "dask", "worker", address, *WORKER_ARGS, "--no-nanny"],
+                            env={**_env(), "TMPDIR": str(tmp)}, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+
+
+def _stop(procs: list[subprocess.Popen]) -> None:
+    for p in reversed(procs):
+        if p.poll() is None:
+            p.send_signal(signal.SIGTERM)
+    for p in procs:
+        try:
+            p.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait()
+
+
+def test_killing_the_only_worker_loses_no_variant(tiny, tmp_path):
+    """A scheduler with one worker, killed (SIGKILL) once the first of three
+    variants is in; a new worker joins: every variant finishes, as the
+    embedded cluster gives it, and the killed worker's temporary folder is
+    gone (the new worker, on the same machine, removes it). Before, the
+    scene's files had been scattered to the dead worker alone and every
+    remaining variant failed."""
+    study = write_text(tmp_path / "s.toml", f'[study]\nname = "k"\nscene = "{tiny.parent}/scene/tiny.toml"\n'
+                       '[[vary]]\nkey = "cables.power.length"\nvalues = [600, 650, 700]\n')
+    port = _free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    temp = tmp_path / "worker-tmp"
+    temp.mkdir()
+    procs = [subprocess.Popen([sys.executable, "-m", "dask", "scheduler", *SCHEDULER_ARGS, "--port", str(port)],
+                              env=_env(), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        procs.append(_worker(address, temp))
+        proc = subprocess.Popen([sys.executable, "-m", "sim.cli", "study", str(study), "--scheduler", address,
+                                 "--out", str(tmp_path / "out"), "--no-record"], env=_env(),
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        procs.append(proc)
+        for line in proc.stderr:
+            if line.startswith("variants: 1/3"):
+                break
+        procs[1].kill()   # SIGKILL: the worker dies mid-variant, its temporary folder left behind
+        procs[1].wait()
+        procs.append(_worker(address, temp))
+        out, err = proc.communicate(timeout=120)
+    finally:
+        _stop(procs)
+    assert proc.returncode == 0, err
+    rows = _rows(tmp_path / "out" / "k")
+    assert [r["status"] for r in rows] == ["done"] * 3 and all(r["error"] == "" for r in rows)
+    assert [r["cables.power.length"] for r in rows] == ["600", "650", "700"]
+    assert not list(temp.glob("cablecheck-variant-*"))
+
+
+def test_resume_keeps_finished_variants_and_gives_the_same_rows(tiny, local_run, scheduler, tmp_path):
+    """The straight run's folder with variant 001 missing (as a study
+    interrupted before it finished leaves it): --resume runs 001 alone and
+    its rows are the straight run's; a variant whose scene changed since
+    (its stored hash differs) runs again; without --resume every variant runs."""
+    folder = tmp_path / "tiny"
+    shutil.copytree(local_run, folder)
+    shutil.rmtree(folder / "variants" / "001")
+    kept = folder / "variants" / "000" / "report.json"
+    before = kept.stat().st_mtime_ns
+    assert main(["study", str(tiny), "--scheduler", scheduler, "--out", str(tmp_path), "--quiet",
+                 "--resume"]) == 0
+    assert kept.stat().st_mtime_ns == before                         # kept, not run again
+    assert (folder / "variants" / "001" / "report.json").is_file()   # run
+    assert [{k: r[k] for k in (*COMPARED, "run_time_s")} for r in _rows(folder)][:1] == \
+           [{k: r[k] for k in (*COMPARED, "run_time_s")} for r in _rows(local_run)][:1]
+    assert [{k: r[k] for k in COMPARED} for r in _rows(folder)] == \
+           [{k: r[k] for k in COMPARED} for r in _rows(local_run)]
+    stored = folder / "variants" / "000" / "variant.json"
+    stored.write_text(stored.read_text().replace('"scene_sha256": "', '"scene_sha256": "0'))
+    done = (folder / "variants" / "001" / "report.json").stat().st_mtime_ns
+    assert main(["study", str(tiny), "--scheduler", scheduler, "--out", str(tmp_path), "--quiet",
+                 "--no-record", "--resume"]) == 0
+    assert kept.stat().st_mtime_ns != before                          # its hash differed: run again
+    assert not (folder / "variants" / "000" / "recording.rrd").exists()
+    assert (folder / "variants" / "001" / "report.json").stat().st_mtime_ns == done
+    assert [{k: r[k] for k in COMPARED} for r in _rows(folder)] == \
+           [{k: r[k] for k in COMPARED} for r in _rows(local_run)]
+
+
+@pytest.fixture()
+def silent_port():
+    """A port on 127.0.0.1 that accepts connections and never answers."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen(8)
+        yield s.getsockname()[1]
+
+
+def test_bad_scheduler_addresses_exit_2_naming_the_option(tiny, tmp_path, capsys, monkeypatch, silent_port):
+    import dask
+
+    from sim import studycluster
+
+    monkeypatch.setattr(studycluster, "CONNECT_TIMEOUT_S", 1.0)
+    for key in list(os.environ):
+        if key.startswith("DASK_DISTRIBUTED__COMM__TLS"):
+            monkeypatch.delenv(key)
+    cases = [("foo", "no port"), ("http://127.0.0.1:8786", "not a Dask scheduler's"),
+             ("tcp://127.0.0.1:99999", "not a number from 1 to 65535"),
+             ("tcp://no-such-host.invalid:8786", "cannot be resolved"),
+             ("tls://127.0.0.1:8786", "needs Dask's TLS configuration"),
+             (f"tcp://127.0.0.1:{silent_port}", "no answer within 1 s")]
+    with dask.config.set({"distributed.comm.tls.ca-file": None, "distributed.comm.tls.client.cert": None}):
+        for address, words in cases:
+            t0 = time.monotonic()
+            assert main(["study", str(tiny), "--scheduler", address, "--out", str(tmp_path), "--quiet"]) == 2
+            err = capsys.readouterr().err
+            assert f"--scheduler {address!r}: " in err and words in err and "Traceback" not in err, err
+            assert time.monotonic() - t0 < 8, address
+    assert not (tmp_path / "tiny").exists()
+
+
+def test_ctrl_c_while_connecting_is_honoured(tiny, tmp_path, silent_port):
+    """A scheduler address that accepts and never answers: Ctrl-C ends the
+    study at once (exit 130), within the connect timeout's 10 s."""
+    proc = subprocess.Popen([sys.executable, "-m", "sim.cli", "study", str(tiny), "--scheduler",
+                             f"tcp://127.0.0.1:{silent_port}", "--out", str(tmp_path)], env=_env(),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().startswith("study tiny: ")   # connecting now
+        time.sleep(0.5)
+        t0 = time.monotonic()
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=20)
+        waited = time.monotonic() - t0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 130 and "interrupted" in err and "Traceback" not in err, err
+    assert waited < 5
+
+
+def test_stale_temporary_folders_of_dead_processes_are_removed(tmp_path):
+    from sim.studyrun import TEMP_PREFIX, _host, remove_stale_temp
+
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    mine = f"{TEMP_PREFIX}{_host()}-"
+    (tmp_path / f"{mine}{dead.pid}-001-abc" / "scene").mkdir(parents=True)
+    (tmp_path / f"{mine}{os.getpid()}-002-abc").mkdir()
+    (tmp_path / f"{TEMP_PREFIX}otherhost-{dead.pid}-003-abc").mkdir()
+    assert remove_stale_temp(tmp_path) == [tmp_path / f"{mine}{dead.pid}-001-abc"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        [f"{mine}{os.getpid()}-002-abc", f"{TEMP_PREFIX}otherhost-{dead.pid}-003-abc"])
