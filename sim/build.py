@@ -40,9 +40,12 @@ from sim.cablephysics import (
     EDGE_IMPEDANCE,
     EDGE_YIELD,
     contact_time_constant,
+    damping_step,
     edge_time_constant,
     first_bending_frequency,
+    first_mode,
     rayleigh_damping,
+    step_damping_ratio,
 )
 from sim.cableplan import CLAMP_EDGE, CablePlan, default_segments, has_slack, plan_cable
 from sim.contactbits import ContactBits
@@ -64,8 +67,9 @@ __all__ = [
     "Attachment", "Built", "CABLE_PREFIX", "CLAMP_EDGE", "CONTACT_SOLIMP", "CableModel", "ContactBits",
     "EDGE_IMPEDANCE", "EDGE_YIELD", "JointDrive", "MAX_SUBSTEPS", "PartModel", "SIM_MARGIN_FRACTION",
     "Substeps", "bending_step", "build", "build_simulation", "choose_substeps", "contact_time_constant",
-    "default_segments", "edge_time_constant", "first_bending_frequency", "held_speeds", "plan_cables",
-    "rayleigh_damping", "scene_origin", "tunnel_warnings", "with_detection",
+    "damping_step", "default_segments", "edge_time_constant", "first_bending_frequency", "first_mode",
+    "held_speeds", "plan_cables", "rayleigh_damping", "scene_origin", "step_damping_ratio", "tunnel_warnings",
+    "with_detection",
 ]
 
 
@@ -98,7 +102,7 @@ def build_simulation(scene: Scene, planned: tuple) -> Built:
     built = read_built(scene, sim, None, plans, origin, own_bits)
     poses = script_poses(built) if scene.effects.dynamics else None
     built.substeps = choose_substeps(built, poses)
-    set_step(sim, built.substeps.step)
+    set_step(sim, built.substeps.step, cable_damping(built))
     built.warnings = tuple(tunnel_warnings(built, poses))
     if built.substeps.capped:
         need = min(built.substeps.needed.values())
@@ -106,6 +110,13 @@ def build_simulation(scene: Scene, planned: tuple) -> Built:
                            f"at most {MAX_SUBSTEPS} steps are taken per scene timestep; scene.timestep "
                            f"<= {need * MAX_SUBSTEPS:.3g} s would do",)
     return built
+
+
+def cable_damping(built: Built) -> dict[int, tuple[float, float]]:
+    """Each cable's flex id -> (its `damping`, its first bending mode as held, `first_mode`)."""
+    defs = {c.name: c for c in built.scene.cables}
+    return {c.flex_id: (defs[c.name].damping, first_mode(c.rest_s, [a.vertex for a in c.attachments], defs[c.name]))
+            for c in built.cables}
 
 
 def with_detection(built: Built, planned: tuple) -> Built:

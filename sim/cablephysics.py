@@ -1,7 +1,7 @@
 """A cable's material as MuJoCo's parameters: damping, time constants, impedances.
 
-The rod's Rayleigh damping from the cable's damping ratio at its first
-bending mode; the solref time constants of the edge-length equality and of
+The rod's Rayleigh damping from the cable's damping ratio at its own
+first bending mode as held, the integrator's own damping accounted for; the solref time constants of the edge-length equality and of
 the cables' contacts, which follow the simulation step; the impedance of
 the edge equality, stiff at small strain and yielding beyond a few percent.
 docs/physics.md explains the model and its numbers.
@@ -34,17 +34,105 @@ def first_bending_frequency(cable: CableDef, length: float) -> float:
     return float(FIRST_BENDING_MODE ** 2 / length ** 2 * np.sqrt(cable.young * cable.radius ** 2 / (4.0 * cable.density)))
 
 
-def rayleigh_damping(cable: CableDef, length: float) -> float:
+def first_mode(rest_s: np.ndarray, held, cable: CableDef) -> float:
+    """omega_1 of the cable's own first bending mode as it is held, rad/s.
+
+    The rod as MuJoCo has it: its vertices at arc lengths `rest_s` (a
+    clamp's short held edge included), masses lumped per vertex (`rho pi
+    r^2` times half the elements meeting there), bending energy `k phi^2`
+    at each interior vertex (`k = EI / (l0 + l1)`, phi the turn there),
+    with the vertices `held` (indices) fixed: a clamp holds two, a pin
+    one, a free end none. The lowest non-zero mode of transverse motion
+    (a free-free rod's first elastic mode, 4.730^2 / L^2 sqrt(EI / mu) as
+    the element count grows; a cantilever's 1.875^2 / L^2 sqrt(EI / mu)).
+    Gravity, tension and sag are left out: they are what this bending mode
+    is measured against (docs/physics.md, Damping)."""
+    rest_s = np.asarray(rest_s, float)
+    n = len(rest_s)
+    l = np.diff(rest_s)
+    ei = cable.young * np.pi * cable.radius ** 4 / 4.0
+    mu = cable.density * np.pi * cable.radius ** 2
+    mass = mu * 0.5 * (np.concatenate([[0.0], l]) + np.concatenate([l, [0.0]]))
+    k = np.zeros((n, n))
+    for i in range(1, n - 1):
+        g = np.zeros(n)
+        g[i - 1], g[i], g[i + 1] = 1.0 / l[i - 1], -1.0 / l[i - 1] - 1.0 / l[i], 1.0 / l[i]
+        k += 2.0 * ei / (l[i - 1] + l[i]) * np.outer(g, g)
+    free = np.setdiff1d(np.arange(n), np.asarray(list(held), int))
+    if len(free) == 0:
+        return float("inf")
+    a = k[np.ix_(free, free)] / np.sqrt(np.outer(mass[free], mass[free]))
+    eig = np.linalg.eigvalsh(a)
+    elastic = eig[eig > 1e-9 * max(float(eig.max()), 1e-300)]
+    return float(np.sqrt(elastic.min())) if len(elastic) else float("inf")
+
+
+def step_damping_ratio(omega: float, step: float, beta: float = 0.0) -> float:
+    """Damping ratio of a mode of frequency `omega` under MuJoCo's `discrete`
+    integrator at step `step`, with Rayleigh damping `beta` (seconds).
+
+    The step is backward Euler in the stiffness and the damping (MuJoCo's
+    effective inertia `M + h D + h^2 K`): with `c = beta omega^2` a mode's
+    state is multiplied each step by the roots of
+    `(1 + h c + h^2 omega^2) z^2 - (2 + h c) z + 1 = 0`, and its damping
+    ratio is `-Re(s) / |s|` with `s = ln(z) / h` (what a logarithmic
+    decrement measures). With no damping it is about `omega h / 2`: the
+    integrator's own."""
+    h, c = step, beta * omega ** 2
+    a = 1.0 + h * c + (h * omega) ** 2
+    disc = (h * c) ** 2 - 4.0 * (h * omega) ** 2
+    if disc >= 0.0:
+        return 1.0
+    s = np.log(complex(2.0 + h * c, np.sqrt(-disc)) / (2.0 * a)) / h
+    return float(-s.real / abs(s))
+
+
+def rayleigh_damping(damping: float, omega: float, step: float) -> float:
     """MuJoCo's flex elasticity `damping` (Rayleigh, stiffness-proportional), seconds.
 
     MuJoCo damps a rod with the force -beta K v, K its bending (and
-    torsion) stiffness; a mode of frequency omega then has the damping ratio
-    zeta = beta omega / 2. The cable's `damping` is zeta at its first
-    bending mode (`first_bending_frequency`), so beta = 2 zeta / omega_1;
-    higher bending modes are damped in proportion to their frequency, and
-    what gravity or tension alone restores (a hanging chain's swing) is not
-    damped at all: there is no air drag."""
-    return float(2.0 * cable.damping / first_bending_frequency(cable, length))
+    torsion) stiffness; a mode of frequency omega then has the damping
+    ratio beta omega / 2, and the integrator adds its own
+    (`step_damping_ratio`). The cable's `damping` is the damping ratio of
+    its first bending mode as held (`first_mode`), integrator included:
+    beta is the one at which `step_damping_ratio(omega, step, beta)` is
+    `damping` (beta = 2 damping / omega as the step goes to 0). Where the
+    integrator alone damps that mode as much, beta is 0 (the step's need,
+    `damping_step`, keeps that from happening). Higher bending modes are
+    damped in proportion to their frequency, and what gravity or tension
+    alone restores (a hanging chain's swing) is not damped at all: there
+    is no air drag."""
+    from scipy.optimize import brentq   # where it runs: start-up leaves scipy.optimize out
+    if damping <= 0.0 or not np.isfinite(omega):
+        return 0.0
+    if step_damping_ratio(omega, step) >= damping:
+        return 0.0
+    hi = 2.0 * damping / omega
+    while step_damping_ratio(omega, step, hi) < damping:
+        hi *= 2.0
+    return float(brentq(lambda b: step_damping_ratio(omega, step, b) - damping, 0.0, hi, xtol=1e-14 * hi,
+                        rtol=1e-12))
+
+
+DAMPING_SHARE = 1.0
+"""Largest share of a cable's declared damping that the integrator's own
+may supply (see `damping_step`); `rayleigh_damping` supplies the rest.
+All of it may: for modes with omega h << 1 backward Euler damps like
+Rayleigh damping of beta = h (ratio omega h / 2, in proportion to the
+frequency), so the two are interchangeable and the realised ratio follows
+the real mode's frequency the same way whichever supplies it."""
+
+
+def damping_step(damping: float, omega: float) -> float:
+    """Largest step at which the integrator's own damping of the first bending
+    mode (`step_damping_ratio` without beta, about omega h / 2) is at most
+    `DAMPING_SHARE` of the declared `damping`, seconds (inf for none)."""
+    if damping <= 0.0 or not np.isfinite(omega):
+        return float("inf")
+    from scipy.optimize import brentq
+    target = DAMPING_SHARE * damping
+    x = brentq(lambda x: step_damping_ratio(1.0, x) - target, 1e-12, 10.0, xtol=1e-15, rtol=1e-12)
+    return float(x / omega)
 
 
 CONTACT_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)

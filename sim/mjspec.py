@@ -46,6 +46,7 @@ from sim.cablephysics import (
     contact_time_constant,
     edge_solimp,
     edge_time_constant,
+    first_mode,
     rayleigh_damping,
 )
 from sim.cableplan import CablePlan
@@ -308,7 +309,9 @@ def _cables_xml(plans: list[CablePlan], scene: Scene, bits: ContactBits, detect:
     for plan in plans:
         c = plan.cable
         n = len(plan.straight)
-        length = float(np.linalg.norm(np.diff(plan.straight, axis=0), axis=1).sum())
+        seg = np.linalg.norm(np.diff(plan.straight, axis=0), axis=1)
+        length = float(seg.sum())
+        omega = first_mode(np.concatenate([[0.0], np.cumsum(seg)]), [h.vertex for h in plan.held], c)
         mass = c.density * np.pi * c.radius ** 2 * length
         pins = sorted({h.vertex for h in plan.held})
         pin = f'<pin id="{" ".join(map(str, pins))}"/>' if pins else ""
@@ -324,7 +327,7 @@ def _cables_xml(plans: list[CablePlan], scene: Scene, bits: ContactBits, detect:
             inertiabox="{2.0 * c.radius!r}" point="{_fmt(plan.straight)}" element="{elements}">
     {pin}
     <edge equality="true" solref="{edge_time_constant(scene.timestep)!r} 1" solimp="{edge_solimp(plan)}"/>
-    <elasticity young="{c.young!r}" damping="{rayleigh_damping(c, length)!r}"{_shear(c)}/>
+    <elasticity young="{c.young!r}" damping="{rayleigh_damping(c.damping, omega, scene.timestep)!r}"{_shear(c)}/>
     <contact selfcollide="{selfcollide}" contype="{contype}" conaffinity="{conaff}"
              margin="{margin!r}" condim="3" solref="{contact_solref!r} 1"
              solimp="{_fmt(CONTACT_SOLIMP)}" {friction}/>
@@ -348,10 +351,15 @@ def move_held(m: mujoco.MjModel, plans: list[CablePlan], frames: Frames) -> None
             m.flex_vert[adr + h.vertex] = frames.to_local(h.body, plan.routed[h.vertex])
 
 
-def set_step(m: mujoco.MjModel, step: float) -> None:
+def set_step(m: mujoco.MjModel, step: float, damping: dict[int, tuple[float, float]] | None = None) -> None:
     """Set the simulation step and what is tied to it (the time constants
-    of the edge equalities and of the cables' contacts)."""
+    of the edge equalities and of the cables' contacts and, for each flex
+    id in `damping`, its Rayleigh damping from (damping ratio, first
+    mode), `sim.cablephysics.rayleigh_damping`: the integrator's own
+    damping depends on the step)."""
     m.opt.timestep = step
+    for f, (zeta, omega) in (damping or {}).items():
+        m.flex_damping[f] = rayleigh_damping(zeta, omega, step)
     m.flex_solref[:, 0] = contact_time_constant(step)
     m.geom_solref[_friction_geoms(m), 0] = contact_time_constant(step)
     flex_eq = m.eq_type == int(mujoco.mjtEq.mjEQ_FLEX)

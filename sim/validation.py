@@ -15,6 +15,9 @@ physics_validation.py tabulates them per element count (docs/physics.md).
   one period.
 - `u_swing`: a cable hanging in a U between two clamps, pushed sideways;
   its swing's frequency and damping ratio (logarithmic decrement).
+- `ring_down`: a cantilever started in its first bending mode, in the
+  plane it sags in under gravity or across it; the mode's damping ratio
+  (logarithmic decrement) against the cable's `damping`.
 - `fast_ends`: one end moved 0.1 L back and forth at a frequency; largest
   |strain| of the cable and of any element.
 - `bowed_rod`: a 200 GPa, 3 mm steel rod of 0.6 m clamped between ends
@@ -186,6 +189,79 @@ def u_swing(elements: int = 40, damping: float | None = None, duration: float = 
     freq = float(1.0 / np.mean(np.diff(_crossings(t, y))))
     return _result("U swing", elements, freq, None, wall, built, sim, damping_ratio=zeta,
                    damping_set=scene.cables[0].damping)
+
+
+CANTILEVER_MODE = 1.8751040687119611
+"""beta_1 L of a cantilever's first bending mode: cos(bL) cosh(bL) = -1."""
+
+
+def cantilever_mode(x) -> np.ndarray:
+    """A cantilever's first bending mode at x = s / L (0 at the clamp), 1 at the free end."""
+    b = CANTILEVER_MODE
+    sigma = (np.cosh(b) + np.cos(b)) / (np.sinh(b) + np.sin(b))
+
+    def phi(x):
+        return np.cosh(b * x) - np.cos(b * x) - sigma * (np.sinh(b * x) - np.sin(b * x))
+
+    return phi(np.asarray(x, float)) / phi(1.0)
+
+
+def decrement(t: np.ndarray, x: np.ndarray, cycles: int = 8) -> tuple[float, float]:
+    """Damping ratio and frequency (rad/s) of a decaying oscillation about 0:
+    the logarithmic decrement of its positive peaks (each placed by a parabola
+    through the sample and its neighbours), fitted over the first `cycles`."""
+    k = np.flatnonzero((x[1:-1] > x[:-2]) & (x[1:-1] >= x[2:]) & (x[1:-1] > 0.0)) + 1
+    k = k[:cycles + 1]
+    y0, y1, y2 = x[k - 1], x[k], x[k + 1]
+    den = y0 - 2.0 * y1 + y2
+    off = np.where(den != 0.0, 0.5 * (y0 - y2) / np.where(den != 0.0, den, 1.0), 0.0)
+    amp = y1 - 0.25 * (y0 - y2) * off
+    tp = t[k] + off * (t[k + 1] - t[k])
+    if len(amp) < 3:
+        return float("nan"), float("nan")
+    delta = -np.polyfit(np.arange(len(amp)), np.log(amp), 1)[0]
+    period = float(np.polyfit(np.arange(len(tp)), tp, 1)[0])
+    return float(delta / np.sqrt(4.0 * np.pi ** 2 + delta ** 2)), float(2.0 * np.pi / period)
+
+
+def ring_down(elements: int, damping: float = 0.02, gravity: bool = True, across: bool = False,
+              cycles: int = 8, amplitude: float = 0.01, settle: float = 1.0) -> Result:
+    """The 0.2 m cantilever of `reference.CANTILEVER` (r 4 mm, 400 MPa, first
+    mode 90.8 rad/s) settled, then displaced in its first bending mode by
+    `amplitude` of its length at the tip, in the plane it sags in (z) or
+    `across` it (y), and let go: the damping ratio of the tip's ringing
+    (`decrement`, over `cycles`) against `damping` (no reference for 0);
+    `settle` seconds of settling under gravity first. `extra`: its frequency (rad/s), the
+    first mode as the builder computes it (`sim.cablephysics.first_mode`)
+    and MuJoCo's Rayleigh coefficient (s)."""
+    p = reference.CANTILEVER
+    omega = CANTILEVER_MODE ** 2 / p["length"] ** 2 * np.sqrt(p["young"] * p["radius"] ** 2 / (4.0 * p["density"]))
+    duration = (cycles + 1.5) * 2.0 * np.pi / omega
+    cable = {"name": "rod", "radius": p["radius"], "start": {"body": "world", "pos": [0, 0, p["height"]]},
+             "end": {"pos": [p["length"], 0, p["height"]], "hold": "free"},
+             "young": p["young"], "density": p["density"], "segments": elements, "damping": damping}
+    data = {"scene": {"name": "ring", "units": "m", "duration": float(duration), "settle": settle if gravity else 0.0,
+                      "timestep": 0.002}, "cables": [cable]}
+    if not gravity:
+        data["effects"] = {"gravity": False}
+    scene = _scene(data)
+    built, sim, state, _ = settled(scene)
+    c = built.cables[0]
+    axis = 1 if across else 2
+    rest = state.cables[0][-1, axis]
+    _start_in_shape(sim, amplitude * p["length"] * cantilever_mode(c.rest_s / c.length), axis)
+    t0 = time.perf_counter()
+    t, x = [], []
+    for s in sim.steps(contacts=False):
+        t.append(s.t)
+        x.append(s.cables[0][-1, axis] - rest)
+    wall = (time.perf_counter() - t0) / duration
+    zeta, freq = decrement(np.array(t), np.array(x), cycles)
+    from sim.build import cable_damping
+    mode = cable_damping(built)[c.flex_id][1]
+    return _result("ring-down " + ("across the sag" if across else "in the sag plane" if gravity else "no gravity"),
+                   elements, zeta, damping or None, wall, built, sim, omega=freq, first_mode=mode,
+                   beta=float(built.model.flex_damping[c.flex_id]))
 
 
 def fast_ends(frequency: float, elements: int | None = None, duration: float = 1.0) -> Result:

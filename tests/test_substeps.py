@@ -10,6 +10,7 @@ import pytest
 from buildscenes import slider_scene
 
 from sim.build import build
+from sim.cablephysics import damping_step, first_mode, step_damping_ratio
 from sim.scene import parse_scene
 from sim.substeps import (
     CONTACT_FRACTION,
@@ -39,7 +40,7 @@ def test_held_speed_is_the_scripts_fastest(tmp_path):
 
 @pytest.mark.parametrize("travel", [0.02, 0.6, 6.0])
 def test_the_scene_step_is_divided_to_meet_the_fastest_cables_need(tmp_path, travel):
-    built = _built(tmp_path, travel, "linear")
+    built = _built(tmp_path, travel, "linear", damping=0.0)   # no damping need (below)
     cable, cable_def = built.cables[0], built.scene.cables[0]
     v = travel / 0.2
     need = min(bending_step(cable, cable_def), SPEED_FRACTION * cable.element_length / v)
@@ -54,14 +55,28 @@ def test_the_scene_step_is_divided_to_meet_the_fastest_cables_need(tmp_path, tra
 
 
 def test_a_stiff_cable_is_stepped_for_its_bending(tmp_path):
-    built = _built(tmp_path, 0.02, young=2.0e11, density=7800.0)
+    built = _built(tmp_path, 0.02, young=2.0e11, density=7800.0, damping=0.0)
     sub = choose_substeps(built)
     assert sub.reasons["c"][0] == "bending"
     assert sub.needed["c"] == pytest.approx(bending_step(built.cables[0], built.scene.cables[0]), rel=1e-12)
     # the bending step shrinks with the square of the element: a quarter for half the elements' length
-    finer = _built(tmp_path, 0.02, young=2.0e11, density=7800.0, segments=40)
+    finer = _built(tmp_path, 0.02, young=2.0e11, density=7800.0, segments=40, damping=0.0)
     ratio = (finer.cables[0].element_length / built.cables[0].element_length) ** 2
     assert choose_substeps(finer).needed["c"] == pytest.approx(sub.needed["c"] * ratio, rel=1e-12)
+
+
+def test_a_stiff_cable_is_stepped_for_its_damping(tmp_path):
+    """With damping the step also keeps the integrator's own damping of the
+    cable's first bending mode (about omega h / 2) within the declared ratio."""
+    built = _built(tmp_path, 0.02, young=2.0e11, density=7800.0, damping=0.05)
+    sub = choose_substeps(built)
+    c, cd = built.cables[0], built.scene.cables[0]
+    omega = first_mode(c.rest_s, [a.vertex for a in c.attachments], cd)
+    assert sub.reasons["c"][0] == "damping" and sub.reasons["c"][1] == pytest.approx(omega, rel=1e-12)
+    assert sub.needed["c"] == pytest.approx(damping_step(0.05, omega), rel=1e-12)
+    assert step_damping_ratio(omega, sub.step) <= 0.05
+    beta = float(built.model.flex_damping[c.flex_id])
+    assert step_damping_ratio(omega, sub.step, beta) == pytest.approx(0.05, rel=1e-9)
 
 
 def test_a_thin_plate_fast_enough_to_pass_through_the_cable_is_stepped_for_or_named(tmp_path):

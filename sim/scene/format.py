@@ -50,8 +50,8 @@ one side sets it, that side's; where both do, the larger (MuJoCo's rule
 for geoms of equal priority; see `sim.mjspec`)."""
 
 DEFAULT_DAMPING = 0.02
-"""`damping` when absent: fraction of critical damping of a cable's first
-bending mode (see `sim.build.rayleigh_damping` and docs/physics.md). 2 % is
+"""`damping` when absent: fraction of critical damping of a cable's own first
+bending mode as held (see `sim.build.rayleigh_damping` and docs/physics.md). 2 % is
 the loss of a polymer-jacketed cable swinging in air; a hanging cable keeps
 swinging for many periods."""
 
