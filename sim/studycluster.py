@@ -215,9 +215,14 @@ def cluster(workers: int | None, scheduler: str | None, stop=None):
 
 
 def _local(n: int, root: str):
+    import dask
     from distributed import Client, LocalCluster
 
-    with _sigint_ignored():   # worker processes inherit the ignored SIGINT (see module docstring)
+    # each worker holds one variant at a time, the rest wait at the scheduler
+    # for whichever worker is free first (Dask's default hands a worker a
+    # second one to queue, which a worker still busy may then hold while
+    # another is idle)
+    with _sigint_ignored(), dask.config.set({"distributed.scheduler.worker-saturation": 1.0}):
         # no dashboard; the scheduler's HTTP server (health and metrics
         # routes, started whatever dashboard_address says) on a free port of 127.0.0.1
         local = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",

@@ -483,25 +483,41 @@ def test_killing_the_only_worker_loses_no_variant(tiny, tmp_path):
 
 
 def test_resume_keeps_finished_variants_and_gives_the_same_rows(tiny, local_run, scheduler, tmp_path):
-    """The straight run's folder with variant 001 missing (as a study
-    interrupted before it finished leaves it): --resume runs 001 alone and
-    its rows are the straight run's; a variant whose scene changed since
-    (its stored hash differs) runs again; without --resume every variant runs."""
+    """A study stopped once its first variant is in (the others cancelled,
+    or stopped where they run): no window and no recommendation; run again
+    with --resume, only what had not finished runs, and the rows are those
+    of the straight run; a variant whose scene changed since (its stored
+    hash differs) runs again."""
+    from sim.cli import _cmd_study, version
+    from sim.cliargs import build_parser
+
     folder = tmp_path / "tiny"
-    shutil.copytree(local_run, folder)
-    shutil.rmtree(folder / "variants" / "001")
-    kept = folder / "variants" / "000" / "report.json"
-    before = kept.stat().st_mtime_ns
+
+    class StopOnceOneIsIn:   # as Ctrl-C would, once a variant's outputs are written
+        signal_name = None
+
+        @property
+        def asked(self):
+            return any(folder.glob("variants/*/variant.json"))
+
+    args = build_parser(version()).parse_args(["study", str(tiny), "--scheduler", scheduler, "--out",
+                                               str(tmp_path), "--quiet"])
+    status = _cmd_study(args, StopOnceOneIsIn())
+    doc = json.loads((folder / "study.json").read_text())
+    finished = {r["id"]: (folder / "variants" / r["id"] / "report.json").stat().st_mtime_ns
+                for r in doc["rows"] if r["status"] == "done"}
+    assert finished and (status == 130) == (len(finished) < 2)   # usually 1 of 2: stopped
+    if status == 130:
+        assert doc["complete"] is False and doc["window"] is None and doc["best"] is None
     assert main(["study", str(tiny), "--scheduler", scheduler, "--out", str(tmp_path), "--quiet",
                  "--resume"]) == 0
-    assert kept.stat().st_mtime_ns == before                         # kept, not run again
-    assert (folder / "variants" / "001" / "report.json").is_file()   # run
-    assert [{k: r[k] for k in (*COMPARED, "run_time_s")} for r in _rows(folder)][:1] == \
-           [{k: r[k] for k in (*COMPARED, "run_time_s")} for r in _rows(local_run)][:1]
+    assert {i: (folder / "variants" / i / "report.json").stat().st_mtime_ns for i in finished} == finished
     assert [{k: r[k] for k in COMPARED} for r in _rows(folder)] == \
            [{k: r[k] for k in COMPARED} for r in _rows(local_run)]
     stored = folder / "variants" / "000" / "variant.json"
     stored.write_text(stored.read_text().replace('"scene_sha256": "', '"scene_sha256": "0'))
+    kept = folder / "variants" / "000" / "report.json"
+    before = kept.stat().st_mtime_ns
     done = (folder / "variants" / "001" / "report.json").stat().st_mtime_ns
     assert main(["study", str(tiny), "--scheduler", scheduler, "--out", str(tmp_path), "--quiet",
                  "--no-record", "--resume"]) == 0
