@@ -456,6 +456,8 @@ def plain(value: Any) -> Any:
     if isinstance(value, (list, tuple)):
         return [plain(v) for v in value]
     if isinstance(value, np.ndarray):
+        if value.dtype.kind == "f":           # most of a report: rounded without a call per number
+            return _rounded(value.tolist(), value.ndim)
         return plain(value.tolist())
     if isinstance(value, (np.bool_, bool)):
         return bool(value)
@@ -469,6 +471,15 @@ def plain(value: Any) -> Any:
     if hasattr(value, "value") and isinstance(getattr(value, "value"), str):  # str enums
         return value.value
     return value
+
+
+def _rounded(values: Any, ndim: int) -> Any:
+    """Nested lists of floats (`ndim` deep) as `plain` makes each float."""
+    if ndim > 1:
+        return [_rounded(v, ndim - 1) for v in values]
+    if ndim == 0:
+        return round(values, 12) if math.isfinite(values) else None
+    return [round(f, 12) if math.isfinite(f) else None for f in values]
 
 
 def write_report(report: dict, path: Path) -> None:

@@ -262,3 +262,15 @@ def test_physics_error_and_error_in_scene_units():
     assert r["error"] == {"type": "IndexError", "message": "index 7 is out of bounds", "t": 0.04,
                           "traceback": "Traceback (most recent call last): ..."} and r["physics_error"] is None
     assert report_of(_outcome())["physics_error"] is None
+
+
+def test_plain_rounds_float_arrays_as_each_float():
+    from sim.report import plain
+    rng = np.random.default_rng(3)
+    values = [rng.normal(size=(50, 3)) * 10.0 ** rng.integers(-9, 9, (50, 1)),
+              np.array([np.nan, np.inf, -np.inf, -0.0, 5e-13, 1.5e-12]), np.array(2.5),
+              rng.normal(size=(2, 3, 2)).astype(np.float32)]
+    for v in values:
+        flat = [round(float(f), 12) if np.isfinite(f) else None for f in np.ravel(v)]
+        got = plain(v)
+        assert json.dumps(got) == json.dumps(np.array(flat, dtype=object).reshape(np.shape(v)).tolist())
