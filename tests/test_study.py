@@ -139,6 +139,25 @@ def test_bad_value_names_study_key_value_and_scene_problem(tmp_path, capsys):
     assert "vary[0] motion.drawer.tiem_scale = 2" in err and "motion[0].tiem_scale: unknown key" in err
 
 
+def test_a_length_shorter_than_the_route_through_the_clips_is_refused(tmp_path, capsys):
+    """The drawer's cable clipped at (100, 0, 450): its route runs 443.35 mm
+    through the clip, though its ends are 325 mm apart. 400 mm passes the
+    scene parser, and a run would take the route's length instead: refused
+    before anything runs, naming the value; 450 mm is accepted."""
+    path = _study(tmp_path, '[[vary]]\nkey = "cables.power.length"\nvalues = [450, 400]\n')
+    scene = tmp_path / "drawer.toml"
+    text = scene.read_text()
+    start = 'start = { body = "world", pos = [-40, 0, 300] }\n'
+    assert start in text
+    scene.write_text(text.replace(start, start + 'clips = [ { body = "world", pos = [100, 0, 450] } ]\n'))
+    assert main(["study", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}: vary[0] cables.power.length = 400: scene " in err and "Traceback" not in err
+    assert "cables[0].length: 400 mm is shorter than the route through its clips (443.353 mm)" in err
+    study = load_study(path)
+    assert check_variants(study, variants(study)[:1])[0].cables[0].length == pytest.approx(0.45)
+
+
 # -- execution ----------------------------------------------------------------------------------
 
 TINY_VALUES = (600.0, 700.0)
