@@ -245,7 +245,10 @@ def _main(args: argparse.Namespace, stop: StopRequest) -> int:
             with log_file_off():
                 return _cmd_sweep(args)
         if args.command == "study":
-            return _cmd_study(args, stop)
+            from sim.studycluster import closing_later   # its cluster closes while it writes its outputs
+
+            with closing_later():
+                return _cmd_study(args, stop)
         if args.command == "bench":
             from sim.bench import FULL, QUICK, run_bench
             from sim.outputs import check_folder

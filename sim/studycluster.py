@@ -20,7 +20,9 @@ nanny starts them with OMP / MKL / OpenBLAS threads set to 1
 SIGINT, so a Ctrl-C in the terminal reaches only the study. Its workers'
 scratch space and the variants' temporary folders lie under one folder of
 the study's (`Cluster.temp_root`), removed when the cluster closes: a worker
-killed mid-variant leaves nothing behind.
+killed mid-variant leaves nothing behind. Within `closing_later` (the
+command line's study) the cluster closes on a thread of its own while the
+study writes its tables and plot.
 
 This module runs no variant (see `sim.studyrun`).
 """
@@ -208,15 +210,24 @@ def cluster(workers: int | None, scheduler: str | None, stop=None):
         return
     n = workers or os.cpu_count() or 1
     root = tempfile.mkdtemp(prefix="cablecheck-study-")
+    local = client = None
     try:
-        yield from _local(n, root)
+        local = _local(n, root)
+        client = Client(local)
+        yield Cluster(client, temp_root=root)
     finally:
-        shutil.rmtree(root, ignore_errors=True)
+        if _LATER is not None:
+            thread = threading.Thread(target=_close, args=(client, local, root), name="cablecheck-cluster-close")
+            thread.start()
+            _LATER.append(thread)
+        else:
+            _close(client, local, root)
 
 
 def _local(n: int, root: str):
+    """The embedded `LocalCluster` (see the module docstring)."""
     import dask
-    from distributed import Client, LocalCluster
+    from distributed import LocalCluster
 
     # each worker holds one variant at a time, the rest wait at the scheduler
     # for whichever worker is free first (Dask's default hands a worker a
@@ -225,21 +236,45 @@ def _local(n: int, root: str):
     with _sigint_ignored(), dask.config.set({"distributed.scheduler.worker-saturation": 1.0}):
         # no dashboard; the scheduler's HTTP server (health and metrics
         # routes, started whatever dashboard_address says) on a free port of 127.0.0.1
-        local = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                             dashboard_address="127.0.0.1:0",
-                             scheduler_kwargs={"dashboard": False, "local_directory": root},
-                             silence_logs=logging.ERROR, local_directory=root)
+        return LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                            dashboard_address="127.0.0.1:0",
+                            scheduler_kwargs={"dashboard": False, "local_directory": root},
+                            silence_logs=logging.ERROR, local_directory=root)
+
+
+def _close(client, local, root: str) -> None:
+    """Close the client and the embedded cluster (running tasks get a few
+    seconds, then their processes end), then remove its temporary folder."""
     try:
-        client = Client(local)
         try:
-            yield Cluster(client, temp_root=root)
+            if client is not None:
+                client.close()
         finally:
-            client.close()
+            if local is not None:
+                local.close()
+    except KeyboardInterrupt:   # a second Ctrl-C: the worker processes, daemonic, end with us
+        pass
     finally:
-        try:   # waits for running tasks a few seconds, then ends their processes
-            local.close()
-        except KeyboardInterrupt:   # a second Ctrl-C: the worker processes, daemonic, end with us
-            pass
+        shutil.rmtree(root, ignore_errors=True)
+
+
+_LATER: list[threading.Thread] | None = None
+"""Within `closing_later`: the threads closing embedded clusters."""
+
+
+@contextmanager
+def closing_later():
+    """Within it, an embedded cluster that is left closes on a thread of its
+    own (its processes end while the study writes its outputs); leaving it
+    waits for them to be closed."""
+    global _LATER
+    outer, _LATER = _LATER, []
+    try:
+        yield
+    finally:
+        threads, _LATER = _LATER, outer
+        for t in threads:
+            t.join()
 
 
 def _wait_for_worker(client, scheduler: str, stop) -> None:
