@@ -1,0 +1,573 @@
+"""A zoo of arms as they come: a dress-pack scene on each, timed side by side in one run.
+
+Issue 29 item 2. Each arm is a public MuJoCo model shipped with its meshes
+in a PyPI package (robosuite's ``models/assets/robots/<arm>/robot.xml``,
+gymnasium-robotics' Fetch), used as it comes: its visual meshes drawn and
+never checked, its collision meshes or primitives as the parts. On each
+the benchmark writes a scene (units m) in a temporary folder:
+
+- a hose (radius 7 mm) clamped on the back of the base, clipped to the
+  upper arm and the forearm (a few cm out from each link's collision
+  geometry, on the side facing up at the start pose) and clamped to the
+  wrist, 12 % longer than its route;
+- a table (box) under the base, a post (cylinder) behind and beside the
+  arm, a tool (box) on the last link (``[[allow]]``: the base on the
+  table, the tool on its flange);
+- a pick-and-place from a CSV trajectory (t, then each joint in degrees,
+  cubic): base yaw, shoulder, elbow, wrist and wrist roll move (the
+  descents' signs chosen from the model's kinematics, every value clipped
+  within the joint's range), 4.4 s; one arm (``--hz-arm``) is also driven
+  from the same program sampled at 100 Hz.
+
+Each scene runs as a user runs it (``cablecheck run SCENE --report R
+--record X --quiet``, a subprocess: a crash of one arm leaves the others
+running) and the report gives the columns: elements (cable elements +
+checked parts), simulation, check, validation, recording (CPU seconds of
+the stages, the report's ``timing``), (c+v+r)/sim, the real-time factor
+(simulated seconds over the run's wall ``total_s``, building included),
+agreement with MuJoCo's contacts, hard / soft events, and the events that
+lie within two attachment zones of an end or clip (arc length along the
+cable from the held point, from the built model's attachments): possible
+false alarms, listed under the table with their pair, distance and time.
+
+Needs the optional ``zoo`` extra (``pip install -e .[zoo]``, or
+``pip install --no-deps robosuite gymnasium-robotics``: only their model
+files are read, nothing of them is imported). Arms whose package is
+missing are named and skipped; with none installed the benchmark says so
+and exits 2.
+
+``--doc docs/performance.md`` writes the table with the date, the machine,
+``uptime``'s load before and after and the command between the markers
+``<!-- bench_robots -->`` and ``<!-- /bench_robots -->``.
+
+Run: python benchmarks/bench_robots.py [--arms panda,ur5e,...] [--hz-arm panda]
+       [--duration S] [--keep DIR] [--doc docs/performance.md]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import datetime
+import importlib.util
+import json
+import math
+import os
+import platform
+import shlex
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+BEGIN, END = "<!-- bench_robots -->", "<!-- /bench_robots -->"
+HOSE_RADIUS = 0.007
+STANDOFF = 0.03
+"""Clip and clamp points this far (m) beyond the link's collision geometry (the hose's axis)."""
+SLACK = 1.12
+"""Hose length over its route's."""
+HZ = 100.0
+
+
+@dataclasses.dataclass(frozen=True)
+class Arm:
+    """One arm of the zoo: where its model ships and how it is dressed.
+
+    joints: base yaw, shoulder, elbow, wrist flex, wrist roll (the program's five channels).
+    home: the start pose, degrees, one per joint of ``joints``.
+    base, clips, wrist: the bodies the hose's start, clips and end ride on.
+    tool: the last link (the tool box is on it, ``tool_pos`` in its frame).
+    """
+
+    package: str
+    model: str
+    joints: tuple[str, ...]
+    home: tuple[float, ...]
+    base: str
+    clips: tuple[str, ...]
+    wrist: str
+    tool: str
+    tool_pos: tuple[float, float, float] = (0.0, 0.0, 0.06)
+    fragment: dict | None = None
+    """A model that is an include fragment (gymnasium-robotics' Fetch): the
+    wrapper's compiler options and the files to include (relative to the
+    package): ``assets`` at the top, ``body`` inside the worldbody."""
+
+
+RS = "models/assets/robots"
+ZOO: dict[str, Arm] = {
+    "panda": Arm("robosuite", f"{RS}/panda/robot.xml",
+                 ("joint1", "joint2", "joint4", "joint6", "joint7"), (0, 11.25, -150, 168.5, 45),
+                 "link0", ("link3", "link5"), "link6", "right_hand"),
+    "ur5e": Arm("robosuite", f"{RS}/ur5e/robot.xml",
+                ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_3_joint"),
+                (-26.9, -99.4, 142.1, -130.3, -114.1),
+                "fixed_base_link", ("upper_arm_link", "forearm_link"), "wrist_1_link", "right_hand"),
+    "iiwa": Arm("robosuite", f"{RS}/iiwa/robot.xml",
+                ("joint_1", "joint_2", "joint_4", "joint_6", "joint_7"), (0, 37.2, -108.3, 34.4, 0),
+                "fixed_base_link", ("link_3", "link_5"), "link_6", "right_hand"),
+    "kinova3": Arm("robosuite", f"{RS}/kinova3/robot.xml",
+                   ("Actuator1", "Actuator2", "Actuator4", "Actuator6", "Actuator7"), (0, 37.2, 108.3, 34.4, -90),
+                   "fixed_base_link", ("HalfArm2_Link", "forearm_link"), "SphericalWrist2_Link", "right_hand"),
+    "sawyer": Arm("robosuite", f"{RS}/sawyer/robot.xml",
+                  ("right_j0", "right_j1", "right_j3", "right_j5", "right_j6"), (0, -67.6, 124.9, 32.7, -90),
+                  "right_arm_base_link", ("right_l2", "right_l4"), "right_l5", "right_hand"),
+    "xarm7": Arm("robosuite", f"{RS}/xarm7/robot.xml",
+                 ("joint1", "joint2", "joint4", "joint6", "joint7"), (0, 0, 70.2, 70.2, 0),
+                 "base", ("link3", "link5"), "link6", "right_hand"),
+    "jaco": Arm("robosuite", f"{RS}/jaco/robot.xml",
+                ("j2s7s300_joint_1", "j2s7s300_joint_2", "j2s7s300_joint_4", "j2s7s300_joint_6",
+                 "j2s7s300_joint_7"), (182.9, 210.8, 67, 215.4, 180),
+                "j2s7s300_link_0", ("j2s7s300_link_2", "j2s7s300_link_4"), "j2s7s300_link_5", "right_hand"),
+    "fetch": Arm("gymnasium_robotics", "envs/assets/fetch/robot.xml",
+                 ("robot0:shoulder_pan_joint", "robot0:shoulder_lift_joint", "robot0:elbow_flex_joint",
+                  "robot0:wrist_flex_joint", "robot0:wrist_roll_joint"), (0, -40, 80, 50, 0),
+                 "robot0:torso_lift_link", ("robot0:upperarm_roll_link", "robot0:forearm_roll_link"),
+                 "robot0:wrist_flex_link", "robot0:gripper_link", (0.12, 0.0, 0.0),
+                 fragment={"compiler": {"angle": "radian", "coordinate": "local", "meshdir": "envs/assets/stls/fetch",
+                                        "texturedir": "envs/assets/textures"},
+                           "assets": "envs/assets/fetch/shared.xml", "body": "envs/assets/fetch/robot.xml"}),
+}
+PACKAGES = {"robosuite": "robosuite", "gymnasium_robotics": "gymnasium-robotics"}
+
+PROGRAM = [  # t (s), then the change from home (degrees) of yaw, shoulder, elbow, wrist flex, wrist roll;
+    (0.0, (0, 0, 0, 0, 0)),          # the shoulder, elbow and wrist columns lower the tool (signs from the
+    (0.7, (-35, -8, -8, -6, 0)),     # model at home), negative: raised; the tool works at home's height
+    (1.2, (-35, 0, 0, 0, 60)),       # down on the pick, rolling the wrist
+    (1.6, (-35, 0, 0, 0, 60)),       # grip
+    (2.1, (-35, -8, -8, -6, 60)),    # lift
+    (3.0, (35, -8, -8, -6, -60)),    # across, rolling back
+    (3.5, (35, 0, 0, 0, -60)),       # down on the place
+    (3.9, (35, 0, 0, 0, -60)),       # release
+    (4.4, (0, 0, 0, 0, 0)),          # home
+]
+
+
+# --------------------------------------------------------------------------- pure helpers
+
+def write_trajectory(path: Path, joints: list[str], rows: list[tuple[float, list[float]]]) -> Path:
+    """A trajectory CSV the scene's ``[[motion]] file`` reads: header ``t,<joint>,...``,
+    one row per sample (seconds, then degrees)."""
+    lines = [",".join(["t", *joints])]
+    for t, values in rows:
+        if len(values) != len(joints):
+            raise ValueError(f"row at t = {t} has {len(values)} values for {len(joints)} joints")
+        lines.append(",".join([f"{t:.6g}", *(f"{v:.6f}" for v in values)]))
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def sample(keys: list[tuple[float, list[float]]], rate: float) -> list[tuple[float, list[float]]]:
+    """The keyframes sampled at ``rate`` Hz, each span eased with a smoothstep
+    (zero velocity at every key, as a controller's point-to-point moves), the
+    last key included."""
+    times = np.array([k[0] for k in keys], float)
+    values = np.array([k[1] for k in keys], float)
+    if len(times) < 2 or np.any(np.diff(times) <= 0):
+        raise ValueError("keys need at least two strictly increasing times")
+    n = int(round((times[-1] - times[0]) * rate))
+    out = []
+    for i in range(n + 1):
+        t = min(times[0] + i / rate, times[-1])
+        k = min(int(np.searchsorted(times, t, side="right")) - 1, len(times) - 2)
+        u = (t - times[k]) / (times[k + 1] - times[k])
+        w = u * u * (3 - 2 * u)
+        out.append((round(float(t), 9), list(values[k] + w * (values[k + 1] - values[k]))))
+    return out
+
+
+def near_held(s: float, held: list[tuple[str, float]], zone: float) -> tuple[str, float] | None:
+    """The end or clip (window name, arc length) nearest arc length ``s`` when
+    it is within ``zone`` of it, else None."""
+    best = min(held, key=lambda w: abs(w[1] - s), default=None)
+    return best if best is not None and abs(best[1] - s) <= zone else None
+
+
+def ratio(t: dict) -> float:
+    """(check + validation + recording) / simulation of a report's ``timing``."""
+    return (t["check_s"] + t["validate_s"] + t["record_s"]) / max(t["sim_s"], 1e-12)
+
+
+# --------------------------------------------------------------------------- models
+
+def package_root(package: str) -> Path | None:
+    """The installed package's folder (found, not imported), or None."""
+    spec = importlib.util.find_spec(package)
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    return Path(list(spec.submodule_search_locations)[0])
+
+
+def standalone(arm: Arm, root: Path, folder: Path) -> Path:
+    """The arm's model file as MuJoCo loads it on its own: the package's own
+    file, or for a fragment a wrapper in ``folder`` that includes it (absolute
+    paths: the meshes stay where the package put them)."""
+    if arm.fragment is None:
+        return root / arm.model
+    f = arm.fragment
+    comp = " ".join(f'{k}="{(root / v) if k.endswith("dir") else v}"' for k, v in f["compiler"].items())
+    xml = (f'<mujoco model="{Path(arm.model).parent.name}">\n  <compiler {comp}/>\n'
+           f'  <include file="{root / f["assets"]}"/>\n'
+           f'  <worldbody>\n    <include file="{root / f["body"]}"/>\n  </worldbody>\n</mujoco>\n')
+    path = folder / f"{Path(arm.model).parent.name}_standalone.xml"
+    path.write_text(xml)
+    return path
+
+
+def _points(m, body: int) -> np.ndarray:
+    """The body's collision geometry as points in its frame (mesh vertices,
+    a primitive's bounding box corners)."""
+    import mujoco
+    pts = []
+    for g in range(m.ngeom):
+        if m.geom_bodyid[g] != body or not (m.geom_contype[g] or m.geom_conaffinity[g]):
+            continue
+        rot = np.zeros(9)
+        mujoco.mju_quat2Mat(rot, m.geom_quat[g])
+        rot = rot.reshape(3, 3)
+        if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH:
+            k = m.geom_dataid[g]
+            local = m.mesh_vert[m.mesh_vertadr[k]:m.mesh_vertadr[k] + m.mesh_vertnum[k]]
+        else:
+            c, h = m.geom_aabb[g, :3], m.geom_aabb[g, 3:]
+            local = c + h * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+        pts.append(local @ rot.T + m.geom_pos[g])
+    if not pts:
+        raise ValueError(f"body {m.body(body).name} has no collision geometry")
+    return np.concatenate(pts)
+
+
+def outside(m, d, body_name: str, world_dir) -> tuple[list[float], np.ndarray]:
+    """A point on ``body_name`` (its frame) STANDOFF beyond its collision
+    geometry in world direction ``world_dir`` (at the pose in ``d``), across
+    from the middle of its bounding box; and that point in the world."""
+    b = m.body(body_name).id
+    pts = _points(m, b)
+    rot = d.xmat[b].reshape(3, 3)
+    u = rot.T @ (np.asarray(world_dir, float) / np.linalg.norm(world_dir))
+    c = (pts.min(0) + pts.max(0)) / 2
+    local = c + u * (float(np.max((pts - c) @ u)) + STANDOFF)
+    return [round(float(x), 4) for x in local], d.xpos[b] + rot @ local
+
+
+UP = (0.0, 0.0, 1.0)
+
+
+def has_geometry(m, body: int) -> bool:
+    return any(m.geom_bodyid[g] == body and (m.geom_contype[g] or m.geom_conaffinity[g]) for g in range(m.ngeom))
+
+
+def chain(m, first: str, last: str) -> list[int]:
+    """The bodies from ``first`` down the kinematic tree to ``last`` (both included)."""
+    out, b, top = [], m.body(last).id, m.body(first).id
+    while b != top:
+        if b <= 0:
+            raise ValueError(f"{last} does not hang from {first}")
+        out.append(b)
+        b = int(m.body_parentid[b])
+    return [top] + out[::-1]
+
+
+def flange(m, body_name: str) -> str:
+    """The body carrying the tool's mount: ``body_name`` or its nearest
+    ancestor with collision geometry (robosuite's ``right_hand`` has none)."""
+    b = m.body(body_name).id
+    while b > 0:
+        if has_geometry(m, b):
+            return m.body(b).name
+        b = int(m.body_parentid[b])
+    raise ValueError(f"no body with collision geometry carries {body_name}")
+
+
+def program(m, arm: Arm) -> tuple[list[tuple[float, list[float]]], list[str]]:
+    """The pick-and-place keys (t, degrees per joint of ``arm.joints``), the
+    descents' signs those that lower the tool at home, every value clipped
+    to its joint's range less 5 degrees; and notes on what was clipped."""
+    import mujoco
+    d = mujoco.MjData(m)
+    ids = [m.joint(j).id for j in arm.joints]
+
+    def pose(deg):
+        for j, v in zip(ids, deg):
+            d.qpos[m.jnt_qposadr[j]] = math.radians(v)
+        mujoco.mj_kinematics(m, d)
+        return d.xpos[m.body(arm.tool).id][2]
+
+    z0 = pose(arm.home)
+    signs = [1.0, 1.0, 1.0, 1.0, 1.0]
+    for i in (1, 2, 3):
+        trial = list(arm.home)
+        trial[i] += 5.0
+        signs[i] = -1.0 if pose(trial) > z0 else 1.0
+    notes, keys = [], []
+    for t, delta in PROGRAM:
+        row = []
+        for i, j in enumerate(ids):
+            v = arm.home[i] + signs[i] * delta[i]
+            if m.jnt_limited[j]:
+                lo, hi = (math.degrees(x) for x in m.jnt_range[j])
+                c = min(max(v, lo + 5), hi - 5)
+                if c != v:
+                    notes.append(f"{arm.joints[i]} {v:.1f} -> {c:.1f} deg (range)")
+                v = c
+            row.append(round(v, 3))
+        keys.append((t, row))
+    return keys, notes
+
+
+def scene_for(name: str, arm: Arm, root: Path, folder: Path, rate: float | None,
+              duration: float | None) -> tuple[Path, list[str]]:
+    """Write arm ``name``'s scene (and its trajectory, keys or sampled at
+    ``rate`` Hz) into ``folder``; its path and notes."""
+    import mujoco
+    from sim.harness import write_scene
+
+    model_path = standalone(arm, root, folder)
+    m = mujoco.MjModel.from_xml_path(str(model_path))
+    keys, notes = program(m, arm)
+    label = name if rate is None else f"{name}_{int(rate)}hz"
+    csv = write_trajectory(folder / f"{label}.csv", list(arm.joints), keys if rate is None else sample(keys, rate))
+
+    d = mujoco.MjData(m)
+    for j, v in zip(arm.joints, keys[0][1]):
+        d.qpos[m.jnt_qposadr[m.joint(j).id]] = math.radians(v)
+    mujoco.mj_kinematics(m, d)
+    start, p_start = outside(m, d, arm.base, (-1, 0, 0.3))
+    clips = [outside(m, d, b, UP) for b in arm.clips]
+    end, p_end = outside(m, d, arm.wrist, UP)
+    vias = [p_start + np.array([-0.02, 0, 0.6 * (clips[0][1][2] - p_start[2])])]
+    route = [p_start, vias[0]]           # in order along the arm (the product inserts each clip where the route passes)
+    for b in chain(m, arm.clips[0], arm.wrist)[:-1]:   # every link from the first clip to the wrist: a clip or a via
+        name = m.body(b).name
+        if name in arm.clips:
+            route.append(clips[arm.clips.index(name)][1])
+        elif has_geometry(m, b):
+            vias.append(outside(m, d, name, UP)[1])
+            route.append(vias[-1])
+    route.append(p_end)
+    length = SLACK * float(sum(np.linalg.norm(b - a) for a, b in zip(route, route[1:])))
+
+    base = m.body(arm.base).id
+    base_xy = d.xpos[base][:2]
+    floor = float(min((d.xpos[base] + d.xmat[base].reshape(3, 3) @ p)[2] for p in _points(m, base)))
+    data = {
+        "scene": {"name": f"zoo-{label}", "units": "m", "duration": duration or PROGRAM[-1][0], "settle": 0.5,
+                  "mjcf": str(model_path)},
+        "effects": {"contact": ["cable-structure"]},
+        "check": {"clearance": 0.005},
+        "parts": [
+            {"name": "cell/table", "shape": "box", "size": [0.7, 0.7, 0.02],
+             "pos": [round(float(base_xy[0]) + 0.2, 4), round(float(base_xy[1]), 4), round(floor - 0.02, 4)]},
+            {"name": "cell/post", "shape": "cylinder", "size": [0.04, 0.5],
+             "pos": [round(float(base_xy[0]) - 0.3, 4), round(float(base_xy[1]) + 0.45, 4), round(floor + 0.5, 4)]},
+            {"name": "tool/body", "body": arm.tool, "shape": "box", "size": [0.025, 0.025, 0.025],
+             "pos": list(arm.tool_pos)},
+        ],
+        "cables": [{
+            "name": "hose", "radius": HOSE_RADIUS,
+            "start": {"body": arm.base, "pos": start},
+            "via": [[round(float(x), 4) for x in v] for v in vias],
+            "clips": [{"body": b, "pos": c[0]} for b, c in zip(arm.clips, clips)],
+            "end": {"body": arm.wrist, "pos": end},
+            "length": round(length, 4), "young": 5.0e6, "density": 1200, "min_bend_radius": 0.035,
+        }],
+        "motion": [{"file": csv.name, "angles": "deg", "interpolation": "cubic"}],
+        "allow": [{"a": "cell/table", "b": arm.base, "reason": "the arm's base is bolted to the table"},
+                  {"a": "tool", "b": flange(m, arm.tool), "reason": "the tool is mounted on the flange"}],
+    }
+    return write_scene(data, folder / f"{label}.toml"), notes
+
+
+# --------------------------------------------------------------------------- runs
+
+def held_points(scene_path: Path) -> tuple[list[tuple[str, float]], float, dict]:
+    """The hose's ends and clips (window, arc length at rest) in the built
+    model, its attachment zone (arc length), and the counts of the built
+    scene (checked parts, of them mesh parts, visual geoms drawn only)."""
+    from sim.build import build
+    from sim.scene import load_scene
+
+    built = build(load_scene(scene_path), detect=False)
+    c = built.cables[0]
+    held: dict[str, list[float]] = {}
+    for a in c.attachments:
+        held.setdefault(a.window, []).append(float(a.s))
+    counts = {"parts": len(built.parts), "meshes": sum(p.shape == "mesh" for p in built.parts),
+              "triangles": sum(len(p.faces) for p in built.parts if p.faces is not None),
+              "visuals": len(built.visuals)}
+    return [(w, float(np.mean(s))) for w, s in held.items()], built.scene.check.attach_zone * c.radius, counts
+
+
+def cli() -> list[str]:
+    script = Path(sys.executable).parent / "cablecheck"
+    return [str(script)] if script.exists() else [sys.executable, "-c",
+                                                  "import sys; from sim.cli import main; sys.exit(main())"]
+
+
+def run_one(label: str, scene_path: Path, timeout: float | None = None) -> dict:
+    """Run the scene as a user does; the row of the table (or its error)."""
+    report_path, rec = scene_path.with_suffix(".json"), scene_path.with_suffix(".rrd")
+    row: dict = {"arm": label, "scene": str(scene_path)}
+    try:
+        held, zone, counts = held_points(scene_path)
+    except Exception as exc:                       # the product failed on the model: report it, go on
+        row["error"] = f"building: {type(exc).__name__}: {exc}"
+        return row
+    t0 = time.perf_counter()
+    args = ["run", str(scene_path), "--report", str(report_path), "--quiet", "--fail-on", "never"]
+    try:
+        proc = subprocess.run(cli() + args + ["--record", str(rec)], capture_output=True, text=True, cwd=REPO,
+                              timeout=timeout)
+    except subprocess.TimeoutExpired:               # killed: run it again without its recording
+        row["error"] = (f"cablecheck run did not finish within {timeout:g} s (killed); the figures are of the "
+                        "same run with --no-record")
+        report_path.unlink(missing_ok=True)
+        try:
+            proc = subprocess.run(cli() + args + ["--no-record"], capture_output=True, text=True, cwd=REPO,
+                                  timeout=timeout)
+        except subprocess.TimeoutExpired:
+            row["error"] = f"cablecheck run did not finish within {timeout:g} s, with or without a recording"
+            return row
+    row["wall_s"] = time.perf_counter() - t0
+    if proc.returncode not in (0, 3) or not report_path.exists():
+        row["error"] = f"cablecheck run exited {proc.returncode}: {(proc.stderr or proc.stdout).strip()[-1500:]}"
+        return row
+    r = json.loads(report_path.read_text())
+    if not r.get("complete", True):
+        row["error"] = (f"incomplete run (exit {proc.returncode}) at t = {r['settings']['t_end']:g} s: "
+                        f"{r.get('physics_error') or r.get('error') or r.get('interrupted')}")
+    t = r["timing"]
+    duration = r["settings"]["t_end"]
+    events = r["events"]
+    near = []
+    for e in events:
+        hit = near_held(float(e["s"]), held, 2 * zone) if e.get("s") is not None else None
+        if hit is not None:
+            near.append({**{k: e[k] for k in ("severity", "type", "a", "b", "min_distance", "t_worst")},
+                         "window": hit[0], "ds": float(e["s"]) - hit[1]})
+    row.update({
+        "elements": r["cables"][0]["segments"], **counts, "duration": duration, "timing": t, "ratio": ratio(t),
+        "rtf": duration / max(t["total_s"], 1e-12), "agreement": r["validation"]["agreement"],
+        "hard": sum(e["severity"] == "hard" for e in events), "soft": sum(e["severity"] == "soft" for e in events),
+        "near_held": near, "excused": len(r.get("excused", [])), "report": str(report_path),
+    })
+    return row
+
+
+def table(rows: list[dict]) -> str:
+    lines = ["| arm | hose elements / parts | sim s | check s | validate s | record s | (c+v+r)/sim | real time | wall s "
+             "| agreement | hard / soft | next to a clamp or clip |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        if "timing" not in r:
+            lines.append(f"| {r['arm']} | error: {r['error'].splitlines()[-1][:120]} |" + " |" * 10)
+            continue
+        t = r["timing"]
+        lines.append(f"| {r['arm']} | {r['elements']} / {r['parts']} ({r['meshes']} meshes, "
+                     f"{r['triangles']} triangles) | {t['sim_s']:.2f} | {t['check_s']:.2f} | {t['validate_s']:.2f} | "
+                     f"{t['record_s']:.2f} | **{r['ratio']:.2f}** | {r['rtf']:.2f}x | {t['total_s']:.1f} | "
+                     f"{100 * r['agreement']:.2f} % | {r['hard']} / {r['soft']} | {len(r['near_held'])} |")
+    return "\n".join(lines)
+
+
+def load() -> str:
+    return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+
+
+def write_doc(path: Path, text: str) -> None:
+    """bench_startup's marker writer, with this benchmark's markers."""
+    import bench_startup
+    saved = bench_startup.BEGIN, bench_startup.END
+    bench_startup.BEGIN, bench_startup.END = BEGIN, END
+    try:
+        bench_startup.write_doc(path, text)
+    finally:
+        bench_startup.BEGIN, bench_startup.END = saved
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--arms", default=",".join(ZOO), help=f"comma-separated, of: {', '.join(ZOO)}")
+    ap.add_argument("--hz-arm", default="panda", help="the arm also driven from a 100 Hz CSV ('' for none)")
+    ap.add_argument("--duration", type=float, default=None, help="simulated seconds (default: the program's 4.4)")
+    ap.add_argument("--keep", type=Path, default=None, help="write the scenes, reports and recordings here")
+    ap.add_argument("--doc", type=Path, default=None, help="write the table into this Markdown file")
+    ap.add_argument("--timeout", type=float, default=600.0, help="wall seconds one arm's run may take")
+    ap.add_argument("--scenes-only", action="store_true", help="write the scenes and stop")
+    a = ap.parse_args(argv)
+    names = [n for n in a.arms.split(",") if n]
+    unknown = [n for n in names if n not in ZOO]
+    if unknown:
+        print(f"bench_robots: unknown arm(s) {', '.join(unknown)}; the zoo: {', '.join(ZOO)}", file=sys.stderr)
+        return 2
+    roots = {p: package_root(p) for p in {ZOO[n].package for n in names}}
+    missing = sorted(PACKAGES[p] for p, r in roots.items() if r is None)
+    if missing:
+        print(f"bench_robots: package(s) not installed: {', '.join(missing)}; skipping "
+              f"{', '.join(n for n in names if roots[ZOO[n].package] is None)}. Install the optional extra: "
+              "pip install -e '.[zoo]' (or pip install --no-deps robosuite gymnasium-robotics: only their "
+              "model files are read)", file=sys.stderr)
+    names = [n for n in names if roots[ZOO[n].package] is not None]
+    if not names:
+        print("bench_robots: no arm of the zoo is installed; nothing to run", file=sys.stderr)
+        return 2
+    folder = a.keep or Path(tempfile.mkdtemp(prefix="bench_robots_"))
+    folder.mkdir(parents=True, exist_ok=True)
+    todo = []
+    for n in names:
+        arm, root = ZOO[n], roots[ZOO[n].package]
+        for rate in ([None, HZ] if n == a.hz_arm else [None]):
+            label = n if rate is None else f"{n} @ {int(rate)} Hz CSV"
+            try:
+                path, notes = scene_for(n, arm, root, folder, rate, a.duration)
+                todo.append((label, path, notes))
+            except Exception as exc:
+                todo.append((label, None, [f"scene not written: {type(exc).__name__}: {exc}"]))
+    if a.scenes_only:
+        for label, path, notes in todo:
+            print(label, path, "; ".join(notes))
+        return 0
+    before = load()
+    started = datetime.datetime.now().astimezone()
+    rows = []
+    for label, path, notes in todo:
+        row = run_one(label, path, a.timeout) if path is not None else {"arm": label, "error": notes[-1]}
+        row["notes"] = notes
+        rows.append(row)
+        state = row.get("error") or f"(c+v+r)/sim {row['ratio']:.2f}, real time {row['rtf']:.2f}x"
+        print(f"  {label}: {state}", file=sys.stderr, flush=True)
+    after = load()
+    lines = [f"Measured {started:%Y-%m-%d %H:%M %Z} on {platform.node() or 'this machine'} "
+             f"({os.cpu_count()} cores, {platform.processor() or platform.machine()}, Python "
+             f"{platform.python_version()}), one run each, one after the other; "
+             f"{PROGRAM[-1][0] if a.duration is None else a.duration:g} s pick-and-place after 0.5 s settling.",
+             "", f"Load before: `{before}`; after: `{after}`.", "",
+             f"Command: `python benchmarks/bench_robots.py {shlex.join(sys.argv[1:] if argv is None else argv)}`",
+             "", table(rows), ""]
+    for r in rows:
+        if "error" in r:
+            lines.append(f"- {r['arm']}: **{r['error']}**")
+        for e in r.get("near_held", []):
+            lines.append(f"- {r['arm']}: {e['severity']} {e['type']} {e['a']} / {e['b']} at {e['ds'] * 1000:+.0f} mm "
+                         f"from {e['window']}, worst {e['min_distance'] * 1000:.1f} mm at t {e['t_worst']:.2f} s "
+                         "(possible false alarm)")
+        for n in r.get("notes", []):
+            lines.append(f"- {r['arm']}: {n}")
+    text = "\n".join(lines).rstrip() + "\n"
+    print(text)
+    if a.keep is None:
+        print(f"scenes, reports and recordings: {folder}")
+    if a.doc is not None:
+        write_doc(a.doc, text.rstrip("\n"))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
