@@ -22,7 +22,8 @@ stretched, taut beyond 1 %).
 (`cablecheck study --workers 1` and `--workers 2`, whole commands,
 alternating, ``--repeat`` times each, reports and recordings written) and
 prints the ratio (target: two workers at least 1.6 times as fast as one on
-a 2-core machine, issue 27), the date, the load (``uptime``) before and
+a 2-core machine, issue 27), the same for the variants alone (the sum of the
+tasks' wall times on the busiest worker, from each `variant.json`), the date, the load (``uptime``) before and
 after, the command, and what a variant costs on its worker beyond its run
 (`variant.json`'s ``task_s`` less the report's ``timing.total_s``: the
 files written, the scene parsed, the outputs read back), the first variant
@@ -81,6 +82,17 @@ def load() -> str:
     return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip().split("load average: ")[-1]
 
 
+def busiest(folder: Path) -> float:
+    """The variants' wall time on the busiest worker of a finished study
+    (sum of its tasks' `task_s`): the study's run phase without start-up,
+    scheduling gaps or outputs."""
+    per: dict[int, float] = {}
+    for sub in (folder / "variants").iterdir():
+        stored = json.loads((sub / "variant.json").read_text())
+        per[stored["worker_pid"]] = per.get(stored["worker_pid"], 0.0) + stored["task_s"]
+    return max(per.values())
+
+
 def overheads(folder: Path) -> tuple[list[float], list[float]]:
     """Per variant of a finished study folder, its task's wall time on its
     worker less its run's own (seconds): (first variant of each worker, the rest)."""
@@ -113,6 +125,7 @@ def scaling(repeat: int, doc: Path | None) -> None:
     study = load_study(STUDY)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
     times: dict[int, list[float]] = {1: [], 2: []}
+    phase: dict[int, list[float]] = {1: [], 2: []}
     extra: dict[int, tuple[list[float], list[float]]] = {1: ([], []), 2: ([], [])}
     before = load()
     started = datetime.datetime.now().astimezone()
@@ -124,6 +137,7 @@ def scaling(repeat: int, doc: Path | None) -> None:
                 subprocess.run([sys.executable, "-m", "sim.cli", "study", str(STUDY), "--workers", str(n),
                                 "--out", str(out), "--quiet", "--fail-on", "never"], env=env, check=True)
                 times[n].append(time.perf_counter() - t0)
+                phase[n].append(busiest(out / study.name))
                 first, rest = overheads(out / study.name)
                 extra[n][0].extend(first)
                 extra[n][1].extend(rest)
@@ -138,15 +152,20 @@ def scaling(repeat: int, doc: Path | None) -> None:
         f"after `{after}`" + (" (not quiet)" if busy > 0.5 else "") + ".",
         f"Command: `python benchmarks/bench_study.py {shlex.join(sys.argv[1:])}`",
         "",
-        "| workers | median s | min s | max s | speed-up |",
-        "|---|---|---|---|---|",
+        "| workers | study, median s | min s | max s | speed-up | variants on the busiest worker, median s | speed-up |",
+        "|---|---|---|---|---|---|---|",
     ]
+    ph1 = statistics.median(phase[1])
     for n in (1, 2):
         lines.append(f"| {n} | {statistics.median(times[n]):.1f} | {min(times[n]):.1f} | {max(times[n]):.1f} | "
-                     f"{one / statistics.median(times[n]):.2f} |")
+                     f"{one / statistics.median(times[n]):.2f} | {statistics.median(phase[n]):.1f} | "
+                     f"{ph1 / statistics.median(phase[n]):.2f} |")
     firsts = extra[1][0] + extra[2][0]
     rests = extra[1][1] + extra[2][1]
-    lines += ["", f"Two workers: {one / two:.2f} times as fast as one (target {SCALING_TARGET}). A variant's "
+    lines += ["", f"Two workers: the study {one / two:.2f} times as fast as one (target {SCALING_TARGET}), its "
+              f"variants {ph1 / statistics.median(phase[2]):.2f} times (the rest of a study, the same on one "
+              "worker or two: Python's start, reading and checking the variants, the cluster's start, each "
+              "worker's first imports, the tables and the plot). A variant's "
               f"cost on its worker beyond its run: first variant of a worker median "
               f"{statistics.median(firsts):.2f} s (n = {len(firsts)}), every later one "
               f"{statistics.median(rests):.2f} s (n = {len(rests)}, max {max(rests):.2f} s). The same "
@@ -154,7 +173,7 @@ def scaling(repeat: int, doc: Path | None) -> None:
               "pays the imports; the worker keeps them)."]
     text = "\n".join(lines)
     print(text)
-    print(json.dumps({"times": times, "first_extra_s": firsts, "later_extra_s": rests, "same_variant_s": warm}))
+    print(json.dumps({"times": times, "busiest_worker_s": phase, "first_extra_s": firsts, "later_extra_s": rests, "same_variant_s": warm}))
     if doc is not None:
         old = doc.read_text()
         block = f"{BEGIN}\n{text}\n{END}"
