@@ -253,8 +253,8 @@ class Substeps:
       count: simulation steps per scene timestep (>= 1).
       step: the simulation step, seconds.
       needed: the step each cable needs, seconds, by cable name.
-      reasons: per cable, what sets its step ("bending", "speed", "contact"
-        or "damping"), its fastest held point's speed (for "contact" the
+      reasons: per cable, what sets its step ("bending", "speed", "contact",
+        "damping" or "compression"), its fastest held point's speed (for "contact" the
         fastest part's, m/s; for "damping" its first bending mode, rad/s)
         and its regular element length (m).
       capped: the count needed exceeds `MAX_SUBSTEPS` and was capped.

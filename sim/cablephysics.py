@@ -163,8 +163,12 @@ d / ((1 - d) tc^2): ten times stiffer than with 0.999."""
 def edge_time_constant(step: float) -> float:
     """solref time constant of the edge-length equality for simulation step `step`, seconds.
 
-    Two steps, the stiffest that MuJoCo's discrete-time constraint resolves
-    stably (its default safety clamp). With d = `EDGE_IMPEDANCE` the
+    Two steps. (Under MuJoCo 4's `discrete` integrator an equality row's
+    spring is evaluated at the end of the step and is stable at any time
+    constant, refsafe clamping only contacts and limits: a smaller one
+    makes the edges give less under load, as (tc + h)^2, at most 9 times
+    less, `compression_strain`; not taken, as it changes every edge's axial
+    response: docs/physics.md, Length in compression.) With d = `EDGE_IMPEDANCE` the
     damping b = 2 / tc removes a velocity error along an edge within one
     step. It must follow the step: a floor of 2 ms (the former setting) kept
     the edges as soft at a 0.25 ms step as at 1 ms, and a cable whose end
@@ -196,3 +200,66 @@ def edge_solimp(plan: CablePlan) -> str:
     width is a length, hence per cable (the regular element's length)."""
     seg = np.linalg.norm(np.diff(plan.straight, axis=0), axis=1)
     return f"{EDGE_IMPEDANCE!r} {EDGE_YIELD!r} {0.04 * float(seg.max())!r} 0.5 6"
+
+
+COMPRESSION_TOLERANCE = 1e-3
+"""Largest shortening of a cable, as a fraction of its length, that the
+model holds to (0.1 %): the edge equality gives under compression
+(`compression_strain`), the step is divided to keep that within
+`COMPRESSION_SHARE` of this under the cable's buckling load
+(`compression_step`), and a run warns where a cable is shorter by more
+(`sim.run`, the report's `physics_warnings`)."""
+
+COMPRESSION_SHARE = 0.5
+"""Share of `COMPRESSION_TOLERANCE` that the edges may give under the
+cable's buckling load (`compression_step`): the rest is left for loads
+above it (a bowed elastica's end force rises above the Euler load as it
+bows further: 1.0 at the onset, 1.2 at 10 % shortening)."""
+
+
+def buckling_load(rest_s, held, cable: CableDef) -> float:
+    """The largest compression the cable can carry straight, N: the largest
+    Euler load of its runs (past it a rod buckles and its end force stays
+    near it). A run between two held vertices with a free vertex between
+    them, of length a, as a rod clamped at both ends, `4 pi^2 EI / a^2` (a
+    clamp's is the largest of the holds; pinned pi^2); a run from a held
+    vertex to a free end, pushed at that end, as a cantilever, `pi^2 EI /
+    (4 a^2)`; a cable held nowhere, pushed at both ends, as pinned at both,
+    `pi^2 EI / L^2`."""
+    rest_s = np.asarray(rest_s, float)
+    held = sorted(set(int(h) for h in held))
+    ei = cable.young * np.pi * cable.radius ** 4 / 4.0
+    if not held:
+        return float(np.pi ** 2 * ei / (rest_s[-1] - rest_s[0]) ** 2)
+    loads = [4.0 * np.pi ** 2 * ei / (rest_s[b] - rest_s[a]) ** 2 for a, b in zip(held, held[1:]) if b - a >= 2]
+    if held[0] > 0:                       # a free start
+        loads.append(np.pi ** 2 * ei / (4.0 * (rest_s[held[0]] - rest_s[0]) ** 2))
+    if held[-1] < len(rest_s) - 1:        # a free end
+        loads.append(np.pi ** 2 * ei / (4.0 * (rest_s[-1] - rest_s[held[-1]]) ** 2))
+    return float(max(loads)) if loads else 0.0
+
+
+def compression_strain(load: float, element: float, cable: CableDef, step: float) -> float:
+    """An edge's strain under an axial `load` (N), edge length `element`, at
+    simulation step `step`: `(1 - d) (tc + h)^2 F / (mu l^2)`.
+
+    MuJoCo's soft constraint rests at a violation `a0 (1 - d) tc^2`
+    (modeling chapter, solver parameters; a0 the acceleration the load
+    gives in constraint space, here F over one vertex's mass mu l). Under
+    the `discrete` integrator the row's spring is evaluated at the end of
+    the step, which adds one step to the time constant: measured on a rod
+    bowed between clamps (0.5 m, r 3 mm, 2 GPa, 20.3 N) at 10, 20 and 40
+    elements and tc from 0.01 h to 2 h, within 2 % of this (docs/physics.md,
+    Length in compression). It grows with (elements x step)^2."""
+    mu = cable.density * np.pi * cable.radius ** 2
+    tc = edge_time_constant(step)
+    return float((1.0 - EDGE_IMPEDANCE) * (tc + step) ** 2 * load / (mu * element ** 2))
+
+
+def compression_step(load: float, element: float, cable: CableDef) -> float:
+    """Largest step at which `compression_strain` under `load` is at most
+    `COMPRESSION_SHARE` of `COMPRESSION_TOLERANCE`, seconds (inf without load)."""
+    if load <= 0.0:
+        return float("inf")
+    unit = compression_strain(load, element, cable, 1.0)   # strain per step^2 (tc + h = 3 h)
+    return float(np.sqrt(COMPRESSION_SHARE * COMPRESSION_TOLERANCE / unit))

@@ -169,11 +169,58 @@ def plan_cable(cable: CableDef, frames: Frames, where: str, scene: Scene,
         if not (slack or given) or abs(excess) <= 1e-12 * length or droop - excess < needed:
             break
         droop -= excess
+    if scene.effects.dynamics:      # nothing pushes a cable that is not simulated: the route as given
+        routed = imperfect(routed, [h.vertex for h in held])
     seg = np.linalg.norm(np.diff(routed, axis=0), axis=1)
     tangent = (routed[1] - routed[0]) / seg[0]
     s = np.concatenate([[0.0], np.cumsum(seg)])
     straight = routed[0] + s[:, None] * tangent[None, :]
     return CablePlan(cable, routed, straight, held)
+
+
+IMPERFECTION = 1e-6
+"""Amplitude of the half sine given to a perfectly straight run between two
+held vertices, as a fraction of the run's length (see `imperfect`)."""
+
+
+def imperfect(routed: np.ndarray, held: list[int]) -> np.ndarray:
+    """`routed` with every perfectly straight run between two held vertices
+    bowed by a half sine of `IMPERFECTION` of its length, towards world -z
+    (gravity's side) square to the run, or +x where the run is vertical.
+
+    A perfectly straight rod pushed along its length is a symmetric
+    equilibrium: every force square to it is exactly 0, so the simulated
+    rod never leaves it and carries any load by shortening its edges
+    (compressed 1 to 5 % with gravity off it carried 220 times its Euler
+    load, 4400 N for 20 N). A real rod is never perfectly straight; this is
+    its imperfection, the same every run (deterministic, not random). A
+    run is perfectly straight when its vertices lie within `IMPERFECTION`
+    of its length of its chord; runs already bent, and runs to a free end
+    (which nothing pushes), are left as they are, and so is every cable of
+    a scene without dynamics (`plan_cable`). It lengthens the run by about
+    2.5e-12 of its length."""
+    routed = np.array(routed, float)
+    held = sorted(set(int(h) for h in held))
+    for a, b in zip(held, held[1:]):
+        if b - a < 2:
+            continue
+        chord = routed[b] - routed[a]
+        span = float(np.linalg.norm(chord))
+        if span <= 0.0:
+            continue
+        axis = chord / span
+        rel = routed[a + 1:b] - routed[a]
+        off = rel - np.outer(rel @ axis, axis)
+        if np.linalg.norm(off, axis=1).max() > IMPERFECTION * span:
+            continue
+        side = np.array([0.0, 0.0, -1.0])
+        side -= (side @ axis) * axis
+        if np.linalg.norm(side) < 1e-6:     # a vertical run
+            side = np.array([1.0, 0.0, 0.0]) - axis[0] * axis
+        side /= np.linalg.norm(side)
+        x = np.clip((rel @ axis) / span, 0.0, 1.0)
+        routed[a + 1:b] += IMPERFECTION * span * np.sin(np.pi * x)[:, None] * side[None, :]
+    return routed
 
 
 def route_direction(route: np.ndarray, w: int) -> np.ndarray:

@@ -17,6 +17,11 @@ measure against one implementation:
 - `chain_period(length)`: first-mode period of a uniform hanging chain with
   a free lower end, 2 pi / ((j_0,1 / 2) sqrt(g / L)), j_0,1 = 2.4048 the
   first zero of the Bessel function J0 (Bernoulli, Euler): 1.2024 sqrt(g/L).
+- `clamped_elastica(length, shortening, EI)`: a rod clamped at both ends
+  whose ends are `shortening` of its length closer than its length (Euler's
+  elastica): end force 4 (2 K(m) / pi)^2 pi^2 EI / L^2 and mid deflection
+  k L / K(m), with 2 (1 - E(m) / K(m)) = shortening (m = k^2; the pinned
+  elastica on half the length, twice over).
 - `catenary_scene` / `cantilever_scene` / `elastica_scene` /
   `chain_scene`: the one-cable scenes, parsed by the real scene parser;
   the cantilevers and the chain have a free end (`hold = "free"`).
@@ -89,6 +94,21 @@ def elastica_tip(length: float, w: float, bending_stiffness: float) -> float:
     if not sol.success:
         raise RuntimeError(f"elastica did not converge: {sol.message}")
     return float(sol.sol(length)[2])
+
+
+def clamped_elastica(length: float, shortening: float, bending_stiffness: float) -> tuple[float, float]:
+    """End force (N) and mid deflection (m) of a rod clamped at both ends
+    `shortening` (a fraction) of its `length` closer than its length.
+
+    The buckled clamped rod is a pinned elastica of half its length between
+    its inflection points (at L / 4 and 3 L / 4), with the same shortening
+    fraction: 2 (1 - E(m) / K(m)) = shortening, force 4 (2 K / pi)^2 pi^2
+    EI / L^2 (4 times the pinned rod's), mid deflection twice the pinned
+    half's, 2 k (L / 2) / K."""
+    from scipy.special import ellipe, ellipk
+    m = brentq(lambda m: 2.0 * (1.0 - ellipe(m) / ellipk(m)) - shortening, 1e-14, 0.999999)
+    force = 4.0 * (2.0 * ellipk(m) / np.pi) ** 2 * np.pi ** 2 * bending_stiffness / length ** 2
+    return float(force), float(np.sqrt(m) * length / ellipk(m))
 
 
 def chain_period(length: float, g: float = G) -> float:

@@ -55,6 +55,7 @@ from checker.wear import CableWear, WearMap
 from sim.ahead import StepsAhead, depth_for, thread_cpu
 from sim.baseline import BaselineError, compare, load_baseline
 from sim.build import Built, build_simulation, plan_cables, with_detection
+from sim.cablephysics import COMPRESSION_TOLERANCE
 from sim.detector import Detector
 from sim.divergence import DivergenceWatch, PhysicsError
 from sim.jointspace import JointLog
@@ -352,7 +353,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         warnings=warning_counts([sim.data if isinstance(sim, Simulation) else None,   # a static check has none
                                  detector.detect_data if detector else None], messages),
         part_warnings=ends.part_warnings,
-        physics_warnings=noted + tuple(built.warnings) + ends.hull_warnings,
+        physics_warnings=noted + tuple(built.warnings) + ends.hull_warnings + out.compression_warnings(),
         substeps=built.substeps.count if built.substeps else 1,
         timing=Timing(time.perf_counter() - start, dict(timer.total),
                       detector.collision_seconds() if detector is not None else None, loop_s,
@@ -421,6 +422,9 @@ class _Checked:
         n = len(built.cables)
         self.max_strain = np.zeros(n)   # signed, largest in magnitude (compression negative)
         self.max_stretch = np.full(n, -np.inf)
+        self.least_strain = np.full(n, np.inf)       # most compressed, and when (scene time)
+        self.least_t = np.full(n, np.nan)
+        self.first_short = np.full(n, np.nan)       # first checked time below -COMPRESSION_TOLERANCE
         self.min_bend = np.full(n, np.inf)
         self.rest_points: list[np.ndarray] = []
         self.final_points: list[np.ndarray] = []
@@ -464,6 +468,15 @@ class _Checked:
             first = strain[np.argmax(np.abs(strain), axis=0), np.arange(strain.shape[1])]
             self.max_strain = np.where(np.abs(first) > np.abs(self.max_strain), first, self.max_strain)
             self.max_stretch = np.maximum(self.max_stretch, strain.max(axis=0))
+            times = np.array([st.t for st in states[:len(results)]], float)
+            k = np.argmin(strain, axis=0)
+            least = strain[k, np.arange(strain.shape[1])]
+            deeper = least < self.least_strain
+            self.least_strain = np.where(deeper, least, self.least_strain)
+            self.least_t = np.where(deeper, times[k], self.least_t)
+            short = strain < -COMPRESSION_TOLERANCE
+            first = np.where(short.any(axis=0), times[np.argmax(short, axis=0)], np.nan)
+            self.first_short = np.where(np.isnan(self.first_short), first, self.first_short)
             self.min_bend = np.minimum(self.min_bend, np.stack([r.bend for r in results]).min(axis=0))
         # the events first, the whole batch: the last state at which each event's worst
         # deepened within the batch is then recorded too (its worst instant, as the report has it)
@@ -507,6 +520,22 @@ class _Checked:
             self.checked += 1
             if self.progress:
                 self.progress("run", state.step, self.total_steps)
+
+    def compression_warnings(self) -> tuple[str, ...]:
+        """The cables shorter than their length by more than
+        `COMPRESSION_TOLERANCE` at some checked step: the edges held the
+        length no better (docs/physics.md, Length in compression)."""
+        out = []
+        for i, name in enumerate(self.names):
+            if not np.isnan(self.first_short[i]):
+                out.append(f"cable {name!r} is shorter than its length by more than "
+                           f"{100 * COMPRESSION_TOLERANCE:g} % (the length the simulation holds to): "
+                           f"from t = {self.first_short[i]:.4g} s, most at t = {self.least_t[i]:.4g} s, "
+                           f"strain {100 * self.least_strain[i]:.3g} %: it carried more compression than "
+                           f"the buckling load of its held runs, under which its elements give with the "
+                           f"step squared (a smaller scene.timestep gives less; docs/physics.md, Length in "
+                           f"compression)")
+        return tuple(out)
 
     def cables(self, wear: list[CableWear]) -> tuple[CableOutcome, ...]:
         """Each cable over the checked steps, with its wear map."""

@@ -1,7 +1,9 @@
 """How finely the simulation steps, and which parts move too fast for it.
 
 `choose_substeps` divides the scene's timestep so that every cable's
-edges stay stiffer than its bending (`bending_step`), its fastest held
+edges stay stiffer than its bending (`bending_step`) and give at most half
+the 0.1 % tolerance under its buckling load (`sim.cablephysics.
+compression_step`), its first mode is damped as declared, its fastest held
 point moves a small fraction of an element per step (`held_speeds`, from
 the script sampled through forward kinematics, `script_poses`) and, where
 parts push cables, no moving part travels more than the cable's radius
@@ -19,7 +21,7 @@ import mujoco
 import numpy as np
 
 from sim.built import Built, CableModel, PartModel, Substeps
-from sim.cablephysics import EDGE_IMPEDANCE, damping_step, first_mode
+from sim.cablephysics import EDGE_IMPEDANCE, buckling_load, compression_step, damping_step, first_mode
 from sim.scene import CableDef
 
 MAX_SUBSTEPS = 64
@@ -204,6 +206,13 @@ def choose_substeps(built: Built, poses=None) -> Substeps:
     (`rayleigh_damping`); h is kept small enough that it supplies at most
     half of it (`damping_step`; a 0.2 m, r 4 mm, 400 MPa cantilever's first
     mode at 90.8 rad/s damped 0.090 at h = 2 ms with `damping` 0).
+    And compression: the edge equality gives under an axial load F by
+    `(1 - d) (tc + h)^2 F / (mu l^2)` of strain (`sim.cablephysics.
+    compression_strain`), so h is kept small enough that under the
+    cable's buckling load (`buckling_load`: its stiffest run's Euler load,
+    clamped between holds, a cantilever to a free end; past it a rod
+    buckles) that is at most half of the 0.1 %
+    tolerance (`compression_step`).
     And where cable-structure contact pushes, contact: a contact acts only
     once a part overlaps a cable, so no moving part may travel more than
     `CONTACT_FRACTION` of the cable's radius in a step (v the fastest
@@ -222,10 +231,14 @@ def choose_substeps(built: Built, poses=None) -> Substeps:
         v = speeds.get(c.name, 0.0)
         speed = SPEED_FRACTION * c.element_length / v if v > 0.0 else np.inf
         contact = CONTACT_FRACTION * c.radius / parts if parts > 0.0 else np.inf
-        omega = first_mode(c.rest_s, [a.vertex for a in c.attachments], cd)
+        held = [a.vertex for a in c.attachments]
+        omega = first_mode(c.rest_s, held, cd)
         damp = damping_step(cd.damping, omega)
-        needed[c.name] = float(min(bend, speed, contact, damp))
-        if damp < min(bend, speed, contact):
+        squeeze = compression_step(buckling_load(c.rest_s, held, cd), c.element_length, cd)
+        needed[c.name] = float(min(bend, speed, contact, damp, squeeze))
+        if squeeze < min(bend, speed, contact, damp):
+            reasons[c.name] = ("compression", v, c.element_length)
+        elif damp < min(bend, speed, contact):
             reasons[c.name] = ("damping", omega, c.element_length)
         elif contact < min(bend, speed):
             reasons[c.name] = ("contact", parts, c.element_length)

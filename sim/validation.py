@@ -22,6 +22,12 @@ physics_validation.py tabulates them per element count (docs/physics.md).
   |strain| of the cable and of any element.
 - `bowed_rod`: a 200 GPa, 3 mm steel rod of 0.6 m clamped between ends
   0.5 m apart; its length change.
+- `bowed`: a rod clamped between ends closer than its length, gravity
+  off (buckled by its ends); its least strain over the run, end force and
+  mid deflection against the clamped elastica.
+- `straight_buckling`: a perfectly straight rod whose end is pushed in past
+  its buckling load, gravity off; whether and how it buckles (mid
+  deflection and end force against the clamped elastica, least strain).
 - `plate`: a plate lifted through a sagging cable; whether it carries it.
 - `resting`: a cable laid on a floor or over a drum under gravity; its settled
   gap to the surface as a fraction of its radius.
@@ -314,6 +320,103 @@ def bowed_rod(elements: int | None = None) -> Result:
     strains = np.array(strains)
     return _result("bowed steel rod", c.elements, float(strains[np.argmax(np.abs(strains))]), None,
                    wall, built, sim)
+
+
+ROD = dict(length=0.5, radius=0.003, density=1500.0, young=2e9)
+"""The rod of `bowed` and `straight_buckling` (tests/test_tangent.py's):
+EI = 0.127 N m^2, clamped Euler load 4 pi^2 EI / L^2 = 20.1 N."""
+
+WIRE = dict(length=0.1, radius=0.0005, density=7850.0, young=2e11)
+"""A 0.1 m steel wire of 1 mm diameter: clamped Euler load 38.8 N."""
+
+
+def _middle_force(sim: Simulation) -> float:
+    """Force of the middle edge's length equality, N (positive: compression).
+    At a buckled rod's middle the edge runs along the chord: the end force."""
+    d = sim.data
+    edges = d.efc_force[d.efc_type == int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)]
+    return float(edges[len(edges) // 2])
+
+
+def _deflection(pts: np.ndarray) -> tuple[float, np.ndarray]:
+    """Largest distance of `pts` from the line through its ends, and the unit
+    direction from that line to the farthest point."""
+    axis = (pts[-1] - pts[0]) / np.linalg.norm(pts[-1] - pts[0])
+    rel = pts - pts[0]
+    off = rel - np.outer(rel @ axis, axis)
+    k = int(np.argmax(np.linalg.norm(off, axis=1)))
+    size = float(np.linalg.norm(off[k]))
+    return size, off[k] / size if size > 0.0 else off[k]
+
+
+def bowed(elements: int | None = None, shortening: float = 0.02, damping: float | None = None,
+          rod: dict = ROD, duration: float = 0.2, settle: float = 3.0) -> Result:
+    """A rod (`rod`) clamped at both ends `shortening` of its length closer
+    than its length, gravity off, settled and then held for `duration`:
+    measured its least strain over the checked steps (negative: shorter;
+    the cable's total length over its rest length, as the run reports it),
+    `extra` its end force and mid deflection with the clamped elastica's
+    (`reference.clamped_elastica`). `elements` None: the default count."""
+    cable = {"name": "rod", "radius": rod["radius"], "start": {"pos": [0, 0, 1]},
+             "end": {"pos": [(1.0 - shortening) * rod["length"], 0, 1]}, "length": rod["length"],
+             "young": rod["young"], "density": rod["density"]}
+    if elements:
+        cable["segments"] = elements
+    if damping is not None:
+        cable["damping"] = damping
+    scene = _scene({"scene": {"name": "bowed", "units": "m", "duration": duration, "settle": settle,
+                              "timestep": 0.002}, "effects": {"gravity": False}, "cables": [cable]})
+    built, sim, state, _ = settled(scene)
+    c = built.cables[0]
+    strains = []
+    t0 = time.perf_counter()
+    for s in sim.steps(contacts=False):
+        strains.append(np.linalg.norm(np.diff(s.cables[0], axis=0), axis=1).sum() / c.length - 1.0)
+    wall = (time.perf_counter() - t0) / duration
+    ei = rod["young"] * np.pi * rod["radius"] ** 4 / 4.0
+    force, deflection = reference.clamped_elastica(rod["length"], shortening, ei)
+    return _result("compression strain", c.elements, float(min(strains)), None, wall, built, sim,
+                   force=_middle_force(sim), force_ref=force, deflection=_deflection(s.cables[0])[0],
+                   deflection_ref=deflection, damping=scene.cables[0].damping,
+                   reason=built.substeps.reasons[c.name][0])
+
+
+def straight_buckling(shortening: float, elements: int | None = None, push: float = 0.2, duration: float = 0.6,
+                      rod: dict = ROD, gravity: bool = False) -> Result:
+    """A perfectly straight rod (`rod`) clamped at both ends, its end pushed
+    in by `shortening` of its length over `push` seconds (at constant speed)
+    and held, gravity off: measured its mid deflection at the end against
+    the clamped elastica's; `extra` its end force and the elastica's, its
+    least strain over the run and at the end, and the direction it buckled
+    to (from its chord). Without the route's imperfection (`sim.cableplan.
+    imperfect`) it would stay straight and shorten instead."""
+    length = rod["length"]
+    keys = [{"t": 0.0, "pos": [length, 0, 1]}, {"t": push, "pos": [(1.0 - shortening) * length, 0, 1]}]
+    cable = {"name": "rod", "radius": rod["radius"], "start": {"pos": [0, 0, 1]},
+             "end": {"body": "b", "pos": [0, 0, 0]}, "young": rod["young"], "density": rod["density"]}
+    if elements:
+        cable["segments"] = elements
+    data = {"scene": {"name": "straight", "units": "m", "duration": duration, "settle": 0.0, "timestep": 0.002},
+            "bodies": [{"name": "b", "pos": [length, 0, 1]}],
+            "motion": [{"body": "b", "keys": keys, "interpolation": "linear"}], "cables": [cable]}
+    if not gravity:
+        data["effects"] = {"gravity": False}
+    scene = _scene(data)
+    built = build(scene, detect=False)
+    sim = Simulation(built)
+    sim.reset()
+    c = built.cables[0]
+    strains = []
+    t0 = time.perf_counter()
+    for s in sim.steps(contacts=False):
+        strains.append(np.linalg.norm(np.diff(s.cables[0], axis=0), axis=1).sum() / c.length - 1.0)
+    wall = (time.perf_counter() - t0) / duration
+    ei = rod["young"] * np.pi * rod["radius"] ** 4 / 4.0
+    force, deflection = reference.clamped_elastica(length, shortening, ei)
+    size, side = _deflection(s.cables[0])
+    return _result(f"straight rod pushed {100 * shortening:g} %", c.elements, size, deflection, wall, built, sim,
+                   force=_middle_force(sim), force_ref=force, least=float(min(strains)), final=float(strains[-1]),
+                   side=tuple(float(x) for x in np.round(side, 3)))
 
 
 def plate(speed: float, half_thickness: float = 0.005, timestep: float = 0.002, radius: float = 0.004) -> Result:
