@@ -82,6 +82,14 @@ def load() -> str:
     return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip().split("load average: ")[-1]
 
 
+def _children_cpu() -> float:
+    """CPU seconds of the finished child processes (the study's, its workers' included)."""
+    import resource
+
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
 def busiest(folder: Path) -> float:
     """The variants' wall time on the busiest worker of a finished study
     (sum of its tasks' `task_s`): the study's run phase without start-up,
@@ -126,6 +134,7 @@ def scaling(repeat: int, doc: Path | None) -> None:
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
     times: dict[int, list[float]] = {1: [], 2: []}
     phase: dict[int, list[float]] = {1: [], 2: []}
+    cores: dict[int, list[float]] = {1: [], 2: []}
     extra: dict[int, tuple[list[float], list[float]]] = {1: ([], []), 2: ([], [])}
     before = load()
     started = datetime.datetime.now().astimezone()
@@ -133,10 +142,11 @@ def scaling(repeat: int, doc: Path | None) -> None:
         for k in range(repeat):
             for n in (1, 2) if k % 2 == 0 else (2, 1):
                 out = Path(tmp) / f"w{n}-{k}"
-                t0 = time.perf_counter()
+                t0, c0 = time.perf_counter(), _children_cpu()
                 subprocess.run([sys.executable, "-m", "sim.cli", "study", str(STUDY), "--workers", str(n),
                                 "--out", str(out), "--quiet", "--fail-on", "never"], env=env, check=True)
                 times[n].append(time.perf_counter() - t0)
+                cores[n].append((_children_cpu() - c0) / times[n][-1])
                 phase[n].append(busiest(out / study.name))
                 first, rest = overheads(out / study.name)
                 extra[n][0].extend(first)
@@ -152,14 +162,15 @@ def scaling(repeat: int, doc: Path | None) -> None:
         f"after `{after}`" + (" (not quiet)" if busy > 0.5 else "") + ".",
         f"Command: `python benchmarks/bench_study.py {shlex.join(sys.argv[1:])}`",
         "",
-        "| workers | study, median s | min s | max s | speed-up | variants on the busiest worker, median s | speed-up |",
-        "|---|---|---|---|---|---|---|",
+        "| workers | study, median s | min s | max s | speed-up | variants on the busiest worker, median s | speed-up "
+        "| cores used (CPU s / wall s) |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     ph1 = statistics.median(phase[1])
     for n in (1, 2):
         lines.append(f"| {n} | {statistics.median(times[n]):.1f} | {min(times[n]):.1f} | {max(times[n]):.1f} | "
                      f"{one / statistics.median(times[n]):.2f} | {statistics.median(phase[n]):.1f} | "
-                     f"{ph1 / statistics.median(phase[n]):.2f} |")
+                     f"{ph1 / statistics.median(phase[n]):.2f} | {statistics.median(cores[n]):.2f} |")
     firsts = extra[1][0] + extra[2][0]
     rests = extra[1][1] + extra[2][1]
     lines += ["", f"Two workers: the study {one / two:.2f} times as fast as one (target {SCALING_TARGET}), its "
@@ -173,7 +184,7 @@ def scaling(repeat: int, doc: Path | None) -> None:
               "pays the imports; the worker keeps them)."]
     text = "\n".join(lines)
     print(text)
-    print(json.dumps({"times": times, "busiest_worker_s": phase, "first_extra_s": firsts, "later_extra_s": rests, "same_variant_s": warm}))
+    print(json.dumps({"times": times, "busiest_worker_s": phase, "cores": cores, "first_extra_s": firsts, "later_extra_s": rests, "same_variant_s": warm}))
     if doc is not None:
         old = doc.read_text()
         block = f"{BEGIN}\n{text}\n{END}"
