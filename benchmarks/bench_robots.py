@@ -54,6 +54,7 @@ import json
 import math
 import os
 import platform
+import re
 import shlex
 import subprocess
 import sys
@@ -221,13 +222,15 @@ def standalone(arm: Arm, root: Path, folder: Path) -> Path:
     return path
 
 
-def _points(m, body: int) -> np.ndarray:
-    """The body's collision geometry as points in its frame (mesh vertices,
-    a primitive's bounding box corners)."""
+def _points(m, body: int, only: int | None = None) -> np.ndarray:
+    """The body's collision geometry (or geom ``only``'s) as points in the
+    body's frame (mesh vertices, a primitive's bounding box corners)."""
     import mujoco
     pts = []
     for g in range(m.ngeom):
         if m.geom_bodyid[g] != body or not (m.geom_contype[g] or m.geom_conaffinity[g]):
+            continue
+        if only is not None and g != only:
             continue
         rot = np.zeros(9)
         mujoco.mju_quat2Mat(rot, m.geom_quat[g])
@@ -244,20 +247,37 @@ def _points(m, body: int) -> np.ndarray:
     return np.concatenate(pts)
 
 
-def outside(m, d, body_name: str, world_dir) -> tuple[list[float], np.ndarray]:
+def outside(m, d, body_name: str, world_dir, across: bool = True) -> tuple[list[float], np.ndarray]:
     """A point on ``body_name`` (its frame) STANDOFF beyond its collision
-    geometry in world direction ``world_dir`` (at the pose in ``d``), across
-    from the middle of its bounding box; and that point in the world."""
+    geometry, across from the middle of its bounding box, in world direction
+    ``world_dir`` (at the pose in ``d``) made square to the link's length (the
+    box's longest side; world -x, behind, where ``world_dir`` runs along
+    it; as given with ``across`` False); and that point in the world."""
     b = m.body(body_name).id
     pts = _points(m, b)
     rot = d.xmat[b].reshape(3, 3)
-    u = rot.T @ (np.asarray(world_dir, float) / np.linalg.norm(world_dir))
+    size = pts.max(0) - pts.min(0)
+    long = int(np.argmax(size)) if across and np.max(size) > 1.3 * np.median(size) else None
+    u = np.zeros(3)
+    for want in (world_dir, (-1.0, 0.0, 0.0), (0.0, 1.0, 0.0)):
+        u = rot.T @ (np.asarray(want, float) / np.linalg.norm(want))
+        if long is not None:
+            u[long] = 0.0
+        if np.linalg.norm(u) > 0.4:
+            break
+    u /= np.linalg.norm(u)
     c = (pts.min(0) + pts.max(0)) / 2
     local = c + u * (float(np.max((pts - c) @ u)) + STANDOFF)
     return [round(float(x), 4) for x in local], d.xpos[b] + rot @ local
 
 
 UP = (0.0, 0.0, 1.0)
+STYLES = {"up": (UP, False), "up, across": (UP, True), "behind": ((-1.0, 0.0, 0.0), True),
+          "left": ((0.0, 1.0, 0.0), True), "right": ((0.0, -1.0, 0.0), True)}
+"""Where the clips and the via points sit on their links: a world direction
+at the start pose, and whether it is made square to the link's length
+(:func:`outside`). The scene takes the style whose route enters the arm's
+collision geometry least (:func:`route_depth`)."""
 
 
 def has_geometry(m, body: int) -> bool:
@@ -273,6 +293,30 @@ def chain(m, first: str, last: str) -> list[int]:
         out.append(b)
         b = int(m.body_parentid[b])
     return [top] + out[::-1]
+
+
+def held_clearance(m, d, held: list[tuple[str, np.ndarray]]) -> float:
+    """The least distance (m) from each held point (body, world point) to the
+    collision geometry (vertices, primitives' box corners) of every other body:
+    an end or clip inside a neighbouring link (its convex hull, as MuJoCo
+    collides it: -1) is
+    a design error no route check sees (it excuses the attachment zones)."""
+    from scipy.spatial import ConvexHull
+
+    least = math.inf
+    for g in range(m.ngeom):
+        if not (m.geom_contype[g] or m.geom_conaffinity[g]) or m.geom_bodyid[g] == 0:
+            continue
+        pts = _points(m, int(m.geom_bodyid[g]), only=g)
+        b = int(m.geom_bodyid[g])
+        world = d.xpos[b] + pts @ d.xmat[b].reshape(3, 3).T
+        planes = ConvexHull(world).equations        # MuJoCo collides a mesh as its convex hull
+        for name, p in held:
+            if m.body(name).id == b:
+                continue
+            inside = bool(np.all(planes[:, :3] @ p + planes[:, 3] <= 0))
+            least = min(least, -1.0 if inside else float(np.min(np.linalg.norm(world - p, axis=1))))
+    return least
 
 
 def flange(m, body_name: str) -> str:
@@ -323,9 +367,11 @@ def program(m, arm: Arm) -> tuple[list[tuple[float, list[float]]], list[str]]:
 
 
 def scene_for(name: str, arm: Arm, root: Path, folder: Path, rate: float | None,
-              duration: float | None) -> tuple[Path, list[str]]:
+              duration: float | None, style: str = "up, across") -> tuple[Path, list[str], float]:
     """Write arm ``name``'s scene (and its trajectory, keys or sampled at
-    ``rate`` Hz) into ``folder``; its path and notes."""
+    ``rate`` Hz) into ``folder``, its clips and via points placed in ``style``
+    (:data:`STYLES`); its path, notes, and the held points' clearance
+    (:func:`held_clearance`)."""
     import mujoco
     from sim.harness import write_scene
 
@@ -340,8 +386,9 @@ def scene_for(name: str, arm: Arm, root: Path, folder: Path, rate: float | None,
         d.qpos[m.jnt_qposadr[m.joint(j).id]] = math.radians(v)
     mujoco.mj_kinematics(m, d)
     start, p_start = outside(m, d, arm.base, (-1, 0, 0.3))
-    clips = [outside(m, d, b, UP) for b in arm.clips]
-    end, p_end = outside(m, d, arm.wrist, UP)
+    way, across = STYLES[style]
+    clips = [outside(m, d, b, way, across) for b in arm.clips]
+    end, p_end = outside(m, d, arm.wrist, way, across)
     vias = [p_start + np.array([-0.02, 0, 0.6 * (clips[0][1][2] - p_start[2])])]
     route = [p_start, vias[0]]           # in order along the arm (the product inserts each clip where the route passes)
     for b in chain(m, arm.clips[0], arm.wrist)[:-1]:   # every link from the first clip to the wrist: a clip or a via
@@ -349,7 +396,7 @@ def scene_for(name: str, arm: Arm, root: Path, folder: Path, rate: float | None,
         if name in arm.clips:
             route.append(clips[arm.clips.index(name)][1])
         elif has_geometry(m, b):
-            vias.append(outside(m, d, name, UP)[1])
+            vias.append(outside(m, d, name, way, across)[1])
             route.append(vias[-1])
     route.append(p_end)
     length = SLACK * float(sum(np.linalg.norm(b - a) for a, b in zip(route, route[1:])))
@@ -382,7 +429,40 @@ def scene_for(name: str, arm: Arm, root: Path, folder: Path, rate: float | None,
         "allow": [{"a": "cell/table", "b": arm.base, "reason": "the arm's base is bolted to the table"},
                   {"a": "tool", "b": flange(m, arm.tool), "reason": "the tool is mounted on the flange"}],
     }
-    return write_scene(data, folder / f"{label}.toml"), notes
+    held = [(arm.base, p_start), *zip(arm.clips, (c[1] for c in clips)), (arm.wrist, p_end)]
+    return write_scene(data, folder / f"{label}.toml"), notes, held_clearance(m, d, held)
+
+
+DEPTH = re.compile(r"up to ([0-9.eE+-]+) m inside")
+
+
+def route_depth(scene_path: Path) -> float:
+    """How deep the routed hose enters the parts it collides with at t = 0, summed
+    over the parts (metres), as ``cablecheck check`` warns; inf when the check fails."""
+    out = subprocess.run(cli() + ["check", str(scene_path)], capture_output=True, text=True, cwd=REPO)
+    if out.returncode != 0:
+        return math.inf
+    return sum(float(x) for x in DEPTH.findall(out.stdout + out.stderr))
+
+
+def best_scene(name: str, arm: Arm, root: Path, folder: Path, rate: float | None,
+               duration: float | None) -> tuple[Path, list[str]]:
+    """The scene of the style (:data:`STYLES`) whose route enters the arm least;
+    a note names the style and what depth is left."""
+    tried = {}
+    need = HOSE_RADIUS + 0.005
+    for style in STYLES:
+        sub = folder / "styles" / style.replace(", ", "_")
+        sub.mkdir(parents=True, exist_ok=True)
+        path, _, clear = scene_for(name, arm, root, sub, rate, duration, style)
+        tried[style] = route_depth(path) + max(0.0, need - clear)
+        if tried[style] == 0.0:
+            break
+    style = min(tried, key=tried.get)
+    path, notes, clear = scene_for(name, arm, root, folder, rate, duration, style)
+    left = (f"; the route still enters the arm by {1000 * tried[style]:.1f} mm in all (ends and clips "
+            f"{1000 * clear:.0f} mm from the nearest other link)") if tried[style] else ""
+    return path, [*notes, f"clips and via points: {style}{left}"]
 
 
 # --------------------------------------------------------------------------- runs
@@ -453,7 +533,7 @@ def run_one(label: str, scene_path: Path, timeout: float | None = None) -> dict:
             near.append({**{k: e[k] for k in ("severity", "type", "a", "b", "min_distance", "t_worst")},
                          "window": hit[0], "ds": float(e["s"]) - hit[1]})
     row.update({
-        "elements": r["cables"][0]["segments"], **counts, "duration": duration, "timing": t, "ratio": ratio(t),
+        "elements": r["cables"][0]["segments"], **counts, "duration": duration, "complete": r.get("complete", True), "timing": t, "ratio": ratio(t),
         "rtf": duration / max(t["total_s"], 1e-12), "agreement": r["validation"]["agreement"],
         "hard": sum(e["severity"] == "hard" for e in events), "soft": sum(e["severity"] == "soft" for e in events),
         "near_held": near, "excused": len(r.get("excused", [])), "report": str(report_path),
@@ -470,15 +550,34 @@ def table(rows: list[dict]) -> str:
             lines.append(f"| {r['arm']} | error: {r['error'].splitlines()[-1][:120]} |" + " |" * 10)
             continue
         t = r["timing"]
-        lines.append(f"| {r['arm']} | {r['elements']} / {r['parts']} ({r['meshes']} meshes, "
+        arm = r["arm"] if r.get("complete", True) else f"{r['arm']} (stopped at {r['duration']:.2f} s)"
+        lines.append(f"| {arm} | {r['elements']} / {r['parts']} ({r['meshes']} meshes, "
                      f"{r['triangles']} triangles) | {t['sim_s']:.2f} | {t['check_s']:.2f} | {t['validate_s']:.2f} | "
                      f"{t['record_s']:.2f} | **{r['ratio']:.2f}** | {r['rtf']:.2f}x | {t['total_s']:.1f} | "
                      f"{100 * r['agreement']:.2f} % | {r['hard']} / {r['soft']} | {len(r['near_held'])} |")
     return "\n".join(lines)
 
 
+def code_state() -> str:
+    """The revision measured: HEAD, and the product's files changed in the working tree."""
+    git = ["git", "-C", str(REPO)]
+    head = subprocess.run(git + ["rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+    dirty = subprocess.run(git + ["status", "--porcelain", "--", "sim", "checker"], capture_output=True,
+                           text=True).stdout.split("\n")
+    dirty = [line[3:] for line in dirty if line.strip()]
+    return f"`{head}`" + (f" with uncommitted changes to {len(dirty)} product file(s) ({', '.join(dirty[:8])}"
+                          f"{', ...' if len(dirty) > 8 else ''})" if dirty else "")
+
+
 def load() -> str:
     return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+
+
+def one_minute(uptime: str) -> float:
+    try:
+        return float(uptime.split("load average:")[1].split(",")[0])
+    except (IndexError, ValueError):
+        return float("nan")
 
 
 def write_doc(path: Path, text: str) -> None:
@@ -526,7 +625,7 @@ def main(argv=None) -> int:
         for rate in ([None, HZ] if n == a.hz_arm else [None]):
             label = n if rate is None else f"{n} @ {int(rate)} Hz CSV"
             try:
-                path, notes = scene_for(n, arm, root, folder, rate, a.duration)
+                path, notes = best_scene(n, arm, root, folder, rate, a.duration)
                 todo.append((label, path, notes))
             except Exception as exc:
                 todo.append((label, None, [f"scene not written: {type(exc).__name__}: {exc}"]))
@@ -544,11 +643,15 @@ def main(argv=None) -> int:
         state = row.get("error") or f"(c+v+r)/sim {row['ratio']:.2f}, real time {row['rtf']:.2f}x"
         print(f"  {label}: {state}", file=sys.stderr, flush=True)
     after = load()
+    (folder / "rows.json").write_text(json.dumps(rows, indent=1, default=str))
     lines = [f"Measured {started:%Y-%m-%d %H:%M %Z} on {platform.node() or 'this machine'} "
              f"({os.cpu_count()} cores, {platform.processor() or platform.machine()}, Python "
              f"{platform.python_version()}), one run each, one after the other; "
              f"{PROGRAM[-1][0] if a.duration is None else a.duration:g} s pick-and-place after 0.5 s settling.",
-             "", f"Load before: `{before}`; after: `{after}`.", "",
+             "", f"Load before: `{before}`; after: `{after}`"
+             + (" (not quiet: wall times and the real-time factor are above a quiet machine's)"
+                if max(one_minute(before), one_minute(after)) > 0.5 else "") + ".", "",
+             f"Code: {code_state()}.", "",
              f"Command: `python benchmarks/bench_robots.py {shlex.join(sys.argv[1:] if argv is None else argv)}`",
              "", table(rows), ""]
     for r in rows:

@@ -66,7 +66,8 @@ def test_missing_packages_are_explained_not_a_traceback(monkeypatch, capsys):
 @pytest.mark.skipif(bench.package_root("robosuite") is None, reason="robosuite (the zoo extra) is not installed")
 def test_one_arm_scene_loads(tmp_path):
     arm = bench.ZOO["panda"]
-    path, _ = bench.scene_for("panda", arm, bench.package_root(arm.package), tmp_path, None, None)
+    path, _, clear = bench.scene_for("panda", arm, bench.package_root(arm.package), tmp_path, None, None)
+    assert clear > 0
     out = subprocess.run([sys.executable, "-c", "import sys; from sim.cli import main; sys.exit(main())",
                           "check", str(path)], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stdout + out.stderr
