@@ -17,7 +17,9 @@ import pytest
 from rerun.chunk import RrdReader
 
 from sim.cli import main, version
-from sim.record import CLASH_COLUMNS, KEEPOUT_COLOUR, PART_COLOUR, SPOT, STATE_COLOURS, wear_colours
+from sim.record import (CABLE_PALETTE, CLASH_COLUMNS, CONTACT_COLOUR, FLOOR, FLOOR_DIMMED, KEEPOUT_COLOUR, PART_COLOUR,
+                        SPOT, STATE_COLOURS, cable_colour, wear_colours)
+from sim.record.cables import RING
 from sim.record.style import pair_path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -84,6 +86,23 @@ def _entities(record: Path) -> set[str]:
     return {c.entity_path for c in RrdReader(record).stream()}
 
 
+def _packed(rgb) -> int:
+    """An 8-bit colour (opaque unless given 4 values) as rerun packs it."""
+    return int.from_bytes(bytes([*rgb, 255][:4]), "big")
+
+
+def _centres(row: dict) -> np.ndarray:
+    """A cable's body centres in one of its recorded rows: each ring's mean (the ring is regular about it)."""
+    v = np.array(row["Mesh3D:vertex_positions"])
+    return v[:-2].reshape(-1, RING, 3).mean(axis=1)
+
+
+def _colours_at(rows: list[dict], t: float) -> np.ndarray:
+    """A cable's vertex colours shown at `t`: its latest row at or before it that gives them."""
+    given = [r for r in rows if r["t"] is not None and r["t"] <= t + 1e-12 and r["Mesh3D:vertex_colors"] is not None]
+    return np.array(given[-1]["Mesh3D:vertex_colors"], np.uint32)
+
+
 @pytest.fixture(scope="module")
 def pinch(tmp_path_factory) -> tuple[dict, Path]:
     """drawer_pinch: the drawer's back panel sweeps through a cable loop (one hard event)."""
@@ -142,37 +161,49 @@ def test_the_spot_is_labelled_with_pair_and_distance_in_its_own_colour(pinch):
     for d in spheres:
         rgba = d["Ellipsoids3D:colors"][0][0]
         assert (rgba >> 24, (rgba >> 16) & 255, (rgba >> 8) & 255) == SPOT
-        assert d["Ellipsoids3D:show_labels"] == [[True]] and d["Ellipsoids3D:line_radii"] == [[-2.5]]
+        assert d["Ellipsoids3D:line_radii"] == [[-2.5]]
+        assert d["Points3D:show_labels"] == [[True]]        # the label rides on a point above the sphere
     spot = int.from_bytes(bytes([*SPOT, 255]), "big")
     assert [d["LineStrips3D:colors"] for d in styles if "LineStrips3D:colors" in d] == [[[spot]]] * len(spheres)
+    assert [d["Points3D:colors"] for d in styles if "Points3D:colors" in d] == [[[spot]]] * len(spheres)
     assert SPOT not in (*STATE_COLOURS.values(), PART_COLOUR, KEEPOUT_COLOUR[:3])
     shown = [r for r in rows if r["t"] is not None]
     # every row holds as many sizes as centres: an emptied row draws nothing (not a sphere at the origin)
     assert all(len(r["Ellipsoids3D:half_sizes"]) == len(r["Ellipsoids3D:centers"]) for r in shown)
     worst = min(shown, key=lambda r: abs(r["t"] - event["t_worst"]))
-    assert worst["Ellipsoids3D:labels"] == [f"loop / drawer/back: {event['min_distance']:.3g} mm"]
+    assert worst["Points3D:labels"] == [f"loop / drawer/back: {event['min_distance']:.3g} mm"]
+    # the label just above the sphere (no other spot to keep clear of)
+    (centre,), (top,), (half,) = worst["Ellipsoids3D:centers"], worst["Points3D:positions"], worst["Ellipsoids3D:half_sizes"]
+    assert np.allclose(np.subtract(top, centre), [0.0, 0.0, 1.15 * half[0]], rtol=1e-5)
     # shown from the event's start, emptied at the frame after its last
-    assert shown[0]["t"] == pytest.approx(event["t_start"]) and shown[-1]["Ellipsoids3D:labels"] == []
+    assert shown[0]["t"] == pytest.approx(event["t_start"]) and shown[-1]["Points3D:labels"] == []
+    assert shown[-1]["Points3D:positions"] == [] and shown[-1]["Ellipsoids3D:centers"] == []
     # the gap: from the worst place on the centreline (radius 3 mm) to the panel's surface
     gaps = [r for r in rows if r.get("LineStrips3D:strips")]
-    seg = np.array(next(r for r in gaps if r["t"] == pytest.approx(event["t_worst"]))["LineStrips3D:strips"][0])
+    at = next(r for r in gaps if r["t"] == pytest.approx(event["t_worst"]))
+    seg = np.array(at["LineStrips3D:strips"][0])
     assert np.linalg.norm(seg[1] - seg[0]) == pytest.approx(abs(event["min_distance"] + 3.0), abs=1e-3)
+    # and a thinner line through it, on the gap's line, running out of the sphere on both sides
+    through = np.array(at["LineStrips3D:strips"][1])
+    d = (seg[1] - seg[0]) / np.linalg.norm(seg[1] - seg[0])
+    off = through - seg[0]
+    assert np.allclose(off - (off @ d)[:, None] * d, 0.0, atol=1e-3)
+    assert (np.linalg.norm(off, axis=1) > 1.5 * half[0]).all() and (off @ d).min() < 0 < (off @ d).max()
+    assert at["LineStrips3D:radii"][1] < at["LineStrips3D:radii"][0]
 
 
 def test_only_the_elements_near_the_spot_take_the_state_colour(pinch):
     report, record = pinch
     (event,) = report["events"]
     rows = [r for r in _rows(record, "/world/cables/loop") if r["t"] is not None]
-    at_worst = min(rows, key=lambda r: abs(r["t"] - event["t_worst"]))
-    hard = np.uint32(int.from_bytes(bytes([*STATE_COLOURS["hard"], 255]), "big"))
-    clear = np.uint32(int.from_bytes(bytes([*STATE_COLOURS["clear"], 255]), "big"))
-    colours = np.array(at_worst["LineStrips3D:colors"], np.uint32)
-    sizes = np.array([len(strip) - 1 for strip in at_worst["LineStrips3D:strips"]])   # elements per strip
+    hard, own = _packed(STATE_COLOURS["hard"]), _packed(cable_colour(0))
+    colours = _colours_at(rows, event["t_worst"])
+    rings = colours[:-2].reshape(-1, RING)                  # one colour per ring
     n = report["cables"][0]["segments"]
-    assert sizes.sum() == n and set(colours.tolist()) == {int(hard), int(clear)}
-    assert 0 < sizes[colours == hard].sum() < n // 3
-    before = min(rows, key=lambda r: abs(r["t"] - 0.5))
-    assert np.array(before["LineStrips3D:colors"], np.uint32).tolist() == [int(clear)]   # one clear strip
+    assert len(rings) == n + 1 and (rings == rings[:, :1]).all()
+    assert set(colours.tolist()) == {hard, own}
+    assert 0 < (rings[:, 0] == hard).sum() < n // 3
+    assert set(_colours_at(rows, 0.5).tolist()) == {own}     # before the clash: the cable's own colour
 
 
 def test_the_clash_list_has_one_row_per_event_at_its_worst_time(pinch):
@@ -454,8 +485,7 @@ def test_a_cable_lying_on_a_plate_with_one_end_sliding_wears_only_where_it_touch
     frames = []
     for row in _rows(record, "/world/cables/lead"):
         if row["t"] is not None:
-            strips = [np.array(x) for x in row["LineStrips3D:strips"]]
-            frames.append(np.concatenate([strips[0]] + [x[1:] for x in strips[1:]]))
+            frames.append(_centres(row))
     z = np.stack(frames)[:, :, 2]                                   # (frames, body centres)
     low, high = z.min(axis=0), z.max(axis=0)
     r, clearance, top = 3.0, 2.0, 0.0
@@ -477,8 +507,10 @@ def test_a_cable_lying_on_a_plate_with_one_end_sliding_wears_only_where_it_touch
 
 def test_a_style_given_once_rides_in_the_first_row(pinch):
     _, record = pinch
-    # one chunk per entity: the cable's radius and the contacts' style in the first row, absent after
-    for entity, style in (("/world/cables/loop", ["LineStrips3D:radii"]),
+    # one chunk per entity: the tube's triangles, the name and its style, the contacts' style in the
+    # first row, absent after
+    for entity, style in (("/world/cables/loop", ["Mesh3D:triangle_indices", "Points3D:labels", "Points3D:colors",
+                                                  "Points3D:radii", "Points3D:show_labels"]),
                           ("/world/mujoco_contacts", ["Points3D:radii", "Points3D:colors"])):
         chunks = [c for c in RrdReader(record).stream() if c.entity_path == entity]
         assert len(chunks) == 1 and not chunks[0].is_static
@@ -487,7 +519,8 @@ def test_a_style_given_once_rides_in_the_first_row(pinch):
             assert rows[0][key] and all(r[key] is None for r in rows[1:])
     scene = tomllib.loads((ROOT / "scenes" / "drawer_pinch.toml").read_text())
     (first, *_) = _rows(record, "/world/cables/loop")
-    assert first["LineStrips3D:radii"] == [pytest.approx(scene["cables"][0]["radius"])]     # mm, as the scene
+    ring = np.array(first["Mesh3D:vertex_positions"])[:RING]
+    assert np.linalg.norm(ring - ring.mean(axis=0), axis=1) == pytest.approx(scene["cables"][0]["radius"], rel=1e-5)
 
 
 def test_frames_recorded_for_an_event_alone_keep_only_what_changes(pinch):
@@ -509,8 +542,9 @@ def test_frames_recorded_for_an_event_alone_keep_only_what_changes(pinch):
     rows = [r for r in _rows(record, "/world/cables/loop") if r["t"] is not None]
     off = [k for k, r in enumerate(rows) if not on_grid(r["t"])]
     assert rows[off[0]]["t"] == pytest.approx(ev["t_start"])          # the clash shows when it starts
-    for k in off:
-        assert rows[k]["LineStrips3D:colors"] != rows[k - 1]["LineStrips3D:colors"]
+    for k in off:                                                       # each gives its new colours
+        assert rows[k]["Mesh3D:vertex_colors"] is not None
+        assert _colours_at(rows, rows[k]["t"]).tolist() != _colours_at(rows, rows[k - 1]["t"]).tolist()
     events = {round(r["t"], 6) for r in _rows(record, "/events")}
     assert any(not on_grid(t) for t in events)                          # there are event-only frames
 
@@ -574,3 +608,176 @@ def test_every_events_worst_instant_is_a_frame_with_the_reports_distance(fixture
         assert len(at) == 1, (event, [r["t"] for r in rows][:20])
         value = at[0]["Scalars:scalars"][0]
         assert value == pytest.approx(event["min_distance"], rel=1e-9, abs=1e-12)
+
+
+def _ring_circle(n: int, radius: float) -> np.ndarray:
+    a = np.linspace(0.0, 1.5 * np.pi, n)
+    return np.stack([radius * np.cos(a), radius * np.sin(a), np.zeros(n)], axis=-1)
+
+
+def test_a_tube_lies_at_the_cable_radius_with_outward_normals_and_no_twist():
+    """Closed form: body centres on a circle of radius R in z = 0 make a
+    torus, (sqrt(x^2 + y^2) - R)^2 + z^2 = r^2 at every ring vertex; each
+    ring is square to the circle there; the normals are unit, point from the
+    centre to the vertex, and the triangles wind outward; transported along
+    a plane curve the rings do not turn about it (a ring's first normal
+    keeps its angle with the plane's normal); the ends are closed `r`
+    beyond the first and last centres."""
+    from sim.record.cables import tube, tube_triangles
+    big, r, n = 80.0, 3.0, 41
+    centres = _ring_circle(n, big)[None]
+    vertices, normals = tube(centres, r)
+    v, nv = vertices[0], normals[0]
+    assert v.shape == (n * RING + 2, 3)
+    ring = v[:-2].reshape(n, RING, 3)[1:-1]                  # the ends' rings are square to their element
+    assert np.allclose((np.hypot(ring[..., 0], ring[..., 1]) - big) ** 2 + ring[..., 2] ** 2, r * r, rtol=1e-9)
+    tangent = np.stack([-centres[0, :, 1], centres[0, :, 0], np.zeros(n)], axis=-1) / big
+    assert np.allclose(np.einsum("kjd,kd->kj", ring - centres[0][1:-1, None], tangent[1:-1]), 0.0, atol=1e-9)
+    chord = np.diff(centres[0], axis=0)
+    tangent[0], tangent[-1] = chord[0] / np.linalg.norm(chord[0]), chord[-1] / np.linalg.norm(chord[-1])
+    assert np.allclose(np.linalg.norm(nv, axis=1), 1.0)
+    assert np.allclose(nv[:-2], (v[:-2] - np.repeat(centres[0], RING, axis=0)) / r)
+    assert np.allclose(v[-2], centres[0, 0] - r * tangent[0]) and np.allclose(v[-1], centres[0, -1] + r * tangent[-1])
+    assert np.allclose(nv[-2], -tangent[0]) and np.allclose(nv[-1], tangent[-1])
+    first = nv[:-2].reshape(n, RING, 3)[:, 0]
+    assert np.allclose(first[:, 2], first[0, 2])            # no twist about the cable
+    tri = tube_triangles(n)
+    assert tri.min() == 0 and tri.max() == len(v) - 1 and len(tri) == 2 * (n - 1) * RING + 2 * RING
+    face = np.cross(v[tri[:, 1]] - v[tri[:, 0]], v[tri[:, 2]] - v[tri[:, 0]])
+    assert (np.einsum("td,td->t", face, nv[tri].sum(axis=1)) > 0).all()
+
+
+def test_parallel_transport_by_doubling_equals_turning_ring_by_ring():
+    """The running products of the turns (log2 passes) against a loop that
+    turns the normal from each tangent to the next (Rodrigues), on a random
+    walk with a kink and a straight stretch."""
+    from sim.record.cables import tangents, transported_normals
+    rng = np.random.default_rng(3)
+    pts = np.cumsum(rng.normal(size=(2, 37, 3)), axis=1)
+    pts[1, 20:26] = pts[1, 19] + np.arange(1, 7)[:, None] * np.array([1.0, 0.0, 0.0])
+    t = tangents(pts)
+    n = transported_normals(t)
+    for f in range(2):
+        want = [n[f, 0]]
+        for k in range(1, 37):
+            a, b = t[f, k - 1], t[f, k]
+            axis = np.cross(a, b)
+            s, c = np.linalg.norm(axis), a @ b
+            v = want[-1]
+            if s > 1e-12:
+                axis /= s
+                th = np.arctan2(s, c)
+                v = v * np.cos(th) + np.cross(axis, v) * np.sin(th) + axis * (axis @ v) * (1 - np.cos(th))
+            want.append(v)
+        assert np.allclose(n[f], want, atol=1e-12)
+    assert np.allclose(np.einsum("fpd,fpd->fp", n, t), 0.0, atol=1e-12)
+
+
+def test_each_cable_is_a_named_tube_in_its_own_colour(crossing):
+    """crossing: two leads, each a tube at its own radius (vertices at the
+    radius from the centres, unit normals outward) in its own colour, named
+    by a label on it; the two names apart; the cables' plots in their colours."""
+    report, record = crossing
+    scene = tomllib.loads((ROOT / "scenes" / "crossing.toml").read_text())
+    owns, names = [], []
+    for i, cable in enumerate(scene["cables"]):
+        rows = [r for r in _rows(record, f"/world/cables/{cable['name']}") if r["t"] is not None]
+        assert rows                     # crossing's leads lie still: one shape each (`STILL`)
+        for row in rows[:: max(1, len(rows) // 5)]:
+            v, nv = np.array(row["Mesh3D:vertex_positions"]), np.array(row["Mesh3D:vertex_normals"])
+            centres = _centres(row)
+            assert len(centres) == report["cables"][i]["segments"] + 1
+            out = v[:-2] - np.repeat(centres, RING, axis=0)
+            assert np.linalg.norm(out, axis=1) == pytest.approx(cable["radius"], rel=1e-4)
+            assert np.allclose(np.linalg.norm(nv, axis=1), 1.0, atol=1e-6)
+            assert np.allclose(nv[:-2], out / cable["radius"], atol=1e-4)
+            # the label on the cable, at one of its centres, all along the run
+            (label,) = row["Points3D:positions"]
+            assert np.linalg.norm(centres - label, axis=1).min() < 1e-3
+        assert rows[0]["Points3D:labels"] == [cable["name"]]
+        assert rows[0]["Points3D:colors"] == [_packed(cable_colour(i))]
+        colours = _colours_at(rows, rows[-1]["t"])
+        own = np.bincount(np.unique(colours, return_inverse=True)[1]).argmax()
+        owns.append(int(np.unique(colours)[own]))
+        names.append(np.array(rows[0]["Points3D:positions"][0]))
+        (strain, *_) = _rows(record, f"/cables/strain/{cable['name']}")
+        assert strain["SeriesLines:colors"] == [_packed(cable_colour(i))]
+    assert owns == [_packed(cable_colour(0)), _packed(cable_colour(1))]
+    reserved = [_packed(c) for c in (*STATE_COLOURS.values(), SPOT, PART_COLOUR)]
+    assert len(set(owns)) == 2 and not set(owns) & set(reserved)
+    span = max(np.ptp(np.array(c["via"] if "via" in c else [c["start"]["pos"], c["end"]["pos"]]), axis=0).max()
+               for c in scene["cables"])
+    assert np.linalg.norm(names[0] - names[1]) > 0.05 * span
+
+
+def test_the_palette_keeps_cables_apart_from_each_other_and_from_the_states():
+    def far(a, b):                      # "redmean" colour distance
+        r = 0.5 * (a[0] + b[0])
+        d = np.subtract(a, b, dtype=float)
+        return np.sqrt((2 + r / 256) * d[0] ** 2 + 4 * d[1] ** 2 + (2 + (255 - r) / 256) * d[2] ** 2)
+    reserved = [*STATE_COLOURS.values(), SPOT, PART_COLOUR, CONTACT_COLOUR]
+    for i, a in enumerate(CABLE_PALETTE):
+        assert min(far(a, b) for b in reserved if b != STATE_COLOURS["clear"]) > 100
+        assert min(far(a, b) for b in CABLE_PALETTE[i + 1:]) > 75 if i + 1 < len(CABLE_PALETTE) else True
+    n = len(CABLE_PALETTE)
+    assert cable_colour(0) == CABLE_PALETTE[0] and cable_colour(n) != cable_colour(0)
+
+
+def test_labels_of_spots_shown_together_are_lifted_apart():
+    """Two spots side by side whose labels would overlap: the second's goes
+    up a label height; a spot far away, or at another frame, stays just
+    above its sphere."""
+    from sim.record.marks import LABEL_ABOVE, label_lifts
+    label = "hose_left / flange: -3.5 mm"
+    rows = {"a": [(0, np.array([0.0, 0.0, 100.0]), None, label, "x"), (1, np.array([0.0, 0.0, 100.0]), None, label, "x")],
+            "b": [(0, np.array([12.0, 0.0, 100.0]), None, label, "y")],
+            "c": [(0, np.array([500.0, 0.0, 100.0]), None, label, "z")]}
+    radii = {"a": 10.0, "b": 10.0, "c": 10.0}
+    lifts = label_lifts(rows, radii, 8.0)
+    assert lifts["a"].tolist() == [LABEL_ABOVE * 10.0] * 2 and lifts["c"].tolist() == [LABEL_ABOVE * 10.0]
+    assert lifts["b"][0] >= LABEL_ABOVE * 10.0 + 8.0
+
+
+FLOOR_SCENE = """
+[scene]
+name = "on-floor"
+units = "mm"
+duration = 0.05
+settle = 0.05
+
+[effects]
+contact = []
+
+[check]
+clearance = 2.0
+
+[[parts]]
+name = "floor"
+shape = "plane"
+
+[[parts]]
+name = "post"
+shape = "box"
+size = [5, 5, 30]
+pos = [0, 0, 30]
+
+[[cables]]
+name = "lead"
+radius = 3.0
+start = { pos = [-60, 0, 40] }
+end = { pos = [60, 0, 40] }
+length = 121.0
+segments = 10
+"""
+
+
+def test_floors_are_translucent_and_more_so_while_a_clash_is_shown(tmp_path: Path):
+    scene = tmp_path / "on_floor.toml"
+    scene.write_text(FLOOR_SCENE)
+    record = tmp_path / "f.rrd"
+    assert main(["run", str(scene), "--record", str(record), "--quiet", "--fail-on", "never"]) == 0
+    report = json.loads(record.with_suffix(".json").read_text())
+    assert report["events"]                                  # the lead runs through the post from the start
+    colours = [c for r in _rows(record, "/world/parts/floor") if r.get("Boxes3D:colors") for c in r["Boxes3D:colors"]]
+    assert colours and all(c & 255 < 255 for c in colours)   # translucent throughout
+    assert set(colours) <= {_packed(FLOOR), _packed(FLOOR_DIMMED)} and _packed(FLOOR_DIMMED) in colours

@@ -3,10 +3,11 @@
 Entity tree (mirrors the scene, in the scene's units, z up), and the
 module of this package that writes each part:
 - `world/parts/<assembly path>`, `world/visual/<body>/<geom>`: the parts
-  and the mjcf model's visual geoms, translucent while a clash is shown
-  (:mod:`.scene`);
-- `world/cables/<name>`: each cable's centreline at its true radius, only
-  the elements near a clash's worst place in its state colour (:mod:`.cables`);
+  and the mjcf model's visual geoms, translucent while a clash is shown,
+  floors always (:mod:`.scene`);
+- `world/cables/<name>`: each cable as a shaded tube at its true radius in
+  its own colour, named, only the elements near a clash's worst place in
+  its state colour (:mod:`.cables`);
 - `world/interference/<type>/<a>/<b>`: the spot and its gap, and
   `lanes/<type>/<a>/<b>`: the pair's state (:mod:`.marks`);
   `world/mujoco_contacts`: MuJoCo's contact points;
@@ -31,9 +32,10 @@ from sim.record.marks import Mark
 from sim.record.recorder import Recorder
 from sim.record.scene import plane_half_sizes
 from sim.record.style import CLEAR, CONTACT_COLOUR, HARD, KEEPOUT_COLOUR, PART_COLOUR, PART_DIMMED, SOFT, SPOT
-from sim.record.style import STATE_COLOURS, STATES, pair_path, part_path, visual_paths
+from sim.record.style import CABLE_PALETTE, FLOOR, FLOOR_DIMMED, STATE_COLOURS, STATES, cable_colour, pair_path
+from sim.record.style import part_path, visual_paths
 from sim.record.wearview import wear_colours
 
-__all__ = ["CLASH_COLUMNS", "CLEAR", "CONTACT_COLOUR", "HARD", "KEEPOUT_COLOUR", "PART_COLOUR", "PART_DIMMED", "SOFT",
+__all__ = ["CABLE_PALETTE", "CLASH_COLUMNS", "CLEAR", "FLOOR", "FLOOR_DIMMED", "cable_colour", "CONTACT_COLOUR", "HARD", "KEEPOUT_COLOUR", "PART_COLOUR", "PART_DIMMED", "SOFT",
            "SPOT", "STATES", "STATE_COLOURS", "VIEWPOINTS", "Mark", "Recorder", "Settings", "pair_path", "part_path",
            "plane_half_sizes", "summary_text", "visual_paths", "wear_colours"]

@@ -23,6 +23,8 @@ VEC3 = pa.list_(pa.field("item", pa.float32(), nullable=False), 3)
 """A point or a size: three float32, as rerun stores them."""
 STRIP = pa.list_(pa.field("item", VEC3, nullable=False))
 """A line strip: a list of points."""
+TRIANGLE = pa.list_(pa.field("item", pa.uint32(), nullable=False), 3)
+"""A triangle: three vertex indices, as rerun stores them."""
 MAT3 = pa.list_(pa.field("item", pa.float32(), nullable=False), 9)
 """A 3x3 matrix: nine float32, column by column, as rerun stores it."""
 
@@ -136,3 +138,37 @@ def rgba(colours: Sequence[Sequence[int]] | np.ndarray) -> pa.Array:
 def times(seconds: np.ndarray) -> rr.TimeColumn:
     """The `sim_time` index of a column."""
     return rr.TimeColumn("sim_time", duration=seconds)
+
+
+@dataclass(frozen=True)
+class Sometimes:
+    """A component given in some rows of a column of `rows` rows (`given`,
+    (rows,) bool, True where a row has a value) and absent from the others,
+    each of those found by the viewer's look-up at or before the time shown
+    (as :class:`Once`, which is this with the first row alone). `values`:
+    the given rows' values laid end to end, `lengths`: how many each row
+    has. A column of `send_columns`."""
+
+    descriptor: rr.ComponentDescriptor
+    values: pa.Array
+    given: np.ndarray
+    lengths: np.ndarray
+
+    def component_descriptor(self) -> rr.ComponentDescriptor:
+        return self.descriptor
+
+    def as_arrow_array(self) -> pa.Array:
+        given = np.asarray(self.given, bool)
+        sizes = np.zeros(len(given), np.int32)
+        sizes[given] = self.lengths
+        offsets = np.zeros(len(given) + 1, np.int32)
+        np.cumsum(sizes, out=offsets[1:])
+        return pa.Array.from_buffers(pa.list_(self.values.type), len(given),
+                                     [pa.py_buffer(np.packbits(given, bitorder="little")), pa.py_buffer(offsets)],
+                                     null_count=int((~given).sum()), children=[self.values])
+
+
+def indices3(triangles: np.ndarray) -> pa.Array:
+    """(n, 3) vertex indices of triangles as rerun's `TriangleIndices` array."""
+    flat = np.ascontiguousarray(triangles, np.uint32).reshape(-1)
+    return pa.FixedSizeListArray.from_arrays(pa.array(flat), type=TRIANGLE)

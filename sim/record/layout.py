@@ -61,11 +61,12 @@ class Together:
 
 def spot_style() -> Together:
     """The 3D views' defaults that style the spots (`sim.record.marks`): a
-    labelled wire sphere and its gap in the spot's colour. Every other
-    ellipsoid and line strip (parts, cables, the wear map) carries its own
-    fill, colour and radius, which a default never overrides."""
-    return Together((rr.Ellipsoids3D.from_fields(colors=[SPOT], line_radii=[-2.5], fill_mode="MajorWireframe",
-                                                 show_labels=True),
+    wire sphere, its label on a small point and its gap, in the spot's
+    colour. Every other ellipsoid, point and line strip (parts, cables'
+    names, contacts, the wear map) carries its own fill, colour and radius,
+    which a default never overrides."""
+    return Together((rr.Ellipsoids3D.from_fields(colors=[SPOT], line_radii=[-2.5], fill_mode="MajorWireframe"),
+                     rr.Points3D.from_fields(colors=[SPOT], radii=[-2.0], show_labels=True),
                      rr.LineStrips3D.from_fields(colors=[SPOT])))
 
 

@@ -1,10 +1,14 @@
 """The clashes in the review recording: the spot of each pair and its state lane.
 
 `world/interference/<type>/<a>/<b>`: a wire sphere round the worst place on
-cable a, labelled with the pair and its distance, in a colour no cable or
-part uses, and the segment (the gap) to the closest point on the other
-side (`checker.spot`); both shown from the frame a clash is seen and
-emptied at the frame after each run of such frames. `lanes/<type>/<a>/<b>`:
+cable a, in a colour no cable or part uses; its label (the pair and its
+distance) on a point just above the sphere, lifted further where another
+spot's label shown at the same time would overlap it (with a leader down
+to the sphere); the segment (the gap) to the closest point on the other
+side (`checker.spot`), and a thin line through it that runs on out of the
+sphere (so the gap's direction shows outside the marker); all shown from
+the frame a clash is seen and emptied at the frame after each run of such
+frames. `lanes/<type>/<a>/<b>`:
 the pair's state (clear / soft / hard) as state changes, one lane per pair.
 Everything is buffered per frame and sent in columns, one chunk per entity,
 when the recording is closed; the style (the spot's colour, wire sphere,
@@ -136,53 +140,130 @@ class ClashMarks:
             # (`sim.record.layout`): one chunk per lane, not two
             rec.send_columns(f"lanes/{path}", indexes=index(frames), columns=[column(state, strings(states))])
         lo, hi = bounds
+        diag = float(np.linalg.norm(hi - lo))
+        radii = {path: max(2.5 * self._radius(rows[0][4]) + 0.5 * clearance, 0.01 * diag) / self.unit
+                 for path, rows in self._rows.items()}
+        lifts = label_lifts(self._rows, radii, LABEL_STEP * diag / self.unit)
         for path, rows in self._rows.items():
-            self._send_spot(rec, path, rows, n_f, index, max(
-                2.5 * self._radius(rows[0][4]) + 0.5 * clearance, 0.01 * float(np.linalg.norm(hi - lo))) / self.unit)
+            self._send_spot(rec, path, rows, n_f, index, radii[path], lifts[path])
 
     def _radius(self, cable: str) -> float:
         i = self._cable_index.get(cable)
         return 0.0 if i is None else self.built.cables[i].radius
 
     @staticmethod
-    def _send_spot(rec: rr.RecordingStream, path: str, rows: list, n_f: int, index, radius: float) -> None:
+    def _send_spot(rec: rr.RecordingStream, path: str, rows: list, n_f: int, index, radius: float,
+                   lifts: np.ndarray) -> None:
         """One pair's spot (a wire sphere of `radius`, scene units, standing out of
-        the cable; the cable, the gap and the part stay visible inside it) and gap."""
-        frames, centres, labels, segs = [], [], [], []
+        the cable; the cable, the gap and the part stay visible inside it), its
+        label `lifts` (one per row, scene units) above its centre, and its gap."""
+        frames, centres, labels, segs, anchors = [], [], [], [], []
         last = -2
-        for frame, where, other, label, _ in rows:
+
+        def empty(frame):
+            frames.append(frame)
+            centres.append(None)
+            labels.append(None)
+            segs.append(None)
+            anchors.append(None)
+
+        for (frame, where, other, label, _), lift in zip(rows, lifts):
             if frame > last + 1 and last >= 0 and last + 1 < n_f:
-                frames.append(last + 1)
-                centres.append(None)
-                labels.append(None)
-                segs.append(None)
+                empty(last + 1)
             frames.append(frame)
             centres.append(where)
             labels.append(label)
             segs.append(None if other is None else np.stack([where, other]))
+            anchors.append(where + np.array([0.0, 0.0, lift]))
             last = frame
         if last + 1 < n_f:
-            frames.append(last + 1)
-            centres.append(None)
-            labels.append(None)
-            segs.append(None)
+            empty(last + 1)
         lengths = np.array([0 if c is None else 1 for c in centres], np.int32)
         pts = np.array([c for c in centres if c is not None]).reshape(-1, 3)
+        tops = np.array([a for a in anchors if a is not None]).reshape(-1, 3)
         # the sizes go with the centres: an empty row has no sphere at all (a size without
-        # a centre would draw one at the origin); the segment to the other side (emptied
-        # with the marker) rides in the same entity, and the style is the views' default
-        # (`sim.record.layout`): one chunk per pair, where a style and a gap entity would
-        # make four
-        e = rr.Ellipsoids3D
+        # a centre would draw one at the origin); the label rides on a point above the
+        # sphere (lifted clear of its neighbours' labels, `label_lifts`), the segment to
+        # the other side (emptied with the marker) in the same entity, and the style is
+        # the views' default (`sim.record.layout`): one chunk per pair, where a style and
+        # a gap entity would make four
+        e, p = rr.Ellipsoids3D, rr.Points3D
         columns = [column(e.descriptor_centers(), vec3(pts), lengths),
                    column(e.descriptor_half_sizes(), vec3(np.full((len(pts), 3), radius)), lengths),
-                   column(e.descriptor_labels(), strings([x for x in labels if x is not None]), lengths)]
-        seg_rows = [s for s in segs if s is not None]
-        if seg_rows:
-            has = np.array([0 if s is None else 1 for s in segs], np.int32)
-            pairs = np.stack(seg_rows)                                   # (k, 2, 3)
+                   column(p.descriptor_positions(), vec3(tops), lengths),
+                   column(p.descriptor_labels(), strings([x for x in labels if x is not None]), lengths)]
+        # per row: the gap (thick), and the line through it across the sphere and out of it
+        # (thin: the gap's direction stays visible outside the marker); a lifted label's leader
+        lines, widths, counts = [], [], []
+        for seg, centre, top in zip(segs, centres, anchors):
+            n = 0
+            if seg is not None:
+                lines.append(seg)
+                widths.append(GAP_WIDTH * radius)
+                n += 1
+                d = seg[1] - seg[0]
+                length = float(np.linalg.norm(d))
+                if length > 1e-9 * radius:
+                    d /= length
+                    lines.append(np.stack([seg[0] - THROUGH * radius * d, seg[0] + THROUGH * radius * max(
+                        1.0, length / radius + 0.3) * d]))
+                    widths.append(THIN_WIDTH * radius)
+                    n += 1
+            if top is not None and top[2] - centre[2] > 1.01 * radius * LABEL_ABOVE:
+                lines.append(np.stack([centre + np.array([0.0, 0.0, radius]), top]))
+                widths.append(0.5 * THIN_WIDTH * radius)
+                n += 1
+            counts.append(n)
+        if lines:
+            pairs = np.stack(lines)                                      # (k, 2, 3)
             columns += [column(rr.LineStrips3D.descriptor_strips(),
-                               strips(pairs.reshape(-1, 3), np.arange(0, 2 * len(pairs) + 1, 2)), has),
-                        column(rr.LineStrips3D.descriptor_radii(),
-                               floats(np.full(len(pairs), 0.35 * radius), np.float32), has)]
+                               strips(pairs.reshape(-1, 3), np.arange(0, 2 * len(pairs) + 1, 2)), counts),
+                        column(rr.LineStrips3D.descriptor_radii(), floats(widths, np.float32), counts)]
         rec.send_columns(f"world/interference/{path}", indexes=index(frames), columns=columns)
+
+
+LABEL_STEP = 0.03
+"""The height of a spot's label in the views, as a fraction of the scene's
+extent (a text line in the scene view; more in a clash's closer view):
+labels of spots shown at once are stacked at least this far apart."""
+LABEL_ABOVE = 1.15
+"""A label's lift above its spot's centre, in sphere radii, with no neighbour in the way."""
+CHAR_WIDTH = 0.55
+"""A label's character width in label heights (the overlap test's width)."""
+GAP_WIDTH = 0.2
+THIN_WIDTH = 0.06
+THROUGH = 1.7
+"""The gap's line runs on to this many sphere radii from the spot's centre, past the sphere."""
+
+
+def label_lifts(rows: dict[str, list], radii: dict[str, float], step: float) -> dict[str, np.ndarray]:
+    """How far above its spot's centre each spot row's label goes (scene
+    units; per pair path, one per row): just above the sphere, unless
+    another label shown at that frame would then overlap it (taken as a box
+    `step` high and :data:`CHAR_WIDTH` x `step` per character wide, across
+    in the horizontal plane), then up by steps until it does not. Pairs in
+    path order, so a pair's label keeps its place while the others come and
+    go."""
+    lifts = {path: np.array([LABEL_ABOVE * radii[path]] * len(r)) for path, r in rows.items()}
+    by_frame: dict[int, list[tuple[str, int]]] = {}
+    for path in sorted(rows):
+        for k, row in enumerate(rows[path]):
+            by_frame.setdefault(row[0], []).append((path, k))
+    for shown in by_frame.values():
+        if len(shown) < 2:
+            continue
+        placed: list[tuple[float, float, float, float]] = []          # x, y, z, half width
+        for path, k in shown:
+            where, label = rows[path][k][1], rows[path][k][3]
+            half = 0.5 * CHAR_WIDTH * step * len(label)
+            z = where[2] + lifts[path][k]
+            moved = True
+            while moved:
+                moved = False
+                for x, y, pz, other in placed:
+                    if abs(z - pz) < step and np.hypot(where[0] - x, where[1] - y) < half + other:
+                        z = pz + step
+                        moved = True
+            lifts[path][k] = z - where[2]
+            placed.append((float(where[0]), float(where[1]), z, half))
+    return lifts

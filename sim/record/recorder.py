@@ -39,7 +39,7 @@ from sim.record.layout import Extent, blueprint
 from sim.record.marks import ClashMarks, Mark
 from sim.record.scene import SceneGeometry
 from sim.record.series import SeriesSet, send_limit_lines
-from sim.record.style import CONTACT_COLOUR, escape, pair_path, pair_text
+from sim.record.style import CONTACT_COLOUR, cable_colour, escape, pair_path, pair_text
 from sim.record.wearview import WearScale, send_wear, wear_scale
 
 
@@ -86,6 +86,10 @@ class Recorder:
                                f"cables/bend_radius/{escape(c.name)}", f"{c.name} min bend radius ({units})")
                               for c in built.cables]
         self._twist_series = [(f"cables/twist/{escape(c.name)}", f"{c.name} twist (deg)") for c in built.cables]
+        for i, ((strain_path, _, bend_path, _), (twist_path, _)) in enumerate(zip(self._cable_series,
+                                                                                 self._twist_series)):
+            for path in (strain_path, bend_path, twist_path):      # a cable's plots in its own colour
+                self.series.colours[path] = cable_colour(i)
         self._closed = False
         self._sampled = True
         self._times: list[float] = []

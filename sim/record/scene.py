@@ -8,7 +8,9 @@ in their own colours, static in their body's frame, the body's pose coming
 from the frame's qpos through MuJoCo's kinematics. Colours live on the
 timeline, one column per entity: opaque from t = 0, translucent while a
 clash is shown (so a spot inside a panel stays visible). A plane is drawn
-as a rectangle: its given size, else sized to cover the scene.
+as a rectangle: its given size, else sized to cover the scene; a floor is
+always translucent (what lies under it shows), more so while a clash is
+shown.
 
 Not here: cables, clashes, plots (the other modules of `sim.record`); what
 is interference.
@@ -22,7 +24,7 @@ import rerun as rr
 
 from sim.build import Built, PartModel
 from sim.record.columns import Column, column, mat3, rgba, vec3
-from sim.record.style import KEEPOUT_COLOUR, PART_COLOUR, PART_DIMMED, part_path, visual_paths
+from sim.record.style import FLOOR, FLOOR_DIMMED, KEEPOUT_COLOUR, PART_COLOUR, PART_DIMMED, part_path, visual_paths
 
 _KINDS = {"box": rr.Boxes3D, "plane": rr.Boxes3D, "sphere": rr.Ellipsoids3D,
           "ellipsoid": rr.Ellipsoids3D, "capsule": rr.Capsules3D, "cylinder": rr.Cylinders3D}
@@ -193,20 +195,27 @@ class SceneGeometry:
     def send_colours(self, rec: rr.RecordingStream, times: np.ndarray, dimmed: np.ndarray) -> None:
         """Every part's and visual geom's colour, one column per entity: its
         own at `times[0]`, then dimmed (translucent) or not at each later
-        time as `dimmed` (T,) says (keep-outs and planes never change)."""
+        time as `dimmed` (T,) says (keep-outs never change; planes are
+        translucent throughout, more so while dimmed)."""
         index = [rr.TimeColumn("sim_time", duration=times)]
         on = np.asarray(dimmed, bool)
         plain = np.array((*PART_COLOUR, 255), np.uint8)
         parts_rgba = np.where(on[:, None], np.array(PART_DIMMED, np.uint8)[None], plain[None])
+        floor_rgba = np.where(on[:, None], np.array(FLOOR_DIMMED, np.uint8)[None], np.array(FLOOR, np.uint8)[None])
         first = [rr.TimeColumn("sim_time", duration=times[:1])]
         for part in self.built.parts:
-            if part.keepout or part.shape == "plane":
-                own = np.array(KEEPOUT_COLOUR if part.keepout else (*PART_COLOUR, 255), np.uint8)[None]
+            if part.keepout:
+                own = np.array(KEEPOUT_COLOUR, np.uint8)[None]
                 rec.send_columns(part_path(part.name), indexes=first, columns=_colour_columns(part, own))
+            elif part.shape == "plane":
+                rec.send_columns(part_path(part.name), indexes=index, columns=_colour_columns(part, floor_rgba))
             else:
                 rec.send_columns(part_path(part.name), indexes=index, columns=_colour_columns(part, parts_rgba))
         for vis in getattr(self.built, "visuals", ()):
             colour = np.array(self.visual_colour(vis.geom_id), np.uint8)
-            faded = np.array([*colour[:3], min(colour[3], PART_DIMMED[3])], np.uint8)
+            if vis.shape == "plane":                      # a floor: translucent throughout
+                colour[3] = min(colour[3], FLOOR[3])
+            faded = np.array([*colour[:3], min(colour[3], PART_DIMMED[3] if vis.shape != "plane" else FLOOR_DIMMED[3])],
+                             np.uint8)
             rgba = np.where(on[:, None], faded[None], colour[None])
             rec.send_columns(visual_paths(vis.body, vis.name)[1], indexes=index, columns=_colour_columns(vis, rgba))

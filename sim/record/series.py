@@ -5,7 +5,8 @@ clearance, and, at full checks, every pair the checker evaluated up to its
 horizon (the approach before a clash); a pair's line breaks (NaN) where it
 is not known. `checks/limits/{clearance,zero}`: reference lines.
 `cables/strain/<name>` (percent), `cables/bend_radius/<name>` (scene
-units, with `<name>_limit` lines), `cables/twist/<name>` (degrees),
+units, with `<name>_limit` lines), `cables/twist/<name>` (degrees), each
+in the cable's own colour as in the 3D view,
 `validation/agreement`, `joints/<name>`. Values are buffered by frame and
 sent in one column per series when the recording is closed, each series
 only where it changes (:func:`changes`: a pair that sits still costs two
@@ -104,11 +105,13 @@ def changes_many(times: list[np.ndarray], values: list[np.ndarray],
 
 
 class SeriesSet:
-    """Every series of a run by entity path, with its legend label."""
+    """Every series of a run by entity path, with its legend label and,
+    where given, its colour (a cable's measures: the cable's own)."""
 
     def __init__(self):
         self.series: dict[str, Series] = {}
         self.labels: dict[str, str] = {}
+        self.colours: dict[str, tuple[int, int, int]] = {}
 
     def add(self, path: str, frame: int, value: float, label: str | None = None) -> None:
         """A value at `frame`; `label` names the series in legends (the first one given)."""
@@ -136,6 +139,8 @@ class SeriesSet:
             columns = [column(scalars, floats(np.asarray(series.values, float)[keep]))]
             if path in self.labels:
                 columns.append(Once(names, strings([self.labels[path]]), int(keep.sum())))
+            if path in self.colours:
+                columns.append(Once(rr.SeriesLines.descriptor_colors(), rgba([self.colours[path]]), int(keep.sum())))
             rec.send_columns(path, indexes=[sim_time(times[series.frames][keep])], columns=columns)
 
 

@@ -2,7 +2,9 @@
 
 Paths mirror the scene: a part's assembly levels become tree levels, a
 pair is `<type>/<a>/<b>`. Colours: the cable states' (clear, soft, hard),
-the parts', and the spot's, which no cable state, part or contact uses.
+the parts' and floors', the spot's, which no cable state, part or contact
+uses, and each cable's own (:func:`cable_colour`, from a qualitative
+palette kept apart from all of those).
 
 Not here: what is logged where (the other modules of `sim.record`).
 """
@@ -20,8 +22,26 @@ SPOT = (255, 0, 230)
 """The spot's colour: used by no cable state, part or contact."""
 PART_COLOUR = (160, 160, 170)
 PART_DIMMED = (160, 160, 170, 70)
+FLOOR = (160, 160, 170, 110)
+"""A plane (a floor): always translucent, so what lies under it shows."""
+FLOOR_DIMMED = (160, 160, 170, 45)
+"""A plane while a clash is shown."""
 KEEPOUT_COLOUR = (255, 140, 0, 90)
 CONTACT_COLOUR = (40, 220, 120)
+CABLE_PALETTE = ((31, 119, 180), (44, 160, 44), (148, 103, 189), (23, 190, 207), (140, 86, 75), (120, 120, 20),
+                 (40, 60, 140), (150, 200, 80), (190, 140, 90), (90, 60, 200))
+"""Each cable's own colour, in the scene's order (a qualitative palette:
+blue, green, purple, cyan, brown, olive, navy, lime, tan, violet), far from
+the soft and hard states' amber and red, the spot's magenta, the parts'
+grey and the contacts' green."""
+
+
+def cable_colour(index: int) -> tuple[int, int, int]:
+    """The colour of the scene's `index`-th cable: the palette's, darker on
+    each further round of it (a harness of more cables than colours)."""
+    rgb = CABLE_PALETTE[index % len(CABLE_PALETTE)]
+    shade = 0.75 ** (index // len(CABLE_PALETTE) % 3)
+    return tuple(round(c * shade) for c in rgb)
 
 
 @cache
