@@ -736,6 +736,10 @@ def test_labels_of_spots_shown_together_are_lifted_apart():
     lifts = label_lifts(rows, radii, 8.0)
     assert lifts["a"].tolist() == [LABEL_ABOVE * 10.0] * 2 and lifts["c"].tolist() == [LABEL_ABOVE * 10.0]
     assert lifts["b"][0] >= LABEL_ABOVE * 10.0 + 8.0
+    # where a step above is not exactly a step apart in floating point (it looped forever)
+    odd = {p: [(0, np.array([0.1 * k, 0.0, 0.7]), None, label, "x")] for k, p in enumerate("abcdef")}
+    lifts = label_lifts(odd, dict.fromkeys(odd, 0.1), 0.30000000000000004)
+    assert sorted(v[0] for v in lifts.values()) == pytest.approx(0.115 + 0.30000000000000004 * np.arange(6))
 
 
 FLOOR_SCENE = """

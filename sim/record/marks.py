@@ -261,7 +261,9 @@ def label_lifts(rows: dict[str, list], radii: dict[str, float], step: float) -> 
             while moved:
                 moved = False
                 for x, y, pz, other in placed:
-                    if abs(z - pz) < step and np.hypot(where[0] - x, where[1] - y) < half + other:
+                    # (a label a whole step above another is clear of it: the test leaves
+                    # a margin, or rounding in pz + step could keep it "overlapping" forever)
+                    if abs(z - pz) < 0.999 * step and np.hypot(where[0] - x, where[1] - y) < half + other:
                         z = pz + step
                         moved = True
             lifts[path][k] = z - where[2]
