@@ -41,7 +41,8 @@ and exits 2.
 ``<!-- bench_robots -->`` and ``<!-- /bench_robots -->``.
 
 Run: python benchmarks/bench_robots.py [--arms panda,ur5e,...] [--hz-arm panda]
-       [--duration S] [--keep DIR] [--doc docs/performance.md]
+       [--duration S] [--timeout S] [--keep DIR] [--doc docs/performance.md]
+     python benchmarks/bench_robots.py --from DIR/rows.json [--doc docs/performance.md]
 """
 
 from __future__ import annotations
@@ -599,8 +600,13 @@ def main(argv=None) -> int:
     ap.add_argument("--keep", type=Path, default=None, help="write the scenes, reports and recordings here")
     ap.add_argument("--doc", type=Path, default=None, help="write the table into this Markdown file")
     ap.add_argument("--timeout", type=float, default=600.0, help="wall seconds one arm's run may take")
+    ap.add_argument("--from", dest="rows", type=Path, default=None,
+                    help="print (and with --doc write) the table of a kept run's rows.json again, nothing run")
     ap.add_argument("--scenes-only", action="store_true", help="write the scenes and stop")
     a = ap.parse_args(argv)
+    if a.rows is not None:
+        finish(json.loads(a.rows.read_text()), a.doc)
+        return 0
     names = [n for n in a.arms.split(",") if n]
     unknown = [n for n in names if n not in ZOO]
     if unknown:
@@ -643,17 +649,35 @@ def main(argv=None) -> int:
         state = row.get("error") or f"(c+v+r)/sim {row['ratio']:.2f}, real time {row['rtf']:.2f}x"
         print(f"  {label}: {state}", file=sys.stderr, flush=True)
     after = load()
-    (folder / "rows.json").write_text(json.dumps(rows, indent=1, default=str))
-    lines = [f"Measured {started:%Y-%m-%d %H:%M %Z} on {platform.node() or 'this machine'} "
+    run = {"started": f"{started:%Y-%m-%d %H:%M %Z}", "before": before, "after": after, "code": code_state(),
+           "command": f"python benchmarks/bench_robots.py {shlex.join(sys.argv[1:] if argv is None else argv)}",
+           "duration": PROGRAM[-1][0] if a.duration is None else a.duration, "rows": rows}
+    (folder / "rows.json").write_text(json.dumps(run, indent=1, default=str))
+    finish(run, a.doc)
+    if a.keep is None:
+        print(f"scenes, reports and recordings: {folder}")
+    return 0
+
+
+def hose_event(e: dict) -> bool:
+    """An event of the hose (against a part or itself), not of two parts."""
+    return e["type"] != "part-part"
+
+
+def finish(run: dict, doc: Path | None) -> None:
+    """Print the run's table and lists (and write them into ``doc``)."""
+    rows, before, after = run["rows"], run["before"], run["after"]
+    for r in rows:                                  # part-part events have no place along the hose
+        r["near_held"] = [e for e in r.get("near_held", []) if hose_event(e)]
+    lines = [f"Measured {run['started']} on {platform.node() or 'this machine'} "
              f"({os.cpu_count()} cores, {platform.processor() or platform.machine()}, Python "
              f"{platform.python_version()}), one run each, one after the other; "
-             f"{PROGRAM[-1][0] if a.duration is None else a.duration:g} s pick-and-place after 0.5 s settling.",
+             f"{run['duration']:g} s pick-and-place after 0.5 s settling.",
              "", f"Load before: `{before}`; after: `{after}`"
              + (" (not quiet: wall times and the real-time factor are above a quiet machine's)"
                 if max(one_minute(before), one_minute(after)) > 0.5 else "") + ".", "",
-             f"Code: {code_state()}.", "",
-             f"Command: `python benchmarks/bench_robots.py {shlex.join(sys.argv[1:] if argv is None else argv)}`",
-             "", table(rows), ""]
+             f"Code: {run['code']}.", "",
+             f"Command: `{run['command']}`", "", table(rows), ""]
     for r in rows:
         if "error" in r:
             lines.append(f"- {r['arm']}: **{r['error']}**")
@@ -665,11 +689,8 @@ def main(argv=None) -> int:
             lines.append(f"- {r['arm']}: {n}")
     text = "\n".join(lines).rstrip() + "\n"
     print(text)
-    if a.keep is None:
-        print(f"scenes, reports and recordings: {folder}")
-    if a.doc is not None:
-        write_doc(a.doc, text.rstrip("\n"))
-    return 0
+    if doc is not None:
+        write_doc(doc, text.rstrip("\n"))
 
 
 if __name__ == "__main__":
