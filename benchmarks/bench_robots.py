@@ -97,6 +97,8 @@ class Arm:
     wrist: str
     tool: str
     tool_pos: tuple[float, float, float] = (0.0, 0.0, 0.06)
+    stand: str | None = None
+    """The body the table goes under (default ``base``: a mobile robot's hose starts on its torso)."""
     fragment: dict | None = None
     """A model that is an include fragment (gymnasium-robotics' Fetch): the
     wrapper's compiler options and the files to include (relative to the
@@ -132,7 +134,7 @@ ZOO: dict[str, Arm] = {
                  ("robot0:shoulder_pan_joint", "robot0:shoulder_lift_joint", "robot0:elbow_flex_joint",
                   "robot0:wrist_flex_joint", "robot0:wrist_roll_joint"), (0, -40, 80, 50, 0),
                  "robot0:torso_lift_link", ("robot0:upperarm_roll_link", "robot0:forearm_roll_link"),
-                 "robot0:wrist_flex_link", "robot0:gripper_link", (0.12, 0.0, 0.0),
+                 "robot0:wrist_flex_link", "robot0:gripper_link", (0.12, 0.0, 0.0), stand="robot0:base_link",
                  fragment={"compiler": {"angle": "radian", "coordinate": "local", "meshdir": "envs/assets/stls/fetch",
                                         "texturedir": "envs/assets/textures"},
                            "assets": "envs/assets/fetch/shared.xml", "body": "envs/assets/fetch/robot.xml"}),
@@ -402,7 +404,7 @@ def scene_for(name: str, arm: Arm, root: Path, folder: Path, rate: float | None,
     route.append(p_end)
     length = SLACK * float(sum(np.linalg.norm(b - a) for a, b in zip(route, route[1:])))
 
-    base = m.body(arm.base).id
+    base = m.body(arm.stand or arm.base).id
     base_xy = d.xpos[base][:2]
     floor = float(min((d.xpos[base] + d.xmat[base].reshape(3, 3) @ p)[2] for p in _points(m, base)))
     data = {
@@ -427,7 +429,7 @@ def scene_for(name: str, arm: Arm, root: Path, folder: Path, rate: float | None,
             "length": round(length, 4), "young": 5.0e6, "density": 1200, "min_bend_radius": 0.035,
         }],
         "motion": [{"file": csv.name, "angles": "deg", "interpolation": "cubic"}],
-        "allow": [{"a": "cell/table", "b": arm.base, "reason": "the arm's base is bolted to the table"},
+        "allow": [{"a": "cell/table", "b": arm.stand or arm.base, "reason": "the arm's base is bolted to the table"},
                   {"a": "tool", "b": flange(m, arm.tool), "reason": "the tool is mounted on the flange"}],
     }
     held = [(arm.base, p_start), *zip(arm.clips, (c[1] for c in clips)), (arm.wrist, p_end)]
