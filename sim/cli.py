@@ -96,7 +96,8 @@ def _cmd_run(args: argparse.Namespace, stop: StopRequest) -> int:
     from sim.run import RunOptions, run_scene  # MuJoCo and rerun load only when needed
 
     options = RunOptions(report=report, record=record, method=args.method, spacing=args.spacing,
-                         only=args.only, advance=not args.full_every_step, baseline=args.baseline)
+                         only=args.only, advance=not args.full_every_step, baseline=args.baseline,
+                         review=args.review)
     bar = ProgressBar(enabled=not args.quiet, timestep=scene.timestep)
     try:
         result = run_scene(scene, options, progress=bar, stop=stop,
@@ -228,6 +229,7 @@ def main(argv: list[str] | None = None) -> int:
 def _main(args: argparse.Namespace, stop: StopRequest) -> int:
     try:   # numpy and MuJoCo load here, with the signals already taken
         from sim.baseline import BaselineError
+        from sim.review import ReviewError
         from sim.outputs import OutputPathError
         from sim.scene import SceneError
     except KeyboardInterrupt:
@@ -263,7 +265,7 @@ def _main(args: argparse.Namespace, stop: StopRequest) -> int:
     except SceneError as e:
         print(f"cablecheck: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except (OutputPathError, BaselineError) as e:
+    except (OutputPathError, BaselineError, ReviewError) as e:
         print(f"cablecheck: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except ValueError as e:

@@ -74,6 +74,10 @@ def build_parser(version: str) -> argparse.ArgumentParser:
     run.add_argument("--baseline", type=Path, metavar="EARLIER.json",
                      help="an earlier run's report: mark each clash new or still present, and list "
                           "the earlier ones now resolved (matched by pair and place along the cable)")
+    run.add_argument("--review", type=Path, metavar="NOTES.toml",
+                     help="a reviewer's notes ([[review]] a, b, status reviewed|approved, comment): "
+                          "carried into the report beside each clash they cover; notes that cover "
+                          "no clash are listed")
     run.add_argument("--only", metavar="PATH",
                      help="check only interference involving this assembly path (a part name or "
                           "prefix): its parts against the rest, and cables against its parts")

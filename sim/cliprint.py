@@ -131,6 +131,7 @@ def print_summary(report: dict, report_path: Path) -> None:
         _print_closest(report, c["name"], units)
     _print_events(report)
     _print_baseline(report)
+    _print_review(report)
     _print_excused(report)
     for c in report["cables"]:
         _print_wear(c["name"], c.get("wear"), units)
@@ -180,8 +181,21 @@ def _print_events(report: dict, most: int = 10) -> None:
               f"at t {e['t_worst']:.3f} s, ({where}), s = {e['s']:.4g} {units}")
         if e["severity"] == "hard" and e.get("joint_ranges"):
             print(f"         {_joint_cause(e, report.get('joint_units', {}))}")
+        if e.get("review"):
+            print(f"         {e['review']['status']}: {e['review']['comment']}")
     if len(events) > most:
         print(f"    ... {len(events) - most} more in the report")
+
+
+def _print_review(report: dict) -> None:
+    """The reviewer's notes (--review): how many are on clashes, and those on none."""
+    r = report.get("review")
+    if not r:
+        return
+    print(f"  review notes {r['file']}: {r['on_events']} clash(es) noted, {len(r['unmatched'])} note(s) "
+          f"on no clash of this run" + (":" if r["unmatched"] else ""))
+    for n in r["unmatched"]:
+        print(f"    review[{n['index']}] {n['a']} / {n['b']} ({n['status']}): {n['comment']}")
 
 
 def _print_baseline(report: dict, most: int = 5) -> None:

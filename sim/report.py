@@ -44,6 +44,7 @@ if TYPE_CHECKING:
     from checker.interference.excused import ExcusedWorst
     from checker.interference.margins import Closest
     from sim.baseline import Comparison
+    from sim.review import ReviewMatch
     from checker.scene_state import CheckConfig
     from checker.validation import ValidationSummary
     from checker.wear import CableWear
@@ -174,6 +175,8 @@ class RunOutcome:
         (`checker.interference.margins`: sampled every `margin_interval`
         simulated seconds and refined around each pair's best sample; a pair
         that came below the clearance as its worst event has it).
+      review: with `--review`, the reviewer's notes against the events
+        (`sim.review`): each event's note and the notes that cover none.
       baseline: with `--baseline`, this run's events against an earlier
         run's (`sim.baseline`): each event's status and the resolved ones.
       event_hold: seconds a pair must stay clear before its event closes.
@@ -223,6 +226,7 @@ class RunOutcome:
     closest: tuple[Closest, ...] = ()
     margin_reach: float = 0.0
     margin_interval: float = 0.0
+    review: ReviewMatch | None = None
 
 
 def _worst_first(rows):
@@ -377,6 +381,9 @@ def report_of(o: RunOutcome) -> dict:
             row.update(o.event_joints[k])
         if o.baseline is not None:
             row["status"] = o.baseline.status[k].value
+        if o.review is not None:
+            note = o.review.per_event[k]
+            row["review"] = None if note is None else {"status": note.status.value, "comment": note.comment}
         events.append(row)
     report = {
         "schema": SCHEMA,
@@ -426,6 +433,11 @@ def report_of(o: RunOutcome) -> dict:
                     for x in _worst_first(o.excused)],
     }
     report["closest"] = _closest(o, u)
+    if o.review is not None:          # the reviewer's notes (--review): those about no clash too
+        report["review"] = {"file": str(o.review.path), "notes": len(o.review.notes),
+                            "on_events": sum(n is not None for n in o.review.per_event),
+                            "unmatched": [{"a": n.a, "b": n.b, "status": n.status.value, "comment": n.comment,
+                                           "index": n.index} for n in o.review.unmatched]}
     if o.baseline is not None:        # the clashes against an earlier run (--baseline)
         report["baseline"] = {"report": str(o.baseline.path), **o.baseline.counts(),
                               "resolved_events": resolved_rows(o.baseline, u)}

@@ -54,6 +54,7 @@ from checker.twist import TwistMeter, update_many
 from checker.wear import CableWear, WearMap
 from sim.ahead import StepsAhead, depth_for, thread_cpu
 from sim.baseline import BaselineError, compare, load_baseline
+from sim.review import ReviewError, load_review, match
 from sim.build import Built, build_simulation, plan_cables, with_detection
 from sim.cablephysics import COMPRESSION_TOLERANCE
 from sim.detector import Detector
@@ -110,6 +111,7 @@ class RunOptions:
     advance: bool = True
     overlap: bool = True
     baseline: Path | None = None
+    review: Path | None = None
 
 
 Progress = Callable[[str, float, float], None]
@@ -153,7 +155,8 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     `error` (module docstring); an error raised before the first step
     does too, unless it is bad input (`SceneError`, the options'
     `OptionError`, `OutputPathError`, a `--baseline` that is no report:
-    `BaselineError`), which is raised."""
+    `BaselineError`, `--review` notes that cannot be used: `ReviewError`),
+    which is raised."""
     start = time.perf_counter()
 
     def reported(stop: StopRequest) -> dict:
@@ -192,7 +195,7 @@ def _bad_input(exc: BaseException) -> bool:
     from sim.checkview import OptionError
     from sim.outputs import OutputPathError
 
-    return isinstance(exc, (SceneError, OptionError, OutputPathError, BaselineError))
+    return isinstance(exc, (SceneError, OptionError, OutputPathError, BaselineError, ReviewError))
 
 
 def run_error(exc: BaseException, t: float | None = None) -> RunError:
@@ -204,6 +207,7 @@ def run_error(exc: BaseException, t: float | None = None) -> RunError:
 def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: StopRequest,
          start: float, warn: Callable[[str], None] | None, messages: MujocoMessages) -> RunOutcome:
     baseline = load_baseline(options.baseline) if options.baseline is not None else None   # bad input first
+    notes = load_review(options.review) if options.review is not None else None
     validate = scene.check.validate
     static = not needs_model(scene)     # nothing calls for MuJoCo: no model is built (sim.staticbuild)
     planned = None if static else plan_cables(scene)
@@ -349,6 +353,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         closest=with_events(ends.closest, events), margin_reach=ends.margin_reach,
         margin_interval=ends.margin_interval,
         event_hold=tracker.hold, baseline=compared,
+        review=None if notes is None else match(options.review, notes, events),
         validation=ends.validation, advance=ends.advance,
         warnings=warning_counts([sim.data if isinstance(sim, Simulation) else None,   # a static check has none
                                  detector.detect_data if detector else None], messages),

@@ -377,15 +377,16 @@ class MarginLog:
 def with_events(closest: Sequence[Closest], events: Sequence) -> tuple[Closest, ...]:
     """The pairs' closest approaches with the run's events: a pair that came
     below the clearance takes its worst event's distance, time and place
-    where that is nearer (the events measure every checked state, by the
-    run's method; self and part-part pairs have only those), nearest first."""
+    where that is as near or nearer (the events measure every checked
+    state, by the run's method; self and part-part pairs have only those),
+    nearest first."""
     rows = {(c.type, c.a, c.b): c for c in closest}
     for e in events:
         k = (PairType(e.type), e.a, e.b)
         if k[0] not in _APPROACHES:
             continue            # bend and taut: no distance between two things
         c = rows.get(k)
-        if c is None or e.min_distance < c.min_distance:
+        if c is None or e.min_distance <= c.min_distance:      # a tie: the event's place, as the events list it
             rows[k] = Closest(k[0], e.a, e.b, float(e.min_distance), float(e.t_worst),
                               np.asarray(e.where, float), float(e.s), None)
     return tuple(sorted(rows.values(), key=lambda c: (c.min_distance, c.t, c.a, c.b)))
