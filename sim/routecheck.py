@@ -56,6 +56,6 @@ def route_warnings(scene: Scene, frames: Frames, meshes: dict, plans: list[Cable
             out.append(f"cables[{i}] {plan.cable.name!r}: its initial shape runs through part "
                        f"{obstacles.names[k]!r} from s = {fmt(where.min() / scene.scale)} to "
                        f"{fmt(where.max() / scene.scale)} {unit} along the cable (up to "
-                       f"{fmt(float(-d[inside].min()) / scene.scale)} {unit} inside); the simulation will "
+                       f"{float(-d[inside].min()) / scene.scale:.3g} {unit} inside); the simulation will "
                        "push it out at the start: route it around the part (via points, clips)")
     return tuple(out)
