@@ -19,7 +19,6 @@ from rerun.chunk import RrdReader
 from sim.cli import main, version
 from sim.record import (CABLE_PALETTE, CLASH_COLUMNS, CONTACT_COLOUR, FLOOR, FLOOR_DIMMED, KEEPOUT_COLOUR, PART_COLOUR,
                         SPOT, STATE_COLOURS, cable_colour, wear_colours)
-from sim.record.cables import RING
 from sim.record.style import pair_path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -91,16 +90,38 @@ def _packed(rgb) -> int:
     return int.from_bytes(bytes([*rgb, 255][:4]), "big")
 
 
+def _axes(quaternions) -> np.ndarray:
+    """+z (a capsule's own axis) turned by each quaternion (x, y, z, w), by the rotation matrix's third column."""
+    x, y, z, w = np.array(quaternions, float).T
+    return np.stack([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)], axis=-1)
+
+
+def _cable_rows(record: Path, cable: str) -> list[dict]:
+    """A cable's timed rows, each with the capsules' lengths shown then (given again only where they changed)."""
+    rows = [r for r in _rows(record, f"/world/cables/{cable}") if r["t"] is not None]
+    for before, row in zip(rows, rows[1:]):
+        row["lengths_given"] = row["Capsules3D:lengths"] is not None
+        if not row["lengths_given"]:
+            row["Capsules3D:lengths"] = before["Capsules3D:lengths"]
+    return rows
+
+
+def _capsule_ends(row: dict) -> tuple[np.ndarray, np.ndarray]:
+    """A cable's capsules in one of its recorded rows: each one's two ends (the centres of its end spheres)."""
+    start = np.array(row["Capsules3D:translations"])
+    return start, start + np.array(row["Capsules3D:lengths"])[:, None] * _axes(row["Capsules3D:quaternions"])
+
+
 def _centres(row: dict) -> np.ndarray:
-    """A cable's body centres in one of its recorded rows: each ring's mean (the ring is regular about it)."""
-    v = np.array(row["Mesh3D:vertex_positions"])
-    return v[:-2].reshape(-1, RING, 3).mean(axis=1)
+    """A cable's body centres in one of its recorded rows: its capsules' first ends and the last one's second."""
+    start, end = _capsule_ends(row)
+    return np.concatenate([start, end[-1:]])
 
 
 def _colours_at(rows: list[dict], t: float) -> np.ndarray:
-    """A cable's vertex colours shown at `t`: its latest row at or before it that gives them."""
-    given = [r for r in rows if r["t"] is not None and r["t"] <= t + 1e-12 and r["Mesh3D:vertex_colors"] is not None]
-    return np.array(given[-1]["Mesh3D:vertex_colors"], np.uint32)
+    """A cable's capsule colours (one per element) shown at `t`: its latest row at or before it that gives them."""
+    given = [r for r in rows if r["t"] is not None and r["t"] <= t + 1e-12 and r["Capsules3D:colors"] is not None]
+    return np.array(given[-1]["Capsules3D:colors"], np.uint32)
 
 
 @pytest.fixture(scope="module")
@@ -197,12 +218,11 @@ def test_only_the_elements_near_the_spot_take_the_state_colour(pinch):
     (event,) = report["events"]
     rows = [r for r in _rows(record, "/world/cables/loop") if r["t"] is not None]
     hard, own = _packed(STATE_COLOURS["hard"]), _packed(cable_colour(0))
-    colours = _colours_at(rows, event["t_worst"])
-    rings = colours[:-2].reshape(-1, RING)                  # one colour per ring
+    colours = _colours_at(rows, event["t_worst"])           # one colour per element
     n = report["cables"][0]["segments"]
-    assert len(rings) == n + 1 and (rings == rings[:, :1]).all()
+    assert len(colours) == n
     assert set(colours.tolist()) == {hard, own}
-    assert 0 < (rings[:, 0] == hard).sum() < n // 3
+    assert 0 < (colours == hard).sum() < n // 3
     assert set(_colours_at(rows, 0.5).tolist()) == {own}     # before the clash: the cable's own colour
 
 
@@ -482,10 +502,7 @@ def test_a_cable_lying_on_a_plate_with_one_end_sliding_wears_only_where_it_touch
     assert main(["run", str(scene), "--record", str(record), "--quiet", "--fail-on", "never"]) == 0
     report = json.loads(record.with_suffix(".json").read_text())
     wear = report["cables"][0]["wear"]
-    frames = []
-    for row in _rows(record, "/world/cables/lead"):
-        if row["t"] is not None:
-            frames.append(_centres(row))
+    frames = [_centres(row) for row in _cable_rows(record, "lead")]
     z = np.stack(frames)[:, :, 2]                                   # (frames, body centres)
     low, high = z.min(axis=0), z.max(axis=0)
     r, clearance, top = 3.0, 2.0, 0.0
@@ -507,10 +524,10 @@ def test_a_cable_lying_on_a_plate_with_one_end_sliding_wears_only_where_it_touch
 
 def test_a_style_given_once_rides_in_the_first_row(pinch):
     _, record = pinch
-    # one chunk per entity: the tube's triangles, the name and its style, the contacts' style in the
-    # first row, absent after
-    for entity, style in (("/world/cables/loop", ["Mesh3D:triangle_indices", "Points3D:labels", "Points3D:colors",
-                                                  "Points3D:radii", "Points3D:show_labels"]),
+    # one chunk per entity: the capsules' radius and fill mode, the name and its style, the contacts'
+    # style in the first row, absent after
+    for entity, style in (("/world/cables/loop", ["Capsules3D:radii", "Capsules3D:fill_mode", "Points3D:labels",
+                                                  "Points3D:colors", "Points3D:radii", "Points3D:show_labels"]),
                           ("/world/mujoco_contacts", ["Points3D:radii", "Points3D:colors"])):
         chunks = [c for c in RrdReader(record).stream() if c.entity_path == entity]
         assert len(chunks) == 1 and not chunks[0].is_static
@@ -519,8 +536,8 @@ def test_a_style_given_once_rides_in_the_first_row(pinch):
             assert rows[0][key] and all(r[key] is None for r in rows[1:])
     scene = tomllib.loads((ROOT / "scenes" / "drawer_pinch.toml").read_text())
     (first, *_) = _rows(record, "/world/cables/loop")
-    ring = np.array(first["Mesh3D:vertex_positions"])[:RING]
-    assert np.linalg.norm(ring - ring.mean(axis=0), axis=1) == pytest.approx(scene["cables"][0]["radius"], rel=1e-5)
+    assert first["Capsules3D:radii"] == [pytest.approx(scene["cables"][0]["radius"], rel=1e-6)]
+    assert first["Capsules3D:fill_mode"] == [3]                         # solid: shaded, not a wireframe
 
 
 def test_frames_recorded_for_an_event_alone_keep_only_what_changes(pinch):
@@ -543,7 +560,7 @@ def test_frames_recorded_for_an_event_alone_keep_only_what_changes(pinch):
     off = [k for k, r in enumerate(rows) if not on_grid(r["t"])]
     assert rows[off[0]]["t"] == pytest.approx(ev["t_start"])          # the clash shows when it starts
     for k in off:                                                       # each gives its new colours
-        assert rows[k]["Mesh3D:vertex_colors"] is not None
+        assert rows[k]["Capsules3D:colors"] is not None
         assert _colours_at(rows, rows[k]["t"]).tolist() != _colours_at(rows, rows[k - 1]["t"]).tolist()
     events = {round(r["t"], 6) for r in _rows(record, "/events")}
     assert any(not on_grid(t) for t in events)                          # there are event-only frames
@@ -610,93 +627,86 @@ def test_every_events_worst_instant_is_a_frame_with_the_reports_distance(fixture
         assert value == pytest.approx(event["min_distance"], rel=1e-9, abs=1e-12)
 
 
-def _ring_circle(n: int, radius: float) -> np.ndarray:
-    a = np.linspace(0.0, 1.5 * np.pi, n)
-    return np.stack([radius * np.cos(a), radius * np.sin(a), np.zeros(n)], axis=-1)
+def test_each_capsule_joins_two_body_centres_in_the_closed_form(tmp_path: Path):
+    """Closed form: body centres on a circle of radius R in z = 0 at angles
+    theta_k, then straight down (-z, the capsule's own axis turned half
+    round) and one element of no length. Element k's capsule, read back
+    from a recording, starts at centre k, runs along the chord
+    (-sin, cos, 0)(theta_mid) for 2 R sin(dtheta / 2) (down: along -z for
+    its drop), ends at centre k + 1, at the cable's radius, solid, in the
+    cable's colour, named by a label on a centre."""
+    from types import SimpleNamespace
+
+    import rerun as rr
+
+    from sim.record.cables import CableFrames, capsules
+    big, r, n, drop = 80.0, 3.0, 25, 7.0
+    theta = np.linspace(0.0, 1.5 * np.pi, n)
+    ring = np.stack([big * np.cos(theta), big * np.sin(theta), np.zeros(n)], axis=-1)
+    centres = np.concatenate([ring, ring[-1:] - [0.0, 0.0, drop], ring[-1:] - [0.0, 0.0, drop]])
+    mid = 0.5 * (theta[1:] + theta[:-1])
+    want_axis = np.concatenate([np.stack([-np.sin(mid), np.cos(mid), np.zeros(n - 1)], axis=-1),
+                                [[0.0, 0.0, -1.0], [0.0, 0.0, 1.0]]])       # no length: +z, as it comes
+    want_length = np.concatenate([np.full(n - 1, 2.0 * big * np.sin(0.5 * (theta[1] - theta[0]))), [drop, 0.0]])
+    start, q, length = capsules(centres[None])
+    assert np.allclose(start[0], centres[:-1]) and np.allclose(length[0], want_length, rtol=1e-12)
+    assert np.allclose(np.linalg.norm(q, axis=-1), 1.0) and np.allclose(_axes(q[0]), want_axis, atol=1e-12)
+    # through a recording and back, in float32
+    rest_s = np.concatenate([[0.0], np.cumsum(want_length)])
+    cable = SimpleNamespace(name="ring", rest_s=rest_s, element_length=want_length[0], radius=r)
+    frames = CableFrames(SimpleNamespace(cables=[cable]), unit=1.0)
+    frames.add(0, [centres], [])
+    frames.add(1, [centres + [0.0, 0.0, 10.0]], [])
+    record = tmp_path / "ring.rrd"
+    rec = rr.RecordingStream(application_id="ring")
+    rec.save(str(record))
+    frames.send(rec, np.array([0.0, 0.1]))
+    rec.disconnect()
+    rows = _cable_rows(record, "ring")
+    assert [row["t"] for row in rows] == [0.0, pytest.approx(0.1)]
+    for row, lift in zip(rows, (0.0, 10.0)):
+        got_start, got_end = _capsule_ends(row)
+        assert np.allclose(got_start, centres[:-1] + [0.0, 0.0, lift], atol=1e-4)
+        assert np.allclose(got_end, centres[1:] + [0.0, 0.0, lift], atol=1e-4)
+        assert np.allclose(row["Capsules3D:lengths"], want_length, rtol=1e-6, atol=1e-6)
+        assert np.allclose(_axes(row["Capsules3D:quaternions"])[:-1], want_axis[:-1], atol=1e-6)
+        (label,) = row["Points3D:positions"]
+        assert np.linalg.norm(_centres(row) - label, axis=1).min() < 1e-4
+    assert rows[0]["Capsules3D:radii"] == [r] and rows[0]["Capsules3D:fill_mode"] == [3]
+    assert rows[0]["Capsules3D:colors"] == [_packed(cable_colour(0))] * len(want_length)
+    assert rows[1]["Capsules3D:colors"] is None                          # the states did not change
+    assert not rows[1]["lengths_given"]                                  # nor the lengths (moved as one)
+    assert rows[0]["Points3D:labels"] == ["ring"]
 
 
-def test_a_tube_lies_at_the_cable_radius_with_outward_normals_and_no_twist():
-    """Closed form: body centres on a circle of radius R in z = 0 make a
-    torus, (sqrt(x^2 + y^2) - R)^2 + z^2 = r^2 at every ring vertex; each
-    ring is square to the circle there; the normals are unit, point from the
-    centre to the vertex, and the triangles wind outward; transported along
-    a plane curve the rings do not turn about it (a ring's first normal
-    keeps its angle with the plane's normal); the ends are closed `r`
-    beyond the first and last centres."""
-    from sim.record.cables import tube, tube_triangles
-    big, r, n = 80.0, 3.0, 41
-    centres = _ring_circle(n, big)[None]
-    vertices, normals = tube(centres, r)
-    v, nv = vertices[0], normals[0]
-    assert v.shape == (n * RING + 2, 3)
-    ring = v[:-2].reshape(n, RING, 3)[1:-1]                  # the ends' rings are square to their element
-    assert np.allclose((np.hypot(ring[..., 0], ring[..., 1]) - big) ** 2 + ring[..., 2] ** 2, r * r, rtol=1e-9)
-    tangent = np.stack([-centres[0, :, 1], centres[0, :, 0], np.zeros(n)], axis=-1) / big
-    assert np.allclose(np.einsum("kjd,kd->kj", ring - centres[0][1:-1, None], tangent[1:-1]), 0.0, atol=1e-9)
-    chord = np.diff(centres[0], axis=0)
-    tangent[0], tangent[-1] = chord[0] / np.linalg.norm(chord[0]), chord[-1] / np.linalg.norm(chord[-1])
-    assert np.allclose(np.linalg.norm(nv, axis=1), 1.0)
-    assert np.allclose(nv[:-2], (v[:-2] - np.repeat(centres[0], RING, axis=0)) / r)
-    assert np.allclose(v[-2], centres[0, 0] - r * tangent[0]) and np.allclose(v[-1], centres[0, -1] + r * tangent[-1])
-    assert np.allclose(nv[-2], -tangent[0]) and np.allclose(nv[-1], tangent[-1])
-    first = nv[:-2].reshape(n, RING, 3)[:, 0]
-    assert np.allclose(first[:, 2], first[0, 2])            # no twist about the cable
-    tri = tube_triangles(n)
-    assert tri.min() == 0 and tri.max() == len(v) - 1 and len(tri) == 2 * (n - 1) * RING + 2 * RING
-    face = np.cross(v[tri[:, 1]] - v[tri[:, 0]], v[tri[:, 2]] - v[tri[:, 0]])
-    assert (np.einsum("td,td->t", face, nv[tri].sum(axis=1)) > 0).all()
-
-
-def test_parallel_transport_by_doubling_equals_turning_ring_by_ring():
-    """The running products of the turns (log2 passes) against a loop that
-    turns the normal from each tangent to the next (Rodrigues), on a random
-    walk with a kink and a straight stretch."""
-    from sim.record.cables import tangents, transported_normals
-    rng = np.random.default_rng(3)
-    pts = np.cumsum(rng.normal(size=(2, 37, 3)), axis=1)
-    pts[1, 20:26] = pts[1, 19] + np.arange(1, 7)[:, None] * np.array([1.0, 0.0, 0.0])
-    t = tangents(pts)
-    n = transported_normals(t)
-    for f in range(2):
-        want = [n[f, 0]]
-        for k in range(1, 37):
-            a, b = t[f, k - 1], t[f, k]
-            axis = np.cross(a, b)
-            s, c = np.linalg.norm(axis), a @ b
-            v = want[-1]
-            if s > 1e-12:
-                axis /= s
-                th = np.arctan2(s, c)
-                v = v * np.cos(th) + np.cross(axis, v) * np.sin(th) + axis * (axis @ v) * (1 - np.cos(th))
-            want.append(v)
-        assert np.allclose(n[f], want, atol=1e-12)
-    assert np.allclose(np.einsum("fpd,fpd->fp", n, t), 0.0, atol=1e-12)
-
-
-def test_each_cable_is_a_named_tube_in_its_own_colour(crossing):
-    """crossing: two leads, each a tube at its own radius (vertices at the
-    radius from the centres, unit normals outward) in its own colour, named
-    by a label on it; the two names apart; the cables' plots in their colours."""
+def test_each_cable_is_named_capsules_in_its_own_colour(crossing):
+    """crossing: two leads, each a chain of capsules at its own radius, one
+    per element, each from one body centre to the next (the report's final
+    centres: the last shape kept, within `STILL` radii of them), in its own
+    colour, named by a label on it; the two names apart; the cables' plots
+    in their colours."""
+    from sim.record.cables import STILL
     report, record = crossing
     scene = tomllib.loads((ROOT / "scenes" / "crossing.toml").read_text())
     owns, names = [], []
     for i, cable in enumerate(scene["cables"]):
-        rows = [r for r in _rows(record, f"/world/cables/{cable['name']}") if r["t"] is not None]
+        rows = _cable_rows(record, cable["name"])
         assert rows                     # crossing's leads lie still: one shape each (`STILL`)
+        assert rows[0]["Capsules3D:radii"] == [pytest.approx(cable["radius"], rel=1e-6)]
         for row in rows[:: max(1, len(rows) // 5)]:
-            v, nv = np.array(row["Mesh3D:vertex_positions"]), np.array(row["Mesh3D:vertex_normals"])
-            centres = _centres(row)
-            assert len(centres) == report["cables"][i]["segments"] + 1
-            out = v[:-2] - np.repeat(centres, RING, axis=0)
-            assert np.linalg.norm(out, axis=1) == pytest.approx(cable["radius"], rel=1e-4)
-            assert np.allclose(np.linalg.norm(nv, axis=1), 1.0, atol=1e-6)
-            assert np.allclose(nv[:-2], out / cable["radius"], atol=1e-4)
+            start, end = _capsule_ends(row)
+            assert len(start) == report["cables"][i]["segments"]
+            # a chain: each ends where the next starts (its length given again where it changed by `STILL` radii)
+            assert np.abs(end[:-1] - start[1:]).max() <= STILL * cable["radius"] + 1e-3
             # the label on the cable, at one of its centres, all along the run
             (label,) = row["Points3D:positions"]
-            assert np.linalg.norm(centres - label, axis=1).min() < 1e-3
+            assert np.linalg.norm(_centres(row) - label, axis=1).min() < 1e-3
+        final = np.array(report["cables"][i]["final_points"])
+        assert np.abs(_centres(rows[-1]) - final).max() <= STILL * cable["radius"] + 1e-3
         assert rows[0]["Points3D:labels"] == [cable["name"]]
         assert rows[0]["Points3D:colors"] == [_packed(cable_colour(i))]
         colours = _colours_at(rows, rows[-1]["t"])
+        assert len(colours) == report["cables"][i]["segments"]
         own = np.bincount(np.unique(colours, return_inverse=True)[1]).argmax()
         owns.append(int(np.unique(colours)[own]))
         names.append(np.array(rows[0]["Points3D:positions"][0]))

@@ -5,9 +5,9 @@ module of this package that writes each part:
 - `world/parts/<assembly path>`, `world/visual/<body>/<geom>`: the parts
   and the mjcf model's visual geoms, translucent while a clash is shown,
   floors always (:mod:`.scene`);
-- `world/cables/<name>`: each cable as a shaded tube at its true radius in
-  its own colour, named, only the elements near a clash's worst place in
-  its state colour (:mod:`.cables`);
+- `world/cables/<name>`: each cable as a chain of shaded capsules (one per
+  element) at its true radius in its own colour, named, only the elements
+  near a clash's worst place in its state colour (:mod:`.cables`);
 - `world/interference/<type>/<a>/<b>`: the spot and its gap, and
   `lanes/<type>/<a>/<b>`: the pair's state (:mod:`.marks`);
   `world/mujoco_contacts`: MuJoCo's contact points;

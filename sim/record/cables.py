@@ -1,26 +1,31 @@
-"""The cables in the review recording: shaded tubes, each in its own colour and named.
+"""The cables in the review recording: shaded capsules, each cable in its own colour and named.
 
-`world/cables/<name>`: the cable as a tube at its true radius, a mesh swept
-along its body centres each recorded frame (a ring of :data:`RING`
-vertices round each centre, turned along the cable by parallel transport
-so the tube does not twist, the vertex normals pointing outward so the
-viewer shades it: over and under read where a cable crosses itself or
-another), in the cable's own colour (`sim.record.style.cable_colour`)
-except the elements near a clash's worst place, which take its state
-colour (soft, hard); and its name as a label on the cable, at a place
-along it chosen apart from the other cables' names and from its clashes.
+`world/cables/<name>`: the cable as a chain of capsules at its true radius,
+one per element, from body centre k to k + 1 each recorded frame (rerun's
+`Capsules3D`, drawn solid: the viewer shades them, so over and under read
+where a cable crosses itself or another; neighbouring capsules share the
+sphere round the centre between them, so the chain reads as one round
+cable), in the cable's own colour (`sim.record.style.cable_colour`) except
+the elements near a clash's worst place, which take its state colour
+(soft, hard); and its name as a label on the cable, at a place along it
+chosen apart from the other names and from its clashes.
 
-The tube's triangles, the label's text and style are given once (the first
-row); the vertex colours only where the states change; the vertices,
-normals and the label's place at every frame that keeps the cable's
-shape: where its states change, or where it moved by more than
-:data:`STILL` radii since the last shape kept (a cable lying still is not
-stored again), at the run's regular samples. At a frame recorded only
-because an event starts or ends there (not one of the run's regular
-samples) a cable's shape is kept only if its state colours change there:
-the colours change exactly when the clash does, and a harness of many
-cables does not store every shape at every step. Buffered per frame and
-sent in one column per cable when the recording is closed.
+The radius, the fill mode, the label's text and style are given once (the
+first row); the colours, one per element, only where the states change;
+the capsules' lengths only where one changed by more than :data:`STILL`
+radii since they were last given (a cable hardly stretches: a capsule
+then ends that little short of or beyond the next centre, inside the next
+capsule's end sphere); the capsules' ends and turns (28 bytes an element,
+where the tube of 838fb0d took 192 a body centre) and the label's place
+at every frame that keeps the cable's shape: where its states change, or
+where it moved by more than :data:`STILL` radii since the last shape kept
+(a cable lying still is not stored again), at the run's regular samples.
+At a frame recorded only because an event starts or ends there (not one
+of the run's regular samples) a cable's shape is kept only if its state
+colours change there: the colours change exactly when the clash does, and
+a harness of many cables does not store every shape at every step.
+Buffered per frame and sent in one column per cable when the recording is
+closed.
 
 Not here: the clashes themselves (`sim.record.marks`), the wear map
 (`sim.record.wearview`).
@@ -33,126 +38,41 @@ import pyarrow as pa
 import rerun as rr
 
 from sim.build import Built
-from sim.record.columns import Once, Sometimes, column, floats, indices3, rgba, strings, vec3
+from sim.record.columns import Once, Sometimes, column, floats, quats, rgba, strings, vec3
 from sim.record.columns import times as sim_time
 from sim.record.marks import Mark
 from sim.record.style import STATE_COLOURS, STATES, cable_colour, escape
 
 _RANK = {s: n for n, s in enumerate(STATES)}
-RING = 8
-"""Vertices round each body centre of a cable's tube (an octagon: shaded,
-it reads as round; each more costs 24 bytes per body per frame)."""
 STILL = 0.05
 """A cable whose centres all moved less than this many radii (in each
 coordinate) since its last kept shape is not stored again at a frame: the
-viewer shows the kept one, off by less than its octagon's own departure
-from a circle (0.08 radii)."""
+viewer shows the kept one, off by a twentieth of the cable's thickness."""
 LABEL_AT = (0.5, 0.3, 0.7, 0.4, 0.6, 0.2, 0.8)
 """Where along each cable (fraction of its length, in the scene's order of
 cables, cycled) its name goes if nothing else is near there."""
 
 
-def _unit(v: np.ndarray, fallback: np.ndarray | None = None) -> np.ndarray:
-    n = np.linalg.norm(v, axis=-1, keepdims=True)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        u = v / n
-    bad = ~(n[..., 0] > 1e-12)
-    if bad.any():
-        u[bad] = np.array([1.0, 0.0, 0.0]) if fallback is None else fallback[bad]
-    return u
-
-
-def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Quaternion products a b (w, x, y, z last axis), elementwise."""
-    aw, ax, ay, az = np.moveaxis(a, -1, 0)
-    bw, bx, by, bz = np.moveaxis(b, -1, 0)
-    return np.stack([aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
-                     aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw], axis=-1)
-
-
-def _rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """v turned by the unit quaternions q, elementwise."""
-    w, u = q[..., :1], q[..., 1:]
-    c = np.cross(u, v)
-    return v + 2.0 * w * c + 2.0 * np.cross(u, c)
-
-
-def tangents(points: np.ndarray) -> np.ndarray:
-    """(F, P, 3) unit tangents at the body centres `points` (F, P, 3): the
-    mean direction of the two elements meeting there (an end: its element's)."""
-    e = _unit(np.diff(points, axis=1))
-    t = np.empty_like(points)
-    t[:, 0], t[:, -1] = e[:, 0], e[:, -1]
-    if points.shape[1] > 2:
-        t[:, 1:-1] = _unit(e[:, :-1] + e[:, 1:], e[:, 1:])
-    return t
-
-
-def transported_normals(t: np.ndarray) -> np.ndarray:
-    """(F, P, 3) unit normals to the tangents `t` (F, P, 3), carried along
-    each cable by parallel transport (each turned by the least rotation
-    that takes one tangent to the next, so the tube's rings do not twist
-    about the cable): the rotations' running products by doubling, in
-    log2(P) vectorised passes (no loop over the points)."""
-    n_f, n_p, _ = t.shape
-    a, b = t[:, :-1], t[:, 1:]
-    q = np.concatenate([1.0 + np.sum(a * b, axis=-1, keepdims=True), np.cross(a, b)], axis=-1)
-    flip = q[..., 0] < 1e-9                                  # a half turn: about any normal to a
-    if flip.any():
-        side = np.where(np.abs(a[flip][:, :1]) < 0.9, np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
-        q[flip] = np.concatenate([np.zeros((flip.sum(), 1)), _unit(np.cross(a[flip], side))], axis=-1)
-    q = _unit(q)
-    run = np.concatenate([np.tile([1.0, 0.0, 0.0, 0.0], (n_f, 1, 1)), q], axis=1)   # (F, P, 4): Q_k = q_k ... q_1
-    step = 1
-    while step < n_p:
-        run[:, step:] = _qmul(run[:, step:], run[:, :-step].copy())
-        step *= 2
-    run = _unit(run)
-    t0 = t[:, 0]
-    up = np.where(np.abs(t0[:, 2:]) < 0.9, np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]))
-    n0 = _unit(np.cross(np.cross(t0, up), t0))               # the first ring's, toward up
-    n = _rotate(run, np.broadcast_to(n0[:, None], t.shape))
-    return _unit(n - np.sum(n * t, axis=-1, keepdims=True) * t)
-
-
-def tube(points: np.ndarray, radius: float, ring: int = RING) -> tuple[np.ndarray, np.ndarray]:
-    """A cable's tube in each frame: (F, V, 3) vertices and (F, V, 3) unit
-    outward normals, V = P x `ring` + 2, from its body centres `points`
-    (F, P, 3). Vertex k x ring + j lies on the circle of `radius` round
-    centre k, square to the tangent there, at angle 2 pi j / ring from the
-    transported normal; the last two close the ends, `radius` beyond the
-    first and the last centre along the cable (their normals along it)."""
+def capsules(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A cable's elements as capsules in each frame, from its body centres
+    `points` (F, P, 3): (F, P - 1, 3) translations (element k's first end,
+    centre k), (F, P - 1, 4) unit quaternions (x, y, z, w, as rerun stores
+    them) turning +z (a capsule's own axis) onto the element's direction,
+    and (F, P - 1) lengths (centre k to centre k + 1). An element of no
+    length keeps +z; one pointing down (-z) is turned half round x."""
     points = np.asarray(points, float)
-    n_f, n_p, _ = points.shape
-    t = tangents(points)
-    n = transported_normals(t)
-    b = np.cross(t, n)
-    angle = 2.0 * np.pi * np.arange(ring) / ring
-    out = np.cos(angle)[None, None, :, None] * n[:, :, None] + np.sin(angle)[None, None, :, None] * b[:, :, None]
-    normals = np.empty((n_f, n_p * ring + 2, 3))
-    normals[:, :-2] = out.reshape(n_f, -1, 3)
-    normals[:, -2], normals[:, -1] = -t[:, 0], t[:, -1]
-    vertices = np.empty_like(normals)
-    vertices[:, :-2] = np.repeat(points, ring, axis=1)
-    vertices[:, -2], vertices[:, -1] = points[:, 0], points[:, -1]
-    vertices += radius * normals
-    return vertices, normals
-
-
-def tube_triangles(n_points: int, ring: int = RING) -> np.ndarray:
-    """(T, 3) vertex indices of :func:`tube`'s triangles, wound so that
-    their normals point outward: two per quad between neighbouring rings,
-    a fan to each end's closing vertex."""
-    k, j = np.meshgrid(np.arange(n_points - 1), np.arange(ring), indexing="ij")
-    a = k * ring + j
-    b = k * ring + (j + 1) % ring
-    c, d = a + ring, b + ring
-    sides = np.stack([np.stack([a, b, c], -1), np.stack([b, d, c], -1)], axis=2).reshape(-1, 3)
-    j = np.arange(ring)
-    first, last = n_points * ring, n_points * ring + 1
-    start = np.stack([np.full(ring, first), (j + 1) % ring, j], axis=-1)
-    end = np.stack([np.full(ring, last), (n_points - 1) * ring + j, (n_points - 1) * ring + (j + 1) % ring], axis=-1)
-    return np.concatenate([sides, start, end]).astype(np.uint32)
+    d = np.diff(points, axis=1)
+    length = np.linalg.norm(d, axis=-1)
+    u = np.zeros_like(d)
+    some = length > 1e-12
+    u[some] = d[some] / length[some][:, None]
+    u[~some] = (0.0, 0.0, 1.0)
+    # the half-way quaternion between +z and u: (z x u, 1 + z . u), normalised
+    q = np.stack([-u[..., 1], u[..., 0], np.zeros_like(length), 1.0 + u[..., 2]], axis=-1)
+    down = q[..., 3] < 1e-9
+    q[down] = (1.0, 0.0, 0.0, 0.0)
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    return points[:, :-1], q, length
 
 
 def label_places(firsts: list[np.ndarray], avoid: list[np.ndarray], apart: float) -> list[int]:
@@ -232,7 +152,7 @@ class CableFrames:
 
     def send(self, rec: rr.RecordingStream, times: np.ndarray) -> None:
         """Every cable's frames, one column per cable (`times`: each frame's,
-        seconds): its tube, colours and name (see the module docstring)."""
+        seconds): its capsules, colours and name (see the module docstring)."""
         kept = [i for i in range(len(self.built.cables)) if self._points[i]]
         if not kept:
             return
@@ -241,32 +161,34 @@ class CableFrames:
         apart = 0.08 * float(np.linalg.norm(every.max(axis=0) - every.min(axis=0)))
         places = label_places(firsts, [np.stack(self._states[i]).max(axis=0) > 0 for i in kept], apart)
         state_rgb = np.array([STATE_COLOURS[s] for s in STATES], np.uint32)
-        m, p = rr.Mesh3D, rr.Points3D
+        c, p = rr.Capsules3D, rr.Points3D
+        solid = rr.components.FillModeBatch(rr.components.FillMode.Solid).as_arrow_array()
         for i, k in zip(kept, places):
             cable = self.built.cables[i]
             r = cable.radius / self.unit
             points = np.stack(self._points[i])                          # (F, P, 3)
-            n_f, n_p, _ = points.shape
-            vertices, normals = tube(points, r)
-            # a ring's state: the worse of its two elements'; the ends' closing vertices their ring's
-            states = np.stack(self._states[i])
-            ring = np.zeros((n_f, n_p), np.uint8)
-            ring[:, :-1] = states
-            ring[:, 1:] = np.maximum(ring[:, 1:], states)
+            n_f, n_e = points.shape[0], points.shape[1] - 1
+            ends, turns, lengths = capsules(points)
+            states = np.stack(self._states[i])                          # (F, P - 1): one per element
             changed = np.ones(n_f, bool)
-            changed[1:] = (ring[1:] != ring[:-1]).any(axis=1)
+            changed[1:] = (states[1:] != states[:-1]).any(axis=1)
             palette = state_rgb.copy()
             palette[0] = cable_colour(i)
-            rows = ring[changed]
-            per_vertex = np.concatenate([np.repeat(rows, RING, axis=1), rows[:, :1], rows[:, -1:]], axis=1)
-            colours = rgba(palette[per_vertex.reshape(-1)])
-            label = points[:, k]                 # the point hides inside the tube; its label shows beside it
-            v = vertices.shape[1]
+            colours = rgba(palette[states[changed].reshape(-1)])
+            stretched = np.zeros(n_f, bool)                             # lengths given again
+            stretched[0], given = True, lengths[0]
+            for f in range(1, n_f):
+                if np.abs(lengths[f] - given).max() > STILL * r:
+                    stretched[f], given = True, lengths[f]
+            label = points[:, k]                 # the point hides inside the cable; its label shows beside it
             rec.send_columns(f"world/cables/{escape(cable.name)}", indexes=[sim_time(times[self._frames[i]])], columns=[
-                column(m.descriptor_vertex_positions(), vec3(vertices.reshape(-1, 3)), np.full(n_f, v)),
-                column(m.descriptor_vertex_normals(), vec3(normals.reshape(-1, 3)), np.full(n_f, v)),
-                Once(m.descriptor_triangle_indices(), indices3(tube_triangles(n_p)), n_f),
-                Sometimes(m.descriptor_vertex_colors(), colours, changed, np.full(int(changed.sum()), v)),
+                column(c.descriptor_translations(), vec3(ends.reshape(-1, 3)), np.full(n_f, n_e)),
+                column(c.descriptor_quaternions(), quats(turns.reshape(-1, 4)), np.full(n_f, n_e)),
+                Sometimes(c.descriptor_lengths(), floats(lengths[stretched].reshape(-1), np.float32), stretched,
+                          np.full(int(stretched.sum()), n_e)),
+                Once(c.descriptor_radii(), floats([r], np.float32), n_f),
+                Once(c.descriptor_fill_mode(), solid, n_f),
+                Sometimes(c.descriptor_colors(), colours, changed, np.full(int(changed.sum()), n_e)),
                 column(p.descriptor_positions(), vec3(label)),
                 Once(p.descriptor_labels(), strings([cable.name]), n_f),
                 Once(p.descriptor_colors(), rgba([cable_colour(i)]), n_f),

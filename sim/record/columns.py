@@ -23,8 +23,8 @@ VEC3 = pa.list_(pa.field("item", pa.float32(), nullable=False), 3)
 """A point or a size: three float32, as rerun stores them."""
 STRIP = pa.list_(pa.field("item", VEC3, nullable=False))
 """A line strip: a list of points."""
-TRIANGLE = pa.list_(pa.field("item", pa.uint32(), nullable=False), 3)
-"""A triangle: three vertex indices, as rerun stores them."""
+QUAT = pa.list_(pa.field("item", pa.float32(), nullable=False), 4)
+"""A rotation: a quaternion's x, y, z, w as four float32, as rerun stores it."""
 MAT3 = pa.list_(pa.field("item", pa.float32(), nullable=False), 9)
 """A 3x3 matrix: nine float32, column by column, as rerun stores it."""
 
@@ -106,6 +106,12 @@ def vec3(points: np.ndarray) -> pa.Array:
     return pa.FixedSizeListArray.from_arrays(pa.array(flat), type=VEC3)
 
 
+def quats(quaternions: np.ndarray) -> pa.Array:
+    """(n, 4) quaternions (x, y, z, w) as rerun's `RotationQuat` array."""
+    flat = np.ascontiguousarray(quaternions, np.float32).reshape(-1)
+    return pa.FixedSizeListArray.from_arrays(pa.array(flat), type=QUAT)
+
+
 def mat3(matrices: np.ndarray) -> pa.Array:
     """(n, 3, 3) matrices as rerun's `Mat3x3` array (column-major)."""
     flat = np.ascontiguousarray(np.swapaxes(np.asarray(matrices).reshape(-1, 3, 3), 1, 2), np.float32).reshape(-1)
@@ -167,8 +173,3 @@ class Sometimes:
                                      [pa.py_buffer(np.packbits(given, bitorder="little")), pa.py_buffer(offsets)],
                                      null_count=int((~given).sum()), children=[self.values])
 
-
-def indices3(triangles: np.ndarray) -> pa.Array:
-    """(n, 3) vertex indices of triangles as rerun's `TriangleIndices` array."""
-    flat = np.ascontiguousarray(triangles, np.uint32).reshape(-1)
-    return pa.FixedSizeListArray.from_arrays(pa.array(flat), type=TRIANGLE)
