@@ -8,6 +8,8 @@ the fully checked steps. The bound itself is tested module by module
 
 from __future__ import annotations
 
+import dataclasses
+
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +23,7 @@ from sim.run import RunOptions, run_scene
 from sim.scene import load_scene
 
 SCENES = sorted((Path(__file__).resolve().parents[1] / "scenes").glob("*.toml"))
+SKIP_CHECK_S = 2.0
 
 
 def _strip(rows):
@@ -39,7 +42,10 @@ def _skipping_and_in_full(scene, tmp_path):
 
 @pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)
 def test_skipping_changes_no_answer(path: Path, tmp_path):
+    # the first SKIP_CHECK_S of each example: long enough for its motions to
+    # bring its pairs near and apart (the robot cell checked in full costs 7 ms a step)
     scene = load_scene(path)
+    scene = dataclasses.replace(scene, duration=min(scene.duration, SKIP_CHECK_S))
     fast, full = _skipping_and_in_full(scene, tmp_path)
     assert fast["summary"] == full["summary"]
     for a, b in zip(fast["cables"], full["cables"]):

@@ -740,7 +740,7 @@ def run_and_check(spec: SceneSpec, folder: Path, units: str, offset) -> dict[str
             "windows": len(windows)}
 
 
-@settings(max_examples=examples(80), deadline=None,
+@settings(max_examples=examples(30), deadline=None,      # HYPOTHESIS_PROFILE=long: the large draw
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(spec=scenes(), units=st.sampled_from(["m", "mm"]), far=st.booleans())
 def test_static_scenes_match_the_reference(tmp_path_factory, spec, units, far):
