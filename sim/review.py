@@ -30,6 +30,8 @@ from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
 
+from sim.scene import covers
+
 _KEYS = ("a", "b", "status", "comment", "type")
 PAIR_TYPES = ("self", "cable-cable", "cable-structure", "keepout", "part-part", "bend", "taut")
 
@@ -64,8 +66,8 @@ class ReviewNote:
         """The note is about this event's pair (either order)."""
         if self.type is not None and str(getattr(event.type, "value", event.type)) != self.type:
             return False
-        return ((_names(self.a, event.a) and _names(self.b, event.b))
-                or (_names(self.a, event.b) and _names(self.b, event.a)))
+        return ((covers(self.a, (event.a,)) and covers(self.b, (event.b,)))
+                or (covers(self.a, (event.b,)) and covers(self.b, (event.a,))))
 
 
 @dataclass(frozen=True)
@@ -111,11 +113,6 @@ def match(path: Path, notes: Sequence[ReviewNote], events: Sequence) -> ReviewMa
     used = {id(n) for n in per_event if n is not None}
     unmatched = tuple(n for n in notes if id(n) not in used and not any(n.covers(e) for e in events))
     return ReviewMatch(Path(path), tuple(notes), per_event, unmatched)
-
-
-def _names(name: str, side: str) -> bool:
-    """`name` is this side or an assembly path above it."""
-    return side == name or side.startswith(name + "/")
 
 
 def _note(path: Path, i: int, entry: dict) -> ReviewNote:

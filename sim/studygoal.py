@@ -34,6 +34,7 @@ from enum import Enum
 from typing import Any
 
 from checker.cable import TAUT_STRAIN
+from sim.scene import covers as covers_part
 
 APPROACH_TYPES = ("cable-structure", "keepout", "cable-cable", "self", "part-part")
 """Report pair types that are distances between two things (not bend or taut)."""
@@ -166,7 +167,7 @@ def check_names(requirements: tuple[Requirement, ...], goal: Goal | None, cables
 
 def covers(name: str, cables: set[str] | tuple, parts: set[str] | tuple) -> bool:
     """The name is a cable, a part or an assembly path of some part."""
-    return name in cables or any(_under(p, name) for p in parts)
+    return name in cables or covers_part(name, parts)
 
 
 def judge(report: dict, requirements: tuple[Requirement, ...], goal: Goal | None) -> Judgement:
@@ -183,10 +184,6 @@ def judge(report: dict, requirements: tuple[Requirement, ...], goal: Goal | None
 
 # -- judging ------------------------------------------------------------------
 
-def _under(part: str, name: str) -> bool:
-    return part == name or part.startswith(name + "/")
-
-
 def _pairs(report: dict) -> list[dict]:
     closest = report.get("closest") or {}
     return [p for p in closest.get("pairs", ()) if p["type"] in APPROACH_TYPES]
@@ -198,7 +195,7 @@ def _reach(report: dict) -> float:
 
 def _is(name: str, side: str, cables: set[str]) -> bool:
     """``side`` of a pair is covered by ``name`` (a cable name, or a part under it)."""
-    return side == name if side in cables else _under(side, name)
+    return side == name if side in cables else covers_part(name, (side,))
 
 
 def _least_between(report: dict, a: str, b: str) -> tuple[float, bool]:

@@ -324,11 +324,10 @@ class MarginLog:
 
     def _lookup(self, keys: np.ndarray) -> np.ndarray:
         """The run's best so far for ``keys`` (inf where none)."""
-        at = np.searchsorted(self._key, keys)
-        have = at < len(self._key)
-        have[have] = self._key[at[have]] == keys[have]
-        return np.where(have, self._value[np.minimum(at, max(len(self._key) - 1, 0))] if len(self._key)
-                        else np.inf, np.inf)
+        if not len(self._key):
+            return np.full(len(keys), np.inf)
+        at = np.minimum(np.searchsorted(self._key, keys), len(self._key) - 1)
+        return np.where(self._key[at] == keys, self._value[at], np.inf)
 
     def _store(self, keys, value, t, a, b, elem, other, param) -> None:
         """Keep these pairs' least values where they improve on the run's
