@@ -32,6 +32,13 @@ import numpy as np
 # nearly parallel and their end-against-segment answers are tried too.
 _NEAR_PARALLEL = 1e-6
 
+# A triangle whose doubled area is below this fraction of its longest edge
+# squared (its height below 2e-12 of that edge) counts as flat: it has no
+# inside, only edges, which lie within that height of it. The face's own
+# edge-side tests would cross 1e-300-sized products there, which round to
+# zero and pass every point on the line of an edge as inside.
+_FLAT = 1e-12
+
 
 def row_norm(v: np.ndarray) -> np.ndarray:
     """Euclidean length of each row of (..., 3) ``v``.
@@ -254,7 +261,8 @@ def point_triangle(
     triangle (edge-side tests with the unnormalised normal), that projection is
     the answer; otherwise the closest point lies on the boundary and is the
     nearest of the three point-segment answers. Zero-area triangles have no
-    inside and are handled by their edges.
+    inside and are handled by their edges, and so are slivers whose area is
+    below 1e-12 of their longest edge squared (`_FLAT`).
 
     Args:
         p, a, b, c: (n, 3) query points and triangle corners.
@@ -267,7 +275,8 @@ def point_triangle(
     """
     n = cross(b - a, c - a)
     nn = _dot(n, n)
-    flat = nn == 0.0
+    longest = np.maximum(np.maximum(_dot(b - a, b - a), _dot(c - b, c - b)), _dot(a - c, a - c))
+    flat = np.sqrt(nn) <= _FLAT * longest
     h = _safe_div(_dot(p - a, n), nn)
     q = p - h[:, None] * n
     inside = (
