@@ -28,9 +28,9 @@ import statistics
 import tempfile
 from pathlib import Path
 
-from sim.report import plain
-from sim.run import RunOptions, run_scene
-from sim.scene import load_scene
+from cablecheck.report.document import plain
+from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.scene.load import load_scene
 
 DOOR = Path(__file__).resolve().parents[1] / "tests" / "scenes" / "door.toml"
 

@@ -1,10 +1,10 @@
-"""Time one full :func:`checker.interference.check_state` on a large scene.
+"""Time one full :func:`cablecheck.checker.interference.check_state` on a large scene.
 
 The checker benchmark's scene: 100 cables of 200 points (20,000 points), 300 primitive
 parts (boxes, cylinders, capsules, spheres, ellipsoids) and 10 torus meshes of
 2,000 triangles, in metres. It prints the median time of a full check with
 method ``points`` and ``exact`` (with :func:`check_state`, and with a
-:class:`~checker.interference.Checker` reused across calls as a simulation
+:class:`~cablecheck.checker.interference.Checker` reused across calls as a simulation
 loop would, the parts prepared once), where the time goes, and the same close-pair
 queries done by python-fcl (a general collision library) in the same run when
 it is installed, with the ratio. It also counts the false alarms of the
@@ -19,8 +19,8 @@ by call with the checker's ``points`` check so both see the same load
 Run: ``python benchmarks/bench_checker.py [--repeat N] [--no-fcl] [--no-mujoco]``. Timings
 are single-threaded (set OMP/BLAS threads to 1 for a fair number).
 
-The scene lives in :mod:`sim.benchscene` and the fcl queries in
-:mod:`sim.benchfcl` (shared with ``cablecheck bench``, which prints the full
+The scene lives in :mod:`cablecheck.bench.scenes` and the fcl queries in
+:mod:`cablecheck.bench.fcl` (shared with ``cablecheck bench``, which prints the full
 accuracy-and-cost tables).
 
 Deliberately not a test: nothing here asserts a time.
@@ -39,12 +39,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from checker.interference import Checker, check_state  # noqa: E402
-from checker.records import PairType  # noqa: E402
-from checker.scene_state import CheckConfig  # noqa: E402
-from checker.shapes import ShapeType  # noqa: E402
-from sim.benchfcl import FclMissing, fcl_queries, load_fcl  # noqa: E402
-from sim.benchscene import make_scene  # noqa: E402
+from cablecheck.bench.fcl import FclMissing, fcl_queries, load_fcl  # noqa: E402
+from cablecheck.bench.scenes import make_scene  # noqa: E402
+from cablecheck.checker.interference import Checker, check_state  # noqa: E402
+from cablecheck.checker.records import PairType  # noqa: E402
+from cablecheck.checker.scene_state import CheckConfig  # noqa: E402
+from cablecheck.checker.shapes import ShapeType  # noqa: E402
 
 
 def time_check(cables, parts, config, repeat):

@@ -1,5 +1,5 @@
 """MuJoCo's collision pass on the robot cell's detection model: concave meshes
-as their own surface (sim.detection_mesh) against MuJoCo's convex hulls.
+as their own surface (cablecheck.detection.mesh) against MuJoCo's convex hulls.
 
 The same simulated states (every `--every`-th step of the robot cell after
 settling) go through the detection model's collision pass (mj_kinematics,
@@ -9,7 +9,7 @@ the meshes left to MuJoCo's convex hulls; as built, each non-convex
 collision mesh rigid flexes of its triangles, every surface in every pass;
 each mesh one flex, those no cable can reach at a state left out of its
 pass; and as a run does it, each mesh in patches, the patches no cable can
-reach left out (`sim.surfacereach`; the contacts of the last three must be
+reach left out (`cablecheck.detection.surfacereach`; the contacts of the last three must be
 the same, and are checked by name). Printed: ms per state for each (CPU
 time of this process, best of `--repeat`), the ratios, contacts per
 state, and the (cable, part) pairs each sees within the clearance.
@@ -27,12 +27,12 @@ from unittest import mock
 
 import numpy as np
 
-import sim.detection_mesh
-import sim.mjspec
-from sim.build import build
-from sim.detector import Detector
-from sim.loop import Simulation
-from sim.scene import load_scene
+import cablecheck.build.mjspec
+import cablecheck.detection.mesh
+from cablecheck.build.stages import build
+from cablecheck.detection.detector import Detector
+from cablecheck.run.loop import Simulation
+from cablecheck.scene.load import load_scene
 
 SCENE = Path(__file__).resolve().parents[1] / "scenes" / "robot_cell.toml"
 
@@ -46,9 +46,9 @@ def main(argv=None) -> None:
 
     scene = load_scene(SCENE)
     surfaces = build(scene)
-    with mock.patch.object(sim.mjspec, "add_surfaces", lambda spec, model, cable_bit: model):
+    with mock.patch.object(cablecheck.build.mjspec, "add_surfaces", lambda spec, model, cable_bit: model):
         hulls = build(scene)
-    with mock.patch.object(sim.detection_mesh, "PATCH_TRIANGLES", 10 ** 9):
+    with mock.patch.object(cablecheck.detection.mesh, "PATCH_TRIANGLES", 10 ** 9):
         whole = build(scene)
     run = Simulation(surfaces)
     run.reset()
@@ -63,7 +63,7 @@ def main(argv=None) -> None:
     patches = surfaces.detect.nflex - hulls.detect.nflex
     triangles = int(surfaces.detect.flex_elemnum[hulls.detect.nflex:].sum())
     print(f"robot cell: {len(states)} states, {meshes} concave meshes as surfaces ({triangles} triangles, "
-          f"{patches} patches of at most {sim.detection_mesh.PATCH_TRIANGLES})")
+          f"{patches} patches of at most {cablecheck.detection.mesh.PATCH_TRIANGLES})")
     rows, found = {}, {}
     for label, built, reach in (("hulls", hulls, True), ("surfaces, every one", surfaces, False),
                                 ("whole meshes in reach", whole, True), ("patches in reach", surfaces, True)):

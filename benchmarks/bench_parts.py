@@ -8,13 +8,13 @@ through the middle line (touching, grazing and overlapping parts on its
 way) and four plant parts in other lines wobble across y and z. Everything
 else is one static body, so its pairs are checked once, at the first step.
 
-Two :class:`checker.parts.PartChecker` run the same steps: one pairs part
+Two :class:`cablecheck.checker.parts.PartChecker` run the same steps: one pairs part
 boxes through the assembly boxes (``assemblies=True``, the default: lines
 whose boxes, grown by the clearance, do not overlap contribute no pairs),
 one with a single sort and sweep over all part boxes (``assemblies=False``).
 Both are timed at every step (interleaved, so both see the same machine),
 their records are compared (must be identical) and the candidate-pair stage
-(:func:`checker.parts.candidate_pairs`, where the two differ) is timed on its
+(:func:`cablecheck.checker.parts.candidate_pairs`, where the two differ) is timed on its
 own.
 
 Run: python benchmarks/bench_parts.py [--steps N] [--clearance MM] [--seed S]
@@ -29,8 +29,8 @@ import time
 import numpy as np
 from bench_sweep import TRAVEL, generate
 
-from checker.partset import PartSet
-from checker.parts import PartChecker, candidate_pairs
+from cablecheck.checker.parts import PartChecker, candidate_pairs
+from cablecheck.checker.partset import PartSet
 
 WOBBLERS = ("plant/line03/cell2/part4", "plant/line08/cell5/part0",
             "plant/line13/cell7/part6", "plant/line17/cell9/part9")

@@ -17,7 +17,7 @@ folder), ``--repeat`` times each. Per scene and code the table gives:
   falls in ``check``), stated so that nothing moved there goes unseen;
 - ``sim``: ``timing.sim_ms_per_step`` (MuJoCo's per step: stepping only,
   building its model is left out);
-- ``build``: ms spent building the MuJoCo models (`sim.build.build`, once
+- ``build``: ms spent building the MuJoCo models (`cablecheck.build.stages.build`, once
   per run), MuJoCo's own fixed cost, beside the recording's (open + close);
 - ``ratio`` = rec / sim (the close spread over the run's steps),
   ``frame_ratio`` = frame / sim (per step, both sides without their
@@ -35,7 +35,7 @@ close spread over the steps (``ratio <= 0.5``), which a short scene misses
 by its fixed close alone.
 
 ``--harness D1,D2`` measures instead the recording's size on the harness
-scene (``sim.harness``: 64 cables among 1,000 parts), run by this checkout
+scene (``cablecheck.bench.harness``: 64 cables among 1,000 parts), run by this checkout
 for each duration D (simulated seconds, one process each): the file's size,
 its size per simulated second and its growth per simulated second between
 consecutive durations (what is written once, such as the parts' shapes and
@@ -59,7 +59,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from sim.benchtable import text_table
+from cablecheck.bench.table import text_table
 
 REPO = Path(__file__).resolve().parents[1]
 BEFORE = "c5dc43e,ab65c56"
@@ -80,10 +80,10 @@ def _export(rev: str) -> Path:
 
 _CHILD = """
 import json, sys, time
-import sim.record, sim.run
-from sim.cli import main
+import cablecheck.record.recorder, cablecheck.run.runner
+from cablecheck.cli.main import main
 cpu, wall = {}, {"open": 0.0, "close": 0.0, "build": 0.0}
-Timer = sim.run._Timer
+Timer = cablecheck.run.runner._Timer
 lap = Timer.lap
 def timed(self, stage):
     now = time.process_time()
@@ -105,9 +105,9 @@ def clock(part, f):
         finally:
             wall[part] += time.perf_counter() - t
     return clocked
-R = sim.record.Recorder
+R = cablecheck.record.recorder.Recorder
 R.__init__, R.log_static, R.close = clock("open", R.__init__), clock("open", R.log_static), clock("close", R.close)
-sim.run.build = clock("build", sim.run.build)
+cablecheck.run.runner.build = clock("build", cablecheck.run.runner.build)
 code = main(sys.argv[1:])
 print(json.dumps({"cpu": cpu, "wall": wall}))
 sys.exit(code)
@@ -148,13 +148,13 @@ COLUMNS = ("rec", "close", "frame", "open", "build", "sim", "ratio", "frame_rati
 
 def harness(durations: list[float], out: Path) -> str:
     """The harness scene's recording size per simulated second (see the module docstring)."""
-    from sim.harness import harness_scene, write_scene
+    from cablecheck.bench.harness import harness_scene, write_scene
 
     rows, sizes = [], {}
     for d in durations:
         scene = write_scene(harness_scene(64, 1000, duration=d), out / f"harness_{d:g}s.toml")
         report, record = out / f"harness_{d:g}s.json", out / f"harness_{d:g}s.rrd"
-        proc = subprocess.run([sys.executable, "-P", "-m", "sim.cli", "run", str(scene), "--report", str(report),
+        proc = subprocess.run([sys.executable, "-P", "-m", "cablecheck.cli.main", "run", str(scene), "--report", str(report),
                                "--record", str(record), "--quiet", "--fail-on", "never"], cwd=REPO,
                               env=dict(os.environ, PYTHONPATH=str(REPO)), capture_output=True, text=True, check=False)
         if proc.returncode != 0 or not record.exists():

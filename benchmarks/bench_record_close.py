@@ -9,7 +9,7 @@ it), into (ms, wall):
 
 - ``data``: the ``send_columns`` calls (rerun's Python wrapper and its
   native hand-over of each chunk);
-- ``layout``: building the blueprint (``sim.record.layout.blueprint``);
+- ``layout``: building the blueprint (``cablecheck.record.layout.blueprint``);
 - ``blueprint``: rerun's ``send_blueprint`` (a blueprint stream of its own,
   one logged entry per view, container, view property and panel, handed
   over to the recording);
@@ -47,7 +47,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from sim.benchtable import text_table
+from cablecheck.bench.table import text_table
 
 REPO = Path(__file__).resolve().parents[1]
 VARIANTS = ("as is", "no footer", "no blueprint")
@@ -56,7 +56,7 @@ PARTS = ("data", "layout", "blueprint", "finish", "replace")
 _CHILD = """
 import json, os, sys, time
 import rerun as rr
-import sim.record.recorder as R
+import cablecheck.record.recorder as R
 variant = sys.argv[1]
 wall = {k: 0.0 for k in ("close", "data", "layout", "blueprint", "finish", "replace")}
 cpu = {"close": 0.0}
@@ -93,7 +93,7 @@ def closing(self):
         cpu["close"] += time.process_time() - c
         inside[0] = False
 R.Recorder.close = closing
-from sim.cli import main
+from cablecheck.cli.main import main
 code = main(sys.argv[2:])
 print(json.dumps({"wall": wall, "cpu": cpu}))
 sys.exit(code)

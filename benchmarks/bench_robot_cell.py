@@ -21,7 +21,7 @@ running a 5 s pick-and-place. One run, recording on, gives side by side
   were all our own work free (MuJoCo's collision pass alone);
 - the real-time factor of the whole run, and how much of the run comes
   before its step loop (the report's ``loop_s``); with ``--serial`` the same run again on one thread
-  (``RunOptions.overlap`` False: no simulation stepped ahead, ``sim.ahead``)
+  (``RunOptions.overlap`` False: no simulation stepped ahead, ``cablecheck.run.ahead``)
   and the two runs' wall times side by side.
 
 The stages are CPU seconds of the thread that ran them (the report's
@@ -44,9 +44,9 @@ import tempfile
 from collections import Counter
 from pathlib import Path
 
-from sim.build import build
-from sim.run import RunOptions, run_scene
-from sim.scene import load_scene
+from cablecheck.build.stages import build
+from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.scene.load import load_scene
 
 SCENE = Path(__file__).resolve().parents[1] / "scenes" / "robot_cell.toml"
 

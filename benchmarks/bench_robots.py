@@ -376,7 +376,8 @@ def scene_for(name: str, arm: Arm, root: Path, folder: Path, rate: float | None,
     (:data:`STYLES`); its path, notes, and the held points' clearance
     (:func:`held_clearance`)."""
     import mujoco
-    from sim.harness import write_scene
+
+    from cablecheck.bench.harness import write_scene
 
     model_path = standalone(arm, root, folder)
     m = mujoco.MjModel.from_xml_path(str(model_path))
@@ -474,8 +475,8 @@ def held_points(scene_path: Path) -> tuple[list[tuple[str, float]], float, dict]
     """The hose's ends and clips (window, arc length at rest) in the built
     model, its attachment zone (arc length), and the counts of the built
     scene (checked parts, of them mesh parts, visual geoms drawn only)."""
-    from sim.build import build
-    from sim.scene import load_scene
+    from cablecheck.build.stages import build
+    from cablecheck.scene.load import load_scene
 
     built = build(load_scene(scene_path), detect=False)
     c = built.cables[0]
@@ -491,7 +492,7 @@ def held_points(scene_path: Path) -> tuple[list[tuple[str, float]], float, dict]
 def cli() -> list[str]:
     script = Path(sys.executable).parent / "cablecheck"
     return [str(script)] if script.exists() else [sys.executable, "-c",
-                                                  "import sys; from sim.cli import main; sys.exit(main())"]
+                                                  "import sys; from cablecheck.cli.main import main; sys.exit(main())"]
 
 
 def run_one(label: str, scene_path: Path, timeout: float | None = None) -> dict:

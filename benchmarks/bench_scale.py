@@ -1,9 +1,9 @@
 """Scale: harness-like scenes of 1-64 cables among 10-1,000 parts, side by side in one run.
 
-Scenes come from :func:`sim.harness.harness_scene` (cables of ``--segments``
+Scenes come from :func:`cablecheck.bench.harness.harness_scene` (cables of ``--segments``
 elements threaded through non-overlapping parts, a few within the
 clearance, one carriage rising and falling once over the run), settled for
-``--settle`` seconds before t = 0 (default :data:`sim.harness.SETTLE`, which
+``--settle`` seconds before t = 0 (default :data:`cablecheck.bench.harness.SETTLE`, which
 brings the 64 x 1,000 harness to rest; ``--settle 0`` runs them from their
 drooped routes, every cable falling into its sag over the first 0.2 s and
 swinging after). Four tables and a profile, every number measured in this
@@ -23,7 +23,7 @@ run on this machine:
    written once: the same run cut at half the duration, subtracted).
 3. ``queries``: the same cable-part state (t = 0) checked by the checker
    (``points`` and ``exact``), by MuJoCo's ``mj_collision`` on the detection
-   model and by python-fcl (:func:`sim.benchfcl.fcl_queries`), each
+   model and by python-fcl (:func:`cablecheck.bench.fcl.fcl_queries`), each
    in one process per scene.
 4. ``static``: a static check (dynamics and validation off, ``--static C,P``
    cables x parts, default 100 x 300) run by ``cablecheck run``, which then
@@ -92,8 +92,8 @@ def _mode_build(parts_file: str) -> None:
     Imports only ``checker`` (so that older revisions run it too)."""
     import numpy as np
 
-    from checker.partset import PartSet
-    from checker.shapes import Shape, ShapeType
+    from cablecheck.checker.partset import PartSet
+    from cablecheck.checker.shapes import Shape, ShapeType
 
     data = json.loads(Path(parts_file).read_text())
     shapes = [Shape(ShapeType(t), np.array(s)) for t, s in zip(data["types"], data["sizes"])]
@@ -105,19 +105,19 @@ def _mode_build(parts_file: str) -> None:
 
 def _mode_queries(scene_path: str, repeat: int) -> None:
     """The checker, mj_collision and python-fcl on the same state; print JSON."""
-    from sim.benchfcl import fcl_queries
-    from checker.scene_state import CheckConfig
-    from sim.benchsim import mujoco_side
-    from sim.scene import load_scene
+    from cablecheck.bench.fcl import fcl_queries
+    from cablecheck.bench.sim_tables import mujoco_side
+    from cablecheck.checker.scene_state import CheckConfig
+    from cablecheck.scene.load import load_scene
 
     scene = load_scene(scene_path)
     out = mujoco_side(scene, repeat)
     # python-fcl on the same cable-part (and cable-cable) queries of the same state
-    from checker.scene_state import PartState
-    from sim.build import build
-    from sim.checkview import part_shapes
-    from sim.loop import Simulation
-    from sim.stepcheck import cable_states
+    from cablecheck.build.checkview import part_shapes
+    from cablecheck.build.stages import build
+    from cablecheck.checker.scene_state import PartState
+    from cablecheck.run.loop import Simulation
+    from cablecheck.run.stepcheck import cable_states
 
     built = build(scene, detect=False)
     sim = Simulation(built)
@@ -143,18 +143,18 @@ def _mode_static(scene_path: str, with_model: bool, repeat: int) -> None:
     import mujoco
     import numpy as np
 
-    import sim.run
-    from checker.interference import Checker
-    from checker.scene_state import CheckConfig, PartState
-    from sim.checkview import part_shapes
-    from sim.run import RunOptions, run_scene
-    from sim.scene import load_scene
+    import cablecheck.run.runner
+    from cablecheck.build.checkview import part_shapes
+    from cablecheck.checker.interference import Checker
+    from cablecheck.checker.scene_state import CheckConfig, PartState
+    from cablecheck.run.runner import RunOptions, run_scene
+    from cablecheck.scene.load import load_scene
 
     def refuse(*args, **kwargs):
         raise RuntimeError("a MuJoCo model was built for a static check")
 
     if with_model:
-        sim.run.needs_model = lambda scene: True      # the run as it was: a MuJoCo build
+        cablecheck.run.runner.needs_model = lambda scene: True      # the run as it was: a MuJoCo build
     else:
         for owner, name in ((mujoco.MjSpec, "compile"), (mujoco.MjSpec, "from_string"),
                             (mujoco.MjSpec, "from_file"), (mujoco.MjModel, "from_xml_string"),
@@ -165,10 +165,10 @@ def _mode_static(scene_path: str, with_model: bool, repeat: int) -> None:
     report = run_scene(scene, RunOptions(report=folder / "r.json", record=None))
     out = {"timing": report["timing"], "events": len(report["events"]), "pairs": len(report["pairs"])}
     if not with_model:
-        from sim.benchfcl import fcl_queries
-        from sim.kinematic import KinematicSimulation
-        from sim.staticbuild import build_static
-        from sim.stepcheck import cable_states
+        from cablecheck.bench.fcl import fcl_queries
+        from cablecheck.build.static import build_static
+        from cablecheck.run.kinematic import KinematicSimulation
+        from cablecheck.run.stepcheck import cable_states
 
         built = build_static(scene)
         run = KinematicSimulation(built)
@@ -201,8 +201,8 @@ def _mode_profile(scene_path: str, top: int) -> None:
     import pstats
     import tracemalloc
 
-    from sim.run import RunOptions, run_scene
-    from sim.scene import load_scene
+    from cablecheck.run.runner import RunOptions, run_scene
+    from cablecheck.scene.load import load_scene
 
     scene = load_scene(scene_path)
     folder = Path(tempfile.mkdtemp())
@@ -275,7 +275,7 @@ def build_table(parts: list[int], before: str | None, mem_gb: float) -> tuple[st
     for label, path in trees:
         code, wall, rss, out, err = _child(["-c", "import numpy, scipy, trimesh"], path, mem_gb, 600)
         rows.append([label, "import", None, None, None, rss])
-    from sim.harness import harness_scene
+    from cablecheck.bench.harness import harness_scene
 
     for n in parts:
         data = harness_scene(64, n, duration=0.0, dynamics=False)
@@ -303,7 +303,7 @@ def run_table(grid: list[tuple[int, int]], duration: float, segments: int, mem_g
     revision (the same scene file, one process each, rows side by side),
     settled ``settle`` seconds before t = 0 (not timed per simulated second:
     the report's timing starts after it)."""
-    from sim.harness import harness_scene, write_scene
+    from cablecheck.bench.harness import harness_scene, write_scene
 
     trees = [("this checkout", REPO)]
     if before:
@@ -317,7 +317,7 @@ def run_table(grid: list[tuple[int, int]], duration: float, segments: int, mem_g
             tag = "" if k == 0 else "_before"
             rep, rec = out / f"harness_{c}x{p}{tag}.json", out / f"harness_{c}x{p}{tag}.rrd"
             rep.unlink(missing_ok=True)
-            code, wall, rss, so, se = _child(["-m", "sim.cli", "run", str(scene), "--report", str(rep),
+            code, wall, rss, so, se = _child(["-m", "cablecheck.cli.main", "run", str(scene), "--report", str(rep),
                                               "--record", str(rec)], path, mem_gb, 3600)
             if code in (0, 1) and rep.exists():
                 t = json.loads(rep.read_text())["timing"]
@@ -356,14 +356,14 @@ def run_table(grid: list[tuple[int, int]], duration: float, segments: int, mem_g
 def _growth(data: dict, size: float, duration: float, stem: Path, path: Path, mem_gb: float) -> float | None:
     """MB per simulated second by which the recording grows: the same scene
     run again for half the duration (validation off: it records nothing)."""
-    from sim.harness import write_scene
+    from cablecheck.bench.harness import write_scene
 
     half = json.loads(json.dumps(data))
     half["scene"]["duration"] = 0.5 * duration
     half["check"]["validate"] = False
     scene = write_scene(half, stem.with_suffix(".toml"))
     rec = stem.with_suffix(".rrd")
-    code, *_ = _child(["-m", "sim.cli", "run", str(scene), "--report", str(stem.with_suffix(".json")),
+    code, *_ = _child(["-m", "cablecheck.cli.main", "run", str(scene), "--report", str(stem.with_suffix(".json")),
                        "--record", str(rec)], path, mem_gb, 3600)
     if code not in (0, 1) or not rec.exists():
         return None
@@ -371,7 +371,7 @@ def _growth(data: dict, size: float, duration: float, stem: Path, path: Path, me
 
 
 def query_table(grid: list[tuple[int, int]], segments: int, mem_gb: float, out: Path) -> tuple[str, list[dict]]:
-    from sim.harness import harness_scene, write_scene
+    from cablecheck.bench.harness import harness_scene, write_scene
 
     rows, found = [], []
     me = str(Path(__file__).resolve())
@@ -397,7 +397,7 @@ def static_table(cases: list[tuple[int, int]], segments: int, mem_gb: float, out
     """Static checks (dynamics and validation off) without and with a MuJoCo
     model, and the checker beside python-fcl on the same state (see the
     module docstring)."""
-    from sim.harness import harness_scene, write_scene
+    from cablecheck.bench.harness import harness_scene, write_scene
 
     rows, found = [], []
     me = str(Path(__file__).resolve())
@@ -438,7 +438,7 @@ def main() -> int:
     ap.add_argument("--segments", type=int, default=40)
     ap.add_argument("--duration", type=float, default=None, help="simulated seconds (default 0.5; quick 0.1)")
     ap.add_argument("--settle", type=float, default=None,
-                    help="seconds settled before t = 0 in the runs and the profile (default sim.harness.SETTLE)")
+                    help="seconds settled before t = 0 in the runs and the profile (default cablecheck.bench.harness.SETTLE)")
     ap.add_argument("--harness", action="store_true", help="also run the 64 x 1,000 harness scene")
     ap.add_argument("--rec-growth", action="store_true",
                     help="also run each scene for half the duration: the recording's growth per simulated second")
@@ -471,10 +471,10 @@ def main() -> int:
     sys.path.insert(0, str(REPO))            # the parent uses this checkout (children: PYTHONPATH)
     a.out.mkdir(parents=True, exist_ok=True)
     duration = a.duration if a.duration is not None else (0.1 if a.quick else 0.5)
-    from sim.harness import SETTLE
+    from cablecheck.bench.harness import SETTLE
     settle = SETTLE if a.settle is None else a.settle
     if a.profile:
-        from sim.harness import harness_scene, write_scene
+        from cablecheck.bench.harness import harness_scene, write_scene
         c, p = a.profile
         data = harness_scene(c, p, segments=a.segments, duration=duration, settle=settle)
         data["check"]["validate"] = not a.no_validate

@@ -6,7 +6,7 @@ untimed warm-up (median, least and most, seconds of wall time):
 1. ``cablecheck check scenes/drawer.toml``;
 2. ``cablecheck run STATIC --no-record --report R``: the static check of
    ``--static C,P`` cables x primitive parts (default 100 x 300), the
-   harness scene of :func:`sim.harness.harness_scene` with no motion,
+   harness scene of :func:`cablecheck.bench.harness.harness_scene` with no motion,
    dynamics and validation off (so no MuJoCo model is built: the routes are
    checked as drooped), written here as TOML;
 3. (``--record``) the same run writing its recording as well.
@@ -61,14 +61,14 @@ BEGIN, END = "<!-- bench_startup -->", "<!-- /bench_startup -->"
 
 def static_scene(cables: int, parts: int, folder: Path) -> Path:
     """The static harness scene (see the module docstring), written to ``folder``."""
-    from sim.harness import harness_scene, write_scene
+    from cablecheck.bench.harness import harness_scene, write_scene
 
     data = harness_scene(cables, parts, segments=40, duration=0.0, dynamics=False)
     data["check"]["validate"] = False
     return write_scene(data, folder / f"static_{cables}x{parts}.toml")
 
 
-ENTRY = "import sys; from sim.cli import main; sys.exit(main())"
+ENTRY = "import sys; from cablecheck.cli.main import main; sys.exit(main())"
 """What the installed ``cablecheck`` script runs."""
 
 
@@ -240,7 +240,7 @@ def main() -> int:
     text = "\n".join([
         f"Measured {started:%Y-%m-%d %H:%M %Z} on {os.cpu_count()} cores, {a.repeat} runs per command "
         f"after one warm-up, {'sources compiled on every start' if a.no_bytecode else 'bytecode cached'}"
-        f"; static scene: {cables} cables x {parts} primitive parts (`sim.harness`, no motion, "
+        f"; static scene: {cables} cables x {parts} primitive parts (`cablecheck.bench.harness`, no motion, "
         "dynamics and validation off).",
         "",
         f"Load before: `{before_load}`; after: `{after_load}`"

@@ -5,7 +5,7 @@ cable at 8 lengths) is run three ways, side by side in one run:
 
 - serial processes: `cablecheck run` of each variant, one after another,
   each a fresh process (what a study replaces: run after run by hand);
-- serial in one process: `sim.run.run_scene` of each variant, one after
+- serial in one process: `cablecheck.run.runner.run_scene` of each variant, one after
   another (no start-up per run: the strictest baseline);
 - the study: `cablecheck study --workers 2` (one process: reading and
   checking the variants, the embedded Dask cluster's start-up, the runs,
@@ -53,12 +53,12 @@ from pathlib import Path
 
 import numpy as np
 
-from checker.cable import TAUT_STRAIN
-from sim.run import RunOptions, run_scene
-from sim.scene import load_scene, parse_scene
-from sim.study import check_variants, load_study, variants
-from sim.studyresult import COLUMNS, length_window, row_from_report
-from sim.studyplot import results_csv
+from cablecheck.checker.cable import TAUT_STRAIN
+from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.scene.load import load_scene, parse_scene
+from cablecheck.study.definition import check_variants, load_study, variants
+from cablecheck.study.plot import results_csv
+from cablecheck.study.result import COLUMNS, length_window, row_from_report
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDY = ROOT / "scenes" / "studies" / "drawer_length_study.toml"
@@ -117,9 +117,9 @@ def overheads(folder: Path) -> tuple[list[float], list[float]]:
 def same_variant_thrice(study) -> list[float]:
     """The example's variant 002 three times, one after another, on one
     fresh worker of an embedded cluster: each task's wall time on the worker."""
-    from sim.bundle import make_bundle
-    from sim.studycluster import cluster
-    from sim.studyrun import VariantTask, run_variant
+    from cablecheck.study.bundle import make_bundle
+    from cablecheck.study.cluster import cluster
+    from cablecheck.study.execute import VariantTask, run_variant
 
     found = variants(study)
     bundle, datas = make_bundle(study.scene_path, [v.data for v in found])
@@ -143,7 +143,7 @@ def scaling(repeat: int, doc: Path | None) -> None:
             for n in (1, 2) if k % 2 == 0 else (2, 1):
                 out = Path(tmp) / f"w{n}-{k}"
                 t0, c0 = time.perf_counter(), _children_cpu()
-                subprocess.run([sys.executable, "-m", "sim.cli", "study", str(STUDY), "--workers", str(n),
+                subprocess.run([sys.executable, "-m", "cablecheck.cli.main", "study", str(STUDY), "--workers", str(n),
                                 "--out", str(out), "--quiet", "--fail-on", "never"], env=env, check=True)
                 times[n].append(time.perf_counter() - t0)
                 cores[n].append((_children_cpu() - c0) / times[n][-1])
@@ -209,7 +209,7 @@ def main() -> None:
     found = variants(study)
     check_variants(study, found)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    cli = [sys.executable, "-m", "sim.cli"]
+    cli = [sys.executable, "-m", "cablecheck.cli.main"]
     print(f"{STUDY.name}: {len(found)} variants of {study.scene_path.name} "
           f"({study.vary[0].key} = {', '.join(f'{v.values[0]:g}' for v in found)}), "
           f"{os.cpu_count()} cores")

@@ -14,7 +14,7 @@ overlaps the mover's (open intervals; for the prisms, built to lie well
 inside or well outside) and its near face is within 5,000 mm; the
 first-contact travel is that face's x minus the mover's front face.
 
-Timed: `checker.sweep.sweep` with the parts prepared and placed once
+Timed: `cablecheck.checker.sweep.sweep` with the parts prepared and placed once
 (hierarchy built and reused; the paper reports 0.014 s for hits with reuse and
 0.534 s for distances), best and median of repeats; the one-off preparation
 is printed separately. Target: hits plus distances under 0.05 s.
@@ -31,9 +31,9 @@ import time
 import numpy as np
 import trimesh
 
-from checker.partset import PartSet
-from checker.shapes import Shape, ShapeType, mesh_shape
-from checker.sweep import sweep
+from cablecheck.checker.partset import PartSet
+from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape
+from cablecheck.checker.sweep import sweep
 
 TRAVEL = 5000.0
 MOVER_HALF = 50.0

@@ -2,7 +2,7 @@
 
     python benchmarks/physics_validation.py [--out docs]
 
-Runs every case of `sim.validation` (catenary sag, small-deflection
+Runs every case of `cablecheck.bench.physics_cases` (catenary sag, small-deflection
 cantilever, large-deflection elastica, hanging-chain first mode, U-cable
 swing damping, a cantilever's first-mode damping in and across its sag plane, stretch under fast ends at 5 and 20 Hz, a bowed steel rod in
 compression, the least strain of rods bowed between clamps, a perfectly
@@ -28,7 +28,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from sim import validation  # noqa: E402  (the path above makes `sim` importable from a checkout)
+from cablecheck.bench import physics_cases as validation  # noqa: E402  (the path above makes `sim` importable from a checkout)
 
 COLUMNS = ["case", "elements", "measured", "reference", "error_pct", "substeps", "wall_per_sim_s", "note"]
 

@@ -7,9 +7,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from sim.build import build
-from sim.loop import Simulation
-from sim.scene import parse_scene
+from cablecheck.build.stages import build
+from cablecheck.run.loop import Simulation
+from cablecheck.scene.load import parse_scene
 
 
 def slider_scene(tmp_path: Path, **over) -> dict:

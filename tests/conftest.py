@@ -2,7 +2,7 @@
 machine) and, under CI, with a fixed seed so a red run can be reproduced;
 MuJoCo's default warning handler writes no MUJOCO_LOG.TXT into the
 repository while the tests step models of their own (a run takes MuJoCo's
-messages itself, `sim.mjlog`)."""
+messages itself, `cablecheck.run.mjlog`)."""
 
 import os
 
@@ -19,7 +19,7 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE") or ("ci" if os.enviro
 
 @pytest.fixture(autouse=True, scope="session")
 def _no_mujoco_log_file():
-    from sim.mjlog import log_file_off
+    from cablecheck.run.mjlog import log_file_off
 
     with log_file_off():
         yield

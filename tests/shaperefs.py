@@ -4,7 +4,7 @@ Not a test file."""
 
 import numpy as np
 
-from checker.shapes import ShapeType
+from cablecheck.checker.shapes import ShapeType
 
 SIZES = {
     ShapeType.BOX: [0.3, 0.2, 0.1],

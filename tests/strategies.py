@@ -11,8 +11,8 @@ import numpy as np
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from checker.scene_state import CableState, PartState
-from checker.shapes import Shape, ShapeType
+from cablecheck.checker.scene_state import CableState, PartState
+from cablecheck.checker.shapes import Shape, ShapeType
 
 
 def coords(shape, lo: float, hi: float):

@@ -1,4 +1,4 @@
-"""Conservative advancement (checker.advance) changes no answer.
+"""Conservative advancement (cablecheck.checker.advance) changes no answer.
 
 Every example scene is run with the skip rule and checking every step in
 full; events and pairs must be identical, and validation compares exactly
@@ -9,18 +9,16 @@ the fully checked steps. The bound itself is tested module by module
 from __future__ import annotations
 
 import dataclasses
-
 from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
 from helpers import examples
+from hypothesis import given, settings, strategies as st
 
-from checker.advance import Advancement
-from sim.run import RunOptions, run_scene
-from sim.scene import load_scene
+from cablecheck.checker.advance import Advancement
+from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.scene.load import load_scene
 
 SCENES = sorted((Path(__file__).resolve().parents[1] / "scenes").glob("*.toml"))
 SKIP_CHECK_S = 2.0
@@ -255,7 +253,7 @@ def test_door_hinge_pin_never_forces_full_checks(tmp_path):
     skip = {name: rep["settings"]["advance"] for name, rep in runs.items()}
     assert skip["door"] == skip["no_allow"] == skip["no_pin"]
     # the door panel swinging away from the frame's post: its boxes stay apart
-    # at every state (checker.advance.partpairs), no full check past the first
+    # at every state (cablecheck.checker.advance.partpairs), no full check past the first
     assert skip["door"]["full_checks"] == 1
     # the pin: allowed in the scene as written, hard part-part events without the allow pairs
     pin = {(p["a"], p["b"]) for p in runs["door"]["allowed"]}
@@ -310,8 +308,8 @@ def test_harness_pairs_checked_on_their_own(tmp_path, monkeypatch):
     full check of every cable against every part. The answers are those of
     checking every step in full, with far fewer full checks than without
     promotion."""
-    from sim import stepcheck
-    from sim.harness import harness_scene, write_scene
+    from cablecheck.bench.harness import harness_scene, write_scene
+    from cablecheck.run import stepcheck
 
     data = harness_scene(9, 60, segments=12, duration=0.2)
     scene = load_scene(write_scene(data, tmp_path / "harness.toml"))

@@ -1,4 +1,4 @@
-"""The skip rule's cable-pair bound (checker.advance.cablepairs): sound on moves that fold, kink and cross.
+"""The skip rule's cable-pair bound (cablecheck.checker.advance.cablepairs): sound on moves that fold, kink and cross.
 
 Each test starts the bound from a real full check (Checker.check_with_gaps)
 and compares what it proves clear with the pairwise check at the new state.
@@ -9,15 +9,14 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from strategies import coords, polylines
 
-from checker.advance import Advancement
-from checker.closest import segment_segment
-from checker.interference import Checker
-from checker.records import PairType
-from checker.scene_state import CableState, CheckConfig
+from cablecheck.checker.advance import Advancement
+from cablecheck.checker.closest import segment_segment
+from cablecheck.checker.interference import Checker
+from cablecheck.checker.records import PairType
+from cablecheck.checker.scene_state import CableState, CheckConfig
 
 _R, _CLEAR, _H, _STRETCH = 0.01, 0.005, 0.02, 0.0025
 _NO_PARTS = np.zeros((0, 4, 4))
@@ -268,7 +267,7 @@ def test_clear_run_with_many_blocks_counts_what_one_at_a_time_would():
 
 def _clear_args(adv, pts):
     """What Advancement.clear_run hands the cable-pair conditions for states pts (S, N, 3)."""
-    from checker.advance.common import row_norm3
+    from cablecheck.checker.advance.common import row_norm3
     x = np.ascontiguousarray(np.transpose(pts, (1, 2, 0)))
     move = x - adv._pts[:, :, None]
     dq = row_norm3(move)
@@ -283,7 +282,7 @@ def test_failing_names_every_pair_clear_rejects():
     centre pair or a block pair fails (or a condition naming no pair) is
     the first state clear rejects; promoting the pairs named lets the
     states pass up to the next such condition."""
-    from checker.advance.common import leading
+    from cablecheck.checker.advance.common import leading
     rng = np.random.default_rng(8)
     grid = np.array([(x, y) for x in range(5) for y in range(4)], float) * 0.06
     cables = [np.stack([np.linspace(0.0, 1.0, 41), np.full(41, x), np.full(41, y)], axis=1) for x, y in grid]

@@ -1,16 +1,15 @@
-"""What the skip rule's modules share (checker.advance.common): brackets of arc length, norms with row_norm's bits."""
+"""What the skip rule's modules share (cablecheck.checker.advance.common): brackets of arc length, norms with row_norm's bits."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from strategies import coords, polylines
 
-from checker.advance.common import bracket, leading, row_norm3
-from checker.cable import polyline_arc_lengths
-from checker.closest import row_norm
+from cablecheck.checker.advance.common import bracket, leading, row_norm3
+from cablecheck.checker.cable import polyline_arc_lengths
+from cablecheck.checker.closest import row_norm
 
 pytestmark = pytest.mark.filterwarnings("error")
 

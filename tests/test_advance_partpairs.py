@@ -1,18 +1,17 @@
-"""The skip rule's part-pair bound (checker.advance.partpairs): box separations are lower bounds on distances."""
+"""The skip rule's part-pair bound (cablecheck.checker.advance.partpairs): box separations are lower bounds on distances."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from strategies import coords, poses
 
-from checker.advance.partpairs import PartPairGaps, PartSolids, part_pair_bounds
-from checker.parts import check_parts
-from checker.partset import PartSet
-from checker.shapes import Shape, ShapeType, mesh_shape
+from cablecheck.checker.advance.partpairs import PartPairGaps, PartSolids, part_pair_bounds
+from cablecheck.checker.parts import check_parts
+from cablecheck.checker.partset import PartSet
+from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape
 
 pytestmark = pytest.mark.filterwarnings("error")
 
@@ -451,8 +450,8 @@ def test_moving_meshes_skip_without_changing_records(v, unit, far):
     import tempfile
     from pathlib import Path
 
-    from sim.run import RunOptions, run_scene
-    from sim.scene import load_scene
+    from cablecheck.run.runner import RunOptions, run_scene
+    from cablecheck.scene.load import load_scene
 
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)

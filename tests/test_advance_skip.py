@@ -1,16 +1,16 @@
-"""The skip rule's state machine (checker.advance.skip): starts, runs of states, pieces and stretch."""
+"""The skip rule's state machine (cablecheck.checker.advance.skip): starts, runs of states, pieces and stretch."""
 
 from __future__ import annotations
 
 import numpy as np
 from test_advance_cablepairs import _CLEAR, _H, _R, _STRETCH, _hairpin
 
-from checker.advance import Advancement
-from checker.interference import Checker
-from checker.interference.hits import Gaps
-from checker.records import PairType
-from checker.scene_state import CableState, CheckConfig, PartState
-from checker.shapes import Shape, ShapeType
+from cablecheck.checker.advance import Advancement
+from cablecheck.checker.interference import Checker
+from cablecheck.checker.interference.hits import Gaps
+from cablecheck.checker.records import PairType
+from cablecheck.checker.scene_state import CableState, CheckConfig, PartState
+from cablecheck.checker.shapes import Shape, ShapeType
 
 
 def _adv(gap_cable=1.0, gap_part=1.0, bound=10.0):
@@ -190,7 +190,7 @@ def test_stretch_runs_hold_every_pair_the_stretch_protects():
     pairs' chord spans (f < e + 2 BLOCK); a stretch spread over a long cable
     passes where the cable's sum would not, one concentrated in a run does
     not."""
-    from checker.advance.cablepairs import CablePairGaps
+    from cablecheck.checker.advance.cablepairs import CablePairGaps
     rng = np.random.default_rng(4)
     for trial in range(20):
         counts = rng.integers(2, 30, size=3)

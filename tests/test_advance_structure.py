@@ -1,19 +1,18 @@
-"""The skip rule's centre-part bound (checker.advance.structure): per-centre gaps, box floors, active pairs."""
+"""The skip rule's centre-part bound (cablecheck.checker.advance.structure): per-centre gaps, box floors, active pairs."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import assume, event, given, settings
-from hypothesis import strategies as st
+from hypothesis import assume, event, given, settings, strategies as st
 from strategies import coords, rotations
 from test_advance_cablepairs import _CLEAR, _H, _R, _STRETCH
 
-from checker.advance import Advancement
-from checker.interference import Checker
-from checker.interference.hits import Gaps, PartCandidates
-from checker.scene_state import CableState, CheckConfig, PartState
-from checker.shapes import Shape, ShapeType
+from cablecheck.checker.advance import Advancement
+from cablecheck.checker.interference import Checker
+from cablecheck.checker.interference.hits import Gaps, PartCandidates
+from cablecheck.checker.scene_state import CableState, CheckConfig, PartState
+from cablecheck.checker.shapes import Shape, ShapeType
 
 
 def test_gaps_per_centre():
@@ -107,7 +106,8 @@ def _slabs_run(sparse: bool, seed: int):
     of slab 1: (gaps, states as Advancement.clear_run hands them)."""
     import pytest
     from test_advance_skip import _two_slabs
-    from checker.advance.common import row_norm3
+
+    from cablecheck.checker.advance.common import row_norm3
 
     checker, fresh, pts0, poses, offsets, radii = _two_slabs()
     with pytest.MonkeyPatch.context() as mp:
@@ -130,7 +130,7 @@ def test_failing_names_every_pair_clear_rejects():
     (centre, part) pair fails (or a condition naming no pair) is the first
     state clear rejects; once the pairs named are promoted, clear passes
     every state up to such a condition."""
-    from checker.advance.common import leading
+    from cablecheck.checker.advance.common import leading
     seen = set()
     for sparse in (False, True):
         for seed in range(16):

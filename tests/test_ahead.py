@@ -1,4 +1,4 @@
-"""sim.ahead: states made on a worker thread come out in order, errors and
+"""cablecheck.run.ahead: states made on a worker thread come out in order, errors and
 early closes reach the consumer, a set-up runs on the worker first, the
 worker's CPU time is counted (the set-up's apart), the queue is sized by the
 states' bytes and the interpreter's switch interval is put back."""
@@ -10,10 +10,9 @@ import threading
 import time
 
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from sim.ahead import AHEAD_BYTES, DEPTH, MAX_DEPTH, SWITCH_INTERVAL, StepsAhead, depth_for
+from cablecheck.run.ahead import AHEAD_BYTES, DEPTH, MAX_DEPTH, SWITCH_INTERVAL, StepsAhead, depth_for
 
 
 @settings(max_examples=25, deadline=None)

@@ -1,15 +1,14 @@
-"""Index expansion (checker.arrays) against the Python loop it replaces, and
+"""Index expansion (cablecheck.checker.arrays) against the Python loop it replaces, and
 each group's first least value against a sort."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given
-from hypothesis import strategies as st
+from hypothesis import given, strategies as st
 
-from checker import arrays
-from checker.arrays import ranges, within
+from cablecheck.checker import arrays
+from cablecheck.checker.arrays import ranges, within
 
 groups = st.lists(st.tuples(st.integers(-1000, 1000), st.integers(0, 6)), max_size=12)
 

@@ -1,5 +1,5 @@
 """Attachment windows excuse only what an end is fastened to, and say what they excused
-(sim.stepcheck.attachment_exclusions, checker.interference.excused, the report's `excused`).
+(cablecheck.run.stepcheck.attachment_exclusions, cablecheck.checker.interference.excused, the report's `excused`).
 
 A straight cable along x (no dynamics: it stays as routed) starts clamped on
 the world inside a clamp box; a second box lies beside its first elements,
@@ -23,10 +23,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.build import build
-from sim.run import RunOptions, run_scene
-from sim.scene import SceneError, load_scene
-from sim.stepcheck import attachment_exclusions
+from cablecheck.build.stages import build
+from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.run.stepcheck import attachment_exclusions
+from cablecheck.scene.errors import SceneError
+from cablecheck.scene.load import load_scene
 
 R, CLEARANCE, BESIDE_Y = 4.0, 20.0, 23.0
 

@@ -1,4 +1,4 @@
-"""sim.baseline and `cablecheck run --baseline`: clashes new, still present or resolved against an earlier run.
+"""cablecheck.report.baseline and `cablecheck run --baseline`: clashes new, still present or resolved against an earlier run.
 
 A straight cable along x (no dynamics: it stays as routed) crosses blocks
 whose places along it are known: the first scene has blocks at x = 100 and
@@ -15,10 +15,18 @@ from pathlib import Path
 
 import pytest
 
-from checker.events import Event
-from checker.records import PairType, Severity
-from sim.baseline import PLACE_RADII, Baseline, BaselineError, BaselineEvent, ClashStatus, compare, load_baseline
-from sim.cli import main
+from cablecheck.checker.events import Event
+from cablecheck.checker.records import PairType, Severity
+from cablecheck.cli.main import main
+from cablecheck.report.baseline import (
+    PLACE_RADII,
+    Baseline,
+    BaselineError,
+    BaselineEvent,
+    ClashStatus,
+    compare,
+    load_baseline,
+)
 
 BLOCK = """
 [[parts]]

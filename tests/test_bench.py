@@ -7,8 +7,8 @@ command line's wiring to the quick and full sizes is checked without
 running them. Nothing here asserts a time: timings only have to be
 positive and finite.
 
-The tables of sim.benchcheck and sim.benchsim and the figure of
-sim.benchplot are tested here, through that one tiny run; their small
+The tables of cablecheck.bench.checker_tables and cablecheck.bench.sim_tables and the figure of
+cablecheck.bench.plot are tested here, through that one tiny run; their small
 pieces have their own files (test_benchtable, test_benchscene,
 test_benchcheck, test_benchsim, test_benchfcl, test_benchplot).
 """
@@ -22,9 +22,9 @@ from pathlib import Path
 
 import pytest
 
-import sim.bench
-from sim.bench import FULL, QUICK, BenchSizes, run_bench
-from sim.cli import main
+import cablecheck.bench.command
+from cablecheck.bench.command import FULL, QUICK, BenchSizes, run_bench
+from cablecheck.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -162,7 +162,7 @@ def test_scale_side_by_side_paper_and_examples(bench):
 def test_quick_and_full_sizes_measure_what_the_tables_state():
     for sizes in (QUICK, FULL):
         assert len(sizes.scale_cables) >= 3 and len(sizes.scale_parts) >= 3
-        assert sizes.side_scene == sim.bench.TARGET_SCENE
+        assert sizes.side_scene == cablecheck.bench.command.TARGET_SCENE
         assert sizes.examples == () and "drawer" in sizes.side_examples
         assert {case for case, _, _ in sizes.paper_cases} == {"simple", "complex"}
         assert all(n > 100 and p > 200 for case, n, p in sizes.paper_cases if case == "complex")
@@ -173,13 +173,13 @@ def test_quick_and_full_sizes_measure_what_the_tables_state():
 @pytest.mark.parametrize("args, sizes", [(["--quick"], QUICK), ([], FULL)])
 def test_the_command_runs_the_quick_or_full_sizes(tmp_path: Path, monkeypatch, args, sizes):
     calls = []
-    monkeypatch.setattr(sim.bench, "run_bench", lambda s, out: calls.append((s, out)))
+    monkeypatch.setattr(cablecheck.bench.command, "run_bench", lambda s, out: calls.append((s, out)))
     assert main(["bench", *args, "--out", str(tmp_path / "b")]) == 0
     assert calls == [(sizes, tmp_path / "b")]
 
 
 def test_the_command_refuses_an_output_folder_that_is_a_file(tmp_path: Path, monkeypatch, capsys):
-    monkeypatch.setattr(sim.bench, "run_bench", lambda s, out: pytest.fail("ran"))
+    monkeypatch.setattr(cablecheck.bench.command, "run_bench", lambda s, out: pytest.fail("ran"))
     (tmp_path / "f").write_text("")
     assert main(["bench", "--quick", "--out", str(tmp_path / "f")]) == 2
     assert "--out" in capsys.readouterr().err

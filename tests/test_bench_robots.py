@@ -68,7 +68,7 @@ def test_one_arm_scene_loads(tmp_path):
     arm = bench.ZOO["panda"]
     path, _, clear = bench.scene_for("panda", arm, bench.package_root(arm.package), tmp_path, None, None)
     assert clear > 0
-    out = subprocess.run([sys.executable, "-c", "import sys; from sim.cli import main; sys.exit(main())",
+    out = subprocess.run([sys.executable, "-c", "import sys; from cablecheck.cli.main import main; sys.exit(main())",
                           "check", str(path)], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stdout + out.stderr
     assert "valid scene 'zoo-panda'" in out.stdout

@@ -1,4 +1,4 @@
-"""The checker's bench tables (sim.benchcheck): the comparison against the
+"""The checker's bench tables (cablecheck.bench.checker_tables): the comparison against the
 exact reference counts misses and false alarms as defined, and the scaling
 exponent fit recovers a power law. The tables themselves run in test_bench
 on the tiny sizes."""
@@ -7,10 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given
-from hypothesis import strategies as st
+from hypothesis import given, strategies as st
 
-from sim.benchcheck import _compare, _fit_exponent
+from cablecheck.bench.checker_tables import _compare, _fit_exponent
 
 
 def test_compare_counts_misses_false_alarms_and_the_worst_error():

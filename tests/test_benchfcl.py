@@ -1,4 +1,4 @@
-"""The collision-library side of the benchmark (sim.benchfcl): without
+"""The collision-library side of the benchmark (cablecheck.bench.fcl): without
 python-fcl it says how to install it. The comparison itself runs in
 test_bench on the tiny sizes."""
 
@@ -10,9 +10,9 @@ import pytest
 def test_without_python_fcl_the_comparison_says_how_to_install_it(monkeypatch):
     import sys
 
-    from checker.scene_state import CheckConfig
-    from sim.benchfcl import FclMissing, fcl_queries
-    from sim.benchscene import make_scene
+    from cablecheck.bench.fcl import FclMissing, fcl_queries
+    from cablecheck.bench.scenes import make_scene
+    from cablecheck.checker.scene_state import CheckConfig
 
     monkeypatch.setitem(sys.modules, "fcl", None)   # what an absent package looks like to import
     cables, parts = make_scene(n_cables=2, n_points=5, n_prims=3, n_meshes=0)

@@ -1,12 +1,12 @@
-"""The bench's figure (sim.benchplot) from small tables made here with the
+"""The bench's figure (cablecheck.bench.plot) from small tables made here with the
 bench's own columns: a PNG is written where asked, rows the side-by-side
 panel leaves out (no other time, fcl query only, detection) do no harm.
 The figure of a real (tiny) bench run is checked in test_bench."""
 
 from __future__ import annotations
 
-from sim.benchplot import plot
-from sim.benchtable import Table
+from cablecheck.bench.plot import plot
+from cablecheck.bench.table import Table
 
 
 def _tables() -> dict[str, Table]:

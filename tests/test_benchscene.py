@@ -1,4 +1,4 @@
-"""The bench's random scenes (sim.benchscene): proper rotations, the sizes
+"""The bench's random scenes (cablecheck.bench.scenes): proper rotations, the sizes
 asked for, cable points at the step asked for, the same scene for the same
 seed, and a synthetic scene through the real parser."""
 
@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from checker.shapes import ShapeType
-from sim.benchscene import RADIUS, make_scene, random_rotation, synthetic_scene
+from cablecheck.bench.scenes import RADIUS, make_scene, random_rotation, synthetic_scene
+from cablecheck.checker.shapes import ShapeType
 
 
 def test_random_rotations_are_proper():

@@ -1,11 +1,11 @@
-"""The simulation side of the benchmark (sim.benchsim): the example scenes it
+"""The simulation side of the benchmark (cablecheck.bench.sim_tables): the example scenes it
 times. Its tables run in test_bench on the tiny sizes."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from sim.benchsim import example_names
+from cablecheck.bench.sim_tables import example_names
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -1,4 +1,4 @@
-"""The bench's table pieces (sim.benchtable): rows must fit the columns, the
+"""The bench's table pieces (cablecheck.bench.table): rows must fit the columns, the
 printed block and the CSV show each value as the bench reports it, and
 `median_time` warms up once then times `repeat` calls."""
 
@@ -8,7 +8,7 @@ import csv
 
 import pytest
 
-from sim.benchtable import Table, median_time, text_table
+from cablecheck.bench.table import Table, median_time, text_table
 
 
 def test_rows_fit_the_columns_and_print_and_write_as_reported(tmp_path):

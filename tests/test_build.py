@@ -11,7 +11,7 @@ import copy
 import numpy as np
 from buildscenes import floor_scene, run_steps, slider_scene
 
-from sim.scene import parse_scene
+from cablecheck.scene.load import parse_scene
 
 
 def test_cable_is_held_at_start_end_and_clip(tmp_path):
@@ -95,7 +95,7 @@ def test_scene_far_from_origin_gives_the_same_physics(tmp_path):
 
 
 def test_cable_pressed_into_a_plane_is_measured_exactly_by_both_sides(tmp_path):
-    from sim.run import RunOptions, run_scene
+    from cablecheck.run.runner import RunOptions, run_scene
     data = floor_scene("plane", pressed=2.0)
     data["effects"]["dynamics"] = False
     report = run_scene(parse_scene(data, tmp_path / "s.toml"), RunOptions(report=tmp_path / "r.json", record=tmp_path / "r.rrd"))
@@ -117,7 +117,7 @@ def test_a_detection_model_added_later_is_the_one_build_makes(tmp_path):
     """A run builds the simulation first and adds the detection model while
     the simulation settles: the same models as `build`, the first record
     left without one."""
-    from sim.build import build, build_simulation, plan_cables, with_detection
+    from cablecheck.build.stages import build, build_simulation, plan_cables, with_detection
     scene = parse_scene(slider_scene(tmp_path), tmp_path / "s.toml")
     planned = plan_cables(scene)
     first = build_simulation(scene, planned)

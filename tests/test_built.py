@@ -1,4 +1,4 @@
-"""The built scene's records (sim.built): a cable's record agrees with itself
+"""The built scene's records (cablecheck.build.built): a cable's record agrees with itself
 (rest coordinates, held vertices, elements), and the MuJoCo-free body tree
 answers the names and counts an MjModel would."""
 
@@ -7,10 +7,10 @@ from __future__ import annotations
 import numpy as np
 from buildscenes import slider_scene
 
-from sim.build import build
-from sim.built import BodyTree
-from sim.scene import parse_scene
-from sim.staticbuild import build_static
+from cablecheck.build.built import BodyTree
+from cablecheck.build.stages import build
+from cablecheck.build.static import build_static
+from cablecheck.scene.load import parse_scene
 
 
 def test_a_cables_record_agrees_with_itself(tmp_path):

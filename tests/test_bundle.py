@@ -1,4 +1,4 @@
-"""The files that travel with a study's task (sim.bundle): meshes, MJCF
+"""The files that travel with a study's task (cablecheck.study.bundle): meshes, MJCF
 models with includes and meshdirs, example scenes; unpacked elsewhere they
 load as the originals."""
 
@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 from helpers import write_text
 
-from sim.bundle import make_bundle, materialise
-from sim.scene import load_scene, parse_scene
+from cablecheck.scene.load import load_scene, parse_scene
+from cablecheck.study.bundle import make_bundle, materialise
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 

@@ -1,10 +1,16 @@
 """Bounding-volume hierarchy: tree queries, OBB separating axes and box pairs against brute force."""
 
 import numpy as np
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from checker.bvh import Assemblies, TriangleForest, aabb_pairs, box_corners, obb_overlap, prefix_hits
+from cablecheck.checker.bvh import (
+    Assemblies,
+    TriangleForest,
+    aabb_pairs,
+    box_corners,
+    obb_overlap,
+    prefix_hits,
+)
 
 
 def _rot(rng):
@@ -138,7 +144,7 @@ def test_assemblies_and_prefix_hits():
 @settings(max_examples=200)
 @given(st.integers(0, 2**32 - 1))
 def test_assembly_pairs_equal_sort_and_sweep(seed):
-    from checker.bvh import assembly_boxes, assembly_pairs
+    from cablecheck.checker.bvh import assembly_boxes, assembly_pairs
     rng = np.random.default_rng(seed)
     n = int(rng.integers(0, 60))
     names = ["/".join([f"a{rng.integers(0, 3)}" for _ in range(rng.integers(0, 4))] + [f"p{k}"])

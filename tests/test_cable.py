@@ -2,11 +2,17 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
-from checker.cable import arc_length, bend_radius, densify, densify_batch, resample, self_pair_excluded
+from cablecheck.checker.cable import (
+    arc_length,
+    bend_radius,
+    densify,
+    densify_batch,
+    resample,
+    self_pair_excluded,
+)
 
 pytestmark = pytest.mark.filterwarnings("error")
 
@@ -82,7 +88,7 @@ def test_self_pair_rule_at_pi_r():
 
 def test_cable_measures_match_arc_length_and_bend_radius():
     """The run loop's fused pass gives the same bits as the per-cable functions."""
-    from checker.cable import CableMeasures, arc_length, bend_radius
+    from cablecheck.checker.cable import CableMeasures, arc_length, bend_radius
     rng = np.random.default_rng(0)
     for trial in range(100):
         counts = rng.integers(2, 30, rng.integers(1, 5))
@@ -102,7 +108,7 @@ def test_cable_measures_match_arc_length_and_bend_radius():
 
 def test_cable_measures_many_states_same_bits():
     """Measuring S states at once equals measuring each state on its own."""
-    from checker.cable import CableMeasures
+    from cablecheck.checker.cable import CableMeasures
     rng = np.random.default_rng(1)
     for trial in range(30):
         counts = rng.integers(2, 20, rng.integers(1, 4))
@@ -133,7 +139,7 @@ def test_arc_lengths_do_not_depend_on_the_polylines_batched_before():
 def test_element_pieces_is_densify_batchs_split(lengths, spacing):
     """element_pieces gives the number of pieces densify_batch cuts each
     element into (at least one, none longer than the spacing)."""
-    from checker.cable import element_pieces
+    from cablecheck.checker.cable import element_pieces
     pts = np.stack([np.concatenate([[0.0], np.cumsum(lengths)]), np.zeros(7), np.zeros(7)], axis=1)
     _, _, _, offsets, src, _, _ = densify_batch(pts, np.array([0, 7]), np.array([spacing]), source=True)
     made = np.bincount(src, minlength=7)[:-1]

@@ -1,4 +1,4 @@
-"""A cable's material as MuJoCo's parameters (sim.cablephysics), against the
+"""A cable's material as MuJoCo's parameters (cablecheck.build.cablephysics), against the
 beam's closed forms: the first bending mode as held, the Rayleigh damping
 ratio it sets with the integrator's own, and the edge impedance's width."""
 
@@ -12,7 +12,7 @@ import pytest
 from buildscenes import slider_scene
 from scipy.optimize import brentq
 
-from sim.cablephysics import (
+from cablecheck.build.cablephysics import (
     EDGE_IMPEDANCE,
     EDGE_YIELD,
     FIRST_BENDING_MODE,
@@ -23,7 +23,7 @@ from sim.cablephysics import (
     rayleigh_damping,
     step_damping_ratio,
 )
-from sim.scene import parse_scene
+from cablecheck.scene.load import parse_scene
 
 
 @pytest.fixture

@@ -1,4 +1,4 @@
-"""Cable plans (sim.cableplan): a points route starts exactly on its points,
+"""Cable plans (cablecheck.build.cableplan): a points route starts exactly on its points,
 is checked as given without dynamics, runs through every point with slack;
 routes the plan cannot keep are refused; the default element count and
 what counts as slack."""
@@ -9,12 +9,11 @@ import dataclasses
 
 import numpy as np
 from buildscenes import run_steps, slider_scene
-from hypothesis import given
-from hypothesis import strategies as st
+from hypothesis import given, strategies as st
 
-from sim.build import build
-from sim.cableplan import default_segments, has_slack
-from sim.scene import parse_scene
+from cablecheck.build.cableplan import default_segments, has_slack
+from cablecheck.build.stages import build
+from cablecheck.scene.load import parse_scene
 
 
 def test_points_cable_starts_exactly_on_its_points(tmp_path):
@@ -62,7 +61,7 @@ def test_points_route_with_dynamics_off_is_checked_as_given(tmp_path):
 def test_points_route_longer_than_given_with_dynamics_off_is_refused(tmp_path):
     import pytest
 
-    from sim.scene import SceneError
+    from cablecheck.scene.errors import SceneError
     data, points = _points_scene(dynamics=False, length=0.8)
     with pytest.raises(SceneError, match="checked as given") as e:
         parse_scene(data, tmp_path / "s.toml")
@@ -80,7 +79,7 @@ def test_points_route_with_slack_starts_through_every_point(tmp_path):
 def test_too_few_segments_for_the_points_is_refused(tmp_path):
     import pytest
 
-    from sim.scene import SceneError
+    from cablecheck.scene.errors import SceneError
     data, _ = _points_scene(dynamics=True, segments=6)
     with pytest.raises(SceneError, match="at least 8") as e:
         parse_scene(data, tmp_path / "s.toml")

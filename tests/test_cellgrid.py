@@ -1,14 +1,13 @@
-"""Cell grid (checker.cellgrid): pairs and near queries equal a brute-force search, exactly."""
+"""Cell grid (cablecheck.checker.cellgrid): pairs and near queries equal a brute-force search, exactly."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import example, given, settings
-from hypothesis import strategies as st
+from hypothesis import example, given, settings, strategies as st
 from strategies import coords
 
-from checker.cellgrid import CellGrid
+from cablecheck.checker.cellgrid import CellGrid
 
 pytestmark = pytest.mark.filterwarnings("error")
 

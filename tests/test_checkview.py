@@ -10,11 +10,18 @@ import numpy as np
 import pytest
 import trimesh
 
-from checker.shapes import ShapeType
-from sim.build import build
-from sim.checkview import DEFAULT_PRECISION_M, OptionError, part_set, part_shapes, rigid_groups, selection
-from sim.run import RunOptions, run_scene
-from sim.scene import parse_scene
+from cablecheck.build.checkview import (
+    DEFAULT_PRECISION_M,
+    OptionError,
+    part_set,
+    part_shapes,
+    rigid_groups,
+    selection,
+)
+from cablecheck.build.stages import build
+from cablecheck.checker.shapes import ShapeType
+from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.scene.load import parse_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -76,7 +83,7 @@ def test_run_only_unknown_is_the_runs_own_error(tmp_path):
 
 def test_the_run_does_not_import_the_sweep_command():
     """No module of a run imports the sweep command's module."""
-    code = "import sys, sim.run, sim.stepcheck, sim.record; print('sim.sweep' in sys.modules)"
+    code = "import sys, cablecheck.run.runner, cablecheck.run.stepcheck, cablecheck.record; print('cablecheck.run.sweep' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
                          env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"}, check=True)
     assert out.stdout.strip() == "False"

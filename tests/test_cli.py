@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from sim.cli import main
-from sim.run import RunOptions, run_scene
-from sim.scene import load_scene
+from cablecheck.cli.main import main
+from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.scene.load import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -70,7 +70,7 @@ def test_run_writes_report_and_recording(small_scene: Path, tmp_path: Path, caps
     cable = report["cables"][0]
     assert cable["name"] == "lead"
     assert cable["length"] == pytest.approx(260.0, rel=1e-3)
-    # 12 elements and, at each clamped end, the short held edge (sim.cableplan.clamp_edges)
+    # 12 elements and, at each clamped end, the short held edge (cablecheck.build.cableplan.clamp_edges)
     assert len(cable["rest_points"]) == 15 and len(cable["final_points"]) == 15
     # the end rides the slider: it moved 20 mm in x
     assert cable["final_points"][-1][0] - cable["rest_points"][-1][0] == pytest.approx(20.0, abs=0.5)
@@ -98,7 +98,7 @@ def test_no_record_writes_only_the_report(small_scene: Path, tmp_path: Path, mon
 def test_bad_input_exits_2_naming_file_and_key(tmp_path: Path, text: str, key: str):
     path = tmp_path / "bad.toml"
     path.write_text(text)
-    proc = subprocess.run([sys.executable, "-m", "sim.cli", "run", str(path), "--no-record"],
+    proc = subprocess.run([sys.executable, "-m", "cablecheck.cli.main", "run", str(path), "--no-record"],
                           capture_output=True, text=True, cwd=tmp_path)
     assert proc.returncode == 2
     assert str(path) in proc.stderr and key in proc.stderr
@@ -199,7 +199,7 @@ def test_ctrl_c_leaves_incomplete_report_and_readable_recording(tmp_path: Path):
     scene = tmp_path / "long.toml"
     scene.write_text(SMALL.replace("duration = 0.2", "duration = 600.0"))
     record = tmp_path / "long.rrd"
-    proc = subprocess.Popen([sys.executable, "-m", "sim.cli", "run", str(scene), "--record", str(record)],
+    proc = subprocess.Popen([sys.executable, "-m", "cablecheck.cli.main", "run", str(scene), "--record", str(record)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 60
@@ -308,7 +308,7 @@ def test_sigterm_at_any_moment_leaves_incomplete_report_and_readable_recording(t
     scene = tmp_path / "long.toml"
     scene.write_text(SMALL.replace("duration = 0.2", "duration = 600.0").replace("settle = 0.2", "settle = 1.5"))
     out = tmp_path / "out"
-    proc = subprocess.Popen([sys.executable, "-m", "sim.cli", "run", str(scene), "--record",
+    proc = subprocess.Popen([sys.executable, "-m", "cablecheck.cli.main", "run", str(scene), "--record",
                              str(out / "long.rrd"), "--quiet"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
     deadline = time.monotonic() + 60

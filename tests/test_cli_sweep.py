@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from sim.cli import main
+from cablecheck.cli.main import main
 
 SCENE = """
 [scene]

@@ -1,4 +1,4 @@
-"""`sim.cliargs`: the option types refuse what a run could not use, and the
+"""`cablecheck.cli.args`: the option types refuse what a run could not use, and the
 parser gives every sub-command its options (no run is started here)."""
 
 from __future__ import annotations
@@ -7,16 +7,9 @@ import argparse
 from pathlib import Path
 
 import pytest
-from hypothesis import given
-from hypothesis import strategies as st
+from hypothesis import given, strategies as st
 
-from sim.cliargs import (
-    build_parser,
-    nonnegative_float,
-    positive_float,
-    positive_int,
-    xyz_direction,
-)
+from cablecheck.cli.args import build_parser, nonnegative_float, positive_float, positive_int, xyz_direction
 
 
 @given(st.floats(min_value=1e-300, max_value=1e300))

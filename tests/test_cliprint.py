@@ -1,4 +1,4 @@
-"""`sim.cliprint`: what the command line prints from a finished report.
+"""`cablecheck.cli.printing`: what the command line prints from a finished report.
 
 Reports here are built by hand with only the fields the printers read; the
 end-to-end output of real runs is checked in tests/test_cli.py."""
@@ -9,11 +9,10 @@ import time
 from pathlib import Path
 
 import pytest
-from hypothesis import given
-from hypothesis import strategies as st
+from hypothesis import given, strategies as st
 
-from sim import cliprint
-from sim.cliprint import POSITION_DECIMALS, ProgressBar, print_summary, print_sweep
+from cablecheck.cli import printing as cliprint
+from cablecheck.cli.printing import POSITION_DECIMALS, ProgressBar, print_summary, print_sweep
 
 
 @given(st.lists(st.floats(min_value=-1e9, max_value=1e9), min_size=3, max_size=3),
@@ -112,9 +111,9 @@ def test_a_runs_progress_says_simulated_time_rate_and_time_left(capsys, monkeypa
 def test_a_run_stopped_before_its_first_step_prints_without_a_traceback(tmp_path: Path, capsys):
     """A stop asked while building or settling: the real report (no step
     checked, strain and bend unmeasured) prints as such."""
-    from sim.run import RunOptions, run_scene
-    from sim.scene import load_scene
-    from sim.stop import StopRequest
+    from cablecheck.run.runner import RunOptions, run_scene
+    from cablecheck.run.stop import StopRequest
+    from cablecheck.scene.load import load_scene
 
     stop = StopRequest()
     stop.asked, stop.signal_name = True, "SIGINT"

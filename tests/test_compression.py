@@ -18,20 +18,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import sim.cableplan
-from sim import validation
-from sim.build import build, cable_damping
-from sim.cablephysics import (
+import cablecheck.build.cableplan
+from cablecheck.bench import physics_cases as validation
+from cablecheck.build.cablephysics import (
     COMPRESSION_TOLERANCE,
     EDGE_IMPEDANCE,
     buckling_load,
     compression_strain,
 )
-from sim.cableplan import IMPERFECTION, imperfect
-from sim.loop import Simulation
-from sim.mjspec import set_step
-from sim.run import RunOptions, run_outcome
-from sim.scene import parse_scene
+from cablecheck.build.cableplan import IMPERFECTION, imperfect
+from cablecheck.build.mjspec import set_step
+from cablecheck.build.stages import build, cable_damping
+from cablecheck.run.loop import Simulation
+from cablecheck.run.runner import RunOptions, run_outcome
+from cablecheck.scene.load import parse_scene
 
 ROD = validation.ROD
 
@@ -125,7 +125,7 @@ def test_a_straight_rod_pushed_past_its_buckling_load_buckles():
 
 
 def test_without_the_imperfection_a_straight_rod_stays_straight(monkeypatch):
-    monkeypatch.setattr(sim.cableplan, "IMPERFECTION", 0.0)
+    monkeypatch.setattr(cablecheck.build.cableplan, "IMPERFECTION", 0.0)
     r = validation.straight_buckling(0.03, duration=0.3)
     assert r.measured == 0.0
     assert r.extra["final"] == pytest.approx(-0.03, rel=0.01)
@@ -168,12 +168,12 @@ def test_a_cable_shorter_than_the_tolerance_is_warned_about(tmp_path, monkeypatc
     """The straight rod without its imperfection is 3 % short at the end:
     the report's physics_warnings name it, the least strain and when; with
     it, no such warning."""
-    from sim.scene import load_scene
+    from cablecheck.scene.load import load_scene
     path = _push_scene(tmp_path)
     out = run_outcome(load_scene(path), RunOptions(report=tmp_path / "r.json", record=None))
     assert not [w for w in out.physics_warnings if "shorter than its length" in w]
     assert out.cables[0].max_strain > -COMPRESSION_TOLERANCE
-    monkeypatch.setattr(sim.cableplan, "IMPERFECTION", 0.0)
+    monkeypatch.setattr(cablecheck.build.cableplan, "IMPERFECTION", 0.0)
     out = run_outcome(load_scene(path), RunOptions(report=tmp_path / "r.json", record=None))
     warned = [w for w in out.physics_warnings if "shorter than its length" in w]
     assert len(warned) == 1

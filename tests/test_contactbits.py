@@ -1,4 +1,4 @@
-"""Contact bits (sim.contactbits): only the listed interactions push back,
+"""Contact bits (cablecheck.build.contactbits): only the listed interactions push back,
 and an MJCF model's own bits are kept and filter the part pairs."""
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ def test_only_listed_interactions_push_back(tmp_path):
 
 
 def test_the_models_own_bits_are_kept_and_filter_part_pairs(tmp_path):
-    from sim.stepcheck import part_pairs_skipped
+    from cablecheck.run.stepcheck import part_pairs_skipped
     built = arm_built(tmp_path, visuals=True, effects=("cable-structure", "part-part"))
     by = {p.name: p.geom_id for p in built.parts}
     m, det = built.model, built.detect

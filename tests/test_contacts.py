@@ -1,12 +1,12 @@
-"""MuJoCo's contacts mapped back to scene names (sim.contacts)."""
+"""MuJoCo's contacts mapped back to scene names (cablecheck.detection.contacts)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from sim.build import build
-from sim.loop import Simulation
-from sim.scene import load_scene
+from cablecheck.build.stages import build
+from cablecheck.run.loop import Simulation
+from cablecheck.scene.load import load_scene
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 
@@ -68,7 +68,7 @@ def test_kinds_and_names(tmp_path):
     part = [i for i, (a, b) in enumerate(zip(c.a, c.b)) if {a, b} == {"frame/block", "slider/zone"}]
     assert part and all(c.kind[i] == "keepout" and c.elem_a[i] == -1 and c.elem_b[i] == -1 for i in part)
     cable = [i for i, a in enumerate(c.a) if a == "lead"]
-    # 12 elements and the short held edge at each clamped end (sim.cableplan.clamp_edges)
+    # 12 elements and the short held edge at each clamped end (cablecheck.build.cableplan.clamp_edges)
     assert all(0 <= c.elem_a[i] < 14 and c.elem_b[i] == -1 for i in cable)
     assert abs(c.dist[cable].min() + 0.001) < 1e-6       # 2 mm above the tops minus the 3 mm radius
     # the same kinds and names as codes into the reader's table
@@ -97,7 +97,7 @@ def test_raw_contacts_are_mujocos_arrays_and_vertices_read_as_elements():
     import mujoco
     import numpy as np
 
-    from sim.contacts import ContactReader
+    from cablecheck.detection.contacts import ContactReader
 
     scene = load_scene(SCENES / "coil_self.toml")        # a coil lying on a plane, touching itself
     built = build(scene)

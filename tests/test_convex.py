@@ -3,13 +3,12 @@ the part-part records the issue of curved parts' tessellations used to miss."""
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from checker.convex import CONVEX, convex_pairs
-from checker.partset import PartSet
-from checker.parts import check_parts
-from checker.shapes import Shape, ShapeType, signed_distance_batch
+from cablecheck.checker.convex import CONVEX, convex_pairs
+from cablecheck.checker.parts import check_parts
+from cablecheck.checker.partset import PartSet
+from cablecheck.checker.shapes import Shape, ShapeType, signed_distance_batch
 
 K = {t: k for k, t in enumerate(CONVEX)}
 EYE = np.eye(3)
@@ -197,7 +196,7 @@ def test_pairs_proven_beyond_the_clearance_are_not_refined():
 def test_overlapping_curved_depth_is_close_to_a_dense_search():
     """Depth of overlapping pairs of the general rule: an upper bound (any direction's h_D is
     one), within 2 % of the least h_D over 50,000 directions spread on the sphere."""
-    from checker.convex import _fibonacci, _h_d
+    from cablecheck.checker.convex import _fibonacci, _h_d
 
     rng = np.random.default_rng(11)
     ka, sa, ra, pa, kb, sb, rb, pb = _random_pairs(rng, 400)
@@ -264,7 +263,7 @@ def test_parallel_cylinders_against_the_general_rule_and_a_dense_search():
     directions, so never above the least over 50,000 spread directions; and the general rule
     (descent on the directions, exact apart, an upper bound on the depth overlapping) on the same
     pair turned 1e-6 rad off parallel agrees with it to that tilt."""
-    from checker.convex import _fibonacci, _h_d
+    from cablecheck.checker.convex import _fibonacci, _h_d
 
     rng = np.random.default_rng(5)
     u = _fibonacci(50000)

@@ -1,14 +1,13 @@
-"""Interpolation of scripted motion (sim.curves): linear exact and held
+"""Interpolation of scripted motion (cablecheck.run.curves): linear exact and held
 outside, cubic with a continuous velocity equal to the derivative, no
 overshoot between samples, merged motions each on their own times."""
 
 from __future__ import annotations
 
 import numpy as np
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from sim.curves import interpolant, merge
+from cablecheck.run.curves import interpolant, merge
 
 
 def test_linear_is_exact_and_holds_outside():

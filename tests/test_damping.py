@@ -1,7 +1,7 @@
 """Damping as declared (issue 31, item 3): a cable's `damping` is the damping
 ratio of its own first bending mode as held, the integrator's own included.
 
-Measured on the validation's cantilever (`sim.validation.ring_down`: 0.2 m,
+Measured on the validation's cantilever (`cablecheck.bench.physics_cases.ring_down`: 0.2 m,
 r 4 mm, 400 MPa, first mode 90.8 rad/s) by the logarithmic decrement of its
 tip; docs/physics.md (Damping) has the causes and the full sweep
 (benchmarks/physics_validation.py). And what is left: MuJoCo 4's rod damping
@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from sim import validation
+from cablecheck.bench import physics_cases as validation
 
 
 @pytest.mark.parametrize("elements", [10, 20, 40, 80])

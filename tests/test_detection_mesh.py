@@ -1,4 +1,4 @@
-"""Concave mesh parts in the detection model (sim.detection_mesh): MuJoCo
+"""Concave mesh parts in the detection model (cablecheck.detection.mesh): MuJoCo
 sees the mesh's own surface, not its convex hull."""
 
 from __future__ import annotations
@@ -6,21 +6,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from sim import detection_mesh
-from sim.build import build
-from sim.detection_mesh import (
-    SURFACE_RADIUS,
-    hull_parts,
-    is_convex,
-    patches,
-    surface_geoms,
-)
-from sim.loop import Simulation
-from sim.run import RunOptions, run_scene
-from sim.scene import load_scene
+from cablecheck.build.stages import build
+from cablecheck.detection import mesh as detection_mesh
+from cablecheck.detection.mesh import SURFACE_RADIUS, hull_parts, is_convex, patches, surface_geoms
+from cablecheck.run.loop import Simulation
+from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.scene.load import load_scene
 
 # A U in the x-z plane (cm): a base 8 wide, 2 thick, and two prongs 2 wide
 # rising 6 above it, with a 4 wide pocket between them; extruded 10 along y.

@@ -1,4 +1,4 @@
-"""A run that diverges or fails says so (sim.divergence, sim.mjlog, sim.run, sim.cli):
+"""A run that diverges or fails says so (cablecheck.run.divergence, cablecheck.run.mjlog, cablecheck.run.runner, cablecheck.cli.main):
 a metre scene with a millimetre value through the command line (exit 3,
 `physics_error` naming time, cable and cause, no MUJOCO_LOG.TXT), MuJoCo's
 instability warning named down to the cable vertex, the scan of a batch on
@@ -18,14 +18,13 @@ import mujoco
 import numpy as np
 import pytest
 
-from sim.build import build
-from sim.cli import EXIT_DIVERGED, EXIT_ERROR, main
-from sim.divergence import Cause, DivergenceWatch, PhysicsError, Sign, likely_cause, unit_outliers
-from sim.loop import Simulation
-from sim.mjlog import MujocoMessages, message_kind, warning_counts
-from sim.scene import load_scene
-from sim.studyresult import row_from_report
-
+from cablecheck.build.stages import build
+from cablecheck.cli.main import EXIT_DIVERGED, EXIT_ERROR, main
+from cablecheck.run.divergence import Cause, DivergenceWatch, PhysicsError, Sign, likely_cause, unit_outliers
+from cablecheck.run.loop import Simulation
+from cablecheck.run.mjlog import MujocoMessages, message_kind, warning_counts
+from cablecheck.scene.load import load_scene
+from cablecheck.study.result import row_from_report
 from tests.test_cli import SMALL, _assert_rrd_has
 from tests.test_record import _rows
 
@@ -81,7 +80,7 @@ def test_divergent_scene_exits_3_naming_time_cable_and_units(tmp_path: Path):
     report, record = tmp_path / "out" / "r.json", tmp_path / "out" / "r.rrd"
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     env.pop("CABLECHECK_TRACEBACK", None)
-    done = subprocess.run([sys.executable, "-m", "sim.cli", "run", str(scene), "--record", str(record),
+    done = subprocess.run([sys.executable, "-m", "cablecheck.cli.main", "run", str(scene), "--record", str(record),
                            "--report", str(report), "--quiet"], cwd=tmp_path, env=env,
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == EXIT_DIVERGED, done.stderr
@@ -109,7 +108,7 @@ def test_divergent_scene_exits_3_naming_time_cable_and_units(tmp_path: Path):
 def log_file_on():
     """MuJoCo's default handler writes MUJOCO_LOG.TXT again for the test
     (the tests keep it off, tests/conftest.py)."""
-    from sim.mjlog import _set_log_file
+    from cablecheck.run.mjlog import _set_log_file
 
     old = _set_log_file(True)
     yield
@@ -122,7 +121,7 @@ def test_mujoco_instability_names_the_vertex_and_writes_no_log(tmp_path: Path, m
     routed shape), the scan names that cable vertex, the warnings are
     counted by kind and nothing is written to the working directory."""
     monkeypatch.chdir(tmp_path)
-    # damping 0: the scene step in one simulation step (no damping need, sim.substeps),
+    # damping 0: the scene step in one simulation step (no damping need, cablecheck.build.substeps),
     # so the NaN has not spread along the cable when the scan reads it
     built = build(load_scene(_scene(tmp_path, UNDAMPED)), detect=False)
     with MujocoMessages() as messages:
@@ -162,7 +161,7 @@ def test_without_the_messages_taken_mujoco_writes_its_log(tmp_path: Path, monkey
 
 
 class _State:
-    """What the scan reads of a `sim.loop.StepState`."""
+    """What the scan reads of a `cablecheck.run.loop.StepState`."""
 
     def __init__(self, step, t, cables, poses, qpos, unstable=None):
         self.step, self.t, self.cables, self.part_poses, self.qpos = step, t, cables, poses, qpos
@@ -264,7 +263,7 @@ def test_message_kinds_and_handler_restored():
 
 
 def test_forced_error_exits_4_with_the_error_in_an_incomplete_report(tmp_path: Path, monkeypatch, capsys):
-    import sim.stepcheck
+    import cablecheck.run.stepcheck
 
     calls = []
 
@@ -274,8 +273,8 @@ def test_forced_error_exits_4_with_the_error_in_an_incomplete_report(tmp_path: P
             raise IndexError("index 7 is out of bounds\n  for axis 0 with size 7")
         return real(self, batch)
 
-    real = sim.stepcheck.StepChecks.run
-    monkeypatch.setattr(sim.stepcheck.StepChecks, "run", boom)
+    real = cablecheck.run.stepcheck.StepChecks.run
+    monkeypatch.setattr(cablecheck.run.stepcheck.StepChecks, "run", boom)
     monkeypatch.delenv("CABLECHECK_TRACEBACK", raising=False)
     monkeypatch.chdir(tmp_path)
     scene = _scene(tmp_path, SMALL.replace("duration = 0.2", "duration = 1.0"))
@@ -295,12 +294,12 @@ def test_forced_error_exits_4_with_the_error_in_an_incomplete_report(tmp_path: P
 
 
 def test_error_before_any_step_exits_4_with_a_report(tmp_path: Path, monkeypatch, capsys):
-    import sim.run
+    import cablecheck.run.runner
 
     def broken(*a, **k):
         raise RuntimeError("the model builder broke")
 
-    monkeypatch.setattr(sim.run, "build_simulation", broken)
+    monkeypatch.setattr(cablecheck.run.runner, "build_simulation", broken)
     monkeypatch.setenv("CABLECHECK_TRACEBACK", "1")
     report = tmp_path / "r.json"
     assert main(["run", str(_scene(tmp_path, SMALL)), "--no-record", "--report", str(report),
@@ -330,12 +329,12 @@ def test_sound_scene_is_not_flagged(tmp_path: Path, monkeypatch):
 
 
 def test_a_command_that_fails_prints_one_line_and_exits_4(tmp_path: Path, monkeypatch, capsys):
-    import sim.sweep
+    import cablecheck.run.sweep
 
     def broken(*a, **k):
         raise ValueError("a bug, not an option")
 
-    monkeypatch.setattr(sim.sweep, "sweep_scene", broken)
+    monkeypatch.setattr(cablecheck.run.sweep, "sweep_scene", broken)
     monkeypatch.delenv("CABLECHECK_TRACEBACK", raising=False)
     code = main(["sweep", str(_scene(tmp_path, SMALL)), "--part", "frame/floor", "--direction", "0,0,1",
                  "--distance", "10", "--report", str(tmp_path / "s.json")])
@@ -350,16 +349,16 @@ def test_run_stopped_by_mujocos_instability_counts_it(tmp_path: Path, monkeypatc
     stops there (exit 3) with the warning named and counted, the rest
     state checked, and no MUJOCO_LOG.TXT although the default handler
     would write one."""
-    import sim.loop
+    import cablecheck.run.loop
 
-    settle = sim.loop.Simulation.settle
+    settle = cablecheck.run.loop.Simulation.settle
 
     def poisoned(self, *a, **k):
         settle(self, *a, **k)
         c = self.built.cables[0]
         self.data.qvel[int(self.model.body_dofadr[int(self.model.flex_vertbodyid[c.vert_adr + 5])])] = np.nan
 
-    monkeypatch.setattr(sim.loop.Simulation, "settle", poisoned)
+    monkeypatch.setattr(cablecheck.run.loop.Simulation, "settle", poisoned)
     monkeypatch.chdir(tmp_path)
     report = tmp_path / "r.json"
     assert main(["run", str(_scene(tmp_path, UNDAMPED)), "--no-record", "--report", str(report),
@@ -386,22 +385,22 @@ def test_every_sign_has_its_one_line(sign: Sign):
 
 
 def test_error_on_the_simulation_thread_exits_4(tmp_path: Path, monkeypatch):
-    """Raised while the simulation steps ahead on its own thread (sim.ahead):
+    """Raised while the simulation steps ahead on its own thread (cablecheck.run.ahead):
     handed to the run, which checks the states made before it and stops."""
-    import sim.loop
+    import cablecheck.run.loop
 
-    state = sim.loop.Simulation.state
+    state = cablecheck.run.loop.Simulation.state
 
     def broken(self, step, contacts):
         if step == 40:
             raise IndexError("a stock arm's mesh link")
         return state(self, step, contacts)
 
-    monkeypatch.setattr(sim.loop.Simulation, "state", broken)
+    monkeypatch.setattr(cablecheck.run.loop.Simulation, "state", broken)
     report = tmp_path / "r.json"
     assert main(["run", str(_scene(tmp_path, SMALL)), "--no-record", "--report", str(report),
                  "--quiet"]) == EXIT_ERROR
     r = json.loads(report.read_text())
     assert r["complete"] is False and r["error"]["type"] == "IndexError"
-    assert "sim/loop.py" in r["error"]["traceback"] or "sim\\loop.py" in r["error"]["traceback"]
+    assert "sim/run/loop.py" in r["error"]["traceback"] or "sim\\loop.py" in r["error"]["traceback"]
     assert r["settings"]["checked_steps"] <= 40 and r["settings"]["steps"] < 40

@@ -1,14 +1,13 @@
-"""Events over time and allowed pairs (checker.events)."""
+"""Events over time and allowed pairs (cablecheck.checker.events)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from checker.events import AllowList, AllowRule, EventTracker, Phase, covered, phase_of
-from checker.records import Interference, PairType, Severity, severity_of
+from cablecheck.checker.events import AllowList, AllowRule, EventTracker, Phase, covered, phase_of
+from cablecheck.checker.records import Interference, PairType, Severity, severity_of
 
 
 def _rec(kind, a, b, d, clearance=0.005):

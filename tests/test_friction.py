@@ -1,4 +1,4 @@
-"""Friction per cable and per part (`friction`, sim.mjspec): read and checked,
+"""Friction per cable and per part (`friction`, cablecheck.build.mjspec): read and checked,
 written as MuJoCo's coefficients and priorities, and measured: a short cable
 on an inclined plane (stays at 15 degrees, slides at 20 with friction 0.3,
 in every direction of the slope: elliptic cones) and a cable sliding round a
@@ -23,10 +23,12 @@ import mujoco
 import numpy as np
 import pytest
 
-from sim.build import build
-from sim.loop import Simulation
-from sim.mjspec import CABLE_PRIORITY, FRICTION_PRIORITY
-from sim.scene import SceneError, euler_matrix, parse_scene
+from cablecheck.build.mjspec import CABLE_PRIORITY, FRICTION_PRIORITY
+from cablecheck.build.stages import build
+from cablecheck.run.loop import Simulation
+from cablecheck.scene.errors import SceneError
+from cablecheck.scene.frames import euler_matrix
+from cablecheck.scene.load import parse_scene
 
 FILE = Path("/virtual/friction.toml")
 

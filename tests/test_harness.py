@@ -4,11 +4,11 @@ pairs within the clearance, and a run of a small one."""
 import numpy as np
 import pytest
 
-from checker.partset import PartSet
-from checker.parts import check_parts
-from checker.shapes import Shape, ShapeType
-from sim.harness import CLEARANCE, RADIUS, harness_scene, write_scene
-from sim.scene import load_scene
+from cablecheck.bench.harness import CLEARANCE, RADIUS, harness_scene, write_scene
+from cablecheck.checker.parts import check_parts
+from cablecheck.checker.partset import PartSet
+from cablecheck.checker.shapes import Shape, ShapeType
+from cablecheck.scene.load import load_scene
 
 
 @pytest.mark.parametrize("cables, parts", [(1, 10), (5, 60), (9, 150)])
@@ -50,7 +50,7 @@ def test_bad_sizes_are_refused():
 
 
 def test_a_small_harness_runs(tmp_path):
-    from sim.run import RunOptions, run_scene
+    from cablecheck.run.runner import RunOptions, run_scene
 
     data = harness_scene(2, 10, segments=10, duration=0.02)
     scene = load_scene(write_scene(data, tmp_path / "h.toml"))
@@ -62,9 +62,9 @@ def test_settling_brings_the_cables_to_rest(tmp_path):
     """The routes droop between via points that hold nothing: unsettled,
     the cables fall into their sag at t = 0; after SETTLE seconds of
     settling they are at rest (the carriage held still meanwhile)."""
-    from sim.build import build
-    from sim.harness import SETTLE
-    from sim.loop import Simulation
+    from cablecheck.bench.harness import SETTLE
+    from cablecheck.build.stages import build
+    from cablecheck.run.loop import Simulation
 
     def moved(settle: float) -> float:
         data = harness_scene(4, 40, segments=16, duration=0.2, settle=settle)

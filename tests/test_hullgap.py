@@ -1,4 +1,4 @@
-"""Cables the simulation holds on a concave part's convex hull (sim.hullgap)."""
+"""Cables the simulation holds on a concave part's convex hull (cablecheck.detection.hullgap)."""
 
 from __future__ import annotations
 
@@ -9,11 +9,11 @@ import pytest
 import trimesh
 from test_detection_mesh import u_mesh
 
-from sim.build import build
-from sim.contacts import Contacts
-from sim.hullgap import GAP_TOLERANCE, HullGaps, HullRaw, HullReader, watched
-from sim.run import RunOptions, run_scene
-from sim.scene import load_scene
+from cablecheck.build.stages import build
+from cablecheck.detection.contacts import Contacts
+from cablecheck.detection.hullgap import GAP_TOLERANCE, HullGaps, HullRaw, HullReader, watched
+from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.scene.load import load_scene
 
 # the U of test_detection_mesh: prongs x in [-0.04, -0.02] and [0.02, 0.04]
 # rising to z = 0.04 over a pocket whose floor is z = -0.02, 0.1 long in y;
@@ -25,7 +25,7 @@ R = 0.005
 def _scene(tmp_path, dynamics: bool = True, validate: bool = True, block: bool = False):
     """Two straight cables (r 5 mm) along y, held at y = +-0.1 (past the
     U's ends) on the hull's top (the simulation has no contact margin,
-    sim.mjspec.SIM_MARGIN_FRACTION), so each lies on the U's top: `over`
+    cablecheck.build.mjspec.SIM_MARGIN_FRACTION), so each lies on the U's top: `over`
     in the middle, above the pocket (the hull's top face spans it there: the surface is the pocket's
     walls and floor, 15 mm and more away); `flat` at x = 0.03, on a prong's
     top face, which the hull shares. `block`: a convex mesh part too, first,
@@ -88,7 +88,7 @@ def test_a_cable_on_the_hull_over_the_pocket_is_named_and_one_on_a_flat_face_is_
     assert [(e["a"], e["b"]) for e in rep["events"]] == [("flat", "u")]
     assert rep["events"][0]["min_distance"] == pytest.approx(R - gap, abs=0.02 * R)
     assert rep["validation"]["agreement"] == 1.0
-    from sim.cliprint import print_summary
+    from cablecheck.cli.printing import print_summary
     print_summary(rep, tmp_path / "r.json")
     assert f"  warning: {w}" in capsys.readouterr().out
 
@@ -159,7 +159,7 @@ def test_contacts_numbered_by_a_shared_table_give_the_gaps_their_names_give(gaps
     """Contacts carrying codes into one name table (as `ContactReader` gives
     them; a name twice, names of neither side) find the same gaps, spans
     and bounds as the same contacts by name."""
-    from checker.validation import NameTable
+    from cablecheck.checker.validation import NameTable
     table = NameTable(np.array(["part-part", "cable-structure"], object),
                       np.array(["", "u", "over", "flat", "u", "frame", "over"], object))
     rng = np.random.default_rng(3)
@@ -190,7 +190,7 @@ def test_only_active_simulation_contacts_of_cables_with_watched_hulls_are_read(g
     threshold), either side order, and drops contacts of other geoms."""
     import mujoco
 
-    from sim.loop import Simulation
+    from cablecheck.run.loop import Simulation
     sim = Simulation(gaps_built)
     sim.reset()
     sim.settle()
@@ -222,7 +222,7 @@ def test_hull_rows_of_a_mesh_part_that_is_not_watched_are_left_out(tmp_path):
 
 
 def test_many_states_raw_contacts_read_at_once_are_each_states_rows(gaps_built):
-    from sim.loop import Simulation
+    from cablecheck.run.loop import Simulation
     sim = Simulation(gaps_built)
     sim.reset()
     sim.settle()

@@ -3,16 +3,15 @@
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from test_closest import seg_seg_apart_ref
 
-from checker.cable import densify, self_pair_excluded
-from checker.closest import segment_segment
-from checker.interference import check_state
-from checker.records import PairType, Severity
-from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
-from checker.shapes import Shape, ShapeType, mesh_shape, segment_signed_distance, signed_distance
+from cablecheck.checker.cable import densify, self_pair_excluded
+from cablecheck.checker.closest import segment_segment
+from cablecheck.checker.interference import check_state
+from cablecheck.checker.records import PairType, Severity
+from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape, segment_signed_distance, signed_distance
 
 pytestmark = pytest.mark.filterwarnings("error")
 
@@ -185,7 +184,7 @@ def test_translation_and_mm_scaling_give_the_same_answers(seed, method):
         assert r1.min_distance == pytest.approx(r0.min_distance, abs=1e-9)
         # The worst place may be any of several tied ones, but it is on cable a.
         pts = by_name[r1.a].points
-        from checker.closest import point_segment
+        from cablecheck.checker.closest import point_segment
 
         n = len(pts) - 1
         d = point_segment(np.tile(r1.where - shift, (n, 1)), pts[:-1], pts[1:])[0]
@@ -241,7 +240,7 @@ def test_self_crossing_only_the_midpoint_pass_catches():
     pts = densify(np.concatenate([leg1, up, leg2[1:]]), 2 * r)[0]
     cable = CableState("loop", pts, r)
     # No two points are within 2r of each other away from neighbours...
-    from checker.cable import arc_length
+    from cablecheck.checker.cable import arc_length
 
     s = arc_length(pts)
     d = np.linalg.norm(pts[:, None] - pts[None], axis=2)
@@ -322,7 +321,7 @@ def test_exclusion_window_follows_the_material_of_a_stretched_cable(method):
     clamp block, touching the last 0.05 of the cable, is excused when the
     window is measured along the material (rest_s), not when measured along
     the current arc length (past 1.0, outside [0.8, 1.0])."""
-    from checker.interference import Checker
+    from cablecheck.checker.interference import Checker
     r = 0.004
     rest = np.linspace(0.0, 1.0, 11)
     pts = np.stack([1.1 * rest, np.zeros(11), np.zeros(11)], axis=1)

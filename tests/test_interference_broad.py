@@ -1,15 +1,14 @@
-"""Broad phase (checker.interference.broad): chunk pairs and part candidates miss nothing a brute-force search finds."""
+"""Broad phase (cablecheck.checker.interference.broad): chunk pairs and part candidates miss nothing a brute-force search finds."""
 
 import numpy as np
 import pytest
-from hypothesis import example, given, settings
-from hypothesis import strategies as st
+from hypothesis import example, given, settings, strategies as st
 from strategies import cable_sets, part_sets
 
-from checker.interference.broad import CHUNK, Chunks, chunk_part_pairs
-from checker.interference.discrete import discretise
-from checker.interference.structure import PartTable
-from checker.scene_state import CableState, CheckConfig
+from cablecheck.checker.interference.broad import CHUNK, Chunks, chunk_part_pairs
+from cablecheck.checker.interference.discrete import discretise
+from cablecheck.checker.interference.structure import PartTable
+from cablecheck.checker.scene_state import CableState, CheckConfig
 
 pytestmark = pytest.mark.filterwarnings("error")
 

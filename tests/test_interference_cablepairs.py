@@ -1,16 +1,15 @@
-"""Self and cable-cable pairs (checker.interference.cablepairs): the batched pass is the single-state check's, bit for bit."""
+"""Self and cable-cable pairs (cablecheck.checker.interference.cablepairs): the batched pass is the single-state check's, bit for bit."""
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings
-from hypothesis import strategies as st
+from hypothesis import assume, given, settings, strategies as st
 from strategies import cable_sets, coils, coords, polylines
 from test_interference import as_dict, assert_same, brute_exact, brute_points
 
-from checker.cable import densify_batch
-from checker.interference import Checker, check_state
-from checker.records import PairType
-from checker.scene_state import CableState, CheckConfig
+from cablecheck.checker.cable import densify_batch
+from cablecheck.checker.interference import Checker, check_state
+from cablecheck.checker.records import PairType
+from cablecheck.checker.scene_state import CableState, CheckConfig
 
 pytestmark = pytest.mark.filterwarnings("error")
 

@@ -1,13 +1,12 @@
-"""Discrete points (checker.interference.discrete): the batched discretisation is each state's, bit for bit."""
+"""Discrete points (cablecheck.checker.interference.discrete): the batched discretisation is each state's, bit for bit."""
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from strategies import cable_sets, coords
 
-from checker.interference.discrete import densify_many, discretise, insert_at_material
-from checker.scene_state import CableState, CheckConfig
+from cablecheck.checker.interference.discrete import densify_many, discretise, insert_at_material
+from cablecheck.checker.scene_state import CableState, CheckConfig
 
 pytestmark = pytest.mark.filterwarnings("error")
 
@@ -78,8 +77,8 @@ def test_kept_centres_give_every_record_of_the_whole_discretisation(seed):
     with a mesh, states moved a little, sparse random entries)."""
     from test_interference import random_scene
 
-    from checker.interference import Checker
-    from checker.interference.discrete import around_centres
+    from cablecheck.checker.interference import Checker
+    from cablecheck.checker.interference.discrete import around_centres
 
     rng = np.random.default_rng(700 + seed)
     cables, parts = random_scene(seed, n_cables=4, n_parts=5)

@@ -1,11 +1,10 @@
 """Exclusion windows as arrays: every selection equals the windows picked one by one."""
 
 import numpy as np
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from checker.interference.exclusions import exclusion_arrays
-from checker.scene_state import Exclusion
+from cablecheck.checker.interference.exclusions import exclusion_arrays
+from cablecheck.checker.scene_state import Exclusion
 
 CABLES = ["a", "b", "c", "d"]
 PARTS = ["p0", "p1", "p2", "q"]

@@ -1,4 +1,4 @@
-"""checker.interference.excused: each window's worst moment against a brute-force reference.
+"""cablecheck.checker.interference.excused: each window's worst moment against a brute-force reference.
 
 Random cables (polylines) in random states, boxes and spheres at random
 poses, random windows: the reference samples every element of a window
@@ -11,14 +11,13 @@ spacing of the true one (signed distance is 1-Lipschitz).
 from __future__ import annotations
 
 import numpy as np
-from hypothesis import given, settings
-from hypothesis import strategies as st
 from helpers import examples
+from hypothesis import given, settings, strategies as st
 
-from checker.interference.excused import ExcusedLog
-from checker.records import PairType
-from checker.scene_state import Exclusion, PartState
-from checker.shapes import Shape, ShapeType
+from cablecheck.checker.interference.excused import ExcusedLog
+from cablecheck.checker.records import PairType
+from cablecheck.checker.scene_state import Exclusion, PartState
+from cablecheck.checker.shapes import Shape, ShapeType
 
 SAMPLES = 4001
 

@@ -1,16 +1,10 @@
-"""Candidates to records (checker.interference.hits): the worst per pair, ties to the smallest arc lengths; the gaps."""
+"""Candidates to records (cablecheck.checker.interference.hits): the worst per pair, ties to the smallest arc lengths; the gaps."""
 
 import numpy as np
 import pytest
 
-from checker.interference.hits import (
-    TYPE_ORDER,
-    Gaps,
-    Hits,
-    PartCandidates,
-    worst_records,
-)
-from checker.records import PairType, Severity
+from cablecheck.checker.interference.hits import TYPE_ORDER, Gaps, Hits, PartCandidates, worst_records
+from cablecheck.checker.records import PairType, Severity
 
 pytestmark = pytest.mark.filterwarnings("error")
 

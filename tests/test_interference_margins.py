@@ -1,4 +1,4 @@
-"""checker.interference.margins: closest approaches against references computed another way.
+"""cablecheck.checker.interference.margins: closest approaches against references computed another way.
 
 - Random cables (polylines) in random states among boxes and spheres at
   random poses, with random attachment windows: every state sampled, each
@@ -18,14 +18,13 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
 from helpers import examples
+from hypothesis import given, settings, strategies as st
 
-from checker.interference.margins import Closest, MarginLog, per_cable, with_events
-from checker.records import PairType
-from checker.scene_state import CheckConfig, Exclusion, PartState
-from checker.shapes import Shape, ShapeType
+from cablecheck.checker.interference.margins import Closest, MarginLog, per_cable, with_events
+from cablecheck.checker.records import PairType
+from cablecheck.checker.scene_state import CheckConfig, Exclusion, PartState
+from cablecheck.checker.shapes import Shape, ShapeType
 
 SAMPLES = 801
 EXACT = CheckConfig(method="exact", clearance=0.0)

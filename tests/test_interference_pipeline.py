@@ -1,15 +1,14 @@
-"""The check pipeline (checker.interference.pipeline): a reused Checker, and the gaps it returns."""
+"""The check pipeline (cablecheck.checker.interference.pipeline): a reused Checker, and the gaps it returns."""
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from strategies import cable_sets, part_sets
 
-from checker.interference import Checker, check_state
-from checker.records import PairType
-from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
-from checker.shapes import Shape, ShapeType
+from cablecheck.checker.interference import Checker, check_state
+from cablecheck.checker.records import PairType
+from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+from cablecheck.checker.shapes import Shape, ShapeType
 
 pytestmark = pytest.mark.filterwarnings("error")
 

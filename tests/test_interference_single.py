@@ -1,15 +1,14 @@
-"""Bend and taut (checker.interference.single): the batched records are the single-state check's, bit for bit."""
+"""Bend and taut (cablecheck.checker.interference.single): the batched records are the single-state check's, bit for bit."""
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from strategies import coords, polylines
 
-from checker.cable import CableMeasures
-from checker.interference import Checker, single_records_many
-from checker.records import PairType
-from checker.scene_state import CableState, CheckConfig
+from cablecheck.checker.cable import CableMeasures
+from cablecheck.checker.interference import Checker, single_records_many
+from cablecheck.checker.records import PairType
+from cablecheck.checker.scene_state import CableState, CheckConfig
 
 pytestmark = pytest.mark.filterwarnings("error")
 

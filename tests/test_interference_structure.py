@@ -1,16 +1,15 @@
-"""Cables against parts (checker.interference.structure): the batched pass is the single-state check's, bit for bit."""
+"""Cables against parts (cablecheck.checker.interference.structure): the batched pass is the single-state check's, bit for bit."""
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from strategies import cable_sets, coords, part_sets, poses
 from test_interference import pose, random_scene, rot
 
-from checker.interference import Checker
-from checker.records import PairType
-from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
-from checker.shapes import Shape, ShapeType
+from cablecheck.checker.interference import Checker
+from cablecheck.checker.records import PairType
+from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+from cablecheck.checker.shapes import Shape, ShapeType
 
 pytestmark = pytest.mark.filterwarnings("error")
 
@@ -108,7 +107,7 @@ def test_active_points_is_the_dense_mask(data):
     """active_points' runs equal marking every (centre, part) entry in a
     dense parts x centres table and reading each point's own centre (and,
     inside an element, the next one): the same pairs, in the same order."""
-    from checker.interference.structure import active_points
+    from cablecheck.checker.interference.structure import active_points
 
     cuts = data.draw(st.lists(st.integers(2, 5), min_size=1, max_size=3))      # centres per cable
     n = sum(cuts)
@@ -131,7 +130,7 @@ def test_active_points_is_the_dense_mask(data):
 
 def test_active_points_on_densified_states():
     """The same on real discrete points (densify_many of random cables, several states)."""
-    from checker.interference.structure import active_points
+    from cablecheck.checker.interference.structure import active_points
 
     rng = np.random.default_rng(3)
     cables, parts = random_scene(4, n_cables=3, n_parts=5)
@@ -161,8 +160,8 @@ def test_near_entries_drop_only_entries_no_point_of_which_passes_the_box(cables,
     clearance; and structure_many on the entries it keeps, with the
     points of their elements alone, gives every state's records of all
     the entries, bits and places included."""
-    from checker.interference.discrete import around_centres
-    from checker.interference.structure import active_points
+    from cablecheck.checker.interference.discrete import around_centres
+    from cablecheck.checker.interference.structure import active_points
 
     cfg = CheckConfig(clearance=data.draw(st.floats(0.0, 0.02)))
     checker = Checker(parts, cfg)

@@ -1,4 +1,4 @@
-"""Joint space of a run (sim.jointspace) on the example arm: joint values in
+"""Joint space of a run (cablecheck.run.jointspace) on the example arm: joint values in
 degrees at the worst moment, the link a pair rides on with the joints that
 move it (nearest first), and ranges over an event that equal a dense
 brute-force scan of the script."""
@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.build import build
-from sim.jointspace import JointLog
-from sim.motion import Motion
-from sim.scene import load_scene
+from cablecheck.build.stages import build
+from cablecheck.run.jointspace import JointLog
+from cablecheck.run.motion import Motion
+from cablecheck.scene.load import load_scene
 
 ARM = Path(__file__).resolve().parents[1] / "scenes" / "arm.toml"
 

@@ -6,14 +6,13 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from sim.build import build
-from sim.kinematic import KinematicSimulation, place
-from sim.loop import Simulation
-from sim.scene import parse_scene
-from sim.staticbuild import build_static
+from cablecheck.build.stages import build
+from cablecheck.build.static import build_static
+from cablecheck.run.kinematic import KinematicSimulation, place
+from cablecheck.run.loop import Simulation
+from cablecheck.scene.load import parse_scene
 
 coord = st.floats(-1.0, 1.0, allow_nan=False)
 angle = st.floats(-180.0, 180.0, allow_nan=False)

@@ -9,10 +9,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from sim.build import build
-from sim.loop import Simulation, script_times
-from sim.motion import Motion
-from sim.scene import euler_matrix, parse_scene
+from cablecheck.build.stages import build
+from cablecheck.run.loop import Simulation, script_times
+from cablecheck.run.motion import Motion
+from cablecheck.scene.frames import euler_matrix
+from cablecheck.scene.load import parse_scene
 
 
 def _door(contact: bool) -> dict:
@@ -96,7 +97,7 @@ def _robot_cell(duration: float):
     """The robot cell example (concave meshes seen as patches), shortened."""
     import dataclasses
 
-    from sim.scene import load_scene
+    from cablecheck.scene.load import load_scene
     scene = load_scene(Path(__file__).resolve().parents[1] / "scenes" / "robot_cell.toml")
     return dataclasses.replace(scene, duration=duration, settle=0.02)
 

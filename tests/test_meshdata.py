@@ -1,11 +1,11 @@
-"""A mesh's acceleration data (checker.meshdata): closure decides the sign,
+"""A mesh's acceleration data (cablecheck.checker.meshdata): closure decides the sign,
 and the reach classes still find every point's and segment's nearest triangle."""
 
 import numpy as np
 import pytest
 import trimesh
 
-from checker.shapes import mesh_shape, signed_distance
+from cablecheck.checker.shapes import mesh_shape, signed_distance
 
 pytestmark = pytest.mark.filterwarnings("error")
 
@@ -23,8 +23,8 @@ def test_sliver_mesh_nearest_and_segment_distance_are_the_brute_force_ones():
     """A CAD-style tessellation: a finely meshed cylinder wall plus long slivers
     (flat caps fanned from one corner). The reach classes must still find
     the nearest triangle of every point and segment that every triangle tried finds."""
-    from checker import meshnearest, segments
-    from checker.closest import point_triangle, segment_triangle
+    from cablecheck.checker import meshnearest, segments
+    from cablecheck.checker.closest import point_triangle, segment_triangle
     rng = np.random.default_rng(7)
     wall = trimesh.creation.cylinder(0.04, 0.2, sections=96)
     fine = wall.subdivide()
@@ -59,7 +59,7 @@ def test_limit_with_the_callers_lower_bounds_is_the_same_answer():
     """signed_distance with a limit and the lower bounds the caller took from
     distance_bounds answers as with the limit alone: exact below the limit,
     the same bound beyond it."""
-    from checker.shapes import distance_bounds
+    from cablecheck.checker.shapes import distance_bounds
     rng = np.random.default_rng(11)
     shape = mesh_shape(*(lambda m: (m.vertices, m.faces))(trimesh.creation.icosphere(2, 0.05)))
     p = rng.normal(size=(400, 3)) * 0.05

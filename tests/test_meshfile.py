@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 import trimesh
 
-from sim.cli import main
-from sim.meshfile import MeshFileError, mesh_nodes
-from sim.scene import SceneError, load_scene
+from cablecheck.cli.main import main
+from cablecheck.scene.errors import SceneError
+from cablecheck.scene.load import load_scene
+from cablecheck.scene.meshfile import MeshFileError, mesh_nodes
 
 SCENE = """
 [scene]

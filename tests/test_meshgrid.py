@@ -1,20 +1,19 @@
-"""The bound grid (checker.meshgrid): nearest triangles through its candidate
+"""The bound grid (cablecheck.checker.meshgrid): nearest triangles through its candidate
 lists and its lower bounds under a limit, against brute force."""
 
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from shaperefs import winding_number
 
-from checker.shapes import Shape, ShapeType, mesh_shape, signed_distance
+from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape, signed_distance
 
 pytestmark = pytest.mark.filterwarnings("error")
 
 
 def _brute_signed(m, shape, p):
-    from checker.closest import point_triangle
+    from cablecheck.checker.closest import point_triangle
     md = shape.mesh
     rows = np.repeat(np.arange(len(p)), len(md.faces))
     fi = np.tile(np.arange(len(md.faces)), len(p))

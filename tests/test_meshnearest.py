@@ -1,4 +1,4 @@
-"""Nearest triangles and their sign (checker.meshnearest): the brute-force
+"""Nearest triangles and their sign (cablecheck.checker.meshnearest): the brute-force
 nearest over every triangle, both roads (triangle boxes and centroid tree),
 the winding number's inside, and a box mesh against the box primitive."""
 
@@ -9,7 +9,7 @@ import pytest
 import trimesh
 from shaperefs import winding_number
 
-from checker.shapes import Shape, ShapeType, mesh_shape, signed_distance
+from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape, signed_distance
 
 pytestmark = pytest.mark.filterwarnings("error")
 
@@ -28,7 +28,7 @@ def test_box_mesh_equals_box_primitive():
 
 
 def test_torus_mesh_matches_brute_force():
-    from checker.closest import point_triangle
+    from cablecheck.checker.closest import point_triangle
 
     m = trimesh.creation.torus(0.08, 0.02, major_sections=40, minor_sections=16)
     shape = mesh_shape(m.vertices, m.faces)
@@ -49,8 +49,8 @@ def test_torus_mesh_matches_brute_force():
 def test_small_mesh_nearest_is_the_brute_force_nearest(monkeypatch):
     """Low-poly meshes take the triangle-box road in mesh_nearest: the same
     distances as every triangle tried, and the same as the centroid-tree road."""
-    from checker import meshnearest
-    from checker.closest import point_triangle
+    from cablecheck.checker import meshnearest
+    from cablecheck.checker.closest import point_triangle
     rng = np.random.default_rng(4)
     for mesh in (trimesh.creation.box([0.04, 0.03, 0.05]), trimesh.creation.icosphere(0, 0.02),
                  trimesh.load(Path(__file__).resolve().parents[1] / "scenes" / "meshes" / "l_bracket.stl")):

@@ -1,4 +1,4 @@
-"""The scene written as MuJoCo models (sim.mjspec): euler angles as
+"""The scene written as MuJoCo models (cablecheck.build.mjspec): euler angles as
 quaternions, parts placed and sized as the scene says (relative to the
 model's origin), planes drawn with a positive grid, the two models' margins,
 and the step's time constants set together."""
@@ -12,11 +12,12 @@ from buildscenes import slider_scene
 from hypothesis import given
 from strategies import coords
 
-from sim.build import build
-from sim.built import CABLE_PREFIX
-from sim.cablephysics import contact_time_constant, edge_time_constant
-from sim.mjspec import PLANE_GRID, SIM_MARGIN_FRACTION, euler_quat, part_size, set_step
-from sim.scene import euler_matrix, parse_scene
+from cablecheck.build.built import CABLE_PREFIX
+from cablecheck.build.cablephysics import contact_time_constant, edge_time_constant
+from cablecheck.build.mjspec import PLANE_GRID, SIM_MARGIN_FRACTION, euler_quat, part_size, set_step
+from cablecheck.build.stages import build
+from cablecheck.scene.frames import euler_matrix
+from cablecheck.scene.load import parse_scene
 
 
 @given(coords(3, -720.0, 720.0))
@@ -75,8 +76,8 @@ def test_the_detection_model_computes_no_edge_jacobians_and_finds_the_same_conta
     import dataclasses
     from pathlib import Path as P
 
-    from sim.loop import Simulation
-    from sim.scene import load_scene
+    from cablecheck.run.loop import Simulation
+    from cablecheck.scene.load import load_scene
     scene = load_scene(P(__file__).resolve().parents[1] / "scenes" / "robot_cell.toml")
     built = build(dataclasses.replace(scene, duration=0.04, settle=0.02))   # hoses on an arm, always in contact
     m = built.detect

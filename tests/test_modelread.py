@@ -1,4 +1,4 @@
-"""Reading the compiled model back (sim.modelread): mesh parts, visual geoms
+"""Reading the compiled model back (cablecheck.build.modelread): mesh parts, visual geoms
 (drawn, never parts, names stable), the model's own excluded pairs."""
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ import numpy as np
 import trimesh
 from buildscenes import arm_built, arm_scene, run_steps, slider_scene
 
-from sim.build import build
-from sim.loop import Simulation
-from sim.scene import parse_scene
+from cablecheck.build.stages import build
+from cablecheck.run.loop import Simulation
+from cablecheck.scene.load import parse_scene
 
 
 def test_mesh_part_matches_box_part(tmp_path):
@@ -36,7 +36,7 @@ def test_mesh_part_matches_box_part(tmp_path):
 def test_visual_geoms_are_drawn_never_parts_and_names_do_not_move(tmp_path):
     """A model with and without its visual geoms gives the same parts, names
     and skipped pairs; the visual geoms are listed to be drawn."""
-    from sim.stepcheck import part_pairs_skipped
+    from cablecheck.run.stepcheck import part_pairs_skipped
     bare, dressed = arm_built(tmp_path, visuals=False), arm_built(tmp_path, visuals=True)
     names = [p.name for p in bare.parts]
     assert names == [p.name for p in dressed.parts]
@@ -50,7 +50,7 @@ def test_visual_geoms_are_drawn_never_parts_and_names_do_not_move(tmp_path):
 
 
 def test_model_exclude_pairs_are_honoured(tmp_path):
-    from sim.stepcheck import part_pairs_skipped
+    from cablecheck.run.stepcheck import part_pairs_skipped
     plain = arm_built(tmp_path, visuals=False)
     excluded = arm_built(tmp_path, visuals=False, contact='<contact><exclude body1="link" body2="post"/></contact>')
     for built, expect in ((plain, False), (excluded, True)):

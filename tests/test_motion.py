@@ -1,5 +1,5 @@
 """Scripted motion: what Motion hands to MuJoCo, joint values in events.
-Interpolation (sim.curves) is tested in test_curves."""
+Interpolation (cablecheck.run.curves) is tested in test_curves."""
 
 from __future__ import annotations
 
@@ -11,10 +11,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from sim.build import build
-from sim.cli import main
-from sim.motion import Motion, body_rate
-from sim.scene import euler_matrix, load_scene
+from cablecheck.build.stages import build
+from cablecheck.cli.main import main
+from cablecheck.run.motion import Motion, body_rate
+from cablecheck.scene.frames import euler_matrix
+from cablecheck.scene.load import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 ARM_XML = ROOT / "scenes" / "arm.xml"

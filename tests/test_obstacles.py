@@ -1,12 +1,12 @@
-"""Drooping clear of the parts (sim.obstacles): a cable along a floor, box or
+"""Drooping clear of the parts (cablecheck.build.obstacles): a cable along a floor, box or
 plane, starts and stays on it."""
 
 from __future__ import annotations
 
 from buildscenes import floor_scene, run_steps, slider_scene
 
-from sim.build import build
-from sim.scene import parse_scene
+from cablecheck.build.stages import build
+from cablecheck.scene.load import parse_scene
 
 
 def test_cable_along_a_floor_starts_and_stays_on_it(tmp_path):

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from sim.outputs import OutputPathError, check_folder, check_output
+from cablecheck.report.outputs import OutputPathError, check_folder, check_output
 
 
 def test_a_new_file_in_a_new_folder_is_fine(tmp_path: Path):

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 import trimesh
 
-from checker.partset import PartSet
-from checker.parts import PartChecker, check_parts
-from checker.shapes import Shape, ShapeType, mesh_shape
-from checker.tessellate import part_surface
+from cablecheck.checker.parts import PartChecker, check_parts
+from cablecheck.checker.partset import PartSet
+from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape
+from cablecheck.checker.tessellate import part_surface
 
 
 def pose(x=0.0, y=0.0, z=0.0):
@@ -147,7 +147,7 @@ def test_tessellation_error_bound_holds():
         assert surf.closed and 0 < surf.error <= 2e-3
         tm = trimesh.Trimesh(surf.vertices, surf.faces)
         pts, _ = trimesh.sample.sample_surface(tm, 4000, seed=1)
-        from checker.shapes import signed_distance
+        from cablecheck.checker.shapes import signed_distance
         sd, _ = signed_distance(shape, pts)
         assert np.all(sd <= 1e-12) and -sd.min() <= surf.error + 1e-12
     assert part_surface(CUBE, 1e-3).error == 0.0
@@ -210,7 +210,7 @@ def test_assembly_pruning_gives_identical_records(seed):
 def test_batched_probes_equal_pair_by_pair(seed):
     """probes_inside_batch (all pairs in one array, one call per shape type or
     mesh) gives exactly probes_inside pair by pair; check_parts uses it."""
-    from checker.sweep import probes_inside, probes_inside_batch
+    from cablecheck.checker.sweep import probes_inside, probes_inside_batch
 
     rng = np.random.default_rng(seed)
     ico = trimesh.creation.icosphere(1, 0.3)
@@ -293,8 +293,12 @@ def test_pairs_at_many_states_are_each_states_own_check(seed):
 # ---- assemblies against an independent reference (python-fcl, closed forms) ----
 
 import fcl  # noqa: E402
-from hypothesis import example, given, settings  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
+from hypothesis import (  # noqa: E402
+    example,
+    given,
+    settings,
+    strategies as st,  # noqa: E402
+)
 from strategies import rotations  # noqa: E402
 
 _PLATE = trimesh.creation.box((60.0, 40.0, 5.0))

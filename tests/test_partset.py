@@ -3,13 +3,12 @@ answer box queries as brute force does."""
 
 import numpy as np
 import trimesh
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from checker.bvh import LEAF_SIZE, TriangleForest
-from checker.partset import PROBE_DEPTH, PartSet
-from checker.shapes import Shape, ShapeType, mesh_shape
-from checker.tessellate import part_surface
+from cablecheck.checker.bvh import LEAF_SIZE, TriangleForest
+from cablecheck.checker.partset import PROBE_DEPTH, PartSet
+from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape
+from cablecheck.checker.tessellate import part_surface
 
 TOL = 5e-3
 
@@ -111,7 +110,7 @@ def test_solids_of_revolution_about_their_z_axis():
     square one), a flattened ellipsoid, a mesh and a plane are not marked.
     Checked on the shapes' own signed distances: turning points about z
     changes none of an axial part's."""
-    from checker.shapes import signed_distance
+    from cablecheck.checker.shapes import signed_distance
 
     box = trimesh.creation.box(extents=[1, 1, 1])
     shapes = [Shape(ShapeType.SPHERE, [0.3]), Shape(ShapeType.CAPSULE, [0.2, 0.4]),

@@ -1,4 +1,4 @@
-"""The cable model against closed-form answers (sim.validation runs each case
+"""The cable model against closed-form answers (cablecheck.bench.physics_cases runs each case
 through the real scene parser, builder and step loop; docs/physics.md has the
 same cases per element count, from benchmarks/physics_validation.py).
 
@@ -13,11 +13,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim import reference, validation
-from sim.build import build, default_segments
-from sim.loop import Simulation
-from sim.run import RunOptions, run_scene
-from sim.scene import parse_scene
+from cablecheck.bench import physics_cases as validation, reference
+from cablecheck.build.cableplan import default_segments
+from cablecheck.build.stages import build
+from cablecheck.run.loop import Simulation
+from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.scene.load import parse_scene
 
 
 def _clean(result: validation.Result) -> validation.Result:
@@ -167,7 +168,7 @@ def test_plate_at_three_metres_per_second_carries_the_cable():
     """A 10 mm plate lifted at 3 m/s through a sagging cable carries it (it
     went through at 2 m/s before); at 8 m/s it would move 16 mm in the 2 ms
     step, four cable radii: the step is divided (the part moves at most a
-    radius a step, `sim.substeps.CONTACT_FRACTION`) and the cable is carried."""
+    radius a step, `cablecheck.build.substeps.CONTACT_FRACTION`) and the cable is carried."""
     r = _clean(validation.plate(3.0))
     assert r.measured == 1.0 and not r.extra["warned"] and r.substeps == 2
     fast = _clean(validation.plate(8.0))

@@ -1,4 +1,4 @@
-"""Primitive point distances (checker.primitives, through checker.shapes):
+"""Primitive point distances (cablecheck.checker.primitives, through cablecheck.checker.shapes):
 consistency, optimality against dense surface samples, exact zeros, degenerate
 points, half-space, face planes, translation and scale."""
 
@@ -7,11 +7,10 @@ from decimal import Decimal, localcontext
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from shaperefs import SIZES
 
-from checker.shapes import Shape, ShapeType, face_plane_distance, signed_distance
+from cablecheck.checker.shapes import Shape, ShapeType, face_plane_distance, signed_distance
 
 pytestmark = pytest.mark.filterwarnings("error")
 
@@ -233,7 +232,7 @@ def _near_points(draw, e):
 @settings(max_examples=300, deadline=None)
 @given(st.data())
 def test_ellipsoid_matches_a_high_precision_reference_near_the_centre(data):
-    from checker.primitives import sd_ellipsoid
+    from cablecheck.checker.primitives import sd_ellipsoid
 
     e = data.draw(_radii())
     p = data.draw(_near_points(e))
@@ -254,7 +253,7 @@ def test_ellipsoid_closed_forms_near_the_centre(b, ratio, lg, ang, w):
     the third a >= b): on its equal radii's plane d = |p| - b; on its long
     axis, d = -b sqrt(1 - y^2 / (a^2 - b^2)) inside the medial segment
     (|y| < (a^2 - b^2) / a), |y| - a past it."""
-    from checker.primitives import sd_ellipsoid
+    from cablecheck.checker.primitives import sd_ellipsoid
 
     r = 10.0**lg * b
     ball = np.array([[b, b, b]] * 3)

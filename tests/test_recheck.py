@@ -1,4 +1,4 @@
-"""Second opinions on one pair (checker.recheck), against closed forms: a
+"""Second opinions on one pair (cablecheck.checker.recheck), against closed forms: a
 sparse straight cable past a sphere and across another cable measured
 exactly; a cable through the pocket of an L bracket clear of the mesh but
 inside its convex hull; a batch's answers those of each state alone."""
@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 import trimesh
 
-from checker.recheck import Recheck, convex_hull_shape
-from checker.records import PairType
-from checker.scene_state import CableState, CheckConfig, PartState
-from checker.shapes import Shape, ShapeType, mesh_shape, signed_distance
+from cablecheck.checker.recheck import Recheck, convex_hull_shape
+from cablecheck.checker.records import PairType
+from cablecheck.checker.scene_state import CableState, CheckConfig, PartState
+from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape, signed_distance
 
 BRACKET = trimesh.load(Path(__file__).resolve().parents[1] / "scenes" / "meshes" / "l_bracket.stl")  # mm
 CS, CC = PairType.CABLE_STRUCTURE, PairType.CABLE_CABLE

@@ -1,4 +1,4 @@
-"""sim.record: the clash review recording, read back with rerun's own reader.
+"""cablecheck.record: the clash review recording, read back with rerun's own reader.
 
 The runs are the example scenes; every assertion reads the written .rrd
 through `rerun.chunk.RrdReader` (the SDK's reader of recordings), never the
@@ -16,10 +16,21 @@ import pyarrow as pa
 import pytest
 from rerun.chunk import RrdReader
 
-from sim.cli import main, version
-from sim.record import (CABLE_PALETTE, CLASH_COLUMNS, CONTACT_COLOUR, FLOOR, FLOOR_DIMMED, KEEPOUT_COLOUR, PART_COLOUR,
-                        SPOT, STATE_COLOURS, cable_colour, wear_colours)
-from sim.record.style import pair_path
+from cablecheck.cli.main import main, version
+from cablecheck.record.layout import CLASH_COLUMNS
+from cablecheck.record.style import (
+    CABLE_PALETTE,
+    CONTACT_COLOUR,
+    FLOOR,
+    FLOOR_DIMMED,
+    KEEPOUT_COLOUR,
+    PART_COLOUR,
+    SPOT,
+    STATE_COLOURS,
+    cable_colour,
+    pair_path,
+)
+from cablecheck.record.wearview import wear_colours
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -274,7 +285,7 @@ def _clash_list(tmp_path: Path, events: list, unit: float, units: str, status=No
 
     import rerun as rr
 
-    from sim.record.clashes import send_clash_list
+    from cablecheck.record.clashes import send_clash_list
     path = tmp_path / f"list_{units}.rrd"
     rec = rr.RecordingStream(application_id="list", recording_id=uuid.uuid4())
     rec.save(str(path))
@@ -314,7 +325,7 @@ def test_the_clash_list_reads_at_a_glance_with_shared_prefixes(tmp_path: Path):
 
 
 def test_short_names_keep_the_levels_that_tell_names_apart():
-    from sim.record.style import short_names
+    from cablecheck.record.style import short_names
     got = short_names(["machine/frame/upright_1", "machine/frame/upright_2", "left/rail", "right/rail", "hose",
                        "drawer/back"])
     assert got == {"machine/frame/upright_1": "upright_1", "machine/frame/upright_2": "upright_2",
@@ -406,7 +417,7 @@ def test_wear_is_on_one_scale_for_the_run_with_a_noise_floor():
     """The same sliding is the same colour on two cables, whichever slid
     most; the top of the scale is the run's most; sliding at or below the
     floor (rounding noise: 9e-16 m here) is grey like no contact."""
-    from sim.record.wearview import ROUNDING_ULPS, SLIDING_FLOOR, wear_scale
+    from cablecheck.record.wearview import ROUNDING_ULPS, SLIDING_FLOOR, wear_scale
     a = _Wear("a", [0.0, 9e-16, 0.002, 0.010], [0.0, 0.5, 0.5, 0.5])
     b = _Wear("b", [0.002, 0.030, 0.0], [0.5, 0.5, 0.5])
     steps, extent = 1000, 0.5
@@ -570,7 +581,7 @@ def test_a_series_keeps_only_what_changes_and_its_line_stays_within_a_bin():
     """A still stretch, a parabola and a break: few rows, the drawn line within
     the resolution of every value, breaks, ends and extremes kept; a brute-force
     reference (every value against the line through the kept ones)."""
-    from sim.record.series import RESOLUTION, changes
+    from cablecheck.record.series import RESOLUTION, changes
     rng = np.random.default_rng(7)
     t = np.sort(rng.uniform(0.0, 1.0, 400))
     v = np.where(t < 0.3, 5.0, 5.0 - 8.0 * (t - 0.3) ** 2) + 1e-7 * rng.standard_normal(400)
@@ -589,7 +600,7 @@ def test_a_series_keeps_only_what_changes_and_its_line_stays_within_a_bin():
 
 
 def test_many_series_at_once_are_each_on_its_own():
-    from sim.record.series import changes, changes_many
+    from cablecheck.record.series import changes, changes_many
     rng = np.random.default_rng(11)
     ts = [np.sort(rng.uniform(0, 1, n)) for n in (1, 2, 7, 64, 300)]
     vs = [np.cumsum(rng.standard_normal(len(t))) * s for t, s in zip(ts, (1.0, 0.0, 1e3, 1e-6, 1.0))]
@@ -600,7 +611,7 @@ def test_many_series_at_once_are_each_on_its_own():
 
 
 def test_plane_is_drawn_sized_to_the_scene_or_as_given():
-    from sim.record import plane_half_sizes
+    from cablecheck.record.scene import plane_half_sizes
     pose = np.eye(4)
     pose[:3, 3] = [1.0, 0.0, 0.0]
     pts = np.array([[0.0, -0.5, 0.3], [3.0, 0.2, 0.1]])
@@ -639,7 +650,7 @@ def test_each_capsule_joins_two_body_centres_in_the_closed_form(tmp_path: Path):
 
     import rerun as rr
 
-    from sim.record.cables import CableFrames, capsules
+    from cablecheck.record.cables import CableFrames, capsules
     big, r, n, drop = 80.0, 3.0, 25, 7.0
     theta = np.linspace(0.0, 1.5 * np.pi, n)
     ring = np.stack([big * np.cos(theta), big * np.sin(theta), np.zeros(n)], axis=-1)
@@ -685,7 +696,7 @@ def test_each_cable_is_named_capsules_in_its_own_colour(crossing):
     centres: the last shape kept, within `STILL` radii of them), in its own
     colour, named by a label on it; the two names apart; the cables' plots
     in their colours."""
-    from sim.record.cables import STILL
+    from cablecheck.record.cables import STILL
     report, record = crossing
     scene = tomllib.loads((ROOT / "scenes" / "crossing.toml").read_text())
     owns, names = [], []
@@ -737,7 +748,7 @@ def test_labels_of_spots_shown_together_are_lifted_apart():
     """Two spots side by side whose labels would overlap: the second's goes
     up a label height; a spot far away, or at another frame, stays just
     above its sphere."""
-    from sim.record.marks import LABEL_ABOVE, label_lifts
+    from cablecheck.record.marks import LABEL_ABOVE, label_lifts
     label = "hose_left / flange: -3.5 mm"
     rows = {"a": [(0, np.array([0.0, 0.0, 100.0]), None, label, "x"), (1, np.array([0.0, 0.0, 100.0]), None, label, "x")],
             "b": [(0, np.array([12.0, 0.0, 100.0]), None, label, "y")],

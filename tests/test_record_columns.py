@@ -1,4 +1,4 @@
-"""sim.record.columns: arrow columns built from numpy equal rerun's own conversions.
+"""cablecheck.record.columns: arrow columns built from numpy equal rerun's own conversions.
 
 The reference is rerun's archetype helpers (`rr.<Archetype>.columns(...)`),
 which convert field by field; a column of `Once` is read back from a written
@@ -13,11 +13,10 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 import rerun as rr
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from rerun.chunk import RrdReader
 
-from sim.record.columns import Once, column, floats, mat3, rgba, strings, strips, times, vec3
+from cablecheck.record.columns import Once, column, floats, mat3, rgba, strings, strips, times, vec3
 
 
 def _rerun(columns) -> dict[str, pa.Array]:

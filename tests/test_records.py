@@ -1,13 +1,12 @@
-"""Interference records, pair types and the one severity rule (checker.records)."""
+"""Interference records, pair types and the one severity rule (cablecheck.checker.records)."""
 
 from __future__ import annotations
 
 import json
 
-from hypothesis import given
-from hypothesis import strategies as st
+from hypothesis import given, strategies as st
 
-from checker.records import PairType, Severity, severity_of
+from cablecheck.checker.records import PairType, Severity, severity_of
 
 
 @given(st.floats(-1e3, 1e3, allow_nan=False), st.floats(0.0, 1e3, allow_nan=False))

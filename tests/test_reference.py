@@ -1,4 +1,4 @@
-"""The analytic references (sim.reference) against independent computations:
+"""The analytic references (cablecheck.bench.reference) against independent computations:
 a discrete chain of many links (catenary and hanging-chain modes), a
 numerically integrated Euler-Bernoulli beam (cantilever) and a shooting
 method (elastica), each solved another way than the module does."""
@@ -7,13 +7,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from scipy.integrate import cumulative_trapezoid, solve_ivp
 from scipy.linalg import eigh_tridiagonal
 from scipy.optimize import brentq
 
-from sim import reference as ref
+from cablecheck.bench import reference as ref
 
 
 def _discrete_catenary_sag(span: float, length: float, links: int = 4000) -> float:

@@ -1,7 +1,7 @@
 """An independent reference for static scenes (issue 25, item 6, static part).
 
 Hypothesis draws whole static scenes and runs them through the product as a
-user would (a TOML scene file, `sim.scene.load_scene`, `sim.run.run_scene`
+user would (a TOML scene file, `cablecheck.scene.load_scene`, `cablecheck.run.runner.run_scene`
 writing a JSON report; `dynamics = false`, `duration = 0`, method `exact`, no
 validation, so no MuJoCo model is built). Each scene has every primitive
 (box, sphere, cylinder, capsule, ellipsoid) and convex meshes (a box,
@@ -34,7 +34,7 @@ not searched.
 
 What is asserted (the issue's "Done when"): an element lies in an
 attachment window of a (cable, part) when its rest arc-length midpoint does
-(windows from `sim.stepcheck.attachment_exclusions`, their extent checked
+(windows from `cablecheck.run.stepcheck.attachment_exclusions`, their extent checked
 here against `check.attach_zone` radii either side of the held vertices,
 widened to whole elements). Then for every cable-part pair
 
@@ -59,10 +59,10 @@ else):
 - a part frame within 1e-6 of its body's is measured where MuJoCo's
   compiler snaps it (drawn frames are kept 1e-5 away or put exactly on it);
 - an element through a mesh was measured at the deepest of nine samples
-  (fixed: checker.segments searches between them; drawn meshes are convex,
+  (fixed: cablecheck.checker.segments searches between them; drawn meshes are convex,
   and their depths are now held to the reference like any other);
 - an ellipsoid whose two shortest semi-axes are equal read a wrong depth
-  next to its centre (fixed: checker.primitives solves for the root
+  next to its centre (fixed: cablecheck.checker.primitives solves for the root
   shifted by the smallest squared semi-axis; drawn ellipsoids have two or
   three equal semi-axes now and then).
 
@@ -87,14 +87,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import HealthCheck, event, given, settings
-from hypothesis import strategies as st
+from hypothesis import HealthCheck, event, given, settings, strategies as st
 from scipy.spatial.transform import Rotation
 
-from sim.run import RunOptions, run_scene
-from sim.scene import load_scene
-from sim.staticbuild import build_static
-from sim.stepcheck import attachment_exclusions
+from cablecheck.build.static import build_static
+from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.run.stepcheck import attachment_exclusions
+from cablecheck.scene.load import load_scene
+
 
 def examples(ci: int) -> int:
     """`ci` examples, or the loaded profile's count when it asks for more than
@@ -821,7 +821,7 @@ end = {{ pos = [0.314, 0.3, {z}] }}
 ], ids=["position", "rotation"])
 @pytest.mark.xfail(strict=True, reason="product bug: a part's frame within 1e-6 of its body's (quaternion "
                    "elements; and its position, in metres, when the rotation is) is measured where MuJoCo's "
-                   "compiler snaps it (sim.kinematic.same_frame, FRAME_EPS), not where the scene puts it")
+                   "compiler snaps it (cablecheck.run.kinematic.same_frame, FRAME_EPS), not where the scene puts it")
 def test_a_frame_next_to_its_body_is_where_the_scene_puts_it(tmp_path, shape, size, pos, euler, z):
     """A part on a body, its frame a hair off the body's; a straight cable
     (radius 0.002) along y, 0.014 from the body's origin along x: the

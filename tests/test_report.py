@@ -1,4 +1,4 @@
-"""The run's outcome record to the JSON report, and the atomic write (sim.report)."""
+"""The run's outcome record to the JSON report, and the atomic write (cablecheck.report.document)."""
 
 from __future__ import annotations
 
@@ -10,19 +10,26 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from checker.events import AllowedWorst, Event, PairWorst, Phase
-from checker.interference.excused import ExcusedWorst
-from checker.records import PairType, Severity, severity_of
-from checker.scene_state import CheckConfig
-from checker.validation import Disagreement, Reason, ValidationSummary
-from checker.wear import CableWear
-from sim import report as report_mod
-from sim.report import (SCHEMA, AdvanceOutcome, CableOutcome, RunOutcome, Timing, plain, report_of,
-                        write_report)
-from sim.scene import parse_scene
+from cablecheck.checker.events import AllowedWorst, Event, PairWorst, Phase
+from cablecheck.checker.interference.excused import ExcusedWorst
+from cablecheck.checker.records import PairType, Severity, severity_of
+from cablecheck.checker.scene_state import CheckConfig
+from cablecheck.checker.validation import Disagreement, Reason, ValidationSummary
+from cablecheck.checker.wear import CableWear
+from cablecheck.report import document as report_mod
+from cablecheck.report.document import (
+    SCHEMA,
+    AdvanceOutcome,
+    CableOutcome,
+    RunOutcome,
+    Timing,
+    plain,
+    report_of,
+    write_report,
+)
+from cablecheck.scene.load import parse_scene
 
 CLEARANCE_MM = 5.0
 
@@ -244,8 +251,8 @@ def test_the_detection_models_collision_time_is_reported_with_validation_only():
 def test_physics_error_and_error_in_scene_units():
     """A divergence's place, cause and measure (a distance in scene units, a
     stretch as a ratio) and a run's error, as the report holds them."""
-    from sim.divergence import Cause, PhysicsError, Sign
-    from sim.report import RunError
+    from cablecheck.report.document import RunError
+    from cablecheck.run.divergence import Cause, PhysicsError, Sign
 
     far = PhysicsError(0.5, 250, False, Sign.FAR, "lead", 4, "cables/lead_4", None, 12.5, Cause.UNITS,
                        "motion[0] moves 'slider' ...")
@@ -265,7 +272,7 @@ def test_physics_error_and_error_in_scene_units():
 
 
 def test_plain_rounds_float_arrays_as_each_float():
-    from sim.report import plain
+    from cablecheck.report.document import plain
     rng = np.random.default_rng(3)
     values = [rng.normal(size=(50, 3)) * 10.0 ** rng.integers(-9, 9, (50, 1)),
               np.array([np.nan, np.inf, -np.inf, -0.0, 5e-13, 1.5e-12]), np.array(2.5),

@@ -2,14 +2,14 @@
 settles on its surface, not a margin above it, and a fast plate still
 carries it.
 
-The simulation model has no contact margin (`sim.mjspec.SIM_MARGIN_FRACTION`):
+The simulation model has no contact margin (`cablecheck.build.mjspec.SIM_MARGIN_FRACTION`):
 MuJoCo 4 inflates each surface by its margin and sums the two sides', and
 with 0.25 r on cables and parts a resting cable floated half a radius above
 what it lay on (2.0 mm for r = 4 mm). Without it, a part meets a cable only
 once they overlap, so the step keeps every moving part within a cable
-radius a step (`sim.substeps.CONTACT_FRACTION`).
+radius a step (`cablecheck.build.substeps.CONTACT_FRACTION`).
 
-Measured (sim.validation.resting, 2 ms step): on a floor -0.05 % of r (box,
+Measured (cablecheck.bench.physics_cases.resting, 2 ms step): on a floor -0.05 % of r (box,
 mean) and -0.08 % (plane) for r = 2 mm, half that for 4 mm; on a 50 mm drum
 -0.3 % and -0.16 %; the same in m and mm (before: +49.9 to +50.0 %).
 """
@@ -21,11 +21,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim import validation
-from sim.build import build
-from sim.mjspec import SIM_MARGIN_FRACTION
-from sim.scene import parse_scene
-from sim.substeps import CONTACT_FRACTION, tunnel_warnings
+from cablecheck.bench import physics_cases as validation
+from cablecheck.build.mjspec import SIM_MARGIN_FRACTION
+from cablecheck.build.stages import build
+from cablecheck.build.substeps import CONTACT_FRACTION, tunnel_warnings
+from cablecheck.scene.load import parse_scene
 
 RESTING_TOLERANCE = 0.02
 """Largest settled gap to the surface, as a fraction of the cable's radius (issue 31)."""

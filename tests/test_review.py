@@ -1,4 +1,4 @@
-"""sim.review: a reviewer's notes matched to a run's events by pair, carried into the report and the summary."""
+"""cablecheck.report.review: a reviewer's notes matched to a run's events by pair, carried into the report and the summary."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ from types import SimpleNamespace
 import pytest
 from helpers import write_text
 
-from sim.cli import main
-from sim.review import ReviewError, ReviewStatus, load_review, match
+from cablecheck.cli.main import main
+from cablecheck.report.review import ReviewError, ReviewStatus, load_review, match
 
 ROOT = Path(__file__).resolve().parents[1]
 

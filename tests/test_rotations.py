@@ -5,7 +5,7 @@ cubic), the step loop's poses and a whole `cablecheck run`.
 
 Expected values are computed here on their own: the written numbers
 interpolated by `np.interp` or by a Fritsch-Carlson cubic written out below
-(zero slopes at the first and last sample, as `sim.curves` documents), and
+(zero slopes at the first and last sample, as `cablecheck.run.curves` documents), and
 turned into rotations by scipy's `Rotation.from_euler('XYZ')` (MuJoCo's
 intrinsic x, y, z).
 """
@@ -18,15 +18,14 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from scipy.spatial.transform import Rotation
 
-from sim.build import build
-from sim.cli import main
-from sim.loop import Simulation
-from sim.motion import Motion
-from sim.scene import load_scene, parse_scene
+from cablecheck.build.stages import build
+from cablecheck.cli.main import main
+from cablecheck.run.loop import Simulation
+from cablecheck.run.motion import Motion
+from cablecheck.scene.load import load_scene, parse_scene
 
 TURNS = ([0.0, 1.0, 2.0, 3.0], [0.0, 270.0, -270.0, 0.0])
 """The turntable's key times (s) and z angles (degrees)."""

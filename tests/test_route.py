@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from sim.route import initial_shape, polyline_length, resample_even, run_elements
+from cablecheck.build.route import initial_shape, polyline_length, resample_even, run_elements
 
 
 def _on_polyline(points: np.ndarray, route: np.ndarray) -> np.ndarray:

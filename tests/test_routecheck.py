@@ -1,4 +1,4 @@
-"""sim.routecheck: a cable routed through a part it collides with is named before any step.
+"""cablecheck.build.routecheck: a cable routed through a part it collides with is named before any step.
 
 A straight cable along x from x = 0 to x = 400 mm at height 0; a box
 spanning x in [150, 250] and height [-20, 20] holds the centreline over
@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 
-from sim.build import plan_cables
-from sim.cli import main
-from sim.routecheck import route_warnings
-from sim.scene import load_scene
+from cablecheck.build.routecheck import route_warnings
+from cablecheck.build.stages import plan_cables
+from cablecheck.cli.main import main
+from cablecheck.scene.load import load_scene
 
 SCENE = """
 [scene]
@@ -77,7 +77,7 @@ def test_check_prints_it(tmp_path, capsys):
 
 @pytest.mark.parametrize("block_y", [0.0, 45.0])
 def test_a_run_lists_it_in_physics_warnings(tmp_path, block_y):
-    from sim.run import RunOptions, run_scene
+    from cablecheck.run.runner import RunOptions, run_scene
 
     path = tmp_path / "through.toml"
     path.write_text(SCENE.format(contact='"cable-structure"', block_y=block_y).replace("duration = 0.1",

@@ -1,4 +1,4 @@
-"""One run end to end (sim.run): the report of small scenes with analytic
+"""One run end to end (cablecheck.run.runner): the report of small scenes with analytic
 answers, complete and interrupted runs, the outputs left behind, and the
 outcome record behind the report."""
 
@@ -9,13 +9,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from sim.report import plain, report_of
-from sim.run import RunOptions, run_outcome, run_scene
-from sim.scene import load_scene
-from sim.stop import StopRequest
+from cablecheck.report.document import plain, report_of
+from cablecheck.run.runner import RunOptions, run_outcome, run_scene
+from cablecheck.run.stop import StopRequest
+from cablecheck.scene.load import load_scene
 
 # A block on a body moving straight down at SPEED onto a straight cable
 # routed along x (no dynamics: the cable stays as routed). The block's bottom
@@ -177,7 +176,7 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "scenes"
 
 def test_simulating_ahead_on_a_thread_gives_the_same_report(tmp_path: Path):
     """A dynamic scene with contact, validation and recording: stepping the
-    simulation on a thread of its own (sim.ahead) gives the report of the
+    simulation on a thread of its own (cablecheck.run.ahead) gives the report of the
     run on one thread, timing apart."""
     scene = load_scene(EXAMPLES / "crossing.toml")
     one = run_scene(scene, RunOptions(report=tmp_path / "one.json", record=tmp_path / "one.rrd", overlap=False))

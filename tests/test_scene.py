@@ -12,12 +12,14 @@ import mujoco
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
+from hypothesis import HealthCheck, given, settings, strategies as st
 
-import sim.scene.format as scene_format
-from sim.scene import (DEFAULT_CLEARANCE, DEFAULT_DAMPING, Anchor, Hold, BodyKey, JointKey, KeyframeKey, Scene, SceneError,
-                       euler_matrix, load_scene, parse_scene)
+import cablecheck.scene.format as scene_format
+from cablecheck.scene.errors import SceneError
+from cablecheck.scene.format import DEFAULT_CLEARANCE, DEFAULT_DAMPING, Hold
+from cablecheck.scene.frames import euler_matrix
+from cablecheck.scene.load import load_scene, parse_scene
+from cablecheck.scene.records import Anchor, BodyKey, JointKey, KeyframeKey, Scene
 
 ARM_XML = """
 <mujoco model="arm">
@@ -689,7 +691,7 @@ def test_any_edit_gives_a_scene_or_a_scene_error(folder, edits):
 
 @pytest.mark.parametrize("path, value, key, fragment", [
     ("scene.duration", 1e9, "scene.duration", "steps, above the limit of 10,000,000"),
-    # a radius no unit makes sense of is refused before it could need a billion points (sim.scene.units)
+    # a radius no unit makes sense of is refused before it could need a billion points (cablecheck.scene.units)
     ("cables.0.radius", 1e-9, "cables[0].radius", "is no cable radius"),
 ])
 def test_absurd_sizes_are_refused_with_the_limit(folder, path, value, key, fragment):
@@ -967,7 +969,7 @@ def test_allow_errors_name_the_key(folder, rule, key, fragment):
 
 def test_allow_names_checked_against_built_parts(folder):
     """A name taken at load time for an mjcf body must still cover a built part."""
-    from sim.scene import check_allow_names
+    from cablecheck.scene.allow import check_allow_names
     scene = parse(_with_allow({"a": "upper/wrist", "b": "power", "reason": "x"}), folder)
     with pytest.raises(SceneError) as exc:
         check_allow_names(scene, ["upper", "forearm", "cab/rail", "power"])

@@ -1,4 +1,4 @@
-"""The checker's input records (checker.scene_state): values that would
+"""The checker's input records (cablecheck.checker.scene_state): values that would
 break the geometry are refused at construction, naming the record; good
 ones are stored as float arrays."""
 
@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given
 from strategies import rotations
 
-from checker.scene_state import CableState, CheckConfig, PartState
-from checker.shapes import Shape, ShapeType
+from cablecheck.checker.scene_state import CableState, CheckConfig, PartState
+from cablecheck.checker.shapes import Shape, ShapeType
 
 BOX = Shape(ShapeType.BOX, [0.1, 0.1, 0.1])
 

@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.run import RunOptions, run_scene
-from sim.scene import load_scene
+from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.scene.load import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
@@ -149,7 +149,7 @@ benchmarks/bench_robot_cell.py times the whole of it)."""
 def robot_cell(tmp_path_factory):
     import dataclasses
 
-    from sim.build import build
+    from cablecheck.build.stages import build
     scene = dataclasses.replace(load_scene(ROBOT_CELL), duration=ROBOT_CELL_CI_S)
     out = tmp_path_factory.mktemp("cell") / "cell.json"
     report = run_scene(scene, RunOptions(report=out, record=out.with_suffix(".rrd")))
@@ -174,7 +174,7 @@ def test_robot_cell_visual_geoms_are_drawn_where_mujoco_puts_them(robot_cell, tm
     is MuJoCo's own geom pose."""
     import mujoco
 
-    from sim.record import Recorder
+    from cablecheck.record.recorder import Recorder
     built, _, _ = robot_cell
     rec = Recorder(built, tmp_path / "v.rrd")
     m = built.model
@@ -209,7 +209,7 @@ def test_robot_cell_dress_pack_rests_on_link_3_and_agrees_with_mujoco(robot_cell
     # MuJoCo collides a mesh geom as its convex hull, and the hoses pass within
     # the clearance of the links' hulls where the meshes are concave (the air
     # hose rests on link 4's hull all run long, well clear of the mesh). The
-    # detection model sees the meshes' own surfaces (sim.detection_mesh).
+    # detection model sees the meshes' own surfaces (cablecheck.detection.mesh).
     # The hoses rest on the links at contact (docs/physics.md, Resting
     # contact; they floated 3 mm off before), so where the contact's give
     # puts an element just inside and the checker's points just outside,

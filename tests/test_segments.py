@@ -1,22 +1,15 @@
-"""Segment signed distances (checker.segments, through checker.shapes) against
+"""Segment signed distances (cablecheck.checker.segments, through cablecheck.checker.shapes) against
 exact candidates (box), a dense grid refined by Brent's method (curved
 primitives), the box primitive (box mesh) and a closed form (plane)."""
 
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 from scipy.optimize import minimize_scalar
 from shaperefs import SIZES
 
-from checker.shapes import (
-    Shape,
-    ShapeType,
-    mesh_shape,
-    segment_signed_distance,
-    signed_distance,
-)
+from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape, segment_signed_distance, signed_distance
 
 pytestmark = pytest.mark.filterwarnings("error")
 
@@ -27,7 +20,7 @@ def _seg_ref_box(h, a, b):
     piecewise-linear max(|x_k| - h_k) is least at an end or where two of its
     six lines cross."""
     box = Shape(ShapeType.BOX, h)
-    from checker.closest import segment_segment
+    from cablecheck.checker.closest import segment_segment
 
     corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * h
     edges = [(i, j) for i in range(8) for j in range(i + 1, 8) if np.sum(corners[i] != corners[j]) == 1]

@@ -1,4 +1,4 @@
-"""The shape front (checker.shapes): the least signed distance over posed
+"""The shape front (cablecheck.checker.shapes): the least signed distance over posed
 shapes, and the memo of mesh shapes. Point and segment distances are tested
 with their modules (test_primitives, test_meshnearest, test_meshdata,
 test_meshgrid, test_segments)."""
@@ -6,21 +6,15 @@ test_meshgrid, test_segments)."""
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from checker.shapes import (
-    Shape,
-    ShapeType,
-    mesh_shape,
-    signed_distance,
-)
+from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape, signed_distance
 
 pytestmark = pytest.mark.filterwarnings("error")
 
 
 def test_least_signed_distance_over_posed_shapes_matches_one_by_one():
-    from checker.shapes import least_signed_distance
+    from cablecheck.checker.shapes import least_signed_distance
     rng = np.random.default_rng(7)
     shapes = [Shape(ShapeType.BOX, [0.1, 0.2, 0.05]), Shape(ShapeType.SPHERE, [0.1]),
               Shape(ShapeType.BOX, [0.3, 0.1, 0.1]), Shape(ShapeType.PLANE, [0, 0, 0]),
@@ -43,7 +37,7 @@ def test_least_signed_distance_over_posed_shapes_matches_one_by_one():
 def test_least_signed_distance_with_a_limit_is_exact_below_it():
     """Values below the limit are the exact ones; beyond it a mesh may
     answer with a lower bound, still beyond the limit."""
-    from checker.shapes import least_signed_distance
+    from cablecheck.checker.shapes import least_signed_distance
     rng = np.random.default_rng(11)
     torus = trimesh.creation.torus(0.3, 0.08)
     shapes = [mesh_shape(torus.vertices, torus.faces), Shape(ShapeType.SPHERE, [0.1])]
@@ -62,7 +56,7 @@ def test_least_signed_distance_with_a_limit_is_exact_below_it():
 def test_mesh_shape_is_kept_by_content_and_bounded():
     """The same vertices and faces give the same shape (its grid shared);
     other content gives another; only the last MESH_MEMO are kept."""
-    from checker import shapes
+    from cablecheck.checker import shapes
     box = trimesh.creation.box([0.2, 0.3, 0.4])
     a = mesh_shape(box.vertices, box.faces)
     assert mesh_shape(box.vertices.copy(), box.faces.copy()) is a
@@ -90,7 +84,7 @@ def test_mesh_shape_is_kept_by_content_and_bounded():
 def test_primitive_bounds_touch_the_surface_on_every_axis(kind, size):
     """primitive_bounds (the one bounds formula, for arrays of parts) is tight:
     the extreme point on each axis lies on the surface, as Shape.local_bounds says."""
-    from checker.shapes import SHAPE_CODE, primitive_bounds, signed_distance
+    from cablecheck.checker.shapes import SHAPE_CODE, primitive_bounds, signed_distance
     shape = Shape(kind, np.array(size))
     lo, hi = primitive_bounds(np.array([SHAPE_CODE[kind]]), shape.size[None, :3])
     assert np.array_equal(lo[0], shape.local_bounds()[0]) and np.array_equal(hi[0], shape.local_bounds()[1])

@@ -2,8 +2,8 @@ import numpy as np
 import trimesh
 from scipy.spatial.transform import Rotation
 
-from checker.shapes import Shape, ShapeType, mesh_shape, signed_distance
-from checker.spot import on_cable, on_cable_many, on_part, on_part_many
+from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape, signed_distance
+from cablecheck.checker.spot import on_cable, on_cable_many, on_part, on_part_many
 
 
 def _poses(rng, n):

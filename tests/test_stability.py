@@ -16,10 +16,10 @@ Each case runs through the real scene parser, builder and step loop
   motion), except the taut case, whose stretch is forced by its ends and must
   be visible (above the report's 1 % taut threshold) and bounded.
 
-The cables carry only their material damping (`sim.build.rayleigh_damping`,
+The cables carry only their material damping (`cablecheck.build.stages.rayleigh_damping`,
 no air drag): after the script stops their mechanical energy must not grow;
 they need not come to rest (a cable swinging under gravity keeps swinging).
-The simulation steps within each 2 ms scene step as `sim.build.choose_substeps`
+The simulation steps within each 2 ms scene step as `cablecheck.build.stages.choose_substeps`
 decides (the fast case, and the steel rod of tests/test_physics.py, need
 several). Held vertices are vertices of the body that holds them: the
 cable's mass and energy count only its own vertices.
@@ -34,9 +34,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.build import build
-from sim.loop import Simulation
-from sim.scene import parse_scene
+from cablecheck.build.stages import build
+from cablecheck.run.loop import Simulation
+from cablecheck.scene.load import parse_scene
 
 G = 9.81
 TIMESTEP = 0.002
@@ -216,7 +216,7 @@ def test_taut_cable_stretches_boundedly_and_settles():
     11.7 % (edges next to the ends at 41 %, the middle at 0.8 %), peak kinetic
     energy 0.024 J. Before the edge impedance yielded (d = 0.99 rising to 0.999)
     the cable vibrated chaotically: edges to 46 %, 0.7 J still at t = 2 s;
-    see `sim.cablephysics.edge_solimp`."""
+    see `cablecheck.build.cablephysics.edge_solimp`."""
     # at_rest False: the forced stretch stores energy in the edge constraints,
     # which the cable's mechanical energy here does not count
     case = Case("taut", _cable(), bodies=[{"name": "b", "pos": [0.8, 0, 1]}],
@@ -230,5 +230,5 @@ def test_taut_cable_stretches_boundedly_and_settles():
     assert forced - 0.005 < run.strain[-1] < forced + 0.03, f"taut: rest strain {run.strain[-1]:.3%}"
     assert run.strain.max() < forced + 0.05, f"taut: max strain {run.strain.max():.3%}"
     # At rest the stretch sits in the edges next to the held ends (the edge
-    # impedance yields past 4 %, see `sim.cablephysics.edge_solimp`): measured 41 %.
+    # impedance yields past 4 %, see `cablecheck.build.cablephysics.edge_solimp`): measured 41 %.
     assert run.edge_strain[-1] < 0.6, f"taut: an edge at {run.edge_strain[-1]:.0%}"

@@ -1,4 +1,4 @@
-"""The scene at t = 0 in model coordinates (sim.startframes): the model's
+"""The scene at t = 0 in model coordinates (cablecheck.build.startframes): the model's
 origin is the mean of the cables' routes (else of the parts and bodies),
 and a body's frame carries points to the model's world and back."""
 
@@ -11,8 +11,8 @@ from buildscenes import slider_scene
 from hypothesis import given
 from strategies import coords, rotations
 
-from sim.scene import parse_scene
-from sim.startframes import Frames, scene_origin
+from cablecheck.build.startframes import Frames, scene_origin
+from cablecheck.scene.load import parse_scene
 
 HERE = Path(__file__).resolve().parent
 SCENE = parse_scene(slider_scene(None), HERE / "s.toml")

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from sim.harness import harness_scene, write_scene
+from cablecheck.bench.harness import harness_scene, write_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -24,7 +24,7 @@ HEAVY = ("rerun", "dask", "distributed", "matplotlib", "trimesh")
 
 _PROBE = """
 import json, sys
-from sim.cli import main
+from cablecheck.cli.main import main
 code = main(sys.argv[1:])
 heavy = sorted({{m.split(".")[0] for m in sys.modules}} & set({heavy!r}))
 print(json.dumps({{"code": code, "heavy": heavy}}))

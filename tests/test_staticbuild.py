@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 import trimesh
 
-import sim.run
-from sim.build import build
-from sim.built import BodyTree
-from sim.run import RunOptions, run_scene
-from sim.scene import parse_scene
-from sim.staticbuild import build_static, needs_model
-from sim.stepcheck import attachment_exclusions, part_pairs_skipped
+import cablecheck.run.runner
+from cablecheck.build.built import BodyTree
+from cablecheck.build.stages import build
+from cablecheck.build.static import build_static, needs_model
+from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.run.stepcheck import attachment_exclusions, part_pairs_skipped
+from cablecheck.scene.load import parse_scene
 
 SHAPES = {"box": 3, "sphere": 1, "cylinder": 2, "capsule": 2, "ellipsoid": 3}
 
@@ -124,7 +124,7 @@ def test_static_run_compiles_nothing_and_reports_as_before(tmp_path, monkeypatch
     data = static_scene(seed, far=3.0)
     scene = parse_scene(data, tmp_path / "s.toml")
     with monkeypatch.context() as patch:
-        patch.setattr(sim.run, "needs_model", lambda s: True)       # the run as it was: a MuJoCo build
+        patch.setattr(cablecheck.run.runner, "needs_model", lambda s: True)       # the run as it was: a MuJoCo build
         run_scene(scene, RunOptions(report=tmp_path / "mujoco.json", record=None))
     with monkeypatch.context() as patch:
         _forbid_models(patch)
@@ -156,7 +156,7 @@ def test_static_mesh_part_is_the_files_mesh_in_double_precision(tmp_path, monkey
     rows = lambda v: np.unique(np.round(np.asarray(v, float), 6), axis=0)   # STL: its own order, float32
     assert np.array_equal(rows(st.parts[0].vertices), rows(mesh.vertices))
     with monkeypatch.context() as patch:
-        patch.setattr(sim.run, "needs_model", lambda s: True)
+        patch.setattr(cablecheck.run.runner, "needs_model", lambda s: True)
         run_scene(scene, RunOptions(report=tmp_path / "mujoco.json", record=None))
     with monkeypatch.context() as patch:
         _forbid_models(patch)

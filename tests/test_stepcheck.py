@@ -1,4 +1,4 @@
-"""Checking states a batch at a time (sim.stepcheck) gives the answers of
+"""Checking states a batch at a time (cablecheck.run.stepcheck) gives the answers of
 checking them one at a time."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import sim.run
-from sim.run import RunOptions, run_scene
-from sim.scene import load_scene
+import cablecheck.run.runner
+from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.scene.load import load_scene
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 
@@ -37,14 +37,14 @@ def _strip(x):
 def test_batch_size_changes_no_answer(name: str, tmp_path, monkeypatch):
     """Any batch size, the same answers; with the promotion budget of these
     small scenes' own size (no floor) the batches hold full checks too."""
-    import sim.stepcheck
-    monkeypatch.setattr(sim.stepcheck, "PROMOTE_MIN", 0)
+    import cablecheck.run.stepcheck
+    monkeypatch.setattr(cablecheck.run.stepcheck, "PROMOTE_MIN", 0)
     scene = load_scene(SCENES / f"{name}.toml")
     reports = []
     # fixed batches of 1, 7 and BATCH states, then the run's own (growing) batches
-    for size, most in ((1, 1), (7, 7), (sim.run.BATCH, sim.run.BATCH), (sim.run.BATCH, sim.run.BATCH_MAX)):
-        monkeypatch.setattr(sim.run, "BATCH", size)
-        monkeypatch.setattr(sim.run, "BATCH_MAX", most)
+    for size, most in ((1, 1), (7, 7), (cablecheck.run.runner.BATCH, cablecheck.run.runner.BATCH), (cablecheck.run.runner.BATCH, cablecheck.run.runner.BATCH_MAX)):
+        monkeypatch.setattr(cablecheck.run.runner, "BATCH", size)
+        monkeypatch.setattr(cablecheck.run.runner, "BATCH_MAX", most)
         rep = run_scene(scene, RunOptions(report=tmp_path / f"{size}-{most}.json", record=None))
         reports.append(_strip(_comparable(rep)))
     adv = reports[0]["advance"]
@@ -58,9 +58,9 @@ def test_active_part_pairs_batch_size_changes_no_answer(tmp_path, monkeypatch):
     answers, allowed pairs included."""
     scene = load_scene(Path(__file__).resolve().parent / "scenes" / "door.toml")
     reports = []
-    for size, most in ((1, 1), (7, 7), (sim.run.BATCH, sim.run.BATCH), (sim.run.BATCH, sim.run.BATCH_MAX)):
-        monkeypatch.setattr(sim.run, "BATCH", size)
-        monkeypatch.setattr(sim.run, "BATCH_MAX", most)
+    for size, most in ((1, 1), (7, 7), (cablecheck.run.runner.BATCH, cablecheck.run.runner.BATCH), (cablecheck.run.runner.BATCH, cablecheck.run.runner.BATCH_MAX)):
+        monkeypatch.setattr(cablecheck.run.runner, "BATCH", size)
+        monkeypatch.setattr(cablecheck.run.runner, "BATCH_MAX", most)
         rep = run_scene(scene, RunOptions(report=tmp_path / f"{size}-{most}.json", record=None))
         reports.append(_strip({**_comparable(rep), "allowed": rep["allowed"]}))
     assert reports[0]["advance"]["proven_clear_steps"] > reports[0]["advance"]["full_checks"]
@@ -72,7 +72,7 @@ def test_neighbour_links_in_the_kinematic_tree():
     -(elbow)- forearm = tool (welded). Never through the world body."""
     import mujoco
 
-    from sim.stepcheck import neighbour_bodies
+    from cablecheck.run.stepcheck import neighbour_bodies
     m = mujoco.MjModel.from_xml_path(str(SCENES / "arm.xml"))
     name = lambda ids: {m.body(i).name for i in ids}      # noqa: E731
     upper = m.body("upper_arm").id
@@ -90,8 +90,8 @@ def test_attach_links_excuse_the_clamp_links_neighbours(tmp_path):
     over its window, never the floor (on the world body); with 0 only the
     upper arm's. (A clearance of 2 m puts every part within reach of the
     held point: the links decide here, not the distance.)"""
-    from sim.build import build
-    from sim.stepcheck import attachment_exclusions
+    from cablecheck.build.stages import build
+    from cablecheck.run.stepcheck import attachment_exclusions
     text = (SCENES / "arm.toml").read_text()
     (tmp_path / "arm.xml").write_text((SCENES / "arm.xml").read_text())
     windows = []
@@ -113,7 +113,7 @@ def test_a_long_cable_on_a_floor_is_checked_in_passes_of_bounded_points(tmp_path
     point (15,000 a state) active: the states proven clear are evaluated in
     passes of at most CHUNK_POINTS points, the same records however small
     the passes (here 1, 2 and the default 66 states a pass)."""
-    import sim.stepcheck
+    import cablecheck.run.stepcheck
 
     path = tmp_path / "wire.toml"
     path.write_text("""
@@ -138,8 +138,8 @@ end = { pos = [15, 0, 0.002] }
 """)
     scene = load_scene(path)
     reports = []
-    for chunk in (15_000, 30_000, sim.stepcheck.CHUNK_POINTS):
-        monkeypatch.setattr(sim.stepcheck, "CHUNK_POINTS", chunk)
+    for chunk in (15_000, 30_000, cablecheck.run.stepcheck.CHUNK_POINTS):
+        monkeypatch.setattr(cablecheck.run.stepcheck, "CHUNK_POINTS", chunk)
         rep = run_scene(scene, RunOptions(report=tmp_path / f"{chunk}.json", record=None))
         reports.append(_strip(_comparable(rep)))
     assert reports[0]["advance"]["proven_clear_steps"] > 0 and reports[0]["events"]

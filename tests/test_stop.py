@@ -1,4 +1,4 @@
-"""The stop request (sim.stop): the first SIGINT or SIGTERM only sets the
+"""The stop request (cablecheck.run.stop): the first SIGINT or SIGTERM only sets the
 flag, a second raises KeyboardInterrupt, leaving puts the old handlers back,
 and outside the main thread nothing is replaced."""
 
@@ -9,7 +9,7 @@ import threading
 
 import pytest
 
-from sim.stop import StopRequest
+from cablecheck.run.stop import StopRequest
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])

@@ -1,6 +1,6 @@
 """Tests of `cablecheck study`: the study file (paths, ranges, grid and zip, bad
 input named by study file and key), free variants, and execution
-(sim.studyrun, sim.studyplot) on an embedded local cluster and on a
+(cablecheck.study.execute, cablecheck.study.plot) on an embedded local cluster and on a
 scheduler with two workers started here on 127.0.0.1. The files that travel
 with a task are tested in test_bundle, the length window in test_studyresult."""
 
@@ -22,12 +22,12 @@ import numpy as np
 import pytest
 from helpers import write_text
 
-from checker.cable import TAUT_STRAIN
-from sim.bundle import make_bundle
-from sim.cli import main
-from sim.scene import load_scene
-from sim.study import Mode, StudyError, check_variants, load_study, resolve, variants
-from sim.studyresult import Row, Status, length_window, row_from_report
+from cablecheck.checker.cable import TAUT_STRAIN
+from cablecheck.cli.main import main
+from cablecheck.scene.load import load_scene
+from cablecheck.study.bundle import make_bundle
+from cablecheck.study.definition import Mode, StudyError, check_variants, load_study, resolve, variants
+from cablecheck.study.result import Row, Status, length_window, row_from_report
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
@@ -301,7 +301,7 @@ def test_each_row_equals_running_that_variant_alone(tiny, local_run, tmp_path):
 def test_a_failing_variant_is_a_row_with_its_error(tiny, scheduler, tmp_path):
     """A variant whose task raises (here: its mesh did not travel with it)
     is a failed row; the other variant still runs."""
-    from sim.studyrun import VariantTask, run_variants
+    from cablecheck.study.execute import VariantTask, run_variants
 
     study = load_study(tiny)
     found = variants(study)
@@ -363,7 +363,7 @@ def test_ctrl_c_keeps_finished_variants(tiny, tmp_path):
                    'mode = "zip"\n[[vary]]\nkey = "scene.duration"\nvalues = [0.1, 60.0, 60.0]\n'
                    '[[vary]]\nkey = "cables.power.length"\nvalues = [650, 651, 652]\n')
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    proc = subprocess.Popen([sys.executable, "-m", "sim.cli", "study", str(study), "--workers", "1",
+    proc = subprocess.Popen([sys.executable, "-m", "cablecheck.cli.main", "study", str(study), "--workers", "1",
                              "--out", str(tmp_path / "out"), "--no-record"], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             start_new_session=True)
@@ -481,7 +481,7 @@ def test_killing_the_only_worker_loses_no_variant(tiny, tmp_path):
                               env=_env(), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     try:
         procs.append(_worker(address, temp))
-        proc = subprocess.Popen([sys.executable, "-m", "sim.cli", "study", str(study), "--scheduler", address,
+        proc = subprocess.Popen([sys.executable, "-m", "cablecheck.cli.main", "study", str(study), "--scheduler", address,
                                  "--out", str(tmp_path / "out"), "--no-record"], env=_env(),
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         procs.append(proc)
@@ -507,8 +507,8 @@ def test_resume_keeps_finished_variants_and_gives_the_same_rows(tiny, local_run,
     with --resume, only what had not finished runs, and the rows are those
     of the straight run; a variant whose scene changed since (its stored
     hash differs) runs again."""
-    from sim.cli import _cmd_study, version
-    from sim.cliargs import build_parser
+    from cablecheck.cli.args import build_parser
+    from cablecheck.cli.main import _cmd_study, version
 
     folder = tmp_path / "tiny"
 
@@ -559,7 +559,7 @@ def silent_port():
 def test_bad_scheduler_addresses_exit_2_naming_the_option(tiny, tmp_path, capsys, monkeypatch, silent_port):
     import dask
 
-    from sim import studycluster
+    from cablecheck.study import cluster as studycluster
 
     monkeypatch.setattr(studycluster, "CONNECT_TIMEOUT_S", 1.0)
     for key in list(os.environ):
@@ -583,7 +583,7 @@ def test_bad_scheduler_addresses_exit_2_naming_the_option(tiny, tmp_path, capsys
 def test_ctrl_c_while_connecting_is_honoured(tiny, tmp_path, silent_port):
     """A scheduler address that accepts and never answers: Ctrl-C ends the
     study at once (exit 130), within the connect timeout's 10 s."""
-    proc = subprocess.Popen([sys.executable, "-m", "sim.cli", "study", str(tiny), "--scheduler",
+    proc = subprocess.Popen([sys.executable, "-m", "cablecheck.cli.main", "study", str(tiny), "--scheduler",
                              f"tcp://127.0.0.1:{silent_port}", "--out", str(tmp_path)], env=_env(),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
@@ -602,7 +602,7 @@ def test_ctrl_c_while_connecting_is_honoured(tiny, tmp_path, silent_port):
 
 
 def test_stale_temporary_folders_of_dead_processes_are_removed(tmp_path):
-    from sim.studyrun import TEMP_PREFIX, _host, remove_stale_temp
+    from cablecheck.study.execute import TEMP_PREFIX, _host, remove_stale_temp
 
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()

@@ -1,4 +1,4 @@
-"""sim.studygoal: requirements and goals read from study tables, judged on reports with known answers."""
+"""cablecheck.study.goal: requirements and goals read from study tables, judged on reports with known answers."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from checker.cable import TAUT_STRAIN
-from sim.studygoal import GoalError, Need, check_names, judge, parse_goal, parse_requirements
+from cablecheck.checker.cable import TAUT_STRAIN
+from cablecheck.study.goal import GoalError, Need, check_names, judge, parse_goal, parse_requirements
 
 REPORT = {
     "complete": True,

@@ -1,4 +1,4 @@
-"""A study's outputs (sim.studyplot) for rows made here: results.csv reads
+"""A study's outputs (cablecheck.study.plot) for rows made here: results.csv reads
 back cell for cell, study.json carries the settings, rows and answer and
 is strict JSON, study.png is a PNG, and no temporary file is left."""
 
@@ -8,9 +8,9 @@ import csv
 import json
 from pathlib import Path
 
-from sim.study import load_study
-from sim.studyplot import SCHEMA, write_outputs
-from sim.studyresult import CABLE_COLUMNS, COLUMNS, CableRow, Row, Status, length_window
+from cablecheck.study.definition import load_study
+from cablecheck.study.plot import SCHEMA, write_outputs
+from cablecheck.study.result import CABLE_COLUMNS, COLUMNS, CableRow, Row, Status, length_window
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "scenes" / "studies" / "drawer_length_study.toml"
 

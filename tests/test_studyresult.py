@@ -1,9 +1,9 @@
-"""A study's answer (sim.studyresult): rows reduced from reports, and the
+"""A study's answer (cablecheck.study.result): rows reduced from reports, and the
 window of cable lengths free of hard events with its recommendation."""
 
 from __future__ import annotations
 
-from sim.studyresult import Row, Status, length_window, row_from_report
+from cablecheck.study.result import Row, Status, length_window, row_from_report
 
 
 def _row(length, taut=False, hard=0, bend=False, soft=0):

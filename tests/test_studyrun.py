@@ -1,4 +1,4 @@
-"""One study task (sim.studyrun.run_variant) in this process, without a
+"""One study task (cablecheck.study.execute.run_variant) in this process, without a
 cluster: a variant's report is the report of running its scene directly
 (timing and file names aside), and its recording comes back as bytes.
 Running variants on clusters is tested in test_study."""
@@ -9,10 +9,10 @@ import json
 
 from buildscenes import slider_scene
 
-from sim.bundle import make_bundle
-from sim.run import RunOptions, run_scene
-from sim.scene import parse_scene
-from sim.studyrun import VariantTask, run_variant
+from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.scene.load import parse_scene
+from cablecheck.study.bundle import make_bundle
+from cablecheck.study.execute import VariantTask, run_variant
 
 _WHERE = ("timing", "scene_file", "recording", "report")
 

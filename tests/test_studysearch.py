@@ -1,14 +1,13 @@
-"""sim.studysearch: rounds of points that close in on the best of analytic functions within a budget."""
+"""cablecheck.study.search: rounds of points that close in on the best of analytic functions within a budget."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
 from helpers import examples
+from hypothesis import given, settings, strategies as st
 
-from sim.studysearch import Search
+from cablecheck.study.search import Search
 
 
 def _run(search: Search, f) -> list[np.ndarray]:

@@ -1,4 +1,4 @@
-"""How finely the simulation steps (sim.substeps): held points' speeds
+"""How finely the simulation steps (cablecheck.build.substeps): held points' speeds
 against the script's closed form, the step divided to meet the fastest
 cable's need (a moving part's speed against its radius among them), and a
 part too fast for any step named."""
@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 from buildscenes import slider_scene
 
-from sim.build import build
-from sim.cablephysics import (
+from cablecheck.build.cablephysics import (
     COMPRESSION_SHARE,
     COMPRESSION_TOLERANCE,
     buckling_load,
@@ -20,8 +19,8 @@ from sim.cablephysics import (
     first_mode,
     step_damping_ratio,
 )
-from sim.scene import parse_scene
-from sim.substeps import (
+from cablecheck.build.stages import build
+from cablecheck.build.substeps import (
     CONTACT_FRACTION,
     MAX_SUBSTEPS,
     SPEED_FRACTION,
@@ -30,6 +29,7 @@ from sim.substeps import (
     held_speeds,
     tunnel_warnings,
 )
+from cablecheck.scene.load import parse_scene
 
 
 def _built(tmp_path, travel: float, interpolation: str = "cubic", **cable):

@@ -1,4 +1,4 @@
-"""The reach test of the detection model's concave surfaces (sim.surfacereach):
+"""The reach test of the detection model's concave surfaces (cablecheck.detection.surfacereach):
 a surface left out of a collision pass is one on which MuJoCo finds no
 contact, so the pass finds what it finds with every surface in."""
 
@@ -7,16 +7,13 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from checker.closest import segment_triangle
-from sim import detection_mesh
-from sim.build import build
-from sim.detection_mesh import SURFACE_PREFIX, surface_geoms
-from sim.loop import Simulation
-from sim.scene import load_scene
-from sim.surfacereach import (
+from cablecheck.build.stages import build
+from cablecheck.checker.closest import segment_triangle
+from cablecheck.detection import mesh as detection_mesh
+from cablecheck.detection.mesh import SURFACE_PREFIX, surface_geoms
+from cablecheck.detection.surfacereach import (
     PIECE_LEVELS,
     REACH_SLACK,
     REACH_TOLERANCES,
@@ -24,6 +21,8 @@ from sim.surfacereach import (
     oriented_boxes,
     pieces,
 )
+from cablecheck.run.loop import Simulation
+from cablecheck.scene.load import load_scene
 from tests.strategies import coords, rotations
 from tests.test_detection_mesh import POCKET_FLOOR, u_mesh
 

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from checker.partset import PartSet
-from checker.shapes import Shape, ShapeType, mesh_shape
-from checker.sweep import sweep
+from cablecheck.checker.partset import PartSet
+from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape
+from cablecheck.checker.sweep import sweep
 
 
 def pose(x=0.0, y=0.0, z=0.0, rot=None):
@@ -152,7 +152,7 @@ def _rot(rng):
 def test_first_contact_separates_clear_from_overlap(seed):
     """Random rotated boxes: just before the reported travel the parts are clear,
     just after it they overlap (checked by the independent part-part test)."""
-    from checker.parts import check_parts
+    from cablecheck.checker.parts import check_parts
 
     rng = np.random.default_rng(seed)
     shapes = [box(*rng.uniform(0.2, 1.0, 3)), box(*rng.uniform(0.05, 1.0, 3))]
@@ -177,7 +177,7 @@ def test_first_contact_separates_clear_from_overlap(seed):
 def test_contained_batch_equals_pair_by_pair(seed):
     """_contained (all moving/candidate pairs in one batch, boxes pruned first)
     marks exactly the parts the pair-by-pair probe test marks."""
-    from checker.sweep import _contained, probes_inside
+    from cablecheck.checker.sweep import _contained, probes_inside
 
     rng = np.random.default_rng(seed)
     ico = trimesh.creation.icosphere(1, 0.3)

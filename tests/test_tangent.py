@@ -20,10 +20,11 @@ import pytest
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
-from sim import reference, validation
-from sim.build import plan_cables
-from sim.cli import main
-from sim.scene import SceneError, parse_scene
+from cablecheck.bench import physics_cases as validation, reference
+from cablecheck.build.stages import plan_cables
+from cablecheck.cli.main import main
+from cablecheck.scene.errors import SceneError
+from cablecheck.scene.load import parse_scene
 
 L, R, RHO, E = 0.5, 0.003, 1500.0, 2e9
 W = RHO * reference.G * np.pi * R ** 2

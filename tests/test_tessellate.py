@@ -3,11 +3,10 @@
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from checker.shapes import Shape, ShapeType, mesh_shape, signed_distance
-from checker.tessellate import part_surface, part_surfaces
+from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape, signed_distance
+from cablecheck.checker.tessellate import part_surface, part_surfaces
 
 SIZES = st.lists(st.floats(1e-3, 2.0), min_size=3, max_size=3)
 CURVED = [ShapeType.SPHERE, ShapeType.CAPSULE, ShapeType.CYLINDER, ShapeType.ELLIPSOID]
@@ -72,7 +71,7 @@ def test_bad_tolerance_is_refused():
 
 def _trimesh_template(kind, n):
     """A template as trimesh's primitives make it, cleaned by trimesh (how
-    `checker.tessellate` made them before it built them itself)."""
+    `cablecheck.checker.tessellate` made them before it built them itself)."""
     if kind is ShapeType.SPHERE:
         tm = trimesh.creation.uv_sphere(radius=1.0, count=[n // 2 + 1, n])
     elif kind is ShapeType.CYLINDER:
@@ -93,7 +92,7 @@ def test_templates_equal_trimeshs_to_the_bit(kind):
     vertices, faces and order, bit for bit, built without trimesh (every
     even count from MIN_SEGMENTS to MAX_SEGMENTS was compared once, 1:20
     min; these take seconds)."""
-    from checker.tessellate import MAX_SEGMENTS, MIN_SEGMENTS, _template
+    from cablecheck.checker.tessellate import MAX_SEGMENTS, MIN_SEGMENTS, _template
 
     for n in (MIN_SEGMENTS, MIN_SEGMENTS + 2, 18, 24, 34, 50, 64, 98, 130, MAX_SEGMENTS - 2, MAX_SEGMENTS):
         v, f, closed = _template(kind, n)
@@ -104,7 +103,7 @@ def test_templates_equal_trimeshs_to_the_bit(kind):
 
 
 def test_unit_box_equals_trimeshs():
-    from checker.tessellate import _unit_box
+    from cablecheck.checker.tessellate import _unit_box
 
     v, f, closed = _unit_box()
     tm = trimesh.creation.box(extents=[2.0, 2.0, 2.0])

@@ -2,10 +2,15 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from checker.tritri import edge_edge_contact, edge_piercings, triangle_distance, triangles_cross, vertex_face_contact
+from cablecheck.checker.tritri import (
+    edge_edge_contact,
+    edge_piercings,
+    triangle_distance,
+    triangles_cross,
+    vertex_face_contact,
+)
 
 T = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from hypothesis import assume, given, settings, strategies as st
 
-from checker.twist import TwistMeter, transport, twist_angle, update_many
+from cablecheck.checker.twist import TwistMeter, transport, twist_angle, update_many
 
 
 def _rot(axis, angle) -> np.ndarray:
@@ -109,8 +109,8 @@ def _wrist_scene(dynamics: bool, turns_deg: float) -> dict:
 
 
 def test_run_reports_the_twist_a_turning_end_winds_in(tmp_path):
-    from sim.run import RunOptions, run_scene
-    from sim.scene import parse_scene
+    from cablecheck.run.runner import RunOptions, run_scene
+    from cablecheck.scene.load import parse_scene
     for dynamics in (False, True):
         report = run_scene(parse_scene(_wrist_scene(dynamics, 90.0), tmp_path / "w.toml"),
                            RunOptions(report=tmp_path / "r.json", record=None))

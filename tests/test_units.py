@@ -1,4 +1,4 @@
-"""sim.scene.units: sizes that make no sense in the declared units are refused or warned
+"""cablecheck.scene.units: sizes that make no sense in the declared units are refused or warned
 about, naming the key and the likely unit; sizes that do make sense never are."""
 
 from __future__ import annotations
@@ -6,12 +6,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
 from helpers import examples
+from hypothesis import given, settings, strategies as st
 
-from sim.cli import main
-from sim.scene import SceneError, load_scene
+from cablecheck.cli.main import main
+from cablecheck.scene.errors import SceneError
+from cablecheck.scene.load import load_scene
 
 SCENES = sorted((Path(__file__).resolve().parents[1] / "scenes").glob("*.toml"))
 

@@ -1,4 +1,4 @@
-"""The cross-check's reduction of simulator contacts and its comparison (checker.validation)."""
+"""The cross-check's reduction of simulator contacts and its comparison (cablecheck.checker.validation)."""
 
 from __future__ import annotations
 
@@ -6,12 +6,11 @@ import dataclasses
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from checker.records import Interference, PairType, Severity, severity_of
-from checker.scene_state import Exclusion
-from checker.validation import Reason, SimContacts, Validation, simulator_pairs
+from cablecheck.checker.records import Interference, PairType, Severity, severity_of
+from cablecheck.checker.scene_state import Exclusion
+from cablecheck.checker.validation import Reason, SimContacts, Validation, simulator_pairs
 
 # a straight cable along x, 10 elements of 0.1 m
 CABLE = np.stack([np.linspace(0.0, 1.0, 11), np.zeros(11), np.zeros(11)], axis=1)
@@ -95,7 +94,7 @@ def test_compare_counts_and_reasons():
 def test_many_states_at_once_is_each_state_alone():
     """SimulatorPairs.many over random contacts of random states: per state,
     exactly what the one-state call gives (pairs, distances, points)."""
-    from checker.validation import SimulatorPairs
+    from cablecheck.checker.validation import SimulatorPairs
     rng = np.random.default_rng(2)
     names, radii = ["c", "d"], np.array([0.01, 0.004])
     offsets = np.array([0, 11, 18])
@@ -133,7 +132,7 @@ def test_contacts_numbered_by_a_shared_table_give_what_their_names_give():
     """Contacts carrying integer codes into one name table (as a simulator
     numbers them; a name may sit in the table twice, kinds too) give
     exactly the pairs, distances and points their names alone give."""
-    from checker.validation import NameTable, SimulatorPairs
+    from cablecheck.checker.validation import NameTable, SimulatorPairs
     rng = np.random.default_rng(11)
     names, radii, offsets = ["c", "d"], np.array([0.01, 0.004]), np.array([0, 11, 18])
     excl = [Exclusion("c", "clamp", 0.0, 0.25), Exclusion("d", "box", 0.3, 0.6)]
@@ -181,7 +180,7 @@ def test_contacts_numbered_by_a_shared_table_give_what_their_names_give():
 def test_shared_codes_only_when_every_contact_indexes_one_table():
     """The codes of all contacts in order when each carries codes into the
     same table; None when one has none, another table or there are none."""
-    from checker.validation import NameTable, shared_codes
+    from cablecheck.checker.validation import NameTable, shared_codes
     table = NameTable(np.array(["cable-structure"], dtype=object), np.array(["c", "box"], dtype=object))
     other = NameTable(table.kinds.copy(), table.names.copy())
 
@@ -204,7 +203,7 @@ def test_least_distance_per_pair_is_the_brute_force_one():
     """No window or self contact to drop: each state's pairs are the least
     distance over its contacts of that (type, a, b), cable-cable pairs named
     in name order, ties to the first contact; counted contact by contact."""
-    from checker.validation import SimulatorPairs
+    from cablecheck.checker.validation import SimulatorPairs
     rng = np.random.default_rng(7)
     names, radii, offsets = ["c", "d", "e"], np.array([0.01, 0.004, 0.006]), np.array([0, 6, 12, 18])
     pairs = SimulatorPairs([], 0.005)
@@ -240,7 +239,7 @@ def test_least_distance_per_pair_is_the_brute_force_one():
 def test_attachment_window_follows_the_material():
     """The cable stretched by 10 %: a contact on its last element is in the
     window [0.8, 1.0] of material (rest_s), not of arc length (0.99-1.1)."""
-    from checker.validation import SimulatorPairs
+    from cablecheck.checker.validation import SimulatorPairs
     stretched = CABLE * 1.1
     rest = np.linspace(0.0, 1.0, 11)
     contacts = _contacts([("cable-structure", "c", "clamp", 9, -1, -0.002, (1.05, 0, 0))])
@@ -286,9 +285,9 @@ def test_convex_hull_reason_is_checked():
     MuJoCo (which collides the hull) reports an overlap: the reason is
     'convex hull' because the hull distance says so; without the hull
     check, or if the hull disagreed too, it is unexplained."""
-    from checker.recheck import Recheck
-    from checker.scene_state import CableState, CheckConfig, PartState
-    from checker.shapes import mesh_shape
+    from cablecheck.checker.recheck import Recheck
+    from cablecheck.checker.scene_state import CableState, CheckConfig, PartState
+    from cablecheck.checker.shapes import mesh_shape
     fork = PartState("fork", mesh_shape(*_fork()), np.eye(4))
     cable = CableState("c", np.array([[0.0, -0.2, 0.0], [0.0, 0.0, 0.0], [0.0, 0.2, 0.0]]), 0.005)
     recheck = Recheck([fork], CheckConfig(clearance=0.005), [])
@@ -311,10 +310,10 @@ def test_hull_opinions_for_a_batch_are_each_state_alone():
     each state's own opinion and the full check's record against the hull
     (a cable sliding through the fork's gap, in and out of the hull, with an
     exclusion window and a moving part)."""
-    from checker.interference import Checker
-    from checker.recheck import Recheck, convex_hull_shape
-    from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
-    from checker.shapes import mesh_shape
+    from cablecheck.checker.interference import Checker
+    from cablecheck.checker.recheck import Recheck, convex_hull_shape
+    from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+    from cablecheck.checker.shapes import mesh_shape
     rng = np.random.default_rng(5)
     shape = mesh_shape(*_fork())
     fork = PartState("fork", shape, np.eye(4))
@@ -347,17 +346,17 @@ def test_hull_opinions_for_a_batch_are_each_state_alone():
 @pytest.mark.parametrize("surfaces", [True, False])
 def test_convex_hull_disagreement_in_a_run(tmp_path, monkeypatch, surfaces):
     """End to end, a cable through the gap of a fork. The detection model
-    sees the fork's own surface (sim.detection_mesh): MuJoCo and the checker
+    sees the fork's own surface (cablecheck.detection.mesh): MuJoCo and the checker
     agree at every step. Where MuJoCo collides the fork as its hull (the
     surface left out), the run's report explains every disagreement (convex
     hull, verified), none unexplained."""
     import trimesh
 
-    import sim.mjspec
-    from sim.run import RunOptions, run_scene
-    from sim.scene import load_scene
+    import cablecheck.build.mjspec
+    from cablecheck.run.runner import RunOptions, run_scene
+    from cablecheck.scene.load import load_scene
     if not surfaces:
-        monkeypatch.setattr(sim.mjspec, "add_surfaces", lambda spec, model, cable_bit: model)
+        monkeypatch.setattr(cablecheck.build.mjspec, "add_surfaces", lambda spec, model, cable_bit: model)
     v, f = _fork()
     trimesh.Trimesh(v, f).export(tmp_path / "fork.stl")
     (tmp_path / "fork.toml").write_text("""
@@ -416,10 +415,10 @@ def test_exact_opinions_for_a_batch_are_each_state_alone():
     sliding past a mesh, a box, a cylinder, an ellipsoid and a keep-out
     sphere, in and out of the clearance, with exclusion windows, moving parts
     and a state without the cable."""
-    from checker.interference import Checker
-    from checker.recheck import Recheck
-    from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
-    from checker.shapes import Shape, ShapeType, mesh_shape
+    from cablecheck.checker.interference import Checker
+    from cablecheck.checker.recheck import Recheck
+    from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+    from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape
     rng = np.random.default_rng(7)
     parts = [PartState("fork", mesh_shape(*_fork()), np.eye(4)),
              PartState("box", Shape(ShapeType.BOX, np.array([0.02, 0.03, 0.01])), np.eye(4)),
@@ -616,8 +615,8 @@ def test_a_hairpin_past_the_window_in_a_run(tmp_path):
     about 3 mm. Both methods report it, exact no farther than points;
     MuJoCo reports no self contact that does not overlap, and every
     disagreement says so (checked), none 'between points'."""
-    from sim.run import RunOptions, run_scene
-    from sim.scene import load_scene
+    from cablecheck.run.runner import RunOptions, run_scene
+    from cablecheck.scene.load import load_scene
     th = np.radians(30.0)
     bend = np.linspace(np.pi, 0.0, 9)
     arc = np.stack([5.0 * np.cos(bend), 60 + 5.0 * np.sin(bend), np.zeros(9)], 1)
@@ -661,8 +660,8 @@ def test_a_cable_exactly_at_the_clearance_in_a_run(tmp_path, method):
     measured by method exact is within 2 % of the clearance (it was
     'unexplained', MuJoCo's reading being within 2 % but the checker's
     unknown)."""
-    from sim.run import RunOptions, run_scene
-    from sim.scene import load_scene
+    from cablecheck.run.runner import RunOptions, run_scene
+    from cablecheck.scene.load import load_scene
     (tmp_path / "edge.toml").write_text(f"""
 [scene]
 name = "edge"

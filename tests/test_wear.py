@@ -1,14 +1,14 @@
-"""checker.wear: contact time, sliding and bending cycles per arc-length bin."""
+"""cablecheck.checker.wear: contact time, sliding and bending cycles per arc-length bin."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from checker.records import Interference, PairType, Severity
-from checker.scene_state import Exclusion
-from checker.shapes import Shape, ShapeType
-from checker.wear import REVERSAL_STRAIN, WearMap, curvature_vectors
+from cablecheck.checker.records import Interference, PairType, Severity
+from cablecheck.checker.scene_state import Exclusion
+from cablecheck.checker.shapes import Shape, ShapeType
+from cablecheck.checker.wear import REVERSAL_STRAIN, WearMap, curvature_vectors
 
 R = 0.01          # cable radius, m
 CLEAR = 0.005     # clearance, m

@@ -25,17 +25,3 @@ everything in columns when closed, built as arrow arrays from numpy
 This package does not decide what is interference or wear; it shows what it
 is given.
 """
-
-from sim.record.clashes import Settings, summary_text
-from sim.record.layout import CLASH_COLUMNS, VIEWPOINTS
-from sim.record.marks import Mark
-from sim.record.recorder import Recorder
-from sim.record.scene import plane_half_sizes
-from sim.record.style import CLEAR, CONTACT_COLOUR, HARD, KEEPOUT_COLOUR, PART_COLOUR, PART_DIMMED, SOFT, SPOT
-from sim.record.style import CABLE_PALETTE, FLOOR, FLOOR_DIMMED, STATE_COLOURS, STATES, cable_colour, pair_path
-from sim.record.style import part_path, visual_paths
-from sim.record.wearview import wear_colours
-
-__all__ = ["CABLE_PALETTE", "CLASH_COLUMNS", "CLEAR", "FLOOR", "FLOOR_DIMMED", "cable_colour", "CONTACT_COLOUR", "HARD", "KEEPOUT_COLOUR", "PART_COLOUR", "PART_DIMMED", "SOFT",
-           "SPOT", "STATES", "STATE_COLOURS", "VIEWPOINTS", "Mark", "Recorder", "Settings", "pair_path", "part_path",
-           "plane_half_sizes", "summary_text", "visual_paths", "wear_colours"]

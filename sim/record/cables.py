@@ -5,7 +5,7 @@ one per element, from body centre k to k + 1 each recorded frame (rerun's
 `Capsules3D`, drawn solid: the viewer shades them, so over and under read
 where a cable crosses itself or another; neighbouring capsules share the
 sphere round the centre between them, so the chain reads as one round
-cable), in the cable's own colour (`sim.record.style.cable_colour`) except
+cable), in the cable's own colour (`cablecheck.record.style.cable_colour`) except
 the elements near a clash's worst place, which take its state colour
 (soft, hard); and its name as a label on the cable, at a place along it
 chosen apart from the other names and from its clashes.
@@ -27,8 +27,8 @@ a harness of many cables does not store every shape at every step.
 Buffered per frame and sent in one column per cable when the recording is
 closed.
 
-Not here: the clashes themselves (`sim.record.marks`), the wear map
-(`sim.record.wearview`).
+Not here: the clashes themselves (`cablecheck.record.marks`), the wear map
+(`cablecheck.record.wearview`).
 """
 
 from __future__ import annotations
@@ -37,11 +37,20 @@ import numpy as np
 import pyarrow as pa
 import rerun as rr
 
-from sim.build import Built
-from sim.record.columns import Once, Sometimes, column, floats, quats, rgba, strings, vec3
-from sim.record.columns import times as sim_time
-from sim.record.marks import Mark
-from sim.record.style import STATE_COLOURS, STATES, cable_colour, escape
+from cablecheck.build.built import Built
+from cablecheck.record.columns import (
+    Once,
+    Sometimes,
+    column,
+    floats,
+    quats,
+    rgba,
+    strings,
+    times as sim_time,
+    vec3,
+)
+from cablecheck.record.marks import Mark
+from cablecheck.record.style import STATE_COLOURS, STATES, cable_colour, escape
 
 _RANK = {s: n for n, s in enumerate(STATES)}
 STILL = 0.05

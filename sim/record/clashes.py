@@ -12,7 +12,7 @@ the contacts attachment windows excused, the most worn place of each cable
 and what it touches). The log is buffered and sent, like the
 list, in columns when the recording is closed.
 
-Not here: deciding events (`checker.events`) or wear (`checker.wear`).
+Not here: deciding events (`cablecheck.checker.events`) or wear (`cablecheck.checker.wear`).
 """
 
 from __future__ import annotations
@@ -22,10 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 import rerun as rr
 
-from sim.record.columns import column, floats, strings
-from sim.record.columns import times as sim_time
-from sim.record.layout import CLASH_TIMELINE, clash_headers
-from sim.record.style import pair_text, short_pairs
+from cablecheck.record.columns import column, floats, strings, times as sim_time
+from cablecheck.record.layout import CLASH_TIMELINE, clash_headers
+from cablecheck.record.style import pair_text, short_pairs
 
 
 @dataclass(frozen=True)
@@ -77,8 +76,8 @@ def send_clash_list(rec: rr.RecordingStream, events: list, joints: list[dict], u
     """The clash list: one row per event, worst first (:func:`clash_order`),
     indexed by its rank on the `clash` sequence and its worst time on
     `sim_time`; one entity per column (`clashes/<column>`, in the layout's
-    order, see :data:`sim.record.layout.CLASH_COLUMNS`): pairs by short names
-    (:func:`sim.record.style.short_names`, among `names` and the events'),
+    order, see :data:`cablecheck.record.layout.CLASH_COLUMNS`): pairs by short names
+    (:func:`cablecheck.record.style.short_names`, among `names` and the events'),
     the full paths in `a` and `b`; distances in scene units rounded to 0.01 mm.
     `status`: against a baseline run, per event; no such column without one."""
     if not events:

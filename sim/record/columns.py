@@ -7,7 +7,7 @@ run, when every entity is sent, that was most of the recording's cost. Here
 each component's arrow array is made in one call from numpy and sent with
 the archetype's own descriptor.
 
-Not here: what is logged where (the other modules of `sim.record`).
+Not here: what is logged where (the other modules of `cablecheck.record`).
 """
 
 from __future__ import annotations

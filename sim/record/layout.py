@@ -7,7 +7,7 @@ twist, agreement, joints, the wear profiles) beside the clash list, the
 event log and the summary. Written when the recording is closed, when the
 run's extent is known.
 
-Not here: the data the views show (the other modules of `sim.record`).
+Not here: the data the views show (the other modules of `cablecheck.record`).
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ import rerun as rr
 import rerun.blueprint as rrb
 from rerun.blueprint.components import ComponentColumnSelector
 
-from sim.build import Built
-from sim.record.style import SPOT, STATE_COLOURS, STATES, escape, pair_text, short_pairs
+from cablecheck.build.built import Built
+from cablecheck.record.style import SPOT, STATE_COLOURS, STATES, escape, pair_text, short_pairs
 
 CLASH_COLUMNS = ("severity", "pair", "worst_distance", "status", "type", "phase", "start", "end", "joints", "a", "b")
 """The clash list's columns, in order, after its rank (`clash`) and worst
@@ -60,7 +60,7 @@ class Together:
 
 
 def spot_style() -> Together:
-    """The 3D views' defaults that style the spots (`sim.record.marks`): a
+    """The 3D views' defaults that style the spots (`cablecheck.record.marks`): a
     wire sphere, its label on a small point and its gap, in the spot's
     colour. Every other ellipsoid, point and line strip (parts, cables'
     names, contacts, the wear map) carries its own fill, colour and radius,
@@ -117,7 +117,7 @@ def _scene_eye(bounds, unit: float) -> rrb.EyeControls3D:
 def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance: float, scale, unit: float,
               units: str, status: bool = False, names=()) -> rrb.Blueprint:
     """The layout of a finished run (`clearance` in metres; `scale`: the wear
-    map's :class:`sim.record.wearview.WearScale`; `status`: the
+    map's :class:`cablecheck.record.wearview.WearScale`; `status`: the
     clash list has a status column, against a baseline run; `names`: the
     scene's names that the clash list's short names are told apart among)."""
     bounds = extent.bounds

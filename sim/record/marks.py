@@ -5,7 +5,7 @@ cable a, in a colour no cable or part uses; its label (the pair and its
 distance) on a point just above the sphere, lifted further where another
 spot's label shown at the same time would overlap it (with a leader down
 to the sphere); the segment (the gap) to the closest point on the other
-side (`checker.spot`), and a thin line through it that runs on out of the
+side (`cablecheck.checker.spot`), and a thin line through it that runs on out of the
 sphere (so the gap's direction shows outside the marker); all shown from
 the frame a clash is seen and emptied at the frame after each run of such
 frames. `lanes/<type>/<a>/<b>`:
@@ -13,7 +13,7 @@ the pair's state (clear / soft / hard) as state changes, one lane per pair.
 Everything is buffered per frame and sent in columns, one chunk per entity,
 when the recording is closed; the style (the spot's colour, wire sphere,
 labels; the lanes' state colours) is the views' default in the blueprint
-(`sim.record.layout`), not data: a harness has thousands of pairs, and a
+(`cablecheck.record.layout`), not data: a harness has thousands of pairs, and a
 chunk costs kilobytes.
 
 Not here: which pairs clash (the checker and the event tracker decide).
@@ -26,12 +26,11 @@ from dataclasses import dataclass
 import numpy as np
 import rerun as rr
 
-from checker import spot
-from checker.shapes import Shape
-from sim.build import Built
-from sim.record.columns import column, floats, strings, strips, vec3
-from sim.record.columns import times as sim_time
-from sim.record.style import pair_path, pair_text
+from cablecheck.build.built import Built
+from cablecheck.checker import spot
+from cablecheck.checker.shapes import Shape
+from cablecheck.record.columns import column, floats, strings, strips, times as sim_time, vec3
+from cablecheck.record.style import pair_path, pair_text
 
 
 @dataclass(frozen=True)
@@ -112,7 +111,7 @@ class ClashMarks:
         states.append(state)
 
     def _resolve_spots(self) -> None:
-        """The other side of every mark on a part or a cable (`checker.spot`):
+        """The other side of every mark on a part or a cable (`cablecheck.checker.spot`):
         one query per part or cable for the whole run. Bend, taut and
         part-part marks have none."""
         u = self.unit
@@ -137,7 +136,7 @@ class ClashMarks:
         state = rr.StateChange.descriptor_state()
         for path, (frames, states) in self._lanes.items():
             # the lanes' configuration (state names and colours) is the view's default
-            # (`sim.record.layout`): one chunk per lane, not two
+            # (`cablecheck.record.layout`): one chunk per lane, not two
             rec.send_columns(f"lanes/{path}", indexes=index(frames), columns=[column(state, strings(states))])
         lo, hi = bounds
         diag = float(np.linalg.norm(hi - lo))
@@ -185,7 +184,7 @@ class ClashMarks:
         # a centre would draw one at the origin); the label rides on a point above the
         # sphere (lifted clear of its neighbours' labels, `label_lifts`), the segment to
         # the other side (emptied with the marker) in the same entity, and the style is
-        # the views' default (`sim.record.layout`): one chunk per pair, where a style and
+        # the views' default (`cablecheck.record.layout`): one chunk per pair, where a style and
         # a gap entity would make four
         e, p = rr.Ellipsoids3D, rr.Points3D
         columns = [column(e.descriptor_centers(), vec3(pts), lengths),

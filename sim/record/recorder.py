@@ -15,7 +15,7 @@ target and moved into place when the recorder is closed, so an interrupted
 run still leaves a complete, readable recording and never a half-written
 one.
 
-Not here: what is shown where (`sim.record.scene`, `.cables`, `.marks`,
+Not here: what is shown where (`cablecheck.record.scene`, `.cables`, `.marks`,
 `.series`, `.clashes`, `.wearview`, `.layout`); what is interference.
 """
 
@@ -29,18 +29,17 @@ from pathlib import Path
 import numpy as np
 import rerun as rr
 
-from checker.shapes import Shape
-from sim.build import Built
-from sim.record.cables import CableFrames
-from sim.record.clashes import Settings, send_clash_list, send_log
-from sim.record.columns import Once, column, floats, named, rgba, strings, vec3
-from sim.record.columns import times as sim_time
-from sim.record.layout import Extent, blueprint
-from sim.record.marks import ClashMarks, Mark
-from sim.record.scene import SceneGeometry
-from sim.record.series import SeriesSet, send_limit_lines
-from sim.record.style import CONTACT_COLOUR, cable_colour, escape, pair_path, pair_text
-from sim.record.wearview import WearScale, send_wear, wear_scale
+from cablecheck.build.built import Built
+from cablecheck.checker.shapes import Shape
+from cablecheck.record.cables import CableFrames
+from cablecheck.record.clashes import Settings, send_clash_list, send_log
+from cablecheck.record.columns import Once, column, floats, named, rgba, strings, times as sim_time, vec3
+from cablecheck.record.layout import Extent, blueprint
+from cablecheck.record.marks import ClashMarks, Mark
+from cablecheck.record.scene import SceneGeometry
+from cablecheck.record.series import SeriesSet, send_limit_lines
+from cablecheck.record.style import CONTACT_COLOUR, cable_colour, escape, pair_path, pair_text
+from cablecheck.record.wearview import WearScale, send_wear, wear_scale
 
 
 @cache
@@ -203,7 +202,7 @@ class Recorder:
     def finish(self, events: list, wear: list, summary: str, joints: list[dict] | None = None,
                status: list[str] | None = None) -> None:
         """The run's events (clash list and viewpoints), wear map
-        (:class:`checker.wear.CableWear` per cable), summary text and, where
+        (:class:`cablecheck.checker.wear.CableWear` per cable), summary text and, where
         the mjcf model's joints move, each event's joint values at its worst
         time (name -> value, in the events' order) and, against a baseline
         run, each event's status (new or present)."""

@@ -12,7 +12,7 @@ as a rectangle: its given size, else sized to cover the scene; a floor is
 always translucent (what lies under it shows), more so while a clash is
 shown.
 
-Not here: cables, clashes, plots (the other modules of `sim.record`); what
+Not here: cables, clashes, plots (the other modules of `cablecheck.record`); what
 is interference.
 """
 
@@ -22,9 +22,17 @@ import mujoco
 import numpy as np
 import rerun as rr
 
-from sim.build import Built, PartModel
-from sim.record.columns import Column, column, mat3, rgba, vec3
-from sim.record.style import FLOOR, FLOOR_DIMMED, KEEPOUT_COLOUR, PART_COLOUR, PART_DIMMED, part_path, visual_paths
+from cablecheck.build.built import Built, PartModel
+from cablecheck.record.columns import Column, column, mat3, rgba, vec3
+from cablecheck.record.style import (
+    FLOOR,
+    FLOOR_DIMMED,
+    KEEPOUT_COLOUR,
+    PART_COLOUR,
+    PART_DIMMED,
+    part_path,
+    visual_paths,
+)
 
 _KINDS = {"box": rr.Boxes3D, "plane": rr.Boxes3D, "sphere": rr.Ellipsoids3D,
           "ellipsoid": rr.Ellipsoids3D, "capsule": rr.Capsules3D, "cylinder": rr.Cylinders3D}

@@ -20,10 +20,9 @@ from __future__ import annotations
 import numpy as np
 import rerun as rr
 
-from sim.build import Built
-from sim.record.columns import Once, column, floats, rgba, strings
-from sim.record.columns import times as sim_time
-from sim.record.style import HARD, escape
+from cablecheck.build.built import Built
+from cablecheck.record.columns import Once, column, floats, rgba, strings, times as sim_time
+from cablecheck.record.style import HARD, escape
 
 
 class Series:

@@ -6,7 +6,7 @@ the parts' and floors', the spot's, which no cable state, part or contact
 uses, and each cable's own (:func:`cable_colour`, from a qualitative
 palette kept apart from all of those).
 
-Not here: what is logged where (the other modules of `sim.record`).
+Not here: what is logged where (the other modules of `cablecheck.record`).
 """
 
 from __future__ import annotations

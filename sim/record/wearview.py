@@ -11,7 +11,7 @@ at t = 0 (the rest shapes' time), translucent.
 `wear/<cable>/<measure>`: a bar chart per measure (`contact_time`,
 `sliding`, `bend_cycles`) over the bins.
 
-Not here: measuring wear (`checker.wear`).
+Not here: measuring wear (`cablecheck.checker.wear`).
 """
 
 from __future__ import annotations
@@ -24,9 +24,9 @@ import pyarrow as pa
 import rerun as rr
 from rerun.components import TensorDataBatch
 
-from sim.build import Built
-from sim.record.columns import column, floats, rgba, strips
-from sim.record.style import escape
+from cablecheck.build.built import Built
+from cablecheck.record.columns import column, floats, rgba, strips
+from cablecheck.record.style import escape
 
 _VIRIDIS = np.array([(68, 1, 84), (59, 82, 139), (33, 145, 140), (94, 201, 98), (253, 231, 37)], float)
 _UNWORN = (200, 200, 200)
@@ -154,7 +154,7 @@ def tensor_1d(values: np.ndarray) -> pa.StructArray:
 
 def send_wear(rec: rr.RecordingStream, built: Built, wear: list, rest: list[np.ndarray] | None,
               unit: float, scale: WearScale, part_shapes: dict | None = None) -> None:
-    """Each cable's wear (:class:`checker.wear.CableWear`): colour along its rest
+    """Each cable's wear (:class:`cablecheck.checker.wear.CableWear`): colour along its rest
     shape (`rest`, metres; else as routed) on the run's `scale`, its name, and
     a bar chart per measure, each one static chunk; the scale's colour bar;
     `part_shapes`: name -> (archetype in its own frame, pose at t = 0 in

@@ -27,11 +27,11 @@ The mjcf model is compiled once here (to know its bodies, joints and the
 pose of its bodies at qpos0); meshes are loaded with trimesh to check they
 exist, load, and (for keepout parts) are closed. The builder loads both again.
 A mesh part whose file is glTF / GLB expands into one part per mesh node of
-the file, named ``<name>/<node path>`` (`sim.meshfile`).
+the file, named ``<name>/<node path>`` (`cablecheck.scene.meshfile`).
 
 A `[[motion]]` gives keys, the mjcf model's keyframes (``key = "home"``) or a
 CSV file of samples (`read_samples`); every sample of a joint with a range
-(`jnt_limited`) must lie in it. Both interpolations (`sim.curves`) stay
+(`jnt_limited`) must lie in it. Both interpolations (`cablecheck.run.curves`) stay
 between neighbouring samples, so the samples bound the whole motion.
 
 `[[allow]]` names (`AllowDef`) must cover a scene part or cable (by name or
@@ -46,29 +46,6 @@ Where things are: `load` (`load_scene`, `parse_scene`: the tables in order),
 `cables`, `motion` with `samples` and `trajectory`, `allow`), `mjcf` and
 `frames` (the base model, the frames at t = 0), `records` (what a scene
 is), `format` (keys, values, defaults, bounds) and `errors` (`SceneError`).
-This package reads and checks; it builds no model (`sim.build`) and runs
-nothing (`sim.run`).
+This package reads and checks; it builds no model (`cablecheck.build.stages`) and runs
+nothing (`cablecheck.run.runner`).
 """
-
-from sim.scene.allow import check_allow_names, covers, unknown_name
-from sim.scene.cables import check_fastened_names
-from sim.scene.errors import SceneError
-from sim.scene.format import (ANGLES, BODY_AXES, DEFAULT_CLEARANCE, DEFAULT_DAMPING,
-                              DEFAULT_DENSITY, DEFAULT_YOUNG, DEGENERATE, INTERACTIONS, LARGEST,
-                              METHODS, POINTS_LENGTH_TOLERANCE, ROUTE_TOLERANCE,
-                              SELF_CONTACT_ELEMENT, SHAPE_SIZES, UNITS, Hold)
-from sim.scene.frames import euler_matrix
-from sim.scene.load import load_scene, parse_scene
-from sim.scene.records import (AllowDef, Anchor, BodyDef, BodyKey, CableDef, CheckSettings,
-                               Effects, JointKey, KeyframeKey, Limits, MotionDef, PartDef,
-                               Scene, Trajectory)
-
-__all__ = [
-    "ANGLES", "BODY_AXES", "DEFAULT_CLEARANCE", "DEFAULT_DAMPING", "DEFAULT_DENSITY",
-    "DEFAULT_YOUNG", "DEGENERATE", "INTERACTIONS", "LARGEST", "METHODS",
-    "POINTS_LENGTH_TOLERANCE", "ROUTE_TOLERANCE", "SELF_CONTACT_ELEMENT", "SHAPE_SIZES", "UNITS",
-    "AllowDef", "Anchor", "BodyDef", "BodyKey", "CableDef", "CheckSettings", "Effects", "Hold",
-    "JointKey", "KeyframeKey", "Limits", "MotionDef", "PartDef", "Scene", "SceneError",
-    "Trajectory", "check_allow_names", "check_fastened_names", "covers", "euler_matrix", "load_scene", "parse_scene",
-    "unknown_name",
-]

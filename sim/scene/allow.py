@@ -4,7 +4,7 @@ cover anything.
 An allow name must cover a scene part or cable (by name or assembly path
 prefix) or, with an mjcf model, begin with one of its bodies: its geoms'
 part names are the builder's, so those are checked against the built parts
-once the model exists (`check_allow_names`, called by `sim.run`). Applying
+once the model exists (`check_allow_names`, called by `cablecheck.run.runner`). Applying
 the rules to interference records is the checker's job, not this module's.
 """
 
@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import difflib
 
-from sim.scene.errors import SceneError
-from sim.scene.format import ALLOW_KEYS
-from sim.scene.reader import Reader
-from sim.scene.records import AllowDef, Scene
+from cablecheck.scene.errors import SceneError
+from cablecheck.scene.format import ALLOW_KEYS
+from cablecheck.scene.reader import Reader
+from cablecheck.scene.records import AllowDef, Scene
 
 
 def read_allow(r: Reader, value: dict, where: str, names: list[str]) -> AllowDef:

@@ -2,9 +2,9 @@
 the route at t = 0 and the limits of the simulation's elements.
 
 The route (start, via..., end, or `points`) is taken in world coordinates
-at t = 0 from the body frames the reader holds (`sim.scene.frames`), so
+at t = 0 from the body frames the reader holds (`cablecheck.scene.frames`), so
 cables are read after bodies, parts and motions. Nothing here chooses the
-elements (`sim.build` does when `segments` is absent).
+elements (`cablecheck.build.stages` does when `segments` is absent).
 """
 
 from __future__ import annotations
@@ -14,15 +14,25 @@ from typing import Any
 
 import numpy as np
 
-from sim.scene.allow import covers, unknown_name
-from sim.scene.errors import SceneError, describe, fmt
-from sim.scene.format import (ANCHOR_KEYS, CABLE_KEYS, DEFAULT_DAMPING, DEFAULT_DENSITY,
-                              DEFAULT_YOUNG, DEGENERATE, POINTS_LENGTH_TOLERANCE,
-                              ROUTE_TOLERANCE, SELF_CONTACT_ELEMENT, ZERO3, Hold)
-from sim.scene.frames import from_world, to_world
-from sim.scene.parts import body_ref
-from sim.scene.reader import Reader
-from sim.scene.records import Anchor, CableDef, Scene
+from cablecheck.scene.allow import covers, unknown_name
+from cablecheck.scene.errors import SceneError, describe, fmt
+from cablecheck.scene.format import (
+    ANCHOR_KEYS,
+    CABLE_KEYS,
+    DEFAULT_DAMPING,
+    DEFAULT_DENSITY,
+    DEFAULT_YOUNG,
+    DEGENERATE,
+    POINTS_LENGTH_TOLERANCE,
+    ROUTE_TOLERANCE,
+    SELF_CONTACT_ELEMENT,
+    ZERO3,
+    Hold,
+)
+from cablecheck.scene.frames import from_world, to_world
+from cablecheck.scene.parts import body_ref
+from cablecheck.scene.reader import Reader
+from cablecheck.scene.records import Anchor, CableDef, Scene
 
 
 def read_anchor(r: Reader, value: Any, where: str, with_pos: bool = True) -> Anchor:
@@ -39,7 +49,7 @@ def read_anchor(r: Reader, value: Any, where: str, with_pos: bool = True) -> Anc
 def read_tangent(r: Reader, t: dict, where: str, hold: Hold) -> tuple[float, float, float] | None:
     """An anchor's `tangent`: the direction a clamp holds the cable in, in its
     body's frame, as a unit vector (any length but zero is accepted); None
-    when absent (the route's direction, `sim.cableplan`)."""
+    when absent (the route's direction, `cablecheck.build.cableplan`)."""
     if "tangent" not in t:
         return None
     key = f"{where}.tangent"

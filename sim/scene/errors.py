@@ -2,7 +2,7 @@
 
 A problem is reported as the file, the key path (``cables[1].radius``,
 0-based indices) and the problem in words. This module formats; it checks
-no value itself (`sim.scene.reader` does).
+no value itself (`cablecheck.scene.reader` does).
 """
 
 from __future__ import annotations

@@ -3,8 +3,8 @@ the values a key may take, the defaults and the bounds every scene is held to.
 
 `docs/scene-format.md` documents these; `tests/test_scene.py` compares its
 tables with the key tuples here. This module reads nothing and checks
-nothing (the table readers do, `sim.scene.load`); the records that carry
-the values are in `sim.scene.records`.
+nothing (the table readers do, `cablecheck.scene.load`); the records that carry
+the values are in `cablecheck.scene.records`.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ INTERACTIONS = ("cable-structure", "cable-cable", "self", "part-part")
 METHODS = ("points", "exact")
 
 INTERPOLATIONS = ("cubic", "linear")
-"""How a motion's samples are joined (`sim.curves`), the default first."""
+"""How a motion's samples are joined (`cablecheck.run.curves`), the default first."""
 """Values allowed in `check.method`."""
 
 DEFAULT_CLEARANCE = 0.005
@@ -47,11 +47,11 @@ DEFAULT_FRICTION = 1.0
 """Sliding friction of a contact where neither the cable nor the part (nor
 the other cable) sets `friction`: MuJoCo's default geom friction. Where
 one side sets it, that side's; where both do, the larger (MuJoCo's rule
-for geoms of equal priority; see `sim.mjspec`)."""
+for geoms of equal priority; see `cablecheck.build.mjspec`)."""
 
 DEFAULT_DAMPING = 0.02
 """`damping` when absent: fraction of critical damping of a cable's own first
-bending mode as held (see `sim.build.rayleigh_damping` and docs/physics.md). 2 % is
+bending mode as held (see `cablecheck.build.stages.rayleigh_damping` and docs/physics.md). 2 % is
 the loss of a polymer-jacketed cable swinging in air; a hanging cable keeps
 swinging for many periods."""
 
@@ -78,7 +78,7 @@ SELF_CONTACT_ELEMENT = 2.25
 """Shortest element, in cable radii, when self-contact pushes back: MuJoCo's
 flex self-collision skips only elements sharing a vertex, so elements two
 apart along a straight cable are one element length apart and touch (within
-the simulation's contact margin of 0.25 r, `sim.build.SIM_MARGIN_FRACTION`)
+the simulation's contact margin of 0.25 r, `cablecheck.build.stages.SIM_MARGIN_FRACTION`)
 unless it exceeds 2 r + 0.25 r. Without self-contact MuJoCo sets no such
 limit on the element length."""
 

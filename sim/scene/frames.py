@@ -1,7 +1,7 @@
 """Body frames at t = 0: euler angles to rotations, anchors to and from
 world coordinates, and the mjcf bodies' frames at the motions' first samples.
 
-"At t = 0" is the pose the motion script gives (see `sim.scene`). Frames
+"At t = 0" is the pose the motion script gives (see `cablecheck.scene`). Frames
 are (origin (3,), rotation (3, 3)) pairs, read-only. Nothing here reads a
 scene table.
 """
@@ -11,8 +11,8 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from sim.scene.mjcf import MjcfInfo
-from sim.scene.records import Anchor, MotionDef
+from cablecheck.scene.mjcf import MjcfInfo
+from cablecheck.scene.records import Anchor, MotionDef
 
 
 def euler_matrix(euler_deg) -> np.ndarray:

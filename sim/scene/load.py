@@ -19,18 +19,18 @@ from types import MappingProxyType
 
 import numpy as np
 
-from sim.scene.allow import read_allow
-from sim.scene.cables import check_fastened_names, read_cable
-from sim.scene.errors import SceneError
-from sim.scene.format import SCENE_KEYS, TOP_KEYS, UNITS
-from sim.scene.frames import euler_matrix, frame, mjcf_frames
-from sim.scene.mjcf import compile_mjcf
-from sim.scene.motion import read_motion
-from sim.scene.parts import expand_nodes, read_body, read_part
-from sim.scene.reader import Reader
-from sim.scene.records import Scene
-from sim.scene.settings import read_check, read_effects, read_limits, within_limits
-from sim.scene.units import check_units
+from cablecheck.scene.allow import read_allow
+from cablecheck.scene.cables import check_fastened_names, read_cable
+from cablecheck.scene.errors import SceneError
+from cablecheck.scene.format import SCENE_KEYS, TOP_KEYS, UNITS
+from cablecheck.scene.frames import euler_matrix, frame, mjcf_frames
+from cablecheck.scene.mjcf import compile_mjcf
+from cablecheck.scene.motion import read_motion
+from cablecheck.scene.parts import expand_nodes, read_body, read_part
+from cablecheck.scene.reader import Reader
+from cablecheck.scene.records import Scene
+from cablecheck.scene.settings import read_check, read_effects, read_limits, within_limits
+from cablecheck.scene.units import check_units
 
 
 def load_scene(path: str | Path) -> Scene:

@@ -2,10 +2,10 @@
 its bodies, joints and keyframes, and which of its joints a motion drives.
 
 `base_model` keeps the compiled file for the process (while the file is
-unchanged), so the droop's obstacles (`sim.obstacles`) read the same model
+unchanged), so the droop's obstacles (`cablecheck.build.obstacles`) read the same model
 instead of compiling it again. The builder compiles the file again into its
-own models (`sim.build`); nothing here builds a simulation or moves the
-model (the frames at t = 0: `sim.scene.frames`).
+own models (`cablecheck.build.stages`); nothing here builds a simulation or moves the
+model (the frames at t = 0: `cablecheck.scene.frames`).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import mujoco
 
-from sim.scene.errors import SceneError
+from cablecheck.scene.errors import SceneError
 
 HINGE = int(mujoco.mjtJoint.mjJNT_HINGE)
 DRIVEN = (HINGE, int(mujoco.mjtJoint.mjJNT_SLIDE))
@@ -56,7 +56,7 @@ def compile_mjcf(file: Path, path: Path) -> MjcfInfo:
 def base_model(path: Path) -> mujoco.MjModel:
     """The model the mjcf file `path` compiles to, compiled once per process
     while the file keeps its content and modification time (`compile_mjcf`
-    and `sim.obstacles` share it). Shared: read it, never change it."""
+    and `cablecheck.build.obstacles` share it). Shared: read it, never change it."""
     path = Path(path).resolve()
     digest = hashlib.blake2b(path.read_bytes(), digest_size=16).digest()
     return _compiled(str(path), path.stat().st_mtime_ns, digest)

@@ -1,8 +1,8 @@
 """`[[motion]]`: what a motion drives (a `[[bodies]]` body, a joint of the
 mjcf model, the model's keyframes, or the columns of a CSV file) and its keys.
 
-The samples become a `Trajectory` in `sim.scene.trajectory`; the CSV file
-is read by `sim.scene.samples`. Every sample of a joint with a range must
+The samples become a `Trajectory` in `cablecheck.scene.trajectory`; the CSV file
+is read by `cablecheck.scene.samples`. Every sample of a joint with a range must
 lie in it.
 """
 
@@ -15,13 +15,20 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from sim.scene.errors import SceneError, describe, fmt
-from sim.scene.format import ANGLES, BODY_AXES, BODY_KEY_KEYS, INTERPOLATIONS, JOINT_KEY_KEYS, MOTION_KEYS
-from sim.scene.mjcf import DRIVEN
-from sim.scene.reader import Reader
-from sim.scene.records import BodyDef, BodyKey, JointKey, KeyframeKey, MotionDef, Trajectory
-from sim.scene.samples import read_samples
-from sim.scene.trajectory import check_ranges, joint_scale, keys_trajectory, make_trajectory
+from cablecheck.scene.errors import SceneError, describe, fmt
+from cablecheck.scene.format import (
+    ANGLES,
+    BODY_AXES,
+    BODY_KEY_KEYS,
+    INTERPOLATIONS,
+    JOINT_KEY_KEYS,
+    MOTION_KEYS,
+)
+from cablecheck.scene.mjcf import DRIVEN
+from cablecheck.scene.reader import Reader
+from cablecheck.scene.records import BodyDef, BodyKey, JointKey, KeyframeKey, MotionDef, Trajectory
+from cablecheck.scene.samples import read_samples
+from cablecheck.scene.trajectory import check_ranges, joint_scale, keys_trajectory, make_trajectory
 
 
 def read_motion(r: Reader, value: dict, where: str, bodies: dict[str, BodyDef]) -> MotionDef:

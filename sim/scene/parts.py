@@ -2,10 +2,10 @@
 bodies they ride on; mesh files loaded (once each) to check they are usable.
 
 A glTF / GLB mesh part expands into one part per mesh node of the file,
-named ``<name>/<node path>`` (`sim.meshfile`). Meshes are loaded with
+named ``<name>/<node path>`` (`cablecheck.scene.meshfile`). Meshes are loaded with
 trimesh only to check that they exist, load and (for keep-out parts) are
-closed; the builder loads them again. Cables and motions: `sim.scene.cables`,
-`sim.scene.motion`.
+closed; the builder loads them again. Cables and motions: `cablecheck.scene.cables`,
+`cablecheck.scene.motion`.
 """
 
 from __future__ import annotations
@@ -15,12 +15,12 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from sim.meshfile import MeshFileError, is_tree, mesh_nodes
-from sim.scene.errors import describe
-from sim.scene.format import BODY_KEYS, PART_KEYS, SHAPE_SIZES
-from sim.scene.frames import euler_matrix, frame
-from sim.scene.reader import Reader
-from sim.scene.records import BodyDef, PartDef
+from cablecheck.scene.errors import describe
+from cablecheck.scene.format import BODY_KEYS, PART_KEYS, SHAPE_SIZES
+from cablecheck.scene.frames import euler_matrix, frame
+from cablecheck.scene.meshfile import MeshFileError, is_tree, mesh_nodes
+from cablecheck.scene.reader import Reader
+from cablecheck.scene.records import BodyDef, PartDef
 
 _SIZE_HELP = {"box": "half-extents x, y, z", "sphere": "radius",
               "cylinder": "radius, half-length", "capsule": "radius, half-length",
@@ -139,7 +139,7 @@ def check_mesh(r: Reader, path: Path, where: str, closed: bool) -> None:
     nodes = read_mesh_nodes(r, path, where)
     if not closed:
         return
-    import trimesh   # loaded already by mesh_nodes (sim.meshfile): only a scene with meshes imports it
+    import trimesh  # loaded already by mesh_nodes (cablecheck.scene.meshfile): only a scene with meshes imports it
 
     for node in nodes:
         if not trimesh.Trimesh(node.vertices, node.faces).is_watertight:

@@ -3,8 +3,8 @@ single values (tables, numbers, names, vectors, lengths, file names).
 
 Each value reader checks one TOML value and returns it converted (lengths
 in metres) or raises `SceneError` naming the key path. The tables are read
-by the modules named after them (`sim.scene.settings`, `parts`, `cables`,
-`motion`, `allow`), which take a `Reader` first; `sim.scene.load` calls them
+by the modules named after them (`cablecheck.scene.settings`, `parts`, `cables`,
+`motion`, `allow`), which take a `Reader` first; `cablecheck.scene.load` calls them
 in order. A `Reader` also keeps what later tables need from earlier ones:
 the scale, the mjcf model, the body frames at t = 0 and the meshes read.
 """
@@ -18,10 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from sim.scene.errors import SceneError, describe, fmt, join_key
-from sim.scene.format import LARGEST
-from sim.scene.mjcf import MjcfInfo
-from sim.scene.records import Effects
+from cablecheck.scene.errors import SceneError, describe, fmt, join_key
+from cablecheck.scene.format import LARGEST
+from cablecheck.scene.mjcf import MjcfInfo
+from cablecheck.scene.records import Effects
 
 
 def is_number(value: Any) -> bool:

@@ -1,9 +1,9 @@
-"""The validated scene as frozen records, in SI units (see `sim.scene`).
+"""The validated scene as frozen records, in SI units (see `cablecheck.scene`).
 
 One record per table of the scene file (`Scene` holds them all), plus the
 motion's keys and its sampled `Trajectory`. The records only hold values:
-reading and checking the file is the table readers' job (`sim.scene.load`
-and its siblings), and building a model from them is `sim.build`'s.
+reading and checking the file is the table readers' job (`cablecheck.scene.load`
+and its siblings), and building a model from them is `cablecheck.build.stages`'s.
 """
 
 from __future__ import annotations
@@ -15,8 +15,15 @@ from typing import Mapping
 
 import numpy as np
 
-from sim.scene.format import (DEFAULT_CLEARANCE, DEFAULT_DAMPING, DEFAULT_DENSITY,
-                              DEFAULT_YOUNG, INTERPOLATIONS, ZERO3, Hold)
+from cablecheck.scene.format import (
+    DEFAULT_CLEARANCE,
+    DEFAULT_DAMPING,
+    DEFAULT_DENSITY,
+    DEFAULT_YOUNG,
+    INTERPOLATIONS,
+    ZERO3,
+    Hold,
+)
 
 
 @dataclass(frozen=True)
@@ -140,7 +147,7 @@ class PartDef:
         in the file's node tree (the part is named ``<entry name>/<node>``);
         None otherwise.
       friction: sliding friction coefficient of its contacts with cables, or
-        None: the cable's alone (`sim.mjspec`: where both set one, MuJoCo's
+        None: the cable's alone (`cablecheck.build.mjspec`: where both set one, MuJoCo's
         rule takes the larger).
     """
 
@@ -169,12 +176,12 @@ class Anchor:
       hold: clamp (position and tangent), pin (position) or free.
       tangent: (3,) unit vector, the direction a clamp holds the cable in
         at this point (the direction of travel from start to end), in the
-        body's frame; None: the route's (`sim.cableplan`). Clamps only.
+        body's frame; None: the route's (`cablecheck.build.cableplan`). Clamps only.
       parts: the parts (names or assembly paths) the scene says the point
         is fastened to (`part`): its attachment window excuses these alone.
         Empty: the parts of its body (and its neighbours, `attach_links`)
         that the held point lies within the cable radius plus the
-        clearance of (`sim.stepcheck.attachment_exclusions`).
+        clearance of (`cablecheck.run.stepcheck.attachment_exclusions`).
     """
 
     body: str
@@ -209,7 +216,7 @@ class CableDef:
         MuJoCo's default E / 2 (see docs/twist.md).
       friction: sliding friction coefficient of its contacts, or None: the
         other side's where it sets one, else MuJoCo's default 1.0 (where
-        both sides set one, the larger: MuJoCo's rule; `sim.mjspec`).
+        both sides set one, the larger: MuJoCo's rule; `cablecheck.build.mjspec`).
     """
 
     name: str
@@ -294,7 +301,7 @@ class Trajectory:
       body_euler: (n, B, 3) world orientations, degrees (intrinsic x, y, z),
         as written: consecutive samples may differ by any angle (0 then 270
         is a turn of 270 degrees, not of -90).
-      interpolation: "cubic" or "linear" (`sim.curves`).
+      interpolation: "cubic" or "linear" (`cablecheck.run.curves`).
     """
 
     times: np.ndarray
@@ -355,12 +362,12 @@ class Scene:
       check: how interference is checked.
       bodies, parts, cables, motions: in file order.
       allow: `[[allow]]` pairs in file order.
-      start_frames: world frame of every body at t = 0 (see `sim.scene`),
+      start_frames: world frame of every body at t = 0 (see `cablecheck.scene`),
         name -> (origin (3,) metres, rotation (3, 3)), for
         "world", each `[[bodies]]` body and each named mjcf body. Read-only.
       limits: the sizes the scene was checked against.
       warnings: what loading found unusual but runnable (sizes unusual in
-        the declared units, `sim.scene.units`), one sentence each.
+        the declared units, `cablecheck.scene.units`), one sentence each.
     """
 
     path: Path

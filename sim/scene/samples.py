@@ -2,7 +2,7 @@
 each row's line number, every problem named by line and column.
 
 Which joint or body a column drives, and the conversion to MuJoCo units,
-are `sim.scene.motion`'s; this module only reads the table.
+are `cablecheck.scene.motion`'s; this module only reads the table.
 """
 
 from __future__ import annotations
@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from sim.scene.errors import SceneError, fmt
-from sim.scene.format import LARGEST
+from cablecheck.scene.errors import SceneError, fmt
+from cablecheck.scene.format import LARGEST
 
 
 def read_samples(scene: Path, path: Path, written: str, where: str

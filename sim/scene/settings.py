@@ -1,7 +1,7 @@
 """The scene-wide tables: `[effects]`, `[check]` and `[limits]`, and the
 check of a scene's sizes against its limits.
 
-`[scene]` itself is read by `sim.scene.load`, which calls these in order;
+`[scene]` itself is read by `cablecheck.scene.load`, which calls these in order;
 nothing here reads parts, cables or motions (only their sizes, in
 `within_limits`).
 """
@@ -12,11 +12,17 @@ from typing import Any
 
 import numpy as np
 
-from sim.scene.errors import describe, fmt
-from sim.scene.format import (CHECK_KEYS, DEFAULT_CLEARANCE, EFFECTS_KEYS, INTERACTIONS,
-                              LIMIT_KEYS, METHODS)
-from sim.scene.reader import Reader
-from sim.scene.records import CableDef, CheckSettings, Effects, Limits
+from cablecheck.scene.errors import describe, fmt
+from cablecheck.scene.format import (
+    CHECK_KEYS,
+    DEFAULT_CLEARANCE,
+    EFFECTS_KEYS,
+    INTERACTIONS,
+    LIMIT_KEYS,
+    METHODS,
+)
+from cablecheck.scene.reader import Reader
+from cablecheck.scene.records import CableDef, CheckSettings, Effects, Limits
 
 
 def read_effects(r: Reader, value: Any) -> Effects:

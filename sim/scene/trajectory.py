@@ -2,9 +2,9 @@
 keys (values, poses or the mjcf model's keyframes), with every joint sample
 checked against its joint's range.
 
-Both interpolations (`sim.curves`) stay between neighbouring samples, so
+Both interpolations (`cablecheck.run.curves`) stay between neighbouring samples, so
 the samples bound the whole motion. Reading the `[[motion]]` table and its
-CSV file is `sim.scene.motion`'s; playing the motion, `sim.motion`'s.
+CSV file is `cablecheck.scene.motion`'s; playing the motion, `cablecheck.run.motion`'s.
 """
 
 from __future__ import annotations
@@ -12,11 +12,11 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from sim.scene.errors import fmt
-from sim.scene.format import ANGLES
-from sim.scene.mjcf import HINGE
-from sim.scene.reader import Reader
-from sim.scene.records import KeyframeKey, Trajectory
+from cablecheck.scene.errors import fmt
+from cablecheck.scene.format import ANGLES
+from cablecheck.scene.mjcf import HINGE
+from cablecheck.scene.reader import Reader
+from cablecheck.scene.records import KeyframeKey, Trajectory
 
 
 def make_trajectory(times, joints, values, bodies, pos, euler, interpolation) -> Trajectory:
@@ -86,7 +86,7 @@ def keys_trajectory(r: Reader, keys: tuple, body: str | None, joint: str | None,
 def check_ranges(r: Reader, trajectory: Trajectory, angles: str, sample) -> None:
     """Every joint sample inside its joint's range, when the joint is
     limited. `sample(i)` gives (key path, "where in the source") of sample i.
-    The interpolants stay between neighbouring samples (`sim.curves`), so
+    The interpolants stay between neighbouring samples (`cablecheck.run.curves`), so
     the samples bound the whole motion."""
     model = r.mjcf.model if r.mjcf else None
     for j, name in enumerate(trajectory.joints):

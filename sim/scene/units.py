@@ -19,15 +19,15 @@ what the same number would mean in the other unit:
 
 Positions are not judged: a cell far from its world origin is legitimate.
 This module reads a loaded scene's sizes and nothing else; it does not build
-or place anything (a route through a part is `sim.routecheck`'s).
+or place anything (a route through a part is `cablecheck.build.routecheck`'s).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from sim.scene.errors import SceneError, fmt
-from sim.scene.records import Scene
+from cablecheck.scene.errors import SceneError, fmt
+from cablecheck.scene.records import Scene
 
 RADIUS_REFUSE = (1e-5, 1.0)
 """Cable radii outside this (metres) are refused: finer than any wire, or a
