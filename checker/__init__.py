@@ -1,16 +1,20 @@
 """cablecheck's geometry: shapes, cable discretisation and interference checks.
 
 Pure numpy/scipy/trimesh, importable without MuJoCo. Inputs are arrays and
-plain records (:mod:`checker.scene_state`); outputs are
-:class:`~checker.records.Interference` records. This package does not step
+plain records (:mod:`cablecheck.checker.scene_state`); outputs are
+:class:`~cablecheck.checker.records.Interference` records. This package does not step
 physics, read scene files or write reports.
 """
 
-from checker.cable import arc_length, bend_radius, densify, resample, self_pair_excluded
-from checker.interference import Checker, check_state
-from checker.records import Interference, PairType, Severity, severity_of
-from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
-from checker.shapes import (
+if __name__ != "cablecheck.checker":   # one name for one module: a second import as `checker` would duplicate every class
+    raise ImportError(f"the folder checker/ is the package `cablecheck.checker` (pip install -e .): "
+                      f"import cablecheck.checker, not {__name__}")
+
+from cablecheck.checker.cable import arc_length, bend_radius, densify, resample, self_pair_excluded
+from cablecheck.checker.interference import Checker, check_state
+from cablecheck.checker.records import Interference, PairType, Severity, severity_of
+from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+from cablecheck.checker.shapes import (
     Shape,
     ShapeType,
     face_plane_distance,

@@ -35,7 +35,7 @@ from functools import cached_property
 
 import numpy as np
 
-from checker.arrays import ranges, within
+from cablecheck.checker.arrays import ranges, within
 
 LEAF_SIZE = 8
 """Triangles per leaf of a part's tree."""

@@ -15,7 +15,7 @@ interference, shared with the simulation side's filtering of MuJoCo's self
 contacts, and :func:`bend_radius`.
 
 Deliberately not here: distances between cables or to parts
-(:mod:`checker.interference`), smoothing or splines (the points are the truth).
+(:mod:`cablecheck.checker.interference`), smoothing or splines (the points are the truth).
 """
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from checker.arrays import within
-from checker.closest import cross, row_norm
+from cablecheck.checker.arrays import within
+from cablecheck.checker.closest import cross, row_norm
 
 TAUT_STRAIN = 0.01
 """Stretch beyond which a cable is taut (SPEC: 1 %)."""
@@ -161,7 +161,7 @@ def element_pieces(length: np.ndarray, spacing: np.ndarray) -> np.ndarray:
     so none is longer than ``spacing``: ``ceil(length / spacing)``, less a
     relative 1e-12 so an element of exactly k spacings is not split in k + 1.
     The one formula of :func:`densify_batch` and of the skip rule's test that
-    an element still splits alike (:mod:`checker.advance`). An infinite
+    an element still splits alike (:mod:`cablecheck.checker.advance`). An infinite
     spacing gives 1 piece."""
     return np.maximum(np.ceil(length / spacing * (1.0 - 1e-12)), 1.0)
 
@@ -297,7 +297,7 @@ def self_pair_excluded(s_a: np.ndarray, s_b: np.ndarray, radius: float | np.ndar
     The rule is about places, whatever finds them: method ``points`` applies
     it to its discrete points and element midpoints, method ``exact`` to
     every place of two elements (the nearest pair at least the window apart,
-    :func:`checker.closest.segment_segment_apart`), and so do the comparison
+    :func:`cablecheck.checker.closest.segment_segment_apart`), and so do the comparison
     with MuJoCo's contacts and the wear map (docs/self-check.md). The arc
     length is along the centreline as it is now: the bend argument above is
     about the cable's present shape.

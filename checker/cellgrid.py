@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from checker.arrays import within
+from cablecheck.checker.arrays import within
 
 _AXIS_CELLS = 2.0 ** 20
 """At most this many cells along an axis: keys fit in int64 and index rounding stays below _ROUND."""

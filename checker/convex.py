@@ -18,7 +18,7 @@ By pair (``exact`` says which answers are exact to rounding):
 - capsule with capsule: the distance between the axes minus both radii:
   exact;
 - capsule with box, cylinder or ellipsoid, apart: the least signed distance
-  along the axis (:func:`checker.shapes.segment_signed_distance_batch`)
+  along the axis (:func:`cablecheck.checker.shapes.segment_signed_distance_batch`)
   minus the radius: exact. Overlapping: with a box, the least of ``h_D`` over
   the face normals of ``A - B`` (box axes and axis x box-axis crosses): exact;
   with the others, the general rule below;
@@ -29,7 +29,7 @@ By pair (``exact`` says which answers are exact to rounding):
   parts turn about the axis (:func:`_parallel_cylinders`);
 - box with box overlapping: the least of ``h_D`` over the 15 separating
   axes (they are all the face normals of ``A - B``): exact. Apart, the
-  distance is the callers' (exact triangles; see :mod:`checker.parts`);
+  distance is the callers' (exact triangles; see :mod:`cablecheck.checker.parts`);
 - any other pair (a cylinder or an ellipsoid with a box, a capsule, a
   cylinder off parallel or an ellipsoid): the least of ``h_D`` over the 15 axes of the two
   frames, their centres' offset and both signs, then refined by Gilbert's
@@ -56,15 +56,15 @@ clearance of each other reach the refinement.
 
 ``where`` is the midpoint of the two support points along the best direction
 (the closest points when apart). Not here: meshes and planes, pair
-selection, records (:mod:`checker.parts`).
+selection, records (:mod:`cablecheck.checker.parts`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from checker.closest import segment_segment
-from checker.shapes import ShapeType, segment_signed_distance_batch, signed_distance_batch
+from cablecheck.checker.closest import segment_segment
+from cablecheck.checker.shapes import ShapeType, segment_signed_distance_batch, signed_distance_batch
 
 CONVEX = (ShapeType.BOX, ShapeType.SPHERE, ShapeType.CAPSULE, ShapeType.CYLINDER, ShapeType.ELLIPSOID)
 """Primitive types handled here."""

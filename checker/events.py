@@ -3,7 +3,7 @@
 `EventTracker.update` takes each checked step's interference records and
 keeps, per (type, a, b) pair, the interval it has stayed below the
 clearance. An event is a maximal such interval; its severity is the worst it
-reached (a record's severity is decided by `checker.records.severity_of`;
+reached (a record's severity is decided by `cablecheck.checker.records.severity_of`;
 an event is hard once any of its records is), its `phase` (:class:`Phase`)
 is static when it contains t = 0 (the settled rest state before motion) and
 dynamic otherwise.
@@ -35,7 +35,7 @@ from enum import StrEnum
 
 import numpy as np
 
-from checker.records import Interference, PairType, Severity
+from cablecheck.checker.records import Interference, PairType, Severity
 
 PairKey = tuple[PairType, str, str]
 """(type, a, b) of a pair (a string enum: a key of plain strings finds it too)."""

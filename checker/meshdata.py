@@ -4,7 +4,7 @@
 keeps the normals, pseudonormals, k-d trees and bound grid the queries
 use; :func:`sd_mesh` answers points with them (through the bound grid,
 exact nearest triangle, sign from the pseudonormals). Not here: segment
-queries (:mod:`checker.segments`), poses (:mod:`checker.shapes`).
+queries (:mod:`cablecheck.checker.segments`), poses (:mod:`cablecheck.checker.shapes`).
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from checker.closest import cross, row_norm
-from checker.meshgrid import BoundGrid
-from checker.meshnearest import mesh_nearest, mesh_sign
+from cablecheck.checker.closest import cross, row_norm
+from cablecheck.checker.meshgrid import BoundGrid
+from cablecheck.checker.meshnearest import mesh_nearest, mesh_sign
 
 if TYPE_CHECKING:
     from scipy.spatial import cKDTree
@@ -72,8 +72,8 @@ class MeshData:
     @staticmethod
     def build(vertices: np.ndarray, faces: np.ndarray) -> MeshData:
         """Check closure with trimesh, orient outward, precompute normals and tree."""
-        import trimesh   # a third of a second to import: only a mesh part pays it
-        from scipy.spatial import cKDTree   # loaded already by trimesh
+        import trimesh  # a third of a second to import: only a mesh part pays it
+        from scipy.spatial import cKDTree  # loaded already by trimesh
 
         tm = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
         closed = bool(tm.is_watertight and tm.is_winding_consistent)
@@ -123,7 +123,7 @@ reach_max / 2^5."""
 
 def _reach_levels(centroids: np.ndarray, face_reach: np.ndarray, reach: float,
                   levels: int = REACH_LEVELS, ratio: float = 2.0) -> tuple:
-    from scipy.spatial import cKDTree   # loaded already by trimesh (MeshData.build)
+    from scipy.spatial import cKDTree  # loaded already by trimesh (MeshData.build)
 
     if not len(face_reach) or reach <= 0:
         return ((reach, np.arange(len(face_reach)), cKDTree(centroids)),) if len(face_reach) else ()

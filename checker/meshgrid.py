@@ -3,7 +3,7 @@
 Filled lazily (cells are computed exactly the first time a query meets
 them and kept), so a run pays only for the cells its cables come near.
 Not here: the k-d tree search it falls back to and fills its cells with
-(:mod:`checker.meshnearest`).
+(:mod:`cablecheck.checker.meshnearest`).
 """
 
 from __future__ import annotations
@@ -12,11 +12,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from checker.closest import point_triangle, row_norm
-from checker.meshnearest import faces_within, mesh_nearest, mesh_sign
+from cablecheck.checker.closest import point_triangle, row_norm
+from cablecheck.checker.meshnearest import faces_within, mesh_nearest, mesh_sign
 
 if TYPE_CHECKING:
-    from checker.meshdata import MeshData
+    from cablecheck.checker.meshdata import MeshData
 
 
 _GRID_CELLS = 72

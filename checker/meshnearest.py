@@ -1,6 +1,6 @@
 """The exact nearest triangle of a mesh for query points, by its k-d trees.
 
-A mesh's :class:`~checker.meshdata.MeshData` keeps a k-d tree over its
+A mesh's :class:`~cablecheck.checker.meshdata.MeshData` keeps a k-d tree over its
 triangle centroids and the same split by the triangles' reach; here the k
 nearest centroids give a first answer that a proven cut-off either accepts
 or widens to every triangle that may beat it (:func:`faces_within`); a
@@ -9,8 +9,8 @@ comes from the angle-weighted pseudonormal of the closest feature
 (Baerentzen and Aanaes 2005).
 
 Not here: the lazily filled grid that answers most repeated queries
-(:mod:`checker.meshgrid`), signed distances as the checker asks them
-(:mod:`checker.meshdata`).
+(:mod:`cablecheck.checker.meshgrid`), signed distances as the checker asks them
+(:mod:`cablecheck.checker.meshdata`).
 """
 
 from __future__ import annotations
@@ -20,10 +20,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from checker.closest import REGION_EDGE_AB, REGION_VERT_A, point_triangle
+from cablecheck.checker.closest import REGION_EDGE_AB, REGION_VERT_A, point_triangle
 
 if TYPE_CHECKING:
-    from checker.meshdata import MeshData
+    from cablecheck.checker.meshdata import MeshData
 
 
 def faces_within(m: MeshData, q: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -16,12 +16,12 @@ the 15-axis test of their oriented boxes grown by the clearance, the triangle tr
 queried against the other part's tree), and only then exact triangle tests.
 
 Two primitives (box, sphere, capsule, cylinder, ellipsoid) are measured on
-their true shapes by :func:`checker.convex.convex_pairs` (exact, or a signed
+their true shapes by :func:`cablecheck.checker.convex.convex_pairs` (exact, or a signed
 distance never above the true one); only two boxes that are apart go on to
 their (exact) triangles. Every other pair (a mesh on either side), per pair:
 
 - overlap, hard, when any of these is found (each a certificate, never a
-  guess): surfaces crossing properly (:func:`checker.tritri.triangles_cross`,
+  guess): surfaces crossing properly (:func:`cablecheck.checker.tritri.triangles_cross`,
   whether or not any vertex lies inside: a pin through a plate, a bar through
   a bracket's foot); a containment probe of one part strictly inside the
   other (a part inside another, coincident parts; 002's containment); a point
@@ -54,7 +54,7 @@ is the deepest edge run's midpoint, the crossing, the deepest point of a
 mesh in a curved primitive or the midpoint of the closest points, world
 coordinates; ``s`` is 0 (parts have no arc length).
 
-Not here: cables (:mod:`checker.interference`), time and events.
+Not here: cables (:mod:`cablecheck.checker.interference`), time and events.
 """
 
 from __future__ import annotations
@@ -63,15 +63,15 @@ from dataclasses import replace
 
 import numpy as np
 
-from checker.arrays import ranges
-from checker.bvh import aabb_pairs, assembly_pairs, obb_overlap, prefix_hits, transformed_aabb
-from checker.convex import CONVEX, convex_pairs, support
-from checker.partset import Placement, PartSet
-from checker.records import Interference, PairType, severity_of
-from checker.shapes import segment_signed_distance_batch
-from checker.sweep import probes_inside_batch
-from checker.closest import row_norm
-from checker.tritri import edge_piercings, triangle_distance, triangles_cross
+from cablecheck.checker.arrays import ranges
+from cablecheck.checker.bvh import aabb_pairs, assembly_pairs, obb_overlap, prefix_hits, transformed_aabb
+from cablecheck.checker.closest import row_norm
+from cablecheck.checker.convex import CONVEX, convex_pairs, support
+from cablecheck.checker.partset import PartSet, Placement
+from cablecheck.checker.records import Interference, PairType, severity_of
+from cablecheck.checker.shapes import segment_signed_distance_batch
+from cablecheck.checker.sweep import probes_inside_batch
+from cablecheck.checker.tritri import edge_piercings, triangle_distance, triangles_cross
 
 
 def candidate_pairs(parts: PartSet, placed: Placement, clearance: float,
@@ -80,7 +80,7 @@ def candidate_pairs(parts: PartSet, placed: Placement, clearance: float,
     """Pairs (i < j, sorted) of non-plane parts whose boxes come within ``clearance``.
 
     With ``assemblies``, the part boxes are paired through the assembly
-    boxes (:func:`checker.bvh.assembly_pairs`: assemblies whose boxes, grown
+    boxes (:func:`cablecheck.checker.bvh.assembly_pairs`: assemblies whose boxes, grown
     by the clearance, do not overlap contribute no pairs); without, by one
     sort and sweep over all parts. Same pairs either way. With ``focus``
     ((P,) bool), only pairs of one focus part and one other, after pruning the
@@ -194,7 +194,7 @@ def _edge_runs(parts: PartSet, placed: Placement, n: int, i: np.ndarray, j: np.n
     For the crossing triangle pairs given (triangle ``ti`` of part
     ``i[row]`` against ``tj`` of ``j[row]``, world corners ``a``, ``b``),
     every edge of either triangle is cut at all its piercings of the other
-    part's triangles (:func:`checker.tritri.edge_piercings`); the midpoint of
+    part's triangles (:func:`cablecheck.checker.tritri.edge_piercings`); the midpoint of
     each run between two consecutive piercings is measured against the other
     part's true shape. An edge whose ends are outside the other part enters
     and leaves it, so a crossing with no corner inside has such a run
@@ -259,9 +259,9 @@ def _true_surface(parts: PartSet, placed: Placement, prim: np.ndarray,
     P of T is nearest S (or cuts it):
 
     - edges: the least signed distance along each edge, exact per primitive
-      (:func:`checker.shapes.segment_signed_distance_batch`);
+      (:func:`cablecheck.checker.shapes.segment_signed_distance_batch`);
     - S wholly on one side of P: the distance from P to S is the height of
-      S's support point towards P (:func:`checker.convex.support`); when its
+      S's support point towards P (:func:`cablecheck.checker.convex.support`); when its
       foot on P lies in T, that is T's distance (if not, a point of P nearest
       S in T would make a segment of such points reaching T's edges, which
       the edges then give);
@@ -445,7 +445,7 @@ def _check_indexed(parts: PartSet, placed: Placement, clearance: float, focus, p
     if n:
         value = np.full(n, np.inf)
         where = np.zeros((n, 3))
-        # two primitives: their true shapes (checker.convex); two boxes apart, meshes: triangles
+        # two primitives: their true shapes (cablecheck.checker.convex); two boxes apart, meshes: triangles
         kind = parts.convex_kind
         conv = np.flatnonzero((kind[i] >= 0) & (kind[j] >= 0))
         tri = np.ones(n, bool)
@@ -620,7 +620,7 @@ class PartChecker:
     def _primitive_pairs_many(self, poses: np.ndarray, i: np.ndarray,
                               j: np.ndarray) -> list[list[Interference]] | None:
         """:meth:`check_pairs_many` when every pair is two primitives (no
-        plane): the oriented-box test and :func:`checker.convex.convex_pairs`
+        plane): the oriented-box test and :func:`cablecheck.checker.convex.convex_pairs`
         on the pairs at all the states in one call, straight from the poses
         (what :func:`check_parts` does with the same rows, whose answers
         depend on each row alone); None when some pair needs its triangles

@@ -1,9 +1,9 @@
 """Rigid parts prepared once for sweeps and part-part checks, and placed per pose set.
 
 :class:`PartSet` holds, for every part, its triangle surface in its own frame
-(:mod:`checker.tessellate`), outward normals and edge pseudonormals per
+(:mod:`cablecheck.checker.tessellate`), outward normals and edge pseudonormals per
 triangle, containment probes, its box in its frame and one
-:class:`~checker.bvh.TriangleForest` over all parts' triangles. It is built
+:class:`~cablecheck.checker.bvh.TriangleForest` over all parts' triangles. It is built
 once; a new set of poses only needs :meth:`PartSet.place`, which computes the
 oriented boxes in the assembly (world) frame, their world AABBs and the
 assembly boxes. Queries reuse both.
@@ -15,8 +15,8 @@ two overlap; coincident parts and parts inside parts are found this way
 without a crossing of surfaces. Parts sharing a face from opposite sides put
 no probe inside each other, so they only touch.
 
-Not here: the contact tests themselves (:mod:`checker.sweep`,
-:mod:`checker.parts`).
+Not here: the contact tests themselves (:mod:`cablecheck.checker.sweep`,
+:mod:`cablecheck.checker.parts`).
 """
 
 from __future__ import annotations
@@ -26,11 +26,11 @@ from functools import cached_property
 
 import numpy as np
 
-from checker.arrays import ranges
-from checker.bvh import Assemblies, TriangleForest, assembly_boxes, transformed_aabb
-from checker.convex import CONVEX
-from checker.shapes import Shape, ShapeType, signed_distance, signed_distance_batch
-from checker.tessellate import part_surfaces
+from cablecheck.checker.arrays import ranges
+from cablecheck.checker.bvh import Assemblies, TriangleForest, assembly_boxes, transformed_aabb
+from cablecheck.checker.convex import CONVEX
+from cablecheck.checker.shapes import Shape, ShapeType, signed_distance, signed_distance_batch
+from cablecheck.checker.tessellate import part_surfaces
 
 TOUCH = 1e-6
 """Touching tolerance, relative to a part's box diagonal: surfaces closer than
@@ -241,7 +241,7 @@ class PartSet:
 
     @cached_property
     def convex_kind(self) -> np.ndarray:
-        """(P,) index into :data:`checker.convex.CONVEX` of each primitive part, -1 for meshes and planes."""
+        """(P,) index into :data:`cablecheck.checker.convex.CONVEX` of each primitive part, -1 for meshes and planes."""
         index = {t: k for k, t in enumerate(CONVEX)}
         return np.array([index.get(sh.type, -1) for sh in self.shapes], np.int64)
 

@@ -9,9 +9,9 @@ convention (box half-extents, sphere radius, cylinder and capsule
 solid half-space ``z < 0``), one row of ``size`` per point, so every part of
 one type is answered in one call. Points are in each shape's own frame.
 
-Not here: meshes (:mod:`checker.meshdata`), segments
-(:mod:`checker.segments`), poses and the :class:`~checker.shapes.Shape`
-object (:mod:`checker.shapes`).
+Not here: meshes (:mod:`cablecheck.checker.meshdata`), segments
+(:mod:`cablecheck.checker.segments`), poses and the :class:`~cablecheck.checker.shapes.Shape`
+object (:mod:`cablecheck.checker.shapes`).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from enum import Enum
 
 import numpy as np
 
-from checker.closest import row_norm
+from cablecheck.checker.closest import row_norm
 
 
 class ShapeType(str, Enum):

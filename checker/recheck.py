@@ -17,7 +17,7 @@ the new distance must class the pair as the simulator did.
 Only the cables and the part of the pair are checked, with the run's
 clearance and exclusion windows; the per-part checkers and hull shapes are
 built on first use and kept. This module decides nothing: the comparison
-(:mod:`checker.validation`) takes the distances. It knows no simulator.
+(:mod:`cablecheck.checker.validation`) takes the distances. It knows no simulator.
 """
 
 from __future__ import annotations
@@ -27,13 +27,13 @@ from dataclasses import replace
 
 import numpy as np
 
-from checker.interference import Checker
-from checker.interference.discrete import discretise
-from checker.interference.hits import Hits, worst_records
-from checker.interference.structure import PartTable, structure_exact_pairs
-from checker.records import PairType
-from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
-from checker.shapes import Shape, ShapeType, mesh_shape
+from cablecheck.checker.interference import Checker
+from cablecheck.checker.interference.discrete import discretise
+from cablecheck.checker.interference.hits import Hits, worst_records
+from cablecheck.checker.interference.structure import PartTable, structure_exact_pairs
+from cablecheck.checker.records import PairType
+from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape
 
 _PART_TYPES = (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)
 
@@ -41,7 +41,7 @@ _PART_TYPES = (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)
 def convex_hull_shape(shape: Shape) -> Shape:
     """The convex hull of a mesh shape, as a closed mesh shape (trimesh's
     Qhull wrapper)."""
-    import trimesh   # a third of a second to import: only a mesh part's hull pays it
+    import trimesh  # a third of a second to import: only a mesh part's hull pays it
 
     hull = trimesh.convex.convex_hull(np.asarray(shape.vertices, float))
     return mesh_shape(np.asarray(hull.vertices), np.asarray(hull.faces))

@@ -8,7 +8,7 @@ poses, non-positive radii) happens here, at construction, with a message naming
 the record.
 
 Deliberately not here: scene files, units, MuJoCo ids; the geometry itself
-(:mod:`checker.shapes`, :mod:`checker.interference`).
+(:mod:`cablecheck.checker.shapes`, :mod:`cablecheck.checker.interference`).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.shapes import Shape
+from cablecheck.checker.shapes import Shape
 
 
 @dataclass(frozen=True, eq=False)

@@ -11,24 +11,24 @@ searched from the deepest of nine evenly spaced samples by golden section
 between its neighbours: exact (1e-13 of that stretch) where the depth is
 concave along the segment, as inside a convex mesh, and never shallower
 than the samples in a concave one (there the deepest point between other
-samples can be missed). Not here: point queries (:mod:`checker.primitives`,
-:mod:`checker.meshdata`), poses (:mod:`checker.shapes`).
+samples can be missed). Not here: point queries (:mod:`cablecheck.checker.primitives`,
+:mod:`cablecheck.checker.meshdata`), poses (:mod:`cablecheck.checker.shapes`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from checker.closest import (
+from cablecheck.checker.closest import (
     point_segment,
     point_triangle,
     row_norm,
     segment_segment,
     segment_triangle,
 )
-from checker.meshdata import MeshData, sd_mesh
-from checker.meshnearest import faces_within, mesh_sign
-from checker.primitives import ShapeType, sd_ellipsoid, signed_distance_value_batch
+from cablecheck.checker.meshdata import MeshData, sd_mesh
+from cablecheck.checker.meshnearest import faces_within, mesh_sign
+from cablecheck.checker.primitives import ShapeType, sd_ellipsoid, signed_distance_value_batch
 
 # Golden-section iterations for segment distances to convex shapes:
 # 0.618**62 ~ 1e-13 of the segment's length.

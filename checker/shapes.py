@@ -31,13 +31,13 @@ every part of one shape type in one call; the ``*_batch`` functions are that
 interface. :func:`least_signed_distance` answers world points against a few
 posed shapes without any pruning. Nothing else here knows about poses, and
 nothing here knows cables or interference records or builds a broad phase
-over several parts: that is :mod:`checker.interference`'s job.
+over several parts: that is :mod:`cablecheck.checker.interference`'s job.
 
 This module holds the :class:`Shape` and the per-shape entry points; the
-work is done by :mod:`checker.primitives` (primitive point distances),
-:mod:`checker.meshdata`, :mod:`checker.meshgrid` and
-:mod:`checker.meshnearest` (mesh point distances) and
-:mod:`checker.segments` (segment distances), whose batch functions are
+work is done by :mod:`cablecheck.checker.primitives` (primitive point distances),
+:mod:`cablecheck.checker.meshdata`, :mod:`cablecheck.checker.meshgrid` and
+:mod:`cablecheck.checker.meshnearest` (mesh point distances) and
+:mod:`cablecheck.checker.segments` (segment distances), whose batch functions are
 re-exported here.
 """
 
@@ -53,14 +53,14 @@ import numpy as np
 
 # The modules below do the work; their public names are re-exported here,
 # where the rest of the checker has always imported them from.
-from checker.meshdata import MeshData, sd_mesh, sd_mesh_face_plane
-from checker.primitives import (
+from cablecheck.checker.meshdata import MeshData, sd_mesh, sd_mesh_face_plane
+from cablecheck.checker.primitives import (
     ShapeType,
     face_plane_distance_batch,
     signed_distance_batch,
     signed_distance_value_batch,
 )
-from checker.segments import (
+from cablecheck.checker.segments import (
     segment_sd_mesh,
     segment_signed_distance_batch,
     segment_signed_distance_mixed,
@@ -197,7 +197,7 @@ def mesh_shape(vertices: np.ndarray, faces: np.ndarray) -> Shape:
         memo = _MESH_MEMO.shapes = OrderedDict()
     shape = memo.get(key)
     if shape is None:
-        import trimesh   # a third of a second to import: only a mesh part pays it
+        import trimesh  # a third of a second to import: only a mesh part pays it
 
         tm = trimesh.Trimesh(vertices=v, faces=f, process=True)
         tm.update_faces(tm.nondegenerate_faces())
@@ -305,7 +305,7 @@ def least_signed_distance(shapes: list[Shape], rotations: np.ndarray, positions:
     type are answered in one batched call and each mesh in one call (its
     k-d tree, not its bound grid: these points are seldom asked again). No
     broad phase (meant for a few parts and points, e.g. placing a cable's
-    initial shape; :mod:`checker.interference` prunes for the per-step
+    initial shape; :mod:`cablecheck.checker.interference` prunes for the per-step
     checks). No parts: +inf.
     """
     p = np.asarray(points, dtype=float).reshape(-1, 3)

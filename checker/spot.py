@@ -1,6 +1,6 @@
 """The other side of a clash: the closest point opposite a record's worst place.
 
-An :class:`~checker.records.Interference` carries its worst place on cable
+An :class:`~cablecheck.checker.records.Interference` carries its worst place on cable
 ``a`` (``where``, ``s``) and, for cable pairs, the arc length on cable ``b``
 (``s_b``). To draw the gap (a segment from one side to the other) a viewer
 needs the matching point on the other side; it is found here from the same
@@ -8,7 +8,7 @@ geometry, for the few records shown, not carried by every record of every
 step:
 
 - against a part: the closest surface point of the part's shape to
-  ``where`` (:func:`checker.shapes.signed_distance`, in the part's frame;
+  ``where`` (:func:`cablecheck.checker.shapes.signed_distance`, in the part's frame;
   many places of one part in one query);
 - against a cable (another one or a loop of the same): the closest point
   to ``where`` on the elements of cable ``b`` next to arc length ``s_b``
@@ -21,9 +21,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from checker.cable import arc_length
-from checker.closest import point_segment, row_norm
-from checker.shapes import Shape, signed_distance
+from cablecheck.checker.cable import arc_length
+from cablecheck.checker.closest import point_segment, row_norm
+from cablecheck.checker.shapes import Shape, signed_distance
 
 
 def on_part(shape: Shape, pose: np.ndarray, where: np.ndarray) -> np.ndarray:

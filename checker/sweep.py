@@ -18,7 +18,7 @@ and lightweight-CAD papers):
    the moving parts' trees: the result is the candidate triangle pairs;
 4. exact continuous tests on those pairs: moving corners against fixed faces,
    fixed corners against moving faces (moving by ``-D``), and edge against
-   edge (:mod:`checker.tritri`). Infinite planes are tested corner by corner.
+   edge (:mod:`cablecheck.checker.tritri`). Infinite planes are tested corner by corner.
 
 Contact rule (touching versus hitting): a contact counts only when the motion
 carries the parts into each other: a corner meets a face whose outward
@@ -30,8 +30,8 @@ pushed into it is hit at travel 0. For an open mesh (no outside) any
 non-parallel contact counts.
 
 Start overlap: surfaces that cross properly
-(:func:`checker.tritri.triangles_cross`) or containment probes strictly
-inside the other part (:mod:`checker.partset`); touching is not overlapping.
+(:func:`cablecheck.checker.tritri.triangles_cross`) or containment probes strictly
+inside the other part (:mod:`cablecheck.checker.partset`); touching is not overlapping.
 
 Exactness: the first-contact travel is exact (up to floating point) for the
 triangle surfaces; boxes and meshes are their own surfaces, curved primitives
@@ -46,11 +46,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.arrays import ranges
-from checker.bvh import obb_overlap, prefix_hits, transformed_aabb
-from checker.partset import PROBE_DEPTH, TOUCH, Placement, PartSet
-from checker.shapes import signed_distance, signed_distance_value_batch
-from checker.tritri import EPS, edge_edge_contact, triangles_cross, vertex_face_contact
+from cablecheck.checker.arrays import ranges
+from cablecheck.checker.bvh import obb_overlap, prefix_hits, transformed_aabb
+from cablecheck.checker.partset import PROBE_DEPTH, TOUCH, PartSet, Placement
+from cablecheck.checker.shapes import signed_distance, signed_distance_value_batch
+from cablecheck.checker.tritri import EPS, edge_edge_contact, triangles_cross, vertex_face_contact
 
 _ROUNDS = 16
 """Most candidate contacts tried per part before the earliest is reported unverified."""

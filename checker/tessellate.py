@@ -1,6 +1,6 @@
 """Triangle surfaces of parts, for the rigid-part checks (sweep, part-part).
 
-:func:`part_surface` turns a :class:`~checker.shapes.Shape` into a closed,
+:func:`part_surface` turns a :class:`~cablecheck.checker.shapes.Shape` into a closed,
 outward-wound triangle surface in the part frame, and says how far that surface
 may lie from the true one:
 
@@ -27,7 +27,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from checker.shapes import Shape, ShapeType
+from cablecheck.checker.shapes import Shape, ShapeType
 
 MAX_SEGMENTS = 256
 """Most segments around a curved primitive (caps the triangle count near 130k)."""

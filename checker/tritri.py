@@ -26,14 +26,14 @@
 Tolerances are relative to the coordinates involved (``EPS`` times the
 largest coordinate magnitude of the pair), so answers do not change when a
 scene is translated or rescaled. Not here: which triangles to pair (see
-:mod:`checker.bvh`), parts, poses, records.
+:mod:`cablecheck.checker.bvh`), parts, poses, records.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from checker.closest import point_triangle, segment_segment
+from cablecheck.checker.closest import point_triangle, segment_segment
 
 EPS = 1e-9
 """Relative tolerance separating touching from crossing and bounding contact parameters."""

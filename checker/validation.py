@@ -3,7 +3,7 @@
 At each checked step both sides are reduced to one signed distance per pair
 (type, a, b) below the clearance, and every pair either side saw is classed
 hard (< 0), soft (< clearance) or clear by each side with the records' own
-rule (`checker.records.severity_of`), so exactly as events are.
+rule (`cablecheck.checker.records.severity_of`), so exactly as events are.
 Simulator contacts are first filtered with the checker's own rules: contacts
 of elements inside an attachment window (`Exclusion`, aligned to elements by
 the caller so both sides leave out the same piece of cable) are expected, and
@@ -31,8 +31,8 @@ counted apart.
 This module takes plain arrays: it does not know MuJoCo's data structures
 (the simulation side maps contacts to names) and computes no geometry beyond
 projecting a contact point onto a segment and measuring a self contact's two
-elements again (:mod:`checker.closest`); the second opinions come from
-:mod:`checker.recheck` through the caller.
+elements again (:mod:`cablecheck.checker.closest`); the second opinions come from
+:mod:`cablecheck.checker.recheck` through the caller.
 """
 
 from __future__ import annotations
@@ -45,12 +45,12 @@ from typing import Protocol
 
 import numpy as np
 
-from checker.arrays import first_least, ranges
-from checker.cable import polyline_arc_lengths, self_pair_excluded, self_pair_window, tile_offsets
-from checker.closest import row_norm, segment_parameter, segment_segment, segment_segment_apart
-from checker.events import AllowList
-from checker.records import Interference, PairType, severity_of
-from checker.scene_state import Exclusion
+from cablecheck.checker.arrays import first_least, ranges
+from cablecheck.checker.cable import polyline_arc_lengths, self_pair_excluded, self_pair_window, tile_offsets
+from cablecheck.checker.closest import row_norm, segment_parameter, segment_segment, segment_segment_apart
+from cablecheck.checker.events import AllowList
+from cablecheck.checker.records import Interference, PairType, severity_of
+from cablecheck.checker.scene_state import Exclusion
 
 COMPARED_TYPES = (PairType.SELF, PairType.CABLE_CABLE, PairType.CABLE_STRUCTURE, PairType.KEEPOUT)
 """Pair types both sides report (bend and taut are the checker's alone)."""
@@ -333,7 +333,7 @@ def past_window(flat: np.ndarray, s: np.ndarray, ga: np.ndarray, gb: np.ndarray,
     at least ``window`` apart along the cable, this is the contact's
     ``dist`` plus how much farther apart the nearest such places are than
     the elements' closest ones (both measured on these elements,
-    :func:`~checker.closest.segment_segment_apart`), and the midpoint of
+    :func:`~cablecheck.checker.closest.segment_segment_apart`), and the midpoint of
     those places; inf where no such places exist.
 
     Args:
@@ -395,7 +395,7 @@ class Reason(StrEnum):
 
 
 class Recheck(Protocol):
-    """Second opinions on a pair at one state (:class:`checker.recheck.StateRecheck`):
+    """Second opinions on a pair at one state (:class:`cablecheck.checker.recheck.StateRecheck`):
     its signed distance when below the clearance, else None."""
 
     def exact(self, key: tuple[str, str, str]) -> float | None: ...

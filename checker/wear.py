@@ -30,11 +30,11 @@ Where contact comes from: the step's interference records name every pair
 below the clearance (at every checked step, proven-clear steps included, so
 a pair in contact is never missed). For each named cable-structure pair the
 cable's elements whose box meets the part's are measured against it (exact
-segment to shape distance, :func:`checker.shapes.segment_signed_distance`;
+segment to shape distance, :func:`cablecheck.checker.shapes.segment_signed_distance`;
 for a mesh the element's ends and middle); for cable-cable and self pairs
 the element pairs whose bounding spheres meet, exactly (self: the checker's
 self rule, the nearest of the two elements' places at least
-:func:`checker.cable.self_pair_window` apart along the cable). Keep-outs
+:func:`cablecheck.checker.cable.self_pair_window` apart along the cable). Keep-outs
 are clearance zones, not surfaces, and make no wear; an attachment window
 (the cable held in a part) is not contact either. Cost: one vectorised
 distance call per pair in contact per batch of steps; nothing when nothing
@@ -58,11 +58,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.cable import self_pair_window
-from checker.closest import row_norm, segment_segment, segment_segment_apart
-from checker.records import Interference, PairType
-from checker.scene_state import Exclusion
-from checker.shapes import Shape, ShapeType, signed_distance, segment_signed_distance
+from cablecheck.checker.cable import self_pair_window
+from cablecheck.checker.closest import row_norm, segment_segment, segment_segment_apart
+from cablecheck.checker.records import Interference, PairType
+from cablecheck.checker.scene_state import Exclusion
+from cablecheck.checker.shapes import Shape, ShapeType, segment_signed_distance, signed_distance
 
 REVERSAL_STRAIN = 1e-3
 """Surface bending strain (radius times change of curvature) a bend must swing
@@ -318,7 +318,7 @@ class WearMap:
         gap = row_norm(ma[:, :, None, :] - mb[:, None, :, :]) - ha[:, :, None] - hb[:, None, :]
         st, ia, ib = np.nonzero(gap < self.radii[c] + self.radii[b] + self.clearance)
         if b == c:
-            # the checker's self rule (checker.cable.self_pair_excluded): only
+            # the checker's self rule (cablecheck.checker.cable.self_pair_excluded): only
             # places at least the window apart along the cable's centreline
             # count, the nearest such places of each element pair
             # (segment_segment_apart), wherever the elements' own closest
@@ -402,7 +402,7 @@ def _element_distance(shape: Shape, a: np.ndarray, b: np.ndarray,
                       limit: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance of elements `a b` (n, 3) to a shape in its frame and
     the parameter of the nearest place: exact for primitives
-    (:func:`checker.shapes.segment_signed_distance`); for a mesh, the least
+    (:func:`cablecheck.checker.shapes.segment_signed_distance`); for a mesh, the least
     of the element's ends and middle (its exact segment search costs a
     millisecond an element on a CAD mesh; elements are a few radii long, so
     this errs by at most the element's sag over half its length). With

@@ -1,8 +1,8 @@
 """Conservative advancement: steps on which no pair can have come within the clearance.
 
 After a full check at step k0 the checker knows, up to a horizon H, how far
-every pair stays from the clearance (the :class:`~checker.interference.hits.Gaps`
-record :meth:`checker.interference.Checker.check_with_gaps` returns, with its
+every pair stays from the clearance (the :class:`~cablecheck.checker.interference.hits.Gaps`
+record :meth:`cablecheck.checker.interference.Checker.check_with_gaps` returns, with its
 part and cable candidates, and :func:`part_pair_bounds`). On a later step k, with
 
 - ``d_i``: the displacement of cable body centre i since k0, ``dq_i = |d_i|``,
@@ -37,7 +37,7 @@ no pair can have come within the clearance while
     consecutive elements) at step k, ``S`` the arc length from centre e + 1
     to centre f at k0 minus ``stretch`` (the arc length at k is no less
     under the last condition), ``w = pi r + clearance`` the self-exclusion window
-    (:func:`checker.cable.self_pair_excluded`) and r the cable's radius; or
+    (:func:`cablecheck.checker.cable.self_pair_excluded`) and r the cable's radius; or
     the largest ``|d_a - d_b|`` over a in {e, e + 1} and b in {f, f + 1} is
     below the pair's gap: the least value minus the clearance of the
     candidates with both places on the pair (H when there is none, capped
@@ -59,7 +59,7 @@ no pair can have come within the clearance while
     b of B, the distance between their midpoints less half their lengths,
     or the gap between their projections on the unit vector ``n`` from
     the closest point of a to that of b (as
-    :func:`checker.closest.segment_segment` finds them), exceeds the two
+    :func:`cablecheck.checker.closest.segment_segment` finds them), exceeds the two
     blocks' largest radii and the clearance,
   - ``min(spread, 2 max dq) < FAR_HORIZONS * H`` when some block pairs are
     farther apart than that and left unlisted,
@@ -72,7 +72,7 @@ no pair can have come within the clearance while
   between parts), ``rel`` the move of one part in the other's own frame
   (modulo turns about that part's axis where it is a solid of revolution,
   less both tessellation errors as a margin:
-  :class:`~checker.advance.partpairs.PartPairGaps`),
+  :class:`~cablecheck.checker.advance.partpairs.PartPairGaps`),
   or the same box separation at step k itself above the clearance,
   except the pairs the caller leaves out of the bound and checks itself at
   every step (*active* part pairs, within the clearance at k0),
@@ -171,15 +171,15 @@ exclusion can change discontinuously) and the face-plane distance never
 skip.
 
 The package holds only the bound, one module per condition:
-:mod:`~checker.advance.cablepairs` (self and cable-cable),
-:mod:`~checker.advance.structure` (cables against parts),
-:mod:`~checker.advance.partpairs` (part pairs), and
-:mod:`~checker.advance.skip` (:class:`Advancement`: the start, the run of
+:mod:`~cablecheck.checker.advance.cablepairs` (self and cable-cable),
+:mod:`~cablecheck.checker.advance.structure` (cables against parts),
+:mod:`~cablecheck.checker.advance.partpairs` (part pairs), and
+:mod:`~cablecheck.checker.advance.skip` (:class:`Advancement`: the start, the run of
 states, pieces and stretch). It takes arrays and knows no simulator; it does
 not check anything itself.
 """
 
-from checker.advance.partpairs import PartSolids, part_pair_bounds
-from checker.advance.skip import Active, Advancement
+from cablecheck.checker.advance.partpairs import PartSolids, part_pair_bounds
+from cablecheck.checker.advance.skip import Active, Advancement
 
 __all__ = ["Active", "Advancement", "PartSolids", "part_pair_bounds"]

@@ -13,24 +13,17 @@ the caller (:meth:`CablePairGaps.promote`). :meth:`CablePairGaps.clear`
 tests many states at once.
 
 Deliberately not here: cables against parts, part pairs, the run of states
-(:class:`checker.advance.skip.Advancement`).
+(:class:`cablecheck.checker.advance.skip.Advancement`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from checker.advance.common import (
-    FAR_HORIZONS,
-    Layout,
-    Start,
-    bracket,
-    leading,
-    row_norm3,
-)
-from checker.cable import self_pair_window
-from checker.closest import row_norm, segment_segment
-from checker.interference.hits import CableCandidates
+from cablecheck.checker.advance.common import FAR_HORIZONS, Layout, Start, bracket, leading, row_norm3
+from cablecheck.checker.cable import self_pair_window
+from cablecheck.checker.closest import row_norm, segment_segment
+from cablecheck.checker.interference.hits import CableCandidates
 
 
 class CablePairGaps:
@@ -134,7 +127,7 @@ class CablePairGaps:
         return cable_active
 
     def _bracket(self, cab: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:func:`~checker.advance.common.bracket` at the start's arc lengths."""
+        """:func:`~cablecheck.checker.advance.common.bracket` at the start's arc lengths."""
         return bracket(self._s_c, self._cable, self._offsets, cab, s)
 
     def _ensure_blocks(self) -> bool:
@@ -200,7 +193,9 @@ class CablePairGaps:
             if nb <= 64:                                # few blocks: every pair
                 gi, gj = np.triu_indices(ng)
             else:
-                from scipy.spatial import cKDTree   # a fifth of a second to import: loaded where a tree is built
+                from scipy.spatial import (
+                    cKDTree,  # a fifth of a second to import: loaded where a tree is built
+                )
 
                 radius = 2.0 * float(reach.max()) + self.clearance + far
                 self._blk_radius = radius

@@ -54,7 +54,7 @@ class Start:
         rot, pos: (P, 3, 3) and (P, 3) the parts' rotations and positions.
         seg: (N - 1,) element lengths (also between cables).
         s_c: (N,) arc length of each centre along its cable (as
-            :func:`checker.cable.densify_batch` computes it).
+            :func:`cablecheck.checker.cable.densify_batch` computes it).
         mu: the rounding margin (1e-9 of the scene's extent).
         horizon: the check's horizon.
     """
@@ -85,7 +85,7 @@ def bracket(s_c: np.ndarray, cable: np.ndarray, offsets: np.ndarray, cab: np.nda
 
 def row_norm3(v: np.ndarray) -> np.ndarray:
     """Euclidean length over axis 1 of (M, 3, S) ``v``: (M, S), the
-    arithmetic of :func:`checker.closest.row_norm` (so the same bits)."""
+    arithmetic of :func:`cablecheck.checker.closest.row_norm` (so the same bits)."""
     x, y, z = v[:, 0], v[:, 1], v[:, 2]
     return np.sqrt((x * x + y * y) + z * z)
 

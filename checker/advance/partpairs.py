@@ -10,8 +10,8 @@ separation at the state itself exceeds the clearance (a door panel that
 swung far from its start, still far from the frame).
 
 Deliberately not here: cables, the run of states
-(:class:`checker.advance.skip.Advancement`), the part-part check itself
-(:mod:`checker.parts`).
+(:class:`cablecheck.checker.advance.skip.Advancement`), the part-part check itself
+(:mod:`cablecheck.checker.parts`).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.partset import PartSet, Placement
+from cablecheck.checker.partset import PartSet, Placement
 
 
 def part_pair_bounds(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray) -> np.ndarray:
@@ -81,7 +81,7 @@ class PartSolids:
             its triangles or, curved, its true shape: both within the box
             ``PartSet`` grows by the tessellation error); infinite for a plane.
         axial: (P,) bool, the part is unchanged by any turn about its
-            frame's z axis (:attr:`checker.partset.PartSet.axial`).
+            frame's z axis (:attr:`cablecheck.checker.partset.PartSet.axial`).
         error: (P,) the part's tessellation error, held off the turned
             bound as a margin (the part-part check measures curved parts
             on their true shapes, never above the true distance).
@@ -139,8 +139,8 @@ class PartPairGaps:
       without a box keeps the radius bound, not turned). The distance of
       the true shapes is the same at both poses, and the part-part check
       measures a curved part on its true shape (against a primitive,
-      :mod:`checker.convex`; against a mesh, the mesh's triangles against
-      the true shape, :mod:`checker.parts`), never above the true distance;
+      :mod:`cablecheck.checker.convex`; against a mesh, the mesh's triangles against
+      the true shape, :mod:`cablecheck.checker.parts`), never above the true distance;
       this bound is still held to ``g - error[i] - error[j]`` (the
       tessellation errors), a margin on the safe side.
 

@@ -3,9 +3,9 @@
 A full check starts the bound (:meth:`Advancement.start`) from its gaps; each
 later state is tested (:meth:`Advancement.clear_run`, many consecutive states
 at once) against the conditions of the package docstring: cable pairs
-(:mod:`~checker.advance.cablepairs`), cables against parts
-(:mod:`~checker.advance.structure`), part pairs
-(:mod:`~checker.advance.partpairs`), and here the elements' pieces and
+(:mod:`~cablecheck.checker.advance.cablepairs`), cables against parts
+(:mod:`~cablecheck.checker.advance.structure`), part pairs
+(:mod:`~cablecheck.checker.advance.partpairs`), and here the elements' pieces and
 stretch. The pairs the caller evaluates itself (*active*) come back from
 :meth:`Advancement.start` as an :class:`Active` record; with
 :meth:`Advancement.clear_run_local` the pairs whose bound fails later join
@@ -22,13 +22,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.advance.cablepairs import CablePairGaps
-from checker.advance.common import FAR_HORIZONS, Layout, Start, leading, row_norm3
-from checker.advance.partpairs import PartPairGaps, PartSolids
-from checker.advance.structure import CentrePartGaps
-from checker.cable import element_pieces, polyline_arc_lengths
-from checker.closest import row_norm
-from checker.interference.hits import Gaps
+from cablecheck.checker.advance.cablepairs import CablePairGaps
+from cablecheck.checker.advance.common import FAR_HORIZONS, Layout, Start, leading, row_norm3
+from cablecheck.checker.advance.partpairs import PartPairGaps, PartSolids
+from cablecheck.checker.advance.structure import CentrePartGaps
+from cablecheck.checker.cable import element_pieces, polyline_arc_lengths
+from cablecheck.checker.closest import row_norm
+from cablecheck.checker.interference.hits import Gaps
 
 
 @dataclass(frozen=True)
@@ -80,7 +80,7 @@ class Advancement:
             ``radius``, centres far from a part get the boxes' distance as
             their gap to it (else the horizon).
         part_solids: the parts' boxes, symmetry and tessellation errors for
-            the part-pair condition (:class:`~checker.advance.partpairs.PartSolids`),
+            the part-pair condition (:class:`~cablecheck.checker.advance.partpairs.PartSolids`),
             or None (their bounding radii alone).
 
     Attributes:
@@ -130,9 +130,9 @@ class Advancement:
               pair_bound: np.ndarray, active: tuple[np.ndarray, np.ndarray] | None = None,
               cable_active: np.ndarray | None = None) -> Active:
         """A full check ran at this state: cable body centres (N, 3) and part
-        poses (P, 4, 4); the check's gaps (:class:`~checker.interference.hits.Gaps`,
+        poses (P, 4, 4); the check's gaps (:class:`~cablecheck.checker.interference.hits.Gaps`,
         parts numbered as in ``poses``, inf for parts it does not check) and
-        part pairs with their distance bounds (:func:`~checker.advance.partpairs.part_pair_bounds`).
+        part pairs with their distance bounds (:func:`~cablecheck.checker.advance.partpairs.part_pair_bounds`).
 
         With ``gaps.part_candidates`` (found up to ``gaps.horizon`` past the
         clearance) the part gaps are kept per body centre (the smallest over

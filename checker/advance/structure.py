@@ -11,16 +11,16 @@ tests many states at once, in each part's own frame and in the world;
 :meth:`CentrePartGaps.promote` leaves them to the caller.
 
 Deliberately not here: cable pairs, part pairs, the run of states
-(:class:`checker.advance.skip.Advancement`).
+(:class:`cablecheck.checker.advance.skip.Advancement`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from checker.advance.common import FAR_HORIZONS, Layout, Start, bracket
-from checker.arrays import ranges
-from checker.interference.hits import PartCandidates
+from cablecheck.checker.advance.common import FAR_HORIZONS, Layout, Start, bracket
+from cablecheck.checker.arrays import ranges
+from cablecheck.checker.interference.hits import PartCandidates
 
 
 class CentrePartGaps:
@@ -50,7 +50,7 @@ class CentrePartGaps:
         ``sparse`` entries: :meth:`_start_sparse`) from the check's gaps per
         part (inf for parts it does not check) and its candidates (None:
         every centre gets its part's gap); ``active`` as for
-        :meth:`checker.advance.skip.Advancement.start`. Returns the active
+        :meth:`cablecheck.checker.advance.skip.Advancement.start`. Returns the active
         (centre, part) pairs."""
         self._sparse = sparse
         self._promoted = np.zeros(0, np.int64)                  # sparse: part * N + centre keys
@@ -206,7 +206,7 @@ class CentrePartGaps:
             reach = (cap + np.sqrt(3.0) * 0.5 * float(seg.max()) + float(self._rad.max()) + self.clearance
                      + 1e-9 * (1.0 + float(np.abs(pts).max())))
             kb = np.nonzero(bounded)[0]
-            from scipy.spatial import cKDTree   # a fifth of a second to import: loaded where a tree is built
+            from scipy.spatial import cKDTree  # a fifth of a second to import: loaded where a tree is built
 
             # every (part, midpoint) pair within the largest radius, then each part's own
             found = cKDTree(self._pos[kb]).sparse_distance_matrix(
@@ -262,7 +262,7 @@ class CentrePartGaps:
         return out
 
     def _bracket(self, cab: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:func:`~checker.advance.common.bracket` at the start's arc lengths."""
+        """:func:`~cablecheck.checker.advance.common.bracket` at the start's arc lengths."""
         return bracket(self._s_c, self._cable, self._offsets, cab, s)
 
     def failing(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray,

@@ -3,17 +3,17 @@
 The points (or elements) of every cable are cut into chunks of a few
 consecutive ones, each with a bounding sphere (around the chord's midpoint,
 of half the arc length), and pairs of consecutive chunks ("super chunks")
-are binned into a uniform grid (:class:`checker.cellgrid.CellGrid`).
+are binned into a uniform grid (:class:`cablecheck.checker.cellgrid.CellGrid`).
 :meth:`Chunks.pairs` gives chunk pairs that may come within a reach (cable
 against cable, other than neighbours along one cable: the near field of
-:mod:`checker.interference.cablepairs`); :func:`chunk_part_pairs` meets
+:mod:`cablecheck.checker.interference.cablepairs`); :func:`chunk_part_pairs` meets
 every part's bounding sphere with the grid, then the chunks' spheres and
 (optionally) the part's own box. Cost therefore grows with the number of
 close pairs, not with points x parts.
 
 Deliberately not here: exact distances (the narrow phases of
-:mod:`~checker.interference.cablepairs` and
-:mod:`~checker.interference.structure`) and the near field along one cable.
+:mod:`~cablecheck.checker.interference.cablepairs` and
+:mod:`~cablecheck.checker.interference.structure`) and the near field along one cable.
 """
 
 from __future__ import annotations
@@ -22,11 +22,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from checker.arrays import within
-from checker.cellgrid import CellGrid
+from cablecheck.checker.arrays import within
+from cablecheck.checker.cellgrid import CellGrid
 
 if TYPE_CHECKING:
-    from checker.interference.structure import PartTable
+    from cablecheck.checker.interference.structure import PartTable
 
 CHUNK = 4
 NEAR = 2 * CHUNK - 1  # offsets along a cable covered by the near field

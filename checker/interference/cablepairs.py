@@ -2,13 +2,13 @@
 
 Method ``points`` (the discrete-point distance method, Ju et al., 2016):
 two points of one cable closer than ``2r`` interfere unless
-:func:`checker.cable.self_pair_excluded` says they are neighbours along the
+:func:`cablecheck.checker.cable.self_pair_excluded` says they are neighbours along the
 cable; second pass, a point against the midpoint of every element it is not
 a neighbour of. Two cables: the least distance over all point pairs, against
 ``r1 + r2``. Method ``exact``: element pairs as capsules, exact
 segment-segment distances; along one cable the least distance over the two
 elements' places that the same rule keeps (at least the window apart in arc
-length, :func:`checker.closest.segment_segment_apart`), so exact finds every
+length, :func:`cablecheck.checker.closest.segment_segment_apart`), so exact finds every
 self pair points finds, at a distance no larger, the window's edge included.
 
 Pairs along one cable within a few places of each other (the near field)
@@ -17,7 +17,7 @@ time, after cuts that drop what cannot be a hit (the self rule's arc-length
 reach; with points, whole windows whose arc exceeds their chord too little
 to fold back within the hit distance; with elements, a chord-minus-arc bound
 per pair). Everything farther apart (other cables, loops of the same cable)
-comes from chunk pairs of :mod:`checker.interference.broad`. A plain tree
+comes from chunk pairs of :mod:`cablecheck.checker.interference.broad`. A plain tree
 over the points would mostly return each point's own neighbours along its
 cable, all of which the self rule then drops. Both halves keep only
 candidates that can be below the clearance and compute their values
@@ -34,10 +34,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from checker.arrays import ranges, within
-from checker.cable import self_pair_excluded, self_pair_window
-from checker.closest import row_norm, segment_segment, segment_segment_apart
-from checker.interference.broad import (
+from cablecheck.checker.arrays import ranges, within
+from cablecheck.checker.cable import self_pair_excluded, self_pair_window
+from cablecheck.checker.closest import row_norm, segment_segment, segment_segment_apart
+from cablecheck.checker.interference.broad import (
     NEAR,
     SLACK,
     Chunks,
@@ -46,9 +46,9 @@ from checker.interference.broad import (
     within_reach,
     within_reach_t,
 )
-from checker.interference.discrete import DenseStates, Discrete
-from checker.interference.hits import TYPE_ORDER, Hits, worst_records
-from checker.records import Interference, PairType
+from cablecheck.checker.interference.discrete import DenseStates, Discrete
+from cablecheck.checker.interference.hits import TYPE_ORDER, Hits, worst_records
+from cablecheck.checker.records import Interference, PairType
 
 
 def _near_windows(pt, s, cab, last, reach, lim) -> np.ndarray:
@@ -127,7 +127,7 @@ def cable_pairs_points(dp: Discrete, ch: Chunks, clearance: float, hits: Hits,
     Candidates: cable-cable point pairs within ``r1 + r2 + clearance``; self
     point pairs within ``2r + clearance``; a point against the midpoint of an
     element not touching it within ``2r + clearance``. Self candidates the
-    rule of :func:`~checker.cable.self_pair_excluded` drops are dropped.
+    rule of :func:`~cablecheck.checker.cable.self_pair_excluded` drops are dropped.
 
     With ``limit`` (>= clearance) candidates are found up to ``limit``
     instead of the clearance, and self pairs up to ``stretch`` of arc length
@@ -197,7 +197,7 @@ def point_pair_rows(p: np.ndarray, s: np.ndarray, cab: np.ndarray, rad: np.ndarr
     cable, valued ``|p_i - x| - 2 r_i``. Candidates at or above ``limit``,
     and self pairs less than ``reach`` (per point) apart along the cable,
     are dropped; a self candidate is a record only outside the self rule's
-    window (:func:`~checker.cable.self_pair_excluded` at ``clearance``).
+    window (:func:`~cablecheck.checker.cable.self_pair_excluded` at ``clearance``).
 
     Returns:
         per kind, (type, cable a, cable b, value, place index i (the place
@@ -233,8 +233,8 @@ def cable_pairs_exact(dp: Discrete, ch: Chunks, clearance: float, hits: Hits) ->
     self rule requires.
 
     Along one cable the value is the least distance between places of the
-    two elements at least :func:`~checker.cable.self_pair_window` apart in
-    arc length (:func:`~checker.closest.segment_segment_apart`), not the
+    two elements at least :func:`~cablecheck.checker.cable.self_pair_window` apart in
+    arc length (:func:`~cablecheck.checker.closest.segment_segment_apart`), not the
     elements' own closest places filtered by the rule: those may lie inside
     the window while other places of the same elements, outside it, are
     within the clearance (a tight bend's legs just past the window's edge).

@@ -1,14 +1,14 @@
 """The discrete points of the discrete-point distance method (Ju et al., 2016).
 
 Each cable's body centres are densified so that no element is longer than
-``spacing * r`` (:func:`checker.cable.densify_batch`); every point carries its
+``spacing * r`` (:func:`cablecheck.checker.cable.densify_batch`); every point carries its
 arc length, its material coordinate (where exclusion windows are measured)
 and its cable. :func:`discretise` does it for one state (with extra points at
 exclusion-window ends for method ``exact``), :func:`densify_many` for many
 states at once with the same bits per state.
 
 Deliberately not here: any distance, pairing or broad phase; the pieces-per-
-element arithmetic itself lives in :func:`checker.cable.element_pieces`.
+element arithmetic itself lives in :func:`cablecheck.checker.cable.element_pieces`.
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.cable import densify_batch, material_coordinates, tile_offsets
-from checker.scene_state import CableState, CheckConfig
+from cablecheck.checker.cable import densify_batch, material_coordinates, tile_offsets
+from cablecheck.checker.scene_state import CableState, CheckConfig
 
 
 class Discrete:

@@ -1,6 +1,6 @@
 """Exclusion windows as arrays, built once per window list and selected per check.
 
-A run hands the same list of :class:`~checker.scene_state.Exclusion` windows
+A run hands the same list of :class:`~cablecheck.checker.scene_state.Exclusion` windows
 to every check, but the checks ask for different cables (all of them in a
 full check, one at a time in a second opinion) and different parts (every
 part, or one). :func:`exclusion_arrays` turns a list into arrays once (cable
@@ -9,7 +9,7 @@ ends, the windows of each cable); :meth:`ExclusionArrays.table` then selects
 the windows of given cables and parts without a loop over the windows.
 
 Deliberately not here: what a window excuses (the cable-structure passes
-of :mod:`~checker.interference.structure` apply it).
+of :mod:`~cablecheck.checker.interference.structure` apply it).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.scene_state import Exclusion
+from cablecheck.checker.scene_state import Exclusion
 
 _MEMO = threading.local()
 _MEMO_SIZE = 4
@@ -32,7 +32,7 @@ class ExclusionTable:
 
     Attributes:
         excl: (key, lo, hi, n_parts) sorted by key = cable * n_parts + part
-            (what :mod:`~checker.interference.structure` takes).
+            (what :mod:`~cablecheck.checker.interference.structure` takes).
         cable, lo, hi: each window's cable (index into the asked cables) and
             ends, in the order of the window list.
     """

@@ -2,7 +2,7 @@
 
 The checks leave the points (and, with method ``exact``, the elements) of a
 cable that lie inside an attachment window
-(:class:`~checker.scene_state.Exclusion`) out of that window's part: a cable
+(:class:`~cablecheck.checker.scene_state.Exclusion`) out of that window's part: a cable
 touching the clamp or connector it is fastened in is no clash. So that
 nothing is excused silently, :class:`ExcusedLog` measures exactly that piece
 of cable against exactly that part at every checked state, and keeps each
@@ -11,7 +11,7 @@ window's worst moment below the clearance: what a report lists as
 
 The measure is exact whatever the check's method: the least signed distance
 along each element of the window
-(:func:`~checker.interference.structure.segment_distances`) less the cable
+(:func:`~cablecheck.checker.interference.structure.segment_distances`) less the cable
 radius, as method ``exact`` measures a cable against a part. An element is in
 a window exactly when its midpoint's material coordinate is (the windows are
 widened to whole elements). Elements that provably stay beyond the clearance
@@ -19,7 +19,7 @@ widened to whole elements). Elements that provably stay beyond the clearance
 searched.
 
 Deliberately not here: which parts a window excuses (the scene's fastening,
-``sim.stepcheck.attachment_exclusions``), and events: an excused contact
+``cablecheck.run.stepcheck.attachment_exclusions``), and events: an excused contact
 never makes one.
 """
 
@@ -30,9 +30,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.interference.structure import PartTable, segment_distances, segments_within
-from checker.records import PairType
-from checker.scene_state import Exclusion, PartState
+from cablecheck.checker.interference.structure import PartTable, segment_distances, segments_within
+from cablecheck.checker.records import PairType
+from cablecheck.checker.scene_state import Exclusion, PartState
 
 
 @dataclass(frozen=True)

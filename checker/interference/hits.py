@@ -2,12 +2,12 @@
 
 Every pass (cable pairs, cables against parts, single-cable checks) adds its
 candidates to :class:`Hits`; :func:`worst_records` turns the worst value per
-(state, type, a, b) into one :class:`~checker.records.Interference`, ties
+(state, type, a, b) into one :class:`~cablecheck.checker.records.Interference`, ties
 going to the smallest arc lengths so the answer does not depend on the order
 the candidates were found in. The single-state check and the batched passes
 (``*_many``) reduce through it alike. With a horizon, the candidates also
 give how far every pair stays from the clearance: a :class:`Gaps` record,
-what the skip rule of :mod:`checker.advance` starts from.
+what the skip rule of :mod:`cablecheck.checker.advance` starts from.
 
 Deliberately not here: finding candidates or computing distances.
 """
@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from checker.records import Interference, PairType, severity_of
+from cablecheck.checker.records import Interference, PairType, severity_of
 
 TYPE_ORDER = list(PairType)
 CABLE_PAIR_CODES = (TYPE_ORDER.index(PairType.SELF), TYPE_ORDER.index(PairType.CABLE_CABLE))
@@ -185,7 +185,7 @@ class Hits:
 
     def _part_candidates(self, clearance: float) -> PartCandidates:
         """Every cable-structure and keep-out candidate: (cable, s, part,
-        value - clearance), for gaps per cable place (:mod:`checker.advance`)."""
+        value - clearance), for gaps per cable place (:mod:`cablecheck.checker.advance`)."""
         rows = [(a, s, b, value - clearance) for code, a, b, value, s, _ in self.near if code in PART_CODES]
         if not rows:
             return PartCandidates(np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64), np.zeros(0))
@@ -193,7 +193,7 @@ class Hits:
 
     def _cable_candidates(self, clearance: float) -> CableCandidates:
         """Every self and cable-cable candidate: (cable a, s_a, cable b, s_b,
-        value - clearance), for gaps per pair of cable places (:mod:`checker.advance`)."""
+        value - clearance), for gaps per pair of cable places (:mod:`cablecheck.checker.advance`)."""
         rows = [(a, s, b, s_b, value - clearance) for code, a, b, value, s, s_b in self.near
                 if code in CABLE_PAIR_CODES]
         if not rows:

@@ -14,7 +14,7 @@ elements near the parts (a grid of element spheres, the samples side by
 side), never the points times the parts at every state.
 
 Elements inside an attachment window are left out against that window's part
-(``excused`` lists them, :mod:`checker.interference.excused`).
+(``excused`` lists them, :mod:`cablecheck.checker.interference.excused`).
 
 Deliberately not here: which states are sampled (the caller's interval),
 self pairs and part-part pairs (a run's pairs that came below the clearance
@@ -28,12 +28,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.arrays import first_least, ranges
-from checker.cellgrid import CellGrid
-from checker.closest import segment_segment
-from checker.interference.structure import PartTable, point_distances, segment_distances, segments_within, to_local
-from checker.records import PairType
-from checker.scene_state import CheckConfig, Exclusion, PartState
+from cablecheck.checker.arrays import first_least, ranges
+from cablecheck.checker.cellgrid import CellGrid
+from cablecheck.checker.closest import segment_segment
+from cablecheck.checker.interference.structure import (
+    PartTable,
+    point_distances,
+    segment_distances,
+    segments_within,
+    to_local,
+)
+from cablecheck.checker.records import PairType
+from cablecheck.checker.scene_state import CheckConfig, Exclusion, PartState
 
 _APPROACHES = frozenset({PairType.SELF, PairType.CABLE_CABLE, PairType.CABLE_STRUCTURE, PairType.KEEPOUT,
                          PairType.PART_PART})

@@ -2,14 +2,14 @@
 
 :func:`check_state` runs the discrete-point distance method (Ju et al., 2016)
 on all cables and parts of one instant and returns one
-:class:`~checker.records.Interference` per interfering pair. :class:`Checker`
+:class:`~cablecheck.checker.records.Interference` per interfering pair. :class:`Checker`
 does the same step after step for one set of parts, preparing what depends
 only on the parts once; each call then takes the cables and the parts'
 poses. The check is a pipeline of the package's modules: discretise
-(:mod:`~checker.interference.discrete`), chunk (:mod:`~checker.interference.broad`),
-cable pairs (:mod:`~checker.interference.cablepairs`), cables against parts
-(:mod:`~checker.interference.structure`), bend and taut
-(:mod:`~checker.interference.single`), reduce (:mod:`~checker.interference.hits`).
+(:mod:`~cablecheck.checker.interference.discrete`), chunk (:mod:`~cablecheck.checker.interference.broad`),
+cable pairs (:mod:`~cablecheck.checker.interference.cablepairs`), cables against parts
+(:mod:`~cablecheck.checker.interference.structure`), bend and taut
+(:mod:`~cablecheck.checker.interference.single`), reduce (:mod:`~cablecheck.checker.interference.hits`).
 
 Deliberately not here: any distance arithmetic of its own, part-part
 interference, events over time and comparison with MuJoCo.
@@ -22,16 +22,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from checker.interference import cablepairs, discrete, structure
-from checker.interference.broad import Chunks
-from checker.interference.cablepairs import cable_pairs_exact, cable_pairs_points
-from checker.interference.discrete import DenseStates, discretise
-from checker.interference.exclusions import ExclusionTable, exclusion_arrays
-from checker.interference.hits import Gaps, Hits
-from checker.interference.single import single_cable
-from checker.interference.structure import PartTable, structure_exact, structure_points
-from checker.records import Interference, PairType
-from checker.scene_state import CableState, CheckConfig, Exclusion, PartState
+from cablecheck.checker.interference import cablepairs, discrete, structure
+from cablecheck.checker.interference.broad import Chunks
+from cablecheck.checker.interference.cablepairs import cable_pairs_exact, cable_pairs_points
+from cablecheck.checker.interference.discrete import DenseStates, discretise
+from cablecheck.checker.interference.exclusions import ExclusionTable, exclusion_arrays
+from cablecheck.checker.interference.hits import Gaps, Hits
+from cablecheck.checker.interference.single import single_cable
+from cablecheck.checker.interference.structure import PartTable, structure_exact, structure_points
+from cablecheck.checker.records import Interference, PairType
+from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 
 _EYE3 = np.eye(3)
 _EXCL_KEEP = 256
@@ -45,7 +45,7 @@ class Checked:
     Attributes:
         records: one record per interfering (type, a, b) pair, worst first.
         gaps: with a horizon, how far every pair stayed from the clearance
-            (what the skip rule of :mod:`checker.advance` starts from);
+            (what the skip rule of :mod:`cablecheck.checker.advance` starts from);
             None when not available (method ``exact``, face-plane, or no
             horizon).
     """
@@ -72,9 +72,9 @@ class Checker:
             attachment windows up to ``stretch`` of arc length inside their
             exclusion), only to return with :meth:`check_with_gaps` how far
             every pair stays from the clearance (a
-            :class:`~checker.interference.hits.Gaps` record); the records do
+            :class:`~cablecheck.checker.interference.hits.Gaps` record); the records do
             not change (severity and the exclusion windows stay tied to the
-            clearance). See :mod:`checker.advance` for the use.
+            clearance). See :mod:`cablecheck.checker.advance` for the use.
         stretch: see ``horizon``.
     """
 
@@ -109,7 +109,7 @@ class Checker:
 
     def _exclusion_table(self, cable_names: Sequence[str], exclusions: Sequence[Exclusion]) -> ExclusionTable:
         """The windows of these cables against this checker's parts
-        (:meth:`~checker.interference.exclusions.ExclusionArrays.table`)."""
+        (:meth:`~cablecheck.checker.interference.exclusions.ExclusionArrays.table`)."""
         # a run passes the same windows at every check: the list's arrays are
         # built once, and the last few cable selections are kept
         arrays = exclusion_arrays(exclusions)
@@ -129,12 +129,12 @@ class Checker:
 
     def densify_many(self, pts: np.ndarray, offsets: np.ndarray, radii: np.ndarray,
                      rest: np.ndarray | None = None, keep: np.ndarray | None = None) -> DenseStates:
-        """:func:`checker.interference.discrete.densify_many` at this checker's spacing."""
+        """:func:`cablecheck.checker.interference.discrete.densify_many` at this checker's spacing."""
         return discrete.densify_many(pts, offsets, radii, self.config.spacing, rest, keep)
 
     def near_entries(self, pts: np.ndarray, poses: np.ndarray, offsets: np.ndarray, radii: np.ndarray,
                      active: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:func:`checker.interference.structure.near_entries` on this
+        """:func:`cablecheck.checker.interference.structure.near_entries` on this
         checker's parts at its clearance: the (state, centre, part) entries
         of :meth:`structure_many` whose points may come near the part, for
         body centres pts (S, N, 3) of cables ``offsets`` (C + 1,) and
@@ -149,13 +149,13 @@ class Checker:
     def structure_many(self, names: Sequence[str], radii: np.ndarray, dense: DenseStates,
                        poses: np.ndarray, exclusions: Sequence[Exclusion],
                        active: tuple[np.ndarray, ...]) -> list[list[Interference]]:
-        """:func:`checker.interference.structure.structure_many` on this checker's parts."""
+        """:func:`cablecheck.checker.interference.structure.structure_many` on this checker's parts."""
         excl = self._exclusion_table(names, exclusions).excl if self._tab is not None else None
         return structure.structure_many(self._tab, self.config, excl, names, radii, dense, poses, active)
 
     def cable_pairs_many(self, names: Sequence[str], radii: np.ndarray, dense: DenseStates,
                          active: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
-        """:func:`checker.interference.cablepairs.cable_pairs_many` at this checker's clearance."""
+        """:func:`cablecheck.checker.interference.cablepairs.cable_pairs_many` at this checker's clearance."""
         return cablepairs.cable_pairs_many(self.config.clearance, names, radii, dense, active)
 
     def check(
@@ -181,7 +181,7 @@ class Checker:
             cables: the cables' centrelines.
             poses: (K, 4, 4) part -> world transforms in the order of the
                 parts, or None for the parts' own poses. Rotations must be
-                orthonormal (as :class:`~checker.scene_state.PartState`
+                orthonormal (as :class:`~cablecheck.checker.scene_state.PartState`
                 requires).
             exclusions: arc-length windows where a cable may touch a part.
             horizon: this call's horizon instead of the checker's (0: no
@@ -261,6 +261,6 @@ def check_state(
         exclusions: arc-length windows where a cable may touch a part.
 
     Returns:
-        list of :class:`~checker.records.Interference`.
+        list of :class:`~cablecheck.checker.records.Interference`.
     """
     return Checker(parts, config).check(cables, None, exclusions)

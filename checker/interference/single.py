@@ -13,11 +13,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from checker.cable import bend_radius, polyline_arc_lengths, taut_margin, tile_offsets
-from checker.closest import row_norm
-from checker.interference.hits import TYPE_ORDER, Hits, worst_records
-from checker.records import Interference, PairType
-from checker.scene_state import CableState
+from cablecheck.checker.cable import bend_radius, polyline_arc_lengths, taut_margin, tile_offsets
+from cablecheck.checker.closest import row_norm
+from cablecheck.checker.interference.hits import TYPE_ORDER, Hits, worst_records
+from cablecheck.checker.records import Interference, PairType
+from cablecheck.checker.scene_state import CableState
 
 _BEND, _TAUT = TYPE_ORDER.index(PairType.BEND), TYPE_ORDER.index(PairType.TAUT)
 
@@ -29,7 +29,7 @@ def single_rows(flat: np.ndarray, offsets: np.ndarray, radius_at: np.ndarray, be
     Bend: the first place of the least bend radius of each polyline, when
     finite and the polyline has a limit; its value is that radius minus the
     limit (a record below the clearance). Taut: the stretch beyond 1 %
-    (:func:`checker.cable.taut_margin`) at the polyline's end, only when
+    (:func:`cablecheck.checker.cable.taut_margin`) at the polyline's end, only when
     negative: hard only, a length clearance has no meaning for a stretch (a
     0.3 m cable's whole 1 % is 3 mm).
 

@@ -3,11 +3,11 @@
 Method ``points`` (the discrete-point distance method, Ju et al., 2016): a
 point's signed distance to the part's surface (negative inside, so
 containment comes for free), minus the cable radius. Method ``exact``: the
-least signed distance along each element (:mod:`checker.shapes`), so contact
+least signed distance along each element (:mod:`cablecheck.checker.shapes`), so contact
 between two discrete points is never missed.
 
 The parts are prepared once as arrays (:class:`PartTable`); the broad phase
-(:func:`checker.interference.broad.chunk_part_pairs`) gives (item, part)
+(:func:`cablecheck.checker.interference.broad.chunk_part_pairs`) gives (item, part)
 candidates, cut to the part's inflated local box and the exclusion windows
 before any exact work. Narrow phases are batched per shape type (all
 primitives' segment searches in one call); meshes per mesh, the parts
@@ -17,8 +17,8 @@ at once and shares :func:`point_values` with the single-state pass;
 :func:`near_entries` keeps of those pairs, state by state, the ones whose
 elements come near enough to the part's box for a point to be evaluated.
 
-Deliberately not here: part-part interference (:mod:`checker.parts`), cable
-pairs, the reduction to records (:mod:`checker.interference.hits`).
+Deliberately not here: part-part interference (:mod:`cablecheck.checker.parts`), cable
+pairs, the reduction to records (:mod:`cablecheck.checker.interference.hits`).
 """
 
 from __future__ import annotations
@@ -28,13 +28,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from checker.closest import row_norm
-from checker.interference.broad import chunk_part_pairs
-from checker.interference.discrete import DenseStates
-from checker.interference.hits import TYPE_ORDER, worst_records
-from checker.records import Interference, PairType
-from checker.scene_state import CheckConfig, PartState
-from checker.shapes import (
+from cablecheck.checker.closest import row_norm
+from cablecheck.checker.interference.broad import chunk_part_pairs
+from cablecheck.checker.interference.discrete import DenseStates
+from cablecheck.checker.interference.hits import TYPE_ORDER, worst_records
+from cablecheck.checker.records import Interference, PairType
+from cablecheck.checker.scene_state import CheckConfig, PartState
+from cablecheck.checker.shapes import (
     SHAPE_CODE,
     ShapeType,
     distance_bounds,
@@ -130,7 +130,7 @@ def point_distances(tab: PartTable, pk: np.ndarray, loc: np.ndarray, face_plane:
 
     With ``limit`` (n,): a mesh may answer a point that provably lies beyond
     its limit with a lower bound above it instead (see
-    :func:`checker.shapes.signed_distance`); callers keep only values below.
+    :func:`cablecheck.checker.shapes.signed_distance`); callers keep only values below.
     With ``group`` (n,) ids too (each group against one part), the caller
     wants only each group's least value exact: a mesh point whose lower
     bound exceeds another point's upper bound in its group may likewise be
@@ -339,7 +339,7 @@ def active_points(src: np.ndarray, own: np.ndarray, ci: np.ndarray, pi: np.ndarr
     element (not ``own``), when (the element's far centre, k) is.
 
     The points of centre g are a run (its own point, then those inside the
-    element after it, :func:`checker.cable.densify_batch`), so an entry's
+    element after it, :func:`cablecheck.checker.cable.densify_batch`), so an entry's
     points are one run too: from past the previous centre's own point to the
     next centre's. The runs of a part's entries (over every state), merged
     where they overlap, are expanded at once: the cost grows with the pairs
