@@ -29,7 +29,7 @@ This module does not step the simulation, track events, record or report
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 import numpy as np
@@ -130,7 +130,7 @@ class Detector(Protocol):
     def read_many(self, raws: list[RawContacts]) -> list[Contacts]: ...
 
 
-@dataclass
+@dataclass(frozen=True)
 class StepResult:
     """What the checks found at one state.
 
@@ -324,13 +324,15 @@ class StepChecks:
         self.margins.add(times, pts, poses[:, self.checked_parts], margin_samples(times, MARGIN_INTERVAL))
         self.lap("check")
         if self.detector is not None:
-            self._validate(states, pts, out)
+            return self._validate(states, pts, out)
         return out
 
-    def _validate(self, states: Sequence[StepState], pts: np.ndarray, results: list[StepResult]) -> None:
-        """MuJoCo's contacts at every state against its cable records
-        (complete on a proven-clear step too: every other pair is clear);
-        the contacts reduced to pairs for all the states at once."""
+    def _validate(self, states: Sequence[StepState], pts: np.ndarray,
+                  results: list[StepResult]) -> list[StepResult]:
+        """`results` with MuJoCo's contacts at every state and their agreement
+        with its cable records (complete on a proven-clear step too: every
+        other pair is clear); the contacts reduced to pairs for all the
+        states at once."""
         # MuJoCo's collision pass on the detection model is validation work, timed as such
         # the body poses the simulation computed at each state, when it kept them
         poses = ((np.stack([s.xpos for s in states]), np.stack([s.xmat for s in states]))
@@ -348,14 +350,16 @@ class StepChecks:
                                                        np.stack([s.part_poses[self.checked_parts] for s in states])))
             return batch[0]
 
+        validated = []
         for i, (state, result, found, pairs) in enumerate(zip(states, results, contacts, seen)):
-            result.contacts = found
             if self.focus_names is not None:
                 pairs = {k: v for k, v in pairs.items() if k[2] in self.focus_names
                          and k[0] in (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value)}
-            result.agreement = self.validation.compare(state.t, result.cable_records, pairs,
-                                                       self._second_opinion(opinions, i))
+            agreement = self.validation.compare(state.t, result.cable_records, pairs,
+                                                self._second_opinion(opinions, i))
+            validated.append(replace(result, contacts=found, agreement=agreement))
         self.lap("validate")
+        return validated
 
     def _proven_clear(self, states: Sequence[StepState], pts: np.ndarray, poses: np.ndarray,
                       single: np.ndarray, radius_at: np.ndarray, strain: np.ndarray,

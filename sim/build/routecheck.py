@@ -1,0 +1,61 @@
+"""Cables whose initial shape runs through a part they collide with, found before anything is simulated.
+
+A route drawn through a part (a hose routed through an arm's elbow, a
+via point inside a bracket) starts the simulation with the cable inside a
+solid it collides with: the first steps push it out violently, the run
+crawls and its strain and events are nonsense, and nothing says why. With
+`cable-structure` contact on, :func:`route_warnings` measures every vertex of
+every cable's routed shape at t = 0 against each part it collides with
+(`cablecheck.build.obstacles.Obstacles`: scene parts that are not keep-outs, the mjcf
+model's colliding geoms) and names each part a cable's centreline enters:
+the cable, the part, the stretch of arc length (scene units) and how deep.
+
+Vertices within `check.attach_zone` radii of arc length of a held vertex are
+left out: an end sits in the part it is fastened to by design.
+
+This module only measures and words; `cablecheck check` and `run` print
+what it finds (a run also lists it in the report's `physics_warnings`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cablecheck.checker.shapes import signed_distance
+from cablecheck.build.cableplan import CablePlan
+from cablecheck.build.obstacles import Obstacles
+from cablecheck.scene.records import Scene
+from cablecheck.scene.errors import fmt
+from cablecheck.build.startframes import Frames
+
+
+def route_warnings(scene: Scene, frames: Frames, meshes: dict, plans: list[CablePlan]) -> tuple[str, ...]:
+    """One sentence per (cable, part) whose routed centreline lies inside the part at t = 0."""
+    if "cable-structure" not in scene.effects.contact or not plans:
+        return ()
+    obstacles = Obstacles(scene, frames, meshes)
+    zone = scene.check.attach_zone
+    unit = scene.units
+    out = []
+    for i, plan in enumerate(plans):
+        pts = np.asarray(plan.routed, float)
+        s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+        radius = plan.cable.radius
+        held = np.array([s[h.vertex] for h in plan.held])
+        free = np.ones(len(pts), bool) if not len(held) else \
+            (np.abs(s[:, None] - held[None, :]) > zone * radius).all(axis=1)
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        near = np.flatnonzero(np.all((obstacles.lo <= hi) & (obstacles.hi >= lo), axis=1))
+        for k in near.tolist():     # the parts whose boxes meet the cable's: a few, once per scene
+            local = (pts - obstacles.pos[k]) @ obstacles.rot[k]
+            d = signed_distance(obstacles.shapes[k], local)[0]
+            inside = (d < 0.0) & free
+            if not inside.any():
+                continue
+            where = s[inside]
+            out.append(f"cables[{i}] {plan.cable.name!r}: its initial shape runs through part "
+                       f"{obstacles.names[k]!r} from s = {fmt(where.min() / scene.scale)} to "
+                       f"{fmt(where.max() / scene.scale)} {unit} along the cable (up to "
+                       f"{float(-d[inside].min()) / scene.scale:.3g} {unit} inside); the simulation will "
+                       "push it out at the start: route it around the part (via points, clips)")
+    return tuple(out)

@@ -1,0 +1,124 @@
+"""Build a validated scene into MuJoCo models: the stages in order.
+
+1. Place the scene at t = 0 in model coordinates (`cablecheck.build.startframes`: the
+   model's origin, body frames, mesh parts read once).
+2. Plan every cable: its routed shape, drooping clear of the parts it
+   collides with (`cablecheck.build.obstacles`), its held vertices and its straight rest
+   shape (`cablecheck.build.cableplan`).
+3. Write and compile the simulation model, then the detection model
+   (`cablecheck.build.mjspec`, with the contact bits of `cablecheck.build.contactbits` and the cable
+   parameters of `cablecheck.build.cablephysics`). `build` does both; a run calls
+   `build_simulation` and later `with_detection`, so the simulation can
+   settle while the detection model is compiled (`cablecheck.run.runner`).
+4. Read the compiled model back as a `Built` (`cablecheck.build.modelread`).
+5. Choose the simulation step from the cables' stiffness and the script's
+   speeds, and warn about parts too fast for it (`cablecheck.build.substeps`).
+
+docs/physics.md explains the model and its numbers.
+
+This module does not step, move or read the simulation; see `cablecheck.run.loop`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from cablecheck.build.built import (
+    CABLE_PREFIX,
+    Attachment,
+    Built,
+    CableModel,
+    JointDrive,
+    PartModel,
+    Substeps,
+)
+from cablecheck.build.cablephysics import (
+    CONTACT_SOLIMP,
+    EDGE_IMPEDANCE,
+    EDGE_YIELD,
+    contact_time_constant,
+    damping_step,
+    edge_time_constant,
+    first_bending_frequency,
+    first_mode,
+    rayleigh_damping,
+    step_damping_ratio,
+)
+from cablecheck.build.cableplan import CLAMP_EDGE, CablePlan, default_segments, has_slack, plan_cable
+from cablecheck.build.contactbits import ContactBits
+from cablecheck.build.mjspec import SIM_MARGIN_FRACTION, compile_model, move_held, set_step
+from cablecheck.build.modelread import read_built
+from cablecheck.build.obstacles import Obstacles
+from cablecheck.build.startframes import Frames, part_meshes, scene_origin
+from cablecheck.build.substeps import (
+    MAX_SUBSTEPS,
+    bending_step,
+    choose_substeps,
+    held_speeds,
+    script_poses,
+    tunnel_warnings,
+)
+from cablecheck.scene.records import Scene
+
+
+def plan_cables(scene: Scene) -> tuple[Frames, dict[str, tuple[np.ndarray, np.ndarray]], list[CablePlan]]:
+    """The scene placed at t = 0 (body frames in model coordinates), its mesh
+    parts read (name -> vertices, faces) and every cable planned."""
+    frames = Frames(scene, scene_origin(scene))
+    meshes = part_meshes(scene)
+    obstacles = None
+    if "cable-structure" in scene.effects.contact and any(has_slack(c) for c in scene.cables):
+        obstacles = Obstacles(scene, frames, meshes)
+    plans = [plan_cable(c, frames, f"cables[{i}]", scene, obstacles) for i, c in enumerate(scene.cables)]
+    return frames, meshes, plans
+
+
+def build(scene: Scene, detect: bool = True) -> Built:
+    """Compile the simulation model (and, if `detect`, the detection model),
+    then choose its step (`choose_substeps`)."""
+    planned = plan_cables(scene)
+    built = build_simulation(scene, planned)
+    return with_detection(built, planned) if detect else built
+
+
+def build_simulation(scene: Scene, planned: tuple) -> Built:
+    """`build` without the detection model, from the scene's `plan_cables`."""
+    frames, meshes, plans = planned
+    origin = frames.origin
+    sim, own_bits = compile_model(scene, plans, meshes, detect=False, frames=frames, rest=True)
+    move_held(sim, plans, frames)
+    read = read_built(scene, sim, None, plans, origin, own_bits)   # the model as compiled, not yet stepped
+    poses = script_poses(read) if scene.effects.dynamics else None
+    substeps = choose_substeps(read, poses)
+    set_step(sim, substeps.step, cable_damping(read))
+    warnings = tuple(tunnel_warnings(read, poses))
+    if substeps.capped:
+        need = min(substeps.needed.values())
+        warnings += (f"the cables need a simulation step of {need:.3g} s (see docs/physics.md) but "
+                     f"at most {MAX_SUBSTEPS} steps are taken per scene timestep; scene.timestep "
+                     f"<= {need * MAX_SUBSTEPS:.3g} s would do",)
+    return replace(read, substeps=substeps, warnings=warnings)
+
+
+def cable_damping(built: Built) -> dict[int, tuple[float, float]]:
+    """Each cable's flex id -> (its `damping`, its first bending mode as held, `first_mode`)."""
+    defs = {c.name: c for c in built.scene.cables}
+    return {c.flex_id: (defs[c.name].damping, first_mode(c.rest_s, [a.vertex for a in c.attachments], defs[c.name]))
+            for c in built.cables}
+
+
+def with_detection(built: Built, planned: tuple) -> Built:
+    """`built` (`build_simulation`) with its detection model, compiled from
+    the same `plan_cables`: a new record, `built` itself unchanged."""
+    scene = built.scene
+    frames, meshes, plans = planned
+    # compiled on the rest shape as the simulation is, then held where it holds:
+    # on the routed shape a held end could fold exactly back onto the free
+    # vertices' rest line, which MuJoCo refuses (a degenerate flex hinge)
+    det = compile_model(scene, plans, meshes, detect=True, frames=frames, rest=True)[0]
+    move_held(det, plans, frames)
+    if det.nq != built.model.nq or det.ngeom != built.model.ngeom:
+        raise RuntimeError("detection and simulation models differ in structure")
+    return replace(built, detect=det)
