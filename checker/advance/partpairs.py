@@ -110,6 +110,43 @@ def _corner_moves(d_rot: np.ndarray, d_pos: np.ndarray, corners: np.ndarray) -> 
     return np.sqrt(np.einsum("nki,nki->nk", v, v).max(axis=1))
 
 
+@dataclass(frozen=True, slots=True)
+class PairStart:
+    """What :meth:`PartPairGaps.start` keeps of one start: the part-pair
+    condition's state until the next.
+
+    Attributes:
+        poses: (P, 4, 4) the parts' poses at the start.
+        pi, pj: (M,) the moving part pairs.
+        g_pair: (M,) their gaps, ``bound - clearance - mu``.
+        g_rel: (M,) the gaps the ``rel`` bound is held to (less both
+            tessellation errors where it is turned).
+        mu: the rounding margin.
+        ok: every gap is positive (else nothing is proven).
+        f, m: (M,) each pair's frame part and other part.
+        turn: (M,) the frame part is axial (and no plane): ``rel`` is turned.
+        q0, s0, c0: (M, 3, 3), (M, 3), (M, 8, 3) the other part's pose and
+            box corners in the frame part's frame at the start.
+        q0_sin: (M, 2, 3) the rows of ``q0`` whose product with Q's top
+            rows gives the sine of the undoing turn.
+    """
+
+    poses: np.ndarray
+    pi: np.ndarray
+    pj: np.ndarray
+    g_pair: np.ndarray
+    g_rel: np.ndarray
+    mu: float
+    ok: bool
+    f: np.ndarray
+    m: np.ndarray
+    turn: np.ndarray
+    q0: np.ndarray
+    s0: np.ndarray
+    c0: np.ndarray
+    q0_sin: np.ndarray
+
+
 class PartPairGaps:
     """The part-pair condition, restarted at every full check.
 
@@ -181,38 +218,47 @@ class PartPairGaps:
         # the frame part of a pair: a plane first, then an axial part
         self._rank = np.where(self._plane, 2, np.where(self._axial, 1, 0))
         self.clearance = float(clearance)
-        self.ok = False
+        self._at: PairStart | None = None
+        """The last start (None: before one, or stopped since)."""
+
+    @property
+    def ok(self) -> bool:
         """True while the last start proved every pair apart (else nothing is proven)."""
+        return self._at is not None and self._at.ok
 
     def start(self, poses: np.ndarray, pairs: tuple[np.ndarray, np.ndarray],
               pair_bound: np.ndarray, mu: float | None = None) -> None:
         """Restart at this state: part poses (P, 4, 4), the moving part pairs
         (i, j) and lower bounds on their distances (:func:`part_pair_bounds`);
         ``mu`` the rounding margin (None: from the poses)."""
-        self._poses = np.array(poses, float)
+        self._at = self._started(poses, pairs, pair_bound, mu)
+
+    def _started(self, poses: np.ndarray, pairs: tuple[np.ndarray, np.ndarray],
+                 pair_bound: np.ndarray, mu: float | None) -> PairStart:
+        """The :class:`PairStart` of a start (arguments as :meth:`start`)."""
+        poses = np.array(poses, float)
         pi, pj = (np.asarray(x, np.int64) for x in pairs)
-        self._pi, self._pj = pi, pj
         if mu is None:
-            mu = 1e-9 * (1.0 + float(np.abs(self._poses[:, :3, 3]).max(initial=0.0)))
-        self._g_pair = np.asarray(pair_bound, float) - self.clearance - mu
-        self._mu = mu
-        self.ok = bool(np.all(self._g_pair > 0))
+            mu = 1e-9 * (1.0 + float(np.abs(poses[:, :3, 3]).max(initial=0.0)))
+        g_pair = np.asarray(pair_bound, float) - self.clearance - mu
         swap = self._rank[pj] > self._rank[pi]
-        self._f, self._m = np.where(swap, pj, pi), np.where(swap, pi, pj)
-        self._turn = self._axial[self._f] & ~self._plane[self._f]
-        self._g_rel = self._g_pair - np.where(self._turn, self._error[pi] + self._error[pj], 0.0)
-        q0, s0, c0 = self._relative(self._poses[None], np.arange(len(pi)))
-        self._q0, self._s0, self._c0 = q0[0], s0[0], c0[0]
-        self._q0_sin = np.stack([self._q0[:, 1], -self._q0[:, 0]], axis=1)   # M10 - M01 against Q's top rows
+        f, m = np.where(swap, pj, pi), np.where(swap, pi, pj)
+        turn = self._axial[f] & ~self._plane[f]
+        g_rel = g_pair - np.where(turn, self._error[pi] + self._error[pj], 0.0)
+        q0, s0, c0 = self._relative(poses[None], f, m)
+        q0, s0, c0 = q0[0], s0[0], c0[0]
+        q0_sin = np.stack([q0[:, 1], -q0[:, 0]], axis=1)   # M10 - M01 against Q's top rows
+        return PairStart(poses, pi, pj, g_pair, g_rel, mu, bool(np.all(g_pair > 0)), f, m, turn,
+                         q0, s0, c0, q0_sin)
 
     def stop(self) -> None:
         """Prove nothing until the next :meth:`start`."""
-        self.ok = False
+        self._at = None
 
     def moves(self, poses: np.ndarray) -> np.ndarray:
         """dp (..., P): how far any point of each part moved since the start
         (poses (..., P, 4, 4))."""
-        dpose = poses - self._poses
+        dpose = poses - self._at.poses
         d_rot, d_pos = dpose[..., :3, :3], dpose[..., :3, 3]
         fro = np.sqrt(np.einsum("...ij,...ij->...", d_rot, d_rot))
         dp = np.sqrt(np.einsum("...i,...i->...", d_pos, d_pos))
@@ -224,11 +270,11 @@ class PartPairGaps:
                 dp[at] = np.minimum(dp[at], _corner_moves(d_rot[at], d_pos[at], self._corners[at[-1]]))
         return dp
 
-    def _relative(self, poses: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _relative(self, poses: np.ndarray, f: np.ndarray,
+                  m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(Q (S, n, 3, 3), s (S, n, 3), corners (S, n, 8, 3)): the other
         part's pose and its box's corners in the frame part's frame, for
-        pairs ``rows`` (n,) at poses (S, P, 4, 4)."""
-        f, m = self._f[rows], self._m[rows]
+        pairs of frame parts ``f`` and other parts ``m`` (n,) at poses (S, P, 4, 4)."""
         pf, pm = poses[:, f], poses[:, m]
         rft = np.swapaxes(pf[..., :3, :3], -1, -2)
         q = rft @ pm[..., :3, :3]
@@ -237,28 +283,29 @@ class PartPairGaps:
 
     def _relative_moves(self, poses: np.ndarray, rows: np.ndarray) -> np.ndarray:
         """(n, S): the ``rel`` bound (class docstring) of pairs ``rows`` at poses (S, P, 4, 4)."""
-        q, s, c = self._relative(poses, rows)
-        q0 = self._q0[rows]
-        turn = self._turn[rows]
-        m = self._m[rows]
+        at = self._at
+        m = at.m[rows]
+        q, s, c = self._relative(poses, at.f[rows], m)
+        q0 = at.q0[rows]
+        turn = at.turn[rows]
         loose = np.flatnonzero(~self._boxed[m])
         if turn.any():
             # Rz(phi) nearest M = Q0 Q^T: cos and sin along (M00 + M11, M10 - M01)
             top = q[..., :2, :]
             cos = np.einsum("nak,snak->sn", q0[:, :2], top)
-            sin = np.einsum("nak,snak->sn", self._q0_sin[rows], top)
+            sin = np.einsum("nak,snak->sn", at.q0_sin[rows], top)
             ln = np.hypot(cos, sin)
             use = turn[None] & (ln > 0)
             ln = np.where(use, ln, 1.0)
             cos = np.where(use, cos / ln, 1.0)[..., None, None]
             sin = np.where(use, sin / ln, 0.0)[..., None, None]
             c = _turned_z(c, cos, sin)
-        d = c - self._c0[rows]
+        d = c - at.c0[rows]
         out = np.sqrt(np.einsum("snki,snki->snk", d, d).max(axis=2))              # boxed: the corners'
         if len(loose):                                  # no box: the radius bound, not turned (sound too)
             dq = q[:, loose] - q0[loose]
             fro = np.sqrt(np.einsum("snij,snij->sn", dq, dq))
-            ds = s[:, loose] - self._s0[rows[loose]]
+            ds = s[:, loose] - at.s0[rows[loose]]
             far = np.sqrt(np.einsum("sni,sni->sn", ds, ds))
             far += np.multiply(fro, self._rho[m[loose]], out=np.zeros_like(fro), where=fro > 0)
             out[:, loose] = far
@@ -269,11 +316,12 @@ class PartPairGaps:
         moves dp (P, S) and the poses (S, P, 4, 4): the pairs the world
         moves do not prove apart are tested relative to each other, and
         those still failing by their boxes' separation at the state itself."""
-        ok = dp[self._pi] + dp[self._pj] < self._g_pair[:, None]
+        at = self._at
+        ok = dp[at.pi] + dp[at.pj] < at.g_pair[:, None]
         rows = np.flatnonzero(~ok.all(axis=1))
         if len(rows):
-            ok[rows] |= self._relative_moves(poses, rows) < self._g_rel[rows, None]
-            rows = rows[~ok[rows].all(axis=1) & self._known[self._pi[rows]] & self._known[self._pj[rows]]]
+            ok[rows] |= self._relative_moves(poses, rows) < at.g_rel[rows, None]
+            rows = rows[~ok[rows].all(axis=1) & self._known[at.pi[rows]] & self._known[at.pj[rows]]]
             if len(rows):
                 ok[rows] |= self._separated(poses, rows)
         return ok
@@ -286,7 +334,7 @@ class PartPairGaps:
         larger than these) rejects the pair there, so it has no record.
         The margin: the start's, plus 1e-9 of the boxes' extent from the
         origin (what the test's own rounding allowance grows with)."""
-        i, j = self._pi[rows], self._pj[rows]
+        i, j = self._at.pi[rows], self._at.pj[rows]
         n_s, n = len(poses), len(rows)
         both = np.concatenate([i, j])
         placed = poses[:, both]                                            # (S, 2n, 4, 4)
@@ -299,13 +347,13 @@ class PartPairGaps:
         sep = box_bounds(self._half, self._plane, ti, tj, (rot[first], c[first], pos[first]),
                          (rot[second], c[second], pos[second]))
         extent = np.abs(c).max(axis=1) + self._half[np.tile(both, n_s)].max(axis=1)
-        margin = self._mu + 1e-9 * (extent[first] + extent[second])
+        margin = self._at.mu + 1e-9 * (extent[first] + extent[second])
         return (sep - self.clearance > margin).reshape(n_s, n).T
 
     def clear(self, dp: np.ndarray, poses: np.ndarray) -> np.ndarray:
         """The condition per state (S,) from the parts' moves dp (P, S)
         (:meth:`moves`) at poses (S, P, 4, 4)."""
-        if not len(self._pi):
+        if not len(self._at.pi):
             return np.ones(dp.shape[1], bool)
         return self._pair_ok(dp, poses).all(axis=0)
 
@@ -314,17 +362,18 @@ class PartPairGaps:
         part-pair condition of the package docstring alone): the part-part
         check's answer is then its same-body records only, even on a step
         whose cable checks run in full."""
-        if not self.ok or len(poses) != len(self._poses):
+        if not self.ok or len(poses) != len(self._at.poses):
             return False
-        return not len(self._pi) or bool(self.clear(self.moves(poses)[:, None], np.asarray(poses)[None])[0])
+        return not len(self._at.pi) or bool(self.clear(self.moves(poses)[:, None], np.asarray(poses)[None])[0])
 
     def failing_at(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """The moving part pairs (i, j) whose bound fails at poses (every
         other pair is provably outside the clearance), or None when no pair
         is bounded (before a start, or the part count changed)."""
-        if not self.ok or len(poses) != len(self._poses):
+        at = self._at
+        if not self.ok or len(poses) != len(at.poses):
             return None
-        if not len(self._pi):
-            return self._pi[:0], self._pj[:0]
+        if not len(at.pi):
+            return at.pi[:0], at.pj[:0]
         fail = ~self._pair_ok(self.moves(poses)[:, None], np.asarray(poses)[None])[:, 0]
-        return self._pi[fail], self._pj[fail]
+        return at.pi[fail], at.pj[fail]
