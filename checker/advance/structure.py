@@ -16,11 +16,96 @@ Deliberately not here: cable pairs, part pairs, the run of states
 
 from __future__ import annotations
 
+from dataclasses import dataclass, replace
+
 import numpy as np
 
 from cablecheck.checker.advance.common import FAR_HORIZONS, Layout, Start, bracket
 from cablecheck.checker.arrays import ranges
 from cablecheck.checker.interference.hits import PartCandidates
+
+
+@dataclass(frozen=True, slots=True)
+class DenseGaps:
+    """The centre-part gaps of a dense start (:meth:`CentrePartGaps.start`);
+    promoting a pair sets its gaps to inf in place.
+
+    Attributes:
+        g_pt: (N, P) ``g[i, k]`` of the package docstring less the rounding margin.
+        g_kn: (P, N) the same, part-major (contiguous) for the fused pass.
+        g2: (P, N) the squares of their positive parts.
+        u0h: (P, N, 4) each centre in each part's frame at the start, homogeneous.
+    """
+
+    g_pt: np.ndarray
+    g_kn: np.ndarray
+    g2: np.ndarray
+    u0h: np.ndarray
+
+
+@dataclass(frozen=True, slots=True)
+class SparseStart:
+    """What a sparse start (:meth:`CentrePartGaps._start_sparse`) keeps:
+    the entries listed at once and what listing the others on first use takes.
+
+    Attributes:
+        cap: the gap of a checked pair that is not listed, ``FAR_HORIZONS
+            * horizon`` less the rounding margin.
+        default: (P,) an unlisted pair's gap per part (inf: not checked).
+        first: (part, centre, gap) entries of the active parts, listed at the start.
+        gap_part: (P,) the check's gaps per part.
+        candidates: the check's part candidates.
+        rest: (P,) bool, the parts whose entries are listed on first use.
+    """
+
+    cap: float
+    default: np.ndarray
+    first: tuple[np.ndarray, np.ndarray, np.ndarray]
+    gap_part: np.ndarray
+    candidates: PartCandidates
+    rest: np.ndarray
+
+
+@dataclass(frozen=True, slots=True)
+class SparseEntries:
+    """The sparse entries listed so far (:meth:`CentrePartGaps._ensure_sparse`,
+    then the bounded parts' floors per centre, :meth:`CentrePartGaps._refine`).
+
+    Attributes:
+        part, row, g: (M,) entries (part, centre, gap less the rounding margin).
+        done: (N - 1,) bool, elements whose floors are listed.
+        ok: every gap was positive when first listed (and the cap is).
+    """
+
+    part: np.ndarray
+    row: np.ndarray
+    g: np.ndarray
+    done: np.ndarray
+    ok: bool
+
+
+@dataclass(frozen=True, slots=True)
+class SparseTables:
+    """The sparse gaps as the tests of one set of moving parts read them
+    (:meth:`CentrePartGaps._sparse_tables`; promoted pairs inf).
+
+    Attributes:
+        g_still: (N,) each centre's least gap to the parts that did not move.
+        mk: (K,) the parts that moved.
+        u0h: (K, N, 4) the centres in their frames at the start, homogeneous.
+        g_kn, g2: (K, N) the gaps to them and the squares of their positive parts.
+        entries: (centre, part, gap) listed entries against the parts that
+            did not move, sorted by centre.
+        still_cap: the gap of the unlisted pairs against those parts (the cap).
+    """
+
+    g_still: np.ndarray
+    mk: np.ndarray
+    u0h: np.ndarray
+    g_kn: np.ndarray
+    g2: np.ndarray
+    entries: tuple[np.ndarray, np.ndarray, np.ndarray]
+    still_cap: float
 
 
 class CentrePartGaps:
@@ -39,10 +124,26 @@ class CentrePartGaps:
         self._horizon, self._mu = start.horizon, start.mu
         self._cable, self._valid, self._offsets = layout.cable, layout.valid, layout.offsets
         self._rad, self._box, self._rho, self.clearance = layout.rad, layout.box, layout.rho, layout.clearance
+        # what :meth:`start` computes: a dense table, or sparse entries listed on use
+        self._dense: DenseGaps | None = None
+        self._sp: SparseStart | None = None
+        self._entries: SparseEntries | None = None          # sparse: listed on first use
+        self._tables_cache: dict[bytes, SparseTables] = {}  # sparse: per set of moving parts
+        self._promoted = np.zeros(0, np.int64)              # sparse: part * N + centre keys
+
+    @property
+    def _sparse(self) -> bool:
+        """The gaps are kept sparse (the last start's choice)."""
+        return self._sp is not None
+
+    @property
+    def _g_pt(self) -> np.ndarray:
+        """(N, P) the dense table's gaps."""
+        return self._dense.g_pt
 
     def ok_at_start(self) -> bool:
         """True when every gap is positive (sparse: the cap; the entries on first use)."""
-        return self._sp_cap > 0 if self._sparse else bool(np.all(self._g_pt > 0))
+        return self._sp.cap > 0 if self._sp is not None else bool(np.all(self._dense.g_pt > 0))
 
     def start(self, gap_part: np.ndarray, candidates: PartCandidates | None,
               active: tuple[np.ndarray, np.ndarray] | None, sparse: bool) -> tuple[np.ndarray, np.ndarray]:
@@ -52,11 +153,13 @@ class CentrePartGaps:
         every centre gets its part's gap); ``active`` as for
         :meth:`cablecheck.checker.advance.skip.Advancement.start`. Returns the active
         (centre, part) pairs."""
-        self._sparse = sparse
-        self._promoted = np.zeros(0, np.int64)                  # sparse: part * N + centre keys
+        self._promoted = np.zeros(0, np.int64)
+        self._dense = self._sp = self._entries = None
+        self._tables_cache = {}
         horizon, mu = self._horizon, self._mu
         if sparse:
-            return self._start_sparse(gap_part, horizon, candidates, active, mu)
+            self._sp, structure = self._start_sparse(gap_part, horizon, candidates, active, mu)
+            return structure
         n, n_p = len(self._pts), len(gap_part)
         u0 = (self._pts[None] - self._pos[:, None]) @ self._rot                  # R^T (x - t)
         if candidates is None:
@@ -79,16 +182,16 @@ class CentrePartGaps:
             rows, j = np.nonzero(near)
             structure = (rows, a_part[j])
             g[structure] = np.inf
-        self._g_pt = g - mu
+        g_pt = g - mu
         # fused-pass data: each centre in each part's frame (homogeneous)
-        self._u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
-        self._g_kn = np.ascontiguousarray(self._g_pt.T)
-        self._g2 = np.where(self._g_kn > 0, self._g_kn, 0.0) ** 2
+        u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
+        g_kn = np.ascontiguousarray(g_pt.T)
+        self._dense = DenseGaps(g_pt, g_kn, np.where(g_kn > 0, g_kn, 0.0) ** 2, u0h)
         return structure
 
     def _start_sparse(self, gap_part: np.ndarray, horizon: float, candidates: tuple[np.ndarray, ...],
                       active: tuple[np.ndarray, np.ndarray] | None,
-                      mu: float) -> tuple[np.ndarray, np.ndarray]:
+                      mu: float) -> tuple[SparseStart, tuple[np.ndarray, np.ndarray]]:
         """The centre-part gaps ``g[i, k]`` of the package docstring kept only
         where they are below ``cap = FAR_HORIZONS * horizon`` (every other
         checked pair counts as ``cap``: a smaller gap only proves less), as
@@ -104,12 +207,11 @@ class CentrePartGaps:
         least ``cap`` beyond the query radius. Candidates (values at most the
         horizon, below every floor's ``max(H, F)``) are entries of their own.
         Planes and other unbounded parts get every centre. Returns the
-        active (centre, part) pairs."""
+        start's record and the active (centre, part) pairs."""
         n_p = len(gap_part)
         cap = self.FAR_HORIZONS * horizon
-        self._sp_cap = cap - mu
-        self._sp_default = np.where(np.isfinite(gap_part), self._sp_cap, np.inf)    # an unlisted pair's gap
-        self._sp_cache: dict[bytes, tuple] = {}
+        sp_cap = cap - mu
+        default = np.where(np.isfinite(gap_part), sp_cap, np.inf)    # an unlisted pair's gap
         first = np.zeros(n_p, bool)
         if active is not None and len(active[0]):
             first[np.asarray(active[1], np.int64)] = True
@@ -137,32 +239,26 @@ class CentrePartGaps:
             structure = (hr, a_part[hj])
             drop = np.isin(part * n + rows, a_part[hj] * n + hr)
             part, rows, val = part[~drop], rows[~drop], val[~drop]
-        self._sp_first = (part, rows, val - mu)
-        self._sp_rest = (gap_part, horizon, candidates, ~first, mu)
-        self._sp_ready = False
-        return structure
+        return SparseStart(sp_cap, default, (part, rows, val - mu), gap_part, candidates, ~first), structure
 
     def _ensure_sparse(self) -> bool:
         """The sparse entries of the last start that are cheap (once): the
         candidates and the unbounded parts' floors; the bounded parts'
         floors come per centre, when a centre first needs them
         (:meth:`_refine`). True when all gaps are positive."""
-        if not self._sp_ready:
-            gap_part, horizon, candidates, rest, mu = self._sp_rest
-            part, rows, val = self._sparse_entries(gap_part, horizon, candidates, rest,
+        if self._entries is None:
+            sp, mu = self._sp, self._mu
+            part, rows, val = self._sparse_entries(sp.gap_part, self._horizon, sp.candidates, sp.rest,
                                                    elem=np.zeros(0, np.int64))
-            p0, r0, g0 = self._sp_first
-            self._sp_part = np.concatenate([p0, part])
-            self._sp_row = np.concatenate([r0, rows])
-            self._sp_g = np.concatenate([g0, val - mu])
-            self._sp_done = ~self._valid.copy()                 # elements whose floors are listed
-            self._sp_ready = True
-            self._sp_ok = bool(np.all(self._sp_g > 0)) and self._sp_cap > 0
-        return self._sp_ok
+            p0, r0, g0 = sp.first
+            g = np.concatenate([g0, val - mu])
+            self._entries = SparseEntries(np.concatenate([p0, part]), np.concatenate([r0, rows]), g,
+                                          ~self._valid.copy(), bool(np.all(g > 0)) and sp.cap > 0)
+        return self._entries.ok
 
     def _refined(self) -> np.ndarray:
         """(N,) bool: centres both of whose elements have their floors listed."""
-        done = self._sp_done
+        done = self._entries.done
         out = np.ones(len(self._pts), bool)
         out[:-1] &= done
         out[1:] &= done
@@ -174,16 +270,18 @@ class CentrePartGaps:
         n = len(self._pts)
         e = np.concatenate([centres - 1, centres])
         e = np.unique(e[(e >= 0) & (e < n - 1)])
-        e = e[~self._sp_done[e]]
+        ent = self._entries
+        e = e[~ent.done[e]]
         if not len(e):
             return
-        gap_part, horizon, candidates, rest, mu = self._sp_rest
-        part, rows, val = self._sparse_entries(gap_part, horizon, candidates, rest, elem=e, lazy=True)
-        self._sp_part = np.concatenate([self._sp_part, part])
-        self._sp_row = np.concatenate([self._sp_row, rows])
-        self._sp_g = np.concatenate([self._sp_g, val - mu])
-        self._sp_done[e] = True
-        self._sp_cache = {}
+        sp = self._sp
+        part, rows, val = self._sparse_entries(sp.gap_part, self._horizon, sp.candidates, sp.rest, elem=e,
+                                               lazy=True)
+        done = ent.done.copy()
+        done[e] = True
+        self._entries = replace(ent, part=np.concatenate([ent.part, part]), row=np.concatenate([ent.row, rows]),
+                                g=np.concatenate([ent.g, val - self._mu]), done=done)
+        self._tables_cache = {}
 
     def _sparse_entries(self, gap_part: np.ndarray, horizon: float, candidates: tuple[np.ndarray, ...],
                         only: np.ndarray, elem: np.ndarray | None = None,
@@ -275,9 +373,10 @@ class CentrePartGaps:
         The state passes :meth:`clear` exactly when no pair fails at it and
         it is before that state."""
         s = x.shape[2]
-        if self._sparse:
+        if self._sp is not None:
             return self._failing_sparse(x, poses, dq, dp)
-        bad = self._named(x, poses, dq, dp, self._u0h, self._g_kn, self._g2)
+        dense = self._dense
+        bad = self._named(x, poses, dq, dp, dense.u0h, dense.g_kn, dense.g2)
         k, i = np.nonzero(bad.any(axis=2))
         return i, k, np.argmax(bad[k, i], axis=1), s
 
@@ -288,18 +387,19 @@ class CentrePartGaps:
         z = np.zeros(0, np.int64)
         if not self._ensure_sparse():
             return z, z, z, 0
-        g_still, mk, u0h, g_kn, g2, still, still_cap = self._tables_for(x, poses, dq, dp)
+        t = self._tables_for(x, poses, dq, dp)
+        mk = t.mk
         centre, part, first = [z], [z], [z]
-        over = dq >= g_still[:, None]                                # (N, S)
+        over = dq >= t.g_still[:, None]                                # (N, S)
         stop = s
         rows = np.nonzero(over.any(axis=1))[0]
         if len(rows):
             # a centre past the cap of the unlisted pairs names no pair
-            cap = dq[rows] >= still_cap
+            cap = dq[rows] >= t.still_cap
             if cap.any():
                 stop = int(np.argmax(cap.any(axis=0)))
             # the listed entries of the centres over their least gap
-            e_row, e_part, e_g = still
+            e_row, e_part, e_g = t.entries
             lo = np.searchsorted(e_row, rows, "left")
             cnt = np.searchsorted(e_row, rows, "right") - lo
             at = ranges(lo, cnt)
@@ -309,7 +409,7 @@ class CentrePartGaps:
             part.append(e_part[at][hit])
             first.append(np.argmax(bad[hit], axis=1))
         if len(mk):
-            bad = self._moved_bad(x, poses, dq, dp[mk], mk, u0h, g_kn, g2)
+            bad = self._moved_bad(x, poses, dq, dp[mk], mk, t.u0h, t.g_kn, t.g2)
             k, i = np.nonzero(bad.any(axis=2))
             centre.append(i)
             part.append(mk[k])
@@ -321,39 +421,38 @@ class CentrePartGaps:
         next start: the caller evaluates them itself at every state."""
         if not len(centre):
             return
-        if self._sparse:
+        if self._sp is not None:
             self._promoted = np.union1d(self._promoted, part * len(self._pts) + centre)
-            self._sp_cache = {}
+            self._tables_cache = {}
             return
-        self._g_pt[centre, part] = np.inf
-        self._g_kn[part, centre] = np.inf
-        self._g2[part, centre] = np.inf
+        dense = self._dense
+        dense.g_pt[centre, part] = np.inf
+        dense.g_kn[part, centre] = np.inf
+        dense.g2[part, centre] = np.inf
 
     def clear(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray) -> np.ndarray:
         """Cable-structure and keep-out conditions per state (S,); x (N, 3, S)
         the centres, dq (N, S) their displacements, dp (P, S) the parts'."""
         s = x.shape[2]
-        if self._sparse:
+        if self._sp is not None:
             return self._parts_clear_sparse(x, poses, dq, dp)
-        bad = self._named(x, poses, dq, dp, self._u0h, self._g_kn, self._g2)
+        dense = self._dense
+        bad = self._named(x, poses, dq, dp, dense.u0h, dense.g_kn, dense.g2)
         return ~bad.reshape(-1, s).any(axis=0)
 
-    def _sparse_tables(self, moved: np.ndarray) -> tuple:
-        """For the parts that did not move (``~moved``, (P,) bool): each
-        centre's least gap; for the parts that moved: their indices, the
-        centres in their frames (homogeneous), the gaps (K, N) and their
-        squares; the listed entries against parts that did not move as
-        (centre, part, gap) sorted by centre, and the gap of the unlisted
-        pairs against them (the cap). Promoted pairs are left out
-        (gap inf). Kept per set of moving parts."""
+    def _sparse_tables(self, moved: np.ndarray) -> SparseTables:
+        """The :class:`SparseTables` of the parts that moved (``moved``, (P,)
+        bool), promoted pairs left out (gap inf). Kept per set of moving
+        parts (the last one alone)."""
         tag = moved.tobytes()
-        if tag not in self._sp_cache:
+        if tag not in self._tables_cache:
             n = len(self._pts)
-            part, row, g = self._sp_part, self._sp_row, self._sp_g
+            ent = self._entries
+            part, row, g = ent.part, ent.row, ent.g
             if len(self._promoted):
                 g = np.where(np.isin(part * n + row, self._promoted), np.inf, g)
             still = ~moved[part]
-            still_cap = float(self._sp_default[~moved].min(initial=np.inf))
+            still_cap = float(self._sp.default[~moved].min(initial=np.inf))
             # a centre whose floors are not listed yet: the horizon (every
             # floor's gap max(H, F) is at least that)
             coarse = ~self._refined()
@@ -366,7 +465,7 @@ class CentrePartGaps:
             mk = np.nonzero(moved)[0]
             col = np.full(len(moved), -1, np.int64)
             col[mk] = np.arange(len(mk))
-            g_kn = np.repeat(self._sp_default[mk][:, None], n, axis=1)
+            g_kn = np.repeat(self._sp.default[mk][:, None], n, axis=1)
             g_kn[:, coarse] = np.minimum(g_kn[:, coarse], near)
             on = ~still
             np.minimum.at(g_kn, (col[part[on]], row[on]), g[on])
@@ -377,24 +476,24 @@ class CentrePartGaps:
             u0 = (self._pts[None] - self._pos[mk, None]) @ self._rot[mk]
             u0h = np.concatenate([u0, np.ones(u0.shape[:2] + (1,))], axis=2)
             g2 = np.where(g_kn > 0, g_kn, 0.0) ** 2
-            self._sp_cache = {tag: (g_still, mk, u0h, g_kn, g2, entries, still_cap)}
-        return self._sp_cache[tag]
+            self._tables_cache = {tag: SparseTables(g_still, mk, u0h, g_kn, g2, entries, still_cap)}
+        return self._tables_cache[tag]
 
-    def _tables_for(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray) -> tuple:
+    def _tables_for(self, x: np.ndarray, poses: np.ndarray, dq: np.ndarray, dp: np.ndarray) -> SparseTables:
         """:meth:`_sparse_tables` for these states, after listing the floors
         of every centre that fails its coarse gap (the horizon) at one of
         them: a centre's test then is what the whole table's would be."""
         moved = (dp > 0).any(axis=1)
-        tables = self._sparse_tables(moved)
-        g_still, mk, u0h, g_kn, g2 = tables[:5]
-        need = (dq >= g_still[:, None]).any(axis=1)
+        t = self._sparse_tables(moved)
+        mk = t.mk
+        need = (dq >= t.g_still[:, None]).any(axis=1)
         if len(mk):
-            need |= self._moved_bad(x, poses, dq, dp[mk], mk, u0h, g_kn, g2, touched=True).any(axis=(0, 2))
+            need |= self._moved_bad(x, poses, dq, dp[mk], mk, t.u0h, t.g_kn, t.g2, touched=True).any(axis=(0, 2))
         need &= ~self._refined()
         if need.any():
             self._refine(np.nonzero(need)[0])
-            tables = self._sparse_tables(moved)
-        return tables
+            t = self._sparse_tables(moved)
+        return t
 
     def _moved_bad(self, x, poses, dq, dp, mk, u0h, g_kn, g2, touched: bool = False) -> np.ndarray:
         """:meth:`_named` against the moved parts mk (K, N, S); ``touched``:
@@ -436,9 +535,10 @@ class CentrePartGaps:
         s = x.shape[2]
         if not self._ensure_sparse():
             return np.zeros(s, bool)
-        g_still, mk, u0h, g_kn, g2, _, _ = self._tables_for(x, poses, dq, dp)
-        ok = (dq < g_still[:, None]).all(axis=0)
+        t = self._tables_for(x, poses, dq, dp)
+        mk = t.mk
+        ok = (dq < t.g_still[:, None]).all(axis=0)
         if len(mk):
-            ok &= ~self._moved_bad(x, poses, dq, dp[mk], mk, u0h, g_kn, g2).reshape(-1, s).any(axis=0)
+            ok &= ~self._moved_bad(x, poses, dq, dp[mk], mk, t.u0h, t.g_kn, t.g2).reshape(-1, s).any(axis=0)
         return ok
 
