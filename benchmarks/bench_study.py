@@ -33,7 +33,7 @@ fresh worker). ``--doc FILE`` writes that block into
 FILE between ``<!-- bench_study -->`` and ``<!-- /bench_study -->``.
 
 Run: python benchmarks/bench_study.py [--workers N]
-     python benchmarks/bench_study.py --scaling [--repeat N] [--doc README.md]
+     python benchmarks/bench_study.py --scaling [--repeat N] [--doc docs/performance.md]
 """
 
 from __future__ import annotations

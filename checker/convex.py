@@ -46,8 +46,8 @@ By pair (``exact`` says which answers are exact to rounding):
   already prove them farther apart than ``beyond`` (the clearance) are not
   refined.
 
-Why by hand: coal (hpp-fcl's successor) answers one pair in about 16 us and
-as accurately when apart, but from one Python call per pair, with EPA depths
+Why by hand: coal (hpp-fcl's successor) answers a pair as accurately when
+apart, but from one Python call per pair, with EPA depths
 that can be off either way (a sphere in a cylinder 4 % too deep), and with
 about 330 MB of native dependencies (boost, assimp, octomap, qhull,
 eigenpy); python-fcl's distances run a little high on curved shapes. The

@@ -103,8 +103,8 @@ def mesh_nearest(m: MeshData, p: np.ndarray, k: int = 8) -> tuple[np.ndarray, np
 
 
 BOX_FACES = 64
-"""Meshes up to this many triangles: :func:`_mesh_nearest_small` (three
-times faster on a 20-triangle bracket, slower from a few hundred)."""
+"""Meshes up to this many triangles: :func:`_mesh_nearest_small` (timed
+faster on a 20-triangle bracket, slower from a few hundred triangles)."""
 
 BOX_PAIRS = 1 << 17
 """Point-triangle pairs up to which :func:`mesh_nearest` bounds every pair

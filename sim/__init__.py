@@ -26,6 +26,8 @@ if __name__ != "cablecheck":   # one name for one module: a second import as `si
     raise ImportError(f"the folder sim/ is the package `cablecheck` (pip install -e .): import cablecheck, "
                       f"not {__name__}")
 
+import importlib  # noqa: E402  (after the guard: nothing is imported under a wrong name)
+
 _API = {
     "load_scene": "cablecheck.scene.load",
     "parse_scene": "cablecheck.scene.load",
@@ -49,8 +51,6 @@ def __getattr__(name: str):
     """The public API's names, each imported from its module on first use (PEP 562)."""
     if name not in _API:
         raise AttributeError(f"module 'cablecheck' has no attribute {name!r}")
-    import importlib
-
     value = getattr(importlib.import_module(_API[name]), name)
     globals()[name] = value
     return value

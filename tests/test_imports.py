@@ -164,3 +164,27 @@ def test_the_public_api_names_resolve():
         assert getattr(cablecheck, name) is not None
     with pytest.raises(AttributeError):
         cablecheck.no_such_name
+
+
+def _deferred_without_a_reason() -> list[str]:
+    """Functions of the package that import inside themselves and say nowhere why: no comment on any of
+    their import lines, nor on the line above the first."""
+    out = []
+    for name, path in _modules().items():
+        lines = path.read_text().split("\n")
+        for fn in ast.walk(ast.parse("\n".join(lines))):
+            if not isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            inner = [n for n in ast.walk(fn) if isinstance(n, (ast.Import, ast.ImportFrom))]
+            if not inner:
+                continue
+            first = min(n.lineno for n in inner)
+            said = "#" in lines[first - 2] or any("#" in line for n in inner
+                                                  for line in lines[n.lineno - 1:n.end_lineno])
+            if not said:
+                out.append(f"{path.relative_to(ROOT)}:{first} {fn.name}")
+    return out
+
+
+def test_imports_are_at_the_top_unless_a_line_says_why_not():
+    assert _deferred_without_a_reason() == []

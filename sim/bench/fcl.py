@@ -28,7 +28,7 @@ class FclMissing(ImportError):
 def load_fcl():
     """The `fcl` module, or `FclMissing` when python-fcl is not installed."""
     try:
-        import fcl
+        import fcl  # python-fcl: an optional dependency (the bench and test extras), loaded for this table only
     except ImportError as e:
         raise FclMissing(f"python-fcl is not installed ({INSTALL}): {e}") from None
     return fcl

@@ -46,7 +46,7 @@ import mujoco
 import numpy as np
 
 from cablecheck.bench import reference
-from cablecheck.build.stages import build
+from cablecheck.build.stages import build, cable_damping
 from cablecheck.run.loop import Simulation
 from cablecheck.scene.load import parse_scene
 
@@ -263,7 +263,6 @@ def ring_down(elements: int, damping: float = 0.02, gravity: bool = True, across
         x.append(s.cables[0][-1, axis] - rest)
     wall = (time.perf_counter() - t0) / duration
     zeta, freq = decrement(np.array(t), np.array(x), cycles)
-    from cablecheck.build.stages import cable_damping
     mode = cable_damping(built)[c.flex_id][1]
     return _result("ring-down " + ("across the sag" if across else "in the sag plane" if gravity else "no gravity"),
                    elements, zeta, damping or None, wall, built, sim, omega=freq, first_mode=mode,

@@ -16,7 +16,7 @@ from cablecheck.bench.table import Table
 
 def plot(tables: dict[str, Table], path: Path) -> Path:
     """A 2 x 2 PNG: discretisation, physics, scale and side by side."""
-    import matplotlib
+    import matplotlib  # slow to load: only when the bench draws its plot
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 from scipy.integrate import solve_bvp
 from scipy.optimize import brentq
-from scipy.special import jn_zeros
+from scipy.special import ellipe, ellipk, j0, jn_zeros
 
 from cablecheck.scene.load import parse_scene
 from cablecheck.scene.records import Scene
@@ -106,7 +106,6 @@ def clamped_elastica(length: float, shortening: float, bending_stiffness: float)
     fraction: 2 (1 - E(m) / K(m)) = shortening, force 4 (2 K / pi)^2 pi^2
     EI / L^2 (4 times the pinned rod's), mid deflection twice the pinned
     half's, 2 k (L / 2) / K."""
-    from scipy.special import ellipe, ellipk
     m = brentq(lambda m: 2.0 * (1.0 - ellipe(m) / ellipk(m)) - shortening, 1e-14, 0.999999)
     force = 4.0 * (2.0 * ellipk(m) / np.pi) ** 2 * np.pi ** 2 * bending_stiffness / length ** 2
     return float(force), float(np.sqrt(m) * length / ellipk(m))
@@ -119,7 +118,6 @@ def chain_period(length: float, g: float = G) -> float:
 
 def chain_mode(height_above_end, length: float) -> np.ndarray:
     """First-mode shape of the hanging chain at heights above its free end: J0(j01 sqrt(z / L))."""
-    from scipy.special import j0
     return j0(J0_FIRST_ZERO * np.sqrt(np.clip(np.asarray(height_above_end, float), 0.0, None) / length))
 
 

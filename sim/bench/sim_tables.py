@@ -28,6 +28,7 @@ from cablecheck.build.stages import build
 from cablecheck.checker.interference import Checker
 from cablecheck.checker.scene_state import CheckConfig, PartState
 from cablecheck.run.loop import Simulation
+from cablecheck.run.runner import RunOptions, run_scene
 from cablecheck.scene.load import load_scene
 
 if TYPE_CHECKING:   # the sizes live with the bench that orders the tables
@@ -173,7 +174,6 @@ def _mj_step_ms(scene, steps: int) -> float:
 
 def example_scenes_table(sizes: BenchSizes, out: Path) -> tuple[Table, dict]:
     """Per-step cost of the example scenes from a full run with recording on."""
-    from cablecheck.run.runner import RunOptions, run_scene
 
     table = Table("example_scenes", "Per-step cost on the example scenes (recording on)",
                   ["scene", "steps", "mj_step_ms", "sim_ms", "check_ms", "validate_ms",

@@ -102,7 +102,7 @@ def rayleigh_damping(damping: float, omega: float, step: float) -> float:
     damped in proportion to their frequency, and what gravity or tension
     alone restores (a hanging chain's swing) is not damped at all: there
     is no air drag."""
-    from scipy.optimize import brentq   # where it runs: start-up leaves scipy.optimize out
+    from scipy.optimize import brentq  # where it runs: start-up leaves scipy.optimize out
     if damping <= 0.0 or not np.isfinite(omega):
         return 0.0
     if step_damping_ratio(omega, step) >= damping:
@@ -129,7 +129,7 @@ def damping_step(damping: float, omega: float) -> float:
     `DAMPING_SHARE` of the declared `damping`, seconds (inf for none)."""
     if damping <= 0.0 or not np.isfinite(omega):
         return float("inf")
-    from scipy.optimize import brentq
+    from scipy.optimize import brentq  # 0.2 s more start-up: only for a cable with damping
     target = DAMPING_SHARE * damping
     x = brentq(lambda x: step_damping_ratio(1.0, x) - target, 1e-12, 10.0, xtol=1e-15, rtol=1e-12)
     return float(x / omega)

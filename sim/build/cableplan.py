@@ -23,10 +23,10 @@ import numpy as np
 
 from cablecheck.build.built import Attachment, CableModel
 from cablecheck.build.route import initial_shape, polyline_length, route_lengths, run_elements
-from cablecheck.scene.records import Anchor, CableDef, Scene
-from cablecheck.scene.format import Hold
-from cablecheck.scene.errors import SceneError
 from cablecheck.build.startframes import Frames
+from cablecheck.scene.errors import SceneError
+from cablecheck.scene.format import Hold
+from cablecheck.scene.records import CableDef, Scene
 
 if TYPE_CHECKING:
     from cablecheck.build.obstacles import Obstacles
@@ -43,7 +43,7 @@ def default_segments(length: float, radius: float) -> int:
 
     Elements longer than 2 r keep MuJoCo's self-collision from touching
     elements two apart along a straight cable (SPEC); 80 bounds the cost of
-    long cables (the flex costs about 0.2 ms per step at 40 points)."""
+    long cables (a flex's cost per step grows with its points)."""
     target = max(0.025, 4.0 * radius)
     return int(np.clip(round(length / target), 8, 80))
 

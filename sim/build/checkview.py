@@ -23,10 +23,9 @@ import difflib
 import mujoco
 import numpy as np
 
+from cablecheck.build.built import BodyTree, Built
 from cablecheck.checker.partset import PartSet
 from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape
-from cablecheck.build.built import Built
-from cablecheck.build.built import BodyTree
 from cablecheck.run.kinematic import KinematicSimulation
 from cablecheck.run.motion import Motion
 

@@ -51,11 +51,11 @@ from cablecheck.build.cablephysics import (
 )
 from cablecheck.build.cableplan import CablePlan
 from cablecheck.build.contactbits import ContactBits, cable_bits, model_bits, part_bits
+from cablecheck.build.startframes import Frames
 from cablecheck.detection.mesh import add_surfaces
-from cablecheck.scene.records import CableDef, PartDef, Scene
 from cablecheck.scene.errors import SceneError
 from cablecheck.scene.frames import euler_matrix
-from cablecheck.build.startframes import Frames
+from cablecheck.scene.records import CableDef, PartDef, Scene
 
 BASE_ARMATURE = 100.0
 """Armature added to the base model's joints, which are driven kinematically:

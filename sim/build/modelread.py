@@ -18,8 +18,8 @@ import numpy as np
 
 from cablecheck.build.built import CABLE_PREFIX, Built, JointDrive, PartModel
 from cablecheck.build.cableplan import CablePlan, cable_model
-from cablecheck.scene.records import Scene
 from cablecheck.scene.errors import SceneError
+from cablecheck.scene.records import Scene
 
 SHAPES = {int(mujoco.mjtGeom.mjGEOM_PLANE): "plane", int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere",
            int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule", int(mujoco.mjtGeom.mjGEOM_ELLIPSOID): "ellipsoid",

@@ -16,12 +16,12 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from cablecheck.checker.shapes import Shape, ShapeType, least_signed_distance, mesh_shape
 from cablecheck.build.modelread import SHAPES, geom_names, mesh_arrays
-from cablecheck.scene.records import Scene
+from cablecheck.build.startframes import Frames
+from cablecheck.checker.shapes import Shape, ShapeType, least_signed_distance, mesh_shape
 from cablecheck.scene.frames import euler_matrix
 from cablecheck.scene.mjcf import base_model
-from cablecheck.build.startframes import Frames
+from cablecheck.scene.records import Scene
 
 
 class Obstacles:

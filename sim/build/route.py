@@ -119,7 +119,7 @@ def _find_profile(ratio: float, count: int, held: int) -> np.ndarray:
         # measured on the resampled points: their chords are the cable's elements
         return float(np.linalg.norm(np.diff(shape(h), axis=0), axis=1).sum()) - ratio
 
-    from scipy.optimize import brentq   # scipy, a third of a second to import: only a run with slack pays it
+    from scipy.optimize import brentq  # scipy, a third of a second to import: only a run with slack pays it
 
     hi = ratio
     while excess(hi) < 0.0:
@@ -199,7 +199,7 @@ def _bent_run(a, b, t0, t1, count: int, target: float, across: np.ndarray, held:
 
     if excess(0.0) >= 0.0:
         return shape(0.0)
-    from scipy.optimize import brentq   # scipy, a third of a second to import: only a run with slack pays it
+    from scipy.optimize import brentq  # scipy, a third of a second to import: only a run with slack pays it
 
     hi = 1.0
     while excess(hi) < 0.0:

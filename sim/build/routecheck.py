@@ -21,12 +21,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from cablecheck.checker.shapes import signed_distance
 from cablecheck.build.cableplan import CablePlan
 from cablecheck.build.obstacles import Obstacles
-from cablecheck.scene.records import Scene
-from cablecheck.scene.errors import fmt
 from cablecheck.build.startframes import Frames
+from cablecheck.checker.shapes import signed_distance
+from cablecheck.scene.errors import fmt
+from cablecheck.scene.records import Scene
 
 
 def route_warnings(scene: Scene, frames: Frames, meshes: dict, plans: list[CablePlan]) -> tuple[str, ...]:

@@ -26,37 +26,19 @@ from dataclasses import replace
 import numpy as np
 
 from cablecheck.build.built import (
-    CABLE_PREFIX,
-    Attachment,
     Built,
-    CableModel,
-    JointDrive,
-    PartModel,
-    Substeps,
 )
 from cablecheck.build.cablephysics import (
-    CONTACT_SOLIMP,
-    EDGE_IMPEDANCE,
-    EDGE_YIELD,
-    contact_time_constant,
-    damping_step,
-    edge_time_constant,
-    first_bending_frequency,
     first_mode,
-    rayleigh_damping,
-    step_damping_ratio,
 )
-from cablecheck.build.cableplan import CLAMP_EDGE, CablePlan, default_segments, has_slack, plan_cable
-from cablecheck.build.contactbits import ContactBits
-from cablecheck.build.mjspec import SIM_MARGIN_FRACTION, compile_model, move_held, set_step
+from cablecheck.build.cableplan import CablePlan, has_slack, plan_cable
+from cablecheck.build.mjspec import compile_model, move_held, set_step
 from cablecheck.build.modelread import read_built
 from cablecheck.build.obstacles import Obstacles
 from cablecheck.build.startframes import Frames, part_meshes, scene_origin
 from cablecheck.build.substeps import (
     MAX_SUBSTEPS,
-    bending_step,
     choose_substeps,
-    held_speeds,
     script_poses,
     tunnel_warnings,
 )

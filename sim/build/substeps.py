@@ -71,7 +71,9 @@ def script_poses(built: Built) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     Samples the script `SPEED_SAMPLES` times over the duration and at every
     key through forward kinematics, so bodies, their rotations and mjcf
     joints all count. Empty when nothing moves."""
-    from cablecheck.run.motion import Motion  # motion imports cablecheck.build.stages, which imports this module
+    from cablecheck.run.motion import (
+        Motion,  # motion imports cablecheck.build.stages, which imports this module
+    )
 
     scene, m = built.scene, built.model
     if scene.duration <= 0.0 or not scene.motions:

@@ -69,7 +69,7 @@ def build_parser(version: str) -> argparse.ArgumentParser:
                      help="run the full pairwise check on every checked step; by default (method "
                           "points) a step on which everything is proven clear since the last full "
                           "check, but the pairs already near the clearance, checks only those: the "
-                          "same events, pairs and MuJoCo comparison, several times faster")
+                          "same events, pairs and MuJoCo comparison, faster (docs/accuracy.md)")
     run.add_argument("--quiet", action="store_true", help="print nothing but errors")
     run.add_argument("--baseline", type=Path, metavar="EARLIER.json",
                      help="an earlier run's report: mark each clash new or still present, and list "
@@ -130,7 +130,7 @@ def build_parser(version: str) -> argparse.ArgumentParser:
                                        "the checker beside python-fcl and MuJoCo's collision, and "
                                        "per-step cost of the example scenes; print the tables and "
                                        "write them as CSV plus bench.png into --out.")
-    bench.add_argument("--quick", action="store_true", help="fewer scenes and repeats (under a minute)")
+    bench.add_argument("--quick", action="store_true", help="fewer scenes and repeats")
     bench.add_argument("--out", type=Path, default=Path("recordings/bench"), metavar="DIR",
                        help="output folder (default: recordings/bench)")
     return parser

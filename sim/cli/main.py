@@ -20,7 +20,10 @@ recording are still written). Tracebacks are printed only with the environment v
 `CABLECHECK_TRACEBACK` set. Output paths are checked before any work starts.
 
 This module runs the sub-commands and maps their outcomes and errors to
-exit statuses. The arguments are parsed by `cablecheck.cli.args`, progress and
+exit statuses. Each command imports its own modules inside its function, so
+a command loads only what it uses (`check` no MuJoCo unless a cable
+collides, no rerun without a recording, no Dask outside a study); those are
+this module's deferred imports. The arguments are parsed by `cablecheck.cli.args`, progress and
 summaries printed by `cablecheck.cli.printing`; the work is done in `cablecheck.run.runner`,
 `cablecheck.run.sweep`, `cablecheck.study.definition` and `cablecheck.bench.command`.
 """
@@ -50,13 +53,14 @@ def _show_traceback() -> bool:
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
-    from cablecheck.scene.load import load_scene
+    from cablecheck.scene.load import load_scene  # each command loads its own modules (module docstring)
 
     scene = load_scene(args.scene)
     warnings = scene.warnings
     if "cable-structure" in scene.effects.contact and scene.cables:
+        # MuJoCo loads only for a scene whose cables collide
         from cablecheck.build.routecheck import route_warnings
-        from cablecheck.build.stages import plan_cables  # MuJoCo loads only for a scene whose cables collide
+        from cablecheck.build.stages import plan_cables
 
         warnings += route_warnings(scene, *plan_cables(scene))
     if not args.quiet:
@@ -72,6 +76,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace, stop: StopRequest) -> int:
+    # each command loads its own modules (module docstring)
     from cablecheck.report.outputs import check_output
     from cablecheck.scene.load import load_scene
 
@@ -114,8 +119,9 @@ def _cmd_run(args: argparse.Namespace, stop: StopRequest) -> int:
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
+    # each command loads its own modules (module docstring)
     from cablecheck.report.outputs import check_output
-    from cablecheck.run.sweep import SweepOptions, sweep_scene  # MuJoCo loads only when needed
+    from cablecheck.run.sweep import SweepOptions, sweep_scene
     from cablecheck.scene.load import load_scene
 
     if args.report is not None:
@@ -133,6 +139,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def _cmd_study(args: argparse.Namespace, stop: StopRequest) -> int:
+    # each command loads its own modules (module docstring)
     from cablecheck.study.cluster import StudyRunError
     from cablecheck.study.definition import Method
     from cablecheck.study.result import fails
@@ -196,26 +203,22 @@ def _main(args: argparse.Namespace, stop: StopRequest) -> int:
         if args.command == "run":
             return _cmd_run(args, stop)
         if args.command == "sweep":
-            from cablecheck.run.mjlog import (
-                log_file_off,  # a run takes MuJoCo's messages itself (cablecheck.run.runner)
-            )
+            from cablecheck.run.mjlog import log_file_off  # each command loads its own modules
 
-            with log_file_off():
+            with log_file_off():   # (a run takes MuJoCo's messages itself, cablecheck.run.runner)
                 return _cmd_sweep(args)
         if args.command == "study":
-            from cablecheck.study.cluster import (
-                closing_later,  # its cluster closes while it writes its outputs
-            )
+            from cablecheck.study.cluster import closing_later  # each command loads its own modules
 
-            with closing_later():
+            with closing_later():   # its cluster closes while it writes its outputs
                 return _cmd_study(args, stop)
         if args.command == "bench":
+            # each command loads its own modules: MuJoCo and matplotlib only here
             from cablecheck.bench.command import FULL, QUICK, run_bench
             from cablecheck.report.outputs import check_folder
-
-            check_folder(args.out, "--out")  # MuJoCo and matplotlib load only when needed
-
             from cablecheck.run.mjlog import log_file_off
+
+            check_folder(args.out, "--out")
 
             with log_file_off():
                 run_bench(QUICK if args.quick else FULL, out=args.out)
@@ -247,7 +250,7 @@ def _failed(args: argparse.Namespace, e: Exception) -> int:
     """An unexpected error of a command: one line on stderr (the traceback
     only with `TRACEBACK_ENV` set), exit status 4."""
     if _show_traceback():
-        import traceback
+        import traceback  # only to print one
 
         traceback.print_exception(type(e), e, e.__traceback__)
     print(f"cablecheck: error: {args.command} failed: {type(e).__name__}: {_one_line(str(e))} "

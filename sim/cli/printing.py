@@ -287,6 +287,7 @@ def print_sweep(r: dict, path: Path) -> None:
 
 
 def print_study(study, rows, units: str, window, complete: bool, paths: dict) -> None:
+    # the study's modules load only for the study command, not for every command that prints
     from cablecheck.study.definition import format_value
     from cablecheck.study.result import Status, free_of_hard
 
@@ -341,6 +342,7 @@ def print_study(study, rows, units: str, window, complete: bool, paths: dict) ->
 def _print_answer(study, rows, units: str) -> None:
     """The study's answer in one line: the best variant, whether it keeps
     every requirement and by what margin (each requirement's beside)."""
+    # the study's modules load only for the study command (as in print_study)
     from cablecheck.study.definition import format_value
     from cablecheck.study.result import Status, best_row
 

@@ -35,10 +35,10 @@ that separate a segment from a box whenever anything does). Before them a
 cull in the world frame leaves out, with no rotation, the (segment, body)
 pairs whose spheres lie apart (the segment's around its box grown by the
 bound, the body's around the box of its patches): what it leaves out the
-first step would, so what is kept is the same. On the robot cell a
-state keeps 6.7 of 330 patches (15.1 with the patches' own boxes alone;
-2 have contacts): each kept patch costs mj_flex and mj_collision some
-10 us even without contacts. Every
+first step would, so what is kept is the same: on the robot cell a state
+keeps a few of its hundreds of patches, fewer than the patches' own boxes
+alone would (each kept patch costs mj_flex and mj_collision work even
+without contacts). Every
 one-dimensional flex counts as a cable; should the mjcf model bring a
 flex of another dimension that can meet a surface, no patch is ever left
 out. The positions are MuJoCo's body poses at the state (mj_kinematics;
@@ -91,8 +91,8 @@ segment reaches one of its pieces."""
 
 TREE_STEP = 2
 """Levels of a body's tree of patch boxes tested at once (2**2 boxes per
-segment): fewer steps down the tree, each a few numpy calls (1, 2, 3, 4 levels
-at once: 64, 55, 59, 73 us a state on the robot cell, side by side)."""
+segment): fewer steps down the tree, each a few numpy calls (1 to 4 levels at
+once were timed side by side on the robot cell; 2 was the fastest)."""
 
 CULL_ROOM = 1e-9
 """Metres added to a segment's sphere in the first cull (`SurfaceReach.reachable`),

@@ -47,6 +47,7 @@ import numpy as np
 from cablecheck.about import version
 from cablecheck.build.built import Built
 from cablecheck.build.cablephysics import COMPRESSION_TOLERANCE
+from cablecheck.build.checkview import OptionError
 from cablecheck.build.routecheck import route_warnings
 from cablecheck.build.stages import build_simulation, plan_cables, with_detection
 from cablecheck.build.static import build_static, needs_model
@@ -70,6 +71,7 @@ from cablecheck.report.document import (
     report_of,
     write_report,
 )
+from cablecheck.report.outputs import OutputPathError
 from cablecheck.report.review import ReviewError, load_review, match
 from cablecheck.run.ahead import StepsAhead, depth_for, thread_cpu
 from cablecheck.run.divergence import DivergenceWatch, PhysicsError
@@ -205,9 +207,6 @@ def run_outcome(scene: Scene, options: RunOptions, progress: Progress | None = N
 
 def _bad_input(exc: BaseException) -> bool:
     """`exc` is the scene's or the options' fault (the command line's exit status 2)."""
-    from cablecheck.build.checkview import OptionError
-    from cablecheck.report.outputs import OutputPathError
-
     return isinstance(exc, (SceneError, OptionError, OutputPathError, BaselineError, ReviewError))
 
 
@@ -345,7 +344,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
             for ev in events:  # each event still open at the end gets its one end entry
                 if id(ev) not in closed:
                     _log_end(recorder, ev, scene.scale, scene.units, at_end=True)
-            from cablecheck.record.clashes import summary_text   # loaded with the Recorder above
+            from cablecheck.record.clashes import summary_text  # loaded with the Recorder above
 
             summary = summary_text(scene.name, settings, events, worn, scene.scale, complete,
                                    tuple(tracker.allowed.values()), excused, compared)

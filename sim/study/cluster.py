@@ -25,6 +25,9 @@ command line's study) the cluster closes on a thread of its own while the
 study writes its tables and plot.
 
 This module runs no variant (see `cablecheck.study.execute`).
+
+Dask (`distributed`) is imported inside the functions that use it: a study's
+bad input (its file, scenes, address) is refused before Dask, slow to load, is.
 """
 
 from __future__ import annotations
@@ -120,7 +123,7 @@ def check_address(address: str) -> str:
 
 def _check_tls(where: str) -> None:
     """StudyRunError unless Dask's configuration gives the client a CA file and a certificate that exist."""
-    from distributed.security import Security
+    from distributed.security import Security  # Dask loads here, not at import (module docstring)
 
     sec = Security()
     missing = [name for name, value in (("distributed.comm.tls.ca-file", sec.tls_ca_file),
@@ -163,8 +166,8 @@ def _wait(coro, timeout: float, stop):
 
 async def _identity(address: str, timeout: float) -> dict:
     """The scheduler's answer to Dask's identity request."""
-    from distributed.comm import connect
-    from distributed.security import Security
+    from distributed.comm import connect  # Dask loads here, not at import (module docstring)
+    from distributed.security import Security  # Dask loads here, not at import (module docstring)
 
     comm = await connect(address, timeout=timeout, **Security().get_connection_args("client"))
     try:
@@ -193,7 +196,7 @@ def probe(address: str, stop=None, timeout: float | None = None) -> None:
 @contextmanager
 def cluster(workers: int | None, scheduler: str | None, stop=None):
     """A `Cluster` on the embedded local cluster or on `scheduler`; closed on leaving."""
-    from distributed import Client
+    from distributed import Client  # Dask loads here, not at import (module docstring)
 
     if scheduler is not None:
         address = check_address(scheduler)
@@ -226,8 +229,8 @@ def cluster(workers: int | None, scheduler: str | None, stop=None):
 
 def _local(n: int, root: str):
     """The embedded `LocalCluster` (see the module docstring)."""
-    import dask
-    from distributed import LocalCluster
+    import dask  # Dask loads here, not at import (module docstring)
+    from distributed import LocalCluster  # Dask loads here, not at import (module docstring)
 
     # each worker holds one variant at a time, the rest wait at the scheduler
     # for whichever worker is free first (Dask's default hands a worker a

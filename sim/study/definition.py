@@ -46,6 +46,8 @@ from enum import Enum
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from cablecheck.scene.errors import SceneError
 from cablecheck.scene.format import LARGEST
 from cablecheck.scene.load import load_scene, parse_scene
@@ -265,7 +267,6 @@ def _check_lengths(scene: Scene, frames) -> None:
     through its clips at the start: a run would lengthen it to the route
     without a word (`cablecheck.build.cableplan.plan_cable`: the length is at least the
     route's), and the study's row would name a length that did not run."""
-    import numpy as np
 
     for i, cable in enumerate(scene.cables):
         if cable.length is None:

@@ -41,6 +41,9 @@ go on. The cluster itself: `cablecheck.study.cluster`.
 
 This module does not parse study files (see `cablecheck.study.definition`), reduce reports to
 rows (`cablecheck.study.result`) or write the study's tables and plot (`cablecheck.study.plot`).
+
+Dask (`distributed`) is imported inside the functions that use it: a study's
+bad input (its file, scenes, address) is refused before Dask, slow to load, is.
 """
 
 from __future__ import annotations
@@ -56,10 +59,14 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from cablecheck.study.bundle import Bundle, materialise
-from cablecheck.study.cluster import Cluster, StudyRunError, cluster, workers_of  # noqa: F401 (StudyRunError: the callers')
+from cablecheck.report.document import write_report
+from cablecheck.scene.errors import SceneError
+from cablecheck.study.bundle import Bundle, make_bundle, materialise
+from cablecheck.study.cluster import Cluster, cluster, workers_of
+from cablecheck.study.definition import check_variant, variant_at
 from cablecheck.study.plot import write_atomic
 from cablecheck.study.result import Row, Status, row_from_report
+from cablecheck.study.search import Search
 
 POLL_S = 0.05
 """How often the client looks for finished variants and a stop request, seconds."""
@@ -109,7 +116,7 @@ class _EventStop:
     signal_name = None
 
     def __init__(self, name: str):
-        from distributed import Event
+        from distributed import Event  # Dask loads here, not at import (module docstring)
 
         self._event = Event(name)
         self._next = 0.0
@@ -152,7 +159,7 @@ def _files(name: str, digest: str) -> Bundle:
     """The scene's files of a batch: kept from an earlier variant on this
     worker, else fetched from the scheduler's `Variable` `name`."""
     if digest not in _FILES:
-        from distributed import Variable
+        from distributed import Variable  # Dask loads here, not at import (module docstring)
 
         doc = Variable(name).get(timeout=60)
         _FILES[digest] = Bundle(scene=doc["scene"], files=tuple((n, bytes(b)) for n, b in doc["files"]))
@@ -332,7 +339,7 @@ def run_batch(cl: Cluster, tasks: list[VariantTask], values: dict[str, tuple], b
     futures = {}
     stopped = shared = None
     if todo:
-        from distributed import Event, Variable
+        from distributed import Event, Variable  # Dask loads here, not at import (module docstring)
 
         tag = os.urandom(4).hex()
         shared = Variable(f"cablecheck-files-{tag}", client=client)   # kept by the scheduler
@@ -383,7 +390,6 @@ def _collect(future, task: VariantTask, values: tuple, folder: Path, judged: tup
     except Exception as e:   # its own error, its worker's death (KilledWorker), or cancelled
         return Row(id=task.id, values=values, status=Status.FAILED,
                    error=f"{type(e).__name__}: {e}".strip())
-    from cablecheck.report.document import write_report
 
     if folder.exists():
         shutil.rmtree(folder)
@@ -415,10 +421,6 @@ def run_search(study, record: bool, out: Path, *, workers: int | None = None, sc
     round runs; a point the scene refuses is a failed row with the scene's
     complaint, not run. `resume` keeps finished variants as `run_batch`
     does: the search proposes the same points from the same rows."""
-    from cablecheck.scene.errors import SceneError
-    from cablecheck.study.bundle import make_bundle
-    from cablecheck.study.definition import check_variant, variant_at
-    from cablecheck.study.search import Search
 
     lo = [v.bounds[0] for v in study.vary]
     hi = [v.bounds[1] for v in study.vary]

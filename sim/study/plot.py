@@ -65,7 +65,7 @@ def plot_map(path: Path, study: Study, rows: list[Row], units: str) -> None:
     by its least margin (with requirements; else its worst distance), the
     runs that keep every requirement ringed, failed runs crossed, the best
     starred."""
-    import matplotlib
+    import matplotlib  # slow to load: only when a plot is drawn
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -178,7 +178,7 @@ def plot(path: Path, study: Study, rows: list[Row], units: str, window: Window |
     with the values. A length window is shaded with its recommendation
     marked; the least margin has the requirements' line; the best run is
     starred."""
-    import matplotlib
+    import matplotlib  # slow to load: only when a plot is drawn
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
