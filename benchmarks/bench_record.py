@@ -17,8 +17,9 @@ folder), ``--repeat`` times each. Per scene and code the table gives:
   falls in ``check``), stated so that nothing moved there goes unseen;
 - ``sim``: ``timing.sim_ms_per_step`` (MuJoCo's per step: stepping only,
   building its model is left out);
-- ``build``: ms spent building the MuJoCo models (`cablecheck.build.stages.build`, once
-  per run), MuJoCo's own fixed cost, beside the recording's (open + close);
+- ``build``: ms spent building the MuJoCo models (`cablecheck.build.stages.build`, or its
+  halves `build_simulation` and `with_detection` since 5974050, once per run),
+  MuJoCo's own fixed cost, beside the recording's (open + close);
 - ``ratio`` = rec / sim (the close spread over the run's steps),
   ``frame_ratio`` = frame / sim (per step, both sides without their
   once-per-run costs), and ``with_open`` = (record + open) / sim over the
@@ -60,6 +61,7 @@ import tempfile
 from pathlib import Path
 
 from cablecheck.bench.table import text_table
+from relayout import export
 
 REPO = Path(__file__).resolve().parents[1]
 BEFORE = "c5dc43e,ab65c56"
@@ -70,18 +72,19 @@ for the wear bar charts, lanes and log entries logged row by row)."""
 
 
 def _export(rev: str) -> Path:
-    """The checker and sim packages of git revision ``rev`` in a temporary folder."""
-    folder = Path(tempfile.mkdtemp(prefix="bench_record_before_"))
-    archive = subprocess.run(["git", "-C", str(REPO), "archive", rev, "checker", "sim"],
-                             check=True, capture_output=True).stdout
-    subprocess.run(["tar", "-x", "-C", str(folder)], input=archive, check=True)
-    return folder
+    """The checker and sim packages of git revision ``rev`` in a temporary folder, importable there as
+    ``cablecheck`` (a revision from before the move into stage packages rewritten: benchmarks/relayout.py)."""
+    return export(REPO, rev, prefix="bench_record_before_")
 
 
 _CHILD = """
 import json, sys, time
-import cablecheck.record.recorder, cablecheck.run.runner
+import cablecheck.run.runner
 from cablecheck.cli.main import main
+try:
+    from cablecheck.record.recorder import Recorder as R
+except ModuleNotFoundError:     # a revision whose recorder was the single module sim/record.py
+    from cablecheck.record import Recorder as R
 cpu, wall = {}, {"open": 0.0, "close": 0.0, "build": 0.0}
 Timer = cablecheck.run.runner._Timer
 lap = Timer.lap
@@ -105,9 +108,10 @@ def clock(part, f):
         finally:
             wall[part] += time.perf_counter() - t
     return clocked
-R = cablecheck.record.recorder.Recorder
 R.__init__, R.log_static, R.close = clock("open", R.__init__), clock("open", R.log_static), clock("close", R.close)
-cablecheck.run.runner.build = clock("build", cablecheck.run.runner.build)
+for name in ("build", "build_simulation", "with_detection"):    # one build, or the two halves (since 5974050)
+    if hasattr(cablecheck.run.runner, name):
+        setattr(cablecheck.run.runner, name, clock("build", getattr(cablecheck.run.runner, name)))
 code = main(sys.argv[1:])
 print(json.dumps({"cpu": cpu, "wall": wall}))
 sys.exit(code)
@@ -115,14 +119,15 @@ sys.exit(code)
 """The child: ``cablecheck`` with the run's stage timer also adding up CPU
 time per stage, and the recorder's opening (its constructor and the static
 scene, which the run's `record` stage does not count) and closing timed,
-and MuJoCo's model build (once per run, in no stage) beside them."""
+and MuJoCo's model build (once per run, in no stage; since 5974050 the
+run's `build_simulation` and `with_detection` together) beside them."""
 
 
 def _run(scene: Path, tree: Path, out: Path) -> dict | None:
     """One recorded run of `scene` by the code in `tree`: its timing and recording size, or None."""
     report, record = out / f"{scene.stem}.json", out / f"{scene.stem}.rrd"
     report.unlink(missing_ok=True)
-    # -P and the tree as the working folder: `sim` comes from PYTHONPATH, never from the
+    # -P and the tree as the working folder: `cablecheck` comes from PYTHONPATH, never from the
     # folder the benchmark was started in
     proc = subprocess.run([sys.executable, "-P", "-c", _CHILD, "run", str(scene), "--report", str(report),
                            "--record", str(record), "--quiet", "--fail-on", "never"],

@@ -55,6 +55,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from relayout import export
+
 REPO = Path(__file__).resolve().parents[1]
 
 BEFORE = "99b3d34"
@@ -258,12 +260,9 @@ def _table(title: str, cols: list[str], rows: list[list]) -> str:
 
 
 def _export(rev: str) -> Path:
-    """The checker and sim packages of git revision ``rev`` in a temporary folder."""
-    folder = Path(tempfile.mkdtemp(prefix="bench_scale_before_"))
-    archive = subprocess.run(["git", "-C", str(REPO), "archive", rev, "checker", "sim"],
-                             check=True, capture_output=True).stdout
-    subprocess.run(["tar", "-x", "-C", str(folder)], input=archive, check=True)
-    return folder
+    """The checker and sim packages of git revision ``rev`` in a temporary folder, importable there as
+    ``cablecheck`` (a revision from before the move into stage packages rewritten: benchmarks/relayout.py)."""
+    return export(REPO, rev, prefix="bench_scale_before_")
 
 
 def build_table(parts: list[int], before: str | None, mem_gb: float) -> tuple[str, list[dict]]:
