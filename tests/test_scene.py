@@ -968,13 +968,17 @@ def test_allow_errors_name_the_key(folder, rule, key, fragment):
 
 
 def test_allow_names_checked_against_built_parts(folder):
-    """A name taken at load time for an mjcf body must still cover a built part."""
+    """A name the loader took for the mjcf model's geoms must still cover a built part; one the builder
+    would not give is refused at load already (the loader names the geoms as the builder does)."""
     from cablecheck.scene.allow import check_allow_names
-    scene = parse(_with_allow({"a": "upper/wrist", "b": "power", "reason": "x"}), folder)
+    scene = parse(_with_allow({"a": "upper/capsule0", "b": "power", "reason": "x"}), folder)
     with pytest.raises(SceneError) as exc:
-        check_allow_names(scene, ["upper", "forearm", "cab/rail", "power"])
+        check_allow_names(scene, ["upper/capsule1", "forearm", "cab/rail", "power"])
+    check_error(exc, folder / "scene.toml", "allow[0].a", "did you mean 'upper/capsule1'?")
+    check_allow_names(scene, ["upper/capsule0", "power"])
+    with pytest.raises(SceneError) as exc:
+        parse(_with_allow({"a": "upper/wrist", "b": "power", "reason": "x"}), folder)
     check_error(exc, folder / "scene.toml", "allow[0].a", "did you mean 'upper'?")
-    check_allow_names(scene, ["upper/wrist/0", "power"])
 
 
 def test_attach_links(folder):

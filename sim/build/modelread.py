@@ -19,12 +19,8 @@ import numpy as np
 from cablecheck.build.built import CABLE_PREFIX, Built, JointDrive, PartModel
 from cablecheck.build.cableplan import CablePlan, cable_model
 from cablecheck.scene.errors import SceneError
+from cablecheck.scene.mjcf import SHAPES, body_name, geom_names
 from cablecheck.scene.records import Scene
-
-SHAPES = {int(mujoco.mjtGeom.mjGEOM_PLANE): "plane", int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere",
-           int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule", int(mujoco.mjtGeom.mjGEOM_ELLIPSOID): "ellipsoid",
-           int(mujoco.mjtGeom.mjGEOM_CYLINDER): "cylinder", int(mujoco.mjtGeom.mjGEOM_BOX): "box",
-           int(mujoco.mjtGeom.mjGEOM_MESH): "mesh"}
 
 
 def mesh_arrays(m: mujoco.MjModel, g: int) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -35,32 +31,6 @@ def mesh_arrays(m: mujoco.MjModel, g: int) -> tuple[np.ndarray | None, np.ndarra
     va, vn = int(m.mesh_vertadr[mid]), int(m.mesh_vertnum[mid])
     fa, fn = int(m.mesh_faceadr[mid]), int(m.mesh_facenum[mid])
     return m.mesh_vert[va:va + vn].astype(float).copy(), m.mesh_face[fa:fa + fn].astype(int).copy()
-
-
-def _body_name(m: mujoco.MjModel, bid: int) -> str:
-    return m.body(bid).name or ("world" if bid == 0 else f"body{bid}")
-
-
-def geom_names(m: mujoco.MjModel, geoms: list[int]) -> list[str]:
-    """Names of one body's geoms (all colliding, or all visual), in model order:
-    `<body>/<geom name>`, else `<body>/<mesh name>`, else `<body>/<type><k>`
-    with k the geom's index among `geoms`; names that would repeat within the
-    body fall back to `<type><k>` for each of them. Counting within the
-    colliding geoms only keeps part names when visual geoms come or go."""
-    if not geoms:
-        return []
-    bname = _body_name(m, int(m.geom_bodyid[geoms[0]]))
-    own = []
-    for g in geoms:
-        name = m.geom(g).name
-        if not name and int(m.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_MESH):
-            name = m.mesh(int(m.geom_dataid[g])).name
-        own.append(name)
-    counts: dict[str, int] = {}
-    for name in own:
-        counts[name] = counts.get(name, 0) + 1
-    return [f"{bname}/{name}" if name and counts[name] == 1 else f"{bname}/{SHAPES[int(m.geom_type[g])]}{k}"
-            for k, (g, name) in enumerate(zip(geoms, own))]
 
 
 def _geom_parts(scene: Scene, m: mujoco.MjModel, own_bits: np.ndarray) -> tuple[list[PartModel], list[PartModel]]:
@@ -86,7 +56,7 @@ def _geom_parts(scene: Scene, m: mujoco.MjModel, own_bits: np.ndarray) -> tuple[
         per_body.setdefault((int(m.geom_bodyid[g]), is_visual), []).append(g)
     for (bid, _), geoms in per_body.items():
         for g, name in zip(geoms, geom_names(m, geoms)):
-            named[g] = (name, _body_name(m, bid), False)
+            named[g] = (name, body_name(m, bid), False)
     parts, visuals, seen = [], [], {}
     for g in sorted(named):
         name, body, keepout = named[g]

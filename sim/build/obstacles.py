@@ -16,11 +16,11 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from cablecheck.build.modelread import SHAPES, geom_names, mesh_arrays
+from cablecheck.build.modelread import mesh_arrays
 from cablecheck.build.startframes import Frames
 from cablecheck.checker.shapes import Shape, ShapeType, least_signed_distance, mesh_shape
 from cablecheck.scene.frames import euler_matrix
-from cablecheck.scene.mjcf import base_model
+from cablecheck.scene.mjcf import SHAPES, base_model, colliding_parts
 from cablecheck.scene.records import Scene
 
 
@@ -55,11 +55,7 @@ class Obstacles:
             names.append(part.name)
         if scene.mjcf is not None:
             m = base_model(scene.mjcf)
-            colliding: dict[int, list[int]] = {}     # body -> its colliding geoms: the builder's part names
-            for g in range(m.ngeom):
-                if int(m.geom_type[g]) in SHAPES and not (m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0):
-                    colliding.setdefault(int(m.geom_bodyid[g]), []).append(g)
-            geom_name = {g: n for gs in colliding.values() for g, n in zip(gs, geom_names(m, gs))}
+            geom_name = colliding_parts(m)     # the builder's part names
             for g in range(m.ngeom):
                 gtype = int(m.geom_type[g])
                 body = m.body(int(m.geom_bodyid[g])).name or "world"

@@ -2,9 +2,9 @@
 cover anything.
 
 An allow name must cover a scene part or cable (by name or assembly path
-prefix) or, with an mjcf model, begin with one of its bodies: its geoms'
-part names are the builder's, so those are checked against the built parts
-once the model exists (`check_allow_names`, called by `cablecheck.run.runner`). Applying
+prefix) or a colliding geom of the mjcf model, named as the builder names
+it (checked again against the built parts once the model exists,
+`check_allow_names`, called by `cablecheck.run.runner`). Applying
 the rules to interference records is the checker's job, not this module's.
 """
 
@@ -19,17 +19,22 @@ from cablecheck.scene.records import AllowDef, Scene
 
 
 def read_allow(r: Reader, value: dict, where: str, names: list[str]) -> AllowDef:
-    """An `[[allow]]` pair. Its names must cover a scene part or cable
-    (or, with an mjcf model, begin with one of its bodies: the geoms'
-    names are the builder's, checked against the built parts by
-    :func:`check_allow_names`)."""
+    """An `[[allow]]` pair. Its names must cover a scene part or cable, or
+    a colliding geom of the mjcf model by the name the builder gives it
+    (`cablecheck.scene.mjcf.colliding_parts`: ``<body>/<geom>``; a body
+    names all of its colliding geoms)."""
     t = r.table(value, where, ALLOW_KEYS, ("a", "b", "reason"))
+    model_parts = list(r.mjcf.parts) if r.mjcf is not None else []
     out = []
     for key in ("a", "b"):
         name = r.name(t[key], f"{where}.{key}")
-        bodies = (set(r.mjcf.bodies) | {"world"}) if r.mjcf is not None else set()
-        if not covers(name, names) and name.split("/")[0] not in bodies:
-            raise r.error(f"{where}.{key}", unknown_name(name, names + sorted(bodies)))
+        if not covers(name, names + model_parts):
+            body = name.split("/")[0]
+            if r.mjcf is not None and (body in r.mjcf.bodies or body == "world") and name == body:
+                raise r.error(f"{where}.{key}", f"body {body!r} of the mjcf model has no colliding geom (its geoms "
+                                                f"are visual, contype = conaffinity = 0, or none): nothing of it "
+                                                f"is a part a cable can touch")
+            raise r.error(f"{where}.{key}", unknown_name(name, names + model_parts))
         out.append(name)
     reason = r.name(t["reason"], f"{where}.reason")
     return AllowDef(out[0], out[1], reason)

@@ -23,6 +23,12 @@ HINGE = int(mujoco.mjtJoint.mjJNT_HINGE)
 DRIVEN = (HINGE, int(mujoco.mjtJoint.mjJNT_SLIDE))
 """Joint types a motion drives by a value: hinge and slide."""
 
+SHAPES = {int(mujoco.mjtGeom.mjGEOM_PLANE): "plane", int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere",
+           int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule", int(mujoco.mjtGeom.mjGEOM_ELLIPSOID): "ellipsoid",
+           int(mujoco.mjtGeom.mjGEOM_CYLINDER): "cylinder", int(mujoco.mjtGeom.mjGEOM_BOX): "box",
+           int(mujoco.mjtGeom.mjGEOM_MESH): "mesh"}
+"""Geom types that are parts (the checker's shapes), by MuJoCo type: heightfields and SDFs are not."""
+
 
 @dataclass(frozen=True)
 class MjcfInfo:
@@ -32,6 +38,7 @@ class MjcfInfo:
     bodies: dict[str, int]   # name -> body id
     joints: dict[str, int]   # name -> joint id
     keyframes: dict[str, int]   # name -> keyframe id
+    parts: tuple[str, ...] = ()   # the colliding geoms' part names, as the builder names them
 
     def driven_joints(self) -> list[str]:
         """Named hinge and slide joints, in model order."""
@@ -50,7 +57,8 @@ def compile_mjcf(file: Path, path: Path) -> MjcfInfo:
     bodies = {model.body(i).name: i for i in range(model.nbody) if model.body(i).name}
     joints = {model.joint(i).name: i for i in range(model.njnt) if model.joint(i).name}
     keyframes = {model.key(i).name: i for i in range(model.nkey) if model.key(i).name}
-    return MjcfInfo(model=model, bodies=bodies, joints=joints, keyframes=keyframes)
+    return MjcfInfo(model=model, bodies=bodies, joints=joints, keyframes=keyframes,
+                    parts=tuple(colliding_parts(model).values()))
 
 
 def base_model(path: Path) -> mujoco.MjModel:
@@ -65,3 +73,40 @@ def base_model(path: Path) -> mujoco.MjModel:
 @lru_cache(maxsize=8)
 def _compiled(path: str, mtime_ns: int, digest: bytes) -> mujoco.MjModel:
     return mujoco.MjModel.from_xml_path(path)
+
+
+def body_name(m: mujoco.MjModel, bid: int) -> str:
+    return m.body(bid).name or ("world" if bid == 0 else f"body{bid}")
+
+
+def geom_names(m: mujoco.MjModel, geoms: list[int]) -> list[str]:
+    """Names of one body's geoms (all colliding, or all visual), in model order:
+    `<body>/<geom name>`, else `<body>/<mesh name>`, else `<body>/<type><k>`
+    with k the geom's index among `geoms`; names that would repeat within the
+    body fall back to `<type><k>` for each of them. Counting within the
+    colliding geoms only keeps part names when visual geoms come or go."""
+    if not geoms:
+        return []
+    bname = body_name(m, int(m.geom_bodyid[geoms[0]]))
+    own = []
+    for g in geoms:
+        name = m.geom(g).name
+        if not name and int(m.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_MESH):
+            name = m.mesh(int(m.geom_dataid[g])).name
+        own.append(name)
+    counts: dict[str, int] = {}
+    for name in own:
+        counts[name] = counts.get(name, 0) + 1
+    return [f"{bname}/{name}" if name and counts[name] == 1 else f"{bname}/{SHAPES[int(m.geom_type[g])]}{k}"
+            for k, (g, name) in enumerate(zip(geoms, own))]
+
+
+def colliding_parts(m: mujoco.MjModel) -> dict[int, str]:
+    """Geom id -> part name of the model's colliding geoms (contype or conaffinity written non-zero, a
+    type in `SHAPES`), in geom order, named as the builder names them (`geom_names`, per body)."""
+    per_body: dict[int, list[int]] = {}
+    for g in range(m.ngeom):
+        if int(m.geom_type[g]) in SHAPES and (m.geom_contype[g] != 0 or m.geom_conaffinity[g] != 0):
+            per_body.setdefault(int(m.geom_bodyid[g]), []).append(g)
+    named = {g: n for geoms in per_body.values() for g, n in zip(geoms, geom_names(m, geoms))}
+    return dict(sorted(named.items()))
