@@ -404,3 +404,28 @@ def test_error_on_the_simulation_thread_exits_4(tmp_path: Path, monkeypatch):
     assert r["complete"] is False and r["error"]["type"] == "IndexError"
     assert "sim/run/loop.py" in r["error"]["traceback"] or "sim\\loop.py" in r["error"]["traceback"]
     assert r["settings"]["checked_steps"] <= 40 and r["settings"]["steps"] < 40
+
+
+def test_a_held_end_pressed_into_a_part_of_another_body_is_named_as_the_cause(tmp_path):
+    """`held_pinch` reads MuJoCo's own contacts: an end held on the slider inside a block on the world is
+    named, with the block, its depth and the hold; the same block riding the slider (what the end is
+    fastened to) is no pinch, nor is a block clear of the cable."""
+    from buildscenes import slider_scene
+
+    from cablecheck.build.stages import build
+    from cablecheck.run.divergence import held_pinch
+    from cablecheck.scene.load import parse_scene
+
+    def pinch(block: dict):
+        data = slider_scene(tmp_path)
+        data["parts"] = [block]
+        built = build(parse_scene(data, tmp_path / "s.toml"), detect=False)
+        return held_pinch(built, built.qpos0, 0, None)
+
+    found = pinch({"name": "frame/block", "shape": "box", "size": [0.03, 0.03, 0.03], "pos": [0.6, 0.0, 0.5]})
+    assert found is not None and "held at vertex" in found and "(its end on 'slider')" in found
+    assert "'frame/block'" in found and "pressed 0.0" in found
+    assert pinch({"name": "frame/block", "body": "slider", "shape": "box", "size": [0.03, 0.03, 0.03],
+                  "pos": [0.6, 0.0, 0.5]}) is None
+    assert pinch({"name": "frame/block", "shape": "box", "size": [0.03, 0.03, 0.03],
+                  "pos": [0.6, 0.0, 0.9]}) is None

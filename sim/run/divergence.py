@@ -32,6 +32,11 @@ vertex) or body where it showed, and the likely cause (`Cause`, `likely_cause`):
   simulation step can follow, even at the most substeps (`cablecheck.build.substeps`);
 - stiffness against the timestep: a cable's bending needs a smaller step
   than the run takes, even at the most substeps;
+- held against a part: at the last sound state, within `PINCH_ELEMENTS`
+  elements of where it diverged, the cable is both held (an end or clip on
+  one body) and pressed into a part of another body, as MuJoCo collides it
+  (a mesh as its convex hull): the hold and the contact fight until the
+  cable gives (`held_pinch`, MuJoCo's own collision pass at that state);
 - unknown, when none of these is found.
 
 This module does not step the simulation, stop the run or write the
@@ -94,6 +99,7 @@ class Cause(str, Enum):
     UNITS = "units"
     TELEPORT = "teleport"
     STIFFNESS = "stiffness-timestep"
+    PINCHED = "held-against-part"
     UNKNOWN = "unknown"
 
 
@@ -251,6 +257,50 @@ def likely_cause(built: Built, cable: str | None) -> tuple[Cause, str]:
                            "found; look at the contacts and the parts near that time in the recording")
 
 
+PINCH_ELEMENTS = 3
+"""Elements between where a cable diverged, a held vertex and a penetrating contact for `held_pinch`."""
+
+
+def held_pinch(built: Built, qpos: np.ndarray, cable: int, vertex: int | None) -> str | None:
+    """Why a cable diverged near a held vertex, when it did: at the state `qpos` (the last sound one)
+    MuJoCo's collision pass finds the cable pressed into a part of another body within `PINCH_ELEMENTS`
+    elements of a vertex held by a body (and of `vertex`, where it diverged, when known); the deepest such
+    contact in words, else None."""
+    m = built.model
+    if not isinstance(m, mujoco.MjModel) or not np.isfinite(qpos).all():
+        return None
+    c = built.cables[cable]
+    d = mujoco.MjData(m)
+    d.qpos[:] = qpos
+    mujoco.mj_fwdPosition(m, d)            # kinematics, flexes and collision: the contacts as simulated
+    parts = {p.geom_id: p for p in built.parts}
+    ends = m.flex_elem[m.flex_elemdataadr[c.flex_id]:].reshape(-1, 2)   # a 1-D flex: two vertices an element
+    best = None
+    for con in d.contact[:d.ncon]:
+        side = 0 if con.flex[0] == c.flex_id else 1 if con.flex[1] == c.flex_id else -1
+        if side < 0 or con.geom[1 - side] not in parts or con.dist >= 0.0:
+            continue
+        part = parts[int(con.geom[1 - side])]
+        verts = ([int(con.vert[side])] if con.vert[side] >= 0 else ends[int(con.elem[side])].tolist())
+        for a in c.attachments:
+            if a.body == part.body or min(abs(v - a.vertex) for v in verts) > PINCH_ELEMENTS:
+                continue
+            if vertex is not None and abs(vertex - a.vertex) > 2 * PINCH_ELEMENTS:
+                continue
+            if best is None or con.dist < best[0]:
+                best = (float(con.dist), part, a, min(verts, key=lambda v: abs(v - a.vertex)))
+    if best is None:
+        return None
+    depth, part, a, v = best
+    scene = built.scene
+    hull = " (as its convex hull: MuJoCo collides a mesh as its hull)" if part.shape == "mesh" else ""
+    at = "there" if v == a.vertex else f"{abs(v - a.vertex)} element(s) from it"
+    return (f"cable {c.name!r} is held at vertex {a.vertex} (its {a.window or a.kind} on {a.body!r}) and "
+            f"{at} pressed {_written(scene, -depth)} into part "
+            f"{part.name!r}{hull}: the hold and the contact fight until the cable gives; keep the held point "
+            f"clear of that part over the program (move the {a.kind} or the part, or change the motion)")
+
+
 class DivergenceWatch:
     """Finds the first diverged state of a run's batches (module docstring).
 
@@ -278,12 +328,14 @@ class DivergenceWatch:
         speeds = [r[1] for r in built.substeps.reasons.values()] if built.substeps is not None else []
         self.speed = max(RUNAWAY_SPEED, 10.0 * max(speeds, default=0.0))
         self._last: tuple[float, np.ndarray] | None = None
+        self._last_qpos: np.ndarray | None = None   # the last sound state's, for `held_pinch`
         # held vertices in the batch's stacked points; each element's rest length (inf across cables)
         self.held = np.array([self.starts[i] + a.vertex for i, c in enumerate(built.cables)
                               for a in c.attachments], int)
         rest = [np.append(np.diff(np.asarray(c.rest_s, float)), np.inf) for c in built.cables]
         self.rest = np.concatenate(rest)[:-1] if rest else np.zeros(0)
         self._vertex_of, self._cable_of = self._vertex_bodies()
+        self._sound: np.ndarray | None = None   # qpos of the state before the diverged one, when known
 
     def _vertex_bodies(self) -> tuple[dict[int, int], dict[int, int]]:
         """Body id -> vertex index and -> cable index, for the cables' vertex bodies."""
@@ -340,6 +392,7 @@ class DivergenceWatch:
             self._remember(states, pts)
             return None
         state = states[k]
+        self._sound = states[k - 1].qpos if k > 0 else self._last_qpos
         if k < first:
             if bad_nf[k]:
                 cols = np.flatnonzero(~finite[k])
@@ -375,6 +428,7 @@ class DivergenceWatch:
     def _remember(self, states: list, pts: np.ndarray) -> None:
         if len(pts):
             self._last = (states[len(pts) - 1].t, pts[-1].copy())
+            self._last_qpos = states[len(pts) - 1].qpos
 
     def _cable_at(self, col: int | None) -> tuple[str | None, int | None]:
         if col is None or not len(self.names):
@@ -395,8 +449,17 @@ class DivergenceWatch:
             ids = getattr(self.built.model, "flex_vertbodyid", None)
             if ids is not None:
                 body = self.built.model.body(int(ids[c.vert_adr + vertex])).name
-        cause, detail = likely_cause(self.built, cable)
+        cause, detail = self._cause(cable, vertex)
         return PhysicsError(state.t, state.step, False, sign, cable, vertex, body, None, value, cause, detail)
+
+    def _cause(self, cable: str | None, vertex: int | None) -> tuple[Cause, str]:
+        """`likely_cause`, and where that finds none, a held point pressed into a part (`held_pinch`)."""
+        cause, detail = likely_cause(self.built, cable)
+        if cause is Cause.UNKNOWN and cable is not None and self._sound is not None:
+            pinch = held_pinch(self.built, self._sound, self.names.index(cable), vertex)
+            if pinch is not None:
+                return Cause.PINCHED, pinch
+        return cause, detail
 
     def _qpos_body(self, adr: int) -> int:
         m = self.built.model
@@ -414,7 +477,7 @@ class DivergenceWatch:
             else:
                 scene_names = {v: k for k, v in self.built.body_ids.items()}
                 name = scene_names.get(body, name)
-        cause, detail = likely_cause(self.built, cable)
+        cause, detail = self._cause(cable, vertex)
         return PhysicsError(t, step, settling, sign, cable, vertex, name, warning, value, cause, detail)
 
     def _unstable(self, state) -> PhysicsError:
