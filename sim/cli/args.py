@@ -22,7 +22,9 @@ outputs:
   recording  recordings/<scene name>.rrd unless --record/--no-record; open it
              with `rerun FILE`.
   report     JSON beside the recording (same name, .json) unless --report.
-  Both are written atomically: an interrupted, diverged or failed run still
+  html       with --html PATH: the same report as one self-contained HTML file
+             (clash table, pictures of the spots, distance histories, wear).
+  Each is written atomically: an interrupted, diverged or failed run still
   leaves a readable recording and a report with "complete": false.
 
 exit status:
@@ -78,6 +80,10 @@ def build_parser(version: str) -> argparse.ArgumentParser:
                      help="a reviewer's notes ([[review]] a, b, status reviewed|approved, comment): "
                           "carried into the report beside each clash they cover; notes that cover "
                           "no clash are listed")
+    run.add_argument("--html", type=Path, metavar="REPORT.html",
+                     help="also write an HTML report there: one self-contained file (no network) with "
+                          "the summary, the clash table, a picture of each clash's spot at its worst "
+                          "time (rendered offscreen), its distance history and each cable's wear")
     run.add_argument("--only", metavar="PATH",
                      help="check only interference involving this assembly path (a part name or "
                           "prefix): its parts against the rest, and cables against its parts")

@@ -80,7 +80,7 @@ def _cmd_run(args: argparse.Namespace, stop: StopRequest) -> int:
     from cablecheck.report.outputs import check_output
     from cablecheck.scene.load import load_scene
 
-    for option, path in (("--report", args.report), ("--record", args.record)):
+    for option, path in (("--report", args.report), ("--record", args.record), ("--html", args.html)):
         if path is not None:
             check_output(path, option)
     scene = load_scene(args.scene)
@@ -94,7 +94,7 @@ def _cmd_run(args: argparse.Namespace, stop: StopRequest) -> int:
 
     options = RunOptions(report=report, record=record, method=args.method, spacing=args.spacing,
                          only=args.only, advance=not args.full_every_step, baseline=args.baseline,
-                         review=args.review)
+                         review=args.review, html=args.html)
     bar = ProgressBar(enabled=not args.quiet, timestep=scene.timestep)
     try:
         result = run_scene(scene, options, progress=bar, stop=stop,
@@ -103,6 +103,10 @@ def _cmd_run(args: argparse.Namespace, stop: StopRequest) -> int:
         bar.done()
     if not args.quiet:
         print_summary(result, report)
+        for w in (result.get("html") or {}).get("warnings", []):
+            print(f"warning: {w}", file=sys.stderr)
+        if args.html is not None:
+            print(f"HTML report: {args.html}")
     if result.get("physics_error"):
         print(f"cablecheck: {result['physics_error']['message']} (report: {report})", file=sys.stderr)
         return EXIT_DIVERGED

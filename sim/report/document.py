@@ -47,6 +47,7 @@ if TYPE_CHECKING:
     from cablecheck.checker.validation import ValidationSummary
     from cablecheck.checker.wear import CableWear
     from cablecheck.report.baseline import Comparison
+    from cablecheck.report.evidence import HtmlEvidence
     from cablecheck.report.review import ReviewMatch
     from cablecheck.run.divergence import PhysicsError
     from cablecheck.scene.records import Scene
@@ -228,6 +229,9 @@ class RunOutcome:
     margin_reach: float = 0.0
     margin_interval: float = 0.0
     review: ReviewMatch | None = None
+    html: HtmlEvidence | None = None
+    """With `--html`: per event its worst state and distance history, and the
+    pictures (`cablecheck.report.evidence`); None otherwise."""
 
 
 def _worst_first(rows):
@@ -430,6 +434,10 @@ def report_of(o: RunOutcome) -> dict:
     if o.baseline is not None:        # the clashes against an earlier run (--baseline)
         report["baseline"] = {"report": str(o.baseline.path), **o.baseline.counts(),
                               "resolved_events": resolved_rows(o.baseline, u)}
+    if o.html is not None:            # the HTML report's pictures (--html): how they were made, what is missing
+        report["html"] = {"renderer": o.html.pictures.renderer,
+                          "pictures": sum(p is not None for p in o.html.pictures.png),
+                          "warnings": list(o.html.pictures.warnings)}
     if o.validation is not None:
         report["validation"] = _validation(o.validation, u)
     report.update({
@@ -485,14 +493,18 @@ def _rounded(values: Any, ndim: int) -> Any:
 
 def write_report(report: dict, path: Path) -> None:
     """Write `report` as JSON to `path` atomically (no temporary file is left)."""
+    write_text(json.dumps(plain(report), indent=1, allow_nan=False) + "\n", Path(path))
+
+
+def write_text(text: str, path: Path) -> None:
+    """Write `text` (UTF-8) to `path` atomically: a temporary file in the
+    target folder, flushed, fsynced and renamed over `path`."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    text = json.dumps(plain(report), indent=1, allow_nan=False)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(text)
-            f.write("\n")
             f.flush()
             os.fsync(f.fileno())
         umask = os.umask(0)

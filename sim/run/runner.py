@@ -71,7 +71,10 @@ from cablecheck.report.document import (
     report_of,
     write_report,
 )
+from cablecheck.report.evidence import EvidenceKeeper, HtmlEvidence, Pictures
+from cablecheck.report.html import write_html
 from cablecheck.report.outputs import OutputPathError
+from cablecheck.report.render import Spot, render_spots
 from cablecheck.report.review import ReviewError, load_review, match
 from cablecheck.run.ahead import StepsAhead, depth_for, thread_cpu
 from cablecheck.run.divergence import DivergenceWatch, PhysicsError
@@ -127,6 +130,10 @@ class RunOptions:
     overlap: bool = True
     baseline: Path | None = None
     review: Path | None = None
+    html: Path | None = None
+    """With a path: the run keeps each clash's worst state and distance
+    history, renders its spot (`cablecheck.report.render`) and writes the
+    HTML report there beside the JSON one (`cablecheck.report.html`)."""
 
 
 Progress = Callable[[str, float, float], None]
@@ -175,15 +182,19 @@ def run_scene(scene: Scene, options: RunOptions, progress: Progress | None = Non
     start = time.perf_counter()
 
     def reported(stop: StopRequest) -> dict:
+        outcome = None
         with MujocoMessages() as messages:
             try:
-                report = report_of(_run(scene, options, progress, stop, start, warn, messages))
+                outcome = _run(scene, options, progress, stop, start, warn, messages)
+                report = report_of(outcome)
             except Exception as exc:
                 if _bad_input(exc):
                     raise
                 report = failed_report(scene, run_error(exc), warning_counts([], messages),
                                        time.perf_counter() - start, options.record)
         write_report(report, options.report)   # still under the stop request: a first signal waits
+        if options.html is not None:           # from the same report dict: the two never disagree
+            write_html(report, options.html, None if outcome is None else outcome.html)
         return report
 
     if stop is not None:
@@ -292,7 +303,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         tracker = EventTracker(hold=3 * every * scene.timestep, allow=checks.allow)
         joints = JointLog(built, sim.motion)
         out = _Checked(built, tracker, recorder, timer, progress, record_stride, sim.total_steps, joints, wear,
-                       checks.exclusions)
+                       checks.exclusions, evidence=options.html is not None)
     except BaseException:
         if ahead is not None:
             ahead.close()
@@ -359,6 +370,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
             timer.lap("record")
         loop_s = time.perf_counter() - loop_start
     ends = checks.outcome(validated=scene.check.validate)
+    html = None if out.keeper is None else _html_evidence(built, events, out.keeper)
     return RunOutcome(
         scene=scene, config=config, scene_file=scene_file, version=product,
         mujoco=mujoco.__version__, complete=complete, interrupted=stop.signal_name,
@@ -379,7 +391,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         timing=Timing(time.perf_counter() - start, dict(timer.total),
                       detector.collision_seconds() if detector is not None else None, loop_s,
                       watch.seconds if watch is not None else None),
-        recording=options.record, physics_error=diverged, error=error)
+        recording=options.record, physics_error=diverged, error=error, html=html)
 
 
 def _stopped_entry(diverged: PhysicsError | None, error: RunError | None, t_last: float
@@ -432,11 +444,13 @@ class _Checked:
 
     def __init__(self, built: Built, tracker: EventTracker, recorder: Recorder | None, timer: _Timer,
                  progress: Progress | None, record_stride: int, total_steps: int, joints: JointLog,
-                 wear: WearMap, exclusions=()):
+                 wear: WearMap, exclusions=(), evidence: bool = False):
         self.built, self.tracker, self.recorder, self.timer = built, tracker, recorder, timer
         self.joints = joints
         self.wear = wear
         self.near = _NearPairs(built, exclusions, built.scene.check.clearance)
+        # --html: each event's worst state and each pair's distances (cablecheck.report.evidence)
+        self.keeper = EvidenceKeeper(self.near.distances) if evidence else None
         self.pending_near = None
         self.progress, self.record_stride, self.total_steps = progress, record_stride, total_steps
         self.names = [c.name for c in built.cables]
@@ -506,10 +520,12 @@ class _Checked:
         for k, (state, res) in enumerate(zip(states, results)):
             started, closed = self.tracker.update(state.t, res.records)
             changes.append(([self.tracker.standing(key) for key in started], closed))
-            if recorder and (res.records or closed):
+            if (recorder or self.keeper is not None) and (res.records or closed):
                 for event in self.tracker.worst_at(state.t):
                     deepest[event] = k
         worst_states = set(deepest.values())
+        if self.keeper is not None:
+            self.keeper.take(states, results, deepest)
         self.timer.lap("check")
         for k, (state, res) in enumerate(zip(states, results)):
             if state.step == 0:
@@ -578,6 +594,32 @@ class _Checked:
                 max_twist=None if meter is None else float(meter.max_abs),
                 max_twist_moment=None if meter is None else _twist_moment(defn, c.radius, c.length, meter.max_abs)))
         return tuple(out)
+
+
+def _html_evidence(built: Built, events: tuple[Event, ...], keeper: EvidenceKeeper) -> HtmlEvidence:
+    """What the HTML report shows of each event: its kept state, distance
+    history and a picture of its spot at its worst state (a static check,
+    with no MuJoCo model, has none: said in the pictures' warnings)."""
+    clashes = keeper.result(events)
+    if not isinstance(built.model, mujoco.MjModel):
+        return HtmlEvidence(clashes, Pictures((None,) * len(events), None, (
+            "no clash pictures: a static check builds no MuJoCo model to render",) if events else ()))
+    geoms = {p.name: p.geom_id for p in built.parts}
+    flexes = {c.name: (c.flex_id, c.radius) for c in built.cables}
+    least = min((c.radius for c in built.cables), default=0.005)
+    spots = []
+    for e, c in zip(events, clashes):
+        names = {e.a, e.b}
+        spots.append(Spot(qpos=c.qpos, where=np.asarray(e.where, float) - built.origin,
+                          geoms=tuple(geoms[n] for n in names if n in geoms),
+                          flexes=tuple(flexes[n][0] for n in names if n in flexes),
+                          size=flexes[e.a][1] if e.a in flexes else least))
+    try:
+        pictures = render_spots(built.model, spots)
+    except Exception as exc:   # a picture is never worth the run: said in the report and the HTML
+        pictures = Pictures((None,) * len(events), None,
+                            (f"no clash pictures: rendering failed: {type(exc).__name__}: {exc}",))
+    return HtmlEvidence(clashes, pictures)
 
 
 def _twist_moment(defn, radius: float, length: float, twist: float) -> float:
