@@ -108,3 +108,25 @@ def test_slack_is_a_length_beyond_the_route(tmp_path):
     assert has_slack(cable)
     assert not has_slack(dataclasses.replace(cable, length=route))             # exactly as long: taut
     assert not has_slack(dataclasses.replace(cable, length=None))
+
+
+def test_a_length_between_the_route_and_the_route_through_its_clips_is_refused_not_lengthened(tmp_path):
+    """Start (0, 0, 0.5) to end (0.6, 0, 0.5) is 0.6 m; through a clip 0.2 m above the middle it is
+    2 * sqrt(0.3^2 + 0.2^2) = 0.7211 m. 0.65 m passed the loader and used to run at 0.7211 m without a
+    word; it is refused naming the key and both lengths. A length just past it builds."""
+    import pytest
+
+    from cablecheck.scene.errors import SceneError
+
+    def scene(length: float) -> dict:
+        data = slider_scene(tmp_path)
+        data["cables"][0].update(length=length, clips=[{"pos": [0.3, 0.0, 0.7]}])
+        return data
+
+    through = 2 * np.hypot(0.3, 0.2)
+    with pytest.raises(SceneError) as e:
+        build(parse_scene(scene(0.65), tmp_path / "s.toml"), detect=False)
+    assert e.value.key == "cables[0].length" and "0.65 m is shorter than the route through its clips" in str(e.value)
+    assert f"({through:.6g} m)" in str(e.value)
+    built = build(parse_scene(scene(through + 1e-3), tmp_path / "s.toml"), detect=False)
+    assert built.cables[0].length >= through

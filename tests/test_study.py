@@ -153,7 +153,7 @@ def test_a_length_shorter_than_the_route_through_the_clips_is_refused(tmp_path, 
     assert main(["study", str(path), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert f"{path}: vary[0] cables.power.length = 400: scene " in err and "Traceback" not in err
-    assert "cables[0].length: 400 mm is shorter than the route through its clips (443.353 mm)" in err
+    assert "cables[0].length: 400 mm is shorter than the route through its clips at t = 0 (443.353 mm)" in err
     study = load_study(path)
     assert check_variants(study, variants(study)[:1])[0].cables[0].length == pytest.approx(0.45)
 

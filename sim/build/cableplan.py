@@ -25,7 +25,7 @@ from cablecheck.build.built import Attachment, CableModel
 from cablecheck.build.route import initial_shape, polyline_length, route_lengths, run_elements
 from cablecheck.build.startframes import Frames
 from cablecheck.scene.errors import SceneError
-from cablecheck.scene.format import Hold
+from cablecheck.scene.format import ROUTE_TOLERANCE, Hold
 from cablecheck.scene.records import CableDef, Scene
 
 if TYPE_CHECKING:
@@ -109,7 +109,12 @@ def plan_cable(cable: CableDef, frames: Frames, where: str, scene: Scene,
     route = route[keep]
     runs = np.linalg.norm(np.diff(route, axis=0), axis=1)
     total = float(runs.sum())
-    length = max(cable.length if cable.length is not None else total, total)
+    if cable.length is not None and cable.length < total * (1.0 - ROUTE_TOLERANCE):
+        raise SceneError(scene.path, f"{where}.length",
+                         f"{cable.length / scene.scale:.6g} {scene.units} is shorter than the route through "
+                         f"its clips at t = 0 ({total / scene.scale:.6g} {scene.units}); lengthen the cable "
+                         "or move the clips")
+    length = max(cable.length if cable.length is not None else total, total)   # within the tolerance: taut
     slack = length > total * (1.0 + 1e-9)
     if cable.segments is not None:
         if cable.segments < len(runs) + (1 if slack else 0):

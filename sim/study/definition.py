@@ -46,8 +46,6 @@ from enum import Enum
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from cablecheck.scene.errors import SceneError
 from cablecheck.scene.format import LARGEST
 from cablecheck.scene.load import load_scene, parse_scene
@@ -248,48 +246,19 @@ def check_variants(study: Study, variants: tuple[Variant, ...]) -> tuple[Scene, 
 def check_variant(study: Study, variant: Variant) -> Scene:
     """Parse a variant's scene and plan its cables as a run would before it
     simulates (`cablecheck.build.stages.plan_cables`: a length shorter than the route
-    through its clips and tangents is refused there); StudyError naming the
+    through its clips, or leaving its clamps along their tangents, is refused
+    there, not run at another length); StudyError naming the
     study file, the varied key, the value and the scene's problem."""
     try:
         scene = parse_scene(variant.data, study.scene_path)
         if scene.cables:
             from cablecheck.build.stages import plan_cables  # MuJoCo loads only for a study of cables
 
-            _check_lengths(scene, plan_cables(scene)[0])
+            plan_cables(scene)
     except SceneError as e:
         raise StudyError(study.path, _culprit(study, variant, e.key),
                          f"scene {study.scene_path}: {e.key}: {e.problem}") from None
     return scene
-
-
-def _check_lengths(scene: Scene, frames) -> None:
-    """SceneError for a cable whose given length is shorter than its route
-    through its clips at the start: a run would lengthen it to the route
-    without a word (`cablecheck.build.cableplan.plan_cable`: the length is at least the
-    route's), and the study's row would name a length that did not run."""
-
-    for i, cable in enumerate(scene.cables):
-        if cable.length is None:
-            continue
-        route = np.asarray(cable.route if cable.route is not None else cable.points, float) - frames.origin
-        route[0] = frames.to_world(cable.start.body, cable.start.pos)
-        route[-1] = frames.to_world(cable.end.body, cable.end.pos)
-        at = []   # each clip's (segment, arc length along it, point), as the planner inserts it
-        for clip in cable.clips:
-            point = np.asarray(frames.to_world(clip.body, clip.pos), float)
-            a, ab = route[:-1], np.diff(route, axis=0)
-            t = np.clip(np.einsum("ij,ij->i", point - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300),
-                        0.0, 1.0)
-            k = int(np.argmin(np.linalg.norm(a + t[:, None] * ab - point, axis=1)))
-            at.append((k, t[k], point))
-        for k, _, point in sorted(at, key=lambda c: (c[0], c[1]), reverse=True):
-            route = np.insert(route, k + 1, point, axis=0)
-        total = float(np.linalg.norm(np.diff(route, axis=0), axis=1).sum())
-        if cable.length < total * (1.0 - 1e-9):
-            raise SceneError(scene.path, f"cables[{i}].length",
-                             f"{cable.length / scene.scale:.6g} {scene.units} is shorter than the route "
-                             f"through its clips ({total / scene.scale:.6g} {scene.units}), which a run "
-                             "would take instead; lengthen the cable or move the clips")
 
 
 def varied_cables(study: Study) -> tuple[str, ...]:
