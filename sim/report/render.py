@@ -41,6 +41,8 @@ PAIR_CABLE = (1.0, 0.0, 0.9, 1.0)
 OTHER_ALPHA = 0.3
 OTHER_GREY = (0.85, 0.85, 0.9)
 SPOT_RGBA = (1.0, 0.0, 0.9, 0.45)
+BACKDROP_RGBA = (0.93, 0.94, 0.96, 1.0)
+"""A light opaque screen far behind the spot, so translucent parts blend over light, not black."""
 
 
 @dataclass(frozen=True)
@@ -132,6 +134,7 @@ def render_spots(model: mujoco.MjModel, spots: Sequence[Spot], width: int = WIDT
             mujoco.mjv_updateScene(model, data, opt, pert, cam, mujoco.mjtCatBit.mjCAT_ALL.value, scn)
             _dim_others(scn, set(spot.geoms))
             _mark(scn, spot.where, 2.0 * spot.size)
+            _backdrop(scn, cam)
             mujoco.mjr_render(rect, scn, con)
             mujoco.mjr_readPixels(pixels, None, rect, con)
             out.append(_png(np.flipud(pixels).copy()))
@@ -171,4 +174,23 @@ def _mark(scn: mujoco.MjvScene, where: np.ndarray, radius: float) -> None:
     mujoco.mjv_initGeom(scn.geoms[scn.ngeom], mujoco.mjtGeom.mjGEOM_SPHERE.value,
                         np.array([radius, 0.0, 0.0]), np.asarray(where, float), np.eye(3).ravel(),
                         np.array(SPOT_RGBA, np.float32))
+    scn.ngeom += 1
+
+
+def _backdrop(scn: mujoco.MjvScene, cam: mujoco.MjvCamera) -> None:
+    """An opaque light plate across the view, four camera distances behind the spot (glowing, so the
+    headlight's angle does not shade it)."""
+    if scn.ngeom >= scn.maxgeom:
+        return
+    az, el = np.radians(cam.azimuth), np.radians(cam.elevation)
+    forward = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    mat = np.column_stack([right, up, forward]).ravel()
+    far = 4.0 * cam.distance
+    g = scn.geoms[scn.ngeom]
+    mujoco.mjv_initGeom(g, mujoco.mjtGeom.mjGEOM_BOX.value, np.array([3 * far, 3 * far, 0.001 * far]),
+                        np.asarray(cam.lookat, float) + far * forward, mat, np.array(BACKDROP_RGBA, np.float32))
+    g.emission = 1.0
     scn.ngeom += 1
