@@ -188,3 +188,16 @@ def _deferred_without_a_reason() -> list[str]:
 
 def test_imports_are_at_the_top_unless_a_line_says_why_not():
     assert _deferred_without_a_reason() == []
+
+
+def test_no_stage_imports_the_benchmarks_and_no_package_re_exports():
+    """Benchmark helpers stay out of the run's way; sim/'s packages hold no facade of re-exported names
+    (the checker keeps its own, one room per job; cablecheck's public API loads lazily)."""
+    names, edges = _graph()
+    for name in names:
+        if not name.startswith(("cablecheck.bench", "cablecheck.cli")):
+            assert not any(d.startswith("cablecheck.bench") for d in edges[name]), name
+    for name, path in _modules().items():
+        if path.name == "__init__.py" and path.is_relative_to(FOLDERS["cablecheck"]) and name != "cablecheck":
+            tree = ast.parse(path.read_text())
+            assert not any(isinstance(n, (ast.Import, ast.ImportFrom)) for n in tree.body), name
