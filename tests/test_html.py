@@ -20,7 +20,7 @@ from matplotlib.image import imread
 from cablecheck.cli.main import main
 from cablecheck.report import render
 from cablecheck.report.html import distance_decimals
-from cablecheck.run.runner import RunOptions, run_scene
+from cablecheck.run.runner import RunOptions, run_outcome, run_scene
 from cablecheck.scene.load import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -137,6 +137,19 @@ def test_status_and_notes_appear_in_the_table(run, tmp_path):
     parsed.feed(page.read_text())
     (attrs, cells), = parsed.rows
     assert "present" in cells and "reviewed: <known> & fine" in cells
+
+
+def test_the_run_keeps_one_state_per_clash_its_worst_and_the_pairs_history(tmp_path):
+    scene = load_scene(SCENE)
+    plain = run_outcome(scene, RunOptions(report=tmp_path / "a.json", record=None))
+    assert plain.html is None                                   # nothing kept without --html
+    o = run_outcome(scene, RunOptions(report=tmp_path / "b.json", record=None, html=tmp_path / "b.html"))
+    (event,), (kept,) = o.events, o.html.clashes
+    assert kept.t_spot == event.t_worst and kept.qpos.ndim == 1 and not kept.qpos.flags.writeable
+    assert len(kept.t) == len(kept.distance) and np.all(np.diff(kept.t) > 0)
+    assert kept.distance.min() == pytest.approx(event.min_distance)
+    assert kept.t[0] <= event.t_start and kept.t[-1] >= event.t_end
+    assert o.html.pictures.renderer == "egl" and o.html.pictures.png[0][:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_no_opengl_context_is_said_in_the_report_and_the_page(tmp_path, monkeypatch):
