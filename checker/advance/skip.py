@@ -63,6 +63,35 @@ class Cleared:
     active: Active
 
 
+@dataclass(frozen=True, slots=True)
+class Started:
+    """What :meth:`Advancement.start` keeps of one full check: the bound's
+    state until the next start (the gaps' objects drop promoted pairs).
+
+    Attributes:
+        start: the full check's state (body centres, part poses, element
+            lengths, arc lengths, margin, horizon).
+        pieces: (N - 1,) pieces per element (1 between cables).
+        run_last: (N - 1,) the last element of each element's stretch run
+            (:meth:`Advancement._stretch_runs`), or None (whole cables).
+        stretch: the stretch allowed, less the rounding margin.
+        g_cable: the check's cable gap less the margin (bounds every cable
+            pair when ``cable`` is None).
+        parts: the centre-part gaps.
+        cable: the cable-pair gaps, or None (the check gave no cable candidates).
+        ok: every condition held at the start (else nothing is proven).
+    """
+
+    start: Start
+    pieces: np.ndarray
+    run_last: np.ndarray | None
+    stretch: float
+    g_cable: float
+    parts: CentrePartGaps
+    cable: CablePairGaps | None
+    ok: bool
+
+
 class Advancement:
     """The bound of the package docstring, restarted at every full check.
 
@@ -109,7 +138,6 @@ class Advancement:
         # stretch is summed per cable (an arc length moves with its own
         # cable's elements alone); with them over windows (see _stretch_runs)
         self._cable_first = offsets[:-1][np.diff(offsets) >= 2]
-        self._run_last: np.ndarray | None = None
         rad = None if radius is None else np.asarray(radius, float)[cable_of_pt]
         box = None if part_box is None or radius is None else \
             (np.asarray(part_box[0], float)[:, None, :], np.asarray(part_box[1], float)[:, None, :])
@@ -118,13 +146,42 @@ class Advancement:
         self._layout = Layout(offsets, cable_of_pt, self._valid, rad, box, np.asarray(part_radius, float),
                               self.clearance, self.stretch)
         self._pairs = PartPairGaps(part_radius, clearance, part_solids)
-        self._ok = False
+        self._since: Started | None = None          # the last start (None: before one, or stopped)
         z = np.zeros(0, np.int64)
-        self._active = Active((z, z), (z, z))
-        self._promoted = 0
-        self._step = 1
+        self._active = Active((z, z), (z, z))       # the pairs the caller evaluates, since the start
+        self._promoted = 0                          # pairs promoted since the start
+        self._step = 1                              # states per evaluation (doubling since the start)
         self.full = 0
         self.skipped = 0
+
+    # the last start's state by its former names (tests read them)
+    @property
+    def _pts(self) -> np.ndarray:
+        """(N, 3) the body centres at the last start."""
+        return self._since.start.pts
+
+    @property
+    def _parts(self) -> CentrePartGaps:
+        """The centre-part gaps of the last start."""
+        return self._since.parts
+
+    @property
+    def _cable_gaps(self) -> CablePairGaps | None:
+        """The cable-pair gaps of the last start (None: no cable candidates)."""
+        return self._since.cable
+
+    @property
+    def _run_last(self) -> np.ndarray | None:
+        """The stretch runs of the last start (:meth:`_stretch_runs`)."""
+        return self._since.run_last
+
+    def _proving(self, pts: np.ndarray) -> Started | None:
+        """The last start, when it can prove states pts (S, N, 3) clear (some
+        states, as many body centres as at the start); else None."""
+        since = self._since
+        if since is None or not since.ok or len(pts) == 0 or pts.shape[1] != len(since.start.pts):
+            return None
+        return since
 
     def start(self, pts: np.ndarray, poses: np.ndarray, gaps: Gaps, pairs: tuple[np.ndarray, np.ndarray],
               pair_bound: np.ndarray, active: tuple[np.ndarray, np.ndarray] | None = None,
@@ -158,40 +215,40 @@ class Advancement:
             evaluate itself at every step proven clear until the next start.
         """
         self.full += 1
-        self._pts = np.array(pts, float)
+        pts = np.array(pts, float)
         rot = np.array(poses[:, :3, :3], float)
-        self._pos = pos = np.array(poses[:, :3, 3], float)
-        self._seg_raw = row_norm(self._pts[1:] - self._pts[:-1])
+        pos = np.array(poses[:, :3, 3], float)
+        seg_raw = row_norm(pts[1:] - pts[:-1])
         # pieces per element, densify_batch's arithmetic (1 between cables)
-        self._pieces_all = np.where(self._valid, element_pieces(self._seg_raw, self._lim), 1.0)
-        scale = max(float(np.abs(self._pts).max(initial=0.0)), float(np.abs(pos).max(initial=0.0)))
+        pieces = np.where(self._valid, element_pieces(seg_raw, self._lim), 1.0)
+        scale = max(float(np.abs(pts).max(initial=0.0)), float(np.abs(pos).max(initial=0.0)))
         mu = 1e-9 * (1.0 + scale)
-        self._g_cable = float(gaps.cable) - mu
+        g_cable = float(gaps.cable) - mu
         gap_part = np.asarray(gaps.part, float)
-        n, n_p = len(self._pts), len(gap_part)
+        n, n_p = len(pts), len(gap_part)
         # arc length of each centre, as densify_batch computes it
-        s_c = polyline_arc_lengths(np.where(self._valid, self._seg_raw, 0.0), self._offsets)
+        s_c = polyline_arc_lengths(np.where(self._valid, seg_raw, 0.0), self._offsets)
         horizon = gaps.horizon
-        start = Start(self._pts, rot, pos, self._seg_raw, s_c, mu, float(horizon))
-        self._run_last = self._stretch_runs(s_c)
+        start = Start(pts, rot, pos, seg_raw, s_c, mu, float(horizon))
         candidates = gaps.part_candidates
         sparse = (candidates is not None and self._layout.box is not None and n > 1 and horizon > 0
                   and n * n_p > self.SPARSE_ENTRIES)
-        self._parts = CentrePartGaps(self._layout, start)
-        structure = self._parts.start(gap_part, candidates, active, sparse)
+        parts = CentrePartGaps(self._layout, start)
+        structure = parts.start(gap_part, candidates, active, sparse)
         self._promoted = 0
         self._step = 1
-        self._cable_pairs = gaps.cable_candidates is not None
+        cable_gaps = None
         cable = (np.zeros(0, np.int64), np.zeros(0, np.int64))
-        if self._cable_pairs:
-            self._cable_gaps = CablePairGaps(self._layout, start)
-            cable = self._cable_gaps.start(gaps.cable_candidates, float(horizon), mu, cable_active)
-            cable_ok = self._cable_gaps.ok_at_start()             # the blocks' gaps on first use
+        if gaps.cable_candidates is not None:
+            cable_gaps = CablePairGaps(self._layout, start)
+            cable = cable_gaps.start(gaps.cable_candidates, float(horizon), mu, cable_active)
+            cable_ok = cable_gaps.ok_at_start()             # the blocks' gaps on first use
         else:
-            cable_ok = self._g_cable > 0
+            cable_ok = g_cable > 0
         self._pairs.start(poses, pairs, pair_bound, mu)
-        self._stretch = self.stretch - mu
-        self._ok = cable_ok and self._parts.ok_at_start() and self._pairs.ok and self.stretch > mu
+        ok = cable_ok and parts.ok_at_start() and self._pairs.ok and self.stretch > mu
+        self._since = Started(start, pieces, self._stretch_runs(s_c), self.stretch - mu, g_cable, parts,
+                              cable_gaps, ok)
         self._active = Active(structure, cable)
         return self._active
 
@@ -217,34 +274,36 @@ class Advancement:
         counted from the start across calls: a run that ends early after a
         start costs a state or two, and one that goes on is soon evaluated
         a whole call's states at a time (numpy's per-call overhead once)."""
-        if not self._ok or len(pts) == 0 or pts.shape[1] != len(self._pts):
+        since = self._proving(pts)
+        if since is None:
             return Cleared(0, self._active)
         z = np.zeros(0, np.int64)
         a, done, total = 0, 0, len(pts)
         structure, cable = [self._active.structure], [self._active.cable]
+        n_parts, cable_gaps, parts = len(since.start.pos), since.cable, since.parts
         while a < total:
             b = min(a + self._step, total)
-            x, move, dq, diag, dcc, d, seg = _states(pts[a:b], self._pts)
+            x, move, dq, diag, dcc, d, seg = _states(pts[a:b], since.start.pts)
             # the conditions that name no pair first: pieces, stretch, part pairs
             pieces = element_pieces(seg, self._lim_all[:, None])
-            n = leading((pieces == self._pieces_all[:, None]).all(axis=0) & self._stretch_ok(seg))
-            dp = np.zeros((len(self._pos), n))
-            if n and len(self._pos):
+            n = leading((pieces == since.pieces[:, None]).all(axis=0) & self._stretch_ok(seg, since))
+            dp = np.zeros((n_parts, n))
+            if n and n_parts:
                 dp = self._pairs.moves(poses[a:a + n]).T                   # (P, S)
                 n = leading(self._pairs.clear(dp, poses[a:a + n]))
             if not n:
                 break
             run = slice(0, n)
-            if self._cable_pairs:
-                (near, cc, blocks), stop = self._cable_gaps.failing(
+            if cable_gaps is not None:
+                (near, cc, blocks), stop = cable_gaps.failing(
                     x[:, :, run], move[:, :, run], dcc[run], diag[run], d[:, :, run], seg[:, run])
             else:
                 near = cc = (z, z)
                 blocks = (z, z, z)
-                stop = leading(dcc[run] < self._g_cable)
-            if len(self._pos):
-                centre, part, first, stop_p = self._parts.failing(x[:, :, run], poses[a:a + n], dq[:, run],
-                                                                  dp[:, run])
+                stop = leading(dcc[run] < since.g_cable)
+            if n_parts:
+                centre, part, first, stop_p = parts.failing(x[:, :, run], poses[a:a + n], dq[:, run],
+                                                             dp[:, run])
                 stop = min(stop, stop_p)
             else:
                 centre = part = first = z
@@ -255,12 +314,12 @@ class Advancement:
             over = self._promoted + np.cumsum(per) > budget
             m = min(stop, int(np.argmax(over)) if over.any() else n)
             take = first < m
-            self._parts.promote(centre[take], part[take])
+            parts.promote(centre[take], part[take])
             structure.append((centre[take], part[take]))
-            if self._cable_pairs:
+            if cable_gaps is not None:
                 ne, cc_k, on = near[0][near[1] < m], cc[0][cc[1] < m], blocks[2] < m
-                self._cable_gaps.promote(ne, cc_k, blocks[0][on], blocks[1][on])
-                cable.append(self._cable_gaps.centre_pairs(ne, cc_k, blocks[0][on], blocks[1][on]))
+                cable_gaps.promote(ne, cc_k, blocks[0][on], blocks[1][on])
+                cable.append(cable_gaps.centre_pairs(ne, cc_k, blocks[0][on], blocks[1][on]))
             self._promoted += int(per[:m].sum())
             done = a + m
             if m < b - a:
@@ -269,7 +328,8 @@ class Advancement:
             self._step *= 2
         self.skipped += done
         if len(structure) > 1 or len(cable) > 1:
-            self._active = Active(_union(structure, len(self._pts)), _union(cable, len(self._pts)))
+            n_c = len(since.start.pts)
+            self._active = Active(_union(structure, n_c), _union(cable, n_c))
         return Cleared(done, self._active)
 
     def _stretch_runs(self, s_c: np.ndarray) -> np.ndarray | None:
@@ -301,26 +361,26 @@ class Advancement:
         run = np.maximum(reach, e + 2 * CablePairGaps.BLOCK)
         return np.where(self._valid, np.minimum(run, last), e)
 
-    def _stretch_ok(self, seg: np.ndarray) -> np.ndarray:
+    def _stretch_ok(self, seg: np.ndarray, since: Started) -> np.ndarray:
         """Per state (S,): the stretch condition: the element lengths of
         every run of :meth:`_stretch_runs` (without radii: of every cable)
-        changed by at most ``stretch`` in total since the start; seg (N - 1,
-        S) the element lengths (between cables too, left out). The runs'
-        sums are differences of one cumulative sum (its rounding, ~1e-16 of
-        all the changes, far below the margin)."""
-        change = self._validf[:, None] * np.abs(seg - self._seg_raw[:, None])
-        if self._run_last is not None:
+        changed by at most ``stretch`` in total since the start ``since``;
+        seg (N - 1, S) the element lengths (between cables too, left out).
+        The runs' sums are differences of one cumulative sum (its rounding,
+        ~1e-16 of all the changes, far below the margin)."""
+        change = self._validf[:, None] * np.abs(seg - since.start.seg[:, None])
+        if since.run_last is not None:
             total = np.concatenate([np.zeros((1, seg.shape[1])), np.cumsum(change, axis=0)])
-            runs = total[self._run_last + 1] - total[:-1]
-            return (runs < self._stretch).all(axis=0)
+            runs = total[since.run_last + 1] - total[:-1]
+            return (runs < since.stretch).all(axis=0)
         if not len(self._cable_first):
             return np.ones(seg.shape[1], bool)
-        return (np.add.reduceat(change, self._cable_first, axis=0) < self._stretch).all(axis=0)
+        return (np.add.reduceat(change, self._cable_first, axis=0) < since.stretch).all(axis=0)
 
     def stop(self) -> None:
         """A full check ran without gaps: prove nothing until the next :meth:`start`."""
         self.full += 1
-        self._ok = False
+        self._since = None
         self._pairs.stop()
 
     def start_pairs(self, poses: np.ndarray, pairs: tuple[np.ndarray, np.ndarray],
@@ -362,10 +422,11 @@ class Advancement:
         (a part that did not move has ``rel`` equal to ``dq`` up to
         rounding, far below the margin). After each condition only the
         states up to the first failure are carried on."""
-        if not self._ok or len(pts) == 0 or pts.shape[1] != len(self._pts):
+        since = self._proving(pts)
+        if since is None:
             return 0
         x = np.ascontiguousarray(np.transpose(pts, (1, 2, 0)))           # (N, 3, S)
-        move = x - self._pts[:, :, None]
+        move = x - since.start.pts[:, :, None]
         dq = row_norm3(move)                                              # (N, S)
         if len(move):
             spread = move.max(axis=0) - move.min(axis=0)                 # (3, S)
@@ -375,20 +436,20 @@ class Advancement:
             diag = dcc = np.zeros(x.shape[2])
         d = x[1:] - x[:-1]                                                # (N - 1, 3, S)
         seg = row_norm3(d)
-        ok = self._cable_gaps.clear(x, move, dcc, diag, d, seg) if self._cable_pairs else dcc < self._g_cable
+        ok = since.cable.clear(x, move, dcc, diag, d, seg) if since.cable is not None else dcc < since.g_cable
         n = leading(ok)
         if n:
             x, seg = x[:, :, :n], seg[:, :n]
             # every element still splits into as many pieces (elements
             # joining two cables: limit inf, 1 piece at the start and now)
             pieces = element_pieces(seg, self._lim_all[:, None])
-            ok = (pieces == self._pieces_all[:, None]).all(axis=0) & \
-                self._stretch_ok(seg)
+            ok = (pieces == since.pieces[:, None]).all(axis=0) & \
+                self._stretch_ok(seg, since)
             n = leading(ok)
-        if n and len(self._pos):
+        if n and len(since.start.pos):
             poses = poses[:n]
             dp = self._pairs.moves(poses).T                                # (P, S)
-            ok = self._parts.clear(x[:, :, :n], poses, dq[:, :n], dp) & self._pairs.clear(dp, poses)
+            ok = since.parts.clear(x[:, :, :n], poses, dq[:, :n], dp) & self._pairs.clear(dp, poses)
             n = leading(ok)
         self.skipped += n
         return n
