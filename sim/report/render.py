@@ -3,7 +3,7 @@
 For each event of a run, :func:`render_spots` poses the simulation model at
 the event's worst state (its qpos, kept by `cablecheck.report.evidence`),
 points a free camera at the spot (the worst point on cable `a`) from a
-distance fitted to the scene, draws the pair in strong colours (the part or
+distance fitted to the pair's parts and the scene, draws the pair in strong colours (the part or
 parts opaque orange, the cable or cables magenta) and everything else
 translucent grey, marks the spot with a small sphere, renders it with
 MuJoCo's own renderer (`mjv_updateScene`, `mjr_render`, `mjr_readPixels`, as
@@ -129,7 +129,7 @@ def render_spots(model: mujoco.MjModel, spots: Sequence[Spot], width: int = WIDT
             _colour(model, geom_rgba, flex_rgba, spot)
             cam.type = mujoco.mjtCamera.mjCAMERA_FREE
             cam.lookat[:] = spot.where
-            cam.distance = max(0.3 * extent, 40.0 * spot.size)
+            cam.distance = _distance(model, spot, extent)
             cam.azimuth, cam.elevation = 135.0, -25.0
             mujoco.mjv_updateScene(model, data, opt, pert, cam, mujoco.mjtCatBit.mjCAT_ALL.value, scn)
             _dim_others(scn, set(spot.geoms))
@@ -144,6 +144,14 @@ def render_spots(model: mujoco.MjModel, spots: Sequence[Spot], width: int = WIDT
         model.flex_rgba[:] = flex_rgba
         ctx.free()
     return Pictures(tuple(out), platform, tuple(warnings))
+
+
+def _distance(model: mujoco.MjModel, spot: Spot, extent: float) -> float:
+    """How far the camera stands from the spot: the pair's parts whole in view (two and a half
+    times their bounding radius), at most a third of the scene, and never closer than 40 cable radii."""
+    bounds = [float(model.geom_rbound[g]) for g in spot.geoms if model.geom_rbound[g] > 0]
+    near = min(0.3 * extent, 2.5 * max(bounds)) if bounds else 0.3 * extent
+    return max(near, 40.0 * spot.size)
 
 
 def _colour(model: mujoco.MjModel, geom_rgba: np.ndarray, flex_rgba: np.ndarray, spot: Spot) -> None:
