@@ -468,6 +468,40 @@ def _check_indexed(parts: PartSet, placed: Placement, clearance: float, focus, p
     return [x for x in out if x[2] is not None]
 
 
+def pair_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray, reach: float) -> np.ndarray:
+    """Lower bounds (n,) on the distance between the shapes the part-part
+    check measures of parts i and j (n,) at one placement: what the check's
+    own measures give (two primitives: :func:`cablecheck.checker.convex.convex_pairs`;
+    a mesh, or two boxes apart: :func:`_triangle_values`, triangles within
+    ``reach`` of each other) less both tessellation errors, at most ``reach``
+    where nothing comes within it; negative for an overlap; 0 for a pair with
+    a plane (not measured here).
+
+    A pair's distance drops by at most how far one part moves relative to
+    the other, so a pair whose bound exceeds the clearance by more than that
+    move has no record (`cablecheck.run.stepcheck`: active part pairs between checks)."""
+    i, j = np.asarray(i, np.int64), np.asarray(j, np.int64)
+    n = len(i)
+    out = np.full(n, float(reach))
+    flat = parts.plane[i] | parts.plane[j]
+    out[flat] = 0.0
+    kind = parts.convex_kind
+    conv = np.flatnonzero(~flat & (kind[i] >= 0) & (kind[j] >= 0))
+    tri = ~flat
+    if len(conv):
+        size = parts.sd_groups[2]
+        a, b = i[conv], j[conv]
+        sd, _, _, apart = convex_pairs(kind[a], size[a], placed.rot[a], placed.pos[a],
+                                       kind[b], size[b], placed.rot[b], placed.pos[b], reach)
+        out[conv[~apart]] = np.minimum(sd[~apart], reach)
+        tri[conv[~apart]] = False
+    rows = np.flatnonzero(tri)
+    if len(rows):
+        value, _, hard = _triangle_values(parts, placed, i[rows], j[rows], reach)
+        out[rows] = np.where(hard, np.minimum(value, 0.0), np.minimum(value, reach))
+    return out - parts.error[i] - parts.error[j]
+
+
 def _record(parts: PartSet, a: int, b: int, d: float, where: np.ndarray, clearance: float) -> Interference | None:
     sev = severity_of(d, clearance)
     if sev is None:
@@ -616,6 +650,12 @@ class PartChecker:
         for a, _, rec in _check_indexed(view, placed, self.clearance, focus, None, True, (vi, vj)):
             out[a // k].append(rec)
         return out
+
+    def pair_values(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray, reach: float) -> np.ndarray:
+        """:func:`pair_values` of pairs (i, j) at poses (P, 4, 4)."""
+        if not len(i):
+            return np.zeros(0)
+        return pair_values(self.parts, self.parts.place(poses), i, j, reach)
 
     def _primitive_pairs_many(self, poses: np.ndarray, i: np.ndarray,
                               j: np.ndarray) -> list[list[Interference]] | None:

@@ -395,3 +395,47 @@ def test_rich_random_scenes_skip_without_changing_answers(seed: int, tmp_path_fa
     fast, full = _skipping_and_in_full(load_scene(path), folder)
     assert _strip(fast["excused"]) == _strip(full["excused"])
     assert fast.get("validation") == full.get("validation")
+
+
+def _turning_mesh_scene_text(seed: int, folder: Path) -> str:
+    """`_turning_scene_text` with mesh parts: L-shaped links (two boxes, one
+    mesh, not convex) and icospheres on the world and on two turning bodies,
+    so pairs of meshes sweep past each other near the clearance."""
+    import trimesh
+
+    rng = np.random.default_rng(seed)
+    el = trimesh.util.concatenate([trimesh.creation.box([30, 8, 8]),
+                                   trimesh.creation.box([8, 30, 8]).apply_translation([11, 11, 0])])
+    el.export(folder / "el.stl")
+    trimesh.creation.icosphere(subdivisions=1, radius=9.0).export(folder / "ball.stl")
+    text = (f'[scene]\nname = "turning-mesh-{seed}"\nunits = "mm"\nduration = 0.5\nsettle = 0.1\n\n'
+            f'[effects]\ncontact = []\n\n[check]\nclearance = {rng.uniform(2.0, 5.0):.3f}\n')
+    for b in range(2):
+        text += f'\n[[bodies]]\nname = "b{b}"\npos = [{rng.uniform(-20, 20):.1f}, {rng.uniform(-20, 20):.1f}, 60.0]\n'
+        turns = np.vstack([np.zeros(3), rng.uniform(-60, 60, (2, 3))])
+        keys = ", ".join(f"{{ t = {t:.2f}, euler = [{x:.1f}, {y:.1f}, {z:.1f}] }}"
+                         for t, (x, y, z) in zip((0.0, 0.25, 0.5), turns))
+        text += f'\n[[motion]]\nbody = "b{b}"\nkeys = [ {keys} ]\n'
+    for k in range(6):
+        file = ["el.stl", "ball.stl"][int(rng.integers(2))]
+        pos = ", ".join(f"{v:.1f}" for v in rng.uniform(-30, 30, 3) + [0, 0, 60 if k % 3 == 0 else 0])
+        body = ["world", "b0", "b1"][k % 3]
+        text += f'\n[[parts]]\nname = "p{k}"\nbody = "{body}"\nshape = "mesh"\nfile = "{file}"\npos = [{pos}]\n'
+    a, e = rng.uniform(-120, 120, 3) + [0, 0, 60], rng.uniform(-120, 120, 3) + [0, 0, 60]
+    text += (f'\n[[cables]]\nname = "c0"\nradius = 3.0\nstart = {{ pos = [{a[0]:.1f}, {a[1]:.1f}, {a[2]:.1f}] }}\n'
+             f'end = {{ pos = [{e[0]:.1f}, {e[1]:.1f}, {e[2]:.1f}] }}\n'
+             f'length = {float(np.linalg.norm(e - a)) * 1.1:.1f}\nsegments = 12\n')
+    return text
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_active_mesh_part_pairs_bounded_from_their_distances_change_no_answer(seed: int, tmp_path):
+    """Mesh part pairs whose boxes stay within the clearance (active) are bounded from their measured
+    distances between full checks and measured again where the bound fails
+    (`StepChecks._active_part_records`): on meshes turning past each other, the events and pairs,
+    part-part ones among them, are those of checking every step in full."""
+    path = tmp_path / "turning.toml"
+    path.write_text(_turning_mesh_scene_text(seed, tmp_path))
+    scene = load_scene(path)
+    fast, full = _skipping_and_in_full(scene, tmp_path)
+    assert any(p["type"] == "part-part" for p in full["pairs"])

@@ -299,6 +299,7 @@ from hypothesis import (  # noqa: E402
     settings,
     strategies as st,  # noqa: E402
 )
+from helpers import examples  # noqa: E402
 from strategies import rotations  # noqa: E402
 
 _PLATE = trimesh.creation.box((60.0, 40.0, 5.0))
@@ -627,3 +628,38 @@ def test_meshes_against_meshes_and_primitives_by_fcl(name_a, name_b, rot_a, rot_
             assert got["soft"] == pytest.approx(ref, abs=2e-5 + rounding) and got["soft"] <= ref + rounding
     elif gap <= -0.01:
         assert hit and "hard" in got and -got["hard"] <= -gap + 1e-6 + rounding
+
+
+_EL = trimesh.util.concatenate([trimesh.creation.box((30.0, 8.0, 8.0)),
+                                trimesh.creation.box((8.0, 30.0, 8.0)).apply_translation([11.0, 11.0, 0.0])])
+
+
+@settings(max_examples=examples(25), deadline=None)
+@given(rotations(), rotations(), st.floats(-40.0, 40.0), st.floats(-40.0, 40.0), st.floats(-40.0, 40.0),
+       st.sampled_from(["el", "pin", "sphere", "box"]))
+def test_pair_values_are_lower_bounds_exact_within_reach(ra, rb, x, y, z, other):
+    """`pair_values` against python-fcl's distance of the same two solids: never above it (a lower bound,
+    what the active part pairs' condition needs), and within 1e-6 mm of it where fcl finds the solids
+    within the reach and apart (an L-shaped mesh against a mesh, a curved primitive, a box)."""
+    from cablecheck.checker.parts import pair_values
+
+    shapes = {"el": (mesh_shape(_EL.vertices, _EL.faces), None, _EL),
+              "pin": (Shape(ShapeType.CYLINDER, [3.0, 15.0]), ShapeType.CYLINDER, None),
+              "sphere": (Shape(ShapeType.SPHERE, [9.0]), ShapeType.SPHERE, None),
+              "box": (Shape(ShapeType.BOX, [10.0, 4.0, 6.0]), ShapeType.BOX, None)}
+    sb, kind_b, tm_b = shapes[other]
+    ps = PartSet.build(["a", "b"], [mesh_shape(_EL.vertices, _EL.faces), sb], tolerance=0.05)
+    ta, tb = np.eye(4), np.eye(4)
+    ta[:3, :3], tb[:3, :3], tb[:3, 3] = ra, rb, [x, y, z]
+    reach = 12.0
+    value = pair_values(ps, ps.place(np.stack([ta, tb])), np.array([0]), np.array([1]), reach)[0]
+    ref_b = _fcl(tm_b, sb if tm_b is None else None, tb, 1.0)
+    res = fcl.DistanceResult()
+    d = fcl.distance(_fcl(_EL, None, ta, 1.0), ref_b, fcl.DistanceRequest(), res)
+    collide = fcl.collide(_fcl(_EL, None, ta, 1.0), ref_b, fcl.CollisionRequest(), fcl.CollisionResult())
+    if collide:
+        assert value <= 1e-6
+    else:
+        assert value <= d + 1e-6
+        if d < reach - 0.01:
+            assert value >= d - 1e-3 - ps.error[1]

@@ -255,6 +255,20 @@ class PartPairGaps:
         """Prove nothing until the next :meth:`start`."""
         self._at = None
 
+    @property
+    def started(self) -> bool:
+        """True after a :meth:`start` (until :meth:`stop`)."""
+        return self._at is not None
+
+    def clear_pairs(self, poses: np.ndarray) -> np.ndarray:
+        """(M, S) bool: each moving pair of the last start provably outside
+        the clearance at each of the poses (S, P, 4, 4) (the condition of
+        :meth:`clear`, pair by pair)."""
+        poses = np.asarray(poses, float)
+        if not len(self._at.pi):
+            return np.ones((0, len(poses)), bool)
+        return self._pair_ok(self.moves(poses).T, poses)
+
     def moves(self, poses: np.ndarray) -> np.ndarray:
         """dp (..., P): how far any point of each part moved since the start
         (poses (..., P, 4, 4))."""

@@ -37,6 +37,7 @@ import numpy as np
 from cablecheck.build.built import Built
 from cablecheck.build.checkview import DEFAULT_PRECISION_M, part_set, part_shapes, selection, start_part_poses
 from cablecheck.checker.advance import Advancement, PartSolids, part_pair_bounds
+from cablecheck.checker.advance.partpairs import PartPairGaps
 from cablecheck.checker.cable import CableMeasures, taut_margin
 from cablecheck.checker.events import AllowList, AllowRule
 from cablecheck.checker.interference import Checker, single_records_many
@@ -77,6 +78,11 @@ run's last batch, or an interrupted one's, is shorter."""
 ADVANCE_HORIZON_RADII = 2.0
 """Conservative advancement: candidates are evaluated up to the clearance
 plus this many (largest) cable radii at a full check..."""
+
+ACTIVE_RESTARTS = 8
+"""Restarts of the active part pairs' condition in one batch of proven-clear
+states (`StepChecks._active_part_records`): pairs that keep near the clearance
+are then checked at their failing states in one call."""
 
 ACTIVE_HORIZONS = 0.1
 """Cable-structure, keep-out, self and cable-cable pairs whose gap at a full
@@ -229,6 +235,9 @@ class StepChecks:
                                 for p, sh, keep in zip(built.parts, shapes, checked) if keep], config,
                                horizon=self.horizon, stretch=self.stretch)
         self.advance: Advancement | None = None
+        self._active_gaps: PartPairGaps | None = None
+        # the active part pairs within the clearance at the last full check, and apart
+        self._active_near = self._active_apart = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         if self.checker.bounds_gaps:
             corner = np.maximum(np.abs(rigid.lo), np.abs(rigid.hi))
             rho = np.sqrt(np.einsum("ij,ij->i", corner, corner))     # inf for planes
@@ -240,9 +249,11 @@ class StepChecks:
             solid_lo, solid_hi = rigid.lo.copy(), rigid.hi.copy()
             solid_lo[checked] = np.minimum(solid_lo[checked], box_lo[checked])
             solid_hi[checked] = np.maximum(solid_hi[checked], box_hi[checked])
+            solids = PartSolids(solid_lo, solid_hi, rigid.axial, rigid.error)
             self.advance = Advancement(offsets, config.spacing * radii, rho, config.clearance,
-                                       self.stretch, radii, (box_lo, box_hi),
-                                       PartSolids(solid_lo, solid_hi, rigid.axial, rigid.error))
+                                       self.stretch, radii, (box_lo, box_hi), solids)
+            # the active part pairs' own condition, restarted from their measured distances
+            self._active_gaps = PartPairGaps(rho, config.clearance, solids)
             self._moving_pairs = self.part_checker.moving_pairs()
             self._checked_index = np.nonzero(checked)[0]
             self._checker_index = np.cumsum(checked) - 1          # built part -> checker part
@@ -394,8 +405,7 @@ class StepChecks:
             dense = self.checker.densify_many(pts, self._offsets, self._radii, self._rest, keep)
             found = self.checker.cable_pairs_many(names, self._radii, dense, self._cable_active)
             records = [a + b for a, b in zip(found, records)]
-        active = self.part_checker.check_pairs_many(poses, *self._part_active) if len(self._part_active[0]) \
-            else [[] for _ in range(n)]
+        active = self._active_part_records(poses)
         same = self.part_checker.replay_many(poses) if self.part_checker.has_same_body_records \
             else [[] for _ in range(n)]
         out = []
@@ -432,6 +442,7 @@ class StepChecks:
             active = bound - self.config.clearance < ACTIVE_HORIZONS * self.horizon
             mi, mj = self._moving_pairs
             self._part_active = (mi[active], mj[active])
+            self._start_active_gaps(poses)
             pairs, bound = (mi[~active], mj[~active]), bound[~active]
             if checked.gaps is not None:
                 gaps = checked.gaps.on_parts(self._checked_index, len(self.built.parts))   # built part indices
@@ -459,6 +470,74 @@ class StepChecks:
                 adv.start_pairs(poses, pairs, bound)
         cable_records = self._focus(cable_records)
         return StepResult(cable_records + part_records, cable_records, strain, bend, True, near=near)
+
+    def _start_active_gaps(self, poses: np.ndarray) -> None:
+        """Split the active part pairs at poses (P, 4, 4) by their distances
+        measured there (`PartChecker.pair_values`, up to the clearance plus a
+        horizon): those within the clearance (records; overlapping links) and
+        pairs of two primitives are checked at every state; the rest, pairs
+        with a mesh apart, are bounded from there (`_restart_active`)."""
+        ai, aj = self._part_active
+        values = self.part_checker.pair_values(poses, ai, aj, self.config.clearance + self.horizon)
+        # two primitives are checked at all the states of a batch in one call, about as cheaply as
+        # bounding them: only pairs with a mesh (their triangles) are worth bounding
+        kind = self.rigid.convex_kind
+        near = (values <= self.config.clearance) | ((kind[ai] >= 0) & (kind[aj] >= 0))
+        self._active_near = (ai[near], aj[near])
+        self._active_apart = (ai[~near], aj[~near])
+        self._active_gaps.start(poses, self._active_apart, values[~near])
+
+    def _restart_active(self, poses: np.ndarray) -> bool:
+        """Restart the apart pairs' condition at poses (P, 4, 4) from their
+        distances measured there; False (and no restart) when one of them
+        has come within the clearance."""
+        ai, aj = self._active_apart
+        values = self.part_checker.pair_values(poses, ai, aj, self.config.clearance + self.horizon)
+        if (values <= self.config.clearance).any():
+            return False
+        self._active_gaps.start(poses, (ai, aj), values)
+        return True
+
+    def _active_part_records(self, poses: np.ndarray) -> list[list[Interference]]:
+        """The active part pairs' records at states (S, P, 4, 4) proven clear
+        for everything else: the same as checking them at every state
+        (`PartChecker.check_pairs_many`). The pairs within the clearance at
+        the last full check are checked at every state. The others: a state
+        where none can have come within the clearance since their last
+        measured distances, as far as the part-pair condition bounds their
+        relative move (`PartPairGaps` started from those distances), has no
+        record of theirs; at the first state where one may have, they are
+        checked and measured again and the condition restarts there (at most
+        `ACTIVE_RESTARTS` times a batch, and not once one is within the
+        clearance); the states still failing then are checked in one call."""
+        n = len(poses)
+        out: list[list[Interference]] = [[] for _ in range(n)]
+        if not len(self._part_active[0]):
+            return out
+        gaps = self._active_gaps
+        if gaps is None or not gaps.started:
+            return self.part_checker.check_pairs_many(poses, *self._part_active)
+        if len(self._active_near[0]):
+            out = self.part_checker.check_pairs_many(poses, *self._active_near)
+        ai, aj = self._active_apart
+        if not len(ai):
+            return out
+        s = 0
+        for _ in range(ACTIVE_RESTARTS):
+            fail = np.flatnonzero(~gaps.clear_pairs(poses[s:]).all(axis=0))
+            if not len(fail):
+                return out
+            s += int(fail[0])
+            out[s] = out[s] + self.part_checker.check_pairs(poses[s], ai, aj)
+            restarted = self._restart_active(poses[s])
+            s += 1
+            if s == n or not restarted:
+                break
+        if s < n:
+            fail = s + np.flatnonzero(~gaps.clear_pairs(poses[s:]).all(axis=0))
+            for k, recs in zip(fail.tolist(), self.part_checker.check_pairs_many(poses[fail], ai, aj)):
+                out[k] = out[k] + recs
+        return out
 
     def _same_body_records(self, poses: np.ndarray) -> list[Interference]:
         """The part-part records of a step on which no moving pair can be
