@@ -421,6 +421,10 @@ def _turning_mesh_scene_text(seed: int, folder: Path) -> str:
         pos = ", ".join(f"{v:.1f}" for v in rng.uniform(-30, 30, 3) + [0, 0, 60 if k % 3 == 0 else 0])
         body = ["world", "b0", "b1"][k % 3]
         text += f'\n[[parts]]\nname = "p{k}"\nbody = "{body}"\nshape = "mesh"\nfile = "{file}"\npos = [{pos}]\n'
+    # a body that never moves, its part sunk into a part on the world: a pair whose records never change
+    text += ('\n[[bodies]]\nname = "still"\npos = [80.0, 0.0, 0.0]\n'
+             '\n[[parts]]\nname = "base"\nshape = "box"\nsize = [20.0, 20.0, 5.0]\npos = [80.0, 0.0, 4.0]\n'
+             '\n[[parts]]\nname = "foot"\nbody = "still"\nshape = "mesh"\nfile = "ball.stl"\npos = [0.0, 0.0, 16.0]\n')
     a, e = rng.uniform(-120, 120, 3) + [0, 0, 60], rng.uniform(-120, 120, 3) + [0, 0, 60]
     text += (f'\n[[cables]]\nname = "c0"\nradius = 3.0\nstart = {{ pos = [{a[0]:.1f}, {a[1]:.1f}, {a[2]:.1f}] }}\n'
              f'end = {{ pos = [{e[0]:.1f}, {e[1]:.1f}, {e[2]:.1f}] }}\n'
@@ -431,11 +435,13 @@ def _turning_mesh_scene_text(seed: int, folder: Path) -> str:
 @pytest.mark.parametrize("seed", range(3))
 def test_active_mesh_part_pairs_bounded_from_their_distances_change_no_answer(seed: int, tmp_path):
     """Mesh part pairs whose boxes stay within the clearance (active) are bounded from their measured
-    distances between full checks and measured again where the bound fails
-    (`StepChecks._active_part_records`): on meshes turning past each other, the events and pairs,
-    part-part ones among them, are those of checking every step in full."""
+    distances between full checks and measured again where the bound fails, and a pair within the
+    clearance whose parts do not move keeps its records (`StepChecks._active_part_records`): on meshes
+    turning past each other beside a ball sunk into a block, the events and pairs, part-part ones among
+    them, are those of checking every step in full."""
     path = tmp_path / "turning.toml"
     path.write_text(_turning_mesh_scene_text(seed, tmp_path))
     scene = load_scene(path)
     fast, full = _skipping_and_in_full(scene, tmp_path)
     assert any(p["type"] == "part-part" for p in full["pairs"])
+    assert any({p["a"], p["b"]} == {"base", "foot"} and p["min_distance"] < 0 for p in full["pairs"])

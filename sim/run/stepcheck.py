@@ -238,6 +238,9 @@ class StepChecks:
         self._active_gaps: PartPairGaps | None = None
         # the active part pairs within the clearance at the last full check, and apart
         self._active_near = self._active_apart = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        # the near pairs' parts, their poses and records where they were split (`_start_active_gaps`)
+        self._near_start: tuple[np.ndarray, np.ndarray, list[Interference]] = (np.zeros(0, np.int64),
+                                                                              np.zeros((0, 4, 4)), [])
         if self.checker.bounds_gaps:
             corner = np.maximum(np.abs(rigid.lo), np.abs(rigid.hi))
             rho = np.sqrt(np.einsum("ij,ij->i", corner, corner))     # inf for planes
@@ -475,8 +478,10 @@ class StepChecks:
         """Split the active part pairs at poses (P, 4, 4) by their distances
         measured there (`PartChecker.pair_values`, up to the clearance plus a
         horizon): those within the clearance (records; overlapping links) and
-        pairs of two primitives are checked at every state; the rest, pairs
-        with a mesh apart, are bounded from there (`_restart_active`)."""
+        pairs of two primitives are checked at every state where one of their
+        parts has moved since (else their records are these, to the bit); the
+        rest, pairs with a mesh apart, are bounded from there
+        (`_restart_active`)."""
         ai, aj = self._part_active
         values = self.part_checker.pair_values(poses, ai, aj, self.config.clearance + self.horizon)
         # two primitives are checked at all the states of a batch in one call, about as cheaply as
@@ -484,6 +489,10 @@ class StepChecks:
         kind = self.rigid.convex_kind
         near = (values <= self.config.clearance) | ((kind[ai] >= 0) & (kind[aj] >= 0))
         self._active_near = (ai[near], aj[near])
+        # their records where none of their parts has moved since (a robot's base on its table)
+        used = np.unique(np.concatenate(self._active_near))
+        self._near_start = (used, np.array(poses, float)[used],
+                            self.part_checker.check_pairs(poses, *self._active_near))
         self._active_apart = (ai[~near], aj[~near])
         self._active_gaps.start(poses, self._active_apart, values[~near])
 
@@ -518,7 +527,14 @@ class StepChecks:
         if gaps is None or not gaps.started:
             return self.part_checker.check_pairs_many(poses, *self._part_active)
         if len(self._active_near[0]):
-            out = self.part_checker.check_pairs_many(poses, *self._active_near)
+            used, at_start, records = self._near_start
+            still = (poses[:, used] == at_start[None]).all(axis=(1, 2, 3))   # to the bit: the same records
+            moved = np.flatnonzero(~still)
+            out = [list(records) if k else [] for k in still.tolist()]
+            if len(moved):
+                for k, recs in zip(moved.tolist(), self.part_checker.check_pairs_many(poses[moved],
+                                                                                   *self._active_near)):
+                    out[k] = recs
         ai, aj = self._active_apart
         if not len(ai):
             return out
