@@ -111,8 +111,8 @@ class Recheck:
 
 class BatchRecheck:
     """Second opinions at consecutive states (:meth:`Recheck.many`): a pair's
-    hull by discrete points, once asked at one state, is found for every
-    state of the batch in one call (a pair that disagrees at one step mostly
+    hull by discrete points or exact, or its exact distance, once asked at one
+    state, is found for every state of the batch in one call (a pair that disagrees at one step mostly
     does at the next ones too); the answers are those of each state alone."""
 
     def __init__(self, owner: Recheck, cables: list[Mapping[str, CableState]], poses: np.ndarray,
@@ -121,6 +121,7 @@ class BatchRecheck:
         self._points = points
         self._hull_points: dict[tuple[str, str, str], list[float | None]] = {}
         self._exact: dict[tuple[str, str, str], list[float | None]] = {}
+        self._hull_exact: dict[tuple[str, str, str], list[float | None]] = {}
 
     def at(self, i: int) -> "StateRecheck":
         """The second opinions at the batch's state i."""
@@ -137,6 +138,16 @@ class BatchRecheck:
             self._exact[key] = exact_many(self.owner._checker(k, False, True), [c.get(a) for c in self.cables],
                                           self.poses[:, k], self.owner.exclusions, key)
         return self._exact[key]
+
+    def hull_exact(self, key: tuple[str, str, str]) -> list[float | None]:
+        """The cable-part pair's distance to the part's convex hull with
+        method exact at every state, in one pass (:meth:`exact_part` on the hull)."""
+        if key not in self._hull_exact:
+            _, a, b = key
+            k = self.owner.index[b]
+            self._hull_exact[key] = exact_many(self.owner._checker(k, True, True), [c.get(a) for c in self.cables],
+                                               self.poses[:, k], self.owner.exclusions, key)
+        return self._hull_exact[key]
 
     def hull_points(self, key: tuple[str, str, str]) -> list[float | None]:
         """The pair's distance to the hull by discrete points at every state."""
@@ -236,6 +247,8 @@ class StateRecheck:
             return None
         if hull and not exact and self.batch is not None:
             return self.batch.hull_points(key)[self.index]
+        if hull and exact and self.batch is not None:
+            return self.batch.hull_exact(key)[self.index]
         if not hull and exact and self.batch is not None:
             return self.batch.exact_part(key)[self.index]
         checker = self.owner._checker(k, hull, exact)

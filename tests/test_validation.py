@@ -306,8 +306,8 @@ def test_convex_hull_reason_is_checked():
 
 
 def test_hull_opinions_for_a_batch_are_each_state_alone():
-    """The hull by discrete points, found for a batch of states at once, is
-    each state's own opinion and the full check's record against the hull
+    """The hull by discrete points or exact, found for a batch of states at once, is
+    each state's own opinion (to the bit) and the full check's record against the hull
     (a cable sliding through the fork's gap, in and out of the hull, with an
     exclusion window and a moving part)."""
     from cablecheck.checker.interference import Checker
@@ -337,6 +337,9 @@ def test_hull_opinions_for_a_batch_are_each_state_alone():
         assert batch.at(i).hull(key, exact=False) == alone
         assert arrays.at(i).hull(key, exact=False) == alone
         assert arrays.at(i).exact(key) == recheck.at(cs, pose).exact(key)
+        hull_exact = recheck.at(cs, pose).hull(key, exact=True)
+        assert batch.at(i).hull(key, exact=True) == hull_exact
+        assert arrays.at(i).hull(key, exact=True) == hull_exact
         records = [r for r in full.check(cs, pose, excl) if r.b == "fork"]
         assert alone == (records[0].min_distance if records else None)
         found.append(alone)
