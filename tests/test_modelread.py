@@ -69,3 +69,42 @@ def test_visual_geoms_make_no_contacts_nor_events(tmp_path):
     raw = sim.detector.collide(states[-1].qpos)
     assert not (set(raw.geom.ravel()) & visual_ids)
     assert all(not str(n).startswith(("link/shell", "stand/box0")) for s in states for n in s.contacts.b)
+
+
+_WELDED = """<mujoco><worldbody>
+  <body name="a"><joint name="ja" type="hinge"/><geom name="ga" size="1"/>
+    <body name="a2"><geom name="ga2" size="1"/>
+      <body name="b"><joint name="jb" type="hinge"/><geom name="gb" size="1"/>
+        <body name="b2"><geom name="gb2" size="1"/>
+          <body name="c"><joint name="jc" type="hinge"/><geom name="gc" size="1"/></body>
+        </body>
+      </body>
+    </body>
+  </body>
+</worldbody></mujoco>"""
+
+
+def test_skipped_part_pairs_are_those_mujoco_never_collides(tmp_path):
+    """Five overlapping spheres on a chain of hinged bodies, two of them with a welded companion body
+    (no joint: robosuite's Sawyer hangs right_l1_2 on right_l1 so): the part pairs the part-part check
+    leaves out are exactly those MuJoCo's own collision pass gives no contact, read from mj_collision."""
+    import mujoco
+
+    from cablecheck.run.stepcheck import part_pairs_skipped
+
+    (tmp_path / "welded.xml").write_text(_WELDED)
+    data = {"scene": {"name": "w", "units": "m", "duration": 0.1, "mjcf": "welded.xml"},
+            "effects": {"contact": ["part-part"]}}
+    built = build(parse_scene(data, tmp_path / "s.toml"), detect=False)
+    names = [p.name for p in built.parts]
+    assert names == ["a/ga", "a2/ga2", "b/gb", "b2/gb2", "c/gc"]
+    ref = mujoco.MjModel.from_xml_path(str(tmp_path / "welded.xml"))
+    d = mujoco.MjData(ref)
+    mujoco.mj_forward(ref, d)
+    touching = {frozenset((ref.geom(int(c.geom[0])).name, ref.geom(int(c.geom[1])).name)) for c in d.contact[:d.ncon]}
+    skip = part_pairs_skipped(built)
+    for i in range(len(names)):
+        for j in range(i + 1, len(names)):
+            pair = frozenset((names[i].split("/")[1], names[j].split("/")[1]))
+            assert skip[i, j] == (pair not in touching), (names[i], names[j])
+    assert frozenset(("ga", "gc")) in touching and frozenset(("ga2", "gb")) not in touching

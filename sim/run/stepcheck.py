@@ -613,7 +613,10 @@ def part_pairs_skipped(built: Built) -> np.ndarray:
 
     - parts of a child body and of its parent body (other than the world
       body itself) when a joint joins them: arm links overlap at their joints
-      by design;
+      by design. As MuJoCo's own filter (Computation, contact selection):
+      bodies welded together (no joint between them) count as one, so a
+      link's welded companion body (robosuite's Sawyer `right_l1_2` on
+      `right_l1`) is its link's child or parent too;
     - two geoms of the base mjcf model in the same rigid (weld) group: the
       model author's layout, never colliding in MuJoCo either;
     - pairs the mjcf model itself excludes (`Built.model_skip`: its own
@@ -624,10 +627,9 @@ def part_pairs_skipped(built: Built) -> np.ndarray:
     scene_names = {p.name for p in built.scene.parts}
     body = np.array([int(m.geom_bodyid[p.geom_id]) for p in built.parts], np.int64)
     weld = m.body_weldid[body]
-    parent = m.body_parentid[body]
+    parent = m.body_weldid[m.body_parentid[weld]]       # the weld group above each part's weld group
     base = np.array([p.name not in scene_names for p in built.parts], bool)
-    jointed = (m.body_weldid[np.arange(m.nbody)] == np.arange(m.nbody))   # top of a weld group
-    child_of = (parent[:, None] == body[None, :]) & (parent[:, None] != 0) & jointed[body][:, None]
+    child_of = (parent[:, None] == weld[None, :]) & (parent[:, None] != 0) & (weld[:, None] != weld[None, :])
     skip = child_of | child_of.T
     skip |= (weld[:, None] == weld[None, :]) & base[:, None] & base[None, :]
     if built.model_skip.shape == skip.shape:
