@@ -1,6 +1,6 @@
 """The cable model against closed-form answers, per element count: one command.
 
-    python benchmarks/physics_validation.py [--out docs]
+    python benchmarks/physics_validation.py [--out docs] [--quick] [--peer-only | --no-peer]
 
 Runs every case of `cablecheck.bench.physics_cases` (catenary sag, small-deflection
 cantilever, large-deflection elastica, hanging-chain first mode, U-cable
@@ -13,6 +13,14 @@ cost (wall seconds per simulated second, measured in this run, side by side),
 and writes it to <out>/physics_validation.csv, a plot to
 <out>/physics_validation.png and, as markdown, into <out>/physics.md between
 its validation-table markers. Well under a few minutes on one core.
+
+Then the shared problems run on PyElastica too (benchmarks/elastica_peer.py:
+cantilever first frequency, a released hose's tip path, a buckled rod, the
+catenary; the optional `peer` extra, `pip install -e '.[peer]'`): one more
+table, closed form, cablecheck (MuJoCo), PyElastica, the differences and the
+CPU seconds of each, printed and written into <out>/physics.md between its
+peer-table markers with the date, machine, load and command. Without
+PyElastica its columns say "not installed". About 1.5 minutes of CPU more.
 
 It does not decide what passes (tests/test_physics.py does); it shows where
 each case stands and what resolution costs.
@@ -29,6 +37,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from cablecheck.bench import physics_cases as validation  # noqa: E402  (the path above makes `sim` importable from a checkout)
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import elastica_peer as peer  # noqa: E402  (beside this file)
 
 COLUMNS = ["case", "elements", "measured", "reference", "error_pct", "substeps", "wall_per_sim_s", "note"]
 
@@ -174,19 +185,114 @@ def update_doc(rows: list[dict], doc: Path) -> bool:
     return True
 
 
+PEER_BEGIN, PEER_END = "<!-- peer table: benchmarks/physics_validation.py -->", "<!-- end of peer table -->"
+
+PEER_COLUMNS = ["case", "closed form", "cablecheck (MuJoCo)", "PyElastica", "cablecheck vs closed form %",
+                "cablecheck vs PyElastica %", "CPU s cablecheck", "CPU s PyElastica", "note"]
+
+
+def _blank(v) -> str:
+    return "" if v is None else _fmt(v)
+
+
+def peer_cells(r: peer.PeerRow) -> list[str]:
+    blank = _blank
+    return [r.case, blank(r.closed_form), _fmt(r.cablecheck), _fmt(r.elastica), blank(r.vs_closed_pct),
+            blank(r.vs_elastica_pct), f"{r.cpu_cablecheck:.2f}",
+            r.cpu_elastica if isinstance(r.cpu_elastica, str) else f"{r.cpu_elastica:.2f}", r.note]
+
+
+def print_peer(rows: list, warm: float | None) -> None:
+    cells = [peer_cells(r) for r in rows]
+    widths = [max(len(c), *(len(x[i]) for x in cells)) for i, c in enumerate(PEER_COLUMNS[:-1])]
+    print(f"\nPeer: PyElastica {peer.version()}" + ("" if warm is None else f" (numba warm-up {warm:.1f} s CPU, not counted)"))
+    print("  ".join(c.ljust(w) for c, w in zip(PEER_COLUMNS[:-1], widths)) + "  note")
+    for x in cells:
+        print("  ".join(v.ljust(w) for v, w in zip(x[:-1], widths)) + "  " + x[-1])
+
+
+def _machine() -> str:
+    import os
+    import platform
+    model = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{os.cpu_count()} cores, {model}, {platform.system()} {platform.release()}"
+
+
+def _load() -> str:
+    import subprocess
+    try:
+        out = subprocess.run(["uptime"], capture_output=True, text=True, timeout=5, check=False).stdout
+        return out.split("load average:")[1].strip()
+    except (OSError, IndexError, subprocess.SubprocessError):
+        return "unknown"
+
+
+def peer_markdown(rows: list, command: str, load_before: str, load_after: str, warm: float | None) -> str:
+    from datetime import UTC, datetime
+
+    import numpy
+    n = ", ".join(f"{k} {v}" for k, v in peer.ELEMENTS.items())
+    head = (f"Measured {datetime.now(UTC):%Y-%m-%d %H:%M} UTC by `{command}` on {_machine()}; load "
+            f"(uptime, 1 / 5 / 15 min) {load_before} before, {load_after} after; PyElastica {peer.version()} "
+            f"(elements: {n}; PositionVerlet at {peer.CFL:g} of the fastest wave's step"
+            + ("" if warm is None else f"; numba warm-up {warm:.1f} s CPU, not counted") + f"), numpy {numpy.__version__}.")
+    lines = [head, "", "| " + " | ".join(PEER_COLUMNS) + " |", "|" + "---|" * len(PEER_COLUMNS)]
+    lines += ["| " + " | ".join(c.replace("|", "/") for c in peer_cells(r)) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def update_block(doc: Path, begin: str, end: str, body: str) -> bool:
+    """Put `body` between the markers `begin` and `end` of `doc`; False when it has none."""
+    if not doc.exists():
+        return False
+    text = doc.read_text()
+    if begin not in text or end not in text:
+        return False
+    head, rest = text.split(begin, 1)
+    tail = rest.split(end, 1)[1]
+    doc.write_text(f"{head}{begin}\n{body}\n{end}{tail}")
+    return True
+
+
+def run_peer(out: Path, command: str) -> list:
+    load = _load()
+    warm = peer.warm_up() if peer.AVAILABLE else None
+    rows = peer.rows()
+    print_peer(rows, warm)
+    if update_block(out / "physics.md", PEER_BEGIN, PEER_END, peer_markdown(rows, command, load, _load(), warm)):
+        print(f"updated the peer table in {out / 'physics.md'}")
+    return rows
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parents[1] / "docs")
     parser.add_argument("--quick", action="store_true", help="fewer element counts")
+    which = parser.add_mutually_exclusive_group()
+    which.add_argument("--no-peer", action="store_true", help="skip the PyElastica comparison")
+    which.add_argument("--peer-only", action="store_true", help="only the PyElastica comparison (its doc table)")
     args = parser.parse_args(argv)
+    command = " ".join(["python benchmarks/physics_validation.py"] + list(sys.argv[1:] if argv is None else argv))
     t0 = time.perf_counter()
-    rows = run(args.quick)
-    print_table(rows)
-    write(rows, args.out)
-    if update_doc(rows, args.out / "physics.md"):
-        print(f"updated the table in {args.out / 'physics.md'}")
-    print(f"\n{len(rows)} rows in {time.perf_counter() - t0:.0f} s; wrote {args.out / 'physics_validation.csv'} "
-          f"and {args.out / 'physics_validation.png'}")
+    if not args.peer_only:
+        rows = run(args.quick)
+        print_table(rows)
+        write(rows, args.out)
+        if update_doc(rows, args.out / "physics.md"):
+            print(f"updated the table in {args.out / 'physics.md'}")
+        print(f"\n{len(rows)} rows in {time.perf_counter() - t0:.0f} s; wrote {args.out / 'physics_validation.csv'} "
+              f"and {args.out / 'physics_validation.png'}")
+    if not args.no_peer:
+        t1 = time.perf_counter()
+        run_peer(args.out, command)
+        print(f"peer table in {time.perf_counter() - t1:.0f} s")
     return 0
 
 
