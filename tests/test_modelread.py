@@ -108,3 +108,23 @@ def test_skipped_part_pairs_are_those_mujoco_never_collides(tmp_path):
             pair = frozenset((names[i].split("/")[1], names[j].split("/")[1]))
             assert skip[i, j] == (pair not in touching), (names[i], names[j])
     assert frozenset(("ga", "gc")) in touching and frozenset(("ga2", "gb")) not in touching
+
+
+def test_a_link_turning_in_a_base_welded_to_the_world_is_left_out(tmp_path):
+    """An arm's base link welded to the world and its first, jointed link overlap at their joint by
+    design: left out, where MuJoCo (which exempts the world's weld group from its parent filter)
+    collides them; a part of the world itself against that link is still checked."""
+    from cablecheck.run.stepcheck import part_pairs_skipped
+
+    (tmp_path / "base.xml").write_text(
+        '<mujoco><worldbody><geom name="floor" type="box" size="1 1 0.1" pos="0 0 -2"/>'
+        '<body name="base"><geom name="gbase" size="1"/>'
+        '<body name="shoulder"><joint type="hinge"/><geom name="gsh" size="1"/></body></body>'
+        '</worldbody></mujoco>')
+    data = {"scene": {"name": "b", "units": "m", "duration": 0.1, "mjcf": "base.xml"},
+            "effects": {"contact": ["part-part"]}}
+    built = build(parse_scene(data, tmp_path / "s.toml"), detect=False)
+    idx = {p.name: k for k, p in enumerate(built.parts)}
+    skip = part_pairs_skipped(built)
+    assert skip[idx["base/gbase"], idx["shoulder/gsh"]] and skip[idx["shoulder/gsh"], idx["base/gbase"]]
+    assert not skip[idx["world/floor"], idx["shoulder/gsh"]]

@@ -616,7 +616,9 @@ def part_pairs_skipped(built: Built) -> np.ndarray:
       by design. As MuJoCo's own filter (Computation, contact selection):
       bodies welded together (no joint between them) count as one, so a
       link's welded companion body (robosuite's Sawyer `right_l1_2` on
-      `right_l1`) is its link's child or parent too;
+      `right_l1`) is its link's child or parent too; unlike MuJoCo's, a
+      parent body welded to the world (an arm's fixed base link) is not
+      exempt;
     - two geoms of the base mjcf model in the same rigid (weld) group: the
       model author's layout, never colliding in MuJoCo either;
     - pairs the mjcf model itself excludes (`Built.model_skip`: its own
@@ -630,6 +632,11 @@ def part_pairs_skipped(built: Built) -> np.ndarray:
     parent = m.body_weldid[m.body_parentid[weld]]       # the weld group above each part's weld group
     base = np.array([p.name not in scene_names for p in built.parts], bool)
     child_of = (parent[:, None] == weld[None, :]) & (parent[:, None] != 0) & (weld[:, None] != weld[None, :])
+    # and a jointed body's own parent body, though welded to the world (an arm's base link on a
+    # fixed base: its first link turns in it by design; MuJoCo exempts the world's weld group)
+    raw_parent = m.body_parentid[body]
+    jointed = m.body_weldid[body] == body
+    child_of |= (raw_parent[:, None] == body[None, :]) & (raw_parent[:, None] != 0) & jointed[:, None]
     skip = child_of | child_of.T
     skip |= (weld[:, None] == weld[None, :]) & base[:, None] & base[None, :]
     if built.model_skip.shape == skip.shape:
