@@ -109,6 +109,10 @@ class Recheck:
         return self._checkers[key]
 
 
+EXACT_WINDOW = 16
+"""States whose exact opinion of a pair `BatchRecheck` finds in one pass."""
+
+
 class BatchRecheck:
     """Second opinions at consecutive states (:meth:`Recheck.many`): a pair's
     hull by discrete points or exact, or its exact distance, once asked at one
@@ -120,34 +124,40 @@ class BatchRecheck:
         self.owner, self.cables, self.poses = owner, cables, poses
         self._points = points
         self._hull_points: dict[tuple[str, str, str], list[float | None]] = {}
-        self._exact: dict[tuple[str, str, str], list[float | None]] = {}
-        self._hull_exact: dict[tuple[str, str, str], list[float | None]] = {}
+        self._exact: dict[tuple[str, str, str], dict[int, float | None]] = {}
+        self._hull_exact: dict[tuple[str, str, str], dict[int, float | None]] = {}
 
     def at(self, i: int) -> "StateRecheck":
         """The second opinions at the batch's state i."""
         return StateRecheck(self.owner, self.cables[i], self.poses[i], self, i)
 
-    def exact_part(self, key: tuple[str, str, str]) -> list[float | None]:
-        """The cable-part pair's distance with method exact at every state:
-        the batch's copies of the cable, each against its own state's pose
-        of the part, in one pass (each element against its own state's part
-        only; the same distances as each state's check alone)."""
-        if key not in self._exact:
-            _, a, b = key
-            k = self.owner.index[b]
-            self._exact[key] = exact_many(self.owner._checker(k, False, True), [c.get(a) for c in self.cables],
-                                          self.poses[:, k], self.owner.exclusions, key)
-        return self._exact[key]
+    def exact_part(self, key: tuple[str, str, str], i: int) -> float | None:
+        """The cable-part pair's distance with method exact at state i, found
+        with the next `EXACT_WINDOW` states' in one pass: the copies of the
+        cable, each against its own state's pose of the part (each element
+        against its own state's part only; the same distances as each state's
+        check alone)."""
+        return self._windowed(self._exact, key, i, hull=False)
 
-    def hull_exact(self, key: tuple[str, str, str]) -> list[float | None]:
+    def hull_exact(self, key: tuple[str, str, str], i: int) -> float | None:
         """The cable-part pair's distance to the part's convex hull with
-        method exact at every state, in one pass (:meth:`exact_part` on the hull)."""
-        if key not in self._hull_exact:
+        method exact at state i (:meth:`exact_part` on the hull)."""
+        return self._windowed(self._hull_exact, key, i, hull=True)
+
+    def _windowed(self, cache: dict, key: tuple[str, str, str], i: int, hull: bool) -> float | None:
+        """Exact opinions of a pair by windows of states: the states from i
+        on not yet found, `EXACT_WINDOW` of them, in one `exact_many` call
+        (a pair disagreeing at one state mostly does at the next few; the
+        exact check of a mesh costs in proportion to the states asked)."""
+        found = cache.setdefault(key, {})
+        if i not in found:
             _, a, b = key
             k = self.owner.index[b]
-            self._hull_exact[key] = exact_many(self.owner._checker(k, True, True), [c.get(a) for c in self.cables],
-                                               self.poses[:, k], self.owner.exclusions, key)
-        return self._hull_exact[key]
+            rows = [j for j in range(i, min(i + EXACT_WINDOW, len(self.cables))) if j not in found]
+            values = exact_many(self.owner._checker(k, hull, True), [self.cables[j].get(a) for j in rows],
+                                self.poses[rows, k], self.owner.exclusions, key)
+            found.update(zip(rows, values))
+        return found[i]
 
     def hull_points(self, key: tuple[str, str, str]) -> list[float | None]:
         """The pair's distance to the hull by discrete points at every state."""
@@ -248,9 +258,9 @@ class StateRecheck:
         if hull and not exact and self.batch is not None:
             return self.batch.hull_points(key)[self.index]
         if hull and exact and self.batch is not None:
-            return self.batch.hull_exact(key)[self.index]
+            return self.batch.hull_exact(key, self.index)
         if not hull and exact and self.batch is not None:
-            return self.batch.exact_part(key)[self.index]
+            return self.batch.exact_part(key, self.index)
         checker = self.owner._checker(k, hull, exact)
         cable = self.cables[a]
         if exact:
