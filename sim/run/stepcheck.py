@@ -79,7 +79,7 @@ ADVANCE_HORIZON_RADII = 2.0
 """Conservative advancement: candidates are evaluated up to the clearance
 plus this many (largest) cable radii at a full check..."""
 
-ACTIVE_RESTARTS = 8
+ACTIVE_RESTARTS = 32
 """Restarts of the active part pairs' condition in one batch of proven-clear
 states (`StepChecks._active_part_records`): pairs that keep near the clearance
 are then checked at their failing states in one call."""
