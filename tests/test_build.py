@@ -129,3 +129,29 @@ def test_a_detection_model_added_later_is_the_one_build_makes(tmp_path):
         assert np.array_equal(a.flex_margin, b.flex_margin) and np.array_equal(a.qpos0, b.qpos0)
     assert later.substeps == whole.substeps and later.warnings == whole.warnings
     assert later.model is first.model
+
+
+def test_a_held_end_starting_inside_a_part_of_another_body_is_warned_of(tmp_path, capsys):
+    """The build, and so `cablecheck check`, warns of a held point MuJoCo finds pressed into a part of
+    another body at t = 0 (a dress-pack end clamped inside the link before it: the zoo's Panda diverged
+    there with no word before the run); a part riding the holding body is no such warning."""
+    from cablecheck.build.stages import build
+    from cablecheck.cli.main import main
+
+    block = {"name": "frame/block", "shape": "box", "size": [0.03, 0.03, 0.03], "pos": [0.6, 0.0, 0.5]}
+    data = slider_scene(tmp_path)
+    data["parts"] = [block]
+    warnings = build(parse_scene(data, tmp_path / "s.toml"), detect=False).warnings
+    assert [w for w in warnings if w.startswith("at t = 0, as routed, cable 'c' is held at vertex")
+            and "(its end on 'slider')" in w and "'frame/block'" in w]
+    data["parts"] = [{**block, "body": "slider", "pos": [0.6, 0.0, 0.5]}]
+    assert not [w for w in build(parse_scene(data, tmp_path / "s.toml"), detect=False).warnings
+                if "as routed" in w]
+    scene = tmp_path / "block.toml"
+    scene.write_text('[scene]\nname = "b"\nunits = "m"\nduration = 0.2\nsettle = 0.3\n\n'
+                     '[effects]\ncontact = ["cable-structure"]\n\n[[bodies]]\nname = "slider"\n\n'
+                     '[[parts]]\nname = "frame/block"\nshape = "box"\nsize = [0.03, 0.03, 0.03]\npos = [0.6, 0.0, 0.5]\n\n'
+                     '[[cables]]\nname = "c"\nradius = 0.004\nstart = { pos = [0, 0, 0.5] }\n'
+                     'end = { body = "slider", pos = [0.6, 0, 0.5] }\nlength = 0.7\nsegments = 20\n')
+    assert main(["check", str(scene)]) == 0
+    assert "at t = 0, as routed, cable 'c' is held" in capsys.readouterr().err

@@ -35,6 +35,7 @@ from cablecheck.build.cableplan import CablePlan, has_slack, plan_cable
 from cablecheck.build.mjspec import compile_model, move_held, set_step
 from cablecheck.build.modelread import read_built
 from cablecheck.build.obstacles import Obstacles
+from cablecheck.build.pinch import held_pinch
 from cablecheck.build.startframes import Frames, part_meshes, scene_origin
 from cablecheck.build.substeps import (
     MAX_SUBSTEPS,
@@ -81,7 +82,24 @@ def build_simulation(scene: Scene, planned: tuple) -> Built:
         warnings += (f"the cables need a simulation step of {need:.3g} s (see docs/physics.md) but "
                      f"at most {MAX_SUBSTEPS} steps are taken per scene timestep; scene.timestep "
                      f"<= {need * MAX_SUBSTEPS:.3g} s would do",)
+    warnings += held_pinch_warnings(read)
     return replace(read, substeps=substeps, warnings=warnings)
+
+
+def held_pinch_warnings(built: Built) -> tuple[str, ...]:
+    """One warning per cable whose held point MuJoCo finds pressed into a part of another body at
+    t = 0, as routed (`cablecheck.build.pinch`): the simulation starts with its hold and a contact
+    fighting, which a run may not survive."""
+    if "cable-structure" not in built.scene.effects.contact:
+        return ()
+    out = []
+    for i, cable in enumerate(built.cables):
+        found = held_pinch(built, built.qpos0, i, None)
+        if found is not None:
+            out.append(f"at t = 0, as routed, {found}: the simulation starts with the hold and that contact "
+                       "fighting (the settling may push the cable out, or the run diverge); route the cable clear "
+                       "of that part next to its hold")
+    return tuple(out)
 
 
 def cable_damping(built: Built) -> dict[int, tuple[float, float]]:

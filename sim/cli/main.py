@@ -60,9 +60,12 @@ def _cmd_check(args: argparse.Namespace) -> int:
     if "cable-structure" in scene.effects.contact and scene.cables:
         # MuJoCo loads only for a scene whose cables collide
         from cablecheck.build.routecheck import route_warnings
-        from cablecheck.build.stages import plan_cables
+        from cablecheck.build.stages import build_simulation, plan_cables
 
-        warnings += route_warnings(scene, *plan_cables(scene))
+        planned = plan_cables(scene)
+        warnings += route_warnings(scene, *planned)
+        if scene.effects.dynamics:   # what the run's model warns of: the step, fast parts, held points pinched
+            warnings += build_simulation(scene, planned).warnings
     if not args.quiet:
         steps = round(scene.duration / scene.timestep)
         print(f"{args.scene}: valid scene {scene.name!r} ({scene.units}): {len(scene.cables)} cable(s), "

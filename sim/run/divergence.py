@@ -53,6 +53,7 @@ import mujoco
 import numpy as np
 
 from cablecheck.build.built import Built
+from cablecheck.build.pinch import held_pinch
 from cablecheck.scene.records import Scene
 
 BAD_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
@@ -257,50 +258,6 @@ def likely_cause(built: Built, cable: str | None) -> tuple[Cause, str]:
                            "found; look at the contacts and the parts near that time in the recording")
 
 
-PINCH_ELEMENTS = 3
-"""Elements between where a cable diverged, a held vertex and a penetrating contact for `held_pinch`."""
-
-
-def held_pinch(built: Built, qpos: np.ndarray, cable: int, vertex: int | None) -> str | None:
-    """Why a cable diverged near a held vertex, when it did: at the state `qpos` (the last sound one)
-    MuJoCo's collision pass finds the cable pressed into a part of another body within `PINCH_ELEMENTS`
-    elements of a vertex held by a body (and of `vertex`, where it diverged, when known); the deepest such
-    contact in words, else None."""
-    m = built.model
-    if not isinstance(m, mujoco.MjModel) or not np.isfinite(qpos).all():
-        return None
-    c = built.cables[cable]
-    d = mujoco.MjData(m)
-    d.qpos[:] = qpos
-    mujoco.mj_fwdPosition(m, d)            # kinematics, flexes and collision: the contacts as simulated
-    parts = {p.geom_id: p for p in built.parts}
-    ends = m.flex_elem[m.flex_elemdataadr[c.flex_id]:].reshape(-1, 2)   # a 1-D flex: two vertices an element
-    best = None
-    for con in d.contact[:d.ncon]:
-        side = 0 if con.flex[0] == c.flex_id else 1 if con.flex[1] == c.flex_id else -1
-        if side < 0 or con.geom[1 - side] not in parts or con.dist >= 0.0:
-            continue
-        part = parts[int(con.geom[1 - side])]
-        verts = ([int(con.vert[side])] if con.vert[side] >= 0 else ends[int(con.elem[side])].tolist())
-        for a in c.attachments:
-            if a.body == part.body or min(abs(v - a.vertex) for v in verts) > PINCH_ELEMENTS:
-                continue
-            if vertex is not None and abs(vertex - a.vertex) > 2 * PINCH_ELEMENTS:
-                continue
-            if best is None or con.dist < best[0]:
-                best = (float(con.dist), part, a, min(verts, key=lambda v: abs(v - a.vertex)))
-    if best is None:
-        return None
-    depth, part, a, v = best
-    scene = built.scene
-    hull = " (as its convex hull: MuJoCo collides a mesh as its hull)" if part.shape == "mesh" else ""
-    at = "there" if v == a.vertex else f"{abs(v - a.vertex)} element(s) from it"
-    return (f"cable {c.name!r} is held at vertex {a.vertex} (its {a.window or a.kind} on {a.body!r}) and "
-            f"{at} pressed {_written(scene, -depth)} into part "
-            f"{part.name!r}{hull}: the hold and the contact fight until the cable gives; keep the held point "
-            f"clear of that part over the program (move the {a.kind} or the part, or change the motion)")
-
-
 class DivergenceWatch:
     """Finds the first diverged state of a run's batches (module docstring).
 
@@ -458,7 +415,9 @@ class DivergenceWatch:
         if cause is Cause.UNKNOWN and cable is not None and self._sound is not None:
             pinch = held_pinch(self.built, self._sound, self.names.index(cable), vertex)
             if pinch is not None:
-                return Cause.PINCHED, pinch
+                return Cause.PINCHED, (f"{pinch}: the hold and the contact fight until the cable gives; keep "
+                                       "the held point clear of that part over the program (move the hold or the "
+                                       "part, or change the motion)")
         return cause, detail
 
     def _qpos_body(self, adr: int) -> int:
