@@ -255,11 +255,6 @@ class PartPairGaps:
         """Prove nothing until the next :meth:`start`."""
         self._at = None
 
-    @property
-    def started(self) -> bool:
-        """True after a :meth:`start` (until :meth:`stop`)."""
-        return self._at is not None
-
     def clear_pairs(self, poses: np.ndarray) -> np.ndarray:
         """(M, S) bool: each moving pair of the last start provably outside
         the clearance at each of the poses (S, P, 4, 4) (the condition of

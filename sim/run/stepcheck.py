@@ -235,7 +235,9 @@ class StepChecks:
                                 for p, sh, keep in zip(built.parts, shapes, checked) if keep], config,
                                horizon=self.horizon, stretch=self.stretch)
         self.advance: Advancement | None = None
-        self._active_gaps: PartPairGaps | None = None
+        self._apart_gaps: list[PartPairGaps] = []   # one condition per active pair apart (`_pair_gaps`)
+        self._pair_gaps_args: tuple = ()            # the parts' radii and solids, with the skip rule
+        self._active_split = False                  # the active pairs split at a full check
         # the active part pairs within the clearance at the last full check, and apart
         self._active_near = self._active_apart = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         # the near pairs' parts, their poses and records where they were split (`_start_active_gaps`)
@@ -255,8 +257,8 @@ class StepChecks:
             solids = PartSolids(solid_lo, solid_hi, rigid.axial, rigid.error)
             self.advance = Advancement(offsets, config.spacing * radii, rho, config.clearance,
                                        self.stretch, radii, (box_lo, box_hi), solids)
-            # the active part pairs' own condition, restarted from their measured distances
-            self._active_gaps = PartPairGaps(rho, config.clearance, solids)
+            # the active part pairs' own conditions, one a pair, restarted from their measured distances
+            self._pair_gaps_args = (rho, solids)
             self._moving_pairs = self.part_checker.moving_pairs()
             self._checked_index = np.nonzero(checked)[0]
             self._checker_index = np.cumsum(checked) - 1          # built part -> checker part
@@ -481,7 +483,7 @@ class StepChecks:
         pairs of two primitives are checked at every state where one of their
         parts has moved since (else their records are these, to the bit); the
         rest, pairs with a mesh apart, are bounded from there
-        (`_restart_active`)."""
+        (`_pair_gaps`, one condition a pair)."""
         ai, aj = self._part_active
         values = self.part_checker.pair_values(poses, ai, aj, self.config.clearance + self.horizon)
         # two primitives are checked at all the states of a batch in one call, about as cheaply as
@@ -494,18 +496,17 @@ class StepChecks:
         self._near_start = (used, np.array(poses, float)[used],
                             self.part_checker.check_pairs(poses, *self._active_near))
         self._active_apart = (ai[~near], aj[~near])
-        self._active_gaps.start(poses, self._active_apart, values[~near])
+        self._active_split = True
+        self._apart_gaps = [self._pair_gaps(poses, a, b, v)
+                            for a, b, v in zip(ai[~near].tolist(), aj[~near].tolist(), values[~near].tolist())]
 
-    def _restart_active(self, poses: np.ndarray) -> bool:
-        """Restart the apart pairs' condition at poses (P, 4, 4) from their
-        distances measured there; False (and no restart) when one of them
-        has come within the clearance."""
-        ai, aj = self._active_apart
-        values = self.part_checker.pair_values(poses, ai, aj, self.config.clearance + self.horizon)
-        if (values <= self.config.clearance).any():
-            return False
-        self._active_gaps.start(poses, (ai, aj), values)
-        return True
+    def _pair_gaps(self, poses: np.ndarray, a: int, b: int, value: float) -> PartPairGaps:
+        """The part-pair condition of the one pair (a, b), started at poses (P, 4, 4) from its
+        distance `value` measured there."""
+        rho, solids = self._pair_gaps_args
+        gaps = PartPairGaps(rho, self.config.clearance, solids)
+        gaps.start(poses, (np.array([a]), np.array([b])), np.array([value]))
+        return gaps
 
     def _active_part_records(self, poses: np.ndarray) -> list[list[Interference]]:
         """The active part pairs' records at states (S, P, 4, 4) proven clear
@@ -515,16 +516,15 @@ class StepChecks:
         where none can have come within the clearance since their last
         measured distances, as far as the part-pair condition bounds their
         relative move (`PartPairGaps` started from those distances), has no
-        record of theirs; at the first state where one may have, they are
-        checked and measured again and the condition restarts there (at most
-        `ACTIVE_RESTARTS` times a batch, and not once one is within the
-        clearance); the states still failing then are checked in one call."""
+        record of theirs; at the first state where one may have, it is checked
+        and measured again and its own condition restarts there (at most
+        `ACTIVE_RESTARTS` restarts a batch, and none for a pair once within the
+        clearance); each pair's states still failing then are checked in one call."""
         n = len(poses)
         out: list[list[Interference]] = [[] for _ in range(n)]
         if not len(self._part_active[0]):
             return out
-        gaps = self._active_gaps
-        if gaps is None or not gaps.started:
+        if not self._active_split:
             return self.part_checker.check_pairs_many(poses, *self._part_active)
         if len(self._active_near[0]):
             used, at_start, records = self._near_start
@@ -538,21 +538,30 @@ class StepChecks:
         ai, aj = self._active_apart
         if not len(ai):
             return out
-        s = 0
+        reach = self.config.clearance + self.horizon
+        ok = np.stack([g.clear_pairs(poses)[0] for g in self._apart_gaps])          # (pairs, states)
+        near = np.zeros(len(ai), bool)     # came within the clearance: not restarted again this batch
         for _ in range(ACTIVE_RESTARTS):
-            fail = np.flatnonzero(~gaps.clear_pairs(poses[s:]).all(axis=0))
-            if not len(fail):
-                return out
-            s += int(fail[0])
-            out[s] = out[s] + self.part_checker.check_pairs(poses[s], ai, aj)
-            restarted = self._restart_active(poses[s])
-            s += 1
-            if s == n or not restarted:
+            fail = ~ok
+            first = np.where(fail.any(axis=1) & ~near, fail.argmax(axis=1), n)
+            k = int(np.argmin(first))
+            s = int(first[k])
+            if s == n:
                 break
-        if s < n:
-            fail = s + np.flatnonzero(~gaps.clear_pairs(poses[s:]).all(axis=0))
-            for k, recs in zip(fail.tolist(), self.part_checker.check_pairs_many(poses[fail], ai, aj)):
-                out[k] = out[k] + recs
+            pair = (ai[k:k + 1], aj[k:k + 1])
+            out[s] = out[s] + self.part_checker.check_pairs(poses[s], *pair)
+            ok[k, s] = True
+            value = float(self.part_checker.pair_values(poses[s], *pair, reach)[0])
+            if value <= self.config.clearance:
+                near[k] = True
+                continue
+            self._apart_gaps[k] = self._pair_gaps(poses[s], int(ai[k]), int(aj[k]), value)
+            ok[k, s + 1:] = self._apart_gaps[k].clear_pairs(poses[s + 1:])[0]
+        for k in np.flatnonzero((~ok).any(axis=1)).tolist():     # what is left: in one call a pair
+            states = np.flatnonzero(~ok[k])
+            for t, recs in zip(states.tolist(), self.part_checker.check_pairs_many(poses[states], ai[k:k + 1],
+                                                                                   aj[k:k + 1])):
+                out[t] = out[t] + recs
         return out
 
     def _same_body_records(self, poses: np.ndarray) -> list[Interference]:
