@@ -238,6 +238,7 @@ class StepChecks:
         self._apart_gaps: list[PartPairGaps] = []   # one condition per active pair apart (`_pair_gaps`)
         self._pair_gaps_args: tuple = ()            # the parts' radii and solids, with the skip rule
         self._active_split = False                  # the active pairs split at a full check
+        self._value_memo: dict[tuple[int, int], tuple] = {}   # (i, j) -> poses of i, j and their value
         # the active part pairs within the clearance at the last full check, and apart
         self._active_near = self._active_apart = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         # the near pairs' parts, their poses and records where they were split (`_start_active_gaps`)
@@ -485,20 +486,46 @@ class StepChecks:
         rest, pairs with a mesh apart, are bounded from there
         (`_pair_gaps`, one condition a pair)."""
         ai, aj = self._part_active
-        values = self.part_checker.pair_values(poses, ai, aj, self.config.clearance + self.horizon)
+        poses = np.asarray(poses, float)
+        values = self._active_values(poses, ai, aj)
         # two primitives are checked at all the states of a batch in one call, about as cheaply as
         # bounding them: only pairs with a mesh (their triangles) are worth bounding
         kind = self.rigid.convex_kind
         near = (values <= self.config.clearance) | ((kind[ai] >= 0) & (kind[aj] >= 0))
+        previous = self._active_near
         self._active_near = (ai[near], aj[near])
-        # their records where none of their parts has moved since (a robot's base on its table)
+        # their records where none of their parts has moved since (a robot's base on its table), kept
+        # from the last split when the same pairs' parts have not moved since either
         used = np.unique(np.concatenate(self._active_near))
-        self._near_start = (used, np.array(poses, float)[used],
-                            self.part_checker.check_pairs(poses, *self._active_near))
+        last_used, last_poses, last_records = self._near_start
+        if not (np.array_equal(previous[0], self._active_near[0]) and np.array_equal(previous[1], self._active_near[1])
+                and np.array_equal(last_used, used) and np.array_equal(last_poses, poses[used])):
+            last_records = self.part_checker.check_pairs(poses, *self._active_near)
+        self._near_start = (used, poses[used], last_records)
         self._active_apart = (ai[~near], aj[~near])
         self._active_split = True
         self._apart_gaps = [self._pair_gaps(poses, a, b, v)
                             for a, b, v in zip(ai[~near].tolist(), aj[~near].tolist(), values[~near].tolist())]
+
+    def _active_values(self, poses: np.ndarray, ai: np.ndarray, aj: np.ndarray) -> np.ndarray:
+        """`PartChecker.pair_values` of the active pairs at poses (P, 4, 4), a pair whose two parts
+        have not moved since it was last measured (to the bit) keeping that value."""
+        memo = self._value_memo
+        values = np.empty(len(ai))
+        fresh = []
+        for k, (a, b) in enumerate(zip(ai.tolist(), aj.tolist())):   # the few active pairs
+            kept = memo.get((a, b))
+            if kept is not None and np.array_equal(kept[0], poses[a]) and np.array_equal(kept[1], poses[b]):
+                values[k] = kept[2]
+            else:
+                fresh.append(k)
+        if fresh:
+            fresh = np.array(fresh)
+            values[fresh] = self.part_checker.pair_values(poses, ai[fresh], aj[fresh],
+                                                          self.config.clearance + self.horizon)
+            for k in fresh.tolist():
+                memo[(int(ai[k]), int(aj[k]))] = (poses[ai[k]].copy(), poses[aj[k]].copy(), float(values[k]))
+        return values
 
     def _pair_gaps(self, poses: np.ndarray, a: int, b: int, value: float) -> PartPairGaps:
         """The part-pair condition of the one pair (a, b), started at poses (P, 4, 4) from its
