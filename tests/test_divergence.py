@@ -413,14 +413,14 @@ def test_a_held_end_pressed_into_a_part_of_another_body_is_named_as_the_cause(tm
     from buildscenes import slider_scene
 
     from cablecheck.build.stages import build
-    from cablecheck.run.divergence import held_pinch
+    from cablecheck.build.pinch import contacts_at, held_pinch
     from cablecheck.scene.load import parse_scene
 
     def pinch(block: dict):
         data = slider_scene(tmp_path)
         data["parts"] = [block]
         built = build(parse_scene(data, tmp_path / "s.toml"), detect=False)
-        return held_pinch(built, built.qpos0, 0, None)
+        return held_pinch(built, contacts_at(built, built.qpos0), 0, None)
 
     found = pinch({"name": "frame/block", "shape": "box", "size": [0.03, 0.03, 0.03], "pos": [0.6, 0.0, 0.5]})
     assert found is not None and "held at vertex" in found and "(its end on 'slider')" in found

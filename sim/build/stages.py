@@ -35,7 +35,7 @@ from cablecheck.build.cableplan import CablePlan, has_slack, plan_cable
 from cablecheck.build.mjspec import compile_model, move_held, set_step
 from cablecheck.build.modelread import read_built
 from cablecheck.build.obstacles import Obstacles
-from cablecheck.build.pinch import held_pinch
+from cablecheck.build.pinch import contacts_at, held_pinch
 from cablecheck.build.startframes import Frames, part_meshes, scene_origin
 from cablecheck.build.substeps import (
     MAX_SUBSTEPS,
@@ -93,8 +93,9 @@ def held_pinch_warnings(built: Built) -> tuple[str, ...]:
     if "cable-structure" not in built.scene.effects.contact:
         return ()
     out = []
-    for i, cable in enumerate(built.cables):
-        found = held_pinch(built, built.qpos0, i, None)
+    at_start = contacts_at(built, built.qpos0)      # one collision pass for every cable
+    for i in range(len(built.cables)):
+        found = held_pinch(built, at_start, i, None)
         if found is not None:
             out.append(f"at t = 0, as routed, {found}: the simulation starts with the hold and that contact "
                        "fighting (the settling may push the cable out, or the run diverge); route the cable clear "

@@ -53,7 +53,8 @@ import mujoco
 import numpy as np
 
 from cablecheck.build.built import Built
-from cablecheck.build.pinch import held_pinch
+from cablecheck.build.pinch import contacts_at, held_pinch
+from cablecheck.scene.errors import written
 from cablecheck.scene.records import Scene
 
 BAD_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
@@ -173,10 +174,6 @@ def _fmt(x: float) -> str:
     return f"{x:.4g}"
 
 
-def _written(scene: Scene, metres: float) -> str:
-    """`metres` as the scene writes it, with its unit."""
-    return f"{_fmt(metres / scene.scale)} {scene.units}"
-
 
 def _other_unit(scene: Scene, metres: float) -> str:
     """What the number as written would mean in the other unit."""
@@ -201,14 +198,14 @@ def unit_outliers(scene: Scene, built: Built) -> list[tuple[float, str]]:
             travel = float(np.linalg.norm(pos.max(axis=0) - pos.min(axis=0), axis=-1).max())
             if travel > UNITS_RATIO * longest:
                 out.append((travel / longest,
-                            f"motion[{i}] moves {m.body or m.joint!r} {_written(scene, travel)}, "
-                            f"{_fmt(travel / longest)} times the longest cable ({_written(scene, longest)}): "
+                            f"motion[{i}] moves {m.body or m.joint!r} {written(scene, travel)}, "
+                            f"{_fmt(travel / longest)} times the longest cable ({written(scene, longest)}): "
                             f"mm and m values mixed? ({_other_unit(scene, travel)})"))
     for i, (c, cm) in enumerate(zip(scene.cables, built.cables)):
         if cm.length > UNITS_RATIO ** 2 * c.radius:
             out.append((cm.length / (UNITS_RATIO * c.radius),
-                        f"cables[{i}].radius = {_written(scene, c.radius)} is 1/{_fmt(cm.length / c.radius)} of "
-                        f"its length ({_written(scene, cm.length)}): mm and m values mixed? "
+                        f"cables[{i}].radius = {written(scene, c.radius)} is 1/{_fmt(cm.length / c.radius)} of "
+                        f"its length ({written(scene, cm.length)}): mm and m values mixed? "
                         f"({_other_unit(scene, c.radius)})"))
     for i, p in enumerate(scene.parts):
         if p.shape in ("plane", "mesh") or not p.size:
@@ -217,8 +214,8 @@ def unit_outliers(scene: Scene, built: Built) -> list[tuple[float, str]]:
         if span > PART_RATIO * longest or span * PART_RATIO < longest:
             ratio = max(span / longest, longest / span)
             out.append((ratio * UNITS_RATIO / PART_RATIO,
-                        f"parts[{i}] ({p.name!r}) spans {_written(scene, span)} against the longest cable's "
-                        f"{_written(scene, longest)}: mm and m values mixed? ({_other_unit(scene, span)})"))
+                        f"parts[{i}] ({p.name!r}) spans {written(scene, span)} against the longest cable's "
+                        f"{written(scene, longest)}: mm and m values mixed? ({_other_unit(scene, span)})"))
     return sorted(out, key=lambda x: -x[0])
 
 
@@ -243,14 +240,14 @@ def likely_cause(built: Built, cable: str | None) -> tuple[Cause, str]:
                 bodies = sorted({a.body for a in cm.attachments if a.body != "world"})
                 on = f" on {', '.join(repr(b) for b in bodies)}" if bodies else ""
                 return Cause.TELEPORT, (
-                    f"the script moves a held point of cable {worst!r}{on} at up to {_written(scene, speed)}/s, "
-                    f"{_written(scene, speed * sub.step)} per simulation step of {sub.step:.3g} s "
+                    f"the script moves a held point of cable {worst!r}{on} at up to {written(scene, speed)}/s, "
+                    f"{written(scene, speed * sub.step)} per simulation step of {sub.step:.3g} s "
                     f"{steps}, {_fmt(speed * sub.step / element)} of an element: the cable cannot follow "
                     f"(a body teleported); slow the motion or make scene.timestep <= "
                     f"{sub.needed[worst] * sub.count:.3g} s")
             defn = next(c for c in scene.cables if c.name == worst)
             return Cause.STIFFNESS, (
-                f"cable {worst!r} (young {defn.young:.3g} Pa, elements of {_written(scene, element)}) "
+                f"cable {worst!r} (young {defn.young:.3g} Pa, elements of {written(scene, element)}) "
                 f"needs a simulation step of {sub.needed[worst]:.3g} s and the run steps {sub.step:.3g} s "
                 f"{steps}: lower scene.timestep to <= {sub.needed[worst] * sub.count:.3g} s, or the "
                 f"stiffness, or use fewer segments")
@@ -413,7 +410,7 @@ class DivergenceWatch:
         """`likely_cause`, and where that finds none, a held point pressed into a part (`held_pinch`)."""
         cause, detail = likely_cause(self.built, cable)
         if cause is Cause.UNKNOWN and cable is not None and self._sound is not None:
-            pinch = held_pinch(self.built, self._sound, self.names.index(cable), vertex)
+            pinch = held_pinch(self.built, contacts_at(self.built, self._sound), self.names.index(cable), vertex)
             if pinch is not None:
                 return Cause.PINCHED, (f"{pinch}: the hold and the contact fight until the cable gives; keep "
                                        "the held point clear of that part over the program (move the hold or the "

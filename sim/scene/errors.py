@@ -45,3 +45,8 @@ def join_key(where: str, key: str) -> str:
 def fmt(value: float) -> str:
     """A number in a message: 6 significant digits."""
     return f"{value:.6g}"
+
+
+def written(scene, metres: float) -> str:
+    """A length in metres as a warning writes it, in `scene`'s units: 4 significant digits and the unit."""
+    return f"{metres / scene.scale:.4g} {scene.units}"
