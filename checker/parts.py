@@ -443,24 +443,8 @@ def _check_indexed(parts: PartSet, placed: Placement, clearance: float, focus, p
     out: list[tuple[int, int, Interference | None]] = []
     n = len(i)
     if n:
-        value = np.full(n, np.inf)
-        where = np.zeros((n, 3))
-        # two primitives: their true shapes (cablecheck.checker.convex); two boxes apart, meshes: triangles
-        kind = parts.convex_kind
-        conv = np.flatnonzero((kind[i] >= 0) & (kind[j] >= 0))
-        tri = np.ones(n, bool)
-        if len(conv):
-            size = parts.sd_groups[2]
-            a, b = i[conv], j[conv]
-            sd, w, _, apart = convex_pairs(kind[a], size[a], placed.rot[a], placed.pos[a],
-                                           kind[b], size[b], placed.rot[b], placed.pos[b], clearance)
-            value[conv], where[conv] = sd, w
-            tri[conv[~apart]] = False
+        value, where, hard = _measured(parts, placed, i, j, clearance)
         touch = parts.touch(i, j)
-        hard = value < -touch
-        rows = np.flatnonzero(tri)
-        if len(rows):
-            value[rows], where[rows], hard[rows] = _triangle_values(parts, placed, i[rows], j[rows], clearance)
         for k in np.flatnonzero(hard | ((touch < value) & (value < clearance))):  # records only
             out.append((int(i[k]), int(j[k]), _record(parts, int(i[k]), int(j[k]), float(value[k]), where[k],
                                                       clearance)))
@@ -481,25 +465,39 @@ def pair_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray,
     the other, so a pair whose bound exceeds the clearance by more than that
     move has no record (`cablecheck.run.stepcheck`: active part pairs between checks)."""
     i, j = np.asarray(i, np.int64), np.asarray(j, np.int64)
+    out = np.zeros(len(i))                                   # a plane's pairs: not measured here
+    rows = np.flatnonzero(~parts.plane[i] & ~parts.plane[j])
+    if len(rows):
+        value, _, hard = _measured(parts, placed, i[rows], j[rows], reach)
+        out[rows] = np.where(hard, np.minimum(value, 0.0), np.minimum(value, reach))
+    return out - parts.error[i] - parts.error[j]
+
+
+def _measured(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray,
+              beyond: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Signed values (n,), places (n, 3) and hard flags (n,) of pairs of
+    parts i and j (n,, no plane): two primitives on their true shapes
+    (:mod:`cablecheck.checker.convex`), two boxes apart and meshes by their
+    triangles (:func:`_triangle_values`); measured exactly up to ``beyond``
+    (past it a lower bound may stand)."""
     n = len(i)
-    out = np.full(n, float(reach))
-    flat = parts.plane[i] | parts.plane[j]
-    out[flat] = 0.0
+    value = np.full(n, np.inf)
+    where = np.zeros((n, 3))
     kind = parts.convex_kind
-    conv = np.flatnonzero(~flat & (kind[i] >= 0) & (kind[j] >= 0))
-    tri = ~flat
+    conv = np.flatnonzero((kind[i] >= 0) & (kind[j] >= 0))
+    tri = np.ones(n, bool)
     if len(conv):
         size = parts.sd_groups[2]
         a, b = i[conv], j[conv]
-        sd, _, _, apart = convex_pairs(kind[a], size[a], placed.rot[a], placed.pos[a],
-                                       kind[b], size[b], placed.rot[b], placed.pos[b], reach)
-        out[conv[~apart]] = np.minimum(sd[~apart], reach)
+        sd, w, _, apart = convex_pairs(kind[a], size[a], placed.rot[a], placed.pos[a],
+                                       kind[b], size[b], placed.rot[b], placed.pos[b], beyond)
+        value[conv], where[conv] = sd, w
         tri[conv[~apart]] = False
+    hard = value < -parts.touch(i, j)
     rows = np.flatnonzero(tri)
     if len(rows):
-        value, _, hard = _triangle_values(parts, placed, i[rows], j[rows], reach)
-        out[rows] = np.where(hard, np.minimum(value, 0.0), np.minimum(value, reach))
-    return out - parts.error[i] - parts.error[j]
+        value[rows], where[rows], hard[rows] = _triangle_values(parts, placed, i[rows], j[rows], beyond)
+    return value, where, hard
 
 
 def _record(parts: PartSet, a: int, b: int, d: float, where: np.ndarray, clearance: float) -> Interference | None:
