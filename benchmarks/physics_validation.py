@@ -174,15 +174,7 @@ def markdown(rows: list[dict]) -> str:
 
 def update_doc(rows: list[dict], doc: Path) -> bool:
     """Put the table between the markers of `doc`; False when it has none."""
-    if not doc.exists():
-        return False
-    text = doc.read_text()
-    if BEGIN not in text or END not in text:
-        return False
-    head, rest = text.split(BEGIN, 1)
-    tail = rest.split(END, 1)[1]
-    doc.write_text(f"{head}{BEGIN}\n{markdown(rows)}\n{END}{tail}")
-    return True
+    return update_block(doc, BEGIN, END, markdown(rows))
 
 
 PEER_BEGIN, PEER_END = "<!-- peer table: benchmarks/physics_validation.py -->", "<!-- end of peer table -->"
