@@ -175,6 +175,28 @@ def test_random_scenes_skip_without_changing_answers(seed: int, tmp_path):
         assert a["max_strain"] == b["max_strain"] and a["min_bend_radius"] == b["min_bend_radius"]
 
 
+def _turning_bodies(rng: np.random.Generator, spread: float, turn: float) -> str:
+    """Two [[bodies]], b0 and b1, within `spread` mm of the axis at 60 mm up, each turning through two
+    random euler keys of up to `turn` degrees over 0.5 s (a turning scene's bodies)."""
+    text = ""
+    for b in range(2):
+        x, y = rng.uniform(-spread, spread), rng.uniform(-spread, spread)
+        text += f'\n[[bodies]]\nname = "b{b}"\npos = [{x:.1f}, {y:.1f}, 60.0]\n'
+        turns = np.vstack([np.zeros(3), rng.uniform(-turn, turn, (2, 3))])
+        keys = ", ".join(f"{{ t = {t:.2f}, euler = [{x:.1f}, {y:.1f}, {z:.1f}] }}"
+                         for t, (x, y, z) in zip((0.0, 0.25, 0.5), turns))
+        text += f'\n[[motion]]\nbody = "b{b}"\nkeys = [ {keys} ]\n'
+    return text
+
+
+def _one_cable(rng: np.random.Generator) -> str:
+    """A turning scene's cable c0 between two random points, 10 % longer than its chord."""
+    a, e = rng.uniform(-120, 120, 3) + [0, 0, 60], rng.uniform(-120, 120, 3) + [0, 0, 60]
+    return (f'\n[[cables]]\nname = "c0"\nradius = 3.0\nstart = {{ pos = [{a[0]:.1f}, {a[1]:.1f}, {a[2]:.1f}] }}\n'
+            f'end = {{ pos = [{e[0]:.1f}, {e[1]:.1f}, {e[2]:.1f}] }}\n'
+            f'length = {float(np.linalg.norm(e - a)) * 1.1:.1f}\nsegments = 12\n')
+
+
 def _turning_scene_text(seed: int) -> str:
     """A small random scene in mm whose bodies turn: primitives (many of
     them solids of revolution) on the world and on two bodies turning about
@@ -184,23 +206,14 @@ def _turning_scene_text(seed: int) -> str:
     shapes = [("box", 3), ("sphere", 1), ("capsule", 2), ("cylinder", 2), ("cylinder", 2)]
     text = (f'[scene]\nname = "turning-{seed}"\nunits = "mm"\nduration = 0.5\nsettle = 0.1\n\n'
             f'[effects]\ncontact = []\n\n[check]\nclearance = {rng.uniform(2.0, 5.0):.3f}\n')
-    for b in range(2):
-        text += f'\n[[bodies]]\nname = "b{b}"\npos = [{rng.uniform(-30, 30):.1f}, {rng.uniform(-30, 30):.1f}, 60.0]\n'
-        turns = np.vstack([np.zeros(3), rng.uniform(-90, 90, (2, 3))])
-        keys = ", ".join(f"{{ t = {t:.2f}, euler = [{x:.1f}, {y:.1f}, {z:.1f}] }}"
-                         for t, (x, y, z) in zip((0.0, 0.25, 0.5), turns))
-        text += f'\n[[motion]]\nbody = "b{b}"\nkeys = [ {keys} ]\n'
+    text += _turning_bodies(rng, 30, 90)
     for k in range(6):
         kind, n = shapes[int(rng.integers(len(shapes)))]
         size = ", ".join(f"{v:.1f}" for v in rng.uniform(4, 20, n))
         pos = ", ".join(f"{v:.1f}" for v in rng.uniform(-35, 35, 3) + [0, 0, 60 if k % 3 == 0 else 0])
         body = ["world", "b0", "b1"][k % 3]
         text += f'\n[[parts]]\nname = "p{k}"\nbody = "{body}"\nshape = "{kind}"\nsize = [{size}]\npos = [{pos}]\n'
-    a, e = rng.uniform(-120, 120, 3) + [0, 0, 60], rng.uniform(-120, 120, 3) + [0, 0, 60]
-    text += (f'\n[[cables]]\nname = "c0"\nradius = 3.0\nstart = {{ pos = [{a[0]:.1f}, {a[1]:.1f}, {a[2]:.1f}] }}\n'
-             f'end = {{ pos = [{e[0]:.1f}, {e[1]:.1f}, {e[2]:.1f}] }}\n'
-             f'length = {float(np.linalg.norm(e - a)) * 1.1:.1f}\nsegments = 12\n')
-    return text
+    return text + _one_cable(rng)
 
 
 @pytest.mark.parametrize("seed", range(2))
@@ -410,12 +423,7 @@ def _turning_mesh_scene_text(seed: int, folder: Path) -> str:
     trimesh.creation.icosphere(subdivisions=1, radius=9.0).export(folder / "ball.stl")
     text = (f'[scene]\nname = "turning-mesh-{seed}"\nunits = "mm"\nduration = 0.5\nsettle = 0.1\n\n'
             f'[effects]\ncontact = []\n\n[check]\nclearance = {rng.uniform(2.0, 5.0):.3f}\n')
-    for b in range(2):
-        text += f'\n[[bodies]]\nname = "b{b}"\npos = [{rng.uniform(-20, 20):.1f}, {rng.uniform(-20, 20):.1f}, 60.0]\n'
-        turns = np.vstack([np.zeros(3), rng.uniform(-60, 60, (2, 3))])
-        keys = ", ".join(f"{{ t = {t:.2f}, euler = [{x:.1f}, {y:.1f}, {z:.1f}] }}"
-                         for t, (x, y, z) in zip((0.0, 0.25, 0.5), turns))
-        text += f'\n[[motion]]\nbody = "b{b}"\nkeys = [ {keys} ]\n'
+    text += _turning_bodies(rng, 20, 60)
     for k in range(6):
         file = ["el.stl", "ball.stl"][int(rng.integers(2))]
         pos = ", ".join(f"{v:.1f}" for v in rng.uniform(-30, 30, 3) + [0, 0, 60 if k % 3 == 0 else 0])
@@ -425,11 +433,7 @@ def _turning_mesh_scene_text(seed: int, folder: Path) -> str:
     text += ('\n[[bodies]]\nname = "still"\npos = [80.0, 0.0, 0.0]\n'
              '\n[[parts]]\nname = "base"\nshape = "box"\nsize = [20.0, 20.0, 5.0]\npos = [80.0, 0.0, 4.0]\n'
              '\n[[parts]]\nname = "foot"\nbody = "still"\nshape = "mesh"\nfile = "ball.stl"\npos = [0.0, 0.0, 16.0]\n')
-    a, e = rng.uniform(-120, 120, 3) + [0, 0, 60], rng.uniform(-120, 120, 3) + [0, 0, 60]
-    text += (f'\n[[cables]]\nname = "c0"\nradius = 3.0\nstart = {{ pos = [{a[0]:.1f}, {a[1]:.1f}, {a[2]:.1f}] }}\n'
-             f'end = {{ pos = [{e[0]:.1f}, {e[1]:.1f}, {e[2]:.1f}] }}\n'
-             f'length = {float(np.linalg.norm(e - a)) * 1.1:.1f}\nsegments = 12\n')
-    return text
+    return text + _one_cable(rng)
 
 
 @pytest.mark.parametrize("seed", range(3))
