@@ -329,6 +329,16 @@ WIRE = dict(length=0.1, radius=0.0005, density=7850.0, young=2e11)
 """A 0.1 m steel wire of 1 mm diameter: clamped Euler load 38.8 N."""
 
 
+def _strains(sim: Simulation, length: float, duration: float) -> tuple[list[float], object, float]:
+    """Step `sim` to its end: its one cable's strain (length over `length`, less 1) at every step, the
+    last state and the wall seconds a simulated second."""
+    strains = []
+    t0 = time.perf_counter()
+    for s in sim.steps(contacts=False):
+        strains.append(np.linalg.norm(np.diff(s.cables[0], axis=0), axis=1).sum() / length - 1.0)
+    return strains, s, (time.perf_counter() - t0) / duration
+
+
 def _middle_force(sim: Simulation) -> float:
     """Force of the middle edge's length equality, N (positive: compression).
     At a buckled rod's middle the edge runs along the chord: the end force."""
@@ -367,11 +377,7 @@ def bowed(elements: int | None = None, shortening: float = 0.02, damping: float 
                               "timestep": 0.002}, "effects": {"gravity": False}, "cables": [cable]})
     built, sim, state, _ = settled(scene)
     c = built.cables[0]
-    strains = []
-    t0 = time.perf_counter()
-    for s in sim.steps(contacts=False):
-        strains.append(np.linalg.norm(np.diff(s.cables[0], axis=0), axis=1).sum() / c.length - 1.0)
-    wall = (time.perf_counter() - t0) / duration
+    strains, s, wall = _strains(sim, c.length, duration)
     ei = rod["young"] * np.pi * rod["radius"] ** 4 / 4.0
     force, deflection = reference.clamped_elastica(rod["length"], shortening, ei)
     return _result("compression strain", c.elements, float(min(strains)), None, wall, built, sim,
@@ -405,11 +411,7 @@ def straight_buckling(shortening: float, elements: int | None = None, push: floa
     sim = Simulation(built)
     sim.reset()
     c = built.cables[0]
-    strains = []
-    t0 = time.perf_counter()
-    for s in sim.steps(contacts=False):
-        strains.append(np.linalg.norm(np.diff(s.cables[0], axis=0), axis=1).sum() / c.length - 1.0)
-    wall = (time.perf_counter() - t0) / duration
+    strains, s, wall = _strains(sim, c.length, duration)
     ei = rod["young"] * np.pi * rod["radius"] ** 4 / 4.0
     force, deflection = reference.clamped_elastica(length, shortening, ei)
     size, side = _deflection(s.cables[0])
