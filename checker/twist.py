@@ -1,4 +1,5 @@
-"""Twist of a cable read from the frames of its held ends, by parallel transport.
+"""Twist of a cable: read from the frames of its held ends by parallel
+transport, or gathered from the simulated rod's twist along it.
 
 A cable clamped at both ends (its end tangents and the roll about them held
 by the bodies it rides on) is twisted by the rotation of one end's frame
@@ -24,8 +25,19 @@ Zero-length edges take the tangent of the edge before them (or after, at the
 start). A cusp (an edge folded back onto the one before) has no minimal
 rotation; it is treated as a half turn about an arbitrary axis.
 
+- :func:`carry_reference` carries a discrete elastic rod's reference
+  frames and reference twists (MuJoCo's `mjData.plastic`, which holds them
+  for the positions at the start of the step just taken) to the positions
+  the step ended at, so the rod's twist can be read at the state checked.
+- :class:`RodTwistMeter` keeps what a run reports of the twist a simulated
+  rod carries (its twist at each interior vertex, step by step): the
+  largest absolute twist end to end, and per vertex the largest moment and
+  twist per length. A run with dynamics reads twist this way; the frames
+  of the held ends are what a run without dynamics has.
+
 This module does not know which ends are clamped, bodies or MuJoCo: it takes
-the end frames it is given as reference vectors in world coordinates.
+the end frames it is given as reference vectors in world coordinates, and
+the rod's twists as arrays.
 """
 
 from __future__ import annotations
@@ -230,3 +242,72 @@ def update_many(meters: list[TwistMeter], points: list[np.ndarray], start_rot: l
         for c, a in zip(cables, np.split(angles, len(cables))):
             out[c] = meters[c].take(a)
     return out
+
+
+def carry_reference(t_old: np.ndarray, u_old: np.ndarray, ref_old: np.ndarray, t_new: np.ndarray,
+                    held: np.ndarray | None = None, turn: np.ndarray | None = None,
+                    pairs: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Rods' reference frames and reference twists carried to new tangents,
+    as the discrete elastic rod does in time (Bergou et al. 2010, "Discrete
+    viscous threads": time-parallel transport).
+
+    Args:
+      t_old, u_old: (E, 3) each edge's unit tangent and reference vector (square to it).
+      ref_old: (V,) reference twist at each interior vertex, radians, unwrapped.
+      t_new: (E, 3) the edges' unit tangents now.
+      held: indices of the edges whose frame a body holds (a clamped end),
+        with `turn` (len(held), 3, 3) each body's turn since `t_old`: their
+        vectors turn with it.
+      pairs: (V,) each, the edges before and after each interior vertex;
+        default one rod, edge i - 1 and i (several rods' edges may be
+        stacked, their vertices paired within each).
+
+    Returns (u_new (E, 3), ref_new (V,)): each edge's vector carried by the
+    least rotation from its old tangent to its new one (or turned with its
+    body), and at each interior vertex the angle, about the next edge's
+    tangent, from the previous edge's vector carried along the rod (least
+    rotation between the two tangents) to the next edge's, unwrapped to
+    within half a turn of `ref_old`."""
+    u_new = _rotate_min(u_old, t_old, t_new)
+    if held is not None and len(held):
+        u_new[held] = np.einsum("eij,ej->ei", turn, u_old[held])
+    before, after = pairs if pairs is not None else (np.arange(len(t_new) - 1), np.arange(1, len(t_new)))
+    carried = _rotate_min(u_new[before], t_new[before], t_new[after])
+    raw = _signed_angle(carried, u_new[after], t_new[after])
+    return u_new, ref_old + _wrap(raw - ref_old)
+
+
+class RodTwistMeter:
+    """What a run keeps of one simulated rod's twist.
+
+    Args:
+      stiffness: (V,) per interior vertex, its moment per radian of twist,
+        N m / rad (G J over the length it stands for).
+      length: (V,) the length each interior vertex stands for, metres.
+
+    Attributes:
+      max_abs: largest absolute twist end to end (the sum over the
+        vertices) so far, radians.
+      max_moment: (V,) each vertex's largest absolute moment so far, N m.
+      max_rate: (V,) each vertex's largest absolute twist per length so far,
+        radians per metre.
+    """
+
+    def __init__(self, stiffness: np.ndarray, length: np.ndarray):
+        self._stiffness = np.asarray(stiffness, float)
+        self._length = np.asarray(length, float)
+        self.max_abs = 0.0
+        self.max_moment = np.zeros(len(self._stiffness))
+        self.max_rate = np.zeros(len(self._stiffness))
+
+    def take(self, twist: np.ndarray) -> np.ndarray:
+        """Take S states' (S, V) twists at the interior vertices, radians;
+        return their (S,) twists end to end."""
+        twist = np.asarray(twist, float).reshape(-1, len(self._stiffness))
+        total = twist.sum(axis=1)
+        if len(total):
+            self.max_abs = max(self.max_abs, float(np.abs(total).max()))
+            most = np.abs(twist).max(axis=0)
+            self.max_moment = np.maximum(self.max_moment, self._stiffness * most)
+            self.max_rate = np.maximum(self.max_rate, most / self._length)
+        return total

@@ -38,10 +38,10 @@ def _parse(data: dict):
 
 
 def _incline_scene(slope: float, azimuth: float, cable_mu=0.3, part_mu=None, shape="plane",
-                   duration=1.0) -> tuple[dict, np.ndarray]:
-    """A 0.2 m cable (r = 3 mm, free ends) lying level across a slope of
-    `slope` degrees whose downhill direction is `azimuth` degrees from x;
-    and the slope's normal."""
+                   duration=1.0, across: bool = False) -> tuple[dict, np.ndarray]:
+    """A 0.2 m cable (r = 3 mm, free ends) lying down a slope of `slope`
+    degrees whose downhill direction is `azimuth` degrees from x (`across`:
+    level across it, where it can roll); and the slope's normal."""
     th, ph = np.radians(slope), np.radians(azimuth)
     # R = Rx(a) Ry(b) puts the normal at (sin th cos ph, sin th sin ph, cos th)
     a = np.arctan2(-np.sin(th) * np.sin(ph), np.cos(th))
@@ -49,8 +49,9 @@ def _incline_scene(slope: float, azimuth: float, cable_mu=0.3, part_mu=None, sha
     euler = [float(np.degrees(a)), float(np.degrees(b)), 0.0]
     n = euler_matrix(euler)[:, 2]
     assert np.allclose(n, [np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)], atol=1e-12)
-    along = np.cross(n, [np.cos(ph), np.sin(ph), 0.0])
-    along /= np.linalg.norm(along)
+    level = np.cross(n, [np.cos(ph), np.sin(ph), 0.0])
+    level /= np.linalg.norm(level)
+    along = level if across else np.cross(level, n)     # level across it, or down its fall line
     r = 0.003
     pts = [list(n * r + s * along) for s in (-0.1, 0.0, 0.1)]
     part = {"name": "slope", "shape": shape, "euler": euler}
@@ -152,13 +153,23 @@ def test_contact_friction_combines_as_mujoco_does(cable_mu, part_mu, mu):
 
 @pytest.mark.parametrize("azimuth", [0.0, 35.0, 60.0, 135.0])
 def test_cable_with_friction_0_3_stays_at_15_degrees_and_slides_at_20_in_every_direction(azimuth):
-    """tan 15 = 0.268 < 0.3 < tan 20 = 0.364: at 15 degrees the cable moves
-    under 5 mm in 1 s (measured 1.6 mm: settling onto the slope); at 20 it
-    slides within 15 % of Coulomb's 0.295 m (measured 0.326 m)."""
+    """Lying down the slope (where a round cable cannot roll): tan 15 = 0.268
+    < 0.3 < tan 20 = 0.364, so at 15 degrees the cable moves under 5 mm in
+    1 s; at 20 it slides within 15 % of Coulomb's 0.295 m."""
     stay = incline_slide(15.0, azimuth)
     slide = incline_slide(20.0, azimuth)
     assert stay < 0.005, f"slid {stay * 1e3:.1f} mm at 15 degrees"
     assert slide == pytest.approx(coulomb_slide(20.0, 0.3), rel=0.15), f"slid {slide * 1e3:.1f} mm at 20 degrees"
+
+
+@pytest.mark.parametrize("slope", [15.0, 20.0])
+def test_a_cable_lying_across_a_slope_rolls_down_as_a_solid_cylinder(slope):
+    """Lying level across the slope a round cable rolls (MuJoCo's rod turns
+    each element about its axis, with its polar inertia m r^2 / 2): a solid
+    cylinder rolls without slipping where mu >= tan(theta) / 3, down at
+    2/3 g sin(theta), g sin(theta) t^2 / 3 in 1 s, friction 0.3 or not."""
+    rolled = incline_slide(slope, 35.0, across=True)
+    assert rolled == pytest.approx(9.81 * np.sin(np.radians(slope)) / 3.0, rel=0.02)
 
 
 def test_friction_of_a_tilted_box_part_holds_and_frictionless_slides_freely():

@@ -107,7 +107,7 @@ SETTINGS = ["method", "spacing", "spacing_radii", "clearance", "attach_zone_radi
             "scene_file", "version", "advance", "substeps"]
 EVENT = ["type", "a", "b", "severity", "phase", "t_start", "t_end", "t_worst", "min_distance", "where", "s"]
 CABLE = ["name", "length", "segments", "max_strain", "taut", "min_bend_radius", "bend_violation", "rest_points",
-         "final_points", "wear", "max_twist", "max_twist_moment"]
+         "final_points", "wear", "max_twist", "max_twist_moment", "twist_from", "twist"]
 VALIDATION = ["compared_steps", "pair_steps", "agree", "checker_only", "mujoco_only", "severity_differs",
               "agreement", "max_distance_error", "unexplained", "allowed_pair_steps", "reasons", "disagreements"]
 

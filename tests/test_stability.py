@@ -156,7 +156,7 @@ def _simulate(case: Case) -> Run:
     cable = built.cables[0]
     bodies = m.flex_vertbodyid[cable.vert_adr:cable.vert_adr + cable.count]
     # held vertices are vertices of the body holding them: their mass is the body's, not the cable's
-    own = np.array([m.body(int(b)).name.startswith("cables/") for b in bodies])
+    own = np.array([m.body(int(b)).name == f"cables/{cable.name}_{k}" for k, b in enumerate(bodies)])
     vertex_mass = np.where(own, m.body_mass[bodies], 0.0)
     strain, edge, kinetic, potential = [], [], [], []
     previous = None

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import assume, given, settings, strategies as st
 
 from cablecheck.checker.twist import TwistMeter, transport, twist_angle, update_many
@@ -117,7 +118,15 @@ def test_run_reports_the_twist_a_turning_end_winds_in(tmp_path):
         (cable,) = report["cables"]
         assert abs(cable["max_twist"] - 90.0) < (1e-6 if not dynamics else 0.5), dynamics
         moment = 2e7 * np.pi * 0.004 ** 4 / 2 * np.radians(cable["max_twist"]) / cable["length"]
-        assert np.isclose(cable["max_twist_moment"], moment)
+        assert cable["twist_from"] == ("rod" if dynamics else "ends")
+        if not dynamics:
+            assert cable["max_twist_moment"] == pytest.approx(moment, rel=1e-12)
+        else:
+            # the rod's own largest moment: spread over a little less than the cable's
+            # length (between the clamped edges' middles, tests/test_rodtwist.py), and
+            # while the end turns, the vertex next to it leads by about one simulation
+            # step of the turn (docs/twist.md): 2.6 % here
+            assert moment < cable["max_twist_moment"] < 1.04 * moment
 
 
 def test_update_many_is_each_meter_updated_alone():

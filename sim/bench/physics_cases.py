@@ -46,6 +46,7 @@ import mujoco
 import numpy as np
 
 from cablecheck.bench import reference
+from cablecheck.build.built import CABLE_PREFIX
 from cablecheck.build.stages import build, cable_damping
 from cablecheck.run.loop import Simulation
 from cablecheck.scene.load import parse_scene
@@ -130,7 +131,7 @@ def _start_in_shape(sim: Simulation, offsets: np.ndarray, axis: int) -> None:
     c = sim.built.cables[0]
     for v in range(c.count):
         bid = int(m.flex_vertbodyid[c.vert_adr + v])
-        if not m.body(bid).name.startswith("cables/"):
+        if m.body(bid).name != f"{CABLE_PREFIX}{c.name}_{v}":
             continue  # held by its body
         d.qpos[m.jnt_qposadr[m.body_jntadr[bid]] + axis] += offsets[v]
     mujoco.mj_forward(m, d)

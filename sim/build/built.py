@@ -88,6 +88,23 @@ class CableModel:
     elements: int = 0
 
 
+def end_roll_body(cable: str) -> str:
+    """The name of the body (and of its hinge) that holds a cable's clamped end
+    (`cablecheck.build.mjspec`)."""
+    return f"{CABLE_PREFIX}{cable}/end_roll"
+
+
+@dataclass(frozen=True)
+class EndRoll:
+    """The hinge of a cable's clamped end (`cablecheck.build.mjspec.end_roll_body`)
+    and the angle the run holds it at, radians (`cablecheck.build.untwist`)."""
+
+    cable: str
+    qpos_adr: int
+    dof_adr: int
+    angle: float = 0.0
+
+
 @dataclass(frozen=True, eq=False)
 class PartModel:
     """A structure part as built: one MuJoCo geom.
@@ -238,6 +255,13 @@ class Built:
     substeps: "Substeps | None" = None
     """Simulation steps per scene step and why (`choose_substeps`); the
     simulation model's timestep is the scene's divided by `substeps.count`."""
+    rods: tuple = ()
+    end_rolls: tuple[EndRoll, ...] = ()
+    """The clamped ends' hinges and the angles that start their cables
+    untwisted; the run holds them there (`cablecheck.run.motion`)."""
+    """Per cable, where its twist is in the simulation's state
+    (`cablecheck.build.rodtwist.RodTwist`, or None); empty for a scene not
+    simulated."""
 
 
 def mesh_parts(built: Built) -> np.ndarray:

@@ -40,7 +40,7 @@ from xml.sax.saxutils import quoteattr
 import mujoco
 import numpy as np
 
-from cablecheck.build.built import CABLE_PREFIX
+from cablecheck.build.built import CABLE_PREFIX, end_roll_body
 from cablecheck.build.cablephysics import (
     CONTACT_SOLIMP,
     contact_time_constant,
@@ -58,6 +58,8 @@ from cablecheck.scene.frames import euler_matrix
 from cablecheck.scene.records import CableDef, PartDef, Scene
 
 BASE_ARMATURE = 100.0
+ROLL_MASS = 1e-6
+"""kg: an end roll body's (`_add_end_roll`): a body on a joint needs one; its hinge's armature rules."""
 """Armature added to the base model's joints, which are driven kinematically:
 the cable's reaction barely moves them within the one step before the script
 sets them again."""
@@ -219,10 +221,11 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
 
     if plans:
         child = mujoco.MjSpec.from_string(_cables_xml(plans, scene, bits, detect, margin))
-        spec.worldbody.add_frame().attach_body(child.worldbody, CABLE_PREFIX, "")
+        spec.attach(child, frame=spec.worldbody.add_frame(), prefix=CABLE_PREFIX)
         placed = frames.at_qpos0(scene, plans) if rest else frames
         for plan in plans:
             _hold_vertices(spec, plan, placed, rest)
+            _add_end_roll(spec, plan, frames)
     try:
         model = spec.compile()
         if detect:  # concave meshes as their true surface, not MuJoCo's hull (cablecheck.detection.mesh)
@@ -303,6 +306,52 @@ def _hold_vertices(spec: mujoco.MjSpec, plan: CablePlan, frames: Frames, rest: b
         b.inertia = [b.mass * (2.0 * c.radius) ** 2 / 6.0] * 3
 
 
+def end_clamp(plan: CablePlan) -> tuple[str, list[int]] | None:
+    """The body and the two vertices of a cable's clamped end, or None (a pinned or free end)."""
+    held = [h for h in plan.held if h.kind == "end"]
+    if len(held) != 2:
+        return None
+    return held[0].body, sorted(h.vertex for h in held)
+
+
+def _add_end_roll(spec: mujoco.MjSpec, plan: CablePlan, frames: Frames) -> None:
+    """Hold a clamped end through a child body of its holder, the end roll
+    body: at the routed end point, on a hinge about the routed end edge
+    (on which both held vertices lie, so turning it moves nothing), which
+    the run holds at the angle `cablecheck.build.untwist` finds, so the cable
+    starts untwisted as routed (`Built.end_rolls`).
+
+    MuJoCo fixes a clamped end edge's material frame to its body as the
+    body turns from its pose at qpos0, the cable is compiled straight, and
+    as routed its end frame is turned from the frame carried along the
+    route by an angle that depends on the route alone (docs/twist.md). The
+    hinge turns that frame; a turn of the body's own `quat` would not (it
+    turns the pose at qpos0 too). Like every joint the run drives, it has a
+    large armature, so the rod's moment barely turns it within a step."""
+    clamp = end_clamp(plan)
+    if clamp is None:
+        return
+    body, (inner, end) = clamp
+    parent = spec.worldbody if body == "world" else spec.body(body)
+    name = end_roll_body(plan.cable.name)
+    pos = frames.to_local(body, plan.routed[end])
+    axis = pos - frames.to_local(body, plan.routed[inner])
+    roll = parent.add_body(name=name, pos=list(pos), gravcomp=1.0)
+    roll.explicitinertial = True
+    roll.mass = ROLL_MASS
+    roll.inertia = [ROLL_MASS * plan.cable.radius ** 2] * 3
+    roll.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(axis / np.linalg.norm(axis)),
+                   armature=BASE_ARMATURE)
+    flex = next(f for f in spec.flexes if f.name == f"{CABLE_PREFIX}{plan.cable.name}")
+    bodies = list(flex.vertbody)
+    vert = np.array(flex.vert, float).reshape(-1, 3)
+    for v in (inner, end):
+        bodies[v] = name
+        vert[v] -= pos
+    flex.vertbody = bodies
+    flex.vert = vert.ravel().tolist()
+
+
 def _cables_xml(plans: list[CablePlan], scene: Scene, bits: ContactBits, detect: bool, margin: float) -> str:
     contype, conaff = cable_bits(scene, bits, detect)
     selfcollide = "auto" if (detect or "self" in scene.effects.contact) else "none"
@@ -345,12 +394,18 @@ def _shear(cable: CableDef) -> str:
 
 def move_held(m: mujoco.MjModel, plans: list[CablePlan], frames: Frames) -> None:
     """Move the held vertices of a model compiled with `rest` to their routed
-    places on their bodies (`flex_vert`: vertex positions in body frames)."""
+    places on their bodies (`flex_vert`: vertex positions in body frames;
+    a clamped end's in its end roll body, `_add_end_roll`)."""
     for plan in plans:
         fid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_FLEX, f"{CABLE_PREFIX}{plan.cable.name}")
         adr = int(m.flex_vertadr[fid])
+        clamp = end_clamp(plan)
+        roll = None if clamp is None else m.body(end_roll_body(plan.cable.name)).id
         for h in plan.held:
-            m.flex_vert[adr + h.vertex] = frames.to_local(h.body, plan.routed[h.vertex])
+            local = frames.to_local(h.body, plan.routed[h.vertex])
+            if roll is not None and h.vertex in clamp[1]:
+                local = local - m.body_pos[roll]
+            m.flex_vert[adr + h.vertex] = local
 
 
 def set_step(m: mujoco.MjModel, step: float, damping: dict[int, tuple[float, float]] | None = None) -> None:

@@ -16,7 +16,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from cablecheck.build.built import CABLE_PREFIX, Built, JointDrive, PartModel
+from cablecheck.build.built import CABLE_PREFIX, Built, EndRoll, JointDrive, PartModel, end_roll_body
 from cablecheck.build.cableplan import CablePlan, cable_model
 from cablecheck.scene.errors import SceneError
 from cablecheck.scene.mjcf import SHAPES, body_name, geom_names
@@ -139,6 +139,11 @@ def read_built(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
         if name and jt in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
             scale = np.pi / 180.0 if jt == int(mujoco.mjtJoint.mjJNT_HINGE) else scene.scale
             joints[name] = JointDrive(name, jt, qa, da, scale)
+    rolls = []
+    for c in cables:
+        j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, end_roll_body(c.name))
+        if j >= 0:
+            rolls.append(EndRoll(c.name, int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])))
     return Built(scene, m, det, cables, parts, free, body_ids,
                  np.array(qadr_list, int), np.array(dadr_list, int), joints, qpos0, origin,
-                 visuals, model_skip)
+                 visuals, model_skip, end_rolls=tuple(rolls))

@@ -36,7 +36,9 @@ from cablecheck.build.mjspec import compile_model, move_held, set_step
 from cablecheck.build.modelread import read_built
 from cablecheck.build.obstacles import Obstacles
 from cablecheck.build.pinch import contacts_at, held_pinch
+from cablecheck.build.rodtwist import rod_twist
 from cablecheck.build.startframes import Frames, part_meshes, scene_origin
+from cablecheck.build.untwist import untwist_ends
 from cablecheck.build.substeps import (
     MAX_SUBSTEPS,
     choose_substeps,
@@ -73,6 +75,9 @@ def build_simulation(scene: Scene, planned: tuple) -> Built:
     sim, own_bits = compile_model(scene, plans, meshes, detect=False, frames=frames, rest=True)
     move_held(sim, plans, frames)
     read = read_built(scene, sim, None, plans, origin, own_bits)   # the model as compiled, not yet stepped
+    if scene.effects.dynamics:
+        read = replace(read, rods=cable_rods(read))
+        read = replace(read, end_rolls=untwist_ends(read, list(read.rods)))
     poses = script_poses(read) if scene.effects.dynamics else None
     substeps = choose_substeps(read, poses)
     set_step(sim, substeps.step, cable_damping(read))
@@ -100,6 +105,18 @@ def held_pinch_warnings(built: Built) -> tuple[str, ...]:
             out.append(f"at t = 0, as routed, {found}: the simulation starts with the hold and that contact "
                        "fighting (the settling may push the cable out, or the run diverge); route the cable clear "
                        "of that part next to its hold")
+    return tuple(out)
+
+
+def cable_rods(built: Built) -> tuple:
+    """Each cable's twist layout in the simulation model (`cablecheck.build.rodtwist`):
+    its shear modulus `twist_stiffness`, else MuJoCo's default E / 2 (docs/twist.md)."""
+    defs = {c.name: c for c in built.scene.cables}
+    out = []
+    for c in built.cables:
+        d = defs[c.name]
+        shear = d.twist_stiffness if d.twist_stiffness is not None else d.young / 2.0
+        out.append(rod_twist(built.model, c.flex_id, c.rest_s, shear, c.radius))
     return tuple(out)
 
 

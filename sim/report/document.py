@@ -59,6 +59,21 @@ STAGES = ("sim", "check", "validate", "record", "wear")
 
 
 @dataclass(frozen=True)
+class TwistProfile:
+    """The simulated rod's twist along one cable over the run (metres).
+
+    Attributes:
+      s: (V,) arc length of each interior vertex along the cable's rest shape.
+      max_moment: (V,) the largest torsional moment there, N m.
+      max_rate: (V,) the largest twist per length there, radians per metre.
+    """
+
+    s: np.ndarray
+    max_moment: np.ndarray
+    max_rate: np.ndarray
+
+
+@dataclass(frozen=True)
 class CableOutcome:
     """One cable over the run (metres; None where no step was checked).
 
@@ -74,9 +89,12 @@ class CableOutcome:
       rest_points, final_points: (n, 3) body centres at the first and last
         checked step, or None.
       wear: the cable's wear map.
-      max_twist: largest absolute twist over the cable, radians; None for a
-        cable not clamped at both ends (twist is not defined).
-      max_twist_moment: the torsional moment of that twist, N m, or None.
+      max_twist: largest absolute twist end to end, radians: with dynamics
+        the simulated rod's (every cable), without it the one its clamped
+        ends' frames wind in (None unless clamped at both ends).
+      max_twist_moment: N m: with dynamics the largest torsional moment
+        anywhere along the rod; without, G J max_twist / L; or None.
+      twist: with dynamics, the twist along the cable (`TwistProfile`), else None.
     """
 
     name: str
@@ -92,6 +110,7 @@ class CableOutcome:
     wear: CableWear
     max_twist: float | None
     max_twist_moment: float | None
+    twist: TwistProfile | None = None
 
 
 @dataclass(frozen=True)
@@ -266,6 +285,10 @@ def _cable_row(c: CableOutcome, u: float) -> dict:
         "wear": _wear_row(c.wear, u),
         "max_twist": None if c.max_twist is None else float(np.degrees(c.max_twist)),
         "max_twist_moment": c.max_twist_moment,
+        "twist_from": None if c.max_twist is None else "ends" if c.twist is None else "rod",
+        "twist": None if c.twist is None else {
+            "s": c.twist.s / u, "max_moment": c.twist.max_moment,
+            "max_rate": np.degrees(c.twist.max_rate) * u},
     }
 
 

@@ -52,7 +52,7 @@ from enum import Enum
 import mujoco
 import numpy as np
 
-from cablecheck.build.built import Built
+from cablecheck.build.built import CABLE_PREFIX, Built, end_roll_body
 from cablecheck.build.pinch import contacts_at, held_pinch
 from cablecheck.scene.errors import written
 from cablecheck.scene.records import Scene
@@ -300,7 +300,7 @@ class DivergenceWatch:
             return vertex, cable
         for i, c in enumerate(self.built.cables):
             for k, b in enumerate(np.asarray(ids[c.vert_adr:c.vert_adr + c.count]).tolist()):
-                if b != 0 and b not in cable:      # held vertices ride their body: not the cable's own
+                if m.body(b).name == f"{CABLE_PREFIX}{c.name}_{k}":   # held vertices ride their body
                     vertex[b], cable[b] = k, i
         return vertex, cable
 
@@ -402,7 +402,11 @@ class DivergenceWatch:
             c = self.built.cables[i]
             ids = getattr(self.built.model, "flex_vertbodyid", None)
             if ids is not None:
-                body = self.built.model.body(int(ids[c.vert_adr + vertex])).name
+                m = self.built.model
+                b = int(ids[c.vert_adr + vertex])
+                if m.body(b).name == end_roll_body(c.name):     # a clamped end rides its holder's child
+                    b = int(m.body_parentid[b])
+                body = m.body(b).name or "world"
         cause, detail = self._cause(cable, vertex)
         return PhysicsError(state.t, state.step, False, sign, cable, vertex, body, None, value, cause, detail)
 

@@ -29,8 +29,8 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
-
 from cablecheck.build.built import Built, mesh_parts
+from cablecheck.build.rodtwist import RodRaw, TwistReader
 from cablecheck.detection.contacts import Contacts
 from cablecheck.detection.detector import Detector
 from cablecheck.detection.hullgap import HullRaw, HullReader
@@ -73,6 +73,9 @@ class StepState:
         (`cablecheck.detection.detector.Detector.collide_many`), or None when not validated.
       unstable: MuJoCo's first instability warning, when the simulation
         went unstable up to this state (it is then the last state), else None.
+      rod: what the state keeps of the simulated rods' twist
+        (`cablecheck.build.rodtwist.RodRaw`, read by `TwistReader.read_many`),
+        or None when nothing is simulated.
     """
 
     step: int
@@ -87,6 +90,7 @@ class StepState:
     xpos: np.ndarray | None = None
     xmat: np.ndarray | None = None
     unstable: Instability | None = None
+    rod: RodRaw | None = None
 
 
 class Simulation:
@@ -118,6 +122,7 @@ class Simulation:
         # the reach test reads the body poses; it has something to leave out only with meshes
         self._poses = validate and bool(len(mesh_parts(built)))
         self._verts = [slice(c.vert_adr, c.vert_adr + c.count) for c in built.cables]   # each cable's, in order
+        self._twist = TwistReader(list(built.rods), [c.count for c in built.cables]) if built.rods else None
         self._end_bodies = np.array([[built.body_ids[c.start.body], built.body_ids[c.end.body]]
                                      for c in built.scene.cables], int).reshape(-1, 2)
         scene = built.scene
@@ -238,6 +243,8 @@ class Simulation:
     def state(self, step: int, contacts: bool) -> StepState:
         """The current state as a StepState (no stepping)."""
         d = self.data
+        # the clamping bodies' rotations at the start of the step just taken (the rods' reference is of then)
+        before = d.xmat[self._twist.bodies] if self._twist is not None else None
         # mj_step leaves positions (xpos, flexvert_xpos) from the start of the
         # step and qpos at its end: recompute them from qpos so the checker,
         # the detection model and the recording all see the same instant.
@@ -257,8 +264,9 @@ class Simulation:
         end_rot = d.xmat[self._end_bodies].reshape(-1, 2, 3, 3)
         hull = self.hull.raw(d) if self.hull is not None else None   # the last step's contacts, as they are
         bodies = (d.xpos.copy(), d.xmat.copy()) if self._poses else (None, None)
+        rod = self._twist.raw(d.plastic, before, d.xmat[self._twist.bodies]) if self._twist is not None else None
         return StepState(step, step * self.timestep, cables, poses, found, d.energy.copy(), d.qpos.copy(),
-                         end_rot, hull, *bodies, unstable=self.instability)
+                         end_rot, hull, *bodies, unstable=self.instability, rod=rod)
 
     def warnings(self) -> dict[str, int]:
         """MuJoCo warnings raised so far, by name, nonzero only."""

@@ -112,6 +112,10 @@ class Motion:
         self.base_qpos_adr = built.base_qpos_adr
         self.base_dof_adr = built.base_dof_adr
         self.base_qpos0 = built.model.qpos0[built.base_qpos_adr].copy()
+        # the clamped ends' hinges, held where they start their cables untwisted (cablecheck.build.untwist)
+        self._roll_qadr = np.array([r.qpos_adr for r in built.end_rolls], int)
+        self._roll_dadr = np.array([r.dof_adr for r in built.end_rolls], int)
+        self._roll = np.array([r.angle for r in built.end_rolls], float)
 
     def joint_values(self, times: np.ndarray, names: list[str]) -> np.ndarray:
         """(m, J) scripted values (MuJoCo units) of the driven joints `names` at `times` (m,)."""
@@ -133,6 +137,8 @@ class Motion:
         of steps' times at once)."""
         data.qpos[self.base_qpos_adr] = self.base_qpos0
         data.qvel[self.base_dof_adr] = 0.0
+        data.qpos[self._roll_qadr] = self._roll
+        data.qvel[self._roll_dadr] = 0.0
         data.qpos[self._joint_qadr] = value[self._joint_idx]
         data.qvel[self._joint_dadr] = rate[self._joint_idx]
         if len(self.bodies):

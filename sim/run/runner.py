@@ -43,11 +43,11 @@ from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
-
 from cablecheck.about import version
 from cablecheck.build.built import Built
 from cablecheck.build.cablephysics import COMPRESSION_TOLERANCE
 from cablecheck.build.checkview import OptionError
+from cablecheck.build.rodtwist import TwistReader
 from cablecheck.build.routecheck import route_warnings
 from cablecheck.build.stages import build_simulation, plan_cables, with_detection
 from cablecheck.build.static import build_static, needs_model
@@ -57,7 +57,7 @@ from cablecheck.checker.events import Event, EventTracker
 from cablecheck.checker.interference.margins import with_events
 from cablecheck.checker.records import PairType, Severity
 from cablecheck.checker.scene_state import CheckConfig
-from cablecheck.checker.twist import TwistMeter, update_many
+from cablecheck.checker.twist import RodTwistMeter, TwistMeter, update_many
 from cablecheck.checker.wear import CableWear, WearMap
 from cablecheck.detection.detector import Detector
 from cablecheck.report.baseline import BaselineError, compare, load_baseline
@@ -67,6 +67,7 @@ from cablecheck.report.document import (
     RunError,
     RunOutcome,
     Timing,
+    TwistProfile,
     failed_report,
     report_of,
     write_report,
@@ -355,7 +356,9 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
             for ev in events:  # each event still open at the end gets its one end entry
                 if id(ev) not in closed:
                     _log_end(recorder, ev, scene.scale, scene.units, at_end=True)
-            from cablecheck.record.clashes import summary_text  # loaded with the Recorder above
+            from cablecheck.record.clashes import (
+                summary_text,  # loaded with the Recorder above
+            )
 
             summary = summary_text(scene.name, settings, events, worn, scene.scale, complete,
                                    tuple(tracker.allowed.values()), excused, compared)
@@ -414,7 +417,7 @@ def _until(states: Iterator, stop: Callable[[], bool]) -> Iterator:
             return
 
 
-def _check_batch(batch: list, checks: StepChecks, out: "_Checked", timer: _Timer,
+def _check_batch(batch: list, checks: StepChecks, out: _Checked, timer: _Timer,
                  ahead: StepsAhead | None, watch: DivergenceWatch | None) -> PhysicsError | None:
     """Check a batch of states and take it in, up to its first diverged
     state (`cablecheck.run.divergence`), which is returned; the time since the last
@@ -466,13 +469,28 @@ class _Checked:
         self.steps = self.checked = 0
         self.t_last = 0.0
         self.clamped = [_clamped(c.start) and _clamped(c.end) for c in built.scene.cables]
-        self.twist: list[TwistMeter | None] = [None] * n
+        self.twist: list[TwistMeter | RodTwistMeter | None] = [None] * n
+        self.rods = TwistReader(list(built.rods), [c.count for c in built.cables]) if built.rods else None
 
     def take_twist(self, states) -> None:
-        """Each cable's twist over the batch (`cablecheck.checker.twist`), for cables
-        clamped at both ends; the first state (t = 0) is the reference."""
+        """Each cable's twist over the batch, in degrees (`batch_twist`):
+        with dynamics, as the simulated rod carries it (`RodTwistMeter`);
+        without, wound in by the frames of ends clamped at both ends
+        (`TwistMeter`; the first state, t = 0, is the reference)."""
         self.batch_twist = np.full((len(states), len(self.clamped)), np.nan)
-        if not states or states[0].end_rot is None:
+        if not states:
+            return
+        if states[0].rod is not None:
+            points = np.stack([np.concatenate(s.cables) for s in states])
+            twists = self.rods.read_many([s.rod for s in states], points, np.stack([s.qpos for s in states]))
+            for i, (rod, twist) in enumerate(zip(self.built.rods, twists)):
+                if rod is None:
+                    continue
+                if self.twist[i] is None:
+                    self.twist[i] = RodTwistMeter(rod.stiffness, rod.length)
+                self.batch_twist[:, i] = np.degrees(self.twist[i].take(twist))
+            return
+        if states[0].end_rot is None:
             return
         cables = [i for i, clamped in enumerate(self.clamped) if clamped]
         if not cables:
@@ -592,7 +610,10 @@ class _Checked:
                 final_points=np.asarray(self.final_points[i]) if self.final_points else None,
                 wear=wear[i],
                 max_twist=None if meter is None else float(meter.max_abs),
-                max_twist_moment=None if meter is None else _twist_moment(defn, c.radius, c.length, meter.max_abs)))
+                max_twist_moment=(None if meter is None else float(meter.max_moment.max(initial=0.0))
+                                  if isinstance(meter, RodTwistMeter)
+                                  else _twist_moment(defn, c.radius, c.length, meter.max_abs)),
+                twist=_twist_profile(meter, self.built.rods[i] if self.built.rods else None)))
         return tuple(out)
 
 
@@ -622,6 +643,13 @@ def _html_evidence(built: Built, events: tuple[Event, ...], keeper: EvidenceKeep
     return HtmlEvidence(clashes, pictures)
 
 
+def _twist_profile(meter, rod) -> TwistProfile | None:
+    """Where along the cable the simulated rod's twist was largest, or None (not simulated)."""
+    if not isinstance(meter, RodTwistMeter):
+        return None
+    return TwistProfile(rod.s, meter.max_moment, meter.max_rate)
+
+
 def _twist_moment(defn, radius: float, length: float, twist: float) -> float:
     """N m: G J twist / L, the torsional moment a straight cable of that
     twist (radians over the cable) carries, G the scene's `twist_stiffness`
@@ -631,12 +659,14 @@ def _twist_moment(defn, radius: float, length: float, twist: float) -> float:
     return float(shear * polar * twist / length)
 
 
-def _record_step(recorder: Recorder, state, res, started, closed, near: "_NearPairs", pending,
+def _record_step(recorder: Recorder, state, res, started, closed, near: _NearPairs, pending,
                  unit: float, units: str, sampled: bool = True) -> None:
     """One recorded frame: the step's clashes as marks, the pairs evaluated
     near the clearance (approach history), contacts, agreement, event entries
     (`started`: the events starting here, as they started)."""
-    from cablecheck.record.marks import Mark  # imported already by the run's Recorder (a recording run)
+    from cablecheck.record.marks import (
+        Mark,  # imported already by the run's Recorder (a recording run)
+    )
 
     marks = [Mark(PairType(r.type).value, r.a, r.b, float(r.min_distance), Severity(r.severity).value,
                   np.asarray(r.where), float(r.s), r.s_b) for r in res.records]
