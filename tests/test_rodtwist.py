@@ -12,6 +12,7 @@ from types import SimpleNamespace
 import mujoco
 import numpy as np
 import pytest
+
 from cablecheck.build.rodtwist import TwistReader
 from cablecheck.build.stages import build
 from cablecheck.build.untwist import start_state
@@ -165,3 +166,28 @@ def test_the_twist_read_is_the_states_own_as_mujocos_next_step_would_have_it(tmp
         assert np.abs(mine - theirs).max() < 1e-8
         late.append(np.abs(rod.twist(d.qpos, d.plastic) - theirs).max())
     assert max(late) > 1e-3
+
+
+@pytest.mark.parametrize("turn", [90.0, -720.0])
+def test_a_clip_turned_about_the_cable_twists_it_both_ways(turn, tmp_path):
+    """A clamped clip in the middle of a cable clamped to the world at both
+    ends, its body turned about the cable: each half carries G J theta over
+    its own span (between the clamped edges' and the clip edge's middles),
+    in opposite senses; the cable's twist end to end stays 0. (MuJoCo's rod
+    alone would let the clip's edge turn freely: no moment at all.)"""
+    scene = {"scene": {"name": "w", "units": "m", "duration": 0.8, "settle": 0.0},
+             "effects": {"dynamics": True, "gravity": False},
+             "bodies": [{"name": "mid", "pos": [0.25, 0, 0.3]}],
+             "cables": [{"name": "c", "radius": RADIUS, "start": {"pos": [0, 0, 0.3]}, "end": {"pos": [0.5, 0, 0.3]},
+                         "clips": [{"body": "mid", "pos": [0, 0, 0]}], "twist_stiffness": SHEAR}],
+             "motion": [{"body": "mid", "keys": [{"t": 0.0, "euler": [0, 0, 0]}, {"t": 0.4, "euler": [turn, 0, 0]}]}]}
+    built, _, states = _simulate(scene, tmp_path, every=80)
+    assert len(built.clip_rolls) == 1
+    s = built.cables[0].rest_s
+    edge = next(a.vertex for a in built.cables[0].attachments if a.kind == "clip")
+    middles = 0.5 * (s[[0, edge, len(s) - 2]] + s[[1, edge + 1, len(s) - 1]])
+    moment = built.rods[0].stiffness * states[-1].twist
+    before, after = moment[:edge - 1], moment[edge + 1:]
+    assert abs(np.degrees(states[-1].twist.sum())) < 1e-4     # the clip's equality gives 1e-7 rad
+    assert np.allclose(before, SHEAR * POLAR * np.radians(turn) / (middles[1] - middles[0]), rtol=3e-3)
+    assert np.allclose(after, -SHEAR * POLAR * np.radians(turn) / (middles[2] - middles[1]), rtol=3e-3)

@@ -106,6 +106,33 @@ class EndRoll:
 
 
 @dataclass(frozen=True, eq=False)
+class ClipRoll:
+    """A clamped clip's hold on the rod's roll (`cablecheck.run.cliphold`):
+    the equality on the twist joint of the clip's held edge, the body
+    holding it, where MuJoCo keeps that edge's reference frame, and the
+    vector fixed in the body that the edge's material frame follows (its
+    frame at t = 0, as the cable starts untwisted, `cablecheck.build.untwist`).
+
+    Attributes:
+      cable, window: the cable and the clip ("clip N").
+      equality: the equality's id (`cablecheck.build.mjspec.clip_roll_name`).
+      qpos_adr, dof_adr: the edge's twist joint.
+      body: the holding body's id.
+      frame: plastic address of the edge's reference frame (tangent, then vector).
+      local: (3,) the vector in the body's frame.
+    """
+
+    cable: str
+    window: str
+    equality: int
+    qpos_adr: int
+    dof_adr: int
+    body: int
+    frame: int
+    local: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
 class PartModel:
     """A structure part as built: one MuJoCo geom.
 
@@ -259,6 +286,8 @@ class Built:
     end_rolls: tuple[EndRoll, ...] = ()
     """The clamped ends' hinges and the angles that start their cables
     untwisted; the run holds them there (`cablecheck.run.motion`)."""
+    clip_rolls: tuple[ClipRoll, ...] = ()
+    """The clamped clips' holds on their cables' roll (`cablecheck.run.cliphold`)."""
     """Per cable, where its twist is in the simulation's state
     (`cablecheck.build.rodtwist.RodTwist`, or None); empty for a scene not
     simulated."""

@@ -43,6 +43,7 @@ import numpy as np
 from cablecheck.build.built import CABLE_PREFIX, end_roll_body
 from cablecheck.build.cablephysics import (
     CONTACT_SOLIMP,
+    EDGE_IMPEDANCE,
     contact_time_constant,
     edge_solimp,
     edge_time_constant,
@@ -55,6 +56,7 @@ from cablecheck.build.startframes import Frames
 from cablecheck.detection.mesh import add_surfaces
 from cablecheck.scene.errors import SceneError
 from cablecheck.scene.frames import euler_matrix
+from cablecheck.scene.format import Hold
 from cablecheck.scene.records import CableDef, PartDef, Scene
 
 BASE_ARMATURE = 100.0
@@ -226,6 +228,7 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
         for plan in plans:
             _hold_vertices(spec, plan, placed, rest)
             _add_end_roll(spec, plan, frames)
+            _add_clip_rolls(spec, plan, scene.timestep)
     try:
         model = spec.compile()
         if detect:  # concave meshes as their true surface, not MuJoCo's hull (cablecheck.detection.mesh)
@@ -352,6 +355,29 @@ def _add_end_roll(spec: mujoco.MjSpec, plan: CablePlan, frames: Frames) -> None:
     flex.vert = vert.ravel().tolist()
 
 
+def clip_roll_name(cable: str, window: str) -> str:
+    """The name of the equality that holds a clamped clip's roll (`_add_clip_rolls`)."""
+    return f"{CABLE_PREFIX}{cable}/{window} roll"
+
+
+def _add_clip_rolls(spec: mujoco.MjSpec, plan: CablePlan, timestep: float) -> None:
+    """An equality on the twist joint of each clamped clip's held edge, whose
+    angle the run sets every step so the edge's material frame follows the
+    clip's body (`cablecheck.run.cliphold`): MuJoCo's rod clamps the frames
+    of its first and last edges only. As stiff as the edges' equalities
+    (their time constant and impedance, `EDGE_IMPEDANCE` at every angle)."""
+    clips: dict[str, list[int]] = {}
+    for h in plan.held:
+        if h.kind == "clip" and h.hold == Hold.CLAMP:
+            clips.setdefault(h.window, []).append(h.vertex)
+    for window, vertices in clips.items():
+        spec.add_equality(name=clip_roll_name(plan.cable.name, window), type=mujoco.mjtEq.mjEQ_JOINT,
+                          objtype=mujoco.mjtObj.mjOBJ_JOINT,
+                          name1=f"{CABLE_PREFIX}{plan.cable.name}_twist_{min(vertices)}",
+                          solref=[edge_time_constant(timestep), 1.0],
+                          solimp=[EDGE_IMPEDANCE, EDGE_IMPEDANCE, 0.001, 0.5, 2.0])
+
+
 def _cables_xml(plans: list[CablePlan], scene: Scene, bits: ContactBits, detect: bool, margin: float) -> str:
     contype, conaff = cable_bits(scene, bits, detect)
     selfcollide = "auto" if (detect or "self" in scene.effects.contact) else "none"
@@ -421,3 +447,6 @@ def set_step(m: mujoco.MjModel, step: float, damping: dict[int, tuple[float, flo
     m.geom_solref[_friction_geoms(m), 0] = contact_time_constant(step)
     flex_eq = m.eq_type == int(mujoco.mjtEq.mjEQ_FLEX)
     m.eq_solref[flex_eq, 0] = edge_time_constant(step)
+    rolls = [i for i in range(m.neq) if (mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_EQUALITY, i) or "").startswith(
+        CABLE_PREFIX)]     # the clamped clips' (`_add_clip_rolls`)
+    m.eq_solref[rolls, 0] = edge_time_constant(step)

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+
 from cablecheck.checker.twist import carry_reference
 
 
@@ -44,6 +45,7 @@ class RodTwist:
     Attributes:
       joint_qpos: (edges,) qpos address of each edge's twist joint; -1 for
         an edge clamped by a body (no joint, angle 0).
+      joint_dof: (edges,) its dof address, -1 likewise.
       held_body: (edges,) the body whose turn a clamped edge's frame follows, -1 for the others.
       vertices: the cable's vertices in `mjData.flexvert_xpos`.
       frames: plastic addresses of the edges' reference frames (tangent, vector: six numbers an edge).
@@ -56,6 +58,7 @@ class RodTwist:
     """
 
     joint_qpos: np.ndarray
+    joint_dof: np.ndarray
     held_body: np.ndarray
     vertices: slice
     frames: slice
@@ -165,15 +168,16 @@ def rod_twist(m: mujoco.MjModel, flex_id: int, rest_s: np.ndarray, shear: float,
     flex = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_FLEX, flex_id)
     names = [f"{flex}_twist_{e}" for e in range(edges - 1)] + [f"{flex}_twist"]
     joint_qpos = np.full(edges, -1, int)
+    joint_dof = np.full(edges, -1, int)
     for e, name in enumerate(names):
         j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)
         if j >= 0:
-            joint_qpos[e] = int(m.jnt_qposadr[j])
+            joint_qpos[e], joint_dof[e] = int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
     first = int(m.flex_vertadr[flex_id])
     edge_body = m.flex_vertbodyid[first:first + edges]
     held_body = np.where(joint_qpos < 0, edge_body, -1).astype(int)
     start = adr + 6 * edges
     half = 0.5 * (np.diff(rest_s)[:-1] + np.diff(rest_s)[1:])
     polar = np.pi * radius ** 4 / 2.0
-    return RodTwist(joint_qpos, held_body, slice(first, first + edges + 1), slice(adr, start),
+    return RodTwist(joint_qpos, joint_dof, held_body, slice(first, first + edges + 1), slice(adr, start),
                     slice(start, start + edges - 1), shear * polar / half, half, np.asarray(rest_s[1:-1], float))

@@ -38,13 +38,13 @@ from cablecheck.build.obstacles import Obstacles
 from cablecheck.build.pinch import contacts_at, held_pinch
 from cablecheck.build.rodtwist import rod_twist
 from cablecheck.build.startframes import Frames, part_meshes, scene_origin
-from cablecheck.build.untwist import untwist_ends
 from cablecheck.build.substeps import (
     MAX_SUBSTEPS,
     choose_substeps,
     script_poses,
     tunnel_warnings,
 )
+from cablecheck.build.untwist import clip_rolls, untwist_ends
 from cablecheck.scene.records import Scene
 
 
@@ -78,6 +78,7 @@ def build_simulation(scene: Scene, planned: tuple) -> Built:
     if scene.effects.dynamics:
         read = replace(read, rods=cable_rods(read))
         read = replace(read, end_rolls=untwist_ends(read, list(read.rods)))
+        read = replace(read, clip_rolls=clip_rolls(read, list(read.rods)))
     poses = script_poses(read) if scene.effects.dynamics else None
     substeps = choose_substeps(read, poses)
     set_step(sim, substeps.step, cable_damping(read))

@@ -14,6 +14,11 @@ end's held edge by that angle, measured on the compiled model at t = 0.
 MuJoCo restarts the reference frames from the first edge at
 `mj_resetData`, so the state a run starts from is the one measured here.
 
+A clamped clip holds the roll of its short held edge, in the middle of the
+cable, where MuJoCo's rod has a free twist joint: `clip_rolls` fixes in the
+holding body the edge's material vector at t = 0, which the run then keeps
+the edge's frame on (`cablecheck.run.cliphold`).
+
 This module does not read twist during a run (see `cablecheck.build.rodtwist`
 and `cablecheck.run.runner`).
 """
@@ -23,8 +28,12 @@ from __future__ import annotations
 from dataclasses import replace
 
 import mujoco
-from cablecheck.build.built import Built, EndRoll
+import numpy as np
+
+from cablecheck.build.built import Built, ClipRoll, EndRoll
+from cablecheck.build.mjspec import clip_roll_name
 from cablecheck.build.rodtwist import RodTwist
+from cablecheck.scene.format import Hold
 
 PROBE_STEP = 1e-12
 """Seconds: the step `start_state` takes to have MuJoCo set the rods' frames."""
@@ -77,3 +86,36 @@ def untwist_ends(built: Built, rods: list[RodTwist | None]) -> tuple[EndRoll, ..
             raise RuntimeError(f"cable {r.cable!r}: turning its clamped end by {r.angle:.6g} rad left "
                                f"{left:.3g} rad of twist at t = 0")
     return rolls
+
+
+def clip_rolls(built: Built, rods: list[RodTwist | None]) -> tuple[ClipRoll, ...]:
+    """Each clamped clip's hold on its cable's roll: the twist joint of its
+    held edge and the edge's material vector at t = 0 (`start_state`, the
+    cable untwisted) in the frame of the body holding it."""
+    pending = []
+    for c, rod in zip(built.cables, rods):
+        if rod is None:
+            continue
+        clips: dict[str, list[int]] = {}
+        for a in c.attachments:
+            if a.kind == "clip" and a.hold == Hold.CLAMP:
+                clips.setdefault(a.window, []).append(a.vertex)
+        for window, vertices in clips.items():
+            edge = min(vertices)
+            if rod.joint_qpos[edge] >= 0:
+                body = next(a.body for a in c.attachments if a.window == window)
+                pending.append((c.name, window, rod, edge, built.body_ids[body]))
+    if not pending:
+        return ()
+    d = start_state(built)
+    out = []
+    for cable, window, rod, edge, body in pending:
+        frame = rod.frames.start + 6 * edge
+        t, u = d.plastic[frame:frame + 3], d.plastic[frame + 3:frame + 6]
+        theta = float(d.qpos[rod.joint_qpos[edge]])
+        material = np.cos(theta) * u + np.sin(theta) * np.cross(t, u)
+        local = d.xmat[body].reshape(3, 3).T @ material
+        eq = mujoco.mj_name2id(built.model, mujoco.mjtObj.mjOBJ_EQUALITY, clip_roll_name(cable, window))
+        out.append(ClipRoll(cable, window, eq, int(rod.joint_qpos[edge]), int(rod.joint_dof[edge]), body, frame,
+                            local))
+    return tuple(out)

@@ -29,11 +29,13 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+
 from cablecheck.build.built import Built, mesh_parts
 from cablecheck.build.rodtwist import RodRaw, TwistReader
 from cablecheck.detection.contacts import Contacts
 from cablecheck.detection.detector import Detector
 from cablecheck.detection.hullgap import HullRaw, HullReader
+from cablecheck.run.cliphold import ClipHold
 from cablecheck.run.divergence import BAD_WARNINGS, Instability
 from cablecheck.run.motion import Motion
 
@@ -122,6 +124,7 @@ class Simulation:
         # the reach test reads the body poses; it has something to leave out only with meshes
         self._poses = validate and bool(len(mesh_parts(built)))
         self._verts = [slice(c.vert_adr, c.vert_adr + c.count) for c in built.cables]   # each cable's, in order
+        self.clips = ClipHold(built)       # clamped clips hold the rod's roll
         self._twist = TwistReader(list(built.rods), [c.count for c in built.cables]) if built.rods else None
         self._end_bodies = np.array([[built.body_ids[c.start.body], built.body_ids[c.end.body]]
                                      for c in built.scene.cables], int).reshape(-1, 2)
@@ -188,6 +191,7 @@ class Simulation:
             if self.unstable() is not None:
                 return
             self.motion.apply(d, 0.0, frozen=True)  # exactly where the script holds them
+            self.clips.hold(self.model, d)
             kinetic = float(d.energy[1])  # at the start of the step just taken
             if kinetic < previous:  # past a peak
                 d.qvel[:] = 0.0
@@ -210,7 +214,7 @@ class Simulation:
         dynamics = self.built.scene.effects.dynamics
         if dynamics:
             self.motion.apply(self.data, 0.0)  # settling froze the targets' velocity
-        apply, sub = self.motion.apply_values, self.substeps
+        apply, sub, hold = self.motion.apply_values, self.substeps, self.clips.hold
         for first in range(1, self.total_steps + 1, SCRIPT_BLOCK):
             # the script at every time the block's steps set it, in one evaluation
             ks = np.arange(first, min(first + SCRIPT_BLOCK, self.total_steps + 1))
@@ -228,11 +232,14 @@ class Simulation:
                     for _ in range(1, sub):
                         mujoco.mj_step(self.model, self.data)
                         apply(self.data, value[row], rate[row])
+                        hold(self.model, self.data)
                         row += 1
                     mujoco.mj_step(self.model, self.data)
                 else:
                     row += sub - 1
                 apply(self.data, value[row], rate[row])
+                if dynamics:
+                    hold(self.model, self.data)
                 row += 1
                 if dynamics and self.unstable() is not None:
                     yield self.state(k, contacts)

@@ -43,6 +43,7 @@ from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
+
 from cablecheck.about import version
 from cablecheck.build.built import Built
 from cablecheck.build.cablephysics import COMPRESSION_TOLERANCE
