@@ -408,6 +408,20 @@ def test_the_wear_map_is_in_the_report_and_the_recording(pinch):
     assert len(strip["LineStrips3D:colors"]) == n
 
 
+def test_the_twist_along_each_cable_is_in_the_report_and_the_recording(pinch):
+    """With dynamics, the report's twist along the cable (per interior vertex)
+    is charted in the recording: a bar per vertex at its arc length."""
+    report, record = pinch
+    cable = report["cables"][0]
+    assert cable["twist_from"] == "rod"
+    twist = cable["twist"]
+    assert len(twist["s"]) == cable["segments"] - 1 == len(twist["max_moment"]) == len(twist["max_rate"])
+    assert cable["max_twist_moment"] == max(twist["max_moment"])
+    (bars,) = _rows(record, "/twist/loop/max_moment")
+    values = np.concatenate([np.asarray(v["buffer"], float).ravel() for v in bars["BarChart:values"]])
+    assert np.allclose(values, twist["max_moment"])
+
+
 class _Wear:
     def __init__(self, name, sliding, contact_time):
         self.name, self.sliding, self.contact_time = name, np.asarray(sliding, float), np.asarray(contact_time, float)

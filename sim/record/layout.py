@@ -84,12 +84,14 @@ class Extent:
       lowest_distance: the lowest pair distance plotted (scene units), or None.
       series_roots: the first levels of every series path (`checks`, `joints`, ...).
       twist: whether any cable's twist is plotted.
+      twisted: the cables whose twist along them is charted (`twist/<name>/max_moment`).
     """
 
     bounds: tuple[np.ndarray, np.ndarray]
     lowest_distance: float | None
     series_roots: frozenset[str]
     twist: bool
+    twisted: tuple[str, ...] = ()
 
 
 def _eye(bounds, target: np.ndarray, distance: float, unit: float) -> rrb.EyeControls3D:
@@ -152,6 +154,8 @@ def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance:
           for root in sorted(extent.series_roots - {"checks", "cables", "validation"})],
         *[rrb.BarChartView(name=f"Wear {w.name}: {m} per bin ({unit_})", origin=f"wear/{escape(w.name)}/{m}")
           for w in wear for m, unit_ in (("contact_time", "s"), ("sliding", units), ("bend_cycles", "cycles"))],
+        *[rrb.BarChartView(name=f"Twist {name}: largest moment along it (N m; {units} from its start)",
+                           origin=f"twist/{escape(name)}/max_moment") for name in extent.twisted],
     ]
     columns = [c for c in CLASH_COLUMNS if status or c != "status"]
     headers = clash_headers(units, max(map(len, short_pairs(events, names)), default=0))

@@ -39,7 +39,7 @@ from cablecheck.record.marks import ClashMarks, Mark
 from cablecheck.record.scene import SceneGeometry
 from cablecheck.record.series import SeriesSet, send_limit_lines
 from cablecheck.record.style import CONTACT_COLOUR, cable_colour, escape, pair_path, pair_text
-from cablecheck.record.wearview import WearScale, send_wear, wear_scale
+from cablecheck.record.wearview import WearScale, send_bars, send_wear, wear_scale
 
 
 @cache
@@ -106,6 +106,7 @@ class Recorder:
         self._event_joints: list[dict] = []
         self._event_status: list[str] | None = None
         self._wear: list = []
+        self._twist: list = []
         self._summary = ""
 
     # -- static content ---------------------------------------------------
@@ -200,12 +201,15 @@ class Recorder:
 
     # -- at the end -------------------------------------------------------
     def finish(self, events: list, wear: list, summary: str, joints: list[dict] | None = None,
-               status: list[str] | None = None) -> None:
+               status: list[str] | None = None, twist: list | None = None) -> None:
         """The run's events (clash list and viewpoints), wear map
         (:class:`cablecheck.checker.wear.CableWear` per cable), summary text and, where
         the mjcf model's joints move, each event's joint values at its worst
-        time (name -> value, in the events' order) and, against a baseline
-        run, each event's status (new or present)."""
+        time (name -> value, in the events' order), against a baseline
+        run, each event's status (new or present), and per cable the
+        simulated rod's twist along it (`cablecheck.report.document.TwistProfile`
+        or None)."""
+        self._twist = list(twist or [])
         self._events = list(events)
         self._event_status = status
         self._wear = list(wear)
@@ -244,12 +248,16 @@ class Recorder:
                         names)
         scale = self.wear_scale()
         send_wear(rec, self.built, self._wear, self._rest, self.unit, scale, self._touched_parts())
+        twisted = tuple(c.name for c, p in zip(self.built.cables, self._twist) if p is not None and len(p.s))
+        for c, p in zip(self.built.cables, self._twist):
+            if p is not None and len(p.s):
+                send_bars(rec, f"twist/{escape(c.name)}/max_moment", p.s / self.unit, p.max_moment)
         doc = rr.TextDocument
         rec.send_columns("summary", indexes=[sim_time(np.zeros(1))],
                          columns=[column(doc.descriptor_text(), strings([self._summary])),
                                   column(doc.descriptor_media_type(), strings(["text/markdown"]))])
         extent = Extent(bounds, self.series.lowest("checks/"), frozenset(p.split("/")[0] for p in self.series.series),
-                        any(p.startswith("cables/twist/") for p in self.series.series))
+                        any(p.startswith("cables/twist/") for p in self.series.series), twisted)
         rec.send_blueprint(blueprint(self.built, self._events, self._wear, extent, self.settings.clearance, scale,
                                      self.unit, self.settings.units, self._event_status is not None, names),
                            make_active=True, make_default=True)

@@ -152,6 +152,18 @@ def tensor_1d(values: np.ndarray) -> pa.StructArray:
     return pa.Array.from_buffers(dt, 1, [None], children=[shape, names, buffer])
 
 
+def send_bars(rec: rr.RecordingStream, path: str, at: np.ndarray, values: np.ndarray) -> None:
+    """A bar chart of `values` at the positions `at` along a cable, one static
+    chunk (each bar as wide as the gap to the next, the last as the one before)."""
+    at = np.asarray(at, float)
+    gaps = np.diff(at)
+    widths = np.append(gaps, gaps[-1] if len(gaps) else 1.0)
+    bar = rr.BarChart
+    rec.send_columns(path, indexes=[], columns=[
+        column(bar.descriptor_values(), tensor_1d(values)), column(bar.descriptor_abscissa(), tensor_1d(at)),
+        column(bar.descriptor_widths(), floats(widths, np.float32), [len(widths)])])
+
+
 def send_wear(rec: rr.RecordingStream, built: Built, wear: list, rest: list[np.ndarray] | None,
               unit: float, scale: WearScale, part_shapes: dict | None = None) -> None:
     """Each cable's wear (:class:`cablecheck.checker.wear.CableWear`): colour along its rest

@@ -369,7 +369,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
                 summary += f"\n\n**{stopped[1]}**\n"
             recorder.finish(list(events), worn, summary,
                             None if event_joints is None else [f["joints"] for f in event_joints],
-                            None if compared is None else [s.value for s in compared.status])
+                            None if compared is None else [s.value for s in compared.status],
+                            out.twist_profiles())
             recorder.close()
             timer.lap("record")
         loop_s = time.perf_counter() - loop_start
@@ -593,9 +594,15 @@ class _Checked:
                            f"compression)")
         return tuple(out)
 
+    def twist_profiles(self) -> list[TwistProfile | None]:
+        """Per cable, the simulated rod's twist along it (None: not simulated)."""
+        rods = self.built.rods or (None,) * len(self.twist)
+        return [_twist_profile(meter, rod) for meter, rod in zip(self.twist, rods)]
+
     def cables(self, wear: list[CableWear]) -> tuple[CableOutcome, ...]:
         """Each cable over the checked steps, with its wear map."""
         checked = self.checked > 0
+        profiles = self.twist_profiles()
         out = []
         for i, (c, defn) in enumerate(zip(self.built.cables, self.built.scene.cables)):
             limit = c.min_bend_radius
@@ -614,7 +621,7 @@ class _Checked:
                 max_twist_moment=(None if meter is None else float(meter.max_moment.max(initial=0.0))
                                   if isinstance(meter, RodTwistMeter)
                                   else _twist_moment(defn, c.radius, c.length, meter.max_abs)),
-                twist=_twist_profile(meter, self.built.rods[i] if self.built.rods else None)))
+                twist=profiles[i]))
         return tuple(out)
 
 
