@@ -299,11 +299,16 @@ def chain(m, first: str, last: str) -> list[int]:
 
 
 def held_clearance(m, d, held: list[tuple[str, np.ndarray]]) -> float:
-    """The least distance (m) from each held point (body, world point) to the
-    collision geometry (vertices, primitives' box corners) of every other body:
-    an end or clip inside a neighbouring link (its convex hull, as MuJoCo
-    collides it: -1) is
-    a design error no route check sees (it excuses the attachment zones)."""
+    """The least clearance (m) of each held point (body, world point) from the
+    collision geometry of every other body, as MuJoCo collides it (the convex
+    hull of its vertices, of a primitive's box corners): the largest of the
+    point's distances to the hull's face planes, the distance itself where
+    the nearest point of the hull is on a face and less elsewhere, negative
+    inside (the depth). An end or clip in or against a neighbouring link is
+    a design error no route check sees (it excuses the attachment zones).
+    (Until 2026-11-28 this took the distance to the nearest hull vertex, so
+    a point 12 mm from every vertex of a wrist's hull passed while the hose
+    there lay 4.6 mm inside its face.)"""
     from scipy.spatial import ConvexHull
 
     least = math.inf
@@ -317,8 +322,7 @@ def held_clearance(m, d, held: list[tuple[str, np.ndarray]]) -> float:
         for name, p in held:
             if m.body(name).id == b:
                 continue
-            inside = bool(np.all(planes[:, :3] @ p + planes[:, 3] <= 0))
-            least = min(least, -1.0 if inside else float(np.min(np.linalg.norm(world - p, axis=1))))
+            least = min(least, float(np.max(planes[:, :3] @ p + planes[:, 3])))
     return least
 
 
