@@ -28,6 +28,13 @@ physics_validation.py tabulates them per element count (docs/physics.md).
 - `straight_buckling`: a perfectly straight rod whose end is pushed in past
   its buckling load, gravity off; whether and how it buckles (mid
   deflection and end force against the clamped elastica, least strain).
+- `twisted_buckling`: `straight_buckling`'s rod, buckled, then one clamped end
+  turned about the chord; how far the bow winds out of its plane (the angle
+  about the chord between its deflections at a quarter and three quarters of
+  its length), its twist read from the simulated rod.
+- `twisted_hose`: a slack hose clamped level at both ends, settled under
+  gravity, then one end turned about the chord; how far it whirls about the
+  chord (the same angle), its twist read from the simulated rod.
 - `plate`: a plate lifted through a sagging cable; whether it carries it.
 - `resting`: a cable laid on a floor or over a drum under gravity; its settled
   gap to the surface as a fraction of its radius.
@@ -47,6 +54,7 @@ import numpy as np
 
 from cablecheck.bench import reference
 from cablecheck.build.built import CABLE_PREFIX
+from cablecheck.build.rodtwist import TwistReader
 from cablecheck.build.stages import build, cable_damping
 from cablecheck.run.loop import Simulation
 from cablecheck.scene.load import parse_scene
@@ -497,3 +505,184 @@ def resting(radius: float, units: str = "m", shape: str = "box", duration: float
     return _result(f"resting on a {'drum' if shape == 'cylinder' else shape}", built.cables[0].elements,
                    float(gap.mean()), None, wall, built, sim, least=float(gap.min()), largest=float(gap.max()),
                    radius=radius, units=units, touching=int(len(gap)))
+
+
+def _rod_twist(built, states: list) -> np.ndarray:
+    """The first cable's twist end to end (radians, the sum over its interior vertices as
+    `cablecheck.build.rodtwist.TwistReader` reads it from the simulated rod) at each of `states`."""
+    reader = TwistReader(list(built.rods), [c.count for c in built.cables])
+    twist = reader.read_many([s.rod for s in states], np.stack([np.concatenate(s.cables) for s in states]),
+                             np.stack([s.qpos for s in states]))[0]
+    return np.zeros(len(states)) if twist is None else twist.sum(axis=1)
+
+
+def _about_chord(pts: np.ndarray, u: float) -> np.ndarray:
+    """The offset from the chord (the line through the ends of `pts`) of the point at `u` of
+    the polyline's length (0 start, 1 end; linearly between its points), square to the chord."""
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+    p = np.array([np.interp(u * arc[-1], arc, pts[:, k]) for k in range(3)])
+    axis = (pts[-1] - pts[0]) / np.linalg.norm(pts[-1] - pts[0])
+    rel = p - pts[0]
+    return rel - (rel @ axis) * axis
+
+
+def _angle_about(axis: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    """Signed angle from `a` to `b` about `axis` (right-handed), radians."""
+    axis = axis / np.linalg.norm(axis)
+    return float(np.arctan2(np.cross(a, b) @ axis, a @ b))
+
+
+def twist_shape(pts: np.ndarray) -> dict:
+    """What a twisted rod's shape shows about its chord (x of `pts`' ends): `mid` the mid-span
+    offset from the chord (m) and `quarters` the angle (radians) about the chord from the offset
+    at a quarter of the length to the one at three quarters (0 for a bow in one plane; the same
+    whatever the whole shape's turn about the chord)."""
+    axis = pts[-1] - pts[0]
+    q1, q3 = _about_chord(pts, 0.25), _about_chord(pts, 0.75)
+    return dict(mid=_about_chord(pts, 0.5), quarters=_angle_about(axis, q1, q3))
+
+
+TWIST_TURN = 1.0
+"""Seconds `twisted_buckling` turns its end over (three turns: 19 rad/s, well below the buckled rod's
+first mode, about 150 rad/s; twice as fast or half changes its angles by well under a degree)."""
+
+
+def twisted_buckling(turns: float = 3.0, shortening: float = 0.03, elements: int | None = None,
+                     push: float = 0.2, hold: float = 0.4, turn: float = TWIST_TURN, settle: float = 0.4,
+                     rod: dict = ROD, twist_stiffness: float | None = None, every: int = 5) -> Result:
+    """`straight_buckling`'s rod (`rod`, gravity off) with its end pushed in `shortening` of its
+    length over `push` s and held until `hold` s (bowed and still by then: the cable model has no
+    imperfection to grow from, the route's bends it at once), then the end body turned `turns`
+    full turns about the chord (the rod's axis, x) at constant rate over `turn` s, then held
+    `settle` s (its shape no longer moves: the turn is slow enough to be quasi-static).
+    `twist_stiffness` the rod's shear modulus G (Pa; None: the cable model's E / 2).
+
+    Measured: the bow's out-of-plane angle, degrees: the angle about the chord from the
+    deflection (offset from the chord) at a quarter of the length to the one at three quarters,
+    at the end (0 in the buckling plane; `twist_shape`; unwrapped from sample to sample). The problem is the same turned about the
+    chord (the clamps hold positions and the chord's direction, and a rigid turn of the whole
+    shape about the chord changes neither bending nor twist), so how far the mid-span deflection
+    turns from the buckling plane is not set by the statics, only by how the motion drifts along
+    that free turn; it is in `extra` as `mid_angle` (degrees) but the quarters' angle is the
+    shape's own. `extra`: mid-span deflection before the turns and at the end (m), the
+    largest over the run of the quarters' angle, the rod's twist end to end (degrees, read
+    from the simulated rod) and the writhe left of the ends' link (turns x 360 less the twist),
+    the least strain over the run."""
+    length = rod["length"]
+    end = [(1.0 - shortening) * length, 0, 1]
+    keys = [{"t": 0.0, "pos": [length, 0, 1], "euler": [0, 0, 0]}, {"t": push, "pos": end, "euler": [0, 0, 0]},
+            {"t": hold, "pos": end, "euler": [0, 0, 0]},
+            {"t": hold + turn, "pos": end, "euler": [360.0 * turns, 0, 0]}]
+    cable = {"name": "rod", "radius": rod["radius"], "start": {"pos": [0, 0, 1]},
+             "end": {"body": "b", "pos": [0, 0, 0]}, "young": rod["young"], "density": rod["density"]}
+    if elements:
+        cable["segments"] = elements
+    if twist_stiffness is not None:
+        cable["twist_stiffness"] = twist_stiffness
+    duration = hold + turn + settle
+    scene = _scene({"scene": {"name": "twisted", "units": "m", "duration": duration, "settle": 0.0,
+                              "timestep": 0.002},
+                    "effects": {"gravity": False}, "bodies": [{"name": "b", "pos": [length, 0, 1]}],
+                    "motion": [{"body": "b", "keys": keys, "interpolation": "linear"}], "cables": [cable]})
+    built = build(scene, detect=False)
+    sim = Simulation(built)
+    sim.reset()
+    c = built.cables[0]
+    t0 = time.perf_counter()
+    states = list(sim.steps(contacts=False, every=every))
+    wall = (time.perf_counter() - t0) / duration
+    twist = _rod_twist(built, states)
+    before = max((s for s in states if s.t <= hold + 1e-9), key=lambda s: s.t)
+    bow = twist_shape(before.cables[0])["mid"]
+    shapes = [twist_shape(s.cables[0]) for s in states]
+    last = shapes[-1]
+    quarters = np.degrees(np.unwrap([sh["quarters"] for sh in shapes]))
+    axis = states[-1].cables[0][-1] - states[-1].cables[0][0]
+    strains = [np.linalg.norm(np.diff(s.cables[0], axis=0), axis=1).sum() / c.length - 1.0 for s in states]
+    return _result(f"twisted buckled rod {turns:g} turns", c.elements, quarters[-1], None, wall,
+                   built, sim, mid_angle=float(np.degrees(_angle_about(axis, bow, last["mid"]))),
+                   largest=float(np.abs(quarters).max()),
+                   deflection_before=float(np.linalg.norm(bow)), deflection=float(np.linalg.norm(last["mid"])),
+                   twist=float(np.degrees(twist[-1])), writhe=float(360.0 * turns - np.degrees(twist[-1])),
+                   least=float(min(strains)), final=float(strains[-1]), turn=turn, hold=hold, settle=settle)
+
+
+HOSE = dict(length=0.5, radius=0.004)
+"""The hose of `twisted_hose` (benchmarks/elastica_peer.py's): young, density and damping the
+scene defaults."""
+
+HOSE_TURN = 4.0
+"""Seconds `twisted_hose` turns its end over (four turns: 6.3 rad/s; three times slower gives the same
+end state, in PyElastica too)."""
+
+
+def twisted_hose(turns: float = 4.0, slack: float = 0.2, elements: int | None = None, turn: float = HOSE_TURN,
+                 hold: float = 3.0, settle: float = 3.0, hose: dict = HOSE, twist_stiffness: float | None = None,
+                 approach: float | None = None, wait: float = 2.0, every: int = 5) -> Result:
+    """A hose (`hose`; the scene's default modulus, density and damping) clamped level (tangent
+    +x) at both ends, its span its length over 1 + `slack`, gravity on, settled `settle` s (the
+    scene's settling: kinetic damping to the static sag), then its end body turned `turns` full
+    turns about the chord (x) at constant rate over `turn` s and held `hold` s.
+    `twist_stiffness` the hose's shear modulus G (Pa; None: the cable model's E / 2).
+    `approach` (a slack, e.g. 0.03): the end instead starts at the span of that slack, is settled
+    there, moved in to the span over 1 s at constant speed and held `wait` s before the turns
+    (a diagnostic: at commit 6074e19 MuJoCo kept no twist state for a rod clamped at both ends
+    and routed with more than a few % of slack along its chord, so its turned end wound nothing;
+    one routed with less keeps its twist state as its ends close in; tests/test_twisted_rods.py).
+
+    Measured: the hose's whirl about the chord at the end, degrees: the angle about the chord
+    (right-handed about +x) from the sag (offset from the chord) at a quarter of the length to
+    the one at three quarters (`twist_shape`; 0 while it hangs in one plane; unwrapped from sample
+    to sample). `extra`: `whirl`,
+    the angle of the mid-span sag from straight down at the end (degrees; a hose symmetric end
+    for end can only hang (0) or stand (180) there: turning the whole problem half a turn about
+    the vertical through the middle swaps its ends and leaves it the same, so the mid-span's
+    sideways offset is 0 unless the symmetry breaks), the largest |whirl| over the run (unwrapped
+    from sample to sample), the largest |quarters' angle|, the mid-span sag before the turns and
+    at the end (m), the twist end to end read from the simulated rod and the writhe left of the
+    link (degrees), the least strain, the first mode as the cable model holds it (rad/s,
+    `cable_damping`) and the shape before the turns (`rest`, (count, 3) m)."""
+    span = hose["length"] / (1.0 + slack)
+    x0 = span if approach is None else hose["length"] / (1.0 + approach)
+    t0 = 0.0 if approach is None else 1.0 + wait
+    keys = [{"t": 0.0, "pos": [x0, 0, 1], "euler": [0, 0, 0]}]
+    if approach is not None:
+        keys += [{"t": 1.0, "pos": [span, 0, 1], "euler": [0, 0, 0]}, {"t": t0, "pos": [span, 0, 1], "euler": [0, 0, 0]}]
+    keys.append({"t": t0 + turn, "pos": [span, 0, 1], "euler": [360.0 * turns, 0, 0]})
+    cable = {"name": "hose", "radius": hose["radius"], "start": {"pos": [0, 0, 1], "tangent": [1, 0, 0]},
+             "end": {"body": "b", "pos": [0, 0, 0], "tangent": [1, 0, 0]}, "length": hose["length"]}
+    if elements:
+        cable["segments"] = elements
+    if twist_stiffness is not None:
+        cable["twist_stiffness"] = twist_stiffness
+    duration = t0 + turn + hold
+    scene = _scene({"scene": {"name": "hose", "units": "m", "duration": duration, "settle": settle,
+                              "timestep": 0.002},
+                    "bodies": [{"name": "b", "pos": [x0, 0, 1]}],
+                    "motion": [{"body": "b", "keys": keys, "interpolation": "linear"}], "cables": [cable]})
+    built = build(scene, detect=False)
+    sim = Simulation(built)
+    sim.reset()
+    sim.settle()
+    c = built.cables[0]
+    t_start = time.perf_counter()
+    states = list(sim.steps(contacts=False, every=every))
+    wall = (time.perf_counter() - t_start) / duration
+    twist = _rod_twist(built, states)
+    before = max((s for s in states if s.t <= t0 + 1e-9), key=lambda s: s.t)
+    turning = [s for s in states if s.t >= t0 - 1e-9]
+    down = np.array([0.0, 0.0, -1.0])
+    shapes = [twist_shape(s.cables[0]) for s in turning]
+    whirl = np.unwrap([_angle_about(s.cables[0][-1] - s.cables[0][0], down, sh["mid"])
+                       for s, sh in zip(turning, shapes)])
+    strains = [np.linalg.norm(np.diff(s.cables[0], axis=0), axis=1).sum() / c.length - 1.0 for s in states]
+    quarters = np.degrees(np.unwrap([sh["quarters"] for sh in shapes]))
+    return _result(f"twisted hose {turns:g} turns", c.elements, quarters[-1], None, wall,
+                   built, sim, whirl=float(np.degrees(whirl[-1])), largest_whirl=float(np.degrees(np.abs(whirl).max())),
+                   largest=float(np.abs(quarters).max()),
+                   sag_before=float(np.linalg.norm(twist_shape(before.cables[0])["mid"])),
+                   sag=float(np.linalg.norm(shapes[-1]["mid"])), twist=float(np.degrees(twist[-1])),
+                   writhe=float(360.0 * turns - np.degrees(twist[-1])), least=float(min(strains)),
+                   span=span, young=scene.cables[0].young, density=scene.cables[0].density,
+                   damping=scene.cables[0].damping, turn=turn, hold=hold, settle=settle,
+                   first_mode=cable_damping(built)[c.flex_id][1], rest=before.cables[0].copy())
