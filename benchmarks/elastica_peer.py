@@ -21,6 +21,18 @@ the same definition (geometry, material, gravity, duration, damping ratio):
   mid deflection against the clamped elastica, end forces in the note.
 - `catenary`: the limp cable of `reference.CATENARY` between two points
   (`physics_cases.catenary`); sag against the catenary.
+- `twisted_buckling`: the buckled rod above, then its pushed end turned three
+  turns about the chord (`physics_cases.twisted_buckling`); the angle about
+  the chord between the bow's deflections at L/4 and 3L/4.
+- `twisted_hose`: the hose (`HOSE`) clamped level at both ends 20 % slack,
+  settled under gravity, then one end turned four turns about the chord
+  (`physics_cases.twisted_hose`); the same angle of its sag.
+
+Both twisted problems use PyElastica's shear modulus, G = E / 3 (its Poisson
+ratio 0.5), for the twist in both models: the cable's `twist_stiffness` is
+set to E / 3 (the cable model's own default is E / 2). A turned clamp in
+PyElastica is a constraint of our own (`_turned_ends`) that turns the end
+element's directors about the chord and sets its omega to match.
 
 How PyElastica is set up: `CosseratRod.straight_rod` (Poisson ratio 0.5, its
 default), `OneEndFixedBC` or `FixedConstraint` for clamps and pins (a
@@ -48,6 +60,7 @@ from cablecheck.bench import physics_cases as cases
 from cablecheck.bench import reference
 from cablecheck.build.stages import build, cable_damping
 from cablecheck.run.loop import Simulation
+from cablecheck.scene.format import DEFAULT_YOUNG
 from cablecheck.scene.load import parse_scene
 
 try:
@@ -65,15 +78,17 @@ STIFF = 1e8
 """Stretch and shear modulus (Pa) of the limp catenary in PyElastica (its 1 Pa `young` only bends it):
 under its largest tension, about 0.5 N, it stretches 1e-4."""
 
-ELEMENTS = dict(frequency=80, hose=80, buckling=80, catenary=80)
+ELEMENTS = dict(frequency=80, hose=80, buckling=80, catenary=80, twisted_buckling=80, twisted_hose=80)
 """PyElastica's elements per case. Its clamp holds the first element's directors, so a clamped rod
 bends from about half an element in: its cantilever frequency comes out 5.1 / 2.4 / 1.2 % high at
 20 / 40 / 80 elements, and its hose tip path 6.6 / 3.0 / 1.3 % of the length from the cable
 model's (measured 2026-11-28); 80 keeps each case under about 40 s CPU. The cable model runs at
 its cases' own counts (`CABLE_ELEMENTS`, the hose its default)."""
 
-CABLE_ELEMENTS = dict(frequency=20, buckling=None, catenary=reference.CATENARY["elements"])
-"""The cable model's elements: the ring-down rows' 20, the buckled rod's default (20), the catenary's 40."""
+CABLE_ELEMENTS = dict(frequency=20, buckling=None, catenary=reference.CATENARY["elements"], twisted_buckling=None,
+                      twisted_hose=None)
+"""The cable model's elements: the ring-down rows' 20, the buckled rod's default (20), the catenary's 40,
+the twisted rod's and hose's defaults (20)."""
 
 CFL = 0.4
 """PyElastica's step as a fraction of the rod's fastest wave's (`_step`)."""
@@ -294,6 +309,178 @@ def elastica_catenary(n: int, settle: float = 3.0, damping: float = 5.0):
     return sag, time.process_time() - c0
 
 
+def _turn_x(angle: float) -> np.ndarray:
+    """The rotation by `angle` (rad) about world x."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _shear_modulus(rod, shear: float, young: float) -> None:
+    """Set the rod's shear modulus G (twist G J, shear G A) from PyElastica's E / 3 to `shear` (Pa)."""
+    f = shear / (young / 3.0)
+    rod.bend_matrix[2, 2, :] *= f
+    rod.shear_matrix[0, 0, :] *= f
+    rod.shear_matrix[1, 1, :] *= f
+
+
+def _turned_ends(p0, p1, d0, d1, angle, rate, moved=lambda t: (0.0, 0.0)):
+    """A constraint class: start clamped at `p0`, `d0`; end clamped at `p1` less `moved(t)`[0] along
+    x (speed `moved(t)`[1]) with its directors `d1` turned by `angle(t)` about world x (the chord)
+    at `rate(t)` rad/s: PyElastica's directors are rows (lab to material), so turned Q = Q0 R^T,
+    and omega is in the material frame, Q [rate, 0, 0]."""
+
+    class Turned(ea.ConstraintBase):
+        def constrain_values(self, system, time):
+            system.position_collection[:, 0] = p0
+            system.position_collection[:, -1] = p1 - np.array([moved(time)[0], 0.0, 0.0])
+            system.director_collection[..., 0] = d0
+            system.director_collection[..., -1] = d1 @ _turn_x(angle(time)).T
+
+        def constrain_rates(self, system, time):
+            system.velocity_collection[:, 0] = 0.0
+            system.velocity_collection[:, -1] = (-moved(time)[1], 0.0, 0.0)
+            system.omega_collection[..., 0] = 0.0
+            system.omega_collection[..., -1] = system.director_collection[..., -1] @ np.array([rate(time), 0.0, 0.0])
+
+    return Turned
+
+
+def _ramp(start: float, length: float, total: float):
+    """`total` spread evenly over [start, start + length]: (value(t), rate(t))."""
+    rate = total / length
+    return (lambda t: rate * min(max(t - start, 0.0), length),
+            lambda t: rate if start <= t < start + length else 0.0)
+
+
+def elastica_twist(rod) -> float:
+    """The rod's twist end to end, radians: its material twist kappa_3 over the interior nodes'
+    Voronoi lengths (PyElastica's kappa is per rest length)."""
+    return float(np.sum(rod.kappa[2] * rod.rest_voronoi_lengths))
+
+
+def elastica_twisted_buckling(n: int, zeta: float, omega: float, turns: float = 3.0, shortening: float = 0.03,
+                              push: float = 0.2, hold: float = 0.4, turn: float = cases.TWIST_TURN,
+                              settle: float = 0.4, rod_def: dict = cases.ROD, shear: float | None = None):
+    """`physics_cases.twisted_buckling` in PyElastica: `elastica_buckling`'s rod and push (the same
+    imperfection), held to `hold`, then its end element's directors turned `turns` full turns about
+    the chord (world x) at constant rate over `turn` s (omega set to match), held `settle` s.
+    `shear` the shear modulus (Pa; None: PyElastica's E / 3). Returns (the quarters' angle at the
+    end (degrees, `physics_cases.twist_shape`), a dict: `mid_angle` (degrees: the mid-span
+    deflection's turn from before the turns), `largest` quarters' angle, `deflection_before`,
+    `deflection` (m), `twist` end to end (degrees), `writhe` (turns x 360 less twist), CPU s)."""
+    r = rod_def
+    length = r["length"]
+    c0 = time.process_time()
+    system = _system()
+    rod = _rod(n, length, r["radius"], r["density"], r["young"], start=(0, 0, 1.0))
+    if shear is not None:
+        _shear_modulus(rod, shear, r["young"])
+    pts = rod.position_collection.T.copy()
+    pts[:, 2] -= 1e-6 * length * np.sin(np.pi * np.linspace(0.0, 1.0, n + 1))
+    _shape(rod, pts)
+    system.append(rod)
+    speed = shortening * length / push
+    angle, rate = _ramp(hold, turn, 2.0 * np.pi * turns)
+    Turned = _turned_ends(rod.position_collection[:, 0].copy(), rod.position_collection[:, -1].copy(),
+                          rod.director_collection[..., 0].copy(), rod.director_collection[..., -1].copy(), angle, rate,
+                          lambda t: (speed * min(t, push), speed if t < push else 0.0))
+    system.constrain(rod).using(Turned, constrained_position_idx=(0, -1), constrained_director_idx=(0, -1))
+    dt = _step(n, length, r["radius"], r["density"], r["young"], None if shear is None else max(r["young"], 3 * shear))
+    _damp(system, rod, zeta, omega, dt)
+    system.finalize()
+    seen = {"quarters": []}
+
+    def sample(tt):
+        shape = cases.twist_shape(rod.position_collection.T)
+        if tt <= hold + 1e-12:
+            seen["bow"] = shape["mid"]
+        seen["quarters"].append(shape["quarters"])
+        seen["last"] = shape
+
+    _run(system, dt, hold + turn + settle, max(1, int(round(0.01 / dt))), sample)
+    p = rod.position_collection.T
+    last, twist = seen["last"], np.degrees(elastica_twist(rod))
+    quarters = np.degrees(np.unwrap(seen["quarters"]))
+    mid = np.degrees(cases._angle_about(p[-1] - p[0], seen["bow"], last["mid"]))
+    extra = dict(mid_angle=float(mid), largest=float(np.abs(quarters).max()),
+                 deflection_before=float(np.linalg.norm(seen["bow"])), deflection=float(np.linalg.norm(last["mid"])),
+                 twist=float(twist), writhe=float(360.0 * turns - twist))
+    return float(quarters[-1]), extra, time.process_time() - c0
+
+
+def elastica_twisted_hose(n: int, young: float, density: float, zeta: float, omega: float, route: np.ndarray,
+                          turns: float = 4.0, turn: float = cases.HOSE_TURN, hold: float = 3.0, settle: float = 1.0,
+                          hose: dict = cases.HOSE, shear: float | None = None):
+    """`physics_cases.twisted_hose` in PyElastica: the hose started in `route` (the cable model's
+    settled shape, resampled evenly by arc length, its end elements put level along the chord as the
+    cable model clamps them), clamped at both ends, gravity on, settled `settle` s with a
+    uniform damping constant 2 omega (the first mode critically damped; the cable model settles by
+    kinetic damping: both to the static sag), then its end's directors turned `turns` full turns
+    about the chord (x) at constant rate over `turn` s with the declared damping 2 zeta omega and
+    held `hold` s. `shear` the shear modulus (Pa; None: PyElastica's E / 3).
+    Returns (the whirl at the end (degrees, `physics_cases.twisted_hose`'s: the angle about the
+    chord from the sag at L/4 to that at 3L/4), a dict: `whirl` (the mid-span sag's angle from straight
+    down at the end) and `largest_whirl` (over the run), `largest` |quarters' angle|, `sag_before`,
+    `sag` (m), `twist`, `writhe` (degrees), `trace` (times from the turn's start, s, quarters' angle
+    and mid-span whirl, degrees, every 10 ms), CPU s)."""
+    c0 = time.process_time()
+    system = _system()
+    rod = _rod(n, hose["length"], hose["radius"], density, young, start=tuple(route[0]))
+    if shear is not None:
+        _shear_modulus(rod, shear, young)
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(route, axis=0), axis=1))])
+    u = np.linspace(0.0, arc[-1], n + 1)
+    pts = np.stack([np.interp(u, arc, route[:, k]) for k in range(3)], axis=1)
+    # the clamped end elements level, along the chord, as the cable model's clamps hold them: resampled,
+    # they would follow the sag down a few degrees, and turning such an end about the chord swings its
+    # tangent round a cone, which drags the sag round with it
+    dx = hose["length"] / n
+    pts[1] = pts[0] + dx * np.array([1.0, 0.0, 0.0])
+    pts[-2] = pts[-1] - dx * np.array([1.0, 0.0, 0.0])
+    _shape(rod, pts)
+    system.append(rod)
+    angle, rate = _ramp(settle, turn, 2.0 * np.pi * turns)
+    Turned = _turned_ends(pts[0].copy(), pts[-1].copy(), rod.director_collection[..., 0].copy(),
+                          rod.director_collection[..., -1].copy(), angle, rate)
+    system.constrain(rod).using(Turned, constrained_position_idx=(0, -1), constrained_director_idx=(0, -1))
+    _gravity(system, rod)
+    dt = _step(n, hose["length"], hose["radius"], density, young, None if shear is None else max(young, 3 * shear))
+    fast, slow = np.exp(-2.0 * omega * dt), np.exp(-2.0 * zeta * omega * dt)
+
+    class Settling(ea.DamperBase):
+        """Uniform damping: 2 omega while settling, then 2 zeta omega (`AnalyticalLinearDamper`'s)."""
+
+        def dampen_rates(self, system, time):
+            k = fast if time < settle else slow
+            system.velocity_collection *= k
+            system.omega_collection *= k
+
+    system.dampen(rod).using(Settling)
+    system.finalize()
+    down = np.array([0.0, 0.0, -1.0])
+    seen = {"whirl": [], "quarters": [], "t": []}
+
+    def sample(tt):
+        p = rod.position_collection.T
+        shape = cases.twist_shape(p)
+        if tt <= settle + 1e-12:
+            seen["before"] = shape["mid"]
+        if tt >= settle - 1e-12:
+            seen["t"].append(tt - settle)
+            seen["whirl"].append(cases._angle_about(p[-1] - p[0], down, shape["mid"]))
+            seen["quarters"].append(shape["quarters"])
+        seen["mid"] = shape["mid"]
+
+    _run(system, dt, settle + turn + hold, max(1, int(round(0.01 / dt))), sample)
+    whirl = np.degrees(np.unwrap(seen["whirl"]))
+    quarters = np.degrees(np.unwrap(seen["quarters"]))
+    twist = np.degrees(elastica_twist(rod))
+    extra = dict(whirl=float(whirl[-1]), largest_whirl=float(np.abs(whirl).max()), largest=float(np.abs(quarters).max()),
+                 sag_before=float(np.linalg.norm(seen["before"])), sag=float(np.linalg.norm(seen["mid"])),
+                 twist=float(twist), writhe=float(360.0 * turns - twist), trace=(np.array(seen["t"]), quarters, whirl))
+    return float(quarters[-1]), extra, time.process_time() - c0
+
+
 def warm_up() -> float:
     """Compile PyElastica's numba kernels on a tiny rod; CPU s."""
     c0 = time.process_time()
@@ -443,5 +630,96 @@ def catenary_row(elements: dict = ELEMENTS) -> PeerRow:
                    _pct(r.measured, sag), note)
 
 
+def _clamped_mode(rod: dict = cases.ROD) -> tuple[float, float]:
+    """The damping ratio and first mode (rad/s) of `rod` clamped straight at both ends, gravity off,
+    as the cable model holds them (`cable_damping`)."""
+    scene = cases._scene({"scene": {"name": "b", "units": "m", "duration": 0.1, "settle": 0.0, "timestep": 0.002},
+                          "effects": {"gravity": False},
+                          "cables": [{"name": "rod", "radius": rod["radius"], "start": {"pos": [0, 0, 1]},
+                                      "end": {"pos": [rod["length"], 0, 1]}, "young": rod["young"],
+                                      "density": rod["density"]}]})
+    return _first_mode(build(scene, detect=False))
+
+
+def _num(v, fmt: str = ".1f") -> str:
+    return v if isinstance(v, str) else format(v, fmt)
+
+
+def twisted_buckling_row(elements: dict = ELEMENTS, turns: float = 3.0, shortening: float = 0.03) -> PeerRow:
+    """`physics_cases.twisted_buckling` on both, at PyElastica's shear modulus (E / 3, its Poisson
+    ratio 0.5): the cable's `twist_stiffness` is set to it."""
+    rod = cases.ROD
+    shear = rod["young"] / 3.0
+    c0 = time.process_time()
+    r = cases.twisted_buckling(turns, shortening, CABLE_ELEMENTS["twisted_buckling"], twist_stiffness=shear)
+    cpu = time.process_time() - c0
+    zeta, omega = _clamped_mode(rod)
+    if AVAILABLE:
+        angle, e_el, cpu_e = elastica_twisted_buckling(elements["twisted_buckling"], zeta, omega, turns, shortening)
+    else:
+        angle = cpu_e = NOT_INSTALLED
+        e_el = {k: NOT_INSTALLED for k in ("mid_angle", "deflection", "twist", "writhe")}
+    e = r.extra
+    mm = (lambda v: v if isinstance(v, str) else f"{1000 * v:.1f}")
+    note = (f"0.5 m rod r 3 mm 2 GPa, G = E / 3 in both, clamped, end pushed in {100 * shortening:g} % over 0.2 s, "
+            f"held to {e['hold']:g} s, turned {turns:g} turns about the chord over {e['turn']:g} s, held "
+            f"{e['settle']:g} s, gravity off; {r.elements} / {elements['twisted_buckling']} elements; degrees about "
+            f"the chord from the deflection at L/4 to that at 3L/4 (0: in the buckling plane); cablecheck / "
+            f"PyElastica: mid deflection {mm(e['deflection'])} / {mm(e_el['deflection'])} mm (before the turns "
+            f"{1000 * e['deflection_before']:.1f}), twist {e['twist']:.0f} / {_num(e_el['twist'], '.0f')} deg, writhe "
+            f"{e['writhe']:.1f} / {_num(e_el['writhe'])} deg; mid-span deflection turned out of the buckling plane "
+            f"{e['mid_angle']:.1f} / {_num(e_el['mid_angle'])} deg (not set by the statics: the problem is the same "
+            f"turned about the chord)")
+    return PeerRow(f"twisted buckled rod {turns:g} turns", "deg", None, r.measured, angle, cpu, cpu_e, None,
+                   _pct(r.measured, angle), note, dict(cable=e, elastica=e_el))
+
+
+APPROACH = 0.01
+"""The slack `twisted_hose_row`'s second cable-model run starts its end at (`physics_cases.twisted_hose`'s
+`approach`). At commit 6074e19 MuJoCo kept no twist state (`mjData.plastic` stayed 0) for a rod
+clamped at both ends and routed with more than a few % of slack along its chord (above about 4 %
+at 20 elements, 3 % at 40; measured 2026-11-28), so its turned end wound nothing; routed with 1 %
+it keeps the state as its ends then close in. The row reads both runs."""
+
+
+def twisted_hose_row(elements: dict = ELEMENTS, turns: float = 4.0, slack: float = 0.2) -> PeerRow:
+    """`physics_cases.twisted_hose` on both, at PyElastica's shear modulus (E / 3): the cable's
+    `twist_stiffness` is set to it; PyElastica starts from the cable model's settled shape. The
+    cable model runs twice: as the problem is set (routed slack, settled, turned) and with its end
+    moved in from `APPROACH` slack before the turns; the row's value is the first, the note gives
+    the second (and says so where the first carries no twist)."""
+    c0 = time.process_time()
+    shear = DEFAULT_YOUNG / 3.0
+    r = cases.twisted_hose(turns, slack, CABLE_ELEMENTS["twisted_hose"], twist_stiffness=shear)
+    cpu = time.process_time() - c0
+    moved = cases.twisted_hose(turns, slack, CABLE_ELEMENTS["twisted_hose"], twist_stiffness=shear, approach=APPROACH)
+    e, m = r.extra, moved.extra
+    if AVAILABLE:
+        whirl, e_el, cpu_e = elastica_twisted_hose(elements["twisted_hose"], e["young"], e["density"], e["damping"],
+                                                   e["first_mode"], e["rest"], turns, e["turn"], e["hold"])
+    else:
+        whirl = cpu_e = NOT_INSTALLED
+        e_el = {k: NOT_INSTALLED for k in ("whirl", "sag", "twist", "writhe")}
+    mm = (lambda v: v if isinstance(v, str) else f"{1000 * v:.1f}")
+    vs = _pct(moved.measured, whirl)
+    note = (f"{HOSE['length']:g} m hose r {1000 * HOSE['radius']:g} mm, {e['young']:.3g} Pa, G = E / 3 in both, "
+            f"{e['density']:g} kg/m3, damping {e['damping']:g} (first mode {e['first_mode']:.1f} rad/s), clamped level "
+            f"{e['span']:.4g} m apart ({100 * slack:g} % slack), gravity on, settled, turned {turns:g} turns about the "
+            f"chord over {e['turn']:g} s, held {e['hold']:g} s; {r.elements} / {elements['twisted_hose']} elements; "
+            f"degrees about the chord from the sag at L/4 to that at 3L/4 (0: hanging in one plane); cablecheck / "
+            f"PyElastica: sag {mm(e['sag'])} / {mm(e_el['sag'])} mm (settled {1000 * e['sag_before']:.1f}), twist "
+            f"{e['twist']:.0f} / {_num(e_el['twist'], '.0f')} deg (PyElastica's writhe {_num(e_el['writhe'], '.0f')} "
+            f"deg), mid-span sag from straight down {e['whirl']:.1f} / "
+            f"{_num(e_el['whirl'])} deg (0 or 180 for a hose symmetric end for end). "
+            + ("The cable model's rod carries no twist here: MuJoCo keeps no twist state for it as it is routed. "
+               if abs(e["twist"]) < 0.01 * 360.0 * abs(turns) else "")
+            + f"Its end moved in from {100 * APPROACH:g} % slack after settling: {moved.measured:.1f} deg "
+            f"({_num(vs)} % from PyElastica), sag {mm(m['sag'])} mm, twist {m['twist']:.0f} deg, writhe "
+            f"{m['writhe']:.0f} deg")
+    return PeerRow(f"twisted hose {turns:g} turns", "deg", None, r.measured, whirl, cpu, cpu_e, None,
+                   _pct(r.measured, whirl), note, dict(cable=e, moved=m, moved_vs_elastica_pct=vs, elastica=e_el))
+
+
 def rows(elements: dict = ELEMENTS) -> list[PeerRow]:
-    return [frequency_row(elements), hose_row(elements), buckling_row(elements), catenary_row(elements)]
+    return [frequency_row(elements), hose_row(elements), buckling_row(elements), catenary_row(elements),
+            twisted_buckling_row(elements), twisted_hose_row(elements)]

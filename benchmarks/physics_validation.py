@@ -16,11 +16,12 @@ its validation-table markers. Well under a few minutes on one core.
 
 Then the shared problems run on PyElastica too (benchmarks/elastica_peer.py:
 cantilever first frequency, a released hose's tip path, a buckled rod, the
-catenary; the optional `peer` extra, `pip install -e '.[peer]'`): one more
+catenary, a twisted buckled rod, a twisted slack hose; the optional `peer`
+extra, `pip install -e '.[peer]'`): one more
 table, closed form, cablecheck (MuJoCo), PyElastica, the differences and the
 CPU seconds of each, printed and written into <out>/physics.md between its
 peer-table markers with the date, machine, load and command. Without
-PyElastica its columns say "not installed". About 1.5 minutes of CPU more.
+PyElastica its columns say "not installed". About 3 minutes of CPU more.
 
 It does not decide what passes (tests/test_physics.py does); it shows where
 each case stands and what resolution costs.
