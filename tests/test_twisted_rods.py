@@ -6,13 +6,12 @@ up to the turns; a slack hose turned four turns whirls about its chord, symmetri
 and hangs in its plane when not turned. PyElastica's answers to the same problems are in
 benchmarks/elastica_peer.py (docs/physics.md, the peer table).
 
-At commit 6074e19 one thing did not hold, and is marked xfail (not strict, so that it reads
-XPASS once it holds): a cable clamped at both ends and routed with more than a few % of slack
-along its chord carried no twist at all. MuJoCo (4.0.1) kept no twist state for its rod
-(`mjData.plastic`, its reference frames, stayed 0 from the first step, and so did the twist
-joints) however its end was turned: above about 4 % slack at 20 elements, 3 % at 40; not with a
-pinned or free end, nor at 6 elements. The same hose routed with 1 % slack and its end then moved
-in keeps its twist state and whirls, the test that runs here.
+At commit 6074e19 a cable clamped at both ends and routed with more than a few % of slack
+along its chord carried no twist at all: MuJoCo (4.0.1) kept no twist state for its rod
+(`mjData.plastic` stayed 0 from the first step) however its end was turned, because the model's
+shape at qpos0 folded exactly back at its end (cablecheck.build.cableplan.STRAIGHT_KINK, which
+fixed it). Both the hose routed with 20 % slack and the same hose routed with 1 % and its end
+moved in are tested.
 """
 
 from __future__ import annotations
@@ -71,8 +70,6 @@ def test_a_slack_hose_turned_four_turns_whirls_about_its_chord_symmetric_end_for
     assert turned.extra["twist"] > 0.9 * 1440.0 and abs(turned.extra["least"]) < 1e-3
 
 
-@pytest.mark.xfail(strict=False, reason="at 6074e19 MuJoCo kept no twist state for a rod clamped at both ends "
-                                        "and routed with 20 % slack along its chord: its turned end wound nothing")
 def test_a_slack_hose_routed_slack_and_turned_four_turns_whirls_about_its_chord():
     r = cases.twisted_hose(4.0, twist_stiffness=5e7 / 3.0)
     assert r.extra["twist"] > 0.9 * 1440.0

@@ -182,7 +182,31 @@ def plan_cable(cable: CableDef, frames: Frames, where: str, scene: Scene,
     tangent = (routed[1] - routed[0]) / seg[0]
     s = np.concatenate([[0.0], np.cumsum(seg)])
     straight = routed[0] + s[:, None] * tangent[None, :]
+    straight[2:] += STRAIGHT_KINK * (s[2:] - s[1])[:, None] * _side(tangent)[None, :]
     return CablePlan(cable, routed, straight, held)
+
+
+STRAIGHT_KINK = 1e-6
+"""Radians: the rest shape turns by this much at its second vertex.
+
+The rest shape runs along the first element; a slack cable clamped at both
+ends without via points leaves along its chord, so its rest line runs
+through its end point and on past it. Compiled on that line and then held
+where it is routed (`cablecheck.build.mjspec.move_held`), the model's shape
+at qpos0 folds exactly back at the end, and MuJoCo then keeps no twist
+state for the rod at all (`mjData.plastic` stays 0: a turned end winds
+nothing; measured on a turntable's slack cable, and on drawer.toml). Any
+turn off the line avoids it (1e-6 rad did); MuJoCo takes a rest shape bent
+under 1e-4 rad at a vertex as straight (rest curvature 0), so this one is
+still straight at rest. Deterministic: the same every run."""
+
+
+def _side(axis: np.ndarray) -> np.ndarray:
+    """A unit vector square to unit `axis`: towards world -z, or +x where `axis` is vertical."""
+    side = np.array([0.0, 0.0, -1.0]) - (-axis[2]) * axis
+    if np.linalg.norm(side) < 1e-6:
+        side = np.array([1.0, 0.0, 0.0]) - axis[0] * axis
+    return side / np.linalg.norm(side)
 
 
 IMPERFECTION = 1e-6
@@ -220,11 +244,7 @@ def imperfect(routed: np.ndarray, held: list[int]) -> np.ndarray:
         off = rel - np.outer(rel @ axis, axis)
         if np.linalg.norm(off, axis=1).max() > IMPERFECTION * span:
             continue
-        side = np.array([0.0, 0.0, -1.0])
-        side -= (side @ axis) * axis
-        if np.linalg.norm(side) < 1e-6:     # a vertical run
-            side = np.array([1.0, 0.0, 0.0]) - axis[0] * axis
-        side /= np.linalg.norm(side)
+        side = _side(axis)
         x = np.clip((rel @ axis) / span, 0.0, 1.0)
         routed[a + 1:b] += IMPERFECTION * span * np.sin(np.pi * x)[:, None] * side[None, :]
     return routed
