@@ -507,6 +507,21 @@ def resting(radius: float, units: str = "m", shape: str = "box", duration: float
                    radius=radius, units=units, touching=int(len(gap)))
 
 
+def _twisted_run(scene, every: int, settle: bool) -> tuple:
+    """Built, its simulation, its states every `every` steps (settled first if `settle`), wall
+    seconds per simulated second of the run (not the settling), and the first cable's twist at
+    each state."""
+    built = build(scene, detect=False)
+    sim = Simulation(built)
+    sim.reset()
+    if settle:
+        sim.settle()
+    t0 = time.perf_counter()
+    states = list(sim.steps(contacts=False, every=every))
+    wall = (time.perf_counter() - t0) / scene.duration
+    return built, sim, states, wall, _rod_twist(built, states)
+
+
 def _rod_twist(built, states: list) -> np.ndarray:
     """The first cable's twist end to end (radians, the sum over its interior vertices as
     `cablecheck.build.rodtwist.TwistReader` reads it from the simulated rod) at each of `states`."""
@@ -584,14 +599,8 @@ def twisted_buckling(turns: float = 3.0, shortening: float = 0.03, elements: int
                               "timestep": 0.002},
                     "effects": {"gravity": False}, "bodies": [{"name": "b", "pos": [length, 0, 1]}],
                     "motion": [{"body": "b", "keys": keys, "interpolation": "linear"}], "cables": [cable]})
-    built = build(scene, detect=False)
-    sim = Simulation(built)
-    sim.reset()
+    built, sim, states, wall, twist = _twisted_run(scene, every, settle=False)
     c = built.cables[0]
-    t0 = time.perf_counter()
-    states = list(sim.steps(contacts=False, every=every))
-    wall = (time.perf_counter() - t0) / duration
-    twist = _rod_twist(built, states)
     before = max((s for s in states if s.t <= hold + 1e-9), key=lambda s: s.t)
     bow = twist_shape(before.cables[0])["mid"]
     shapes = [twist_shape(s.cables[0]) for s in states]
@@ -660,15 +669,8 @@ def twisted_hose(turns: float = 4.0, slack: float = 0.2, elements: int | None = 
                               "timestep": 0.002},
                     "bodies": [{"name": "b", "pos": [x0, 0, 1]}],
                     "motion": [{"body": "b", "keys": keys, "interpolation": "linear"}], "cables": [cable]})
-    built = build(scene, detect=False)
-    sim = Simulation(built)
-    sim.reset()
-    sim.settle()
+    built, sim, states, wall, twist = _twisted_run(scene, every, settle=True)
     c = built.cables[0]
-    t_start = time.perf_counter()
-    states = list(sim.steps(contacts=False, every=every))
-    wall = (time.perf_counter() - t_start) / duration
-    twist = _rod_twist(built, states)
     before = max((s for s in states if s.t <= t0 + 1e-9), key=lambda s: s.t)
     turning = [s for s in states if s.t >= t0 - 1e-9]
     down = np.array([0.0, 0.0, -1.0])
