@@ -86,3 +86,31 @@ def test_mujoco_damps_a_bent_rod_only_in_its_bending_plane():
     assert along > 0.1 and across < 1e-6 * along
     across, along = _bent_rod(0.01)
     assert along > 0.1 and across < 0.01 * along
+
+
+@pytest.mark.parametrize("damping", [1.0, 1.5])
+def test_damping_at_or_past_critical_is_refused_with_the_key(damping, tmp_path):
+    """A first mode damped at or past critical no longer swings, so no ratio
+    there can be set: the loader says so, naming the key (before, 1.0 raised
+    scipy's brentq and 1.5 an OverflowError from the build)."""
+    from cablecheck.scene.errors import SceneError
+    from cablecheck.scene.load import parse_scene
+
+    scene = {"scene": {"name": "d", "units": "m", "duration": 0.1},
+             "cables": [{"name": "c", "radius": 0.004, "start": {"pos": [0, 0, 1]}, "end": {"pos": [0.5, 0, 1]},
+                         "damping": damping}]}
+    with pytest.raises(SceneError) as exc:
+        parse_scene(scene, tmp_path / "d.toml")
+    assert exc.value.key == "cables[0].damping" and "below 1" in exc.value.problem
+
+
+@pytest.mark.parametrize("damping", [0.9, 0.99])
+def test_heavy_damping_below_critical_builds(damping):
+    """Ratios the integrator alone reaches only at omega h past 10 (0.84 there)
+    have a step (damping_step searched up to 10 and failed) and run."""
+    from cablecheck.build.cablephysics import damping_step, step_damping_ratio
+
+    h = damping_step(damping, 30.0)
+    assert np.isfinite(h) and step_damping_ratio(30.0, h) == pytest.approx(damping, rel=1e-9)
+    r = validation.ring_down(10, damping, gravity=False, cycles=1, settle=0.05)
+    assert not r.warnings

@@ -131,7 +131,12 @@ def damping_step(damping: float, omega: float) -> float:
         return float("inf")
     from scipy.optimize import brentq  # 0.2 s more start-up: only for a cable with damping
     target = DAMPING_SHARE * damping
-    x = brentq(lambda x: step_damping_ratio(1.0, x) - target, 1e-12, 10.0, xtol=1e-15, rtol=1e-12)
+    hi = 10.0      # the integrator's own ratio rises towards 1 as omega h grows (0.84 at 10)
+    while step_damping_ratio(1.0, hi) < target:
+        if hi > 1e12:      # a ratio the integrator never reaches alone (the loader keeps `damping` below 1)
+            return float("inf")
+        hi *= 10.0
+    x = brentq(lambda x: step_damping_ratio(1.0, x) - target, 1e-12, hi, xtol=1e-15, rtol=1e-12)
     return float(x / omega)
 
 

@@ -186,8 +186,7 @@ def read_cable(r: Reader, value: dict, where: str, dynamics: bool = True) -> Cab
         min_bend_radius=bend, route=route,
         twist_stiffness=(r.number(t["twist_stiffness"], f"{where}.twist_stiffness",
                                   positive=True) if "twist_stiffness" in t else None),
-        damping=r.number(t.get("damping", DEFAULT_DAMPING), f"{where}.damping",
-                         nonnegative=True),
+        damping=_damping(r, t.get("damping", DEFAULT_DAMPING), f"{where}.damping"),
         friction=(r.number(t["friction"], f"{where}.friction", nonnegative=True)
                   if "friction" in t else None))
 
@@ -213,3 +212,13 @@ def check_fastened_names(scene: Scene, part_names, bodies=()) -> None:
                     continue
                 at = f"cables[{i}].{key}.part" + (f"[{k}]" if len(anchor.parts) > 1 else "")
                 raise SceneError(scene.path, at, unknown_name(name, names, "part or assembly path"))
+
+
+def _damping(r: Reader, value, where: str) -> float:
+    """A cable's `damping`: the damping ratio of its first bending mode, at least 0 and below 1."""
+    damping = r.number(value, where, nonnegative=True)
+    if damping >= 1.0:
+        raise r.error(where, f"must be below 1, got {fmt(damping)}: it is the damping ratio of the cable's "
+                             "first bending mode, and at 1 (critical) that mode no longer swings, so no ratio "
+                             "at or past it can be set (docs/physics.md, Damping)")
+    return damping
