@@ -207,3 +207,11 @@ def test_a_clip_turned_about_the_cable_twists_it_both_ways(turn, tmp_path):
     assert abs(np.degrees(states[-1].twist.sum())) < 1e-4     # the clip's equality gives 1e-7 rad
     assert np.allclose(before, SHEAR * POLAR * np.radians(turn) / (middles[1] - middles[0]), rtol=3e-3)
     assert np.allclose(after, -SHEAR * POLAR * np.radians(turn) / (middles[2] - middles[1]), rtol=3e-3)
+
+
+def test_a_reader_of_no_rod_reads_nothing():
+    """Cables without twist state (a rod MuJoCo keeps none for): no bodies, no state kept, None read."""
+    reader = TwistReader([None, None], [5, 7])
+    assert len(reader.bodies) == 0
+    assert reader.raw(np.zeros(4), np.zeros((0, 9)), np.zeros((0, 9))) is None
+    assert reader.read_many([], np.zeros((0, 12, 3)), np.zeros((0, 3))) == [None, None]

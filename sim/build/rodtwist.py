@@ -103,6 +103,7 @@ class TwistReader:
         """`rods` per cable, `counts` its vertices (the order of `read_many`'s points)."""
         self._cables = [i for i, r in enumerate(rods) if r is not None]
         self._count = len(rods)
+        self.bodies = np.zeros(0, int)
         live = [rods[i] for i in self._cables]
         if not live:
             return
