@@ -62,6 +62,20 @@ def test_a_clean_run_says_no_interference(capsys):
     assert "no interference" in out and "min bend radius straight" in out
 
 
+def test_a_cables_torsion_is_printed_where_it_was_largest(capsys):
+    """With the simulated rod's twist, the line says the largest moment and where along the
+    cable it was; a cable that carried none reads as before."""
+    report = _report([])
+    report["cables"][0].update(max_twist=33.8, max_twist_moment=0.0154,
+                               twist={"s": [0.1, 0.5, 0.9], "max_moment": [0.002, 0.0154, 0.004], "max_rate": [1, 2, 3]})
+    print_summary(report, Path("r.json"))
+    assert "max twist 33.8 deg (torsion up to 0.0154 N m, at 0.5 mm along)" in capsys.readouterr().out
+    report["cables"][0].update(max_twist=0.0, max_twist_moment=0.0)
+    print_summary(report, Path("r.json"))
+    out = capsys.readouterr().out
+    assert "max twist 0 deg" in out and "torsion" not in out
+
+
 def test_an_interrupted_run_says_so(capsys):
     report = _report([])
     report["complete"] = False

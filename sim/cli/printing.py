@@ -126,7 +126,8 @@ def print_summary(report: dict, report_path: Path) -> None:
         print(f"  cable {c['name']}: length {c['length']:.4g} {units}, max strain "
               f"{round(100 * strain, 2) + 0.0:.2f} %, min bend radius "
               f"{'straight' if bend is None else f'{bend:.4g} {units}'}"
-              + (f", max twist {c['max_twist']:.3g} deg" if c.get("max_twist") is not None else "")
+              + (f", max twist {c['max_twist']:.3g} deg{_torsion(c, units)}" if c.get("max_twist") is not None
+                 else "")
               + (f"  [{', '.join(flags)}]" if flags else ""))
         _print_closest(report, c["name"], units)
     _print_events(report)
@@ -211,6 +212,15 @@ def _print_baseline(report: dict, most: int = 5) -> None:
               f"at t {e['t_worst']:.3f} s, s = {e['s']:.4g} {units}")
     if len(b["resolved_events"]) > most:
         print(f"    ... {len(b['resolved_events']) - most} more in the report")
+
+
+def _torsion(c: dict, units: str) -> str:
+    """Where the simulated rod's torsional moment was largest, when it carried any."""
+    twist = c.get("twist")
+    if not twist or not len(twist["max_moment"]) or not c.get("max_twist_moment"):
+        return ""
+    k = max(range(len(twist["max_moment"])), key=lambda i: twist["max_moment"][i])
+    return f" (torsion up to {c['max_twist_moment']:.3g} N m, at {twist['s'][k]:.4g} {units} along)"
 
 
 def _print_closest(report: dict, cable: str, units: str) -> None:
