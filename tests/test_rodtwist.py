@@ -215,3 +215,15 @@ def test_a_reader_of_no_rod_reads_nothing():
     assert len(reader.bodies) == 0
     assert reader.raw(np.zeros(4), np.zeros((0, 9)), np.zeros((0, 9))) is None
     assert reader.read_many([], np.zeros((0, 12, 3)), np.zeros((0, 3))) == [None, None]
+
+
+def test_a_rod_without_twist_state_is_warned_about(tmp_path, monkeypatch):
+    """Nothing silent: with the rest shape's kink taken away, the slack cable along its chord
+    gets no twist state from MuJoCo again, and the build says so (the kinked one does not)."""
+    import cablecheck.build.cableplan as cableplan
+
+    scene = parse_scene(_turning(90.0, length=0.6, gravity=True), tmp_path / "w.toml")
+    assert not [w for w in build(scene, detect=False).warnings if "twist state" in w]
+    monkeypatch.setattr(cableplan, "STRAIGHT_KINK", 0.0)
+    (warning,) = [w for w in build(scene, detect=False).warnings if "twist state" in w]
+    assert "cable 'c'" in warning and "winds nothing" in warning

@@ -44,7 +44,7 @@ from cablecheck.build.substeps import (
     script_poses,
     tunnel_warnings,
 )
-from cablecheck.build.untwist import clip_rolls, untwist_ends
+from cablecheck.build.untwist import clip_rolls, untwist_ends, without_twist_state
 from cablecheck.scene.records import Scene
 
 
@@ -89,6 +89,10 @@ def build_simulation(scene: Scene, planned: tuple) -> Built:
                      f"at most {MAX_SUBSTEPS} steps are taken per scene timestep; scene.timestep "
                      f"<= {need * MAX_SUBSTEPS:.3g} s would do",)
     warnings += held_pinch_warnings(read)
+    if scene.effects.dynamics:
+        warnings += tuple(f"cable {name!r}: MuJoCo keeps no twist state for its rod, so a turned end or clip "
+                          "winds nothing in it and its twist reads 0 (docs/twist.md)"
+                          for name in without_twist_state(read, list(read.rods)))
     return replace(read, substeps=substeps, warnings=warnings)
 
 

@@ -119,3 +119,15 @@ def clip_rolls(built: Built, rods: list[RodTwist | None]) -> tuple[ClipRoll, ...
         out.append(ClipRoll(cable, window, eq, int(rod.joint_qpos[edge]), int(rod.joint_dof[edge]), body, frame,
                             local))
     return tuple(out)
+
+
+def without_twist_state(built: Built, rods: list[RodTwist | None]) -> list[str]:
+    """The cables whose rod MuJoCo keeps no twist state for at t = 0 (its
+    reference frames all 0 after a step, `start_state`): a turned end or clip
+    winds nothing in them and their twist reads 0. None is expected: the
+    causes found (docs/twist.md) are built around; this says so if one is not."""
+    live = [(c.name, rod) for c, rod in zip(built.cables, rods) if rod is not None]
+    if not live:
+        return []
+    d = start_state(built)
+    return [name for name, rod in live if not d.plastic[rod.frames].any()]
