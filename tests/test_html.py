@@ -169,3 +169,29 @@ def test_an_html_path_that_cannot_be_written_fails_before_the_run(tmp_path, caps
                  "--html", str(tmp_path)]) == 2
     assert "--html" in capsys.readouterr().err
     assert not (tmp_path / "r.json").exists()
+
+
+def test_a_twisted_cable_shows_its_torsion_along_it():
+    """With the simulated rod's twist, the cable's section says how far it twisted and where the
+    torsion was largest, with a chart of it along the cable; a cable that carried none, no chart."""
+    from cablecheck.report.html import html_report
+
+    def cable(name, moment):
+        return {"name": name, "length": 1.0, "segments": 4, "max_strain": 0.001, "taut": False,
+                "min_bend_radius": None, "bend_violation": False, "rest_points": [], "final_points": [],
+                "wear": {"s": [0.0, 0.25, 0.5, 0.75], "contact_time": [0.0] * 4, "sliding": [0.0] * 4,
+                         "bend_cycles": [0] * 4, "most_worn": None},
+                "max_twist": 90.0 if moment else 0.0, "max_twist_moment": max(moment or [0.0]), "twist_from": "rod",
+                "twist": {"s": [0.25, 0.5, 0.75], "max_moment": moment or [0.0] * 3, "max_rate": [1.0] * 3}}
+
+    report = {"scene": "t", "units": "m", "complete": True, "events": [], "cables": [
+        cable("wound", [0.01, 0.03, 0.02]), cable("still", None)],
+        "summary": {"hard": 0, "soft": 0, "static": 0, "dynamic": 0},
+        "settings": {"version": "x", "clearance": 0.005, "units": "m"}}
+    page = html_report(report)
+    assert "twist up to 90 degrees end to end, torsion up to 0.03 N m at 0.5 m along it" in page
+    parser = _Page()
+    parser.feed(page)
+    torsion = [src for src in parser.images if src]
+    assert 'alt="torsion along wound"' in page and 'alt="torsion along still"' not in page
+    _check_images(torsion)

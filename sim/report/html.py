@@ -12,7 +12,8 @@ and the reviewer's note where given; then per clash its picture (an
 offscreen rendering at its worst state, `cablecheck.report.render`) and its
 distance history; the clashes a baseline run had and this one resolved; and
 each cable's wear profile (contact time, sliding, bend cycles along the
-cable, one scale per measure for the whole run). Images are PNG as `data:`
+cable, one scale per measure for the whole run) and, with dynamics, its
+twist and the largest torsional moment along it. Images are PNG as `data:`
 URIs, the style sheet inline, no script, nothing fetched: the file opens
 offline. :func:`write_html` writes it atomically, as the JSON report is.
 
@@ -146,6 +147,36 @@ def wear_png(cable: dict, limits: dict[str, float], floor: float, units: str) ->
     fig.suptitle(f"{cable['name']}: wear (one scale for the run)", fontsize=10)
     fig.tight_layout()
     return _png_of(fig)
+
+
+def twist_png(cable: dict, units: str) -> bytes:
+    """The largest torsional moment along a cable (the simulated rod's twist, per interior vertex)."""
+    t = cable["twist"]
+    s = np.asarray(t["s"], float)
+    moment = np.asarray(t["max_moment"], float)
+    fig = _figure(6.4, 1.9)
+    ax = fig.subplots()
+    width = np.diff(np.append(s, cable["length"])) if len(s) else s
+    ax.bar(s, moment, width=width, align="center", color="#9467bd")
+    ax.set_ylabel("torsion (N m)", fontsize=8)
+    ax.set_xlabel(f"along the cable from its start ({units})")
+    ax.set_xlim(0, cable["length"])
+    ax.grid(alpha=0.3)
+    fig.suptitle(f"{cable['name']}: largest torsional moment over the run", fontsize=10)
+    fig.tight_layout()
+    return _png_of(fig)
+
+
+def _twist_line(c: dict, units: str) -> str:
+    """What the report says of a cable's twist, in words ("" when it has none to say)."""
+    if c.get("max_twist") is None:
+        return ""
+    line = f"; twist up to {c['max_twist']:.3g} degrees end to end"
+    twist = c.get("twist")
+    if twist and len(twist["max_moment"]) and c.get("max_twist_moment"):
+        k = int(np.argmax(twist["max_moment"]))
+        line += f", torsion up to {c['max_twist_moment']:.3g} N m at {twist['s'][k]:.4g} {units} along it"
+    return line
 
 
 def _why_incomplete(r: dict) -> str:
@@ -308,9 +339,12 @@ def _wear(r: dict) -> str:
         bend = c.get("min_bend_radius")
         out.append(f'<h3>{_e(c["name"])}</h3><p>length {c["length"]:.4g} {_e(units)}, largest strain '
                    f'{"-" if strain is None else f"{100 * strain:.3g} %"}, least bend radius '
-                   f'{"-" if bend is None else f"{bend:.4g} {units}"}; {_e(line)}</p>')
+                   f'{"-" if bend is None else f"{bend:.4g} {units}"}; {_e(line)}{_e(_twist_line(c, units))}</p>')
         out.append(f'<img class="wear" alt="wear of {_e(c["name"])}" '
                    f'src="{_data_uri(wear_png(c, limits, floor, units))}">')
+        if c.get("twist") and c.get("max_twist_moment"):
+            out.append(f'<img class="wear" alt="torsion along {_e(c["name"])}" '
+                       f'src="{_data_uri(twist_png(c, units))}">')
     return "\n".join(out)
 
 
