@@ -1,18 +1,21 @@
 """Every cable starts untwisted as routed: the end roll that takes out the
 twist the straight compile would leave between a cable's clamped ends.
 
-MuJoCo fixes a clamped end edge's material frame in the body holding it as
-the model is compiled, and cablecheck compiles each cable straight (its rest
+MuJoCo fixes a clamped end edge's material frame to the body holding it,
+turning it as the body turns from its pose at qpos0, from the frame it has
+as the model is compiled; cablecheck compiles each cable straight (its rest
 shape, `cablecheck.build.mjspec.compile_model`). Put into its routed shape,
 a cable's frame carried along the route from its start then meets the end's
 frame at an angle that depends on the route alone (a cable bent out of one
 plane: 41 degrees on a 1 m cable routed through one corner, 156 and 84
 degrees on robot_cell's two), which MuJoCo would read as twist held between
-the clamps. A cable routed in CAD carries none, so the body holding the
-clamped end (`cablecheck.build.mjspec.end_roll_body`) is turned about the
-end's held edge by that angle, measured on the compiled model at t = 0.
-MuJoCo restarts the reference frames from the first edge at
-`mj_resetData`, so the state a run starts from is the one measured here.
+the clamps. A cable routed in CAD carries none, so each clamped end rides
+its end roll body (`cablecheck.build.built.end_roll_body`) on a hinge about
+the end's held edge, and `untwist_ends` finds the hinge angle that takes
+that twist out, measured on the compiled model at t = 0; the run holds it
+there (`Built.end_rolls`, `cablecheck.run.motion`). MuJoCo restarts the
+reference frames from the first edge at `mj_resetData`, so the state a run
+starts from is the one measured here.
 
 A clamped clip holds the roll of its short held edge, in the middle of the
 cable, where MuJoCo's rod has a free twist joint: `clip_rolls` fixes in the
