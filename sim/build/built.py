@@ -283,14 +283,14 @@ class Built:
     """Simulation steps per scene step and why (`choose_substeps`); the
     simulation model's timestep is the scene's divided by `substeps.count`."""
     rods: tuple = ()
+    """Per cable, where its twist is in the simulation's state
+    (`cablecheck.build.rodtwist.RodTwist`, or None); empty for a scene not
+    simulated."""
     end_rolls: tuple[EndRoll, ...] = ()
     """The clamped ends' hinges and the angles that start their cables
     untwisted; the run holds them there (`cablecheck.run.motion`)."""
     clip_rolls: tuple[ClipRoll, ...] = ()
     """The clamped clips' holds on their cables' roll (`cablecheck.run.cliphold`)."""
-    """Per cable, where its twist is in the simulation's state
-    (`cablecheck.build.rodtwist.RodTwist`, or None); empty for a scene not
-    simulated."""
 
 
 def mesh_parts(built: Built) -> np.ndarray:

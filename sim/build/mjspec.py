@@ -60,11 +60,11 @@ from cablecheck.scene.format import Hold
 from cablecheck.scene.records import CableDef, PartDef, Scene
 
 BASE_ARMATURE = 100.0
-ROLL_MASS = 1e-6
-"""kg: an end roll body's (`_add_end_roll`): a body on a joint needs one; its hinge's armature rules."""
 """Armature added to the base model's joints, which are driven kinematically:
 the cable's reaction barely moves them within the one step before the script
 sets them again."""
+ROLL_MASS = 1e-6
+"""kg: an end roll body's (`_add_end_roll`): a body on a joint needs one; its hinge's armature rules."""
 
 PLANE_GRID = 0.1
 """Grid spacing MuJoCo draws on a plane part given no size, metres."""
