@@ -57,7 +57,7 @@ def _simulate(scene: dict, tmp_path: Path, every: int = 1):
     sim.reset()
     sim.settle()
     states = list(sim.steps(contacts=False, every=every))
-    reader = TwistReader(list(built.rods), [c.count for c in built.cables])
+    reader = TwistReader.of(built)
     twist = reader.read_many([s.rod for s in states], np.stack([np.concatenate(s.cables) for s in states]),
                              np.stack([s.qpos for s in states]))[0]
     return built, sim, [SimpleNamespace(**vars(s), twist=t) for s, t in zip(states, twist)]
@@ -171,7 +171,8 @@ def test_the_twist_read_is_the_states_own_as_mujocos_next_step_would_have_it(tmp
         mujoco.mj_kinematics(m, d)
         mujoco.mj_flex(m, d)
         raw = reader.raw(d.plastic, before, d.xmat[reader.bodies])
-        (mine,) = reader.read_many([raw], d.flexvert_xpos[rod.vertices][None], d.qpos[None])
+        c = built.cables[0]
+        (mine,) = reader.read_many([raw], d.flexvert_xpos[c.vert_adr:c.vert_adr + c.count][None], d.qpos[None])
         mine = mine[0]
         probe = mujoco.MjData(m)
         mujoco.mj_copyData(probe, m, d)

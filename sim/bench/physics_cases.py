@@ -525,7 +525,7 @@ def _twisted_run(scene, every: int, settle: bool) -> tuple:
 def _rod_twist(built, states: list) -> np.ndarray:
     """The first cable's twist end to end (radians, the sum over its interior vertices as
     `cablecheck.build.rodtwist.TwistReader` reads it from the simulated rod) at each of `states`."""
-    reader = TwistReader(list(built.rods), [c.count for c in built.cables])
+    reader = TwistReader.of(built)
     twist = reader.read_many([s.rod for s in states], np.stack([np.concatenate(s.cables) for s in states]),
                              np.stack([s.qpos for s in states]))[0]
     return np.zeros(len(states)) if twist is None else twist.sum(axis=1)

@@ -116,7 +116,7 @@ class ClipRoll:
     Attributes:
       cable, window: the cable and the clip ("clip N").
       equality: the equality's id (`cablecheck.build.mjspec.clip_roll_name`).
-      qpos_adr, dof_adr: the edge's twist joint.
+      qpos_adr: the edge's twist joint's.
       body: the holding body's id.
       frame: plastic address of the edge's reference frame (tangent, then vector).
       local: (3,) the vector in the body's frame.
@@ -126,7 +126,6 @@ class ClipRoll:
     window: str
     equality: int
     qpos_adr: int
-    dof_adr: int
     body: int
     frame: int
     local: np.ndarray

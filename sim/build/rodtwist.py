@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from cablecheck.build.built import Built
 from cablecheck.checker.twist import carry_reference
 
 
@@ -45,9 +46,7 @@ class RodTwist:
     Attributes:
       joint_qpos: (edges,) qpos address of each edge's twist joint; -1 for
         an edge clamped by a body (no joint, angle 0).
-      joint_dof: (edges,) its dof address, -1 likewise.
       held_body: (edges,) the body whose turn a clamped edge's frame follows, -1 for the others.
-      vertices: the cable's vertices in `mjData.flexvert_xpos`.
       frames: plastic addresses of the edges' reference frames (tangent, vector: six numbers an edge).
       reference: plastic addresses of the interior vertices' reference twists.
       stiffness: (edges - 1,) G J / l per interior vertex, N m per radian
@@ -58,9 +57,7 @@ class RodTwist:
     """
 
     joint_qpos: np.ndarray
-    joint_dof: np.ndarray
     held_body: np.ndarray
-    vertices: slice
     frames: slice
     reference: slice
     stiffness: np.ndarray
@@ -98,6 +95,11 @@ class TwistReader:
       bodies: the bodies whose turn the clamped edges' frames follow, in the
         order `raw` takes their rotations.
     """
+
+    @classmethod
+    def of(cls, built: Built) -> TwistReader | None:
+        """The reader of a built scene's cables (None for a scene not simulated, `Built.rods` empty)."""
+        return cls(list(built.rods), [c.count for c in built.cables]) if built.rods else None
 
     def __init__(self, rods: list[RodTwist | None], counts: list[int]):
         """`rods` per cable, `counts` its vertices (the order of `read_many`'s points)."""
@@ -169,16 +171,15 @@ def rod_twist(m: mujoco.MjModel, flex_id: int, rest_s: np.ndarray, shear: float,
     flex = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_FLEX, flex_id)
     names = [f"{flex}_twist_{e}" for e in range(edges - 1)] + [f"{flex}_twist"]
     joint_qpos = np.full(edges, -1, int)
-    joint_dof = np.full(edges, -1, int)
     for e, name in enumerate(names):
         j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)
         if j >= 0:
-            joint_qpos[e], joint_dof[e] = int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
+            joint_qpos[e] = int(m.jnt_qposadr[j])
     first = int(m.flex_vertadr[flex_id])
     edge_body = m.flex_vertbodyid[first:first + edges]
     held_body = np.where(joint_qpos < 0, edge_body, -1).astype(int)
     start = adr + 6 * edges
     half = 0.5 * (np.diff(rest_s)[:-1] + np.diff(rest_s)[1:])
     polar = np.pi * radius ** 4 / 2.0
-    return RodTwist(joint_qpos, joint_dof, held_body, slice(first, first + edges + 1), slice(adr, start),
+    return RodTwist(joint_qpos, held_body, slice(adr, start),
                     slice(start, start + edges - 1), shear * polar / half, half, np.asarray(rest_s[1:-1], float))

@@ -119,8 +119,7 @@ def clip_rolls(built: Built, rods: list[RodTwist | None]) -> tuple[ClipRoll, ...
         material = np.cos(theta) * u + np.sin(theta) * np.cross(t, u)
         local = d.xmat[body].reshape(3, 3).T @ material
         eq = mujoco.mj_name2id(built.model, mujoco.mjtObj.mjOBJ_EQUALITY, clip_roll_name(cable, window))
-        out.append(ClipRoll(cable, window, eq, int(rod.joint_qpos[edge]), int(rod.joint_dof[edge]), body, frame,
-                            local))
+        out.append(ClipRoll(cable, window, eq, int(rod.joint_qpos[edge]), body, frame, local))
     return tuple(out)
 
 

@@ -125,7 +125,7 @@ class Simulation:
         self._poses = validate and bool(len(mesh_parts(built)))
         self._verts = [slice(c.vert_adr, c.vert_adr + c.count) for c in built.cables]   # each cable's, in order
         self.clips = ClipHold(built)       # clamped clips hold the rod's roll
-        self._twist = TwistReader(list(built.rods), [c.count for c in built.cables]) if built.rods else None
+        self._twist = TwistReader.of(built)
         self._end_bodies = np.array([[built.body_ids[c.start.body], built.body_ids[c.end.body]]
                                      for c in built.scene.cables], int).reshape(-1, 2)
         scene = built.scene

@@ -472,7 +472,7 @@ class _Checked:
         self.t_last = 0.0
         self.clamped = [_clamped(c.start) and _clamped(c.end) for c in built.scene.cables]
         self.twist: list[TwistMeter | RodTwistMeter | None] = [None] * n
-        self.rods = TwistReader(list(built.rods), [c.count for c in built.cables]) if built.rods else None
+        self.rods = TwistReader.of(built)
 
     def take_twist(self, states) -> None:
         """Each cable's twist over the batch, in degrees (`batch_twist`):
