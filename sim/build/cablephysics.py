@@ -27,6 +27,13 @@ FIRST_BENDING_MODE = 4.7300407448627040
 free): cos(bL) cosh(bL) = 1, omega_1 = (beta_1 L)^2 sqrt(EI / (mu L^4))."""
 
 
+def shear_modulus(cable: CableDef) -> float:
+    """Pa: the shear modulus G of a cable's torsion, its `twist_stiffness`, else
+    MuJoCo's default E / (2 (1 + poisson)) = E / 2 (cablecheck sets no Poisson
+    ratio; docs/twist.md)."""
+    return cable.twist_stiffness if cable.twist_stiffness is not None else cable.young / 2.0
+
+
 def first_bending_frequency(cable: CableDef, length: float) -> float:
     """omega_1 of the cable as a beam of its length clamped at both ends, rad/s.
 

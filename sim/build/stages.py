@@ -30,6 +30,7 @@ from cablecheck.build.built import (
 )
 from cablecheck.build.cablephysics import (
     first_mode,
+    shear_modulus,
 )
 from cablecheck.build.cableplan import CablePlan, has_slack, plan_cable
 from cablecheck.build.mjspec import compile_model, move_held, set_step
@@ -44,7 +45,7 @@ from cablecheck.build.substeps import (
     script_poses,
     tunnel_warnings,
 )
-from cablecheck.build.untwist import clip_rolls, untwist_ends, without_twist_state
+from cablecheck.build.untwist import untwisted
 from cablecheck.scene.records import Scene
 
 
@@ -76,9 +77,7 @@ def build_simulation(scene: Scene, planned: tuple) -> Built:
     move_held(sim, plans, frames)
     read = read_built(scene, sim, None, plans, origin, own_bits)   # the model as compiled, not yet stepped
     if scene.effects.dynamics:
-        read = replace(read, rods=cable_rods(read))
-        read = replace(read, end_rolls=untwist_ends(read, list(read.rods)))
-        read = replace(read, clip_rolls=clip_rolls(read, list(read.rods)))
+        read, stateless = untwisted(replace(read, rods=cable_rods(read)))
     poses = script_poses(read) if scene.effects.dynamics else None
     substeps = choose_substeps(read, poses)
     set_step(sim, substeps.step, cable_damping(read))
@@ -91,8 +90,7 @@ def build_simulation(scene: Scene, planned: tuple) -> Built:
     warnings += held_pinch_warnings(read)
     if scene.effects.dynamics:
         warnings += tuple(f"cable {name!r}: MuJoCo keeps no twist state for its rod, so a turned end or clip "
-                          "winds nothing in it and its twist reads 0 (docs/twist.md)"
-                          for name in without_twist_state(read, list(read.rods)))
+                          "winds nothing in it and its twist reads 0 (docs/twist.md)" for name in stateless)
     return replace(read, substeps=substeps, warnings=warnings)
 
 
@@ -114,15 +112,11 @@ def held_pinch_warnings(built: Built) -> tuple[str, ...]:
 
 
 def cable_rods(built: Built) -> tuple:
-    """Each cable's twist layout in the simulation model (`cablecheck.build.rodtwist`):
-    its shear modulus `twist_stiffness`, else MuJoCo's default E / 2 (docs/twist.md)."""
+    """Each cable's twist layout in the simulation model (`cablecheck.build.rodtwist`),
+    with its `shear_modulus`."""
     defs = {c.name: c for c in built.scene.cables}
-    out = []
-    for c in built.cables:
-        d = defs[c.name]
-        shear = d.twist_stiffness if d.twist_stiffness is not None else d.young / 2.0
-        out.append(rod_twist(built.model, c.flex_id, c.rest_s, shear, c.radius))
-    return tuple(out)
+    return tuple(rod_twist(built.model, c.flex_id, c.rest_s, shear_modulus(defs[c.name]), c.radius)
+                 for c in built.cables)
 
 
 def cable_damping(built: Built) -> dict[int, tuple[float, float]]:

@@ -20,7 +20,7 @@ starts from is the one measured here.
 A clamped clip holds the roll of its short held edge, in the middle of the
 cable, where MuJoCo's rod has a free twist joint: `clip_rolls` fixes in the
 holding body the edge's material vector at t = 0, which the run then keeps
-the edge's frame on (`cablecheck.run.cliphold`).
+the edge's frame on (`cablecheck.run.cliphold`). `untwisted` does both.
 
 This module does not read twist during a run (see `cablecheck.build.rodtwist`
 and `cablecheck.run.runner`).
@@ -70,32 +70,46 @@ def start_state(built: Built) -> mujoco.MjData:
     return d
 
 
-def untwist_ends(built: Built, rods: list[RodTwist | None]) -> tuple[EndRoll, ...]:
-    """`built.end_rolls` with the angles that start each cable untwisted
-    (`rods` per cable of `built`). Raises RuntimeError where the angle does
-    not take the twist out (MuJoCo's clamped frame not following the body
-    as documented)."""
-    if not built.end_rolls:
-        return ()
-    rod_of = {c.name: rod for c, rod in zip(built.cables, rods)}
+def untwisted(built: Built) -> tuple[Built, list[str]]:
+    """`built` with its end rolls' angles (`untwist_ends`) and its clips' holds
+    (`clip_rolls`), and the cables MuJoCo keeps no twist state for
+    (`without_twist_state`), from one or two `start_state`s: the one the
+    end rolls are measured on, and, where they turn, the one they start."""
+    rods = list(built.rods)
     d = start_state(built)
-    rolls = tuple(replace(r, angle=r.angle - float(rod_of[r.cable].twist(d.qpos, d.plastic).sum()))
-                  if rod_of[r.cable] is not None else r for r in built.end_rolls)
-    d = start_state(replace(built, end_rolls=rolls))
-    for r in rolls:
+    if built.end_rolls:
+        built = replace(built, end_rolls=untwist_ends(built, rods, d))
+        d = start_state(built)
+        check_untwisted(built, rods, d)
+    return replace(built, clip_rolls=clip_rolls(built, rods, d)), without_twist_state(built, rods, d)
+
+
+def untwist_ends(built: Built, rods: list[RodTwist | None], d: mujoco.MjData) -> tuple[EndRoll, ...]:
+    """`built.end_rolls` with the angles that start each cable untwisted
+    (`rods` per cable of `built`; `d` its `start_state` with the rolls as they are)."""
+    rod_of = {c.name: rod for c, rod in zip(built.cables, rods)}
+    return tuple(replace(r, angle=r.angle - float(rod_of[r.cable].twist(d.qpos, d.plastic).sum()))
+                 if rod_of[r.cable] is not None else r for r in built.end_rolls)
+
+
+def check_untwisted(built: Built, rods: list[RodTwist | None], d: mujoco.MjData) -> None:
+    """Raise RuntimeError where a cable of `built` still carries twist at t = 0
+    (`d` its `start_state`): MuJoCo's clamped frame not following the body
+    as documented."""
+    rod_of = {c.name: rod for c, rod in zip(built.cables, rods)}
+    for r in built.end_rolls:
         rod = rod_of[r.cable]
         left = 0.0 if rod is None else float(rod.twist(d.qpos, d.plastic).sum())
         if abs(left) > UNTWISTED * max(1.0, abs(r.angle)):
             raise RuntimeError(f"cable {r.cable!r}: turning its clamped end by {r.angle:.6g} rad left "
                                f"{left:.3g} rad of twist at t = 0")
-    return rolls
 
 
-def clip_rolls(built: Built, rods: list[RodTwist | None]) -> tuple[ClipRoll, ...]:
+def clip_rolls(built: Built, rods: list[RodTwist | None], d: mujoco.MjData) -> tuple[ClipRoll, ...]:
     """Each clamped clip's hold on its cable's roll: the twist joint of its
-    held edge and the edge's material vector at t = 0 (`start_state`, the
-    cable untwisted) in the frame of the body holding it."""
-    pending = []
+    held edge and the edge's material vector at t = 0 (`d`, the
+    `start_state`: the cable untwisted) in the frame of the body holding it."""
+    out = []
     for c, rod in zip(built.cables, rods):
         if rod is None:
             continue
@@ -105,31 +119,22 @@ def clip_rolls(built: Built, rods: list[RodTwist | None]) -> tuple[ClipRoll, ...
                 clips.setdefault(a.window, []).append(a.vertex)
         for window, vertices in clips.items():
             edge = min(vertices)
-            if rod.joint_qpos[edge] >= 0:
-                body = next(a.body for a in c.attachments if a.window == window)
-                pending.append((c.name, window, rod, edge, built.body_ids[body]))
-    if not pending:
-        return ()
-    d = start_state(built)
-    out = []
-    for cable, window, rod, edge, body in pending:
-        frame = rod.frames.start + 6 * edge
-        t, u = d.plastic[frame:frame + 3], d.plastic[frame + 3:frame + 6]
-        theta = float(d.qpos[rod.joint_qpos[edge]])
-        material = np.cos(theta) * u + np.sin(theta) * np.cross(t, u)
-        local = d.xmat[body].reshape(3, 3).T @ material
-        eq = mujoco.mj_name2id(built.model, mujoco.mjtObj.mjOBJ_EQUALITY, clip_roll_name(cable, window))
-        out.append(ClipRoll(cable, window, eq, int(rod.joint_qpos[edge]), body, frame, local))
+            if rod.joint_qpos[edge] < 0:
+                continue
+            body = built.body_ids[next(a.body for a in c.attachments if a.window == window)]
+            frame = rod.frames.start + 6 * edge
+            t, u = d.plastic[frame:frame + 3], d.plastic[frame + 3:frame + 6]
+            theta = float(d.qpos[rod.joint_qpos[edge]])
+            material = np.cos(theta) * u + np.sin(theta) * np.cross(t, u)
+            local = d.xmat[body].reshape(3, 3).T @ material
+            eq = mujoco.mj_name2id(built.model, mujoco.mjtObj.mjOBJ_EQUALITY, clip_roll_name(c.name, window))
+            out.append(ClipRoll(c.name, window, eq, int(rod.joint_qpos[edge]), body, frame, local))
     return tuple(out)
 
 
-def without_twist_state(built: Built, rods: list[RodTwist | None]) -> list[str]:
+def without_twist_state(built: Built, rods: list[RodTwist | None], d: mujoco.MjData) -> list[str]:
     """The cables whose rod MuJoCo keeps no twist state for at t = 0 (its
-    reference frames all 0 after a step, `start_state`): a turned end or clip
-    winds nothing in them and their twist reads 0. None is expected: the
-    causes found (docs/twist.md) are built around; this says so if one is not."""
-    live = [(c.name, rod) for c, rod in zip(built.cables, rods) if rod is not None]
-    if not live:
-        return []
-    d = start_state(built)
-    return [name for name, rod in live if not d.plastic[rod.frames].any()]
+    reference frames all 0 after a step, `d` the `start_state`): a turned end
+    or clip winds nothing in them and their twist reads 0. None is expected:
+    the causes found (docs/twist.md) are built around; this says so if one is not."""
+    return [c.name for c, rod in zip(built.cables, rods) if rod is not None and not d.plastic[rod.frames].any()]

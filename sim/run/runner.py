@@ -46,7 +46,7 @@ import numpy as np
 
 from cablecheck.about import version
 from cablecheck.build.built import Built
-from cablecheck.build.cablephysics import COMPRESSION_TOLERANCE
+from cablecheck.build.cablephysics import COMPRESSION_TOLERANCE, shear_modulus
 from cablecheck.build.checkview import OptionError
 from cablecheck.build.rodtwist import TwistReader
 from cablecheck.build.routecheck import route_warnings
@@ -660,11 +660,8 @@ def _twist_profile(meter, rod) -> TwistProfile | None:
 
 def _twist_moment(defn, radius: float, length: float, twist: float) -> float:
     """N m: G J twist / L, the torsional moment a straight cable of that
-    twist (radians over the cable) carries, G the scene's `twist_stiffness`
-    or E / 2 (docs/twist.md)."""
-    shear = defn.twist_stiffness if defn.twist_stiffness is not None else defn.young / 2.0
-    polar = np.pi * radius ** 4 / 2.0
-    return float(shear * polar * twist / length)
+    twist (radians over the cable) carries, G its `shear_modulus`."""
+    return float(shear_modulus(defn) * np.pi * radius ** 4 / 2.0 * twist / length)
 
 
 def _record_step(recorder: Recorder, state, res, started, closed, near: _NearPairs, pending,
