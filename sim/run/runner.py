@@ -474,16 +474,16 @@ class _Checked:
         self.twist: list[TwistMeter | RodTwistMeter | None] = [None] * n
         self.rods = TwistReader.of(built)
 
-    def take_twist(self, states) -> None:
+    def take_twist(self, states, points: np.ndarray | None) -> None:
         """Each cable's twist over the batch, in degrees (`batch_twist`):
         with dynamics, as the simulated rod carries it (`RodTwistMeter`);
         without, wound in by the frames of ends clamped at both ends
-        (`TwistMeter`; the first state, t = 0, is the reference)."""
+        (`TwistMeter`; the first state, t = 0, is the reference). `points`:
+        (S, N, 3) all cables' points of each state, in order."""
         self.batch_twist = np.full((len(states), len(self.clamped)), np.nan)
         if not states:
             return
         if states[0].rod is not None:
-            points = np.stack([np.concatenate(s.cables) for s in states])
             twists = self.rods.read_many([s.rod for s in states], points, np.stack([s.qpos for s in states]))
             for i, (rod, twist) in enumerate(zip(self.built.rods, twists)):
                 if rod is None:
@@ -509,12 +509,13 @@ class _Checked:
     def take(self, states, results) -> None:
         """The checked states (oldest first) and their results."""
         recorder, scale = self.recorder, self.built.scene.scale
-        self.take_twist(states)
+        # every cable's points of each state, for the twist and the wear
+        points = (np.stack([np.concatenate(s.cables) if s.cables else np.zeros((0, 3)) for s in states])
+                  if len(states) else None)
+        self.take_twist(states, points)
         self.timer.lap("check")
         if len(states):
-            self.wear.update_many([s.t for s in states],
-                                  np.stack([np.concatenate(s.cables) if s.cables else np.zeros((0, 3))
-                                            for s in states]),
+            self.wear.update_many([s.t for s in states], points,
                                   np.stack([s.part_poses for s in states]), [r.records for r in results])
             self.timer.lap("wear")
         if len(results):
