@@ -152,12 +152,15 @@ def tensor_1d(values: np.ndarray) -> pa.StructArray:
     return pa.Array.from_buffers(dt, 1, [None], children=[shape, names, buffer])
 
 
-def send_bars(rec: rr.RecordingStream, path: str, at: np.ndarray, values: np.ndarray) -> None:
+def send_bars(rec: rr.RecordingStream, path: str, at: np.ndarray, values: np.ndarray,
+              widths: np.ndarray | None = None) -> None:
     """A bar chart of `values` at the positions `at` along a cable, one static
-    chunk (each bar as wide as the gap to the next, the last as the one before)."""
+    chunk; each bar `widths` wide, else as wide as the gap to the next (the
+    last as the one before)."""
     at = np.asarray(at, float)
-    gaps = np.diff(at)
-    widths = np.append(gaps, gaps[-1] if len(gaps) else 1.0)
+    if widths is None:
+        gaps = np.diff(at)
+        widths = np.append(gaps, gaps[-1] if len(gaps) else 1.0)
     bar = rr.BarChart
     rec.send_columns(path, indexes=[], columns=[
         column(bar.descriptor_values(), tensor_1d(values)), column(bar.descriptor_abscissa(), tensor_1d(at)),
@@ -171,17 +174,14 @@ def send_wear(rec: rr.RecordingStream, built: Built, wear: list, rest: list[np.n
     a bar chart per measure, each one static chunk; the scale's colour bar;
     `part_shapes`: name -> (archetype in its own frame, pose at t = 0 in
     metres) of the parts the cables touch, drawn beside them."""
-    bar, line = rr.BarChart, rr.LineStrips3D
+    line = rr.LineStrips3D
     shapes = []
     for i, w in enumerate(wear):
         name = escape(w.name)
         edges = np.append(w.s, w.length) / unit
-        at, widths = tensor_1d(edges[:-1]), floats(np.diff(edges), np.float32)
         for measure, values in (("contact_time", w.contact_time), ("sliding", w.sliding / unit),
                                 ("bend_cycles", w.bend_cycles)):
-            rec.send_columns(f"wear/{name}/{measure}", indexes=[], columns=[
-                column(bar.descriptor_values(), tensor_1d(values)), column(bar.descriptor_abscissa(), at),
-                column(bar.descriptor_widths(), widths, [len(widths)])])
+            send_bars(rec, f"wear/{name}/{measure}", edges[:-1], values, np.diff(edges))
         pts = np.asarray(rest[i] if rest is not None else built.cables[i].routed, float) / unit
         shapes.append(pts)
         ends = np.stack([pts[:-1], pts[1:]], axis=1).reshape(-1, 3)          # one two-point strip per bin
