@@ -248,16 +248,17 @@ class Recorder:
                         names)
         scale = self.wear_scale()
         send_wear(rec, self.built, self._wear, self._rest, self.unit, scale, self._touched_parts())
-        twisted = tuple(c.name for c, p in zip(self.built.cables, self._twist) if p is not None and len(p.s))
+        twisted = []        # the cables whose rod carried twist: a chart of it along each
         for c, p in zip(self.built.cables, self._twist):
             if p is not None and len(p.s):
                 send_bars(rec, f"twist/{escape(c.name)}/max_moment", p.s / self.unit, p.max_moment)
+                twisted.append(c.name)
         doc = rr.TextDocument
         rec.send_columns("summary", indexes=[sim_time(np.zeros(1))],
                          columns=[column(doc.descriptor_text(), strings([self._summary])),
                                   column(doc.descriptor_media_type(), strings(["text/markdown"]))])
         extent = Extent(bounds, self.series.lowest("checks/"), frozenset(p.split("/")[0] for p in self.series.series),
-                        any(p.startswith("cables/twist/") for p in self.series.series), twisted)
+                        any(p.startswith("cables/twist/") for p in self.series.series), tuple(twisted))
         rec.send_blueprint(blueprint(self.built, self._events, self._wear, extent, self.settings.clearance, scale,
                                      self.unit, self.settings.units, self._event_status is not None, names),
                            make_active=True, make_default=True)
