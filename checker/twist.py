@@ -69,7 +69,7 @@ def _norm(x: np.ndarray, keepdims: bool = False) -> np.ndarray:
     return np.sqrt(np.add.reduce(x * x, axis=-1, keepdims=keepdims))
 
 
-def _wrap(angle: np.ndarray) -> np.ndarray:
+def wrap(angle: np.ndarray) -> np.ndarray:
     """Angles wrapped to (-pi, pi]."""
     return np.pi - np.mod(np.pi - angle, 2.0 * np.pi)
 
@@ -210,7 +210,7 @@ class TwistMeter:
     def take(self, angles: np.ndarray) -> np.ndarray:
         """Take the (S,) angles of S consecutive states from :func:`twist_angle`
         (in (-pi, pi]); return their (S,) accumulated twists, radians."""
-        twist = self.twist + np.cumsum(_wrap(np.diff(np.concatenate([[self._last], angles]))))
+        twist = self.twist + np.cumsum(wrap(np.diff(np.concatenate([[self._last], angles]))))
         self._last = float(angles[-1])
         self.twist = float(twist[-1])
         self.max_abs = max(self.max_abs, float(np.abs(twist).max()))
@@ -274,7 +274,7 @@ def carry_reference(t_old: np.ndarray, u_old: np.ndarray, ref_old: np.ndarray, t
     before, after = pairs if pairs is not None else (np.arange(len(t_new) - 1), np.arange(1, len(t_new)))
     carried = _rotate_min(u_new[before], t_new[before], t_new[after])
     raw = _signed_angle(carried, u_new[after], t_new[after])
-    return u_new, ref_old + _wrap(raw - ref_old)
+    return u_new, ref_old + wrap(raw - ref_old)
 
 
 class RodTwistMeter:

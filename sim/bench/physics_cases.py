@@ -53,7 +53,7 @@ import mujoco
 import numpy as np
 
 from cablecheck.bench import reference
-from cablecheck.build.built import CABLE_PREFIX
+from cablecheck.build.built import vertex_body
 from cablecheck.build.rodtwist import TwistReader
 from cablecheck.build.stages import build, cable_damping
 from cablecheck.run.loop import Simulation
@@ -139,7 +139,7 @@ def _start_in_shape(sim: Simulation, offsets: np.ndarray, axis: int) -> None:
     c = sim.built.cables[0]
     for v in range(c.count):
         bid = int(m.flex_vertbodyid[c.vert_adr + v])
-        if m.body(bid).name != f"{CABLE_PREFIX}{c.name}_{v}":
+        if m.body(bid).name != vertex_body(c.name, v):
             continue  # held by its body
         d.qpos[m.jnt_qposadr[m.body_jntadr[bid]] + axis] += offsets[v]
     mujoco.mj_forward(m, d)

@@ -88,6 +88,12 @@ class CableModel:
     elements: int = 0
 
 
+def vertex_body(cable: str, vertex: int) -> str:
+    """The name of the body of a cable's free vertex (flexcomp's `<name>_<i>`,
+    under `CABLE_PREFIX`); a held vertex is one of its holder's instead."""
+    return f"{CABLE_PREFIX}{cable}_{vertex}"
+
+
 def end_roll_body(cable: str) -> str:
     """The name of the body (and of its hinge) that holds a cable's clamped end
     (`cablecheck.build.mjspec`)."""

@@ -317,6 +317,17 @@ def clamp_edges(routed: np.ndarray, anchors: list[tuple],
     return np.array(points), held
 
 
+def clamped_clips(held) -> dict[str, list[int]]:
+    """Each clamped clip's window ("clip N") -> its held vertices (the two of
+    the short edge `clamp_edges` puts there), from a cable's `Held` or
+    `cablecheck.build.built.Attachment` records alike."""
+    clips: dict[str, list[int]] = {}
+    for h in held:
+        if h.kind == "clip" and h.hold == Hold.CLAMP:
+            clips.setdefault(h.window, []).append(h.vertex)
+    return clips
+
+
 def has_slack(cable: CableDef) -> bool:
     """The cable is longer than its route (clips aside), so its initial shape droops."""
     route = np.asarray(cable.route if cable.route is not None else cable.points, float)

@@ -40,7 +40,7 @@ from xml.sax.saxutils import quoteattr
 import mujoco
 import numpy as np
 
-from cablecheck.build.built import CABLE_PREFIX, end_roll_body
+from cablecheck.build.built import CABLE_PREFIX, end_roll_body, vertex_body
 from cablecheck.build.cablephysics import (
     CONTACT_SOLIMP,
     EDGE_IMPEDANCE,
@@ -50,13 +50,12 @@ from cablecheck.build.cablephysics import (
     first_mode,
     rayleigh_damping,
 )
-from cablecheck.build.cableplan import CablePlan
+from cablecheck.build.cableplan import CablePlan, clamped_clips
 from cablecheck.build.contactbits import ContactBits, cable_bits, model_bits, part_bits
 from cablecheck.build.startframes import Frames
 from cablecheck.detection.mesh import add_surfaces
 from cablecheck.scene.errors import SceneError
 from cablecheck.scene.frames import euler_matrix
-from cablecheck.scene.format import Hold
 from cablecheck.scene.records import CableDef, PartDef, Scene
 
 BASE_ARMATURE = 100.0
@@ -304,7 +303,7 @@ def _hold_vertices(spec: mujoco.MjSpec, plan: CablePlan, frames: Frames, rest: b
     for v in range(len(plan.straight)):
         if v in held:
             continue
-        b = spec.body(f"{CABLE_PREFIX}{c.name}_{v}")
+        b = spec.body(vertex_body(c.name, v))
         b.mass = per_length * share[v]
         b.inertia = [b.mass * (2.0 * c.radius) ** 2 / 6.0] * 3
 
@@ -366,11 +365,7 @@ def _add_clip_rolls(spec: mujoco.MjSpec, plan: CablePlan, timestep: float) -> No
     clip's body (`cablecheck.run.cliphold`): MuJoCo's rod clamps the frames
     of its first and last edges only. As stiff as the edges' equalities
     (their time constant and impedance, `EDGE_IMPEDANCE` at every angle)."""
-    clips: dict[str, list[int]] = {}
-    for h in plan.held:
-        if h.kind == "clip" and h.hold == Hold.CLAMP:
-            clips.setdefault(h.window, []).append(h.vertex)
-    for window, vertices in clips.items():
+    for window, vertices in clamped_clips(plan.held).items():
         spec.add_equality(name=clip_roll_name(plan.cable.name, window), type=mujoco.mjtEq.mjEQ_JOINT,
                           objtype=mujoco.mjtObj.mjOBJ_JOINT,
                           name1=f"{CABLE_PREFIX}{plan.cable.name}_twist_{min(vertices)}",

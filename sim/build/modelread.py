@@ -16,7 +16,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from cablecheck.build.built import CABLE_PREFIX, Built, EndRoll, JointDrive, PartModel, end_roll_body
+from cablecheck.build.built import CABLE_PREFIX, Built, EndRoll, JointDrive, PartModel, end_roll_body, vertex_body
 from cablecheck.build.cableplan import CablePlan, cable_model
 from cablecheck.scene.errors import SceneError
 from cablecheck.scene.mjcf import SHAPES, body_name, geom_names
@@ -106,7 +106,7 @@ def read_built(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
         n = len(plan.routed)
         for v in range(n):
             try:
-                bid = m.body(f"{CABLE_PREFIX}{c.name}_{v}").id
+                bid = m.body(vertex_body(c.name, v)).id
             except KeyError:
                 continue  # pinned to the world
             ja = int(m.body_jntadr[bid])

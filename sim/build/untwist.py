@@ -34,9 +34,9 @@ import mujoco
 import numpy as np
 
 from cablecheck.build.built import Built, ClipRoll, EndRoll
+from cablecheck.build.cableplan import clamped_clips
 from cablecheck.build.mjspec import clip_roll_name
 from cablecheck.build.rodtwist import RodTwist
-from cablecheck.scene.format import Hold
 
 PROBE_STEP = 1e-12
 """Seconds: the step `start_state` takes to have MuJoCo set the rods' frames."""
@@ -113,11 +113,7 @@ def clip_rolls(built: Built, rods: list[RodTwist | None], d: mujoco.MjData) -> t
     for c, rod in zip(built.cables, rods):
         if rod is None:
             continue
-        clips: dict[str, list[int]] = {}
-        for a in c.attachments:
-            if a.kind == "clip" and a.hold == Hold.CLAMP:
-                clips.setdefault(a.window, []).append(a.vertex)
-        for window, vertices in clips.items():
+        for window, vertices in clamped_clips(c.attachments).items():
             edge = min(vertices)
             if rod.joint_qpos[edge] < 0:
                 continue

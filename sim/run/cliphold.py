@@ -27,6 +27,7 @@ import mujoco
 import numpy as np
 
 from cablecheck.build.built import Built
+from cablecheck.checker.twist import wrap
 
 
 class ClipHold:
@@ -52,4 +53,4 @@ class ClipHold:
         held = np.einsum("kij,kj->ki", d.xmat[self._body].reshape(-1, 3, 3), self._local)
         target = np.arctan2(np.einsum("ki,ki->k", np.cross(t, u), held), np.einsum("ki,ki->k", u, held))
         now = d.qpos[self._qpos]
-        m.eq_data[self._eq, 0] = now + (np.pi - np.mod(np.pi - (target - now), 2.0 * np.pi))
+        m.eq_data[self._eq, 0] = now + wrap(target - now)

@@ -52,7 +52,7 @@ from enum import Enum
 import mujoco
 import numpy as np
 
-from cablecheck.build.built import CABLE_PREFIX, Built, end_roll_body
+from cablecheck.build.built import Built, end_roll_body, vertex_body
 from cablecheck.build.pinch import contacts_at, held_pinch
 from cablecheck.scene.errors import written
 from cablecheck.scene.records import Scene
@@ -300,7 +300,7 @@ class DivergenceWatch:
             return vertex, cable
         for i, c in enumerate(self.built.cables):
             for k, b in enumerate(np.asarray(ids[c.vert_adr:c.vert_adr + c.count]).tolist()):
-                if m.body(b).name == f"{CABLE_PREFIX}{c.name}_{k}":   # held vertices ride their body
+                if m.body(b).name == vertex_body(c.name, k):   # held vertices ride their body
                     vertex[b], cable[b] = k, i
         return vertex, cable
 
