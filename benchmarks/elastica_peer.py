@@ -242,26 +242,10 @@ def elastica_buckling(n: int, shortening: float, zeta: float, omega: float, push
     _shape(rod, pts)
     system.append(rod)
     speed = shortening * length / push
-
-    class Pushed(ea.ConstraintBase):
-        """Start clamped; end clamped and moved along -x at `speed` until `push`."""
-
-        def __init__(self, p0, p1, d0, d1, **kw):
-            super().__init__(**kw)
-            self.p0, self.p1, self.d0, self.d1 = p0, p1, d0, d1
-
-        def constrain_values(self, system, time):
-            system.position_collection[:, 0] = self.p0
-            system.position_collection[:, -1] = self.p1 - np.array([speed * min(time, push), 0.0, 0.0])
-            system.director_collection[..., 0] = self.d0
-            system.director_collection[..., -1] = self.d1
-
-        def constrain_rates(self, system, time):
-            system.velocity_collection[:, 0] = 0.0
-            system.velocity_collection[:, -1] = (-speed if time < push else 0.0, 0.0, 0.0)
-            system.omega_collection[..., 0] = 0.0
-            system.omega_collection[..., -1] = 0.0
-
+    # start clamped; end clamped, not turned, moved along -x at `speed` until `push`
+    Pushed = _turned_ends(rod.position_collection[:, 0].copy(), rod.position_collection[:, -1].copy(),
+                          rod.director_collection[..., 0].copy(), rod.director_collection[..., -1].copy(),
+                          lambda t: 0.0, lambda t: 0.0, lambda t: (speed * min(t, push), speed if t < push else 0.0))
     system.constrain(rod).using(Pushed, constrained_position_idx=(0, -1), constrained_director_idx=(0, -1))
     dt = _step(n, length, r["radius"], r["density"], r["young"])
     _damp(system, rod, zeta, omega, dt)
@@ -595,13 +579,7 @@ def buckling_row(elements: dict = ELEMENTS, shortening: float = 0.03) -> PeerRow
     c0 = time.process_time()
     r = cases.straight_buckling(shortening, CABLE_ELEMENTS["buckling"])
     cpu = time.process_time() - c0
-    # the damping ratio on the clamped rod's first mode, as the cable model holds it
-    scene = cases._scene({"scene": {"name": "b", "units": "m", "duration": 0.1, "settle": 0.0, "timestep": 0.002},
-                          "effects": {"gravity": False},
-                          "cables": [{"name": "rod", "radius": cases.ROD["radius"], "start": {"pos": [0, 0, 1]},
-                                      "end": {"pos": [cases.ROD["length"], 0, 1]}, "young": cases.ROD["young"],
-                                      "density": cases.ROD["density"]}]})
-    zeta, omega = _first_mode(build(scene, detect=False))
+    zeta, omega = _clamped_mode()   # the damping ratio on the clamped rod's first mode, as the cable model holds it
     if AVAILABLE:
         size, force, cpu_e = elastica_buckling(elements["buckling"], shortening, zeta, omega)
         fe = f"{force:.4g}"
