@@ -67,6 +67,7 @@ from cablecheck.checker.arrays import ranges
 from cablecheck.checker.bvh import aabb_pairs, assembly_pairs, obb_overlap, prefix_hits, transformed_aabb
 from cablecheck.checker.closest import row_norm
 from cablecheck.checker.convex import CONVEX, convex_pairs, support
+from cablecheck.checker.hullbound import hull_lower_bounds
 from cablecheck.checker.partset import PartSet, Placement
 from cablecheck.checker.records import Interference, PairType, severity_of
 from cablecheck.checker.shapes import segment_signed_distance_batch
@@ -452,7 +453,8 @@ def _check_indexed(parts: PartSet, placed: Placement, clearance: float, focus, p
     return [x for x in out if x[2] is not None]
 
 
-def pair_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray, reach: float) -> np.ndarray:
+def pair_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray, reach: float,
+                exact_below: float | None = None) -> np.ndarray:
     """Lower bounds (n,) on the distance between the shapes the part-part
     check measures of parts i and j (n,) at one placement: what the check's
     own measures give (two primitives: :func:`cablecheck.checker.convex.convex_pairs`;
@@ -461,16 +463,50 @@ def pair_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray,
     where nothing comes within it; negative for an overlap; 0 for a pair with
     a plane (not measured here).
 
+    With ``exact_below``: a pair with a mesh whose vertices' convex hulls
+    are farther apart than that (:func:`cablecheck.checker.hullbound.hull_lower_bounds`,
+    the hull holding the triangles) keeps the hulls' distance, a lower bound
+    of its triangles', without measuring them; the others are measured.
+
     A pair's distance drops by at most how far one part moves relative to
     the other, so a pair whose bound exceeds the clearance by more than that
     move has no record (`cablecheck.run.stepcheck`: active part pairs between checks)."""
     i, j = np.asarray(i, np.int64), np.asarray(j, np.int64)
     out = np.zeros(len(i))                                   # a plane's pairs: not measured here
     rows = np.flatnonzero(~parts.plane[i] & ~parts.plane[j])
+    if exact_below is not None and len(rows):
+        kind = parts.convex_kind
+        hulled = rows[(kind[i[rows]] < 0) | (kind[j[rows]] < 0)]
+        if len(hulled):
+            bound = _hull_values(parts, placed, i[hulled], j[hulled], reach)
+            far = bound > exact_below
+            out[hulled[far]] = np.minimum(bound[far], reach)
+            rows = np.setdiff1d(rows, hulled[far])
     if len(rows):
         value, _, hard = _measured(parts, placed, i[rows], j[rows], reach)
         out[rows] = np.where(hard, np.minimum(value, 0.0), np.minimum(value, reach))
     return out - parts.error[i] - parts.error[j]
+
+
+HULL_TOLERANCE = 0.02
+"""How near the hulls' distance (a share of the reach) their bound in
+:func:`pair_values` is taken: a bound this much low restarts a pair's
+condition that much sooner, no more."""
+
+
+def _hull_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray, reach: float) -> np.ndarray:
+    """(n,) lower bounds on the distance between the triangles of parts i
+    and j (n,): their vertices' convex hulls' (in the world), within
+    ``HULL_TOLERANCE`` of ``reach`` of it."""
+    start = np.searchsorted(parts.vert_part, np.arange(len(parts.names) + 1))
+    count = np.diff(start)
+
+    def padded(part: np.ndarray) -> np.ndarray:
+        m = int(count[part].max())
+        k = np.minimum(np.arange(m)[None], count[part][:, None] - 1)     # a short set repeats its last
+        return placed.world(part, parts.vertices[start[part][:, None] + k])
+
+    return hull_lower_bounds(padded(i), padded(j), HULL_TOLERANCE * reach)
 
 
 def _measured(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray,
@@ -649,11 +685,12 @@ class PartChecker:
             out[a // k].append(rec)
         return out
 
-    def pair_values(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray, reach: float) -> np.ndarray:
+    def pair_values(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray, reach: float,
+                    exact_below: float | None = None) -> np.ndarray:
         """:func:`pair_values` of pairs (i, j) at poses (P, 4, 4)."""
         if not len(i):
             return np.zeros(0)
-        return pair_values(self.parts, self.parts.place(poses), i, j, reach)
+        return pair_values(self.parts, self.parts.place(poses), i, j, reach, exact_below)
 
     def _primitive_pairs_many(self, poses: np.ndarray, i: np.ndarray,
                               j: np.ndarray) -> list[list[Interference]] | None:

@@ -640,7 +640,9 @@ _EL = trimesh.util.concatenate([trimesh.creation.box((30.0, 8.0, 8.0)),
 def test_pair_values_are_lower_bounds_exact_within_reach(ra, rb, x, y, z, other):
     """`pair_values` against python-fcl's distance of the same two solids: never above it (a lower bound,
     what the active part pairs' condition needs), and within 1e-6 mm of it where fcl finds the solids
-    within the reach and apart (an L-shaped mesh against a mesh, a curved primitive, a box)."""
+    within the reach and apart (an L-shaped mesh against a mesh, a curved primitive, a box); with
+    `exact_below`, the convex hulls' bound (the L's hull spans its notch) where it is past that, else
+    the same measure."""
     from cablecheck.checker.parts import pair_values
 
     shapes = {"el": (mesh_shape(_EL.vertices, _EL.faces), None, _EL),
@@ -663,3 +665,10 @@ def test_pair_values_are_lower_bounds_exact_within_reach(ra, rb, x, y, z, other)
         assert value <= d + 1e-6
         if d < reach - 0.01:
             assert value >= d - 1e-3 - ps.error[1]
+    # with exact_below: the hulls' bound where it proves more than 2 apart, never above the measure
+    hulled = pair_values(ps, ps.place(np.stack([ta, tb])), np.array([0]), np.array([1]), reach, 2.0)[0]
+    assert hulled == value or hulled > 2.0 - ps.error[0] - ps.error[1]
+    if not collide:
+        assert hulled <= d + 1e-6
+    if ps.error[1] == 0.0:                     # the measure of a curved part has its error off twice
+        assert hulled <= value + 1e-9

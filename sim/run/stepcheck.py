@@ -522,7 +522,8 @@ class StepChecks:
         if fresh:
             fresh = np.array(fresh)
             values[fresh] = self.part_checker.pair_values(poses, ai[fresh], aj[fresh],
-                                                          self.config.clearance + self.horizon)
+                                                          self.config.clearance + self.horizon,
+                                                          exact_below=self.config.clearance)
             for k in fresh.tolist():
                 memo[(int(ai[k]), int(aj[k]))] = (poses[ai[k]].copy(), poses[aj[k]].copy(), float(values[k]))
         return values
@@ -576,10 +577,12 @@ class StepChecks:
             if s == n:
                 break
             pair = (ai[k:k + 1], aj[k:k + 1])
-            out[s] = out[s] + self.part_checker.check_pairs(poses[s], *pair)
             ok[k, s] = True
-            value = float(self.part_checker.pair_values(poses[s], *pair, reach)[0])
+            # a lower bound past the clearance: no record there (the convex hulls' where they prove it)
+            value = float(self.part_checker.pair_values(poses[s], *pair, reach,
+                                                        exact_below=self.config.clearance)[0])
             if value <= self.config.clearance:
+                out[s] = out[s] + self.part_checker.check_pairs(poses[s], *pair)
                 near[k] = True
                 continue
             self._apart_gaps[k] = self._pair_gaps(poses[s], int(ai[k]), int(aj[k]), value)

@@ -1,0 +1,119 @@
+"""Lower bounds on the distance between two point sets' convex hulls, for whole arrays of pairs.
+
+A part's triangles lie in the convex hull of its vertices, so the distance
+between two hulls never exceeds the distance between the parts' triangles:
+a lower bound that costs a few passes over the vertices, where the exact
+distance between two meshes within reach of each other costs every pair of
+their triangles within that reach (thousands for two arm links beside a
+joint). The part-pair condition of the skip rule needs only a lower bound
+(`cablecheck.checker.parts.pair_values`); where the bound is too low to
+prove a pair apart (concave parts, overlapping hulls), the caller measures
+the triangles.
+
+The bound comes from the GJK iteration (Gilbert, Johnson and Keerthi
+1988) on the Minkowski difference ``D = A - B`` of the two vertex sets: the
+point ``v`` of the hull of a simplex of D's points nearest the origin moves
+to take in D's support point along ``-v``, the simplex keeping the points
+that hold ``v`` (found among all its faces: four points at most, fifteen
+faces). Every direction ``u = v / |v|`` visited proves the hulls at least
+``min_a u.a - max_b u.b`` apart (their projections on ``u`` are separated
+by that much), whatever the iteration; ``|v|`` is at least the distance, so
+the iteration stops once the two meet within the tolerance. The best
+separation seen is returned: never above the hulls' distance, 0 or less
+where they may overlap.
+
+Why by hand: the convex-primitive refinement (:mod:`cablecheck.checker.convex`)
+takes shapes by kind and size, not vertex sets; coal and python-fcl answer
+one pair per call and bring native dependencies this package does not have.
+
+Not here: which pairs, triangles, records (:mod:`cablecheck.checker.parts`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+HULL_ITERS = 64
+"""GJK iterations at most: each proves a bound, the last the best."""
+
+_FACES = [np.array(f) for f in ([0], [1], [2], [3], [0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3],
+                                [0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3], [0, 1, 2, 3])]
+"""The faces of a simplex of four slots (a slot repeating another makes its faces degenerate)."""
+
+
+def _nearest_on_simplex(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The point (n, 3) of the hull of w (n, 4, 3) nearest the origin and
+    the slots (n, 4) bool that hold it: of the faces whose affine hull's
+    nearest point lies inside them (barycentric weights >= 0, the face
+    not degenerate), the nearest; a single point always qualifies."""
+    n = len(w)
+    best = np.full(n, np.inf)
+    point = w[:, 0].copy()
+    slots = np.zeros((n, 4), bool)
+    for face in _FACES:
+        p0 = w[:, face[0]]
+        if len(face) == 1:
+            x, lam_ok = p0, np.ones(n, bool)
+        else:
+            e = w[:, face[1:]] - p0[:, None]                      # (n, m, 3)
+            g = np.einsum("nij,nkj->nik", e, e)
+            rhs = -np.einsum("nij,nj->ni", e, p0)
+            det = np.linalg.det(g)
+            good = np.abs(det) > 1e-12 * np.maximum(np.einsum("nii->n", g), 1e-300) ** len(face[1:])
+            t = np.zeros((n, len(face) - 1))
+            if good.any():
+                t[good] = np.linalg.solve(g[good], rhs[good][..., None])[..., 0]
+            lam_ok = good & (t >= 0.0).all(axis=1) & (t.sum(axis=1) <= 1.0)
+            x = p0 + np.einsum("ni,nij->nj", t, e)
+        d = np.einsum("nj,nj->n", x, x)
+        take = lam_ok & (d < best)
+        best = np.where(take, d, best)
+        point = np.where(take[:, None], x, point)
+        held = np.zeros(4, bool)
+        held[face] = True
+        slots = np.where(take[:, None], held[None], slots)
+    return point, slots
+
+
+def hull_lower_bounds(va: np.ndarray, vb: np.ndarray, tol: np.ndarray | float) -> np.ndarray:
+    """(n,) lower bounds on the distance between the convex hulls of the
+    point sets va[k] (n, m, 3) and vb[k] (n, q, 3) (a set padded with
+    copies of one of its points: the hull is the same), within ``tol``
+    (scalar or (n,)) of the hulls' distance once converged; 0 or less where
+    the hulls may overlap."""
+    n = len(va)
+    best = np.full(n, -np.inf)
+    if not n:
+        return np.zeros(0)
+    tol = np.broadcast_to(np.asarray(tol, float), (n,))
+    w = np.repeat((va[:, :1] - vb[:, :1]), 4, axis=1)            # the simplex: one point, repeated
+    act = np.arange(n)
+    for _ in range(HULL_ITERS):
+        v, slots = _nearest_on_simplex(w[act])
+        ln = np.sqrt(np.einsum("ij,ij->i", v, v))
+        live = ln > 0                                             # the origin in the hull: overlap
+        act, v, ln, slots = act[live], v[live], ln[live], slots[live]
+        if not len(act):
+            break
+        u = v / ln[:, None]
+        pa = np.einsum("nmj,nj->nm", va[act], u)
+        pb = np.einsum("nmj,nj->nm", vb[act], u)
+        r = np.arange(len(act))
+        ka, kb = pa.argmin(axis=1), pb.argmax(axis=1)
+        sep = pa[r, ka] - pb[r, kb]
+        best[act] = np.maximum(best[act], sep)
+        go = ln - sep > tol[act]
+        # the simplex: the slots holding v, then D's support point along -v, repeated into the rest
+        kept = w[act]
+        first = slots.argmax(axis=1)
+        fill = np.where(slots[..., None], kept, kept[r, first][:, None])
+        order = np.argsort(~slots, axis=1, kind="stable")
+        fill = np.take_along_axis(fill, order[..., None], axis=1)
+        count = slots.sum(axis=1)
+        new = va[act, ka] - vb[act, kb]
+        at = np.arange(4)[None] >= count[:, None]
+        w[act] = np.where(at[..., None], new[:, None], fill)
+        act = act[go & (count < 4)]
+        if not len(act):
+            break
+    return np.where(np.isfinite(best), best, 0.0)
