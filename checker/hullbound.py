@@ -36,42 +36,79 @@ import numpy as np
 HULL_ITERS = 64
 """GJK iterations at most: each proves a bound, the last the best."""
 
-_FACES = [np.array(f) for f in ([0], [1], [2], [3], [0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3],
-                                [0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3], [0, 1, 2, 3])]
-"""The faces of a simplex of four slots (a slot repeating another makes its faces degenerate)."""
+_FACES = tuple(np.array(f) for f in (
+    [[0], [1], [2], [3]],
+    [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]],
+    [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]],
+    [[0, 1, 2, 3]]))
+"""The faces of a simplex of four slots, by size (a slot repeating another makes its faces degenerate)."""
+
+
+def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    return np.einsum("...j,...j->...", u, v)
+
+
+def _affine_nearest(p0: np.ndarray, e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The point nearest the origin of the faces ``p0 + sum t_i e_i``
+    (p0 (..., 3), edges e (..., m, 3), m = 0 to 3) where it lies inside the
+    face (t_i >= 0, sum <= 1) and the face is not degenerate: (x (..., 3),
+    ok (...)). Closed forms (Cramer's rule) by the face's size."""
+    m = e.shape[-2]
+    if m == 0:
+        return p0, np.ones(p0.shape[:-1], bool)
+    if m == 1:
+        a = e[..., 0, :]
+        aa = _dot(a, a)
+        good = aa > 0.0
+        t = -_dot(a, p0) / np.where(good, aa, 1.0)
+        return p0 + t[..., None] * a, good & (t >= 0.0) & (t <= 1.0)
+    if m == 2:
+        a, b = e[..., 0, :], e[..., 1, :]
+        aa, ab, bb = _dot(a, a), _dot(a, b), _dot(b, b)
+        r0, r1 = -_dot(a, p0), -_dot(b, p0)
+        det = aa * bb - ab * ab
+        good = det > 1e-12 * (aa * bb)
+        det = np.where(good, det, 1.0)
+        t0, t1 = (bb * r0 - ab * r1) / det, (aa * r1 - ab * r0) / det
+        x = p0 + t0[..., None] * a + t1[..., None] * b
+        return x, good & (t0 >= 0.0) & (t1 >= 0.0) & (t0 + t1 <= 1.0)
+    a, b, c = e[..., 0, :], e[..., 1, :], e[..., 2, :]      # a tetrahedron: the origin inside it, or not
+    bc = np.cross(b, c)
+    det = _dot(a, bc)
+    scale = np.sqrt(_dot(a, a) * _dot(b, b) * _dot(c, c))
+    good = np.abs(det) > 1e-12 * scale
+    det = np.where(good, det, 1.0)
+    t0 = -_dot(p0, bc) / det
+    t1 = -_dot(a, np.cross(p0, c)) / det
+    t2 = -_dot(a, np.cross(b, p0)) / det
+    x = p0 + t0[..., None] * a + t1[..., None] * b + t2[..., None] * c
+    return x, good & (t0 >= 0.0) & (t1 >= 0.0) & (t2 >= 0.0) & (t0 + t1 + t2 <= 1.0)
 
 
 def _nearest_on_simplex(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The point (n, 3) of the hull of w (n, 4, 3) nearest the origin and
     the slots (n, 4) bool that hold it: of the faces whose affine hull's
     nearest point lies inside them (barycentric weights >= 0, the face
-    not degenerate), the nearest; a single point always qualifies."""
+    not degenerate), the nearest; a single point always qualifies. The
+    faces of one size in one pass."""
     n = len(w)
     best = np.full(n, np.inf)
     point = w[:, 0].copy()
     slots = np.zeros((n, 4), bool)
-    for face in _FACES:
-        p0 = w[:, face[0]]
-        if len(face) == 1:
-            x, lam_ok = p0, np.ones(n, bool)
-        else:
-            e = w[:, face[1:]] - p0[:, None]                      # (n, m, 3)
-            g = np.einsum("nij,nkj->nik", e, e)
-            rhs = -np.einsum("nij,nj->ni", e, p0)
-            det = np.linalg.det(g)
-            good = np.abs(det) > 1e-12 * np.maximum(np.einsum("nii->n", g), 1e-300) ** len(face[1:])
-            t = np.zeros((n, len(face) - 1))
-            if good.any():
-                t[good] = np.linalg.solve(g[good], rhs[good][..., None])[..., 0]
-            lam_ok = good & (t >= 0.0).all(axis=1) & (t.sum(axis=1) <= 1.0)
-            x = p0 + np.einsum("ni,nij->nj", t, e)
-        d = np.einsum("nj,nj->n", x, x)
-        take = lam_ok & (d < best)
-        best = np.where(take, d, best)
-        point = np.where(take[:, None], x, point)
-        held = np.zeros(4, bool)
-        held[face] = True
-        slots = np.where(take[:, None], held[None], slots)
+    for faces in _FACES:
+        f = len(faces)
+        p = w[:, faces]                                            # (n, f, m, 3)
+        p0 = p[:, :, 0]
+        x, ok = _affine_nearest(p0, p[:, :, 1:] - p0[:, :, None])
+        d = np.where(ok, np.einsum("nfj,nfj->nf", x, x), np.inf)
+        k = d.argmin(axis=1)
+        r = np.arange(n)
+        take = d[r, k] < best
+        best = np.where(take, d[r, k], best)
+        point = np.where(take[:, None], x[r, k], point)
+        held = np.zeros((f, 4), bool)
+        np.put_along_axis(held, faces, True, axis=1)
+        slots = np.where(take[:, None], held[k], slots)
     return point, slots
 
 

@@ -496,15 +496,14 @@ condition that much sooner, no more."""
 
 def _hull_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray, reach: float) -> np.ndarray:
     """(n,) lower bounds on the distance between the triangles of parts i
-    and j (n,): their vertices' convex hulls' (in the world), within
-    ``HULL_TOLERANCE`` of ``reach`` of it."""
-    start = np.searchsorted(parts.vert_part, np.arange(len(parts.names) + 1))
-    count = np.diff(start)
+    and j (n,): their convex hulls' (:meth:`PartSet.hull_points`, in the
+    world), within ``HULL_TOLERANCE`` of ``reach`` of it."""
 
     def padded(part: np.ndarray) -> np.ndarray:
-        m = int(count[part].max())
-        k = np.minimum(np.arange(m)[None], count[part][:, None] - 1)     # a short set repeats its last
-        return placed.world(part, parts.vertices[start[part][:, None] + k])
+        hulls = [parts.hull_points(int(k)) for k in part.tolist()]      # the few active pairs' parts
+        m = max(len(h) for h in hulls)
+        return placed.world(part, np.stack([np.concatenate([h, np.repeat(h[-1:], m - len(h), axis=0)])
+                                            for h in hulls]))
 
     return hull_lower_bounds(padded(i), padded(j), HULL_TOLERANCE * reach)
 

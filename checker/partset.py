@@ -240,6 +240,29 @@ class PartSet:
         return key, tuple(kinds), size
 
     @cached_property
+    def _hulls(self) -> dict[int, np.ndarray]:
+        """Part -> its convex hull's vertices, filled as :meth:`hull_points` asks."""
+        return {}
+
+    def hull_points(self, part: int) -> np.ndarray:
+        """(h, 3) the vertices of part ``part``'s convex hull in its frame
+        (its triangles' corners where qhull cannot hull them: flat, or fewer
+        than four), computed once: the hull is the same, its support a pass
+        over fewer points (:mod:`cablecheck.checker.hullbound`)."""
+        kept = self._hulls.get(part)
+        if kept is None:
+            from scipy.spatial import ConvexHull, QhullError  # loaded already by trimesh (meshes)
+
+            start = np.searchsorted(self.vert_part, [part, part + 1])
+            v = self.vertices[start[0]:start[1]]
+            try:
+                kept = v[ConvexHull(v).vertices] if len(v) > 4 else v
+            except QhullError:
+                kept = v
+            self._hulls[part] = kept
+        return kept
+
+    @cached_property
     def convex_kind(self) -> np.ndarray:
         """(P,) index into :data:`cablecheck.checker.convex.CONVEX` of each primitive part, -1 for meshes and planes."""
         index = {t: k for k, t in enumerate(CONVEX)}
