@@ -31,7 +31,7 @@ from cablecheck.checker.interference import Checker
 from cablecheck.checker.interference.discrete import discretise
 from cablecheck.checker.interference.hits import Hits, worst_records
 from cablecheck.checker.interference.structure import PartTable, structure_exact_pairs
-from cablecheck.checker.records import PairType
+from cablecheck.checker.records import Interference, PairType
 from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape
 
@@ -92,6 +92,10 @@ class Recheck:
         template = {c.name: c for c in cables}
         states = [_StateCables(template, spans, x) for x in points]
         return BatchRecheck(self, states, np.asarray(poses, float), (points, spans))
+
+    def exact_checker(self, k: int) -> Checker:
+        """Part k's one-part checker with method exact at the run's settings."""
+        return self._checker(k, False, True)
 
     def _checker(self, k: int, hull: bool, exact: bool = True, config: CheckConfig | None = None) -> Checker:
         """Part k's one-part checker: its shape or hull, method exact or
@@ -281,10 +285,23 @@ def exact_many(checker: Checker, cables: Sequence[CableState | None], poses: np.
                 exclusions: Sequence[Exclusion], key: tuple[str, str, str]) -> list[float | None]:
     """A cable against a one-part exact checker's part at S states (poses
     (S, 4, 4)), as ``checker.check([cable], pose, exclusions)`` classes the
-    pair at each (None: clear, or no cable there), in one pass: the S
-    cables discretised together (each on its own, the same bits), every
-    element of cable s paired with part s only."""
-    out: list[float | None] = [None] * len(cables)
+    pair at each (None: clear, or no cable there): :func:`exact_records_many`'s distances."""
+    return [None if r is None else float(r.min_distance)
+            for r in exact_records_many(checker, cables, poses, exclusions, key)]
+
+
+def exact_records_many(checker: Checker, cables: Sequence[CableState | None], poses: np.ndarray,
+                       exclusions: Sequence[Exclusion], key: tuple[str, str, str],
+                       below: Sequence[float] | None = None) -> list[Interference | None]:
+    """The record ``checker.check([cable], pose, exclusions)`` gives the pair
+    ``key`` of a cable against a one-part exact checker's part at each of S
+    states (poses (S, 4, 4); None: clear, or no cable there), in one pass:
+    the S cables discretised together (each on its own, the same bits),
+    every element of cable s paired with part s only. ``below`` (S,): only
+    the elements that may come below a state's value are measured, so its
+    record is the same where the pair comes below it, and may be missing or
+    not the pair's least where it does not."""
+    out: list[Interference | None] = [None] * len(cables)
     rows = [i for i, c in enumerate(cables) if c is not None]
     if not rows or checker._tab is None:
         return out
@@ -300,20 +317,26 @@ def exact_many(checker: Checker, cables: Sequence[CableState | None], poses: np.
     cuts = (np.concatenate([cut_c, cut_c]), np.concatenate([np.tile(one.lo, n), np.tile(one.hi, n)]))
     dp = discretise([cables[i] for i in rows], checker.config, cuts)
     hits = Hits()
-    structure_exact_pairs(dp, tab, checker.config, excl, hits, dp.seg, dp.cable[dp.seg])
+    limit = None if below is None else np.asarray(below, float)[rows][dp.cable[dp.seg]]
+    structure_exact_pairs(dp, tab, checker.config, excl, hits, dp.seg, dp.cable[dp.seg], limit)
     if hits.parts:
         t, a, _, v, w, s_at, sb = (np.concatenate(x) for x in zip(*hits.parts))
         found = worst_records(n, a, t, np.zeros_like(a), np.zeros_like(a), v, w, s_at, sb,
                               checker.config.clearance, [key[1]], lambda _: [key[2]])
         for i, recs in zip(rows, found):
-            out[i] = _distance(recs, key)
+            out[i] = _record(recs, key)
     return out
 
 
-def _distance(records, key: tuple[str, str, str]) -> float | None:
+def _record(records, key: tuple[str, str, str]) -> Interference | None:
     kind, a, b = key
     for r in records:
         ra, rb = (r.a, r.b) if not (r.type == PairType.CABLE_CABLE and r.a > r.b) else (r.b, r.a)
         if PairType(r.type) == kind and ra == a and rb == b:
-            return float(r.min_distance)
+            return r
     return None
+
+
+def _distance(records, key: tuple[str, str, str]) -> float | None:
+    r = _record(records, key)
+    return None if r is None else float(r.min_distance)

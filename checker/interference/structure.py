@@ -230,11 +230,14 @@ def structure_exact(dp, ch, tab, config, excl, hits) -> None:
     structure_exact_pairs(dp, tab, config, excl, hits, i0, pk)
 
 
-def structure_exact_pairs(dp, tab, config, excl, hits, i0: np.ndarray, pk: np.ndarray) -> None:
+def structure_exact_pairs(dp, tab, config, excl, hits, i0: np.ndarray, pk: np.ndarray,
+                          below: np.ndarray | None = None) -> None:
     """:func:`structure_exact` on given (element, part) candidates (element
     i0 joins points i0 and i0 + 1): any superset of the broad phase's
     candidates gives the same records (the filters below only drop elements
-    farther than the clearance)."""
+    farther than the clearance). ``below`` (n,): each candidate measured
+    only where it may come below that (at most the clearance) instead:
+    the least value of a pair stays exact where it is below its ``below``."""
     p, s = dp.p, dp.s
     if len(i0) == 0:
         return
@@ -243,7 +246,8 @@ def structure_exact_pairs(dp, tab, config, excl, hits, i0: np.ndarray, pk: np.nd
     # Cuts were inserted at the window ends, so an element is in a window
     # exactly when its midpoint is.
     keep = np.flatnonzero(~excluded(dp.cable[i0], pk, 0.5 * (dp.m[i0] + dp.m[i0 + 1]), excl))
-    near = keep[segments_within(tab, pk[keep], a[keep], b[keep], dp.radius[i0[keep]], config.clearance)]
+    limit = config.clearance if below is None else np.minimum(below[keep], config.clearance)
+    near = keep[segments_within(tab, pk[keep], a[keep], b[keep], dp.radius[i0[keep]], limit)]
     pk, i0, a, b = pk[near], i0[near], a[near], b[near]
     d, t = segment_distances(tab, pk, a, b)
     where = p[i0] + t[:, None] * (p[i0 + 1] - p[i0])
@@ -252,18 +256,19 @@ def structure_exact_pairs(dp, tab, config, excl, hits, i0: np.ndarray, pk: np.nd
 
 
 def segments_within(tab: PartTable, pk: np.ndarray, a: np.ndarray, b: np.ndarray, rad: np.ndarray,
-                    limit: float) -> np.ndarray:
+                    limit: float | np.ndarray) -> np.ndarray:
     """Indices of the local segments ``a b`` (n, 3) whose signed distance to
-    parts ``pk`` (n,), less ``rad`` (n,), may lie below ``limit``: those
+    parts ``pk`` (n,), less ``rad`` (n,), may lie below ``limit`` (scalar or (n,)): those
     within ``rad + limit`` of the part's local box whose midpoint's distance
     less half their length (signed distance is 1-Lipschitz, so that bounds
     the segment's from below) is below it too. The others need no search."""
+    limit = np.broadcast_to(np.asarray(limit, float), (len(pk),))
     thr = (rad + limit)[:, None]
     box = np.all((np.maximum(a, b) >= tab.lo[pk] - thr) & (np.minimum(a, b) <= tab.hi[pk] + thr), axis=1)
     idx = np.flatnonzero(box)
     half = 0.5 * row_norm(b[idx] - a[idx])
-    mid = point_distances(tab, pk[idx], 0.5 * (a[idx] + b[idx]), False, limit + half + rad[idx])
-    return idx[mid - half - rad[idx] < limit]
+    mid = point_distances(tab, pk[idx], 0.5 * (a[idx] + b[idx]), False, limit[idx] + half + rad[idx])
+    return idx[mid - half - rad[idx] < limit[idx]]
 
 
 def segment_distances(tab: PartTable, pk: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

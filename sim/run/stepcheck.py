@@ -41,13 +41,14 @@ from cablecheck.checker.advance.partpairs import PartPairGaps
 from cablecheck.checker.cable import CableMeasures, taut_margin
 from cablecheck.checker.events import AllowList, AllowRule
 from cablecheck.checker.interference import Checker, single_records_many
-from cablecheck.checker.interference.discrete import around_centres
+from cablecheck.checker.interference.discrete import around_centres, points_error
 from cablecheck.checker.interference.excused import ExcusedLog, ExcusedWorst
 from cablecheck.checker.interference.margins import Closest, MarginLog
 from cablecheck.checker.interference.structure import PartTable, point_distances
 from cablecheck.checker.parts import PartChecker
 from cablecheck.checker.recheck import Recheck
 from cablecheck.checker.records import Interference, PairType
+from cablecheck.checker.refine import refined_records
 from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from cablecheck.checker.shapes import Shape
 from cablecheck.checker.validation import SimulatorPairs, Validation, ValidationSummary
@@ -292,6 +293,7 @@ class StepChecks:
                                      allow=self.allow)
         self.hull_gaps = HullGaps(built) if detector is not None else None   # cables held on a hull
         self._recheck = Recheck(self.checker.parts, config, self.exclusions)
+        self._points_error = {c.name: points_error(c.radius, config.spacing) for c in built.cables}
         self._measures = CableMeasures(offsets)
         self._rest_length = np.array([c.length for c in built.cables], float)
         limit = np.array([np.inf if c.min_bend_radius is None else c.min_bend_radius
@@ -335,6 +337,7 @@ class StepChecks:
             if j < len(states):
                 out.append(self._full(states[j], pts[j], poses[j], strain[j], bend[j]))
                 j += 1
+        out = self._refined(states, poses, out)
         times = np.array([s.t for s in states])
         if self.excused:
             self.excused.add(times, pts, poses[:, self.checked_parts])
@@ -343,6 +346,22 @@ class StepChecks:
         if self.detector is not None:
             return self._validate(states, pts, out)
         return out
+
+    def _refined(self, states: Sequence[StepState], poses: np.ndarray,
+                 results: list[StepResult]) -> list[StepResult]:
+        """Method ``points``: its soft cable-part records within the method's
+        own error of touching replaced by method ``exact``'s
+        (:func:`cablecheck.checker.refine.refined_records`): a hose resting on a link
+        reads as touching it, as MuJoCo's contact says, not a fraction of a
+        millimetre off."""
+        if self.config.method != "points":
+            return results
+        swaps = refined_records([r.cable_records for r in results],
+                                lambda i: {c.name: c for c in self._cable_states(states[i])},
+                                poses[:, self.checked_parts], self._recheck, self._points_error)
+        return [res if not swap else replace(res, records=[swap.get(id(r), r) for r in res.records],
+                                             cable_records=[swap.get(id(r), r) for r in res.cable_records])
+                for res, swap in zip(results, swaps)]
 
     def _validate(self, states: Sequence[StepState], pts: np.ndarray,
                   results: list[StepResult]) -> list[StepResult]:
