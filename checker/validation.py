@@ -584,8 +584,10 @@ class Validation:
         ``dm``; None: clear), and the distance that shows it (None where the
         two distances themselves do): each claim of :class:`Reason` is
         checked in turn, the most specific first: at a boundary with both
-        distances known, convex hull, between points, at a boundary with
-        one side clear, self with no margin; else unexplained. ``second``
+        distances known, convex hull (by discrete points), between points,
+        convex hull (by method exact: credited only where the mesh's own exact
+        distance did not explain it), at a boundary with one side clear, self
+        with no margin; else unexplained. ``second``
         gives the second opinions (None: nothing can be checked but the
         distances themselves)."""
         c = self.clearance
@@ -597,15 +599,17 @@ class Validation:
         opinion = second()
         exact = dc if self.method == "exact" else None
         if opinion is not None:
-            if kind in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) and b in self.mesh_parts:
-                for by_exact in (False, True):        # discrete points first: cheaper, often enough
-                    d = opinion.hull(key, by_exact)
-                    if severity_of(d, c) == cm:
-                        return Reason.CONVEX_HULL, d
+            hulled = kind in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) and b in self.mesh_parts
+            # the hull by discrete points first (cheaper, often enough); by exact only once the
+            # mesh's own exact distance does not explain it (a convex mesh is its own hull)
+            if hulled and severity_of(d := opinion.hull(key, False), c) == cm:
+                return Reason.CONVEX_HULL, d
             if self.method == "points":
                 exact = opinion.exact(key)
                 if severity_of(exact, c) == cm and _least(exact, None) < _least(dc, None):
                     return Reason.BETWEEN_POINTS, exact
+            if hulled and severity_of(d := opinion.hull(key, True), c) == cm:
+                return Reason.CONVEX_HULL, d
             # one side clear, the other just below the clearance: the pair's
             # distance by method exact, found up to c + tol, within tol of c
             if (dc is None) != (dm is None) and c - tol <= _least(dc, dm):

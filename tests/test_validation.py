@@ -305,6 +305,32 @@ def test_convex_hull_reason_is_checked():
     assert w.disagreements[0].reason is Reason.UNEXPLAINED and w.unexplained == 1
 
 
+def test_a_convex_mesh_is_never_credited_to_its_hull():
+    """A box mesh (its own convex hull) with a corner between two of a cable's discrete points,
+    just inside the cable: the points read it soft, MuJoCo hard. Method exact on the mesh itself
+    explains it, so the reason is 'between points'; the hull by exact (the same distance) is asked
+    only after, and not given (found by helper-24 on the UR5e's convex links, 522 steps)."""
+    import trimesh
+
+    from cablecheck.checker.recheck import Recheck
+    from cablecheck.checker.scene_state import CableState, CheckConfig, PartState
+    from cablecheck.checker.shapes import mesh_shape
+    box = trimesh.creation.box((0.02, 0.1, 0.02))
+    pose = np.eye(4)               # turned 45 degrees about y: an edge up, along y, 0.1 mm into the cable
+    pose[:3, :3] = [[np.sqrt(0.5), 0.0, np.sqrt(0.5)], [0.0, 1.0, 0.0], [-np.sqrt(0.5), 0.0, np.sqrt(0.5)]]
+    pose[:3, 3] = [0.005, 0.0, -0.0049 - 0.01 * np.sqrt(2.0)]
+    part = PartState("box", mesh_shape(box.vertices, box.faces), np.eye(4))
+    cable = CableState("c", np.array([[-0.03, 0.0, 0.0], [0.0, 0.0, 0.0], [0.01, 0.0, 0.0], [0.04, 0.0, 0.0]]), 0.005)
+    opinion = Recheck([part], CheckConfig(clearance=0.005), []).at([cable], pose[None])
+    key = ("cable-structure", "c", "box")
+    assert abs(opinion.exact(key) + 1e-4) < 1e-9 and abs(opinion.hull(key) + 1e-4) < 1e-9
+    v = Validation(clearance=0.005, method="points", mesh_parts=frozenset({"box"}))
+    soft = Interference(PairType.CABLE_STRUCTURE, "c", "box", 0.002, Severity.SOFT, np.zeros(3), 0.03)
+    v.compare(0.0, [soft], {key: (-1e-4, np.zeros(3))}, lambda: opinion)
+    (d,) = v.disagreements
+    assert d.reason is Reason.BETWEEN_POINTS and abs(d.second + 1e-4) < 1e-9
+
+
 def test_hull_opinions_for_a_batch_are_each_state_alone():
     """The hull by discrete points or exact, found for a batch of states at once, is
     each state's own opinion (to the bit) and the full check's record against the hull
