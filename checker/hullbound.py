@@ -118,10 +118,19 @@ def hull_lower_bounds(va: np.ndarray, vb: np.ndarray, tol: np.ndarray | float) -
     copies of one of its points: the hull is the same), within ``tol``
     (scalar or (n,)) of the hulls' distance once converged; 0 or less where
     the hulls may overlap."""
+    return hull_separations(va, vb, tol)[0]
+
+
+def hull_separations(va: np.ndarray, vb: np.ndarray,
+                     tol: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`hull_lower_bounds` and the unit directions (n, 3) that prove
+    them, pointing from b's hull to a's: ``min_a u.a - max_b u.b`` is the
+    bound (zero rows where none was proven)."""
     n = len(va)
     best = np.full(n, -np.inf)
+    best_u = np.zeros((n, 3))
     if not n:
-        return np.zeros(0)
+        return np.zeros(0), best_u
     tol = np.broadcast_to(np.asarray(tol, float), (n,))
     w = np.repeat((va[:, :1] - vb[:, :1]), 4, axis=1)            # the simplex: one point, repeated
     act = np.arange(n)
@@ -138,7 +147,9 @@ def hull_lower_bounds(va: np.ndarray, vb: np.ndarray, tol: np.ndarray | float) -
         r = np.arange(len(act))
         ka, kb = pa.argmin(axis=1), pb.argmax(axis=1)
         sep = pa[r, ka] - pb[r, kb]
-        best[act] = np.maximum(best[act], sep)
+        better = sep > best[act]
+        best[act[better]] = sep[better]
+        best_u[act[better]] = u[better]
         go = ln - sep > tol[act]
         # the simplex: the slots holding v, then D's support point along -v, repeated into the rest
         kept = w[act]
@@ -153,4 +164,4 @@ def hull_lower_bounds(va: np.ndarray, vb: np.ndarray, tol: np.ndarray | float) -
         act = act[go & (count < 4)]
         if not len(act):
             break
-    return np.where(np.isfinite(best), best, 0.0)
+    return np.where(np.isfinite(best), best, 0.0), best_u

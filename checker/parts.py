@@ -67,7 +67,7 @@ from cablecheck.checker.arrays import ranges
 from cablecheck.checker.bvh import aabb_pairs, assembly_pairs, obb_overlap, prefix_hits, transformed_aabb
 from cablecheck.checker.closest import row_norm
 from cablecheck.checker.convex import CONVEX, convex_pairs, support
-from cablecheck.checker.hullbound import hull_lower_bounds
+from cablecheck.checker.hullbound import hull_separations
 from cablecheck.checker.partset import PartSet, Placement
 from cablecheck.checker.records import Interference, PairType, severity_of
 from cablecheck.checker.shapes import segment_signed_distance_batch
@@ -471,21 +471,56 @@ def pair_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray,
     A pair's distance drops by at most how far one part moves relative to
     the other, so a pair whose bound exceeds the clearance by more than that
     move has no record (`cablecheck.run.stepcheck`: active part pairs between checks)."""
+    return pair_values_axes(parts, placed, i, j, reach, exact_below)[0]
+
+
+def pair_values_axes(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray, reach: float,
+                     exact_below: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`pair_values`, and (n, 3) for the pairs the convex hulls
+    answered the world direction that separates them (from j's hull to i's;
+    :func:`hull_separations_along` follows it), zero for the others."""
     i, j = np.asarray(i, np.int64), np.asarray(j, np.int64)
     out = np.zeros(len(i))                                   # a plane's pairs: not measured here
+    axes = np.zeros((len(i), 3))
     rows = np.flatnonzero(~parts.plane[i] & ~parts.plane[j])
     if exact_below is not None and len(rows):
         kind = parts.convex_kind
         hulled = rows[(kind[i[rows]] < 0) | (kind[j[rows]] < 0)]
         if len(hulled):
-            bound = _hull_values(parts, placed, i[hulled], j[hulled], reach)
+            bound, u = _hull_values(parts, placed, i[hulled], j[hulled], reach)
             far = bound > exact_below
             out[hulled[far]] = np.minimum(bound[far], reach)
+            axes[hulled[far]] = u[far]
             rows = np.setdiff1d(rows, hulled[far])
     if len(rows):
         value, _, hard = _measured(parts, placed, i[rows], j[rows], reach)
         out[rows] = np.where(hard, np.minimum(value, 0.0), np.minimum(value, reach))
-    return out - parts.error[i] - parts.error[j]
+    return out - parts.error[i] - parts.error[j], axes
+
+
+def hull_separations_along(parts: PartSet, poses: np.ndarray, a: int, b: int, axis: np.ndarray,
+                           at: np.ndarray) -> np.ndarray:
+    """(S,) lower bounds on the distance between the triangles of parts a
+    and b at poses (S, P, 4, 4), less both tessellation errors: their hulls'
+    separation along ``axis`` (a world direction from b's hull to a's at
+    poses ``at`` (P, 4, 4)), the axis carried along with a, and, apart,
+    with b (the better of the two at each state). Whatever the direction,
+    two solids' projections on it separated by ``g`` are at least ``g``
+    apart: no bound on how far a part moved is needed, so two links beside a
+    joint keep their separating plane however far their far ends swing."""
+    poses = np.asarray(poses, float)
+    ha, hb = parts.hull_points(a), parts.hull_points(b)
+    ra, ta = poses[:, a, :3, :3], poses[:, a, :3, 3]
+    rb, tb = poses[:, b, :3, :3], poses[:, b, :3, 3]
+    best = np.full(len(poses), -np.inf)
+    for part, rot in ((a, at[a, :3, :3]), (b, at[b, :3, :3])):
+        fixed = rot.T @ np.asarray(axis, float)                        # the axis in that part's frame
+        r = ra if part == a else rb
+        u = np.einsum("sij,j->si", r, fixed)                           # (S, 3) the axis carried along
+        low_a = (np.einsum("si,sij,kj->sk", u, ra, ha)).min(axis=1) + np.einsum("si,si->s", u, ta)
+        high_b = (np.einsum("si,sij,kj->sk", u, rb, hb)).max(axis=1) + np.einsum("si,si->s", u, tb)
+        best = np.maximum(best, low_a - high_b)
+    return best - parts.error[a] - parts.error[b]
 
 
 HULL_TOLERANCE = 0.02
@@ -494,10 +529,12 @@ HULL_TOLERANCE = 0.02
 condition that much sooner, no more."""
 
 
-def _hull_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray, reach: float) -> np.ndarray:
+def _hull_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray,
+                 reach: float) -> tuple[np.ndarray, np.ndarray]:
     """(n,) lower bounds on the distance between the triangles of parts i
     and j (n,): their convex hulls' (:meth:`PartSet.hull_points`, in the
-    world), within ``HULL_TOLERANCE`` of ``reach`` of it."""
+    world), within ``HULL_TOLERANCE`` of ``reach`` of it; and the world
+    directions (n, 3) that prove them."""
 
     def padded(part: np.ndarray) -> np.ndarray:
         hulls = [parts.hull_points(int(k)) for k in part.tolist()]      # the few active pairs' parts
@@ -505,7 +542,7 @@ def _hull_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray
         return placed.world(part, np.stack([np.concatenate([h, np.repeat(h[-1:], m - len(h), axis=0)])
                                             for h in hulls]))
 
-    return hull_lower_bounds(padded(i), padded(j), HULL_TOLERANCE * reach)
+    return hull_separations(padded(i), padded(j), HULL_TOLERANCE * reach)
 
 
 def _measured(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndarray,
@@ -687,9 +724,19 @@ class PartChecker:
     def pair_values(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray, reach: float,
                     exact_below: float | None = None) -> np.ndarray:
         """:func:`pair_values` of pairs (i, j) at poses (P, 4, 4)."""
+        return self.pair_values_axes(poses, i, j, reach, exact_below)[0]
+
+    def pair_values_axes(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray, reach: float,
+                         exact_below: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`pair_values_axes` of pairs (i, j) at poses (P, 4, 4)."""
         if not len(i):
-            return np.zeros(0)
-        return pair_values(self.parts, self.parts.place(poses), i, j, reach, exact_below)
+            return np.zeros(0), np.zeros((0, 3))
+        return pair_values_axes(self.parts, self.parts.place(poses), i, j, reach, exact_below)
+
+    def hull_separations(self, poses: np.ndarray, a: int, b: int, axis: np.ndarray,
+                         at: np.ndarray) -> np.ndarray:
+        """:func:`hull_separations_along` of the pair (a, b) at poses (S, P, 4, 4)."""
+        return hull_separations_along(self.parts, poses, a, b, axis, at)
 
     def _primitive_pairs_many(self, poses: np.ndarray, i: np.ndarray,
                               j: np.ndarray) -> list[list[Interference]] | None:

@@ -267,6 +267,13 @@ def mesh_segment_unsigned(m: MeshData, a: np.ndarray, b: np.ndarray,
     if len(redo):
         local, fi2 = faces_within(m, mid[redo], best[redo] + half[redo])
         rows2 = redo[local]
+        # a face within `best` of the segment has its box within `best` of the segment's box: a
+        # segment lying along a face (a cable resting on it) keeps the faces beside it, not the
+        # whole ball about its midpoint
+        reach = best[rows2][:, None] * (1 + 1e-12) + 1e-300
+        lo, hi = np.minimum(a[rows2], b[rows2]) - reach, np.maximum(a[rows2], b[rows2]) + reach
+        near = np.all((m.tri_lo[fi2] <= hi) & (m.tri_hi[fi2] >= lo), axis=1)
+        rows2, fi2 = rows2[near], fi2[near]
         d2, t2, _ = segment_triangle(a[rows2], b[rows2], m.a[fi2], m.b[fi2], m.c[fi2])
         o = np.lexsort((d2, rows2))
         first = o[np.r_[True, rows2[o][1:] != rows2[o][:-1]]]

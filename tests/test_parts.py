@@ -672,3 +672,37 @@ def test_pair_values_are_lower_bounds_exact_within_reach(ra, rb, x, y, z, other)
         assert hulled <= d + 1e-6
     if ps.error[1] == 0.0:                     # the measure of a curved part has its error off twice
         assert hulled <= value + 1e-9
+
+
+@settings(max_examples=examples(25), deadline=None)
+@given(rotations(), rotations(), st.floats(-40.0, 40.0), st.floats(-40.0, 40.0), st.floats(-40.0, 40.0),
+       rotations(), st.floats(-6.0, 6.0), st.floats(-6.0, 6.0), st.sampled_from(["el", "pin", "box"]))
+def test_hull_separation_along_a_carried_axis_is_a_lower_bound(ra, rb, x, y, z, turn, dx, dy, other):
+    """The axis the hulls were found apart along, carried with either part to a drawn later pose
+    (the second part turned and moved), never proves the parts farther apart than python-fcl's
+    distance there; and at the start it is the hull bound itself."""
+    from cablecheck.checker.parts import hull_separations_along, pair_values_axes
+
+    shapes = {"el": (mesh_shape(_EL.vertices, _EL.faces), None, _EL),
+              "pin": (Shape(ShapeType.CYLINDER, [3.0, 15.0]), None, None),
+              "box": (Shape(ShapeType.BOX, [10.0, 4.0, 6.0]), None, None)}
+    sb, _, tm_b = shapes[other]
+    ps = PartSet.build(["a", "b"], [mesh_shape(_EL.vertices, _EL.faces), sb], tolerance=0.05)
+    ta, tb = np.eye(4), np.eye(4)
+    ta[:3, :3], tb[:3, :3], tb[:3, 3] = ra, rb, [x, y, z]
+    start = np.stack([ta, tb])
+    value, axis = pair_values_axes(ps, ps.place(start), np.array([0]), np.array([1]), 12.0, 0.5)
+    if not np.any(axis[0]):
+        return                                                      # measured by its triangles
+    at_start = hull_separations_along(ps, start[None], 0, 1, axis[0], start)[0]
+    assert abs(at_start - value[0]) <= 1e-9 or (value[0] >= 12.0 - ps.error[1] and at_start >= value[0] - 1e-9)
+    later = start.copy()
+    later[1, :3, :3] = turn @ rb
+    later[1, :3, 3] += [dx, dy, 0.0]
+    sep = hull_separations_along(ps, later[None], 0, 1, axis[0], start)[0]
+    ref_b = _fcl(tm_b, sb if tm_b is None else None, later[1], 1.0)
+    a_obj = _fcl(_EL, None, later[0], 1.0)
+    if fcl.collide(a_obj, ref_b, fcl.CollisionRequest(), fcl.CollisionResult()):
+        assert sep <= 1e-6
+    else:
+        assert sep <= fcl.distance(a_obj, ref_b, fcl.DistanceRequest(), fcl.DistanceResult()) + 1e-6

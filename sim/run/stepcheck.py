@@ -166,6 +166,25 @@ class StepResult:
 
 
 @dataclass(frozen=True)
+class ApartPair:
+    """An active part pair apart, as last measured (`StepChecks._pair_gaps`).
+
+    Attributes:
+        a, b: its parts (built indices).
+        gaps: its part-pair condition, started there.
+        axis: the world direction its convex hulls were found apart along
+            there (from b's to a's), or None (measured by its triangles).
+        at: (P, 4, 4) the poses there.
+    """
+
+    a: int
+    b: int
+    gaps: PartPairGaps
+    axis: np.ndarray | None
+    at: np.ndarray
+
+
+@dataclass(frozen=True)
 class ChecksOutcome:
     """What a run's checks say at its end, beside their events.
 
@@ -236,7 +255,7 @@ class StepChecks:
                                 for p, sh, keep in zip(built.parts, shapes, checked) if keep], config,
                                horizon=self.horizon, stretch=self.stretch)
         self.advance: Advancement | None = None
-        self._apart_gaps: list[PartPairGaps] = []   # one condition per active pair apart (`_pair_gaps`)
+        self._apart_gaps: list[ApartPair] = []   # one condition per active pair apart (`_pair_gaps`)
         self._pair_gaps_args: tuple = ()            # the parts' radii and solids, with the skip rule
         self._active_split = False                  # the active pairs split at a full check
         self._value_memo: dict[tuple[int, int], tuple] = {}   # (i, j) -> poses of i, j and their value
@@ -506,7 +525,7 @@ class StepChecks:
         (`_pair_gaps`, one condition a pair)."""
         ai, aj = self._part_active
         poses = np.asarray(poses, float)
-        values = self._active_values(poses, ai, aj)
+        values, axes = self._active_values(poses, ai, aj)
         # two primitives are checked at all the states of a batch in one call, about as cheaply as
         # bounding them: only pairs with a mesh (their triangles) are worth bounding
         kind = self.rigid.convex_kind
@@ -523,37 +542,53 @@ class StepChecks:
         self._near_start = (used, poses[used], last_records)
         self._active_apart = (ai[~near], aj[~near])
         self._active_split = True
-        self._apart_gaps = [self._pair_gaps(poses, a, b, v)
-                            for a, b, v in zip(ai[~near].tolist(), aj[~near].tolist(), values[~near].tolist())]
+        self._apart_gaps = [self._pair_gaps(poses, a, b, v, u) for a, b, v, u in
+                            zip(ai[~near].tolist(), aj[~near].tolist(), values[~near].tolist(), axes[~near])]
 
-    def _active_values(self, poses: np.ndarray, ai: np.ndarray, aj: np.ndarray) -> np.ndarray:
-        """`PartChecker.pair_values` of the active pairs at poses (P, 4, 4), a pair whose two parts
-        have not moved since it was last measured (to the bit) keeping that value."""
+    def _active_values(self, poses: np.ndarray, ai: np.ndarray,
+                       aj: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """`PartChecker.pair_values_axes` of the active pairs at poses (P, 4, 4), a pair whose two
+        parts have not moved since it was last measured (to the bit) keeping its value and axis."""
         memo = self._value_memo
         values = np.empty(len(ai))
+        axes = np.zeros((len(ai), 3))
         fresh = []
         for k, (a, b) in enumerate(zip(ai.tolist(), aj.tolist())):   # the few active pairs
             kept = memo.get((a, b))
             if kept is not None and np.array_equal(kept[0], poses[a]) and np.array_equal(kept[1], poses[b]):
-                values[k] = kept[2]
+                values[k], axes[k] = kept[2], kept[3]
             else:
                 fresh.append(k)
         if fresh:
             fresh = np.array(fresh)
-            values[fresh] = self.part_checker.pair_values(poses, ai[fresh], aj[fresh],
-                                                          self.config.clearance + self.horizon,
-                                                          exact_below=self.config.clearance)
+            values[fresh], axes[fresh] = self.part_checker.pair_values_axes(
+                poses, ai[fresh], aj[fresh], self.config.clearance + self.horizon, exact_below=self.config.clearance)
             for k in fresh.tolist():
-                memo[(int(ai[k]), int(aj[k]))] = (poses[ai[k]].copy(), poses[aj[k]].copy(), float(values[k]))
-        return values
+                memo[(int(ai[k]), int(aj[k]))] = (poses[ai[k]].copy(), poses[aj[k]].copy(), float(values[k]),
+                                                  axes[k].copy())
+        return values, axes
 
-    def _pair_gaps(self, poses: np.ndarray, a: int, b: int, value: float) -> PartPairGaps:
+    def _pair_gaps(self, poses: np.ndarray, a: int, b: int, value: float, axis: np.ndarray) -> ApartPair:
         """The part-pair condition of the one pair (a, b), started at poses (P, 4, 4) from its
-        distance `value` measured there."""
+        distance `value` measured there, and the axis its hulls were found apart along (zero: none)."""
         rho, solids = self._pair_gaps_args
         gaps = PartPairGaps(rho, self.config.clearance, solids)
         gaps.start(poses, (np.array([a]), np.array([b])), np.array([value]))
-        return gaps
+        return ApartPair(a, b, gaps, np.array(axis, float) if np.any(axis) else None, np.array(poses, float))
+
+    def _apart_clear(self, pair: ApartPair, poses: np.ndarray) -> np.ndarray:
+        """(S,) the pair provably outside the clearance at poses (S, P, 4, 4): its part-pair condition
+        (`PartPairGaps`: how far one part moved relative to the other), or, where that fails, its
+        hulls' separation along the axis found at the start, carried along with either part
+        (`PartChecker.hull_separations`: measured at the state itself, no bound on a move), past the
+        clearance by a rounding margin."""
+        ok = pair.gaps.clear_pairs(poses)[0]
+        if pair.axis is not None and not ok.all():
+            rows = np.flatnonzero(~ok)
+            sep = self.part_checker.hull_separations(poses[rows], pair.a, pair.b, pair.axis, pair.at)
+            mu = 1e-9 * (1.0 + float(np.abs(poses[rows][:, [pair.a, pair.b], :3, 3]).max(initial=0.0)))
+            ok[rows] = sep > self.config.clearance + mu
+        return ok
 
     def _active_part_records(self, poses: np.ndarray) -> list[list[Interference]]:
         """The active part pairs' records at states (S, P, 4, 4) proven clear
@@ -586,7 +621,7 @@ class StepChecks:
         if not len(ai):
             return out
         reach = self.config.clearance + self.horizon
-        ok = np.stack([g.clear_pairs(poses)[0] for g in self._apart_gaps])          # (pairs, states)
+        ok = np.stack([self._apart_clear(g, poses) for g in self._apart_gaps])        # (pairs, states)
         near = np.zeros(len(ai), bool)     # came within the clearance: not restarted again this batch
         for _ in range(ACTIVE_RESTARTS):
             fail = ~ok
@@ -598,14 +633,14 @@ class StepChecks:
             pair = (ai[k:k + 1], aj[k:k + 1])
             ok[k, s] = True
             # a lower bound past the clearance: no record there (the convex hulls' where they prove it)
-            value = float(self.part_checker.pair_values(poses[s], *pair, reach,
-                                                        exact_below=self.config.clearance)[0])
-            if value <= self.config.clearance:
+            values, axes = self.part_checker.pair_values_axes(poses[s], *pair, reach,
+                                                              exact_below=self.config.clearance)
+            if values[0] <= self.config.clearance:
                 out[s] = out[s] + self.part_checker.check_pairs(poses[s], *pair)
                 near[k] = True
                 continue
-            self._apart_gaps[k] = self._pair_gaps(poses[s], int(ai[k]), int(aj[k]), value)
-            ok[k, s + 1:] = self._apart_gaps[k].clear_pairs(poses[s + 1:])[0]
+            self._apart_gaps[k] = self._pair_gaps(poses[s], int(ai[k]), int(aj[k]), float(values[0]), axes[0])
+            ok[k, s + 1:] = self._apart_clear(self._apart_gaps[k], poses[s + 1:])
         for k in np.flatnonzero((~ok).any(axis=1)).tolist():     # what is left: in one call a pair
             states = np.flatnonzero(~ok[k])
             for t, recs in zip(states.tolist(), self.part_checker.check_pairs_many(poses[states], ai[k:k + 1],
