@@ -259,6 +259,7 @@ class StepChecks:
         self._pair_gaps_args: tuple = ()            # the parts' radii and solids, with the skip rule
         self._active_split = False                  # the active pairs split at a full check
         self._value_memo: dict[tuple[int, int], tuple] = {}   # (i, j) -> poses of i, j and their value
+        self._pair_records_memo: tuple | None = None    # the last full check's moving pairs and their records
         # the active part pairs within the clearance at the last full check, and apart
         self._active_near = self._active_apart = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         # the near pairs' parts, their poses and records where they were split (`_start_active_gaps`)
@@ -475,7 +476,12 @@ class StepChecks:
         if failing is not None:
             fi, fj = failing
             ai, aj = self._part_active
-            part_records = self._same_body_records(poses) + self.part_checker.check_pairs(
+            if len(ai):
+                # an active pair whose lower bound is past the clearance has no record (its measure,
+                # kept for the split below: `_start_active_gaps`)
+                close = self._active_values(poses, ai, aj)[0] <= self.config.clearance
+                ai, aj = ai[close], aj[close]
+            part_records = self._same_body_records(poses) + self._pair_records(
                 poses, np.concatenate([fi, ai]), np.concatenate([fj, aj]))
         else:
             part_records = self.part_checker.check(poses)
@@ -514,6 +520,19 @@ class StepChecks:
                 adv.start_pairs(poses, pairs, bound)
         cable_records = self._focus(cable_records)
         return StepResult(cable_records + part_records, cable_records, strain, bend, True, near=near)
+
+    def _pair_records(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray) -> list[Interference]:
+        """`PartChecker.check_pairs` of pairs (i, j) at poses (P, 4, 4): the last call's records
+        where it asked for the same pairs and none of their parts has moved since (to the bit: a
+        robot's base on its table, checked at every full check)."""
+        used = np.unique(np.concatenate([i, j]))
+        last = self._pair_records_memo
+        if last is not None and np.array_equal(last[0], i) and np.array_equal(last[1], j) \
+                and np.array_equal(last[2], poses[used]):
+            return list(last[3])
+        records = self.part_checker.check_pairs(poses, i, j)
+        self._pair_records_memo = (np.array(i), np.array(j), poses[used].copy(), list(records))
+        return records
 
     def _start_active_gaps(self, poses: np.ndarray) -> None:
         """Split the active part pairs at poses (P, 4, 4) by their distances
