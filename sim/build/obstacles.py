@@ -36,7 +36,8 @@ class Obstacles:
     (`cablecheck.build.routecheck`)."""
 
     def __init__(self, scene: Scene, frames: Frames, meshes: dict):
-        shapes, rot, pos, names = [], [], [], []
+        shapes: list[Shape | tuple[np.ndarray, np.ndarray]] = []   # a mesh as its arrays until asked for
+        rot, pos, names = [], [], []
 
         def place(body: str, local_pos, local_rot) -> None:
             p, r = frames.poses[body]
@@ -48,7 +49,7 @@ class Obstacles:
             if part.keepout:
                 continue
             if part.shape == "mesh":
-                shapes.append(mesh_shape(*meshes[part.name]))
+                shapes.append(meshes[part.name])
             else:
                 shapes.append(Shape(ShapeType(part.shape), np.asarray(part.size, float) if part.size else np.zeros(3)))
             place(part.body, part.pos, euler_matrix(part.euler))
@@ -64,14 +65,14 @@ class Obstacles:
                 if m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0:
                     continue    # visual geoms never collide
                 if gtype == int(mujoco.mjtGeom.mjGEOM_MESH):
-                    shapes.append(mesh_shape(*mesh_arrays(m, g)))
+                    shapes.append(mesh_arrays(m, g))
                 else:
                     shapes.append(Shape(ShapeType(SHAPES[gtype]), m.geom_size[g].copy()))
                 local = np.zeros(9)
                 mujoco.mju_quat2Mat(local, m.geom_quat[g])
                 place(body, m.geom_pos[g], local.reshape(3, 3))
                 names.append(geom_name[g])
-        self.shapes = shapes
+        self._shapes = shapes
         self.names = names
         self.rot = np.asarray(rot, float).reshape(-1, 3, 3)
         self.pos = np.asarray(pos, float).reshape(-1, 3)
@@ -80,11 +81,20 @@ class Obstacles:
         self.lo = np.full((len(shapes), 3), -np.inf)
         self.hi = np.full((len(shapes), 3), np.inf)
         for k, sh in enumerate(shapes):
-            if sh.type is not ShapeType.PLANE:
-                lo, hi = sh.local_bounds()
+            if isinstance(sh, tuple) or sh.type is not ShapeType.PLANE:
+                lo, hi = (np.min(sh[0], axis=0), np.max(sh[0], axis=0)) if isinstance(sh, tuple) \
+                    else sh.local_bounds()
                 corners = np.array(np.meshgrid(*zip(lo, hi), indexing="ij")).reshape(3, -1).T
                 world = corners @ self.rot[k].T + self.pos[k]
                 self.lo[k], self.hi[k] = world.min(axis=0), world.max(axis=0)
+
+    def shape(self, k: int) -> Shape:
+        """Part k's shape; a mesh's prepared (`mesh_shape`: its trees, about 36 ms for an arm
+        link) the first time it is asked for: a droop or a route meets a few of an arm's links."""
+        sh = self._shapes[k]
+        if isinstance(sh, tuple):
+            sh = self._shapes[k] = mesh_shape(*sh)
+        return sh
 
     def measure(self, radius: float):
         """depth(points) for a cable of `radius`: radius less the signed
@@ -94,6 +104,6 @@ class Obstacles:
         def depth(points: np.ndarray) -> np.ndarray:
             lo, hi = points.min(axis=0) - radius, points.max(axis=0) + radius
             near = np.flatnonzero(np.all((self.lo <= hi) & (self.hi >= lo), axis=1))
-            shapes = [self.shapes[k] for k in near]
+            shapes = [self.shape(k) for k in near.tolist()]
             return radius - least_signed_distance(shapes, self.rot[near], self.pos[near], points, limit=radius)
         return depth

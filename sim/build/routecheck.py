@@ -48,7 +48,7 @@ def route_warnings(scene: Scene, frames: Frames, meshes: dict, plans: list[Cable
         near = np.flatnonzero(np.all((obstacles.lo <= hi) & (obstacles.hi >= lo), axis=1))
         for k in near.tolist():     # the parts whose boxes meet the cable's: a few, once per scene
             local = (pts - obstacles.pos[k]) @ obstacles.rot[k]
-            d = signed_distance(obstacles.shapes[k], local)[0]
+            d = signed_distance(obstacles.shape(k), local)[0]
             inside = (d < 0.0) & free
             if not inside.any():
                 continue
