@@ -28,7 +28,11 @@ the stages, the report's ``timing``), (c+v+r)/sim, the real-time factor
 agreement with MuJoCo's contacts, hard / soft events, and the events that
 lie within two attachment zones of an end or clip (arc length along the
 cable from the held point, from the built model's attachments): possible
-false alarms, listed under the table with their pair, distance and time.
+false alarms, listed under the table with their pair, distance and time,
+and what MuJoCo's contacts say of each at its worst step (the report's
+validation: a contact event whose pair the validation found agreeing
+there is no false alarm of the checker's; a bend or taut event is no
+contact, and has no second opinion).
 
 Needs the optional ``zoo`` extra (``pip install -e .[zoo]``, or
 ``pip install --no-deps robosuite gymnasium-robotics``: only their model
@@ -605,7 +609,8 @@ def run_one(label: str, scene_path: Path, timeout: float | None = None) -> dict:
         hit = near_held(float(e["s"]), held, 2 * zone) if e.get("s") is not None else None
         if hit is not None:
             near.append({**{k: e[k] for k in ("severity", "type", "a", "b", "min_distance", "t_worst")},
-                         "window": hit[0], "ds": float(e["s"]) - hit[1]})
+                         "window": hit[0], "ds": float(e["s"]) - hit[1],
+                         "mujoco": second_opinion(e, r.get("validation") or {})})
     row.update({
         "elements": r["cables"][0]["segments"], **counts, "duration": duration, "complete": r.get("complete", True), "timing": t, "ratio": ratio(t),
         "rtf": duration / max(t["total_s"], 1e-12), "agreement": r["validation"]["agreement"],
@@ -732,6 +737,25 @@ def main(argv=None) -> int:
     return 0
 
 
+CONTACTS = ("cable-structure", "keepout", "cable-cable", "self")
+"""Event types MuJoCo's contacts have an opinion on (the validation compares them)."""
+
+
+def second_opinion(e: dict, validation: dict) -> str:
+    """What MuJoCo's contacts say of event ``e`` at its worst step: a contact type whose pair
+    the validation found disagreeing there names the reason; one it did not, agrees; a bend
+    or taut event is no contact (no second opinion)."""
+    if e["type"] not in CONTACTS:
+        return "no contact: no second opinion"
+    if not validation:
+        return "not validated"
+    for d in validation.get("disagreements", []):
+        if (d["type"], d["a"], d["b"]) == (e["type"], e["a"], e["b"]) and \
+                d["t_start"] - 1e-9 <= e["t_worst"] <= d["t_end"] + 1e-9:
+            return f"MuJoCo differs there ({d['reason']})"
+    return "MuJoCo agrees at its worst step"
+
+
 def hose_event(e: dict) -> bool:
     """An event of the hose (against a part or itself), not of two parts."""
     return e["type"] != "part-part"
@@ -757,7 +781,7 @@ def finish(run: dict, doc: Path | None) -> None:
         for e in r.get("near_held", []):
             lines.append(f"- {r['arm']}: {e['severity']} {e['type']} {e['a']} / {e['b']} at {e['ds'] * 1000:+.0f} mm "
                          f"from {e['window']}, worst {e['min_distance'] * 1000:.1f} mm at t {e['t_worst']:.2f} s "
-                         "(possible false alarm)")
+                         f"({e.get('mujoco', 'possible false alarm')})")
         for n in r.get("notes", []):
             lines.append(f"- {r['arm']}: {n}")
     text = "\n".join(lines).rstrip() + "\n"

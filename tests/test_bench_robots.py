@@ -43,6 +43,19 @@ def test_near_held_finds_the_nearest_end_or_clip_within_the_zone():
     assert bench.near_held(1.0, [], 0.07) is None
 
 
+def test_second_opinion_reads_the_validations_disagreements_at_the_worst_step():
+    """A contact event agrees unless its pair disagrees over an interval holding its worst step;
+    a bend has no second opinion."""
+    validation = {"disagreements": [{"type": "cable-structure", "a": "hose", "b": "link3", "t_start": 1.0,
+                                     "t_end": 1.2, "reason": "between points"}]}
+    event = {"type": "cable-structure", "a": "hose", "b": "link3", "t_worst": 1.1}
+    assert bench.second_opinion(event, validation) == "MuJoCo differs there (between points)"
+    assert bench.second_opinion({**event, "t_worst": 1.3}, validation) == "MuJoCo agrees at its worst step"
+    assert bench.second_opinion({**event, "b": "link4"}, validation) == "MuJoCo agrees at its worst step"
+    assert bench.second_opinion({**event, "type": "bend"}, validation) == "no contact: no second opinion"
+    assert bench.second_opinion(event, {}) == "not validated"
+
+
 def test_ratio_of_the_report_timing():
     t = {"sim_s": 2.0, "check_s": 0.5, "validate_s": 0.3, "record_s": 0.2}
     assert bench.ratio(t) == pytest.approx(0.5)
