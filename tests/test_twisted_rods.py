@@ -74,3 +74,39 @@ def test_a_slack_hose_routed_slack_and_turned_four_turns_whirls_about_its_chord(
     r = cases.twisted_hose(4.0, twist_stiffness=5e7 / 3.0)
     assert r.extra["twist"] > 0.9 * 1440.0
     assert r.measured > 90.0
+
+
+def test_a_slack_hose_turned_past_its_critical_twist_throws_a_loop():
+    """A hose (r 5 mm, 0.5 m) clamped level over 0.4 m, its end turned 10 turns about the chord
+    in 5 s: the twist the simulated rod carries climbs to a critical value and then drops by more
+    than a turn within 0.1 s, the hose snapping into a loop (its writhe takes the turns), and the
+    loop brings the hose onto itself (a self record of the checker at the snap); the rod never
+    carries the ten turns as twist."""
+    import numpy as np
+
+    from cablecheck.bench.physics_cases import _scene, _twisted_run
+    from cablecheck.checker.interference import Checker
+    from cablecheck.checker.scene_state import CableState, CheckConfig
+
+    scene = _scene({"scene": {"name": "loop", "units": "m", "duration": 6.0, "settle": 2.0},
+                    "bodies": [{"name": "b", "pos": [0.4, 0, 1]}],
+                    "motion": [{"body": "b", "interpolation": "linear",
+                                "keys": [{"t": 0.0, "pos": [0.4, 0, 1], "euler": [0, 0, 0]},
+                                         {"t": 5.0, "pos": [0.4, 0, 1], "euler": [3600, 0, 0]}]}],
+                    "cables": [{"name": "hose", "radius": 0.005, "length": 0.5,
+                                "start": {"pos": [0, 0, 1], "tangent": [1, 0, 0]},
+                                "end": {"body": "b", "pos": [0, 0, 0], "tangent": [1, 0, 0]}}]})
+    built, _, states, _, twist = _twisted_run(scene, 1, settle=True)
+    twist = np.degrees(twist)
+    t = np.array([s.t for s in states])
+    peak = int(np.argmax(twist))
+    assert 720.0 < twist[peak] < 0.9 * 3600.0                        # a critical twist, short of the turns
+    after = (t > t[peak]) & (t < t[peak] + 0.1)
+    assert twist[peak] - twist[after].min() > 360.0                    # released within 0.1 s
+    checker = Checker([], CheckConfig(clearance=0.001))
+    near = np.flatnonzero((t > t[peak] - 0.02) & (t < t[peak] + 0.1))
+    c = built.cables[0]
+    selfs = [r for k in near for r in checker.check([CableState(c.name, states[k].cables[0], c.radius,
+                                                                c.min_bend_radius, c.length, c.rest_s)])
+             if r.type.value == "self"]
+    assert selfs, "the loop did not bring the hose onto itself"
