@@ -513,9 +513,8 @@ def hull_separations_along(parts: PartSet, poses: np.ndarray, a: int, b: int, ax
     ra, ta = poses[:, a, :3, :3], poses[:, a, :3, 3]
     rb, tb = poses[:, b, :3, :3], poses[:, b, :3, 3]
     best = np.full(len(poses), -np.inf)
-    for part, rot in ((a, at[a, :3, :3]), (b, at[b, :3, :3])):
-        fixed = rot.T @ np.asarray(axis, float)                        # the axis in that part's frame
-        r = ra if part == a else rb
+    for r, start in ((ra, at[a, :3, :3]), (rb, at[b, :3, :3])):
+        fixed = start.T @ np.asarray(axis, float)                      # the axis in that part's frame
         u = np.einsum("sij,j->si", r, fixed)                           # (S, 3) the axis carried along
         low_a = (np.einsum("si,sij,kj->sk", u, ra, ha)).min(axis=1) + np.einsum("si,si->s", u, ta)
         high_b = (np.einsum("si,sij,kj->sk", u, rb, hb)).max(axis=1) + np.einsum("si,si->s", u, tb)

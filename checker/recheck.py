@@ -31,11 +31,9 @@ from cablecheck.checker.interference import Checker
 from cablecheck.checker.interference.discrete import discretise
 from cablecheck.checker.interference.hits import Hits, worst_records
 from cablecheck.checker.interference.structure import PartTable, structure_exact_pairs
-from cablecheck.checker.records import Interference, PairType
+from cablecheck.checker.records import PART_TYPES, Interference, PairType
 from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape
-
-_PART_TYPES = (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)
 
 
 def convex_hull_shape(shape: Shape) -> Shape:
@@ -220,7 +218,7 @@ class StateRecheck:
     def exact(self, key: tuple[str, str, str]) -> float | None:
         """The pair (type, a, b) with method exact."""
         kind, a, b = key
-        if kind in _PART_TYPES:
+        if kind in PART_TYPES:
             return self._part(key, hull=False)
         names = [a] if kind == PairType.SELF else [a, b]
         if any(n not in self.cables for n in names):
@@ -231,7 +229,7 @@ class StateRecheck:
     def hull(self, key: tuple[str, str, str], exact: bool = True) -> float | None:
         """A cable against the convex hull of the mesh part b, with method
         exact (or, cheaper, points at the run's spacing)."""
-        return self._part(key, hull=True, exact=exact) if key[0] in _PART_TYPES else None
+        return self._part(key, hull=True, exact=exact) if key[0] in PART_TYPES else None
 
     def near(self, key: tuple[str, str, str], limit: float) -> float | None:
         """The pair (type, a, b) with method exact, its distance when below
@@ -242,7 +240,7 @@ class StateRecheck:
         invented)."""
         kind, a, b = key
         cfg = replace(self.owner.config, clearance=max(float(limit), self.owner.config.clearance))
-        if kind in _PART_TYPES:
+        if kind in PART_TYPES:
             k = self.owner.index.get(b)
             if k is None or a not in self.cables:
                 return None

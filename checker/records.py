@@ -32,6 +32,11 @@ class PairType(StrEnum):
     TAUT = "taut"
 
 
+PART_TYPES = (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)
+"""The pair types measured against a part (a cable and a part or keep-out zone); as a
+`StrEnum`'s members, the report's strings compare equal to them."""
+
+
 class Severity(StrEnum):
     """``hard``: min_distance < 0; ``soft``: 0 <= min_distance < clearance."""
 

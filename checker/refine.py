@@ -25,11 +25,8 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 
 from cablecheck.checker.recheck import Recheck, exact_records_many
-from cablecheck.checker.records import Interference, PairType, Severity
+from cablecheck.checker.records import PART_TYPES, Interference, PairType, Severity
 from cablecheck.checker.scene_state import CableState
-
-PART_TYPES = (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)
-"""The record types measured against a part."""
 
 _ROUNDING = 1.0 + 1e-9
 """A record at the error bound itself (a corner touching the cable half way between two points)

@@ -49,7 +49,7 @@ from cablecheck.checker.arrays import first_least, ranges
 from cablecheck.checker.cable import polyline_arc_lengths, self_pair_excluded, self_pair_window, tile_offsets
 from cablecheck.checker.closest import row_norm, segment_parameter, segment_segment, segment_segment_apart
 from cablecheck.checker.events import AllowList
-from cablecheck.checker.records import Interference, PairType, severity_of
+from cablecheck.checker.records import PART_TYPES, Interference, PairType, severity_of
 from cablecheck.checker.scene_state import Exclusion
 
 COMPARED_TYPES = (PairType.SELF, PairType.CABLE_CABLE, PairType.CABLE_STRUCTURE, PairType.KEEPOUT)
@@ -295,7 +295,7 @@ class SimulatorPairs:
             kinds=kinds + [PairType.SELF.value, PairType.CABLE_CABLE.value], names=names,
             kind=kind.ravel().astype(np.int64), name=name.ravel().astype(np.int64),
             compared=np.array([t in COMPARED_TYPES for t in types] + [False, False], bool),
-            structure=np.array([t in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) for t in types] + [False, False]),
+            structure=np.array([t in PART_TYPES for t in types] + [False, False]),
             cable=np.array([cable_of.get(x, -1) for x in names], np.int64),
             window_cable=np.array([self._cable_code.get(x, -1) for x in names], np.int64),
             window_part=np.array([self._part_code.get(x, -1) for x in names], np.int64),
@@ -599,7 +599,7 @@ class Validation:
         opinion = second()
         exact = dc if self.method == "exact" else None
         if opinion is not None:
-            hulled = kind in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) and b in self.mesh_parts
+            hulled = kind in PART_TYPES and b in self.mesh_parts
             # the hull by discrete points first (cheaper, often enough); by exact only once the
             # mesh's own exact distance does not explain it (a convex mesh is its own hull)
             if hulled and severity_of(d := opinion.hull(key, False), c) == cm:

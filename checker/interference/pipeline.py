@@ -30,7 +30,7 @@ from cablecheck.checker.interference.exclusions import ExclusionTable, exclusion
 from cablecheck.checker.interference.hits import Gaps, Hits
 from cablecheck.checker.interference.single import single_cable
 from cablecheck.checker.interference.structure import PartTable, structure_exact, structure_points
-from cablecheck.checker.records import Interference, PairType
+from cablecheck.checker.records import PART_TYPES, Interference, PairType
 from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 
 _EYE3 = np.eye(3)
@@ -236,7 +236,7 @@ class Checker:
         found = hits.gaps(config.clearance, horizon, len(parts)) if bounded else None
 
         def names(ptype: PairType) -> list[str]:
-            return part_names if ptype in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT) else cable_names
+            return part_names if ptype in PART_TYPES else cable_names
 
         return Checked(hits.records(config.clearance, cable_names, names), found)
 

@@ -47,7 +47,7 @@ from cablecheck.checker.interference.margins import Closest, MarginLog
 from cablecheck.checker.interference.structure import PartTable, point_distances
 from cablecheck.checker.parts import PartChecker
 from cablecheck.checker.recheck import Recheck
-from cablecheck.checker.records import Interference, PairType
+from cablecheck.checker.records import PART_TYPES, Interference, PairType
 from cablecheck.checker.refine import refined_records
 from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from cablecheck.checker.shapes import Shape
@@ -266,7 +266,7 @@ class StepChecks:
         self._pair_gaps_args: tuple = ()            # the parts' radii and solids, with the skip rule
         self._active_split = False                  # the active pairs split at a full check
         self._value_memo: dict[tuple[int, int], tuple] = {}   # (i, j) -> poses of i, j and their value
-        self._pair_records_memo: tuple | None = None    # the last full check's moving pairs and their records
+        self._pair_records_memo: dict[str, tuple] = {}  # slot -> its last pairs, their parts' poses, records
         # the active part pairs within the clearance at the last full check, and apart
         self._active_near = self._active_apart = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         # the near pairs' parts, their poses and records where they were split (`_start_active_gaps`)
@@ -417,7 +417,7 @@ class StepChecks:
         for i, (state, result, found, pairs) in enumerate(zip(states, results, contacts, seen)):
             if self.focus_names is not None:
                 pairs = {k: v for k, v in pairs.items() if k[2] in self.focus_names
-                         and k[0] in (PairType.CABLE_STRUCTURE.value, PairType.KEEPOUT.value)}
+                         and k[0] in PART_TYPES}
             agreement = self.validation.compare(state.t, result.cable_records, pairs,
                                                 self._second_opinion(opinions, i))
             validated.append(replace(result, contacts=found, agreement=agreement))
@@ -489,7 +489,7 @@ class StepChecks:
                 close = self._active_values(poses, ai, aj)[0] <= self.config.clearance
                 ai, aj = ai[close], aj[close]
             part_records = self._same_body_records(poses) + self._pair_records(
-                poses, np.concatenate([fi, ai]), np.concatenate([fj, aj]))
+                poses, np.concatenate([fi, ai]), np.concatenate([fj, aj]), "full")
         else:
             part_records = self.part_checker.check(poses)
         if adv is not None:
@@ -528,17 +528,17 @@ class StepChecks:
         cable_records = self._focus(cable_records)
         return StepResult(cable_records + part_records, cable_records, strain, bend, True, near=near)
 
-    def _pair_records(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray) -> list[Interference]:
-        """`PartChecker.check_pairs` of pairs (i, j) at poses (P, 4, 4): the last call's records
-        where it asked for the same pairs and none of their parts has moved since (to the bit: a
-        robot's base on its table, checked at every full check)."""
+    def _pair_records(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray, slot: str) -> list[Interference]:
+        """`PartChecker.check_pairs` of pairs (i, j) at poses (P, 4, 4): the records of the last
+        call for the same `slot` where it asked for the same pairs and none of their parts has
+        moved since (to the bit: a robot's base on its table, checked at every full check)."""
         used = np.unique(np.concatenate([i, j]))
-        last = self._pair_records_memo
+        last = self._pair_records_memo.get(slot)
         if last is not None and np.array_equal(last[0], i) and np.array_equal(last[1], j) \
                 and np.array_equal(last[2], poses[used]):
             return list(last[3])
         records = self.part_checker.check_pairs(poses, i, j)
-        self._pair_records_memo = (np.array(i), np.array(j), poses[used].copy(), list(records))
+        self._pair_records_memo[slot] = (np.array(i), np.array(j), poses[used].copy(), list(records))
         return records
 
     def _start_active_gaps(self, poses: np.ndarray) -> None:
@@ -556,16 +556,11 @@ class StepChecks:
         # bounding them: only pairs with a mesh (their triangles) are worth bounding
         kind = self.rigid.convex_kind
         near = (values <= self.config.clearance) | ((kind[ai] >= 0) & (kind[aj] >= 0))
-        previous = self._active_near
         self._active_near = (ai[near], aj[near])
         # their records where none of their parts has moved since (a robot's base on its table), kept
         # from the last split when the same pairs' parts have not moved since either
         used = np.unique(np.concatenate(self._active_near))
-        last_used, last_poses, last_records = self._near_start
-        if not (np.array_equal(previous[0], self._active_near[0]) and np.array_equal(previous[1], self._active_near[1])
-                and np.array_equal(last_used, used) and np.array_equal(last_poses, poses[used])):
-            last_records = self.part_checker.check_pairs(poses, *self._active_near)
-        self._near_start = (used, poses[used], last_records)
+        self._near_start = (used, poses[used], self._pair_records(poses, *self._active_near, "near"))
         self._active_apart = (ai[~near], aj[~near])
         self._active_split = True
         self._apart_gaps = [self._pair_gaps(poses, a, b, v, u) for a, b, v, u in
@@ -684,7 +679,7 @@ class StepChecks:
         if self.focus_names is None:
             return records
         return [r for r in records if r.b in self.focus_names
-                and PairType(r.type) in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)]
+                and PairType(r.type) in PART_TYPES]
 
     def _cable_states(self, state: StepState) -> list[CableState]:
         return cable_states(self.built, state.cables)
