@@ -1,7 +1,7 @@
 """A triangle mesh's acceleration data, built once per shape, and its signed distance.
 
 :class:`MeshData` checks closure with trimesh, orients the mesh outward and
-keeps the normals, pseudonormals, k-d trees and bound grid the queries
+keeps the normals, pseudonormals, k-d tree, box tree and bound grid the queries
 use; :func:`sd_mesh` answers points with them (through the bound grid,
 exact nearest triangle, sign from the pseudonormals). Not here: segment
 queries (:mod:`cablecheck.checker.segments`), poses (:mod:`cablecheck.checker.shapes`).
@@ -10,10 +10,12 @@ queries (:mod:`cablecheck.checker.segments`), poses (:mod:`cablecheck.checker.sh
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from cablecheck.checker.bvh import TriangleForest
 from cablecheck.checker.closest import cross, row_norm
 from cablecheck.checker.meshgrid import BoundGrid
 from cablecheck.checker.meshnearest import mesh_nearest, mesh_sign
@@ -37,12 +39,6 @@ class MeshData:
         centroids: (F, 3) triangle centroids.
         reach: float, largest distance from a centroid to its corners.
         tree: k-d tree over ``centroids``.
-        levels: the faces split by their own reach (centroid to farthest
-            corner) into halving classes, each ``(bound, face indices, k-d
-            tree over their centroids)``: a query for every triangle that
-            may come within r of a point asks each class for centroids
-            within r + its bound, so the few long slivers of a CAD
-            tessellation no longer widen the search for all the others.
         closed: the mesh is watertight and consistently wound, so inside and
             outside are defined and distances are signed.
         lo, hi: (3,) bounding box corners.
@@ -61,13 +57,19 @@ class MeshData:
     centroids: np.ndarray
     reach: float
     tree: cKDTree
-    levels: tuple
     closed: bool
     lo: np.ndarray
     hi: np.ndarray
     tri_lo: np.ndarray
     tri_hi: np.ndarray
     bound: BoundGrid = field(default=None, repr=False)
+
+    @cached_property
+    def forest(self) -> TriangleForest:
+        """A box tree over the triangles (built the first time a segment
+        asks: most meshes of a scene never meet a cable): every triangle
+        whose box meets a box, for many boxes in one pass."""
+        return TriangleForest.build(self.tri_lo, self.tri_hi, np.zeros(len(self.faces), np.int64), 1)
 
     @staticmethod
     def build(vertices: np.ndarray, faces: np.ndarray) -> MeshData:
@@ -109,34 +111,10 @@ class MeshData:
         return MeshData(
             a=a, b=b, c=c, face_normals=fn, edge_normals=edge_normals, vertex_normals=vn,
             faces=f, vertices=v, centroids=centroids, reach=reach,
-            tree=cKDTree(centroids), levels=_reach_levels(centroids, face_reach, reach), closed=closed, lo=v.min(axis=0), hi=v.max(axis=0),
+            tree=cKDTree(centroids), closed=closed, lo=v.min(axis=0), hi=v.max(axis=0),
             tri_lo=np.minimum(np.minimum(a, b), c), tri_hi=np.maximum(np.maximum(a, b), c),
             bound=BoundGrid(v.min(axis=0), v.max(axis=0)),
         )
-
-
-REACH_LEVELS = 6
-"""Classes of :attr:`MeshData.levels`: a face of reach r goes to class
-floor(log2(reach_max / r)), the last class taking every face below
-reach_max / 2^5."""
-
-
-def _reach_levels(centroids: np.ndarray, face_reach: np.ndarray, reach: float,
-                  levels: int = REACH_LEVELS, ratio: float = 2.0) -> tuple:
-    from scipy.spatial import cKDTree  # loaded already by trimesh (MeshData.build)
-
-    if not len(face_reach) or reach <= 0:
-        return ((reach, np.arange(len(face_reach)), cKDTree(centroids)),) if len(face_reach) else ()
-    floor = reach * ratio ** -(levels - 1)
-    cls = np.minimum(np.floor(np.log(reach / np.maximum(face_reach, floor)) / np.log(ratio)),
-                     levels - 1).astype(np.int64)
-    out = []
-    for j in range(levels):
-        idx = np.flatnonzero(cls == j)
-        if len(idx):
-            # the class's own largest reach is its bound
-            out.append((float(face_reach[idx].max()), idx, cKDTree(centroids[idx])))
-    return tuple(out)
 
 
 def sd_mesh(m: MeshData, p: np.ndarray, limit: np.ndarray | None = None,

@@ -15,7 +15,6 @@ Not here: the lazily filled grid that answers most repeated queries
 
 from __future__ import annotations
 
-import itertools
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -28,23 +27,15 @@ if TYPE_CHECKING:
 
 def faces_within(m: MeshData, q: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(rows, faces): for each query point q[i], every face whose triangle may
-    come within radius[i] of it (its centroid within radius plus the face's
-    reach class bound; see :attr:`MeshData.levels`). A superset, exact to
-    filter."""
-    rows, faces = [], []
-    for bound, idx, tree in m.levels:
-        lists = tree.query_ball_point(q, radius + bound * (1 + 1e-12) + 1e-300)
-        cnt = np.fromiter(map(len, lists), dtype=np.int64, count=len(q))
-        flat = np.fromiter(itertools.chain.from_iterable(lists), dtype=np.int64, count=int(cnt.sum()))
-        rows.append(np.repeat(np.arange(len(q)), cnt))
-        faces.append(idx[flat])
-    if not rows:
-        return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    rows, faces = np.concatenate(rows), np.concatenate(faces)
+    come within radius[i] of it: those whose box does (the mesh's box tree,
+    :attr:`MeshData.forest`, lists the boxes meeting each point's cube,
+    which the ball then cuts). A superset, exact to filter."""
+    r = np.asarray(radius, float) * (1 + 1e-12) + 1e-300
+    rows, faces = m.forest.query(np.zeros(len(q), np.int64), q - r[:, None], q + r[:, None])
     # A triangle is no nearer than its box: cheaper than the exact test it saves.
     qr = q[rows]
     gap = np.maximum(np.maximum(m.tri_lo[faces] - qr, qr - m.tri_hi[faces]), 0.0)
-    keep = np.einsum("ij,ij->i", gap, gap) <= np.square(radius[rows] * (1 + 1e-12) + 1e-300)
+    keep = np.einsum("ij,ij->i", gap, gap) <= np.square(r[rows])
     return rows[keep], faces[keep]
 
 
@@ -89,8 +80,8 @@ def mesh_nearest(m: MeshData, p: np.ndarray, k: int = 8) -> tuple[np.ndarray, np
         local, fi2 = faces_within(m, p[redo], best[redo])
         rows2 = redo[local]
         d2, cl2, reg2 = point_triangle(p[rows2], m.a[fi2], m.b[fi2], m.c[fi2])
-        # Least per point: sort by (row, distance) and take each row's first.
-        o = np.lexsort((d2, rows2))
+        # Least per point: sort by (row, distance) and take each row's first (ties to the lowest face).
+        o = np.lexsort((fi2, d2, rows2))
         first = o[np.r_[True, rows2[o][1:] != rows2[o][:-1]]]
         r = rows2[first]
         better = d2[first] < best[r]

@@ -27,7 +27,7 @@ from cablecheck.checker.closest import (
     segment_triangle,
 )
 from cablecheck.checker.meshdata import MeshData, sd_mesh
-from cablecheck.checker.meshnearest import faces_within, mesh_sign
+from cablecheck.checker.meshnearest import mesh_sign
 from cablecheck.checker.primitives import ShapeType, sd_ellipsoid, signed_distance_value_batch
 
 # Golden-section iterations for segment distances to convex shapes:
@@ -240,18 +240,33 @@ def segment_signed_distance_mixed(
     return d, t
 
 
-def mesh_segment_unsigned(m: MeshData, a: np.ndarray, b: np.ndarray,
-                           k: int = 8) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def mesh_segment_unsigned(m: MeshData, a: np.ndarray, b: np.ndarray, k: int = 8,
+                          upper: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Exact unsigned distance from segments to a mesh, its parameter and face.
 
     Same cut-off as :func:`mesh_nearest`, queried from the segment midpoint
-    with the half length added to the triangle reach.
+    with the half length added to the triangle reach; a segment it does not
+    settle is measured against every face whose box comes within its best
+    so far of the segment's box (:attr:`MeshData.forest`). ``upper`` (n,): an
+    upper bound on each segment's distance the caller has already (a point
+    of it measured: the midpoint's distance to the surface): every face
+    that may come within it is measured at once, without the k nearest
+    faces' first answer.
     """
     n = len(a)
     nf = len(m.faces)
     k = min(k, nf)
     mid = 0.5 * (a + b)
     half = 0.5 * row_norm(b - a)
+    if upper is not None and n:
+        # the bound's own rounding (a few ulp of a point query) is kept clear of
+        bound = np.abs(np.asarray(upper, float)) * (1 + 1e-9) + 1e-9 * m.bound.h
+        best, tb, fb = _segment_faces(m, a, b, np.arange(n), bound,
+                                      np.full(n, np.inf), np.zeros(n), np.zeros(n, np.int64))
+        lost = np.flatnonzero(best > bound)          # a bound that was none: measured the usual way
+        if len(lost):
+            best[lost], tb[lost], fb[lost] = mesh_segment_unsigned(m, a[lost], b[lost], k)
+        return best, tb, fb
     dk, idx = m.tree.query(mid, k=k)
     dk = dk.reshape(n, k)
     fi = idx.reshape(n, k).ravel()
@@ -265,34 +280,42 @@ def mesh_segment_unsigned(m: MeshData, a: np.ndarray, b: np.ndarray,
     fb = fi[np.arange(n) * k + j]
     redo = np.nonzero((k < nf) & (best > dk[:, -1] - m.reach - half))[0]
     if len(redo):
-        local, fi2 = faces_within(m, mid[redo], best[redo] + half[redo])
-        rows2 = redo[local]
-        # a face within `best` of the segment has its box within `best` of the segment's box: a
-        # segment lying along a face (a cable resting on it) keeps the faces beside it, not the
-        # whole ball about its midpoint
-        reach = best[rows2][:, None] * (1 + 1e-12) + 1e-300
-        lo, hi = np.minimum(a[rows2], b[rows2]) - reach, np.maximum(a[rows2], b[rows2]) + reach
-        near = np.all((m.tri_lo[fi2] <= hi) & (m.tri_hi[fi2] >= lo), axis=1)
-        rows2, fi2 = rows2[near], fi2[near]
-        d2, t2, _ = segment_triangle(a[rows2], b[rows2], m.a[fi2], m.b[fi2], m.c[fi2])
-        o = np.lexsort((d2, rows2))
-        first = o[np.r_[True, rows2[o][1:] != rows2[o][:-1]]]
-        r = rows2[first]
-        better = d2[first] < best[r]
-        best[r[better]] = d2[first[better]]
-        tb[r[better]] = t2[first[better]]
-        fb[r[better]] = fi2[first[better]]
+        return _segment_faces(m, a, b, redo, best[redo], best, tb, fb)
+    return best, tb, fb
+
+
+def _segment_faces(m: MeshData, a: np.ndarray, b: np.ndarray, redo: np.ndarray, bound: np.ndarray,
+                   best: np.ndarray, tb: np.ndarray, fb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Segments ``redo`` measured against every face that may come within
+    ``bound`` (len(redo),) of them, their ``best``, ``tb``, ``fb`` (n,)
+    improved in place and returned."""
+    # a face within `bound` of the segment has its box within `bound` of the segment's box: a
+    # segment lying along a face (a cable resting on it) meets the faces beside it, not the
+    # whole ball about its midpoint; the mesh's box tree lists them for all segments at once
+    reach = bound[:, None] * (1 + 1e-12) + 1e-300
+    lo, hi = np.minimum(a[redo], b[redo]) - reach, np.maximum(a[redo], b[redo]) + reach
+    local, fi2 = m.forest.query(np.zeros(len(redo), np.int64), lo, hi)
+    rows2 = redo[local]
+    d2, t2, _ = segment_triangle(a[rows2], b[rows2], m.a[fi2], m.b[fi2], m.c[fi2])
+    o = np.lexsort((d2, rows2))
+    first = o[np.r_[True, rows2[o][1:] != rows2[o][:-1]]]
+    r = rows2[first]
+    better = d2[first] < best[r]
+    best[r[better]] = d2[first[better]]
+    tb[r[better]] = t2[first[better]]
+    fb[r[better]] = fi2[first[better]]
     return best, tb, fb
 
 
 _MESH_SAMPLES = np.linspace(0.0, 1.0, 9)
 
 
-def segment_sd_mesh(m: MeshData, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def segment_sd_mesh(m: MeshData, a: np.ndarray, b: np.ndarray,
+                    upper: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     n = len(a)
     if n == 0:
         return np.zeros(0), np.zeros(0)
-    du, tu, face = mesh_segment_unsigned(m, a, b)
+    du, tu, face = mesh_segment_unsigned(m, a, b, upper=upper)
     if not m.closed:
         return du, tu
     # Penetration: the segment touches the surface, or lies inside. A segment

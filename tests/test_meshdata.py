@@ -1,5 +1,5 @@
 """A mesh's acceleration data (cablecheck.checker.meshdata): closure decides the sign,
-and the reach classes still find every point's and segment's nearest triangle."""
+and the box tree still finds every point's and segment's nearest triangle."""
 
 import numpy as np
 import pytest
@@ -21,8 +21,9 @@ def test_open_mesh_is_unsigned():
 
 def test_sliver_mesh_nearest_and_segment_distance_are_the_brute_force_ones():
     """A CAD-style tessellation: a finely meshed cylinder wall plus long slivers
-    (flat caps fanned from one corner). The reach classes must still find
-    the nearest triangle of every point and segment that every triangle tried finds."""
+    (flat caps fanned from one corner). The box tree must still find the
+    nearest triangle of every point and segment that every triangle tried
+    finds, with or without an upper bound from a point of the segment."""
     from cablecheck.checker import meshnearest, segments
     from cablecheck.checker.closest import point_triangle, segment_triangle
     rng = np.random.default_rng(7)
@@ -39,8 +40,6 @@ def test_sliver_mesh_nearest_and_segment_distance_are_the_brute_force_ones():
         faces.append(np.array([[base, base + k, base + k + 1] for k in range(1, 95)]))
     v, f = np.concatenate(verts), np.concatenate(faces)
     md = mesh_shape(v, f).mesh
-    reaches = [b for b, _, _ in md.levels]
-    assert len(md.levels) >= 3 and max(reaches) == md.reach and min(reaches) < md.reach / 8
     p = rng.uniform([-0.08, -0.08, -0.15], [0.08, 0.08, 0.15], (200, 3))
     d = meshnearest.mesh_nearest(md, p)[0]
     rows = np.repeat(np.arange(len(p)), len(md.faces))
@@ -53,6 +52,34 @@ def test_sliver_mesh_nearest_and_segment_distance_are_the_brute_force_ones():
     fi = np.tile(np.arange(len(md.faces)), len(a))
     brute_s = segment_triangle(a[rows], b[rows], md.a[fi], md.b[fi], md.c[fi])[0].reshape(len(a), -1).min(axis=1)
     assert np.allclose(ds, brute_s, rtol=0, atol=1e-15)
+    # an upper bound from the midpoint's distance (the checker's), and from a looser point
+    mid = meshnearest.mesh_nearest(md, 0.5 * (a + b))[0]
+    for upper in (mid, mid * 1.5 + 0.01):
+        du, tu, fu = segments.mesh_segment_unsigned(md, a, b, upper=upper)
+        assert np.allclose(du, brute_s, rtol=0, atol=1e-15)
+        again = segment_triangle(a, b, md.a[fu], md.b[fu], md.c[fu])
+        assert np.array_equal(again[0], du) and np.array_equal(again[1], tu)
+    # a bound that is none (below the true distance) is measured the usual way
+    du = segments.mesh_segment_unsigned(md, a, b, upper=0.5 * brute_s)[0]
+    assert np.allclose(du, brute_s, rtol=0, atol=1e-15)
+
+
+def test_faces_within_holds_every_triangle_that_comes_within_the_radius():
+    """The box tree's lists against every triangle measured: nothing within the radius left out."""
+    from cablecheck.checker.closest import point_triangle
+    from cablecheck.checker.meshnearest import faces_within
+    rng = np.random.default_rng(3)
+    m = trimesh.creation.icosphere(3, 0.05)
+    md = mesh_shape(m.vertices, m.faces).mesh
+    q = rng.normal(size=(300, 3)) * 0.06
+    radius = rng.uniform(0.0, 0.03, len(q))
+    rows, faces = faces_within(md, q, radius)
+    got = set(zip(rows.tolist(), faces.tolist()))
+    r = np.repeat(np.arange(len(q)), len(md.faces))
+    f = np.tile(np.arange(len(md.faces)), len(q))
+    d = point_triangle(q[r], md.a[f], md.b[f], md.c[f])[0]
+    need = set(zip(r[d <= radius[r]].tolist(), f[d <= radius[r]].tolist()))
+    assert need and need <= got
 
 
 def test_limit_with_the_callers_lower_bounds_is_the_same_answer():

@@ -123,10 +123,10 @@ class ExcusedLog:
         wa, wb = pts[:, i0].reshape(-1, 3), pts[:, i0 + 1].reshape(-1, 3)
         a = np.einsum("ni,nij->nj", wa - trans, rot)
         b = np.einsum("ni,nij->nj", wb - trans, rot)
-        idx = segments_within(tab, pk, a, b, rad, self.clearance)    # the others provably beyond it
+        idx, mid = segments_within(tab, pk, a, b, rad, self.clearance, midpoints=True)   # the others provably beyond it
         if len(idx) == 0:
             return
-        d, t = segment_distances(tab, pk[idx], a[idx], b[idx])
+        d, t = segment_distances(tab, pk[idx], a[idx], b[idx], mid)
         value = d - rad[idx]
         below = value < self.clearance
         idx, value, t = idx[below], value[below], t[below]

@@ -253,8 +253,8 @@ class MarginLog:
         rad = self._er[elem]
         key = self._ec[elem] * self._n_k + part
         if self.config.method == "exact":
-            idx = segments_within(tab, part, a, b, rad, self.reach)
-            d, t = segment_distances(tab, part[idx], a[idx], b[idx])
+            idx, mid = segments_within(tab, part, a, b, rad, self.reach, midpoints=True)
+            d, t = segment_distances(tab, part[idx], a[idx], b[idx], mid)
         else:
             thr = (rad + self.reach)[:, None]
             idx = np.flatnonzero(np.all((np.maximum(a, b) >= tab.lo[part] - thr)

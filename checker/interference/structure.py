@@ -247,34 +247,43 @@ def structure_exact_pairs(dp, tab, config, excl, hits, i0: np.ndarray, pk: np.nd
     # exactly when its midpoint is.
     keep = np.flatnonzero(~excluded(dp.cable[i0], pk, 0.5 * (dp.m[i0] + dp.m[i0 + 1]), excl))
     limit = config.clearance if below is None else np.minimum(below[keep], config.clearance)
-    near = keep[segments_within(tab, pk[keep], a[keep], b[keep], dp.radius[i0[keep]], limit)]
+    within, mid = segments_within(tab, pk[keep], a[keep], b[keep], dp.radius[i0[keep]], limit, midpoints=True)
+    near = keep[within]
     pk, i0, a, b = pk[near], i0[near], a[near], b[near]
-    d, t = segment_distances(tab, pk, a, b)
+    d, t = segment_distances(tab, pk, a, b, mid)
     where = p[i0] + t[:, None] * (p[i0 + 1] - p[i0])
     s_at = s[i0] + t * (s[i0 + 1] - s[i0])
     _add_structure(hits, tab, dp.cable[i0], pk, d - dp.radius[i0], where, s_at)
 
 
 def segments_within(tab: PartTable, pk: np.ndarray, a: np.ndarray, b: np.ndarray, rad: np.ndarray,
-                    limit: float | np.ndarray) -> np.ndarray:
+                    limit: float | np.ndarray, midpoints: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Indices of the local segments ``a b`` (n, 3) whose signed distance to
     parts ``pk`` (n,), less ``rad`` (n,), may lie below ``limit`` (scalar or (n,)): those
     within ``rad + limit`` of the part's local box whose midpoint's distance
     less half their length (signed distance is 1-Lipschitz, so that bounds
-    the segment's from below) is below it too. The others need no search."""
+    the segment's from below) is below it too. The others need no search.
+    ``midpoints``: also those segments' midpoints' signed distances (exact:
+    each an upper bound on its segment's unsigned distance, for
+    :func:`segment_distances`)."""
     limit = np.broadcast_to(np.asarray(limit, float), (len(pk),))
     thr = (rad + limit)[:, None]
     box = np.all((np.maximum(a, b) >= tab.lo[pk] - thr) & (np.minimum(a, b) <= tab.hi[pk] + thr), axis=1)
     idx = np.flatnonzero(box)
     half = 0.5 * row_norm(b[idx] - a[idx])
     mid = point_distances(tab, pk[idx], 0.5 * (a[idx] + b[idx]), False, limit[idx] + half + rad[idx])
-    return idx[mid - half - rad[idx] < limit[idx]]
+    kept = mid - half - rad[idx] < limit[idx]
+    return (idx[kept], mid[kept]) if midpoints else idx[kept]
 
 
-def segment_distances(tab: PartTable, pk: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def segment_distances(tab: PartTable, pk: np.ndarray, a: np.ndarray, b: np.ndarray,
+                      mid: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Least signed distance (n,) of local segments ``a b`` (n, 3) to parts
     ``pk`` (n,), and the parameter (n,) of the deepest or nearest point:
-    each mesh's rows in one call, all primitives' in one."""
+    each mesh's rows in one call, all primitives' in one. ``mid`` (n,): the
+    segments' midpoints' signed distances, where the caller has them
+    (:func:`segments_within`): a mesh then searches only the faces that may
+    come within them."""
     d = np.full(len(pk), np.inf)
     t = np.zeros(len(pk))
     is_mesh = tab.type[pk] == SHAPE_CODE[ShapeType.MESH]
@@ -282,7 +291,7 @@ def segment_distances(tab: PartTable, pk: np.ndarray, a: np.ndarray, b: np.ndarr
     grp = tab.mesh_group[pk[sel]]
     for g in np.unique(grp):
         sk = sel[grp == g]
-        d[sk], t[sk] = segment_signed_distance(tab.mesh_shapes[g], a[sk], b[sk])
+        d[sk], t[sk] = segment_signed_distance(tab.mesh_shapes[g], a[sk], b[sk], None if mid is None else mid[sk])
     # All primitives in one call (box and cylinder share one line search).
     sel = np.nonzero(~is_mesh)[0]
     if len(sel):
