@@ -23,7 +23,6 @@ Deliberately not here: running the points, scoring them (see
 from __future__ import annotations
 
 import numpy as np
-from scipy.stats import qmc
 
 FIRST_SHARE = 0.4
 """The first round takes this share of the budget (at least a batch and
@@ -56,6 +55,8 @@ class Search:
         if d == 1:
             pts = np.linspace(self.lo, self.hi, n) if n > 1 else (0.5 * (self.lo + self.hi))[None]
         else:
+            from scipy.stats import qmc  # half a second to import: only a search pays it
+
             unit = qmc.LatinHypercube(d, seed=self._seed).random(max(n - 1, 1))[: n - 1]
             pts = np.vstack([0.5 * (self.lo + self.hi), qmc.scale(unit, self.lo, self.hi)]) if n > 1 \
                 else (0.5 * (self.lo + self.hi))[None]
@@ -87,6 +88,8 @@ class Search:
                 # least: one would be the box's centre, the best itself)
                 pts = list(np.linspace(lo, hi, max(n, 2) + 2)[1:-1])
             else:
+                from scipy.stats import qmc  # see first()
+
                 unit = qmc.LatinHypercube(len(self.lo), seed=self._rng.integers(2**31)).random(n)
                 pts = [lo + (hi - lo) * u for u in unit]
             found = self._new(pts)
