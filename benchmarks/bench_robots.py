@@ -610,7 +610,7 @@ def run_one(label: str, scene_path: Path, timeout: float | None = None) -> dict:
         if hit is not None:
             near.append({**{k: e[k] for k in ("severity", "type", "a", "b", "min_distance", "t_worst")},
                          "window": hit[0], "ds": float(e["s"]) - hit[1],
-                         "mujoco": second_opinion(e, r.get("validation") or {})})
+                         "mujoco": second_opinion(e, r.get("validation") or {}, r.get("physics_warnings", ()))})
     row.update({
         "elements": r["cables"][0]["segments"], **counts, "duration": duration, "complete": r.get("complete", True), "timing": t, "ratio": ratio(t),
         "rtf": duration / max(t["total_s"], 1e-12), "agreement": r["validation"]["agreement"],
@@ -741,10 +741,16 @@ CONTACTS = ("cable-structure", "keepout", "cable-cable", "self")
 """Event types MuJoCo's contacts have an opinion on (the validation compares them)."""
 
 
-def second_opinion(e: dict, validation: dict) -> str:
+def second_opinion(e: dict, validation: dict, warnings=()) -> str:
     """What MuJoCo's contacts say of event ``e`` at its worst step: a contact type whose pair
-    the validation found disagreeing there names the reason; one it did not, agrees; a bend
-    or taut event is no contact (no second opinion)."""
+    the validation found disagreeing there names the reason; one it did not, agrees; a taut
+    event is no contact (no second opinion); a bend is none either, but where the run warned
+    (``warnings``, the report's physics warnings) that the hose's elements cannot resolve its
+    bend, it is tighter still on a finer rod (docs/physics.md, Bends the elements cannot resolve)."""
+    if e["type"] == "bend":
+        if any(f"cable {e['a']!r}" in w and "cannot resolve" in w for w in warnings):
+            return "no contact; its elements cannot resolve the bend, which a finer rod reads tighter still"
+        return "no contact: no second opinion"
     if e["type"] not in CONTACTS:
         return "no contact: no second opinion"
     if not validation:

@@ -53,6 +53,11 @@ def test_second_opinion_reads_the_validations_disagreements_at_the_worst_step():
     assert bench.second_opinion({**event, "t_worst": 1.3}, validation) == "MuJoCo agrees at its worst step"
     assert bench.second_opinion({**event, "b": "link4"}, validation) == "MuJoCo agrees at its worst step"
     assert bench.second_opinion({**event, "type": "bend"}, validation) == "no contact: no second opinion"
+    warned = ["cable 'hose': its least bend radius, 0.02639 m at t = 3 s, spans fewer than 3 of its elements "
+              "(0.02915 m each): the simulated rod cannot resolve a bend that tight"]
+    assert "cannot resolve" in bench.second_opinion({**event, "type": "bend", "a": "hose"}, validation, warned)
+    assert bench.second_opinion({**event, "type": "bend", "a": "air"}, validation, warned) == \
+        "no contact: no second opinion"
     assert bench.second_opinion(event, {}) == "not validated"
 
 

@@ -222,6 +222,25 @@ model holds to (0.1 %): the edge equality gives under compression
 (`compression_step`), and a run warns where a cable is shorter by more
 (`cablecheck.run.runner`, the report's `physics_warnings`)."""
 
+BEND_RESOLUTION = 3.0
+"""Fewest regular elements a bend radius must span for the simulated rod to
+resolve it. A tighter bend (a hose turned sharply where it leaves a clamp or
+clip) is averaged over its elements and read larger than it is: a 7 mm
+hose leaving an arm's clip, 0.84 m long, read 24.3, 16.0, 13.4 and 12.4 mm
+with 34, 68, 136 and 272 segments (a radius of 1.0, 1.3, 2.2 and 4.0
+elements); a hairpin of a 2 mm cable 0.12 m long, 19.1, 15.75 and 15.73 mm
+with 6, 60 and 120 (docs/physics.md, Bends the elements cannot resolve).
+A run warns where a cable with a bend limit came below this many elements
+and below `BEND_READ_FACTOR` times its limit (`cablecheck.run.runner`, the
+report's `physics_warnings`)."""
+
+BEND_READ_FACTOR = 2.5
+"""How much larger than the bend a reading under `BEND_RESOLUTION` elements
+may be, at most, rounded up from what was measured: 2.1 times (26.4 mm at
+0.9 elements against 12.4 mm settled, the UR5e hose above). A reading
+farther than this above its cable's limit cannot hide a bend past it, and
+is not warned of."""
+
 COMPRESSION_SHARE = 0.5
 """Share of `COMPRESSION_TOLERANCE` that the edges may give under the
 cable's buckling load (`compression_step`): the rest is left for loads

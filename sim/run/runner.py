@@ -46,7 +46,7 @@ import numpy as np
 
 from cablecheck.about import version
 from cablecheck.build.built import Built
-from cablecheck.build.cablephysics import COMPRESSION_TOLERANCE, shear_modulus
+from cablecheck.build.cablephysics import BEND_READ_FACTOR, BEND_RESOLUTION, COMPRESSION_TOLERANCE, shear_modulus
 from cablecheck.build.checkview import OptionError
 from cablecheck.build.rodtwist import TwistReader
 from cablecheck.build.routecheck import route_warnings
@@ -391,7 +391,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         warnings=warning_counts([sim.data if isinstance(sim, Simulation) else None,   # a static check has none
                                  detector.detect_data if detector else None], messages),
         part_warnings=ends.part_warnings,
-        physics_warnings=noted + tuple(built.warnings) + ends.hull_warnings + out.compression_warnings(),
+        physics_warnings=noted + tuple(built.warnings) + ends.hull_warnings + out.compression_warnings() + out.bend_warnings(),
         substeps=built.substeps.count if built.substeps else 1,
         timing=Timing(time.perf_counter() - start, dict(timer.total),
                       detector.collision_seconds() if detector is not None else None, loop_s,
@@ -466,6 +466,7 @@ class _Checked:
         self.least_t = np.full(n, np.nan)
         self.first_short = np.full(n, np.nan)       # first checked time below -COMPRESSION_TOLERANCE
         self.min_bend = np.full(n, np.inf)
+        self.min_bend_t = np.full(n, np.nan)        # when (scene time)
         self.rest_points: list[np.ndarray] = []
         self.final_points: list[np.ndarray] = []
         self.steps = self.checked = 0
@@ -533,7 +534,12 @@ class _Checked:
             short = strain < -COMPRESSION_TOLERANCE
             first = np.where(short.any(axis=0), times[np.argmax(short, axis=0)], np.nan)
             self.first_short = np.where(np.isnan(self.first_short), first, self.first_short)
-            self.min_bend = np.minimum(self.min_bend, np.stack([r.bend for r in results]).min(axis=0))
+            bend = np.stack([r.bend for r in results])
+            k = np.argmin(bend, axis=0)
+            least = bend[k, np.arange(bend.shape[1])]
+            tighter = least < self.min_bend
+            self.min_bend = np.where(tighter, least, self.min_bend)
+            self.min_bend_t = np.where(tighter, times[k], self.min_bend_t)
         # the events first, the whole batch: the last state at which each event's worst
         # deepened within the batch is then recorded too (its worst instant, as the report has it)
         changes = []
@@ -593,6 +599,24 @@ class _Checked:
                            f"the buckling load of its held runs, under which its elements give with the "
                            f"step squared (a smaller scene.timestep gives less; docs/physics.md, Length in "
                            f"compression)")
+        return tuple(out)
+
+    def bend_warnings(self) -> tuple[str, ...]:
+        """The cables with a bend limit whose least bend radius spans fewer
+        than `BEND_RESOLUTION` of their elements, near enough to the limit
+        to hide a bend past it (`BEND_READ_FACTOR`): the rod reads such a
+        bend larger than it is (docs/physics.md, Bends the elements cannot resolve)."""
+        out = []
+        for i, c in enumerate(self.built.cables):
+            r, step, limit = float(self.min_bend[i]), c.element_length, c.min_bend_radius
+            if limit is None or not np.isfinite(r) or r >= BEND_RESOLUTION * step or r >= BEND_READ_FACTOR * limit:
+                continue
+            need = int(np.ceil(BEND_RESOLUTION * c.length / max(r, 1e-12)))
+            out.append(f"cable {c.name!r}: its least bend radius, {r:.4g} m at t = {self.min_bend_t[i]:.4g} s, "
+                       f"spans fewer than {BEND_RESOLUTION:g} of its elements ({step:.4g} m each): the "
+                       f"simulated rod cannot resolve a bend that tight and reads it larger than it is "
+                       f"(its limit is {c.min_bend_radius:.4g} m); to see it, segments = {need} at least, and again "
+                       f"finer until it settles (docs/physics.md, Bends the elements cannot resolve)")
         return tuple(out)
 
     def twist_profiles(self) -> list[TwistProfile | None]:
