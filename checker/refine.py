@@ -13,9 +13,13 @@ and the exact record replaces the points' one: the same or nearer, never
 clear where the points found a record. Records farther than the error from
 touching keep the points' value: their class cannot change.
 
+:func:`near_miss_records` does the same on the clearance's side: a pair
+the points read at or past the clearance by less than their error is
+measured with method ``exact`` too, and becomes a soft record where exact
+finds it inside.
+
 Not here: which records a state has (:mod:`cablecheck.checker.interference`),
-the near-miss side of the clearance (a pair the points put just past it
-stays clear), cable-cable and self records.
+cable-cable and self records.
 """
 
 from __future__ import annotations
@@ -67,4 +71,41 @@ def refined_records(records: Sequence[Sequence[Interference]], cables: Callable[
         for (i, r), e in zip(found, exact):
             if e is not None and e.min_distance <= r.min_distance:
                 out[i][id(r)] = e
+    return out
+
+
+def near_miss_records(near: Sequence[Sequence[Interference]], cables: Callable[[int], Mapping[str, CableState]],
+                      poses: np.ndarray, recheck: Recheck) -> list[list[Interference]]:
+    """Per state, the records method ``exact`` finds of its near misses: the
+    cable-part pairs the points read at or past the clearance by less than
+    their own error (:meth:`~cablecheck.checker.interference.hits.Hits.near_misses`),
+    each measured against its part alone (every state asking for one pair
+    in one pass, only the elements that may come below the clearance). A
+    pair exact finds inside the clearance gets exact's record (soft, or hard
+    where the clearance is under the points' error); the others stay clear.
+
+    Args:
+        near: per state (S), its near misses.
+        cables, poses, recheck: as :func:`refined_records`.
+    """
+    out: list[list[Interference]] = [[] for _ in near]
+    wanted: dict[tuple[PairType, str, str], list[int]] = {}
+    for i, recs in enumerate(near):
+        for r in recs:                                                  # a state's few near misses
+            wanted.setdefault((PairType(r.type), r.a, r.b), []).append(i)
+    if not wanted:
+        return out
+    clearance = recheck.config.clearance
+    asked: dict[int, Mapping[str, CableState]] = {}
+    for key, rows in wanted.items():
+        _, a, b = key
+        k = recheck.index[b]
+        for i in rows:
+            if i not in asked:
+                asked[i] = cables(i)
+        exact = exact_records_many(recheck.exact_checker(k), [asked[i][a] for i in rows],
+                                   poses[rows, k], recheck.exclusions, key, below=[clearance] * len(rows))
+        for i, e in zip(rows, exact):
+            if e is not None and e.min_distance < clearance:
+                out[i].append(e)
     return out

@@ -1,6 +1,9 @@
-"""Tests of cablecheck.checker.refine: method points' records near touching measured again exactly,
-against an independent `Checker` with method exact on the same drawn cable and part (primitives and
-meshes, turned, far from the origin), and the points' error bound that decides which records are."""
+"""Tests of cablecheck.checker.refine: method points' records near touching, and its near misses
+past the clearance, measured again exactly, against an independent `Checker` with method exact on
+the same drawn cable and part (primitives and meshes, turned, far from the origin), and the points'
+error bound that decides which records are."""
+
+import json
 
 import numpy as np
 import trimesh
@@ -11,7 +14,7 @@ from cablecheck.checker.interference import Checker
 from cablecheck.checker.interference.discrete import points_error
 from cablecheck.checker.recheck import Recheck
 from cablecheck.checker.records import PairType, Severity
-from cablecheck.checker.refine import refined_records
+from cablecheck.checker.refine import near_miss_records, refined_records
 from cablecheck.checker.scene_state import CableState, CheckConfig, PartState
 from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape
 from helpers import examples
@@ -114,3 +117,124 @@ def test_a_corner_between_two_points_reads_as_touching():
         assert got.severity is severity
         assert abs(got.min_distance + depth) < 1e-12
         assert abs(got.where[0] - 0.005) < 1e-9
+
+
+@settings(max_examples=examples(60), deadline=None)
+@given(st.sampled_from(sorted(_SHAPES)), rotations(), st.floats(0.0, np.pi), coords((5,), -0.004, 0.004),
+       coords(2, -0.01, 0.01), st.floats(0.002, 0.01), st.floats(0.0, 1.0), st.sampled_from([0.0, 500.0]),
+       st.booleans())
+def test_no_pair_exact_finds_inside_the_clearance_is_left_clear(kind, rot, heading, jitter, off, radius, at,
+                                                                 far, keepout):
+    """A cable laid level across a drawn part's highest point, its surface drawn between the
+    clearance and the clearance plus the points' error above it: whatever the points read, the pair
+    has a record exactly where method exact finds one, either the points' own or, for a near miss
+    (the points at or past the clearance by less than their error), exact's, the same value to
+    rounding."""
+    clearance = 0.004
+    err = points_error(radius, 2.0)
+    top = _top(kind, rot)
+    along = np.array([np.cos(heading), np.sin(heading), 0.0])
+    steps = np.linspace(-0.05, 0.05, 5) + jitter
+    line = top + np.array([off[0], off[1], radius + clearance - err + at * 2.0 * err]) + steps[:, None] * along
+    pose = np.eye(4)
+    pose[:3, :3], pose[:3, 3] = rot, far
+    part = PartState("p", _SHAPES[kind], pose, keepout=keepout)
+    cable = CableState("c", line + far, radius)
+    checked = Checker([part], CheckConfig(method="points", clearance=clearance)).check_with_gaps([cable])
+    exact = Checker([part], CheckConfig(method="exact", clearance=clearance)).check([cable])
+    ptype = PairType.KEEPOUT if keepout else PairType.CABLE_STRUCTURE
+    p_rec, e_rec = _record(checked.records, ptype, "p"), _record(exact, ptype, "p")
+    recheck = Recheck([PartState("p", _SHAPES[kind], np.eye(4), keepout)], CheckConfig(clearance=clearance), [])
+    found = near_miss_records([checked.near_misses], lambda i: {"c": cable}, pose[None, None], recheck)[0]
+    n_rec = _record(found, ptype, "p")
+    rounding = 1e-12 * (1.0 + far)
+    near = _record(checked.near_misses, ptype, "p")
+    event("points record" if p_rec else ("near miss, inside by exact" if n_rec else
+                                         ("near miss, clear by exact" if near else "clear")))
+    assert p_rec is None or n_rec is None and near is None      # a pair is a record or a near miss, not both
+    if near is not None:
+        assert clearance <= near.min_distance < clearance + err
+    if e_rec is None:
+        assert p_rec is None and n_rec is None
+    elif p_rec is None:
+        assert n_rec is not None and abs(n_rec.min_distance - e_rec.min_distance) <= rounding
+        assert n_rec.severity is e_rec.severity
+
+
+def test_a_corner_just_past_the_clearance_by_points_is_a_record_by_exact():
+    """The box edge of the test above, 1 mm from the cable's surface half way between two points
+    (r = 5 mm, 10 mm apart), with a 2 mm clearance: the points read 3.07 mm, past it, a near miss;
+    exact finds 1 mm, a soft record."""
+    r, half = 0.005, 0.01
+    cable = CableState("c", np.array([[-0.03, 0.0, 0.0], [0.0, 0.0, 0.0], [0.01, 0.0, 0.0], [0.04, 0.0, 0.0]]), r)
+    cfg = CheckConfig(clearance=0.002, spacing=2.0)
+    pose = np.eye(4)
+    pose[:3, :3] = [[np.sqrt(0.5), 0.0, np.sqrt(0.5)], [0.0, 1.0, 0.0], [-np.sqrt(0.5), 0.0, np.sqrt(0.5)]]
+    pose[:3, 3] = [0.005, 0.0, -(r + 0.001) - half * np.sqrt(2.0)]
+    part = PartState("p", Shape(ShapeType.BOX, [half, 0.05, half]), pose)
+    checked = Checker([part], cfg).check_with_gaps([cable])
+    assert _record(checked.records, PairType.CABLE_STRUCTURE, "p") is None
+    near = _record(checked.near_misses, PairType.CABLE_STRUCTURE, "p")
+    assert abs(near.min_distance - (np.hypot(0.005, r + 0.001) - r)) < 1e-6
+    recheck = Recheck([PartState("p", part.shape, np.eye(4))], cfg, [])
+    got = near_miss_records([[near]], lambda i: {"c": cable}, pose[None, None], recheck)[0]
+    assert len(got) == 1 and got[0].severity is Severity.SOFT and abs(got[0].min_distance - 0.001) < 1e-12
+
+
+EDGE_PASS = """
+[scene]
+name = "edge-pass"
+units = "mm"
+duration = 1.0
+timestep = 0.01
+
+[effects]
+dynamics = false
+
+[check]
+clearance = 2.0
+validate = false
+
+[[bodies]]
+name = "sled"
+
+[[motion]]
+body = "sled"
+interpolation = "linear"
+keys = [{ t = 0.0, pos = [0, 0, 0] }, { t = 1.0, pos = [40, 0, 0] }]
+
+[[parts]]
+name = "wedge"
+body = "sled"
+shape = "box"
+size = [10, 30, 10]
+euler = [0, 45, 0]
+pos = [-20, 0, -20.642135623730951]
+
+[[cables]]
+name = "c"
+radius = 5.0
+start = { pos = [-100, 0, 0] }
+end = { pos = [100, 0, 0] }
+segments = 20
+"""
+
+
+def test_an_edge_sliding_along_a_cable_inside_the_clearance_is_one_event(tmp_path):
+    """A box's edge slid 40 mm along a straight cable (r 5 mm, points 10 mm apart), 1.5 mm from its
+    surface all the way, with a 2 mm clearance: half way between two points the points read 3.2 mm,
+    past it (before: five soft events, the pair clear between them); measured exactly there, one soft
+    event over the whole slide, at 1.5 mm, the same with the skip rule and checked in full."""
+    from cablecheck.run.runner import RunOptions, run_scene
+    from cablecheck.scene.load import load_scene
+
+    path = tmp_path / "edge.toml"
+    path.write_text(EDGE_PASS)
+    reports = [run_scene(load_scene(path), RunOptions(report=tmp_path / f"{k}.json", record=None, advance=k == 0))
+               for k in (0, 1)]
+    for r in reports:
+        assert [(e["type"], e["severity"]) for e in r["events"]] == [("cable-structure", "soft")]
+        e = r["events"][0]
+        assert (e["t_start"], e["t_end"]) == (0.0, 1.0) and abs(e["min_distance"] - 1.5) < 1e-9
+    plain = [json.loads(json.dumps(r, default=lambda x: np.asarray(x).tolist())) for r in reports]
+    assert plain[0]["events"] == plain[1]["events"] and plain[0]["pairs"] == plain[1]["pairs"]

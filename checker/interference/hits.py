@@ -146,6 +146,21 @@ def worst_records(states: int, state: np.ndarray, t: np.ndarray, a: np.ndarray, 
     return out
 
 
+def near_miss_mask(state: np.ndarray, t: np.ndarray, a: np.ndarray, b: np.ndarray, value: np.ndarray,
+                   clearance: float, errors: np.ndarray) -> np.ndarray:
+    """(n,) the candidates at or past the clearance by less than their ``errors`` (n,) whose
+    (state, type, a, b) pair has no candidate below the clearance (no record)."""
+    near = (value >= clearance) & (value < clearance + errors)
+    if not near.any():
+        return near
+    below = value < clearance
+    if below.any():
+        key = np.stack([state, t, a, b])
+        key = np.ravel_multi_index(key, key.max(axis=1) + 1)      # one number per pair
+        near &= ~np.isin(key, key[below])
+    return near
+
+
 class Hits:
     """Accumulates candidate values; reduces to the worst per (type, a, b)."""
 
@@ -169,24 +184,30 @@ class Hits:
         s_b = np.full(n, np.nan) if s_b is None else s_b
         self.parts.append((np.full(n, code), a, b, value, where, s, s_b))
 
-    def gaps(self, clearance: float, horizon: float, n_parts: int) -> Gaps:
+    def gaps(self, clearance: float, horizon: float, n_parts: int, part_errors: np.ndarray | None = None) -> Gaps:
         """Smallest candidate value minus the clearance: over cable pairs (self
         and cable-cable), and per part (cable-structure and keep-out), at most
         ``horizon`` (candidates are found up to clearance + horizon); with
-        every candidate behind them."""
+        every candidate behind them. ``part_errors`` (C,): a cable-part
+        candidate's is counted from the clearance plus its cable's (the
+        points' error: a pair kept past that is past the clearance by method
+        exact too; its candidates must then be found that much farther)."""
         cc = horizon
         part = np.full(n_parts, horizon)
-        for code, _, b, value, _, _ in self.near:
+        for code, a, b, value, _, _ in self.near:
             if code in CABLE_PAIR_CODES:
                 cc = min(cc, float(value.min()) - clearance)
             elif code in PART_CODES:
-                np.minimum.at(part, b, value - clearance)
-        return Gaps(horizon, cc, part, self._part_candidates(clearance), self._cable_candidates(clearance))
+                np.minimum.at(part, b, value - clearance - (0.0 if part_errors is None else part_errors[a]))
+        return Gaps(horizon, cc, part, self._part_candidates(clearance, part_errors),
+                    self._cable_candidates(clearance))
 
-    def _part_candidates(self, clearance: float) -> PartCandidates:
+    def _part_candidates(self, clearance: float, part_errors: np.ndarray | None = None) -> PartCandidates:
         """Every cable-structure and keep-out candidate: (cable, s, part,
-        value - clearance), for gaps per cable place (:mod:`cablecheck.checker.advance`)."""
-        rows = [(a, s, b, value - clearance) for code, a, b, value, s, _ in self.near if code in PART_CODES]
+        value - clearance, less its cable's ``part_errors``), for gaps per
+        cable place (:mod:`cablecheck.checker.advance`)."""
+        rows = [(a, s, b, value - clearance - (0.0 if part_errors is None else part_errors[a]))
+                for code, a, b, value, s, _ in self.near if code in PART_CODES]
         if not rows:
             return PartCandidates(np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64), np.zeros(0))
         return PartCandidates(*(np.concatenate(x) for x in zip(*rows)))
@@ -200,6 +221,23 @@ class Hits:
             z = np.zeros(0, np.int64)
             return CableCandidates(z, np.zeros(0), z, np.zeros(0), np.zeros(0))
         return CableCandidates(*(np.concatenate(x) for x in zip(*rows)))
+
+    def near_misses(self, clearance: float, errors: np.ndarray, cable_names: Sequence[str],
+                    b_names: Callable[[PairType], Sequence[str]]) -> list[Interference]:
+        """The worst cable-structure and keep-out candidate per pair at or
+        past the clearance but within its cable's ``errors`` (C,) of it (what
+        method ``points`` may over-state: :func:`~cablecheck.checker.interference.discrete.points_error`),
+        worst first: pairs an exact measure may find inside the clearance,
+        no records themselves."""
+        rows = [x for x in self.parts if x[0][0] in PART_CODES]
+        if not rows:
+            return []
+        t, a, b, v, w, s, sb = (np.concatenate(x) for x in zip(*rows))
+        keep = near_miss_mask(np.zeros(len(v), np.int64), t, a, b, v, clearance, np.asarray(errors, float)[a])
+        if not keep.any():
+            return []
+        t, a, b, v, w, s, sb = (x[keep] for x in (t, a, b, v, w, s, sb))
+        return worst_records(1, np.zeros(len(v), np.int64), t, a, b, v, w, s, sb, math.inf, cable_names, b_names)[0]
 
     def records(self, clearance: float, cable_names: Sequence[str],
                 b_names: Callable[[PairType], Sequence[str]]) -> list[Interference]:

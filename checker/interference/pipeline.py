@@ -18,14 +18,14 @@ interference, events over time and comparison with MuJoCo.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from cablecheck.checker.interference import cablepairs, discrete, structure
 from cablecheck.checker.interference.broad import Chunks
 from cablecheck.checker.interference.cablepairs import cable_pairs_exact, cable_pairs_points
-from cablecheck.checker.interference.discrete import DenseStates, discretise
+from cablecheck.checker.interference.discrete import DenseStates, discretise, points_error
 from cablecheck.checker.interference.exclusions import ExclusionTable, exclusion_arrays
 from cablecheck.checker.interference.hits import Gaps, Hits
 from cablecheck.checker.interference.single import single_cable
@@ -48,10 +48,14 @@ class Checked:
             (what the skip rule of :mod:`cablecheck.checker.advance` starts from);
             None when not available (method ``exact``, face-plane, or no
             horizon).
+        near_misses: method ``points``: the cable-part pairs at or past the
+            clearance by less than the points may over-state
+            (:meth:`Hits.near_misses`), for an exact measure to decide; no records.
     """
 
     records: list[Interference]
     gaps: Gaps | None
+    near_misses: list[Interference] = field(default_factory=list)
 
 
 class Checker:
@@ -133,25 +137,29 @@ class Checker:
         return discrete.densify_many(pts, offsets, radii, self.config.spacing, rest, keep)
 
     def near_entries(self, pts: np.ndarray, poses: np.ndarray, offsets: np.ndarray, radii: np.ndarray,
-                     active: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                     active: tuple[np.ndarray, np.ndarray], near_errors: np.ndarray | None = None
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:func:`cablecheck.checker.interference.structure.near_entries` on this
-        checker's parts at its clearance: the (state, centre, part) entries
-        of :meth:`structure_many` whose points may come near the part, for
-        body centres pts (S, N, 3) of cables ``offsets`` (C + 1,) and
-        ``radii`` (C,), the parts' poses (S, K, 4, 4)."""
+        checker's parts at its clearance (plus the largest of ``near_errors``,
+        (C,), where :meth:`structure_many` looks for near misses too): the
+        (state, centre, part) entries of :meth:`structure_many` whose points
+        may come near the part, for body centres pts (S, N, 3) of cables
+        ``offsets`` (C + 1,) and ``radii`` (C,), the parts' poses (S, K, 4, 4)."""
         if self._tab is None:
             z = np.zeros(0, np.int64)
             return z, z, z
         cable = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
+        limit = self.config.clearance + (0.0 if near_errors is None else float(np.max(near_errors, initial=0.0)))
         return structure.near_entries(self._tab, pts, poses, cable[:-1] == cable[1:],
-                                      np.asarray(radii, float)[cable], self.config.clearance, active)
+                                      np.asarray(radii, float)[cable], limit, active)
 
     def structure_many(self, names: Sequence[str], radii: np.ndarray, dense: DenseStates,
                        poses: np.ndarray, exclusions: Sequence[Exclusion],
-                       active: tuple[np.ndarray, ...]) -> list[list[Interference]]:
+                       active: tuple[np.ndarray, ...], near_errors: np.ndarray | None = None):
         """:func:`cablecheck.checker.interference.structure.structure_many` on this checker's parts."""
         excl = self._exclusion_table(names, exclusions).excl if self._tab is not None else None
-        return structure.structure_many(self._tab, self.config, excl, names, radii, dense, poses, active)
+        return structure.structure_many(self._tab, self.config, excl, names, radii, dense, poses, active,
+                                        near_errors)
 
     def cable_pairs_many(self, names: Sequence[str], radii: np.ndarray, dense: DenseStates,
                          active: tuple[np.ndarray, np.ndarray]) -> list[list[Interference]]:
@@ -214,6 +222,7 @@ class Checker:
             exact = config.method == "exact"
             cuts = (np.concatenate([ex_c, ex_c]), np.concatenate([ex_lo, ex_hi])) if exact \
                 else (np.zeros(0, np.int64), np.zeros(0))
+            errors = near_miss_errors(cables, config)
             dp = discretise(cables, config, cuts)
             has_next = np.concatenate([dp.cable[:-1] == dp.cable[1:], [False]])
             limit = config.clearance + (horizon if bounded else 0.0)
@@ -231,14 +240,27 @@ class Checker:
                     # windows narrowed by the stretch: points that may enter
                     # or leave a window bound the gaps too
                     near = (excl[0], excl[1] + self.stretch, excl[2] - self.stretch, excl[3]) if bounded else None
-                    structure_points(dp, ch, tab, config, excl, hits, limit, near)
+                    # up to the points' own error farther: the near misses, and the gaps counted
+                    # from the clearance plus that error (Hits.gaps)
+                    structure_points(dp, ch, tab, config, excl, hits, limit + float(errors.max(initial=0.0)), near)
             single_cable(cables, config.clearance, hits)
-        found = hits.gaps(config.clearance, horizon, len(parts)) if bounded else None
+        found = hits.gaps(config.clearance, horizon, len(parts), errors if cables else None) if bounded else None
 
         def names(ptype: PairType) -> list[str]:
             return part_names if ptype in PART_TYPES else cable_names
 
-        return Checked(hits.records(config.clearance, cable_names, names), found)
+        near_misses = hits.near_misses(config.clearance, errors, cable_names, names) \
+            if cables and errors.max(initial=0.0) > 0.0 else []
+        return Checked(hits.records(config.clearance, cable_names, names), found, near_misses)
+
+
+def near_miss_errors(cables: Sequence[CableState], config: CheckConfig) -> np.ndarray:
+    """(C,) per cable, how far past the clearance a cable-part pair may read by
+    method ``points`` and still be inside it (:func:`points_error`); 0 for
+    method ``exact`` and the paper's face-plane distance (no near misses)."""
+    if config.method != "points" or config.face_plane:
+        return np.zeros(len(cables))
+    return np.array([points_error(c.radius, config.spacing) for c in cables], float)
 
 
 def check_state(

@@ -24,6 +24,7 @@ pairs, the reduction to records (:mod:`cablecheck.checker.interference.hits`).
 from __future__ import annotations
 
 import copy
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -31,7 +32,7 @@ import numpy as np
 from cablecheck.checker.closest import row_norm
 from cablecheck.checker.interference.broad import chunk_part_pairs
 from cablecheck.checker.interference.discrete import DenseStates
-from cablecheck.checker.interference.hits import TYPE_ORDER, worst_records
+from cablecheck.checker.interference.hits import TYPE_ORDER, near_miss_mask, worst_records
 from cablecheck.checker.records import Interference, PairType
 from cablecheck.checker.scene_state import CheckConfig, PartState
 from cablecheck.checker.shapes import (
@@ -401,7 +402,8 @@ def active_points(src: np.ndarray, own: np.ndarray, ci: np.ndarray, pi: np.ndarr
 
 def structure_many(tab: PartTable | None, config: CheckConfig, excl: tuple, names: Sequence[str],
                    radii: np.ndarray, dense: DenseStates, poses: np.ndarray,
-                   active: tuple[np.ndarray, ...]) -> list[list[Interference]]:
+                   active: tuple[np.ndarray, ...], near_errors: np.ndarray | None = None
+                   ) -> list[list[Interference]] | tuple[list[list[Interference]], list[list[Interference]]]:
     """The full check's cable-structure and keep-out records at many
     states at once, from the discrete points next to given body centres
     (method ``points``; to the bit).
@@ -419,16 +421,20 @@ def structure_many(tab: PartTable | None, config: CheckConfig, excl: tuple, name
         active: (centre index in a state, part index) arrays, each entry
             in every state; or (state, centre, part) arrays, each entry in
             its own state (:func:`near_entries`).
+        near_errors: (C,) per cable, what its points may over-state
+            (:func:`~cablecheck.checker.interference.pipeline.near_miss_errors`):
+            the near misses are found too (as :meth:`Hits.near_misses`).
 
     Returns:
-        per state, its records (worst first).
+        per state, its records (worst first); with ``near_errors``, and per
+        state its near misses.
     """
     n_s, n, n_c, n_k = dense.states, dense.centres, dense.cables, (0 if tab is None else len(tab.names))
     out: list[list[Interference]] = [[] for _ in range(n_s)]
     si = np.asarray(active[0], np.int64) if len(active) == 3 else None
     ci, pi = (np.asarray(x, np.int64) for x in active[-2:])
     if n_s == 0 or len(ci) == 0 or tab is None:
-        return out
+        return out if near_errors is None else (out, [[] for _ in range(n_s)])
     radii = np.asarray(radii, float)
     p, s, src, own = dense.p, dense.s, dense.src, dense.own
     state, cab = dense.poly // n_c, dense.poly % n_c
@@ -439,10 +445,18 @@ def structure_many(tab: PartTable | None, config: CheckConfig, excl: tuple, name
     loc = to_local(p[it], trans[q], rot[q])
     # only the worst place per (state, cable, part) becomes a record
     group = (state[it] * n_c + cab[it]) * n_k + k
-    o, v, _ = point_values(tab, k, loc, radii[cab[it]], cab[it], dense.m[it], excl, config.clearance,
+    err = None if near_errors is None else np.asarray(near_errors, float)
+    limit = config.clearance + (0.0 if err is None else float(err.max(initial=0.0)))
+    o, v, _ = point_values(tab, k, loc, radii[cab[it]], cab[it], dense.m[it], excl, limit,
                            config.face_plane, group)
     it, k = it[o], k[o]
     kind = np.where(tab.keepout[k], _KEEPOUT, _STRUCTURE)
-    return worst_records(n_s, state[it], kind, cab[it], k, v, p[it], s[it], np.full(len(v), np.nan),
-                         config.clearance, names, lambda _: tab.names)
+    records = worst_records(n_s, state[it], kind, cab[it], k, v, p[it], s[it], np.full(len(v), np.nan),
+                            config.clearance, names, lambda _: tab.names)
+    if err is None:
+        return records
+    m = near_miss_mask(state[it], kind, cab[it], k, v, config.clearance, err[cab[it]])
+    near = worst_records(n_s, state[it][m], kind[m], cab[it][m], k[m], v[m], p[it][m], s[it][m],
+                         np.full(int(m.sum()), np.nan), math.inf, names, lambda _: tab.names)
+    return records, near
 

@@ -47,8 +47,9 @@ from cablecheck.checker.interference.margins import Closest, MarginLog
 from cablecheck.checker.interference.structure import PartTable, point_distances
 from cablecheck.checker.parts import PartChecker
 from cablecheck.checker.recheck import Recheck
+from cablecheck.checker.interference.hits import record_order
 from cablecheck.checker.records import PART_TYPES, Interference, PairType
-from cablecheck.checker.refine import refined_records
+from cablecheck.checker.refine import near_miss_records, refined_records
 from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from cablecheck.checker.shapes import Shape
 from cablecheck.checker.validation import SimulatorPairs, Validation, ValidationSummary
@@ -160,6 +161,9 @@ class StepResult:
         evaluated up to its horizon, as ((cable, s, part, value - clearance)
         for parts, (cable a, s_a, cable b, s_b, value - clearance) for cable
         pairs; built part indices, metres), else None.
+      near_misses: method points: the cable-part pairs read at or past the
+        clearance by less than the points' error (no records: `StepChecks.run`
+        measures them with method exact, and leaves them empty).
     """
 
     records: list[Interference]
@@ -170,6 +174,7 @@ class StepResult:
     contacts: Contacts | None = None
     agreement: float | None = None
     near: tuple | None = None
+    near_misses: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -321,6 +326,9 @@ class StepChecks:
         self.hull_gaps = HullGaps(built) if detector is not None else None   # cables held on a hull
         self._recheck = Recheck(self.checker.parts, config, self.exclusions)
         self._points_error = {c.name: points_error(c.radius, config.spacing) for c in built.cables}
+        # how far past the clearance a cable-part pair may read and still be inside it (method points)
+        self._near_errors = (np.array([self._points_error[n] for n in self._names], float)
+                             if config.method == "points" and not config.face_plane else None)
         self._measures = CableMeasures(offsets)
         self._rest_length = np.array([c.length for c in built.cables], float)
         limit = np.array([np.inf if c.min_bend_radius is None else c.min_bend_radius
@@ -383,12 +391,29 @@ class StepChecks:
         millimetre off."""
         if self.config.method != "points":
             return results
-        swaps = refined_records([r.cable_records for r in results],
-                                lambda i: {c.name: c for c in self._cable_states(states[i])},
-                                poses[:, self.checked_parts], self._recheck, self._points_error)
-        return [res if not swap else replace(res, records=[swap.get(id(r), r) for r in res.records],
-                                             cable_records=[swap.get(id(r), r) for r in res.cable_records])
-                for res, swap in zip(results, swaps)]
+        memo: dict[int, dict] = {}
+
+        def cables(i: int) -> dict:
+            if i not in memo:
+                memo[i] = {c.name: c for c in self._cable_states(states[i])}
+            return memo[i]
+
+        placed = poses[:, self.checked_parts]
+        swaps = refined_records([r.cable_records for r in results], cables, placed, self._recheck,
+                                self._points_error)
+        found = near_miss_records([r.near_misses for r in results], cables, placed, self._recheck)
+        out = []
+        for res, swap, more in zip(results, swaps, found):
+            if more:           # the pairs exact found inside the clearance, in the records' order
+                cable_ids = {id(r) for r in res.cable_records}
+                cable_records = sorted([swap.get(id(r), r) for r in res.cable_records] + more, key=record_order)
+                res = replace(res, records=cable_records + [r for r in res.records if id(r) not in cable_ids],
+                              cable_records=cable_records)
+            elif swap:
+                res = replace(res, records=[swap.get(id(r), r) for r in res.records],
+                              cable_records=[swap.get(id(r), r) for r in res.cable_records])
+            out.append(replace(res, near_misses=()) if res.near_misses else res)
+        return out
 
     def _validate(self, states: Sequence[StepState], pts: np.ndarray,
                   results: list[StepResult]) -> list[StepResult]:
@@ -434,6 +459,7 @@ class StepChecks:
         n = len(states)
         names = self._names
         records: list[list[Interference]] = [[] for _ in range(n)]
+        near: list[list[Interference]] = [[] for _ in range(n)]
         flagged = np.flatnonzero(single)
         if len(flagged):
             found = single_records_many(names, pts[flagged], self._offsets, radius_at[flagged],
@@ -444,12 +470,15 @@ class StepChecks:
             # the active pairs state by state where their elements come near
             # the part's box, and the points of those elements alone
             checked_poses = poses[:, self.checked_parts]
-            si, ci, pi = self.checker.near_entries(pts, checked_poses, self._offsets, self._radii, self._active)
+            si, ci, pi = self.checker.near_entries(pts, checked_poses, self._offsets, self._radii, self._active,
+                                                   self._near_errors)
             if len(si):
                 keep = around_centres(ci, pts.shape[1], si, len(pts))
                 dense = self.checker.densify_many(pts, self._offsets, self._radii, self._rest, keep)
                 found = self.checker.structure_many(names, self._radii, dense, checked_poses,
-                                                    self.exclusions, (si, ci, pi))
+                                                    self.exclusions, (si, ci, pi), self._near_errors)
+                if self._near_errors is not None:
+                    found, near = found
                 records = [a + b for a, b in zip(found, records)]
         if len(self._cable_active[0]):
             # the points of the elements next to the active centres alone
@@ -461,10 +490,11 @@ class StepChecks:
         same = self.part_checker.replay_many(poses) if self.part_checker.has_same_body_records \
             else [[] for _ in range(n)]
         out = []
-        for recs, st, bd, found, static in zip(records, strain, bend, active, same):
+        for recs, st, bd, found, static, misses in zip(records, strain, bend, active, same, near):
             cable_records = self._focus(recs)
             part_records = static + found
-            out.append(StepResult(cable_records + part_records, cable_records, st, bd, False))
+            out.append(StepResult(cable_records + part_records, cable_records, st, bd, False,
+                                  near_misses=tuple(self._focus(misses))))
         return out
 
     def _full(self, state: StepState, pts: np.ndarray, poses: np.ndarray, strain: np.ndarray,
@@ -526,7 +556,8 @@ class StepChecks:
                 adv.stop()
                 adv.start_pairs(poses, pairs, bound)
         cable_records = self._focus(cable_records)
-        return StepResult(cable_records + part_records, cable_records, strain, bend, True, near=near)
+        return StepResult(cable_records + part_records, cable_records, strain, bend, True, near=near,
+                          near_misses=tuple(self._focus(checked.near_misses)))
 
     def _pair_records(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray, slot: str) -> list[Interference]:
         """`PartChecker.check_pairs` of pairs (i, j) at poses (P, 4, 4): the records of the last
