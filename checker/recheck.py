@@ -290,7 +290,8 @@ def exact_many(checker: Checker, cables: Sequence[CableState | None], poses: np.
 
 def exact_records_many(checker: Checker, cables: Sequence[CableState | None], poses: np.ndarray,
                        exclusions: Sequence[Exclusion], key: tuple[str, str, str],
-                       below: Sequence[float] | None = None) -> list[Interference | None]:
+                       below: Sequence[float] | None = None,
+                       spans: np.ndarray | None = None) -> list[Interference | None]:
     """The record ``checker.check([cable], pose, exclusions)`` gives the pair
     ``key`` of a cable against a one-part exact checker's part at each of S
     states (poses (S, 4, 4); None: clear, or no cable there), in one pass:
@@ -298,7 +299,9 @@ def exact_records_many(checker: Checker, cables: Sequence[CableState | None], po
     every element of cable s paired with part s only. ``below`` (S,): only
     the elements that may come below a state's value are measured, so its
     record is the same where the pair comes below it, and may be missing or
-    not the pair's least where it does not."""
+    not the pair's least where it does not. ``spans`` (S, 2): only the
+    elements of cable s between those arc lengths (along it as it lies) are
+    measured."""
     out: list[Interference | None] = [None] * len(cables)
     rows = [i for i, c in enumerate(cables) if c is not None]
     if not rows or checker._tab is None:
@@ -315,8 +318,13 @@ def exact_records_many(checker: Checker, cables: Sequence[CableState | None], po
     cuts = (np.concatenate([cut_c, cut_c]), np.concatenate([np.tile(one.lo, n), np.tile(one.hi, n)]))
     dp = discretise([cables[i] for i in rows], checker.config, cuts)
     hits = Hits()
-    limit = None if below is None else np.asarray(below, float)[rows][dp.cable[dp.seg]]
-    structure_exact_pairs(dp, tab, checker.config, excl, hits, dp.seg, dp.cable[dp.seg], limit)
+    seg = dp.seg
+    if spans is not None:       # the elements that reach into their copy's span
+        span = np.asarray(spans, float)[rows][dp.cable[seg]]
+        pad = 1e-9 * (1.0 + np.abs(span).max(axis=1))            # the arc lengths' own rounding
+        seg = seg[(dp.s[seg + 1] >= span[:, 0] - pad) & (dp.s[seg] <= span[:, 1] + pad)]
+    limit = None if below is None else np.asarray(below, float)[rows][dp.cable[seg]]
+    structure_exact_pairs(dp, tab, checker.config, excl, hits, seg, dp.cable[seg], limit)
     if hits.parts:
         t, a, _, v, w, s_at, sb = (np.concatenate(x) for x in zip(*hits.parts))
         found = worst_records(n, a, t, np.zeros_like(a), np.zeros_like(a), v, w, s_at, sb,

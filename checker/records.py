@@ -86,3 +86,28 @@ class Interference:
     where: np.ndarray
     s: float
     s_b: float | None = None
+
+
+@dataclass(frozen=True)
+class NearMiss:
+    """A cable-part pair method ``points`` reads at or past the clearance by
+    less than its own error (:func:`~cablecheck.checker.interference.discrete.points_error`)
+    at one scene state: no record, but one an exact measure may find inside
+    the clearance (:func:`cablecheck.checker.refine.near_miss_records`).
+
+    Attributes:
+        type: cable-structure or keep-out.
+        a, b: the cable and the part.
+        min_distance: the points' least value (at or past the clearance).
+        s_lo, s_hi: the arc lengths along the cable between which its points
+            read below the clearance plus the error: only there can an
+            element come inside the clearance.
+    """
+
+    type: PairType
+    a: str
+    b: str
+    min_distance: float
+    s_lo: float
+    s_hi: float
+

@@ -29,7 +29,7 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 
 from cablecheck.checker.recheck import Recheck, exact_records_many
-from cablecheck.checker.records import PART_TYPES, Interference, PairType, Severity
+from cablecheck.checker.records import PART_TYPES, Interference, NearMiss, PairType, Severity
 from cablecheck.checker.scene_state import CableState
 
 _ROUNDING = 1.0 + 1e-9
@@ -74,37 +74,40 @@ def refined_records(records: Sequence[Sequence[Interference]], cables: Callable[
     return out
 
 
-def near_miss_records(near: Sequence[Sequence[Interference]], cables: Callable[[int], Mapping[str, CableState]],
+def near_miss_records(near: Sequence[Sequence[NearMiss]], cables: Callable[[int], Mapping[str, CableState]],
                       poses: np.ndarray, recheck: Recheck) -> list[list[Interference]]:
     """Per state, the records method ``exact`` finds of its near misses: the
     cable-part pairs the points read at or past the clearance by less than
-    their own error (:meth:`~cablecheck.checker.interference.hits.Hits.near_misses`),
-    each measured against its part alone (every state asking for one pair
-    in one pass, only the elements that may come below the clearance). A
-    pair exact finds inside the clearance gets exact's record (soft, or hard
-    where the clearance is under the points' error); the others stay clear.
+    their own error (:class:`~cablecheck.checker.records.NearMiss`), each
+    measured against its part alone (every state asking for one pair in one
+    pass, only the elements where its points read below the clearance plus
+    the error: elsewhere none can come inside). A pair exact finds inside the
+    clearance gets exact's record (soft, or hard where the clearance is under
+    the points' error); the others stay clear.
 
     Args:
         near: per state (S), its near misses.
         cables, poses, recheck: as :func:`refined_records`.
     """
     out: list[list[Interference]] = [[] for _ in near]
-    wanted: dict[tuple[PairType, str, str], list[int]] = {}
-    for i, recs in enumerate(near):
-        for r in recs:                                                  # a state's few near misses
-            wanted.setdefault((PairType(r.type), r.a, r.b), []).append(i)
+    wanted: dict[tuple[PairType, str, str], list[tuple[int, NearMiss]]] = {}
+    for i, misses in enumerate(near):
+        for m in misses:                                                # a state's few near misses
+            wanted.setdefault((PairType(m.type), m.a, m.b), []).append((i, m))
     if not wanted:
         return out
     clearance = recheck.config.clearance
     asked: dict[int, Mapping[str, CableState]] = {}
-    for key, rows in wanted.items():
+    for key, found in wanted.items():
         _, a, b = key
         k = recheck.index[b]
+        rows = [i for i, _ in found]
         for i in rows:
             if i not in asked:
                 asked[i] = cables(i)
         exact = exact_records_many(recheck.exact_checker(k), [asked[i][a] for i in rows],
-                                   poses[rows, k], recheck.exclusions, key, below=[clearance] * len(rows))
+                                   poses[rows, k], recheck.exclusions, key, below=[clearance] * len(rows),
+                                   spans=np.array([[m.s_lo, m.s_hi] for _, m in found], float))
         for i, e in zip(rows, exact):
             if e is not None and e.min_distance < clearance:
                 out[i].append(e)

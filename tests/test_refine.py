@@ -88,7 +88,7 @@ def test_records_near_touching_are_the_exact_methods(kind, rot, heading, jitter,
         return
     got = swap.get(id(p_rec), p_rec)
     event(f"points {p_rec.severity.value}{' near touching' if p_rec.min_distance < err else ''}, exact {e_rec.severity.value}")
-    if p_rec.severity is Severity.SOFT and p_rec.min_distance < err:
+    if p_rec.severity is Severity.SOFT and p_rec.min_distance <= err * (1 + 1e-9):    # at the bound too (refine)
         assert abs(got.min_distance - e_rec.min_distance) <= rounding   # two elements meeting at a point tie
         assert got.severity is e_rec.severity or abs(e_rec.min_distance) <= rounding
         assert np.allclose(got.where, e_rec.where, atol=rounding) and abs(got.s - e_rec.s) <= rounding

@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from cablecheck.checker.records import Interference, PairType, severity_of
+from cablecheck.checker.records import Interference, NearMiss, PairType, severity_of
 
 TYPE_ORDER = list(PairType)
 CABLE_PAIR_CODES = (TYPE_ORDER.index(PairType.SELF), TYPE_ORDER.index(PairType.CABLE_CABLE))
@@ -146,19 +146,33 @@ def worst_records(states: int, state: np.ndarray, t: np.ndarray, a: np.ndarray, 
     return out
 
 
-def near_miss_mask(state: np.ndarray, t: np.ndarray, a: np.ndarray, b: np.ndarray, value: np.ndarray,
-                   clearance: float, errors: np.ndarray) -> np.ndarray:
-    """(n,) the candidates at or past the clearance by less than their ``errors`` (n,) whose
-    (state, type, a, b) pair has no candidate below the clearance (no record)."""
-    near = (value >= clearance) & (value < clearance + errors)
+def near_misses_of(states: int, state: np.ndarray, t: np.ndarray, a: np.ndarray, b: np.ndarray,
+                   value: np.ndarray, s: np.ndarray, clearance: float, errors: np.ndarray,
+                   a_names: Sequence[str], b_names: Sequence[str]) -> list[list[NearMiss]]:
+    """Per state, its near misses among cable-part candidates: the (state,
+    type, a, b) pairs with no candidate below the clearance (no record) and
+    some below the clearance plus their ``errors`` (n,), each with its least
+    value (ties to the smallest arc length) and the span of arc lengths of
+    those candidates."""
+    out: list[list[NearMiss]] = [[] for _ in range(states)]
+    near = value < clearance + errors
     if not near.any():
-        return near
+        return out
+    key = np.stack([state, t, a, b])
+    key = np.ravel_multi_index(key, key.max(axis=1) + 1)      # one number per pair
     below = value < clearance
     if below.any():
-        key = np.stack([state, t, a, b])
-        key = np.ravel_multi_index(key, key.max(axis=1) + 1)      # one number per pair
         near &= ~np.isin(key, key[below])
-    return near
+    idx = np.flatnonzero(near)
+    if not len(idx):
+        return out
+    o = idx[np.lexsort((s[idx], value[idx], key[idx]))]
+    first = np.r_[0, np.flatnonzero(np.diff(key[o])) + 1]
+    s_lo, s_hi = np.minimum.reduceat(s[o], first), np.maximum.reduceat(s[o], first)
+    head = o[first]
+    for i, st, lo, hi in zip(head.tolist(), state[head].tolist(), s_lo.tolist(), s_hi.tolist()):
+        out[st].append(NearMiss(TYPE_ORDER[t[i]], a_names[a[i]], b_names[b[i]], float(value[i]), lo, hi))
+    return out
 
 
 class Hits:
@@ -223,21 +237,18 @@ class Hits:
         return CableCandidates(*(np.concatenate(x) for x in zip(*rows)))
 
     def near_misses(self, clearance: float, errors: np.ndarray, cable_names: Sequence[str],
-                    b_names: Callable[[PairType], Sequence[str]]) -> list[Interference]:
-        """The worst cable-structure and keep-out candidate per pair at or
-        past the clearance but within its cable's ``errors`` (C,) of it (what
-        method ``points`` may over-state: :func:`~cablecheck.checker.interference.discrete.points_error`),
-        worst first: pairs an exact measure may find inside the clearance,
-        no records themselves."""
+                    part_names: Sequence[str]) -> list[NearMiss]:
+        """The cable-structure and keep-out pairs at or past the clearance but
+        within their cable's ``errors`` (C,) of it (what method ``points``
+        may over-state: :func:`~cablecheck.checker.interference.discrete.points_error`):
+        pairs an exact measure may find inside the clearance, no records
+        themselves (:func:`near_misses_of`)."""
         rows = [x for x in self.parts if x[0][0] in PART_CODES]
         if not rows:
             return []
-        t, a, b, v, w, s, sb = (np.concatenate(x) for x in zip(*rows))
-        keep = near_miss_mask(np.zeros(len(v), np.int64), t, a, b, v, clearance, np.asarray(errors, float)[a])
-        if not keep.any():
-            return []
-        t, a, b, v, w, s, sb = (x[keep] for x in (t, a, b, v, w, s, sb))
-        return worst_records(1, np.zeros(len(v), np.int64), t, a, b, v, w, s, sb, math.inf, cable_names, b_names)[0]
+        t, a, b, v, _, s, _ = (np.concatenate(x) for x in zip(*rows))
+        return near_misses_of(1, np.zeros(len(v), np.int64), t, a, b, v, s, clearance,
+                              np.asarray(errors, float)[a], cable_names, part_names)[0]
 
     def records(self, clearance: float, cable_names: Sequence[str],
                 b_names: Callable[[PairType], Sequence[str]]) -> list[Interference]:

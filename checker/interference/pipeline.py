@@ -30,7 +30,7 @@ from cablecheck.checker.interference.exclusions import ExclusionTable, exclusion
 from cablecheck.checker.interference.hits import Gaps, Hits
 from cablecheck.checker.interference.single import single_cable
 from cablecheck.checker.interference.structure import PartTable, structure_exact, structure_points
-from cablecheck.checker.records import PART_TYPES, Interference, PairType
+from cablecheck.checker.records import PART_TYPES, Interference, NearMiss, PairType
 from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 
 _EYE3 = np.eye(3)
@@ -55,7 +55,7 @@ class Checked:
 
     records: list[Interference]
     gaps: Gaps | None
-    near_misses: list[Interference] = field(default_factory=list)
+    near_misses: list[NearMiss] = field(default_factory=list)
 
 
 class Checker:
@@ -249,7 +249,7 @@ class Checker:
         def names(ptype: PairType) -> list[str]:
             return part_names if ptype in PART_TYPES else cable_names
 
-        near_misses = hits.near_misses(config.clearance, errors, cable_names, names) \
+        near_misses = hits.near_misses(config.clearance, errors, cable_names, part_names) \
             if cables and errors.max(initial=0.0) > 0.0 else []
         return Checked(hits.records(config.clearance, cable_names, names), found, near_misses)
 

@@ -24,7 +24,6 @@ pairs, the reduction to records (:mod:`cablecheck.checker.interference.hits`).
 from __future__ import annotations
 
 import copy
-import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -32,7 +31,7 @@ import numpy as np
 from cablecheck.checker.closest import row_norm
 from cablecheck.checker.interference.broad import chunk_part_pairs
 from cablecheck.checker.interference.discrete import DenseStates
-from cablecheck.checker.interference.hits import TYPE_ORDER, near_miss_mask, worst_records
+from cablecheck.checker.interference.hits import TYPE_ORDER, near_misses_of, worst_records
 from cablecheck.checker.records import Interference, PairType
 from cablecheck.checker.scene_state import CheckConfig, PartState
 from cablecheck.checker.shapes import (
@@ -455,8 +454,6 @@ def structure_many(tab: PartTable | None, config: CheckConfig, excl: tuple, name
                             config.clearance, names, lambda _: tab.names)
     if err is None:
         return records
-    m = near_miss_mask(state[it], kind, cab[it], k, v, config.clearance, err[cab[it]])
-    near = worst_records(n_s, state[it][m], kind[m], cab[it][m], k[m], v[m], p[it][m], s[it][m],
-                         np.full(int(m.sum()), np.nan), math.inf, names, lambda _: tab.names)
-    return records, near
+    return records, near_misses_of(n_s, state[it], kind, cab[it], k, v, s[it], config.clearance, err[cab[it]],
+                                   names, tab.names)
 
