@@ -57,21 +57,30 @@ def refined_records(records: Sequence[Sequence[Interference]], cables: Callable[
         for r in recs:                                                  # a state's few records
             if PairType(r.type) in PART_TYPES and r.severity is Severity.SOFT and r.min_distance <= errors[r.a] * _ROUNDING:
                 wanted.setdefault((PairType(r.type), r.a, r.b), []).append((i, r))
+    for found, exact in _measured(wanted, cables, poses, recheck, lambda r: r.min_distance):   # near touching
+        for (i, r), e in zip(found, exact):
+            if e is not None and e.min_distance <= r.min_distance:
+                out[i][id(r)] = e
+    return out
+
+
+def _measured(wanted: dict, cables: Callable[[int], Mapping[str, CableState]], poses: np.ndarray,
+              recheck: Recheck, below: Callable, span: Callable | None = None):
+    """For each pair (type, a, b) of ``wanted`` and its [(state, item)]: the
+    items and method exact's records of the pair at their states, in one
+    pass a pair (`exact_records_many`, each state measured below
+    ``below(item)``, and between the arc lengths ``span(item)``)."""
     asked: dict[int, Mapping[str, CableState]] = {}
-    for key, found in wanted.items():                                    # the pairs near touching
+    for key, found in wanted.items():
         _, a, b = key
         k = recheck.index[b]
         rows = [i for i, _ in found]
         for i in rows:
             if i not in asked:
                 asked[i] = cables(i)
-        exact = exact_records_many(recheck.exact_checker(k), [asked[i][a] for i in rows],
-                                   poses[rows, k], recheck.exclusions, key,
-                                   below=[r.min_distance for _, r in found])
-        for (i, r), e in zip(found, exact):
-            if e is not None and e.min_distance <= r.min_distance:
-                out[i][id(r)] = e
-    return out
+        spans = None if span is None else np.array([span(x) for _, x in found], float)
+        yield found, exact_records_many(recheck.exact_checker(k), [asked[i][a] for i in rows], poses[rows, k],
+                                        recheck.exclusions, key, below=[below(x) for _, x in found], spans=spans)
 
 
 def near_miss_records(near: Sequence[Sequence[NearMiss]], cables: Callable[[int], Mapping[str, CableState]],
@@ -94,21 +103,9 @@ def near_miss_records(near: Sequence[Sequence[NearMiss]], cables: Callable[[int]
     for i, misses in enumerate(near):
         for m in misses:                                                # a state's few near misses
             wanted.setdefault((PairType(m.type), m.a, m.b), []).append((i, m))
-    if not wanted:
-        return out
     clearance = recheck.config.clearance
-    asked: dict[int, Mapping[str, CableState]] = {}
-    for key, found in wanted.items():
-        _, a, b = key
-        k = recheck.index[b]
-        rows = [i for i, _ in found]
-        for i in rows:
-            if i not in asked:
-                asked[i] = cables(i)
-        exact = exact_records_many(recheck.exact_checker(k), [asked[i][a] for i in rows],
-                                   poses[rows, k], recheck.exclusions, key, below=[clearance] * len(rows),
-                                   spans=np.array([[m.s_lo, m.s_hi] for _, m in found], float))
-        for i, e in zip(rows, exact):
+    for found, exact in _measured(wanted, cables, poses, recheck, lambda m: clearance, lambda m: (m.s_lo, m.s_hi)):
+        for (i, _), e in zip(found, exact):
             if e is not None and e.min_distance < clearance:
                 out[i].append(e)
     return out
