@@ -6,6 +6,7 @@ from hypothesis import given, settings, strategies as st
 from strategies import cable_sets, part_sets
 
 from cablecheck.checker.interference import Checker, check_state
+from cablecheck.checker.interference.discrete import points_error
 from cablecheck.checker.records import PairType
 from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from cablecheck.checker.shapes import Shape, ShapeType
@@ -53,8 +54,10 @@ def test_checker_reused_across_poses_matches_check_state(method):
 @given(cable_sets(max_cables=3, max_points=10), part_sets(max_parts=4), st.floats(0.001, 0.03))
 def test_gaps_are_the_least_values_up_to_the_horizon(cables, parts, horizon):
     """With a horizon the records do not change, and each part's gap is the
-    least value of any cable against it minus the clearance, capped at the
-    horizon: what a check with the clearance raised by the horizon finds."""
+    least value of any cable against it minus the clearance and minus the
+    cable's points' error (a pair kept past that is past the clearance by
+    method exact too), capped at the horizon: what a check with the
+    clearance raised by the horizon and the errors finds."""
     clearance = 0.005
     checked = Checker(parts, CheckConfig(clearance=clearance), horizon=horizon).check_with_gaps(cables)
     plain = Checker(parts, CheckConfig(clearance=clearance)).check(cables)
@@ -62,11 +65,12 @@ def test_gaps_are_the_least_values_up_to_the_horizon(cables, parts, horizon):
         [(r.type, r.a, r.b, r.min_distance, r.s, r.s_b) for r in plain]
     gaps = checked.gaps
     assert gaps.horizon == horizon and gaps.cable <= horizon and len(gaps.part) == len(parts)
-    wide = check_state(cables, parts, CheckConfig(clearance=clearance + horizon))
+    err = {c.name: points_error(c.radius, 2.0) for c in cables}
+    wide = check_state(cables, parts, CheckConfig(clearance=clearance + horizon + max(err.values())))
     for k, part in enumerate(parts):
-        least = min((r.min_distance for r in wide if r.b == part.name
+        least = min((r.min_distance - clearance - err[r.a] for r in wide if r.b == part.name
                      and r.type in (PairType.CABLE_STRUCTURE, PairType.KEEPOUT)), default=np.inf)
-        assert gaps.part[k] == min(horizon, least - clearance)
+        assert gaps.part[k] == min(horizon, least)
     pc = gaps.part_candidates
     assert np.all(pc.value < horizon) and np.all((pc.part >= 0) & (pc.part < len(parts)))
 

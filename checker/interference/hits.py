@@ -213,8 +213,11 @@ class Hits:
                 cc = min(cc, float(value.min()) - clearance)
             elif code in PART_CODES:
                 np.minimum.at(part, b, value - clearance - (0.0 if part_errors is None else part_errors[a]))
-        return Gaps(horizon, cc, part, self._part_candidates(clearance, part_errors),
-                    self._cable_candidates(clearance))
+        pc = self._part_candidates(clearance, part_errors)
+        if part_errors is not None:     # found farther by the errors: past the horizon is no candidate
+            keep = pc.value < horizon
+            pc = PartCandidates(pc.cable[keep], pc.s[keep], pc.part[keep], pc.value[keep])
+        return Gaps(horizon, cc, part, pc, self._cable_candidates(clearance))
 
     def _part_candidates(self, clearance: float, part_errors: np.ndarray | None = None) -> PartCandidates:
         """Every cable-structure and keep-out candidate: (cable, s, part,
