@@ -241,7 +241,8 @@ def segment_signed_distance_mixed(
 
 
 def mesh_segment_unsigned(m: MeshData, a: np.ndarray, b: np.ndarray, k: int = 8,
-                          upper: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                          upper: np.ndarray | None = None,
+                          cap: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Exact unsigned distance from segments to a mesh, its parameter and face.
 
     Same cut-off as :func:`mesh_nearest`, queried from the segment midpoint
@@ -251,7 +252,11 @@ def mesh_segment_unsigned(m: MeshData, a: np.ndarray, b: np.ndarray, k: int = 8,
     upper bound on each segment's distance the caller has already (a point
     of it measured: the midpoint's distance to the surface): every face
     that may come within it is measured at once, without the k nearest
-    faces' first answer.
+    faces' first answer. ``cap`` (n,), with ``upper``: the caller keeps a
+    distance only below it; a segment whose ``upper`` is positive (its
+    midpoint outside a closed mesh) and no face comes within ``cap`` of is
+    answered ``cap`` (it is at least that far, wholly outside: a segment
+    crossing the surface is at 0 from it), with parameter 0 and face -1.
     """
     n = len(a)
     nf = len(m.faces)
@@ -260,10 +265,16 @@ def mesh_segment_unsigned(m: MeshData, a: np.ndarray, b: np.ndarray, k: int = 8,
     half = 0.5 * row_norm(b - a)
     if upper is not None and n:
         # the bound's own rounding (a few ulp of a point query) is kept clear of
-        bound = np.abs(np.asarray(upper, float)) * (1 + 1e-9) + 1e-9 * m.bound.h
+        upper = np.asarray(upper, float)
+        bound = np.abs(upper) * (1 + 1e-9) + 1e-9 * m.bound.h
+        capped = np.zeros(n, bool) if cap is None else (np.asarray(cap, float) < bound) & (upper > 0.0)
+        if capped.any():
+            bound = np.where(capped, cap, bound)
         best, tb, fb = _segment_faces(m, a, b, np.arange(n), bound,
                                       np.full(n, np.inf), np.zeros(n), np.zeros(n, np.int64))
-        lost = np.flatnonzero(best > bound)          # a bound that was none: measured the usual way
+        beyond = capped & (best > bound)             # no face within the cap: at least that far
+        best[beyond], tb[beyond], fb[beyond] = bound[beyond], 0.0, -1
+        lost = np.flatnonzero((best > bound) & ~beyond)   # a bound that was none: measured the usual way
         if len(lost):
             best[lost], tb[lost], fb[lost] = mesh_segment_unsigned(m, a[lost], b[lost], k)
         return best, tb, fb
@@ -310,12 +321,12 @@ def _segment_faces(m: MeshData, a: np.ndarray, b: np.ndarray, redo: np.ndarray, 
 _MESH_SAMPLES = np.linspace(0.0, 1.0, 9)
 
 
-def segment_sd_mesh(m: MeshData, a: np.ndarray, b: np.ndarray,
-                    upper: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def segment_sd_mesh(m: MeshData, a: np.ndarray, b: np.ndarray, upper: np.ndarray | None = None,
+                    cap: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     n = len(a)
     if n == 0:
         return np.zeros(0), np.zeros(0)
-    du, tu, face = mesh_segment_unsigned(m, a, b, upper=upper)
+    du, tu, face = mesh_segment_unsigned(m, a, b, upper=upper, cap=cap)
     if not m.closed:
         return du, tu
     # Penetration: the segment touches the surface, or lies inside. A segment
@@ -323,9 +334,13 @@ def segment_sd_mesh(m: MeshData, a: np.ndarray, b: np.ndarray,
     # point by the pseudonormal of the nearest triangle's closest feature
     # (that triangle is also the nearest one to that point).
     ts = _MESH_SAMPLES
-    x = a + tu[:, None] * (b - a)
-    _, cl, reg = point_triangle(x, m.a[face], m.b[face], m.c[face])
-    inside = mesh_sign(m, x, cl, face, reg) < 0.0
+    # (a segment answered at its cap is wholly outside: mesh_segment_unsigned)
+    found = np.flatnonzero(face >= 0)
+    inside = np.zeros(n, bool)
+    x = a[found] + tu[found, None] * (b[found] - a[found])
+    f = face[found]
+    _, cl, reg = point_triangle(x, m.a[f], m.b[f], m.c[f])
+    inside[found] = mesh_sign(m, x, cl, f, reg) < 0.0
     cand = np.nonzero((du <= 0.0) | inside)[0]
     d = du.copy()
     t = tu.copy()

@@ -272,20 +272,22 @@ def face_plane_distance(shape: Shape, points: np.ndarray) -> np.ndarray:
     return face_plane_distance_batch(shape.type, np.broadcast_to(shape.size, (len(p), len(shape.size))), p)
 
 
-def segment_signed_distance(shape: Shape, a: np.ndarray, b: np.ndarray,
-                            upper: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def segment_signed_distance(shape: Shape, a: np.ndarray, b: np.ndarray, upper: np.ndarray | None = None,
+                            cap: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Least signed distance from segments ``a b`` (n, 3) to a shape, in its frame.
 
     Returns ``(d (n,), t (n,))``: the signed distance of the segment (of a
     capsule's axis) to the shape and the parameter of its deepest or nearest
     point. See the module docstring for the accuracy of each type.
     ``upper`` (n,): a mesh's segments' unsigned distances are at most these
-    (the caller measured a point of each: the same answers, found sooner).
+    (the caller measured a point of each: the same answers, found sooner);
+    ``cap`` (n,), with it: distances the caller does not keep, a mesh may
+    answer at the cap (`cablecheck.checker.segments.mesh_segment_unsigned`).
     """
     a = np.asarray(a, dtype=float).reshape(-1, 3)
     b = np.asarray(b, dtype=float).reshape(-1, 3)
     if shape.type is ShapeType.MESH:
-        return segment_sd_mesh(shape.mesh, a, b, upper)
+        return segment_sd_mesh(shape.mesh, a, b, upper, cap)
     return segment_signed_distance_batch(shape.type, np.broadcast_to(shape.size, (len(a), len(shape.size))), a, b)
 
 

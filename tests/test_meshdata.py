@@ -62,6 +62,21 @@ def test_sliver_mesh_nearest_and_segment_distance_are_the_brute_force_ones():
     # a bound that is none (below the true distance) is measured the usual way
     du = segments.mesh_segment_unsigned(md, a, b, upper=0.5 * brute_s)[0]
     assert np.allclose(du, brute_s, rtol=0, atol=1e-15)
+    # a cap: segments farther (their midpoints outside) are answered at it, the others exactly,
+    # and their signed distances are those without it
+    from cablecheck.checker.segments import segment_sd_mesh
+    sd = segment_sd_mesh(md, a, b)[0]
+    from cablecheck.checker.meshdata import sd_mesh
+
+    signed_mid = sd_mesh(md, 0.5 * (a + b))[0]
+    cap = np.full(len(a), float(np.median(brute_s)))
+    du, tu, fu = segments.mesh_segment_unsigned(md, a, b, upper=signed_mid, cap=cap)
+    far = (brute_s > cap) & (signed_mid > 0)
+    assert far.any() and (~far).any()
+    assert np.all(du[far] == cap[far]) and np.all(fu[far] == -1)
+    assert np.allclose(du[~far], brute_s[~far], rtol=0, atol=1e-15)
+    capped = segment_sd_mesh(md, a, b, signed_mid, cap)[0]
+    assert np.array_equal(capped[~far], sd[~far]) and np.all(capped[far] <= sd[far] + 1e-15)
 
 
 def test_faces_within_holds_every_triangle_that_comes_within_the_radius():

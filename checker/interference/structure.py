@@ -250,7 +250,9 @@ def structure_exact_pairs(dp, tab, config, excl, hits, i0: np.ndarray, pk: np.nd
     within, mid = segments_within(tab, pk[keep], a[keep], b[keep], dp.radius[i0[keep]], limit, midpoints=True)
     near = keep[within]
     pk, i0, a, b = pk[near], i0[near], a[near], b[near]
-    d, t = segment_distances(tab, pk, a, b, mid)
+    # a centreline farther than the limit plus the radius is no record: a mesh need not say how far
+    keep_limit = np.broadcast_to(np.asarray(limit, float), (len(keep),))[within] + dp.radius[i0]
+    d, t = segment_distances(tab, pk, a, b, mid, keep_limit * (1 + 1e-9) + 1e-12 * (1.0 + np.abs(keep_limit)))
     where = p[i0] + t[:, None] * (p[i0 + 1] - p[i0])
     s_at = s[i0] + t * (s[i0 + 1] - s[i0])
     _add_structure(hits, tab, dp.cable[i0], pk, d - dp.radius[i0], where, s_at)
@@ -277,13 +279,14 @@ def segments_within(tab: PartTable, pk: np.ndarray, a: np.ndarray, b: np.ndarray
 
 
 def segment_distances(tab: PartTable, pk: np.ndarray, a: np.ndarray, b: np.ndarray,
-                      mid: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                      mid: np.ndarray | None = None, cap: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Least signed distance (n,) of local segments ``a b`` (n, 3) to parts
     ``pk`` (n,), and the parameter (n,) of the deepest or nearest point:
     each mesh's rows in one call, all primitives' in one. ``mid`` (n,): the
     segments' midpoints' signed distances, where the caller has them
     (:func:`segments_within`): a mesh then searches only the faces that may
-    come within them."""
+    come within them; and with ``cap`` (n,), distances past it are not kept:
+    a mesh may answer them at the cap (`segment_signed_distance`)."""
     d = np.full(len(pk), np.inf)
     t = np.zeros(len(pk))
     is_mesh = tab.type[pk] == SHAPE_CODE[ShapeType.MESH]
@@ -291,7 +294,8 @@ def segment_distances(tab: PartTable, pk: np.ndarray, a: np.ndarray, b: np.ndarr
     grp = tab.mesh_group[pk[sel]]
     for g in np.unique(grp):
         sk = sel[grp == g]
-        d[sk], t[sk] = segment_signed_distance(tab.mesh_shapes[g], a[sk], b[sk], None if mid is None else mid[sk])
+        d[sk], t[sk] = segment_signed_distance(tab.mesh_shapes[g], a[sk], b[sk], None if mid is None else mid[sk],
+                                               None if mid is None or cap is None else cap[sk])
     # All primitives in one call (box and cylinder share one line search).
     sel = np.nonzero(~is_mesh)[0]
     if len(sel):
