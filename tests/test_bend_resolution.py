@@ -5,7 +5,6 @@ between two clamps, coarse against fine."""
 import json
 
 import pytest
-
 from cablecheck.build.cablephysics import BEND_RESOLUTION
 from cablecheck.run.runner import RunOptions, run_scene
 from cablecheck.scene.load import load_scene
