@@ -388,7 +388,9 @@ class StepChecks:
         own error of touching replaced by method ``exact``'s
         (:func:`cablecheck.checker.refine.refined_records`): a hose resting on a link
         reads as touching it, as MuJoCo's contact says, not a fraction of a
-        millimetre off."""
+        millimetre off; and its near misses, the pairs it reads just past the
+        clearance, measured with method ``exact`` too, a record where that
+        finds them inside (:func:`cablecheck.checker.refine.near_miss_records`)."""
         if self.config.method != "points":
             return results
         memo: dict[int, dict] = {}
