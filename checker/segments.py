@@ -261,10 +261,8 @@ def mesh_segment_unsigned(m: MeshData, a: np.ndarray, b: np.ndarray, k: int = 8,
     n = len(a)
     nf = len(m.faces)
     k = min(k, nf)
-    mid = 0.5 * (a + b)
-    half = 0.5 * row_norm(b - a)
     if upper is not None and n:
-        # the bound's own rounding (a few ulp of a point query) is kept clear of
+        # widened past the bound's own rounding (a point query's few ulp)
         upper = np.asarray(upper, float)
         bound = np.abs(upper) * (1 + 1e-9) + 1e-9 * m.bound.h
         capped = np.zeros(n, bool) if cap is None else (np.asarray(cap, float) < bound) & (upper > 0.0)
@@ -278,6 +276,8 @@ def mesh_segment_unsigned(m: MeshData, a: np.ndarray, b: np.ndarray, k: int = 8,
         if len(lost):
             best[lost], tb[lost], fb[lost] = mesh_segment_unsigned(m, a[lost], b[lost], k)
         return best, tb, fb
+    mid = 0.5 * (a + b)
+    half = 0.5 * row_norm(b - a)
     dk, idx = m.tree.query(mid, k=k)
     dk = dk.reshape(n, k)
     fi = idx.reshape(n, k).ravel()

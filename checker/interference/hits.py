@@ -207,13 +207,12 @@ class Hits:
         points' error: a pair kept past that is past the clearance by method
         exact too; its candidates must then be found that much farther)."""
         cc = horizon
-        part = np.full(n_parts, horizon)
-        for code, a, b, value, _, _ in self.near:
+        for code, _, _, value, _, _ in self.near:
             if code in CABLE_PAIR_CODES:
                 cc = min(cc, float(value.min()) - clearance)
-            elif code in PART_CODES:
-                np.minimum.at(part, b, value - clearance - (0.0 if part_errors is None else part_errors[a]))
         pc = self._part_candidates(clearance, part_errors)
+        part = np.full(n_parts, horizon)
+        np.minimum.at(part, pc.part, pc.value)
         if part_errors is not None:     # found farther by the errors: past the horizon is no candidate
             keep = pc.value < horizon
             pc = PartCandidates(pc.cable[keep], pc.s[keep], pc.part[keep], pc.value[keep])
