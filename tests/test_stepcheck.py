@@ -144,3 +144,22 @@ end = { pos = [15, 0, 0.002] }
         reports.append(_strip(_comparable(rep)))
     assert reports[0]["advance"]["proven_clear_steps"] > 0 and reports[0]["events"]
     assert reports[0] == reports[1] == reports[2]
+
+
+def test_batches_shrink_towards_the_runs_end():
+    """Twice the last up to the most, never more than half of what is
+    still to come, never under the least: the run's last batch is short."""
+    from cablecheck.run.stepcheck import next_batch
+    assert next_batch(32, 10_000) == 64 and next_batch(256, 10_000) == 256
+    assert next_batch(256, 300) == 150 and next_batch(150, 150) == 75 and next_batch(75, 75) == 38
+    assert next_batch(38, 37) == 32 and next_batch(32, 0) == 32
+    assert next_batch(256, 300, every=3) == 50      # 100 states still to come
+    assert next_batch(7, 10_000, least=7, most=7) == 7
+    # the run's own sizes, state by state: the last batch after 2,200 steps is at most a quarter of the one before
+    size, left, sizes = 32, 2200, []
+    while left > 0:
+        take = min(size, left)
+        sizes.append(take)
+        left -= take
+        size = next_batch(size, left)
+    assert sum(sizes) == 2200 and max(sizes) == 256 and sizes[-1] <= 32

@@ -77,6 +77,21 @@ the first batches stay short so a run stopped early stops at once, and a
 run's last batch, or an interrupted one's, is shorter."""
 
 
+def next_batch(size: int, steps_left: int, every: int = 1, least: int = BATCH, most: int = BATCH_MAX) -> int:
+    """The next batch's length after one of `size` states, with `steps_left`
+    simulation steps still to come (a state every `every` steps): twice the
+    last, up to `most`, but at most half the states still to come (and
+    never under `least`), so the batches shrink towards the run's end. The
+    states of a run's last batch can only be checked once the simulation
+    has made them all: with the simulation stepped ahead
+    (:mod:`cablecheck.run.ahead`) that check is the run's tail, and on the
+    zoo's Fetch a last batch of 185 states took 0.27 s after the simulation
+    had ended. Any batch length gives the same answers
+    (tests/test_stepcheck.py)."""
+    states_left = -(-max(int(steps_left), 0) // max(int(every), 1))
+    return max(least, min(2 * size, most, -(-states_left // 2)))
+
+
 ADVANCE_HORIZON_RADII = 2.0
 """Conservative advancement: candidates are evaluated up to the clearance
 plus this many (largest) cable radii at a full check..."""
