@@ -67,7 +67,8 @@ def main(argv=None) -> None:
     out.mkdir(parents=True, exist_ok=True)
 
     built = build(scene, detect=False)
-    visual_names = {v.name for v in built.visuals}
+    from cablecheck.build.drawn import DrawnLoad
+    visual_names = {v.name for v in DrawnLoad(scene).result()}
     part_names = [p.name for p in built.parts]
     held = {(c.name, a.body) for c in built.cables for a in c.attachments}
     body_of = {p.name: p.body for p in built.parts}
@@ -90,7 +91,7 @@ def main(argv=None) -> None:
     v = report["validation"]
     adv = report["settings"]["advance"]
 
-    print(f"robot cell: {len(part_names)} parts ({len(built.visuals)} visual geoms drawn, not checked), "
+    print(f"robot cell: {len(part_names)} parts ({len(visual_names)} visual geoms drawn, not checked), "
           f"{len(built.cables)} cables, {duration:g} s simulated, {report['settings']['checked_steps']} steps checked "
           f"({adv['full_checks']} in full)")
     print(f"  MuJoCo simulation       {t['sim_s']:8.2f} s  ({t['sim_ms_per_step']:.2f} ms/step)")

@@ -549,17 +549,19 @@ def held_points(scene_path: Path) -> tuple[list[tuple[str, float]], float, dict]
     """The hose's ends and clips (window, arc length at rest) in the built
     model, its attachment zone (arc length), and the counts of the built
     scene (checked parts, of them mesh parts, visual geoms drawn only)."""
+    from cablecheck.build.drawn import DrawnLoad
     from cablecheck.build.stages import build
     from cablecheck.scene.load import load_scene
 
-    built = build(load_scene(scene_path), detect=False)
+    scene = load_scene(scene_path)
+    built = build(scene, detect=False)
     c = built.cables[0]
     held: dict[str, list[float]] = {}
     for a in c.attachments:
         held.setdefault(a.window, []).append(float(a.s))
     counts = {"parts": len(built.parts), "meshes": sum(p.shape == "mesh" for p in built.parts),
               "triangles": sum(len(p.faces) for p in built.parts if p.faces is not None),
-              "visuals": len(built.visuals)}
+              "visuals": len(DrawnLoad(scene).result())}
     return [(w, float(np.mean(s))) for w, s in held.items()], built.scene.check.attach_zone * c.radius, counts
 
 

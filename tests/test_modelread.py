@@ -35,18 +35,33 @@ def test_mesh_part_matches_box_part(tmp_path):
 
 def test_visual_geoms_are_drawn_never_parts_and_names_do_not_move(tmp_path):
     """A model with and without its visual geoms gives the same parts, names
-    and skipped pairs; the visual geoms are listed to be drawn."""
+    and skipped pairs; the visual geoms are listed to be drawn, from the
+    file compiled whole, and left out of the simulation and detection
+    models, whose bodies keep the mass MuJoCo gives them with them."""
+    import mujoco
+
+    from cablecheck.build.drawn import drawn_geoms
     from cablecheck.run.stepcheck import part_pairs_skipped
-    bare, dressed = arm_built(tmp_path, visuals=False), arm_built(tmp_path, visuals=True)
+    bare = arm_built(tmp_path, visuals=False)
+    bare_drawn = drawn_geoms(mujoco.MjModel.from_xml_path(str(tmp_path / "arm.xml")))
+    dressed = arm_built(tmp_path, visuals=True)
+    whole = mujoco.MjModel.from_xml_path(str(tmp_path / "arm.xml"))
+    drawn = drawn_geoms(whole)
     names = [p.name for p in bare.parts]
     assert names == [p.name for p in dressed.parts]
     assert set(names) == {"cell/table", "stand/column", "link/capsule0", "link/lug", "link/sphere2", "post/rod"}
-    assert [v.name for v in dressed.visuals] == ["stand/box0", "link/lug", "link/shell"] and not bare.visuals
+    assert [v.name for v in drawn] == ["stand/box0", "link/lug", "link/shell"] and not bare_drawn
+    assert [v.shape for v in drawn] == ["box", "mesh", "capsule"] and drawn[1].vertices.shape == (4, 3)
     assert np.array_equal(part_pairs_skipped(bare), part_pairs_skipped(dressed))
     for built in (bare, dressed):
         for m in (built.model, built.detect):
-            for v in built.visuals:
-                assert m.geom_contype[v.geom_id] == 0 and m.geom_conaffinity[v.geom_id] == 0
+            assert m.ngeom == bare.model.ngeom       # the visual geoms are not there
+    for v in drawn:
+        assert dressed.model.body(v.body_id).name == whole.body(v.body_id).name == v.body
+    # the visual geoms weigh (no <inertial> in the file): their mass stays with their bodies
+    for body in ("stand", "link"):
+        assert np.isclose(dressed.model.body(body).mass[0], whole.body(body).mass[0], rtol=1e-12)
+        assert dressed.model.body(body).mass[0] > bare.model.body(body).mass[0]
 
 
 def test_model_exclude_pairs_are_honoured(tmp_path):
@@ -65,9 +80,8 @@ def test_visual_geoms_make_no_contacts_nor_events(tmp_path):
     """A visual shell the cable runs through is never a contact, part or event."""
     data = arm_scene(tmp_path, visuals=True)
     sim, states = run_steps(data, tmp_path)
-    visual_ids = {v.geom_id for v in sim.built.visuals}
-    raw = sim.detector.collide(states[-1].qpos)
-    assert not (set(raw.geom.ravel()) & visual_ids)
+    for m in (sim.built.model, sim.built.detect):
+        assert not ((m.geom_contype == 0) & (m.geom_conaffinity == 0)).any()   # left out
     assert all(not str(n).startswith(("link/shell", "stand/box0")) for s in states for n in s.contacts.b)
 
 

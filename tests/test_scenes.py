@@ -157,8 +157,11 @@ def robot_cell(tmp_path_factory):
 
 
 def test_robot_cell_checks_collision_meshes_only(robot_cell):
+    import mujoco
+
+    from cablecheck.build.drawn import drawn_geoms
     built, report, recording = robot_cell
-    visual = {v.name for v in built.visuals}
+    visual = {v.name for v in drawn_geoms(mujoco.MjModel.from_xml_path(str(built.scene.mjcf)))}
     assert len(visual) == 13 and len(built.parts) == 4 + 7      # cell parts + one collision mesh per link
     assert {p.name for p in built.parts} >= {"j2s7s300_link_2/ah1_collision", "j2s7s300_link_4/f_collision"}
     named = {e["a"] for e in report["events"]} | {e["b"] for e in report["events"]}
@@ -170,27 +173,30 @@ def test_robot_cell_checks_collision_meshes_only(robot_cell):
 
 
 def test_robot_cell_visual_geoms_are_drawn_where_mujoco_puts_them(robot_cell, tmp_path):
-    """Body pose (logged per step) times the geom's pose in its body (static)
-    is MuJoCo's own geom pose."""
+    """Body pose in the simulation model (logged per step) times the geom's
+    pose in its body (static) is MuJoCo's own geom pose in the file
+    compiled whole, with its visual geoms, at the same joint values."""
     import mujoco
 
+    from cablecheck.build.drawn import drawn_geoms
     from cablecheck.record.recorder import Recorder
     built, _, _ = robot_cell
-    rec = Recorder(built, tmp_path / "v.rrd")
-    m = built.model
+    whole = mujoco.MjModel.from_xml_path(str(built.scene.mjcf))
+    drawn = drawn_geoms(whole)
+    assert len(drawn) == 13
+    rec = Recorder(built, tmp_path / "v.rrd", drawn=drawn)
     qpos = built.qpos0.copy()
-    qpos[[built.joints[f"j2s7s300_joint_{k}"].qpos_adr for k in (1, 2, 4)]] += [0.3, -0.2, 0.4]
-    d = mujoco.MjData(m)
-    d.qpos[:] = qpos
-    mujoco.mj_kinematics(m, d)
-    for v in built.visuals:
-        body = int(m.geom_bodyid[v.geom_id])
-        pose = rec.scene.body_poses(qpos, np.array([body]))[0]
-        mat = np.zeros(9)
-        mujoco.mju_quat2Mat(mat, m.geom_quat[v.geom_id])
-        assert np.allclose(pose[:3, :3] @ m.geom_pos[v.geom_id] + pose[:3, 3],
-                           d.geom_xpos[v.geom_id] + built.origin, atol=1e-12)
-        assert np.allclose(pose[:3, :3] @ mat.reshape(3, 3), d.geom_xmat[v.geom_id].reshape(3, 3), atol=1e-12)
+    turn = {f"j2s7s300_joint_{k}": dq for k, dq in ((1, 0.3), (2, -0.2), (4, 0.4))}
+    d = mujoco.MjData(whole)
+    for name, dq in turn.items():
+        qpos[built.joints[name].qpos_adr] += dq
+        d.qpos[whole.joint(name).qposadr[0]] = qpos[built.joints[name].qpos_adr]
+    mujoco.mj_kinematics(whole, d)
+    for v in drawn:
+        # scene world = the file's world (the simulation model is placed about `built.origin`, and back)
+        pose = rec.scene.body_poses(qpos, np.array([v.body_id]))[0] @ v.local
+        assert np.allclose(pose[:3, 3], d.geom_xpos[v.geom_id], atol=1e-9), v.name
+        assert np.allclose(pose[:3, :3], d.geom_xmat[v.geom_id].reshape(3, 3), atol=1e-9), v.name
     rec.close()
 
 

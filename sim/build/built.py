@@ -276,9 +276,6 @@ class Built:
     origin: np.ndarray = field(default_factory=lambda: np.zeros(3))
     """Scene-world position of the model's origin (see `scene_origin`):
     model coordinates + origin = scene world coordinates."""
-    visuals: list[PartModel] = field(default_factory=list)
-    """Geoms of the mjcf model MuJoCo never collides (contype = conaffinity = 0
-    as written): drawn in the recording, never checked."""
     model_skip: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), bool))
     """(P, P) bool over `parts`: pairs the mjcf model tells MuJoCo never to
     collide (its own contact bits, `<contact><exclude>`; see `cablecheck.build.modelread`)."""

@@ -2,8 +2,9 @@
 
 A pair collides when (type1 & aff2) | (type2 & aff1). An mjcf model is
 taken as it comes. Its geoms that MuJoCo never collides (`contype` and
-`conaffinity` both 0 as written: visual meshes) stay so in both models;
-they are `Built.visuals`, drawn in the recording and never checker parts.
+`conaffinity` both 0 as written: visual meshes) are left out of both
+models (`cablecheck.scene.mjcf.lean_spec`) or, where MuJoCo keeps them, stay
+so; the recording draws them (`cablecheck.build.drawn`), the checker never.
 Its other geoms are parts whose own bits say which of them meet each
 other; the scene's interactions use three bits the model leaves unused
 (`ContactBits`), added to the model geoms' conaffinity only, so they never

@@ -56,6 +56,7 @@ from cablecheck.build.startframes import Frames
 from cablecheck.detection.mesh import add_surfaces
 from cablecheck.scene.errors import SceneError
 from cablecheck.scene.frames import euler_matrix
+from cablecheck.scene.mjcf import lean_spec
 from cablecheck.scene.records import CableDef, PartDef, Scene
 
 BASE_ARMATURE = 100.0
@@ -114,10 +115,12 @@ def part_size(part: PartDef) -> list[float]:
 
 
 def base_spec(scene: Scene) -> mujoco.MjSpec:
+    """The scene's mjcf model without what MuJoCo only draws
+    (`cablecheck.scene.mjcf.lean_spec`), or an empty spec."""
     if scene.mjcf is None:
         return mujoco.MjSpec()
     try:
-        return mujoco.MjSpec.from_file(str(scene.mjcf))
+        return lean_spec(scene.mjcf)
     except Exception as e:  # MuJoCo raises ValueError with its parser message
         raise SceneError(scene.path, "scene.mjcf", f"MuJoCo cannot load {scene.mjcf}: {e}") from None
 

@@ -2,8 +2,9 @@
 
 Parts are the scene's `[[parts]]` and the mjcf model's colliding geoms, in
 geom order, named `<body>/<geom name>`, else `<body>/<mesh name>`, else
-`<body>/<type><k>`; the mjcf model's visual geoms come out apart (drawn,
-never checked). Mesh parts carry MuJoCo's own vertices (MuJoCo recentres
+`<body>/<type><k>`; the mjcf model's visual geoms are no parts (the
+models leave most of them out, `cablecheck.scene.mjcf.lean_spec`; the
+recording draws them all from the file compiled whole, `cablecheck.build.drawn`). Mesh parts carry MuJoCo's own vertices (MuJoCo recentres
 and reorients meshes: the geom frame is MuJoCo's). Cables get their flex's
 addresses and their routed shape written into qpos0; the base model's
 hinge and slide joints become the script's `JointDrive`s.
@@ -33,9 +34,10 @@ def mesh_arrays(m: mujoco.MjModel, g: int) -> tuple[np.ndarray | None, np.ndarra
     return m.mesh_vert[va:va + vn].astype(float).copy(), m.mesh_face[fa:fa + fn].astype(int).copy()
 
 
-def _geom_parts(scene: Scene, m: mujoco.MjModel, own_bits: np.ndarray) -> tuple[list[PartModel], list[PartModel]]:
-    """(parts, visuals): the scene's parts and the mjcf model's colliding geoms
-    in model order; the mjcf model's visual geoms (contype = conaffinity = 0)."""
+def _geom_parts(scene: Scene, m: mujoco.MjModel, own_bits: np.ndarray) -> list[PartModel]:
+    """The scene's parts and the mjcf model's colliding geoms in model order;
+    not the mjcf model's visual geoms (contype = conaffinity = 0 as written)
+    that MuJoCo kept (some other element names them)."""
     scene_parts = {p.name: p for p in scene.parts}
     named: dict[int, tuple[str, str, bool]] = {}   # geom id -> (name, body, keepout)
     visual: set[int] = set()
@@ -57,19 +59,19 @@ def _geom_parts(scene: Scene, m: mujoco.MjModel, own_bits: np.ndarray) -> tuple[
     for (bid, _), geoms in per_body.items():
         for g, name in zip(geoms, geom_names(m, geoms)):
             named[g] = (name, body_name(m, bid), False)
-    parts, visuals, seen = [], [], {}
+    parts, seen = [], {}
     for g in sorted(named):
+        if g in visual:
+            continue
         name, body, keepout = named[g]
-        if g not in visual:
-            if name in seen:
-                raise SceneError(scene.path, "parts", f"two parts are named {name!r} (a scene part and a "
-                                                      f"geom of the mjcf model); rename the scene part")
-            seen[name] = g
+        if name in seen:
+            raise SceneError(scene.path, "parts", f"two parts are named {name!r} (a scene part and a "
+                                                  f"geom of the mjcf model); rename the scene part")
+        seen[name] = g
         verts, faces = mesh_arrays(m, g)
         gtype = int(m.geom_type[g])
-        (visuals if g in visual else parts).append(
-            PartModel(name, g, body, SHAPES[gtype], m.geom_size[g].copy(), verts, faces, keepout))
-    return parts, visuals
+        parts.append(PartModel(name, g, body, SHAPES[gtype], m.geom_size[g].copy(), verts, faces, keepout))
+    return parts
 
 
 def _model_skip(scene: Scene, m: mujoco.MjModel, parts: list[PartModel], own_bits: np.ndarray) -> np.ndarray:
@@ -96,7 +98,7 @@ def _model_skip(scene: Scene, m: mujoco.MjModel, parts: list[PartModel], own_bit
 
 def read_built(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
             plans: list[CablePlan], origin: np.ndarray, own_bits: np.ndarray) -> Built:
-    parts, visuals = _geom_parts(scene, m, own_bits)
+    parts = _geom_parts(scene, m, own_bits)
     model_skip = _model_skip(scene, m, parts, own_bits)
     cables = []
     qpos0 = m.qpos0.copy()
@@ -146,4 +148,4 @@ def read_built(scene: Scene, m: mujoco.MjModel, det: mujoco.MjModel | None,
             rolls.append(EndRoll(c.name, int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])))
     return Built(scene, m, det, cables, parts, free, body_ids,
                  np.array(qadr_list, int), np.array(dadr_list, int), joints, qpos0, origin,
-                 visuals, model_skip, end_rolls=tuple(rolls))
+                 model_skip=model_skip, end_rolls=tuple(rolls))

@@ -75,7 +75,7 @@ def build_static(scene: Scene) -> Built:
     cables = [cable_model(plan, i, int(adr), origin) for i, (plan, adr) in enumerate(zip(plans, vert_adr))]
     empty = np.zeros(0, int)
     built = Built(scene, tree, None, cables, parts, {b.name: (7 * i, 6 * i) for i, b in enumerate(scene.bodies)},
-                  dict(body_index), empty, empty, {}, qpos0, origin, [],
+                  dict(body_index), empty, empty, {}, qpos0, origin,
                   np.zeros((len(parts), len(parts)), bool))
     # without dynamics one step per scene step and nothing to tunnel (cablecheck.build.substeps)
     return replace(built, substeps=choose_substeps(built))

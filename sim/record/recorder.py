@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import os
 import uuid
+from collections.abc import Sequence
 from functools import cache
 from pathlib import Path
 
@@ -30,6 +31,7 @@ import numpy as np
 import rerun as rr
 
 from cablecheck.build.built import Built
+from cablecheck.build.drawn import DrawnGeom
 from cablecheck.checker.shapes import Shape
 from cablecheck.record.cables import CableFrames
 from cablecheck.record.clashes import Settings, send_clash_list, send_log
@@ -55,10 +57,11 @@ class Recorder:
       path: the .rrd to write.
       shapes: the checker's shape of every built part (for the other side of a spot).
       settings: units, clearance, scene file and version (properties and summary).
+      drawn: the mjcf model's visual geoms (`cablecheck.build.drawn.DrawnLoad`).
     """
 
     def __init__(self, built: Built, path: Path, shapes: list[Shape] | None = None,
-                 settings: Settings | None = None):
+                 settings: Settings | None = None, drawn: Sequence[DrawnGeom] = ()):
         scene = built.scene
         self.built = built
         self.path = Path(path)
@@ -75,7 +78,7 @@ class Recorder:
         self.rec.send_property("cablecheck", named({
             "units": strings([s.units]), "clearance": floats([s.clearance / self.unit]),
             "scene_file": strings([s.scene_file]), "version": strings([s.version])}))
-        self.scene = SceneGeometry(built, self.unit)
+        self.scene = SceneGeometry(built, self.unit, drawn)
         self.cables = CableFrames(built, self.unit)
         self.marks = ClashMarks(built, self.unit, s.units, shapes)
         self.series = SeriesSet()

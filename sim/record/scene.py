@@ -18,11 +18,14 @@ is interference.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import mujoco
 import numpy as np
 import rerun as rr
 
 from cablecheck.build.built import Built, PartModel
+from cablecheck.build.drawn import DrawnGeom
 from cablecheck.record.columns import Column, column, mat3, rgba, vec3
 from cablecheck.record.style import (
     FLOOR,
@@ -92,15 +95,18 @@ class SceneGeometry:
     Args:
       built: the built scene.
       unit: metres per scene unit.
+      drawn: the mjcf model's visual geoms (`cablecheck.build.drawn`), drawn
+        by their bodies' poses in the simulation model.
     """
 
-    def __init__(self, built: Built, unit: float):
+    def __init__(self, built: Built, unit: float, drawn: Sequence[DrawnGeom] = ()):
         self.built, self.unit = built, unit
         moving = {name for name in built.body_ids if name != "world"}
         self.moving_parts = np.array([p.body in moving for p in built.parts], bool)
         m = built.model
-        visuals = getattr(built, "visuals", ())
-        vis_body = np.array([int(m.geom_bodyid[v.geom_id]) for v in visuals], int)
+        self.visuals = tuple(drawn)
+        visuals = self.visuals
+        vis_body = np.array([v.body_id for v in visuals], int)
         self._vis_bodies = np.unique(vis_body)
         self._vis_body_paths = {int(b): visual_paths(v.body, v.name)[0] for v, b in zip(visuals, vis_body)}
         self.moving_visual_bodies = self._vis_bodies[m.body_weldid[self._vis_bodies] != 0]
@@ -126,20 +132,15 @@ class SceneGeometry:
         if self._kin is None:
             return
         m = self.built.model
-        for vis in self.built.visuals:
-            g = vis.geom_id
-            local = np.eye(4)
-            mat = np.zeros(9)
-            mujoco.mju_quat2Mat(mat, m.geom_quat[g])
-            local[:3, :3], local[:3, 3] = mat.reshape(3, 3), m.geom_pos[g]
-            rec.log(visual_paths(vis.body, vis.name)[1], self.shape(vis, np.eye(4)), transform(local, u),
+        for vis in self.visuals:
+            rec.log(visual_paths(vis.body, vis.name)[1], self.shape(vis, np.eye(4)), transform(vis.local, u),
                     static=True)
         poses = self.body_poses(self.built.qpos0 if qpos is None else qpos, self._vis_bodies)
         for b, pose in zip(self._vis_bodies, poses):
             if m.body_weldid[b] == 0:
                 rec.log(self._vis_body_paths[int(b)], transform(pose, u), static=True)
 
-    def shape(self, part: PartModel, pose: np.ndarray):
+    def shape(self, part: PartModel | DrawnGeom, pose: np.ndarray):
         """The archetype drawing a part (or visual geom) in its own frame, filled."""
         u = self.unit
         size = np.asarray(part.size, float) / u
@@ -177,13 +178,6 @@ class SceneGeometry:
             return None
         return self.body_poses(self.built.qpos0 if qpos is None else qpos, self.moving_visual_bodies)
 
-    def visual_colour(self, g: int) -> tuple[int, ...]:
-        """The geom's colour as MuJoCo draws it: its material's, else its own rgba."""
-        m = self.built.model
-        mat = int(m.geom_matid[g])
-        rgba = m.mat_rgba[mat] if mat >= 0 else m.geom_rgba[g]
-        return tuple(round(255 * float(c)) for c in np.clip(rgba, 0.0, 1.0))
-
     def send_motion(self, rec: rr.RecordingStream, index: list, poses: list[np.ndarray],
                     vis_poses: list[np.ndarray]) -> None:
         """Poses of the moving parts (F, M, 4, 4) and visual bodies (F, B, 4, 4), one column per entity."""
@@ -219,8 +213,8 @@ class SceneGeometry:
                 rec.send_columns(part_path(part.name), indexes=index, columns=_colour_columns(part, floor_rgba))
             else:
                 rec.send_columns(part_path(part.name), indexes=index, columns=_colour_columns(part, parts_rgba))
-        for vis in getattr(self.built, "visuals", ()):
-            colour = np.array(self.visual_colour(vis.geom_id), np.uint8)
+        for vis in self.visuals:
+            colour = np.array(vis.rgba, np.uint8)
             if vis.shape == "plane":                      # a floor: translucent throughout
                 colour[3] = min(colour[3], FLOOR[3])
             faded = np.array([*colour[:3], min(colour[3], PART_DIMMED[3] if vis.shape != "plane" else FLOOR_DIMMED[3])],

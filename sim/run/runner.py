@@ -48,6 +48,7 @@ from cablecheck.about import version
 from cablecheck.build.built import Built
 from cablecheck.build.cablephysics import BEND_READ_FACTOR, BEND_RESOLUTION, COMPRESSION_TOLERANCE, shear_modulus
 from cablecheck.build.checkview import OptionError
+from cablecheck.build.drawn import DrawnLoad
 from cablecheck.build.rodtwist import TwistReader
 from cablecheck.build.routecheck import route_warnings
 from cablecheck.build.stages import build_simulation, plan_cables, with_detection
@@ -84,7 +85,7 @@ from cablecheck.run.jointspace import JointLog
 from cablecheck.run.kinematic import KinematicSimulation
 from cablecheck.run.loop import Simulation
 from cablecheck.run.mjlog import MujocoMessages, warning_counts
-from cablecheck.run.stepcheck import BATCH, BATCH_MAX, StepChecks
+from cablecheck.run.stepcheck import BATCH, BATCH_MAX, StepChecks, next_batch
 from cablecheck.run.stop import StopRequest
 from cablecheck.scene.allow import check_allow_names
 from cablecheck.scene.cables import check_fastened_names
@@ -235,6 +236,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     notes = load_review(options.review) if options.review is not None else None
     validate = scene.check.validate
     static = not needs_model(scene)     # nothing calls for MuJoCo: no model is built (cablecheck.build.static)
+    # the mjcf model's visual geoms, which only the recording draws, compiled on a thread of their own
+    drawn = DrawnLoad(scene) if options.record and not static else None
     planned = None if static else plan_cables(scene)
     noted = scene.warnings
     # the simulation model first: the detection model is compiled while it settles
@@ -292,7 +295,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
             from cablecheck.record.recorder import Recorder
 
             settings = Settings(scene.units, scene.check.clearance, scene_file, product)
-            recorder = Recorder(built, options.record, checks.shapes, settings)
+            recorder = Recorder(built, options.record, checks.shapes, settings,
+                                drawn.result() if drawn is not None else ())
         # The recording samples the checked steps at about RECORD_RATE (and at
         # every step where an event starts or ends): a viewer needs no 500 Hz.
         # The wear map measures contact at the same rate (bends at every step).
@@ -319,7 +323,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     try:
         for state in (states if ahead is None else ahead):
             # states are checked BATCH at a time at first, then each batch
-            # twice the last up to BATCH_MAX (cablecheck.run.stepcheck): the last state
+            # twice the last up to BATCH_MAX, shrinking towards the run's end
+            # (cablecheck.run.stepcheck.next_batch): the last state
             # of the run closes its batch, and an interrupted run's last
             # states are checked after the loop; an unstable simulation's
             # last state closes its batch at once
@@ -330,7 +335,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
             batch = []
             if diverged is not None:
                 break
-            size = min(2 * size, max(BATCH, BATCH_MAX))
+            size = next_batch(size, sim.total_steps - state.step, every, BATCH, max(BATCH, BATCH_MAX))
         if batch:
             diverged = _check_batch(batch, checks, out, timer, ahead, watch)
         complete = not stop.asked and diverged is None
