@@ -24,7 +24,9 @@ Each scene runs as a user runs it (``cablecheck run SCENE --report R
 running) and the report gives the columns: elements (cable elements +
 checked parts), simulation, check, validation, recording (CPU seconds of
 the stages, the report's ``timing``), (c+v+r)/sim, the real-time factor
-(simulated seconds over the run's wall ``total_s``, building included),
+(simulated seconds over the run's wall ``total_s``, building included;
+and over the whole command's wall, as a user waits for it: Python's
+start, the imports and reading the scene included),
 agreement with MuJoCo's contacts, hard / soft events, and the events that
 lie within two attachment zones of an end or clip (arc length along the
 cable from the held point, from the built model's attachments): possible
@@ -624,17 +626,18 @@ def run_one(label: str, scene_path: Path, timeout: float | None = None) -> dict:
 
 def table(rows: list[dict]) -> str:
     lines = ["| arm | hose elements / parts | sim s | check s | validate s | record s | (c+v+r)/sim | real time | wall s "
-             "| agreement | hard / soft | next to a clamp or clip |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "| command s | real time, command | agreement | hard / soft | next to a clamp or clip |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         if "timing" not in r:
-            lines.append(f"| {r['arm']} | error: {r['error'].splitlines()[-1][:120]} |" + " |" * 10)
+            lines.append(f"| {r['arm']} | error: {r['error'].splitlines()[-1][:120]} |" + " |" * 12)
             continue
         t = r["timing"]
         arm = r["arm"] if r.get("complete", True) else f"{r['arm']} (stopped at {r['duration']:.2f} s)"
         lines.append(f"| {arm} | {r['elements']} / {r['parts']} ({r['meshes']} meshes, "
                      f"{r['triangles']} triangles) | {t['sim_s']:.2f} | {t['check_s']:.2f} | {t['validate_s']:.2f} | "
                      f"{t['record_s']:.2f} | **{r['ratio']:.2f}** | {r['rtf']:.2f}x | {t['total_s']:.1f} | "
+                     f"{r['wall_s']:.1f} | {r['duration'] / max(r['wall_s'], 1e-12):.2f}x | "
                      f"{100 * r['agreement']:.2f} % | {r['hard']} / {r['soft']} | {len(r['near_held'])} |")
     return "\n".join(lines)
 
