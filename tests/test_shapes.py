@@ -53,18 +53,27 @@ def test_least_signed_distance_with_a_limit_is_exact_below_it():
     assert np.all(got[~below] >= limit) and np.all(got[~below] <= exact[~below])
 
 
-def test_mesh_shape_is_kept_by_content_and_bounded():
+def test_mesh_shape_is_kept_by_content_and_bounded(monkeypatch):
     """The same vertices and faces give the same shape (its grid shared);
-    other content gives another; only the last MESH_MEMO are kept."""
+    other content gives another; the last made are kept up to
+    MESH_MEMO_TRIANGLES triangles, a scene's meshes asked for in turn all
+    stay, and a mesh larger than the budget alone is still kept."""
     from cablecheck.checker import shapes
-    box = trimesh.creation.box([0.2, 0.3, 0.4])
+    box = trimesh.creation.box([0.2, 0.3, 0.4])        # 12 triangles
+    monkeypatch.setattr(shapes, "MESH_MEMO_TRIANGLES", 12 * 20)
     a = mesh_shape(box.vertices, box.faces)
     assert mesh_shape(box.vertices.copy(), box.faces.copy()) is a
     moved = mesh_shape(box.vertices + 1.0, box.faces)
     assert moved is not a
-    for k in range(shapes.MESH_MEMO):
-        mesh_shape(box.vertices * (2.0 + k), box.faces)
-    assert len(shapes._MESH_MEMO.shapes) == shapes.MESH_MEMO
+    # eighteen more asked for twice in turn (a run's passes over its parts): each made once, all twenty kept
+    made = [mesh_shape(box.vertices * (2.0 + k), box.faces) for k in range(18)]
+    assert all(mesh_shape(box.vertices * (2.0 + k), box.faces) is made[k] for k in range(18))
+    assert len(shapes._MESH_MEMO.shapes) == 20
+    mesh_shape(box.vertices * 30.0, box.faces)        # one more: the least recent (a) goes
+    assert len(shapes._MESH_MEMO.shapes) == 20
+    big = trimesh.creation.icosphere(subdivisions=3)   # 1,280 triangles, over the budget alone
+    kept = mesh_shape(big.vertices, big.faces)
+    assert list(shapes._MESH_MEMO.shapes.values()) == [kept] and mesh_shape(big.vertices, big.faces) is kept
     again = mesh_shape(box.vertices, box.faces)
     assert again is not a
     p = np.array([[0.5, 0.0, 0.0], [0.0, 0.0, 0.0]])
