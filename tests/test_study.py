@@ -384,6 +384,43 @@ def test_ctrl_c_keeps_finished_variants(tiny, tmp_path):
     assert json.loads((tmp_path / "out" / "int" / "study.json").read_text())["complete"] is False
 
 
+def test_killing_the_embedded_clusters_only_worker_loses_no_variant(tiny, tmp_path):
+    """The embedded cluster's worker is forked from its fork server
+    (cablecheck.study.cluster.start_forkserver); killed (SIGKILL) mid-variant,
+    its nanny starts another and every variant finishes; when the study
+    ends, no process of it is left (the fork server is stopped with the
+    cluster) and neither are its temporary folders."""
+    import psutil
+
+    study = write_text(tmp_path / "s.toml", f'[study]\nname = "kf"\nscene = "{tiny.parent}/scene/tiny.toml"\n'
+                       'mode = "zip"\n[[vary]]\nkey = "scene.duration"\nvalues = [0.1, 1.0, 0.1]\n'
+                       '[[vary]]\nkey = "cables.power.length"\nvalues = [650, 651, 652]\n')
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+           "TMPDIR": str(tmp_path)}
+    proc = subprocess.Popen([sys.executable, "-m", "cablecheck.cli.main", "study", str(study), "--workers", "1",
+                             "--out", str(tmp_path / "out"), "--no-record"], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    study_proc = psutil.Process(proc.pid)
+    try:
+        for line in proc.stderr:
+            if line.startswith("variants: 1/3"):
+                break
+        servers = [c for c in study_proc.children() if "forkserver" in " ".join(c.cmdline())]
+        (server,) = servers
+        (worker,) = server.children()
+        worker.kill()
+        out, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 0, err
+    rows = _rows(tmp_path / "out" / "kf")
+    assert [r["status"] for r in rows] == ["done"] * 3 and all(r["error"] == "" for r in rows)
+    assert not server.is_running() or server.status() == psutil.STATUS_ZOMBIE
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(("cablecheck-", "pymp-"))]
+
+
 def test_a_search_answers_with_the_best_variant_and_its_margin(tiny, tmp_path, capsys):
     """A search over the tiny drawer's cable length that must never be
     taut and should be as short as possible: every run is kept, and the

@@ -146,6 +146,11 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def _cmd_study(args: argparse.Namespace, stop: StopRequest) -> int:
+    if args.scheduler is None:
+        # the embedded cluster's fork server loads the workers' modules on the
+        # second core while the study loads its own (cablecheck.study.cluster)
+        from cablecheck.study.cluster import start_forkserver
+        start_forkserver()
     # each command loads its own modules (module docstring)
     from cablecheck.study.cluster import StudyRunError
     from cablecheck.study.definition import Method

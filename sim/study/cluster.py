@@ -17,7 +17,22 @@ scheduler's HTTP server, which Dask starts regardless, takes a free port of
 127.0.0.1, not 8787 on every interface); Dask's
 nanny starts them with OMP / MKL / OpenBLAS threads set to 1
 (`distributed.nanny.pre-spawn-environ`). Its worker processes ignore
-SIGINT, so a Ctrl-C in the terminal reaches only the study. Its workers'
+SIGINT, so a Ctrl-C in the terminal reaches only the study.
+
+Its workers are forked from a fork server (`start_forkserver`, Python's
+`multiprocessing` "forkserver", which Dask supports as
+`distributed.worker.multiprocessing-method`) that the command line starts
+first thing, before it reads the study: the server loads Dask and the
+run's modules (`WORKER_IMPORTS`) on the second core while the study loads
+its own, and every worker forked from it starts with them loaded. Spawned
+instead, each worker started a Python of its own and loaded them at its
+first variant: 8 variants of the drawer took 15.2 s on one worker and
+10.7 s on two (1.42 times as fast); forked, 13.0 and 7.8 s (1.67), side
+by side on this 2-core machine (`benchmarks/bench_study.py --scaling`,
+2026-11-28 22:54). The server is single-threaded (no lock held by another
+thread is copied into a worker), starts with the threads' variables at 1
+and SIGINT ignored, and is stopped with the cluster. A worker that dies is
+started again by its nanny the default way (spawned). Its workers'
 scratch space and the variants' temporary folders lie under one folder of
 the study's (`Cluster.temp_root`), removed when the cluster closes: a worker
 killed mid-variant leaves nothing behind. Within `closing_later` (the
@@ -236,7 +251,14 @@ def _local(n: int, root: str):
     # for whichever worker is free first (Dask's default hands a worker a
     # second one to queue, which a worker still busy may then hold while
     # another is idle)
-    with _sigint_ignored(), dask.config.set({"distributed.scheduler.worker-saturation": 1.0}):
+    method = "forkserver" if start_forkserver() else dask.config.get("distributed.worker.multiprocessing-method")
+    import distributed.utils
+
+    # the server's imports are ours (WORKER_IMPORTS): Dask's own list would import
+    # its optional packages (pandas, lz4) into the study's process the first time
+    distributed.utils._forkserver_preload_set = True
+    with _sigint_ignored(), dask.config.set({"distributed.scheduler.worker-saturation": 1.0,
+                                             "distributed.worker.multiprocessing-method": method}):
         # no dashboard; the scheduler's HTTP server (health and metrics
         # routes, started whatever dashboard_address says) on a free port of 127.0.0.1
         return LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
@@ -245,9 +267,63 @@ def _local(n: int, root: str):
                             silence_logs=logging.ERROR, local_directory=root)
 
 
+WORKER_IMPORTS = ("distributed", "numpy", "mujoco", "scipy.interpolate", "trimesh", "rerun", "cablecheck.scene.load",
+                  "cablecheck.run.runner", "cablecheck.study.execute")
+"""What the fork server loads for the workers forked from it: Dask, and what
+a variant's run loads (`cablecheck.study.execute.run_variant`; trimesh for
+a scene with mesh parts). A worker's first variant of the drawer then took
+0.95 s against 0.93 for its next (spawned, 1.76 against 1.04)."""
+
+THREAD_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+"""The fork server's (and so its workers') thread variables: one thread a worker."""
+
+_SERVER: list = []
+"""The fork server this process started and has not stopped (one at most)."""
+
+
+def start_forkserver() -> bool:
+    """Start the fork server the embedded cluster's workers are forked from
+    (module docstring), unless it runs already; False where Python has no
+    fork server (Windows): the workers are then spawned."""
+    import multiprocessing
+    import multiprocessing.forkserver
+
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return False
+    if _SERVER:
+        return True
+    multiprocessing.get_context("forkserver").set_forkserver_preload(list(WORKER_IMPORTS))
+    old = {k: os.environ.get(k) for k in THREAD_ENV}
+    os.environ.update(THREAD_ENV)
+    try:
+        with _sigint_ignored():       # the server, and every worker forked from it, ignore SIGINT
+            multiprocessing.forkserver.ensure_running()
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+    _SERVER.append(multiprocessing.forkserver)
+    return True
+
+
+def _stop_forkserver() -> None:
+    """Stop the fork server (its workers have ended), waiting for it: no
+    process outlives the study, and its CPU time is counted as its parent's.
+    `ForkServer._stop` is Python's own (its test suite's); where it is
+    missing the server ends with this process."""
+    if _SERVER:
+        module = _SERVER.pop()
+        stop = getattr(getattr(module, "_forkserver", None), "_stop", None)
+        if stop is not None:
+            stop()
+
+
 def _close(client, local, root: str) -> None:
     """Close the client and the embedded cluster (running tasks get a few
-    seconds, then their processes end), then remove its temporary folder."""
+    seconds, then their processes end) and its fork server, then remove its
+    temporary folder."""
     try:
         try:
             if client is not None:
@@ -255,6 +331,7 @@ def _close(client, local, root: str) -> None:
         finally:
             if local is not None:
                 local.close()
+                _stop_forkserver()
     except KeyboardInterrupt:   # a second Ctrl-C: the worker processes, daemonic, end with us
         pass
     finally:
