@@ -9,10 +9,10 @@ import dataclasses
 
 import numpy as np
 from buildscenes import run_steps, slider_scene
-from hypothesis import given, strategies as st
+from hypothesis import assume, event, given, settings, strategies as st
 
 from cablecheck.build.cableplan import default_segments, has_slack
-from cablecheck.build.stages import build
+from cablecheck.build.stages import build, plan_cables
 from cablecheck.scene.load import parse_scene
 
 
@@ -130,3 +130,33 @@ def test_a_length_between_the_route_and_the_route_through_its_clips_is_refused_n
     assert f"({through:.6g} m)" in str(e.value)
     built = build(parse_scene(scene(through + 1e-3), tmp_path / "s.toml"), detect=False)
     assert built.cables[0].length >= through
+
+
+@settings(max_examples=25, deadline=None)
+@given(length=st.floats(0.6, 0.9), clip_z=st.floats(0.5, 0.8), segments=st.sampled_from([None, 3, 4, 12]))
+def test_checking_a_plan_raises_what_planning_it_raises(tmp_path_factory, length, clip_z, segments):
+    """A study checks each variant's cables without shaping them
+    (`check_cables`): on drawn lengths, clip heights and element counts it
+    refuses exactly what `plan_cables` refuses, with the same key and text,
+    and passes what it plans."""
+    from cablecheck.build.stages import check_cables
+    from cablecheck.scene.errors import SceneError
+
+    tmp_path = tmp_path_factory.mktemp("chk")
+    data = slider_scene(tmp_path)
+    data["cables"][0].update(length=length, clips=[{"pos": [0.3, 0.0, clip_z]}])
+    if segments is not None:
+        data["cables"][0]["segments"] = segments
+    try:
+        scene = parse_scene(data, tmp_path / "s.toml")
+    except SceneError:       # the loader's own refusals come before either
+        assume(False)
+    outcomes = []
+    for f in (plan_cables, check_cables):
+        try:
+            f(scene)
+            outcomes.append(None)
+        except SceneError as e:
+            outcomes.append((e.key, str(e)))
+    assert outcomes[0] == outcomes[1]
+    event("refused" if outcomes[0] else "planned")

@@ -83,8 +83,9 @@ def _closest_arc(route: np.ndarray, point: np.ndarray) -> tuple[int, float]:
 
 
 def plan_cable(cable: CableDef, frames: Frames, where: str, scene: Scene,
-                depth: Obstacles | None = None) -> CablePlan:
-    """Routed shape through start, via or points, clips and end, with the cable's length.
+                depth: Obstacles | None = None, shaped: bool = True) -> CablePlan | None:
+    """Routed shape through start, via or points, clips and end, with the cable's length
+    (`shaped` False: only the checks that raise SceneError, no shape, None).
 
     Every waypoint (start, each via or given point, each clip, end) is a
     vertex (`cablecheck.build.route`): each clip is inserted where the route passes
@@ -163,6 +164,8 @@ def plan_cable(cable: CableDef, frames: Frames, where: str, scene: Scene,
                          f"{length / scene.scale:.6g} {scene.units} is shorter than the route leaving "
                          f"its clamps along their tangents ({needed / scene.scale:.6g} {scene.units}); "
                          "lengthen the cable or change the tangents")
+    if not shaped:      # every SceneError a plan raises is above
+        return None
     droop = length
     for _ in range(6):
         # A clamp's held edge along its tangent leaves the drooped shape by a

@@ -61,6 +61,17 @@ def plan_cables(scene: Scene) -> tuple[Frames, dict[str, tuple[np.ndarray, np.nd
     return frames, meshes, plans
 
 
+def check_cables(scene: Scene) -> None:
+    """Raise the SceneError `plan_cables` would raise for the scene's cables
+    (a length shorter than the route through the clips, or than the route
+    leaving its clamps along their tangents; too few segments), without
+    shaping them: no droop found (nor scipy loaded for it), no part
+    prepared. A study checks every variant so before any runs."""
+    frames = Frames(scene, scene_origin(scene))
+    for i, c in enumerate(scene.cables):
+        plan_cable(c, frames, f"cables[{i}]", scene, shaped=False)
+
+
 def build(scene: Scene, detect: bool = True) -> Built:
     """Compile the simulation model (and, if `detect`, the detection model),
     then choose its step (`choose_substeps`)."""

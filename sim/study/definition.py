@@ -4,7 +4,7 @@
 ``[[vary]]`` entries into the scenes to run, as a full grid (the default:
 every combination, the first key varying slowest) or ``mode = "zip"`` (the
 i-th value of every key together); `check_variants` parses every variant's
-scene with `cablecheck.scene.parse_scene` and plans its cables (`cablecheck.build.stages.plan_cables`)
+scene with `cablecheck.scene.parse_scene` and checks its cables as their plan would (`cablecheck.build.stages.check_cables`)
 before anything runs, so a bad key or value is reported once, up front,
 naming the study file, the ``[[vary]]`` key, the value and the scene's own
 complaint.
@@ -244,17 +244,18 @@ def check_variants(study: Study, variants: tuple[Variant, ...]) -> tuple[Scene, 
 
 
 def check_variant(study: Study, variant: Variant) -> Scene:
-    """Parse a variant's scene and plan its cables as a run would before it
-    simulates (`cablecheck.build.stages.plan_cables`: a length shorter than the route
-    through its clips, or leaving its clamps along their tangents, is refused
-    there, not run at another length); StudyError naming the
+    """Parse a variant's scene and check its cables as a run's plan would
+    before it simulates (`cablecheck.build.stages.check_cables`: a length
+    shorter than the route through its clips, or leaving its clamps along
+    their tangents, is refused there, not run at another length; the
+    shapes, which raise nothing, are left to the run); StudyError naming the
     study file, the varied key, the value and the scene's problem."""
     try:
         scene = parse_scene(variant.data, study.scene_path)
         if scene.cables:
-            from cablecheck.build.stages import plan_cables  # MuJoCo loads only for a study of cables
+            from cablecheck.build.stages import check_cables  # MuJoCo loads only for a study of cables
 
-            plan_cables(scene)
+            check_cables(scene)
     except SceneError as e:
         raise StudyError(study.path, _culprit(study, variant, e.key),
                          f"scene {study.scene_path}: {e.key}: {e.problem}") from None
