@@ -384,6 +384,36 @@ def test_ctrl_c_keeps_finished_variants(tiny, tmp_path):
     assert json.loads((tmp_path / "out" / "int" / "study.json").read_text())["complete"] is False
 
 
+def _worker_sees(conn) -> None:
+    """In a process forked from the fork server: what a worker starts with."""
+    import signal as sig
+    conn.send({k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "MALLOC_TRIM_THRESHOLD_")}
+              | {"sigint_ignored": sig.getsignal(sig.SIGINT) == sig.SIG_IGN,
+                 "runner_loaded": "cablecheck.run.runner" in sys.modules})
+    conn.close()
+
+
+def test_the_fork_server_gives_its_workers_dasks_environment_their_modules_and_no_ctrl_c():
+    import multiprocessing
+
+    from cablecheck.study import cluster
+    before = dict(os.environ)
+    if not cluster.start_forkserver():
+        pytest.skip("no fork server on this platform")
+    try:
+        assert dict(os.environ) == before        # this process's environment as it was
+        ctx = multiprocessing.get_context("forkserver")
+        here, there = ctx.Pipe(duplex=False)
+        p = ctx.Process(target=_worker_sees, args=(there,))
+        p.start()
+        seen = here.recv()
+        p.join(30)
+        assert seen == {"OMP_NUM_THREADS": "1", "MALLOC_TRIM_THRESHOLD_": "65536", "sigint_ignored": True,
+                        "runner_loaded": True}
+    finally:
+        cluster._stop_forkserver()
+
+
 def test_killing_the_embedded_clusters_only_worker_loses_no_variant(tiny, tmp_path):
     """The embedded cluster's worker is forked from its fork server
     (cablecheck.study.cluster.start_forkserver); killed (SIGKILL) mid-variant,

@@ -30,8 +30,9 @@ first variant: 8 variants of the drawer took 15.2 s on one worker and
 10.7 s on two (1.42 times as fast); forked, 13.0 and 7.8 s (1.67), side
 by side on this 2-core machine (`benchmarks/bench_study.py --scaling`,
 2026-11-28 22:54). The server is single-threaded (no lock held by another
-thread is copied into a worker), starts with the threads' variables at 1
-and SIGINT ignored, and is stopped with the cluster. A worker that dies is
+thread is copied into a worker), starts with the environment Dask's nanny
+gives a worker it spawns (`SERVER_ENV`: threads at 1) and SIGINT ignored,
+and is stopped with the cluster. A worker that dies is
 started again by its nanny the default way (spawned). Its workers'
 scratch space and the variants' temporary folders lie under one folder of
 the study's (`Cluster.temp_root`), removed when the cluster closes: a worker
@@ -49,6 +50,8 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import multiprocessing
+import multiprocessing.forkserver
 import os
 import shutil
 import signal
@@ -274,8 +277,12 @@ a variant's run loads (`cablecheck.study.execute.run_variant`; trimesh for
 a scene with mesh parts). A worker's first variant of the drawer then took
 0.95 s against 0.93 for its next (spawned, 1.76 against 1.04)."""
 
-THREAD_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
-"""The fork server's (and so its workers') thread variables: one thread a worker."""
+SERVER_ENV = {"MALLOC_TRIM_THRESHOLD_": "65536", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+              "OPENBLAS_NUM_THREADS": "1"}
+"""The fork server's (and so its workers') environment beyond this
+process's: Dask's own `distributed.nanny.pre-spawn-environ` (one thread a
+worker; freed memory given back to the system), which a nanny sets only
+for a worker it spawns, not for one forked from the server."""
 
 _SERVER: list = []
 """The fork server this process started and has not stopped (one at most)."""
@@ -285,16 +292,13 @@ def start_forkserver() -> bool:
     """Start the fork server the embedded cluster's workers are forked from
     (module docstring), unless it runs already; False where Python has no
     fork server (Windows): the workers are then spawned."""
-    import multiprocessing
-    import multiprocessing.forkserver
-
     if "forkserver" not in multiprocessing.get_all_start_methods():
         return False
     if _SERVER:
         return True
     multiprocessing.get_context("forkserver").set_forkserver_preload(list(WORKER_IMPORTS))
-    old = {k: os.environ.get(k) for k in THREAD_ENV}
-    os.environ.update(THREAD_ENV)
+    old = {k: os.environ.get(k) for k in SERVER_ENV}
+    os.environ.update(SERVER_ENV)
     try:
         with _sigint_ignored():       # the server, and every worker forked from it, ignore SIGINT
             multiprocessing.forkserver.ensure_running()
