@@ -423,7 +423,7 @@ def test_killing_the_embedded_clusters_only_worker_loses_no_variant(tiny, tmp_pa
     import psutil
 
     study = write_text(tmp_path / "s.toml", f'[study]\nname = "kf"\nscene = "{tiny.parent}/scene/tiny.toml"\n'
-                       'mode = "zip"\n[[vary]]\nkey = "scene.duration"\nvalues = [0.1, 1.0, 0.1]\n'
+                       'mode = "zip"\n[[vary]]\nkey = "scene.duration"\nvalues = [0.1, 0.5, 0.1]\n'
                        '[[vary]]\nkey = "cables.power.length"\nvalues = [650, 651, 652]\n')
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
            "TMPDIR": str(tmp_path)}
