@@ -27,9 +27,10 @@ run's modules (`WORKER_IMPORTS`) on the second core while the study loads
 its own, and every worker forked from it starts with them loaded. Spawned
 instead, each worker started a Python of its own and loaded them at its
 first variant: 8 variants of the drawer took 15.2 s on one worker and
-10.7 s on two (1.42 times as fast); forked, 13.0 and 7.8 s (1.67), side
-by side on this 2-core machine (`benchmarks/bench_study.py --scaling`,
-2026-11-28 22:54). The server is single-threaded (no lock held by another
+10.7 s on two (1.42 times as fast); forked, 12.3-13.0 and 7.8-8.1 s
+(1.53-1.67 in three measurements), on this 2-core machine
+(`benchmarks/bench_study.py --scaling`, 2026-11-28 22:50-23:08,
+docs/performance.md). The server is single-threaded (no lock held by another
 thread is copied into a worker), starts with the environment Dask's nanny
 gives a worker it spawns (`SERVER_ENV`: threads at 1) and SIGINT ignored,
 and is stopped with the cluster. A worker that dies is
