@@ -15,6 +15,7 @@ import socket
 import subprocess
 import sys
 import time
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 
@@ -362,21 +363,10 @@ def test_ctrl_c_keeps_finished_variants(tiny, tmp_path):
     study = write_text(tmp_path / "s.toml", f'[study]\nname = "int"\nscene = "{tiny.parent}/scene/tiny.toml"\n'
                    'mode = "zip"\n[[vary]]\nkey = "scene.duration"\nvalues = [0.1, 60.0, 60.0]\n'
                    '[[vary]]\nkey = "cables.power.length"\nvalues = [650, 651, 652]\n')
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    proc = subprocess.Popen([sys.executable, "-m", "cablecheck.cli.main", "study", str(study), "--workers", "1",
-                             "--out", str(tmp_path / "out"), "--no-record"], env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
-    try:
-        for line in proc.stderr:
-            if line.startswith("variants: 1/3"):
-                break
+    with _study_running([str(study), "--workers", "1", "--out", str(tmp_path / "out"), "--no-record"],
+                        _env()) as proc:
         os.killpg(proc.pid, signal.SIGINT)
         out, err = proc.communicate(timeout=60)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
     assert proc.returncode == 130, err
     assert "Traceback" not in err and "INTERRUPTED" in out
     rows = _rows(tmp_path / "out" / "int")
@@ -425,25 +415,12 @@ def test_killing_the_embedded_clusters_only_worker_loses_no_variant(tiny, tmp_pa
     study = write_text(tmp_path / "s.toml", f'[study]\nname = "kf"\nscene = "{tiny.parent}/scene/tiny.toml"\n'
                        'mode = "zip"\n[[vary]]\nkey = "scene.duration"\nvalues = [0.1, 0.5, 0.1]\n'
                        '[[vary]]\nkey = "cables.power.length"\nvalues = [650, 651, 652]\n')
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
-           "TMPDIR": str(tmp_path)}
-    proc = subprocess.Popen([sys.executable, "-m", "cablecheck.cli.main", "study", str(study), "--workers", "1",
-                             "--out", str(tmp_path / "out"), "--no-record"], env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
-    study_proc = psutil.Process(proc.pid)
-    try:
-        for line in proc.stderr:
-            if line.startswith("variants: 1/3"):
-                break
-        servers = [c for c in study_proc.children() if "forkserver" in " ".join(c.cmdline())]
-        (server,) = servers
+    with _study_running([str(study), "--workers", "1", "--out", str(tmp_path / "out"), "--no-record"],
+                        {**_env(), "TMPDIR": str(tmp_path)}) as proc:
+        (server,) = [c for c in psutil.Process(proc.pid).children() if "forkserver" in " ".join(c.cmdline())]
         (worker,) = server.children()
         worker.kill()
         out, err = proc.communicate(timeout=120)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
     assert proc.returncode == 0, err
     rows = _rows(tmp_path / "out" / "kf")
     assert [r["status"] for r in rows] == ["done"] * 3 and all(r["error"] == "" for r in rows)
@@ -507,6 +484,24 @@ def test_a_requirement_naming_nothing_in_the_scene_exits_2(tmp_path, capsys):
 
 
 # -- robust execution (issue 27 item 5) ----------------------------------------------------------
+
+@contextmanager
+def _study_running(args: list[str], env: dict, after: str = "variants: 1/3"):
+    """`cablecheck study ARGS` in a session of its own (a signal to its
+    group reaches no test), once its progress has said `after`; the whole
+    session killed on leaving if it still runs."""
+    proc = subprocess.Popen([sys.executable, "-m", "cablecheck.cli.main", "study", *args], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        for line in proc.stderr:
+            if line.startswith(after):
+                break
+        yield proc
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+
 
 def _env() -> dict:
     return {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
