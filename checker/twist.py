@@ -44,24 +44,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from cablecheck.checker.closest import cross
+
 _TINY = 1e-300
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.einsum("...i,...i->...", a, b)
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``_cross(a, b)`` of (..., 3) arrays: its arithmetic and bits (each
-    component one product less another), without its Python-level axis
-    handling, which cost more than the products on a cable's few dozen edges."""
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    np.subtract(a1 * b2, a2 * b1, out=out[..., 0])
-    np.subtract(a2 * b0, a0 * b2, out=out[..., 1])
-    np.subtract(a0 * b1, a1 * b0, out=out[..., 2])
-    return out
 
 
 def _norm(x: np.ndarray, keepdims: bool = False) -> np.ndarray:
@@ -96,23 +85,23 @@ def _tangents(points: np.ndarray) -> np.ndarray:
 def _normal_to(t: np.ndarray) -> np.ndarray:
     """(..., 3) unit vectors perpendicular to unit `t`, from the axis least aligned with it."""
     axis = np.eye(3)[np.argmin(np.abs(t), axis=-1)]
-    n = _cross(t, axis)
+    n = cross(t, axis)
     return n / _norm(n, keepdims=True)
 
 
 def _signed_angle(a: np.ndarray, b: np.ndarray, axis: np.ndarray) -> np.ndarray:
     """Angle from `a` to `b` about unit `axis` (both taken perpendicular to it)."""
-    return np.arctan2(_dot(_cross(a, b), axis), _dot(a, b) - _dot(a, axis) * _dot(b, axis))
+    return np.arctan2(_dot(cross(a, b), axis), _dot(a, b) - _dot(a, axis) * _dot(b, axis))
 
 
 def _rotate_min(v: np.ndarray, t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
     """`v` rotated by the least rotation taking unit `t0` to unit `t1`
     (Rodrigues' formula with c = t0 x t1, d = t0 . t1); a cusp (t1 = -t0)
     turns half a turn about a normal of t0."""
-    c = _cross(t0, t1)
+    c = cross(t0, t1)
     d = _dot(t0, t1)
     folded = d < -1.0 + 1e-12
-    out = v * d[..., None] + _cross(c, v) + c * (_dot(c, v) / np.where(folded, 1.0, 1.0 + d))[..., None]
+    out = v * d[..., None] + cross(c, v) + c * (_dot(c, v) / np.where(folded, 1.0, 1.0 + d))[..., None]
     if folded.any():
         a = _normal_to(t0)
         out = np.where(folded[..., None], 2.0 * a * _dot(a, v)[..., None] - v, out)
@@ -143,7 +132,7 @@ def transport(points: np.ndarray, vectors: np.ndarray) -> tuple[np.ndarray, np.n
     alpha = _signed_angle(f[:, 0], np.asarray(vectors, float), t[:, 0])
     phi = alpha + beta.sum(axis=1)
     t_end, f_end = t[:, -1], f[:, -1]
-    moved = np.cos(phi)[:, None] * f_end + np.sin(phi)[:, None] * _cross(t_end, f_end)
+    moved = np.cos(phi)[:, None] * f_end + np.sin(phi)[:, None] * cross(t_end, f_end)
     return t_end, moved
 
 

@@ -27,6 +27,7 @@ import mujoco
 import numpy as np
 
 from cablecheck.build.built import Built
+from cablecheck.checker.closest import cross
 from cablecheck.checker.twist import wrap
 
 
@@ -51,6 +52,7 @@ class ClipHold:
             return
         t, u = d.plastic[self._t], d.plastic[self._u]
         held = np.einsum("kij,kj->ki", d.xmat[self._body].reshape(-1, 3, 3), self._local)
-        target = np.arctan2(np.einsum("ki,ki->k", np.cross(t, u), held), np.einsum("ki,ki->k", u, held))
+        # closest.cross: np.cross's bits without its axis handling, a third of this call's cost
+        target = np.arctan2(np.einsum("ki,ki->k", cross(t, u), held), np.einsum("ki,ki->k", u, held))
         now = d.qpos[self._qpos]
         m.eq_data[self._eq, 0] = now + wrap(target - now)
