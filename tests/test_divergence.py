@@ -429,3 +429,37 @@ def test_a_held_end_pressed_into_a_part_of_another_body_is_named_as_the_cause(tm
                   "pos": [0.6, 0.0, 0.5]}) is None
     assert pinch({"name": "frame/block", "shape": "box", "size": [0.03, 0.03, 0.03],
                   "pos": [0.6, 0.0, 0.9]}) is None
+
+
+def test_a_run_diverged_before_its_first_checked_state_is_judged_from_its_routed_start(tmp_path):
+    """Settling that blows up leaves no sound state checked before the first
+    diverged one: the routed start (`Built.qpos0`) is the last sound state,
+    so an end held inside a part of another body is named as the cause
+    there too (a route drawn through a robot's shoulder next to the hose's
+    start diverged with cause unknown). The same block clear of the cable
+    leaves the cause unknown."""
+    from buildscenes import slider_scene
+
+    from cablecheck.scene.load import parse_scene
+
+    def first_state_stretched(block: dict):
+        data = slider_scene(tmp_path)
+        data["parts"] = [block]
+        built = build(parse_scene(data, tmp_path / "s.toml"), detect=False)
+        c = built.cables[0]
+        near_end = c.count - 3                      # within the pinch's reach of the held end
+        state = _states(built, 1)[0]
+        state.cables[0][near_end + 1:] += [0.0, 3.5 * c.element_length, 0.0]
+        found = DivergenceWatch(built, built.scene.settle).scan([state])
+        assert found is not None and found[0] == 0
+        e = found[1]
+        assert e.sign is Sign.STRETCHED and (e.cable, e.vertex) == ("c", near_end)
+        return e
+
+    e = first_state_stretched({"name": "frame/block", "shape": "box", "size": [0.03, 0.03, 0.03],
+                               "pos": [0.6, 0.0, 0.5]})
+    assert e.cause is Cause.PINCHED
+    assert "(its end on 'slider')" in e.detail and "'frame/block'" in e.detail
+    e = first_state_stretched({"name": "frame/block", "shape": "box", "size": [0.03, 0.03, 0.03],
+                               "pos": [0.6, 0.0, 0.9]})
+    assert e.cause is Cause.UNKNOWN

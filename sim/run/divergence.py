@@ -32,7 +32,8 @@ vertex) or body where it showed, and the likely cause (`Cause`, `likely_cause`):
   simulation step can follow, even at the most substeps (`cablecheck.build.substeps`);
 - stiffness against the timestep: a cable's bending needs a smaller step
   than the run takes, even at the most substeps;
-- held against a part: at the last sound state, within `PINCH_ELEMENTS`
+- held against a part: at the last sound state (the routed start when the
+  first state checked is already diverged: the settling blew up), within `PINCH_ELEMENTS`
   elements of where it diverged, the cable is both held (an end or clip on
   one body) and pressed into a part of another body, as MuJoCo collides it
   (a mesh as its convex hull): the hold and the contact fight until the
@@ -282,7 +283,9 @@ class DivergenceWatch:
         speeds = [r[1] for r in built.substeps.reasons.values()] if built.substeps is not None else []
         self.speed = max(RUNAWAY_SPEED, 10.0 * max(speeds, default=0.0))
         self._last: tuple[float, np.ndarray] | None = None
-        self._last_qpos: np.ndarray | None = None   # the last sound state's, for `held_pinch`
+        # the last sound state's qpos, for `held_pinch`: until a state is scanned, the routed start
+        # (a run that diverges while settling has no checked state before it)
+        self._last_qpos: np.ndarray | None = np.asarray(built.qpos0, float)
         # held vertices in the batch's stacked points; each element's rest length (inf across cables)
         self.held = np.array([self.starts[i] + a.vertex for i, c in enumerate(built.cables)
                               for a in c.attachments], int)
