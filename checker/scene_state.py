@@ -96,13 +96,19 @@ class CableState:
 class Exclusion:
     """A window along a cable's material where touching a part is expected.
 
-    Points (and, with method exact, centreline pieces) of ``cable`` whose
-    material coordinate (:attr:`CableState.rest_s`: arc length along the
-    unstretched cable, or the current arc length where the cable has none)
-    lies in ``[s_min, s_max]`` are not checked against ``part``: the
-    attachment or clip zone. Measured along the material, the window holds
-    the same piece of cable however far the cable stretches. ``window``
-    names it in reports ("start", "end", "clip N"; may be empty).
+    The elements (with method exact, centreline pieces) of ``cable`` whose
+    middle's material coordinate (:attr:`CableState.rest_s`: arc length
+    along the unstretched cable, or the current arc length where the cable
+    has none) lies in ``[s_min, s_max]`` are not checked against ``part``:
+    the attachment or clip zone; nor are the discrete points on them
+    (method points). A point on an end of the window that is also on an
+    element outside it is checked, as that element is (MuJoCo's contacts,
+    one per element, are filtered the same way): the window's ends are
+    open to points, but where the window reaches the cable's own start
+    (``s_min`` 0) or its end (``to_end``). Measured along the material, the
+    window holds the same piece of cable however far the cable stretches.
+    ``window`` names it in reports ("start", "end", "clip N"; may be
+    empty).
     """
 
     cable: str
@@ -110,6 +116,7 @@ class Exclusion:
     s_min: float
     s_max: float
     window: str = ""
+    to_end: bool = False
 
 
 @dataclass(frozen=True)

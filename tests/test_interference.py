@@ -326,7 +326,7 @@ def test_exclusion_window_follows_the_material_of_a_stretched_cable(method):
     rest = np.linspace(0.0, 1.0, 11)
     pts = np.stack([1.1 * rest, np.zeros(11), np.zeros(11)], axis=1)
     clamp = PartState("clamp", Shape(ShapeType.BOX, [0.025, 0.02, 0.02]), pose(t=(1.09, 0.0, 0.0)))
-    window = [Exclusion("c", "clamp", 0.8, 1.0)]
+    window = [Exclusion("c", "clamp", 0.8, 1.0, "end", to_end=True)]     # the window reaches the cable's end
     config = CheckConfig(method=method, clearance=0.005)
     by_arc = check_state([CableState("c", pts, r)], [clamp], config, window)
     assert [(x.b, x.severity) for x in by_arc] == [("clamp", Severity.HARD)] and by_arc[0].s > 1.0

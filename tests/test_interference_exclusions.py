@@ -11,23 +11,28 @@ PARTS = ["p0", "p1", "p2", "q"]
 
 
 def _reference(exclusions, cable_names, part_names):
-    """The windows picked in a loop, in list order, then stably sorted by key."""
+    """The windows picked in a loop, in list order, then stably sorted by
+    key; the points' ends (``excl``) one ulp inside the window where it ends
+    inside the cable: past 0 (its start), and short of its end unless it
+    reaches it (``to_end``)."""
     cidx = {n: i for i, n in enumerate(cable_names)}
     pidx = {n: i for i, n in enumerate(part_names)}
-    rows = [(cidx[e.cable], pidx[e.part], min(e.s_min, e.s_max), max(e.s_min, e.s_max))
+    rows = [(cidx[e.cable], pidx[e.part], min(e.s_min, e.s_max), max(e.s_min, e.s_max), e.to_end)
             for e in exclusions if e.cable in cidx and e.part in pidx]
     c = np.array([r[0] for r in rows], np.int64)
     p = np.array([r[1] for r in rows], np.int64)
     lo = np.array([r[2] for r in rows], float)
     hi = np.array([r[3] for r in rows], float)
+    point_lo = np.array([r[2] if r[2] <= 0.0 else np.nextafter(r[2], 2.0) for r in rows], float)
+    point_hi = np.array([r[3] if r[4] else np.nextafter(r[3], -2.0) for r in rows], float)
     n = max(len(part_names), 1)
     key = c * n + p
     o = np.argsort(key, kind="stable")
-    return (key[o], lo[o], hi[o], n), c, lo, hi
+    return (key[o], point_lo[o], point_hi[o], n), c, lo, hi
 
 
 windows = st.lists(st.builds(Exclusion, st.sampled_from(CABLES + ["x"]), st.sampled_from(PARTS + ["y"]),
-                             st.floats(-1, 1), st.floats(-1, 1)), max_size=30)
+                             st.floats(-1, 1), st.floats(-1, 1), st.just(""), st.booleans()), max_size=30)
 
 
 @settings(max_examples=60, deadline=None)

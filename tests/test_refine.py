@@ -15,7 +15,7 @@ from cablecheck.checker.interference.discrete import points_error
 from cablecheck.checker.recheck import Recheck
 from cablecheck.checker.records import PairType, Severity
 from cablecheck.checker.refine import near_miss_records, refined_records
-from cablecheck.checker.scene_state import CableState, CheckConfig, PartState
+from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape
 from helpers import examples
 from strategies import coords, rotations
@@ -159,6 +159,58 @@ def test_no_pair_exact_finds_inside_the_clearance_is_left_clear(kind, rot, headi
     elif p_rec is None:
         assert n_rec is not None and abs(n_rec.min_distance - e_rec.min_distance) <= rounding
         assert n_rec.severity is e_rec.severity
+
+
+@settings(max_examples=examples(60), deadline=None)
+@given(st.sampled_from(["box", "mesh box"]), rotations(), st.floats(0.0, 2.0 * np.pi), st.integers(1, 3),
+       st.floats(1.0, 6.0), st.floats(0.0, 0.3), st.floats(-0.5, 2.0), st.floats(0.002, 0.01),
+       st.sampled_from([0.0, 500.0]))
+def test_a_window_end_is_checked_as_the_element_beyond_it(kind, rot, heading, j, element, slope, at, radius, far):
+    """A cable leaving a part from inside an attachment window (its start
+    clamped there), rising away at a drawn slope, the window ending on its
+    vertex j: nearest the part outside the window is that vertex, where the
+    element beyond the window begins. Method exact measures that element
+    whole and MuJoCo's contacts are filtered by elements the same way: the
+    points must check the point there too, so that wherever exact finds the
+    pair inside the clearance, the points (with their near misses measured
+    again) have its record, the same value to rounding. (A rotary table's
+    cable, clamped beside a column, ran along the column's edge 2.19 mm
+    from it, inside 3 mm, a soft contact exact and MuJoCo both found, past
+    the window's last point the points left out: 83 % agreement.)"""
+    clearance = 0.004
+    err = points_error(radius, 2.0)
+    top = _top(kind, rot)
+    along = np.array([np.cos(heading), np.sin(heading), 0.0])
+    arc = element * radius * np.arange(6)
+    # the surface distance at vertex j: drawn from half a radius inside to twice the error past the clearance
+    lift = radius + at * (clearance + 2.0 * err) - slope * arc[j]
+    line = top + np.array([0.0, 0.0, lift]) + arc[:, None] * along + (slope * arc)[:, None] * [0.0, 0.0, 1.0]
+    pose = np.eye(4)
+    pose[:3, :3], pose[:3, 3] = rot, far
+    part = PartState("p", _SHAPES[kind], pose)
+    cable = CableState("c", line + far, radius, rest_s=arc)
+    window = [Exclusion("c", "p", 0.0, float(arc[j]), "start")]
+    checked = Checker([part], CheckConfig(method="points", clearance=clearance)).check_with_gaps([cable], None, window)
+    exact = Checker([part], CheckConfig(method="exact", clearance=clearance)).check([cable], None, window)
+    p_rec, e_rec = _record(checked.records, PairType.CABLE_STRUCTURE, "p"), _record(exact, PairType.CABLE_STRUCTURE, "p")
+    recheck = Recheck([PartState("p", _SHAPES[kind], np.eye(4))], CheckConfig(clearance=clearance), window)
+    n_rec = _record(near_miss_records([checked.near_misses], lambda i: {"c": cable}, pose[None, None], recheck)[0],
+                    PairType.CABLE_STRUCTURE, "p")
+    event("points record" if p_rec else ("near miss, inside by exact" if n_rec else "clear"))
+    rounding = 1e-12 * (1.0 + far)
+    if e_rec is None:
+        assert p_rec is None and n_rec is None
+        return
+    assert e_rec.s >= arc[j] - rounding                  # nothing inside the window
+    got = p_rec if p_rec is not None else n_rec
+    assert got is not None
+    if p_rec is None or p_rec.min_distance <= err * (1 + 1e-9):
+        if p_rec is not None:
+            got = refined_records([checked.records], lambda i: {"c": cable}, pose[None, None], recheck,
+                                  {"c": err})[0].get(id(p_rec), p_rec)
+        assert abs(got.min_distance - e_rec.min_distance) <= rounding
+    else:
+        assert e_rec.min_distance <= got.min_distance + rounding <= e_rec.min_distance + err + 2 * rounding
 
 
 def test_a_corner_just_past_the_clearance_by_points_is_a_record_by_exact():

@@ -32,7 +32,11 @@ class ExclusionTable:
 
     Attributes:
         excl: (key, lo, hi, n_parts) sorted by key = cable * n_parts + part
-            (what :mod:`~cablecheck.checker.interference.structure` takes).
+            (what :mod:`~cablecheck.checker.interference.structure` takes),
+            lo and hi each a window's ends as its points see them: an end
+            inside the cable (not its start, not its end: ``Exclusion.to_end``)
+            moved inwards by one ulp, so the point on it, which an element
+            outside the window shares, is checked.
         cable, lo, hi: each window's cable (index into the asked cables) and
             ends, in the order of the window list.
     """
@@ -52,6 +56,8 @@ class ExclusionArrays:
         part_names: the list's part names, each once.
         part: (E,) each window's part (index into ``part_names``).
         lo, hi: (E,) each window's ends (lo <= hi).
+        point_lo, point_hi: (E,) the ends as the points see them
+            (:attr:`ExclusionTable.excl`).
         groups: each cable's windows (indices into the list, ascending).
     """
 
@@ -60,6 +66,8 @@ class ExclusionArrays:
     part: np.ndarray
     lo: np.ndarray
     hi: np.ndarray
+    point_lo: np.ndarray
+    point_hi: np.ndarray
     groups: tuple[np.ndarray, ...]
 
     def part_map(self, part_index: Mapping[str, int]) -> np.ndarray:
@@ -86,7 +94,7 @@ class ExclusionArrays:
         n_parts = max(n_parts, 1)
         key = cab * n_parts + part
         o = np.argsort(key, kind="stable")
-        return ExclusionTable((key[o], lo[o], hi[o], n_parts), cab, lo, hi)
+        return ExclusionTable((key[o], self.point_lo[rows][o], self.point_hi[rows][o], n_parts), cab, lo, hi)
 
 
 def _build(exclusions: Sequence[Exclusion]) -> ExclusionArrays:
@@ -97,12 +105,16 @@ def _build(exclusions: Sequence[Exclusion]) -> ExclusionArrays:
     part_names, part = np.unique(np.array(parts, dtype=object), return_inverse=True) if parts \
         else (np.zeros(0, object), np.zeros(0, np.int64))
     s = np.array([(e.s_min, e.s_max) for e in exclusions], dtype=float).reshape(-1, 2)
+    lo, hi = np.minimum(s[:, 0], s[:, 1]), np.maximum(s[:, 0], s[:, 1])
+    to_end = np.array([e.to_end for e in exclusions], bool)
+    # the points on an end inside the cable belong to an element outside the window too
+    point_lo = np.where(lo > 0.0, np.nextafter(lo, np.inf), lo)
+    point_hi = np.where(to_end, hi, np.nextafter(hi, -np.inf))
     order = np.argsort(cable, kind="stable")
     bounds = np.searchsorted(cable[order], np.arange(len(cable_names) + 1))
     groups = tuple(order[bounds[j]:bounds[j + 1]] for j in range(len(cable_names)))
     return ExclusionArrays({str(n): j for j, n in enumerate(cable_names)}, tuple(str(n) for n in part_names),
-                           np.asarray(part, np.int64).reshape(-1), np.minimum(s[:, 0], s[:, 1]),
-                           np.maximum(s[:, 0], s[:, 1]), groups)
+                           np.asarray(part, np.int64).reshape(-1), lo, hi, point_lo, point_hi, groups)
 
 
 def exclusion_arrays(exclusions: Sequence[Exclusion]) -> ExclusionArrays:

@@ -858,7 +858,8 @@ def attachment_exclusions(built: Built, shapes: Sequence[Shape] | None = None,
                     table = _start_table(built, shapes, poses)
                 points = c.routed[[a.vertex for a in held]]
                 fastened = near[held_within(table, near, points, c.radius + reach)] if len(near) else near
-            out += [Exclusion(c.name, names[k], float(lo), float(hi), window) for k in fastened.tolist()]
+            to_end = bool(hi >= c.rest_s[c.count - 1])
+            out += [Exclusion(c.name, names[k], float(lo), float(hi), window, to_end) for k in fastened.tolist()]
     return sorted(set(out), key=lambda e: (e.cable, e.part, e.s_min, e.window))
 
 
