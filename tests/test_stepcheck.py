@@ -163,3 +163,65 @@ def test_batches_shrink_towards_the_runs_end():
         left -= take
         size = next_batch(size, left)
     assert sum(sizes) == 2200 and max(sizes) == 256 and sizes[-1] <= 32
+
+
+def _turntable(tmp_path: Path, allow: bool) -> dict:
+    """A ring (a mesh) turning +270 degrees and back on a cylinder it sits 3 mm
+    into, a cable clamped clear of both; the pair allowed or not."""
+    import trimesh
+
+    trimesh.creation.annulus(r_min=0.03, r_max=0.08, height=0.02, sections=24).export(tmp_path / "ring.stl")
+    data = {
+        "scene": {"name": "turntable", "units": "m", "duration": 0.6},
+        "effects": {"dynamics": False, "contact": ["cable-structure"]},
+        "check": {"clearance": 0.003},
+        "bodies": [{"name": "table", "pos": [0.0, 0.0, 0.057]}],
+        "parts": [{"name": "machine/base", "shape": "cylinder", "size": [0.1, 0.05]},
+                  {"name": "table/ring", "body": "table", "shape": "mesh", "file": "ring.stl"}],
+        "cables": [{"name": "c", "radius": 0.004, "start": {"pos": [0.3, 0.0, 0.2]},
+                    "end": {"pos": [0.3, 0.3, 0.2]}}],
+        "motion": [{"body": "table", "keys": [{"t": 0.0, "euler": [0, 0, 0]}, {"t": 0.3, "euler": [0, 0, 270]},
+                                             {"t": 0.6, "euler": [0, 0, 0]}]}],
+    }
+    if allow:
+        data["allow"] = [{"a": "table", "b": "machine", "reason": "the table turns on its bearing"}]
+    return data
+
+
+def test_an_allowed_pair_turning_in_its_bearing_is_measured_at_the_sampled_states(tmp_path, monkeypatch):
+    """An allowed part-part pair is measured at the first checked state of
+    each ALLOWED_INTERVAL alone, in full checks and proven-clear states
+    alike: the same answers with the skip rule or without it, its worst
+    the ring's 3 mm in the cylinder (the depth at every angle), the report
+    saying how often it was measured. Not allowed, the same pair is an
+    event measured at every state (its worst the same)."""
+    from cablecheck.checker.parts import PartChecker
+    from cablecheck.run.stepcheck import ALLOWED_INTERVAL
+    from cablecheck.scene.load import parse_scene
+
+    asked = []
+    many = PartChecker.check_pairs_many
+
+    def counted(self, poses, i, j):
+        if any("table/ring" in (self.parts.names[a], self.parts.names[b]) for a, b in zip(i, j)):
+            asked.append(len(poses))
+        return many(self, poses, i, j)
+
+    monkeypatch.setattr(PartChecker, "check_pairs_many", counted)
+    scene = parse_scene(_turntable(tmp_path, allow=True), tmp_path / "t.toml")
+    reports = [run_scene(scene, RunOptions(report=tmp_path / f"{adv}.json", record=None, advance=adv))
+               for adv in (True, False)]
+    skip, full = reports
+    for key in ("events", "pairs", "allowed", "summary"):
+        assert _strip(skip[key]) == _strip(full[key]), key
+    (pair,) = skip["allowed"]
+    assert (pair["type"], {pair["a"], pair["b"]}) == ("part-part", {"table/ring", "machine/base"})
+    assert pair["min_distance"] == pytest.approx(-0.003, abs=1e-7) and pair["sampled_every_s"] == ALLOWED_INTERVAL
+    samples = int(np.floor(0.6 / ALLOWED_INTERVAL)) + 1
+    assert skip["settings"]["advance"]["proven_clear_steps"] > 0
+    assert 0 < sum(asked) <= samples          # the proven-clear states measured it at the samples alone
+    not_allowed = run_scene(parse_scene(_turntable(tmp_path, allow=False), tmp_path / "t.toml"),
+                            RunOptions(report=tmp_path / "event.json", record=None))
+    (event,) = [e for e in not_allowed["events"] if e["type"] == "part-part"]
+    assert event["t_start"] == 0.0 and event["t_end"] == pytest.approx(0.6)
+    assert event["min_distance"] == pytest.approx(pair["min_distance"], abs=1e-9)

@@ -36,7 +36,7 @@ import numpy as np
 from cablecheck.about import mujoco_version, version
 from cablecheck.checker.events import Phase
 from cablecheck.checker.interference.margins import per_cable
-from cablecheck.checker.records import Severity
+from cablecheck.checker.records import PairType, Severity
 from cablecheck.report.baseline import resolved_rows
 
 if TYPE_CHECKING:
@@ -189,7 +189,8 @@ class RunOutcome:
         scene moves joints of an mjcf model, else None; `joint_units` then
         maps each moving joint to its unit.
       pairs, allowed: every pair that came below the clearance / allowed
-        pair, with its worst moment.
+        pair, with its worst moment (an allowed part-part pair's over the
+        states it was measured at, every `allowed_interval` simulated seconds).
       excused: every attachment window whose piece of cable came below the
         clearance of a part it excuses, with its worst moment.
       closest: every pair's closest approach within `margin_reach`
@@ -247,6 +248,7 @@ class RunOutcome:
     closest: tuple[Closest, ...] = ()
     margin_reach: float = 0.0
     margin_interval: float = 0.0
+    allowed_interval: float = 0.0
     review: ReviewMatch | None = None
     html: HtmlEvidence | None = None
     """With `--html`: per event its worst state and distance history, and the
@@ -443,7 +445,10 @@ def report_of(o: RunOutcome) -> dict:
         "pairs": [{"type": p.type, "a": p.a, "b": p.b, "min_distance": p.min_distance / u, "t": p.t}
                   for p in _worst_first(o.pairs)],
         "allowed": [{"type": p.type, "a": p.a, "b": p.b, "min_distance": p.min_distance / u, "t": p.t,
-                     "reason": p.reason} for p in _worst_first(o.allowed)],
+                     "reason": p.reason,
+                     # a part-part pair is measured every allowed_interval alone (cablecheck.run.stepcheck)
+                     "sampled_every_s": o.allowed_interval if p.type == PairType.PART_PART else None}
+                    for p in _worst_first(o.allowed)],
         "excused": [{"type": x.type, "a": x.a, "b": x.b, "window": x.window, "min_distance": x.min_distance / u,
                      "t_worst": x.t, "where": np.asarray(x.where) / u, "s": x.s / u}
                     for x in _worst_first(o.excused)],

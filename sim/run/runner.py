@@ -389,7 +389,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         joint_units=dict(zip(joints.names, joints.units)) if joints else None,
         pairs=tuple(tracker.pairs.values()), allowed=tuple(tracker.allowed.values()), excused=excused,
         closest=with_events(ends.closest, events), margin_reach=ends.margin_reach,
-        margin_interval=ends.margin_interval,
+        margin_interval=ends.margin_interval, allowed_interval=ends.allowed_interval,
         event_hold=tracker.hold, baseline=compared,
         review=None if notes is None else match(options.review, notes, events),
         validation=ends.validation, advance=ends.advance,

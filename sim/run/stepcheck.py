@@ -132,6 +132,16 @@ are sampled about this often in simulated seconds (and at a batch's first
 and last state), then refined around each pair's best sample: on the robot
 cell a sampled state costs about as much as ten proven clear ones."""
 
+ALLOWED_INTERVAL = MARGIN_INTERVAL
+"""Allowed part-part pairs (`[[allow]]`: a table turning on its bearing, a
+hinge pin in its knuckles) are measured at the first checked state of each
+interval of this many simulated seconds, not at every state: they make no
+event, and the report keeps only each one's worst over those states
+(`allowed`, with this interval). A mesh ring turning on a cylinder it sits
+5 mm into (thousands of crossing triangle pairs at every state) made the
+checks of a rotary table 27 times its simulation; a pair's worst between
+two samples may be missed, as the closest approaches' may."""
+
 MARGIN_REACH_CLEARANCES = 3.0
 """Closest approaches are kept out to this many clearances ..."""
 
@@ -227,6 +237,8 @@ class ChecksOutcome:
         :data:`MARGIN_INTERVAL`).
       margin_reach, margin_interval: how far and how often closest
         approaches were measured (metres, seconds).
+      allowed_interval: how often allowed part-part pairs were measured
+        (seconds: :data:`ALLOWED_INTERVAL`).
     """
 
     advance: AdvanceOutcome | None
@@ -237,6 +249,7 @@ class ChecksOutcome:
     closest: tuple[Closest, ...] = ()
     margin_reach: float = 0.0
     margin_interval: float = MARGIN_INTERVAL
+    allowed_interval: float = ALLOWED_INTERVAL
 
 
 class StepChecks:
@@ -289,6 +302,10 @@ class StepChecks:
         self._pair_records_memo: dict[str, tuple] = {}  # slot -> its last pairs, their parts' poses, records
         # the active part pairs within the clearance at the last full check, and apart
         self._active_near = self._active_apart = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        # the allowed ones among them, measured at the sampled states alone (ALLOWED_INTERVAL)
+        self._allowed_near = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        self._allowed_memo: dict[tuple[str, str], bool] = {}   # (a, b) part names -> an allowed pair
+        self._allowed_slot = np.nan         # the ALLOWED_INTERVAL slot of the last state checked
         # the near pairs' parts, their poses and records where they were split (`_start_active_gaps`)
         self._near_start: tuple[np.ndarray, np.ndarray, list[Interference]] = (np.zeros(0, np.int64),
                                                                               np.zeros((0, 4, 4)), [])
@@ -369,6 +386,7 @@ class StepChecks:
         single = (((bend - np.where(self._has_bend_limit, self._bend_limit, 0.0) < self.config.clearance)
                    & self._has_bend_limit).any(axis=1)
                   | (taut_margin(lengths, self._rest_length) < 0.0).any(axis=1))
+        sampled = self._allowed_samples(states)
         out: list[StepResult] = []
         j = 0
         while j < len(states):
@@ -382,11 +400,14 @@ class StepChecks:
             for lo in range(j, j + k, self._chunk):     # at most CHUNK_POINTS points a pass
                 part = slice(lo, min(lo + self._chunk, j + k))
                 out += self._proven_clear(states[part], pts[part], poses[part], single[part],
-                                          radius_at[part], strain[part], bend[part])
+                                          radius_at[part], strain[part], bend[part],
+                                          None if sampled is None else sampled[part])
             j += k
             if j < len(states):
                 out.append(self._full(states[j], pts[j], poses[j], strain[j], bend[j]))
                 j += 1
+        if sampled is not None:
+            out = self._allowed_sampled(out, sampled)
         out = self._refined(states, poses, out)
         times = np.array([s.t for s in states])
         if self.excused:
@@ -395,6 +416,38 @@ class StepChecks:
         self.lap("check")
         if self.detector is not None:
             return self._validate(states, pts, out)
+        return out
+
+    def _allowed_samples(self, states: Sequence[StepState]) -> np.ndarray | None:
+        """(S,) bool: the states of a batch at which allowed part-part pairs
+        are measured, the first checked in each ALLOWED_INTERVAL of simulated
+        time (on one grid over the run, so batches, chunks and full checks
+        do not move them); None when the scene allows no pair."""
+        if not self.allow:
+            return None
+        slot = np.floor(np.array([s.t for s in states], float) / ALLOWED_INTERVAL)
+        before = np.r_[self._allowed_slot, slot[:-1]]
+        self._allowed_slot = float(slot[-1])
+        return slot != before                  # NaN before the first state: it is sampled
+
+    def _allowed_part(self, a: str, b: str) -> bool:
+        """Parts `a` and `b` are an allowed part-part pair (`[[allow]]`)."""
+        hit = self._allowed_memo.get((a, b))
+        if hit is None:
+            hit = self._allowed_memo[(a, b)] = self.allow.match((PairType.PART_PART, a, b)) is not None
+        return hit
+
+    def _allowed_sampled(self, results: list[StepResult], sampled: np.ndarray) -> list[StepResult]:
+        """`results` without the allowed part-part pairs' records at the states
+        not sampled (ALLOWED_INTERVAL): the same whether a state was checked
+        in full or proven clear, so the skip rule changes no answer."""
+        out = list(results)
+        for i in np.flatnonzero(~sampled).tolist():
+            res = out[i]
+            drop = [r for r in res.records if r.type == PairType.PART_PART and self._allowed_part(r.a, r.b)]
+            if drop:
+                gone = {id(r) for r in drop}
+                out[i] = replace(res, records=[r for r in res.records if id(r) not in gone])
         return out
 
     def _refined(self, states: Sequence[StepState], poses: np.ndarray,
@@ -468,7 +521,7 @@ class StepChecks:
 
     def _proven_clear(self, states: Sequence[StepState], pts: np.ndarray, poses: np.ndarray,
                       single: np.ndarray, radius_at: np.ndarray, strain: np.ndarray,
-                      bend: np.ndarray) -> list[StepResult]:
+                      bend: np.ndarray, sampled: np.ndarray | None = None) -> list[StepResult]:
         """States proven clear since the last full check: what a full check
         returns is the single-cable records, the active pairs' records and
         the replayed same-body part records; all but the last for all the
@@ -503,7 +556,7 @@ class StepChecks:
             dense = self.checker.densify_many(pts, self._offsets, self._radii, self._rest, keep)
             found = self.checker.cable_pairs_many(names, self._radii, dense, self._cable_active)
             records = [a + b for a, b in zip(found, records)]
-        active = self._active_part_records(poses)
+        active = self._active_part_records(poses, sampled)
         same = self.part_checker.replay_many(poses) if self.part_checker.has_same_body_records \
             else [[] for _ in range(n)]
         out = []
@@ -604,7 +657,11 @@ class StepChecks:
         # bounding them: only pairs with a mesh (their triangles) are worth bounding
         kind = self.rigid.convex_kind
         near = (values <= self.config.clearance) | ((kind[ai] >= 0) & (kind[aj] >= 0))
-        self._active_near = (ai[near], aj[near])
+        names = self.rigid.names
+        allowed = np.array([bool(self.allow) and self._allowed_part(names[a], names[b])
+                            for a, b in zip(ai.tolist(), aj.tolist())], bool).reshape(-1)   # the few active pairs
+        self._allowed_near = (ai[near & allowed], aj[near & allowed])
+        self._active_near = (ai[near & ~allowed], aj[near & ~allowed])
         # their records where none of their parts has moved since (a robot's base on its table), kept
         # from the last split when the same pairs' parts have not moved since either
         used = np.unique(np.concatenate(self._active_near))
@@ -659,7 +716,7 @@ class StepChecks:
             ok[rows] = sep > self.config.clearance + mu
         return ok
 
-    def _active_part_records(self, poses: np.ndarray) -> list[list[Interference]]:
+    def _active_part_records(self, poses: np.ndarray, sampled: np.ndarray | None = None) -> list[list[Interference]]:
         """The active part pairs' records at states (S, P, 4, 4) proven clear
         for everything else: the same as checking them at every state
         (`PartChecker.check_pairs_many`). The pairs within the clearance at
@@ -670,7 +727,9 @@ class StepChecks:
         record of theirs; at the first state where one may have, it is checked
         and measured again and its own condition restarts there (at most
         `ACTIVE_RESTARTS` restarts a batch, and none for a pair once within the
-        clearance); each pair's states still failing then are checked in one call."""
+        clearance); each pair's states still failing then are checked in one call.
+        The allowed pairs within the clearance are checked at the `sampled`
+        states alone (ALLOWED_INTERVAL)."""
         n = len(poses)
         out: list[list[Interference]] = [[] for _ in range(n)]
         if not len(self._part_active[0]):
@@ -686,6 +745,11 @@ class StepChecks:
                 for k, recs in zip(moved.tolist(), self.part_checker.check_pairs_many(poses[moved],
                                                                                    *self._active_near)):
                     out[k] = recs
+        if len(self._allowed_near[0]):
+            at = np.flatnonzero(sampled) if sampled is not None else np.arange(n)
+            if len(at):
+                for k, recs in zip(at.tolist(), self.part_checker.check_pairs_many(poses[at], *self._allowed_near)):
+                    out[k] = out[k] + recs
         ai, aj = self._active_apart
         if not len(ai):
             return out
