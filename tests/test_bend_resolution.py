@@ -55,3 +55,21 @@ def test_a_bend_the_elements_cannot_resolve_is_read_larger_and_warned(tmp_path):
     need = int(warned[0].split("segments = ")[1].split()[0])
     assert need >= BEND_RESOLUTION * 0.12 / coarse
     assert quiet == []
+
+
+def test_the_warning_gives_lengths_in_the_scenes_units(tmp_path):
+    """The same hairpin written in millimetres: the same warning, its
+    lengths in mm (a millimetre scene was told of 0.0334 m bends in 0.0249 m
+    elements)."""
+    mm = (HAIRPIN.replace('units = "m"', 'units = "mm"').replace("0.002", "2").replace("0.03,", "30,")
+          .replace("0.001", "1").replace("0.12", "120").replace("0.02\n", "20\n").replace("0.5]", "500]"))
+    path = tmp_path / "hairpin_mm.toml"
+    path.write_text(mm.format(segments=6))
+    report = tmp_path / "mm.json"
+    run_scene(load_scene(path), RunOptions(report=report, record=None))
+    r = json.loads(report.read_text())
+    (warned,) = [w for w in r["physics_warnings"] if "cannot resolve" in w]
+    coarse_m, metres = _run(tmp_path, 6)
+    radius = float(warned.split("least bend radius, ")[1].split(" mm")[0])
+    assert radius == pytest.approx(1000 * coarse_m, rel=1e-3)
+    assert "mm each)" in warned and "(its limit is 20 mm)" in warned and " m " not in warned

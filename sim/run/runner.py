@@ -89,7 +89,7 @@ from cablecheck.run.stepcheck import BATCH, BATCH_MAX, StepChecks, next_batch
 from cablecheck.run.stop import StopRequest
 from cablecheck.scene.allow import check_allow_names
 from cablecheck.scene.cables import check_fastened_names
-from cablecheck.scene.errors import SceneError
+from cablecheck.scene.errors import SceneError, written
 from cablecheck.scene.records import Scene
 
 if TYPE_CHECKING:
@@ -617,11 +617,13 @@ class _Checked:
             if limit is None or not np.isfinite(r) or r >= BEND_RESOLUTION * step or r >= BEND_READ_FACTOR * limit:
                 continue
             need = int(np.ceil(BEND_RESOLUTION * c.length / max(r, 1e-12)))
-            out.append(f"cable {c.name!r}: its least bend radius, {r:.4g} m at t = {self.min_bend_t[i]:.4g} s, "
-                       f"spans fewer than {BEND_RESOLUTION:g} of its elements ({step:.4g} m each): the "
-                       f"simulated rod cannot resolve a bend that tight and reads it larger than it is "
-                       f"(its limit is {c.min_bend_radius:.4g} m); to see it, segments = {need} at least, and again "
-                       f"finer until it settles (docs/physics.md, Bends the elements cannot resolve)")
+            scene = self.built.scene      # lengths in the scene's own units, as every warning gives them
+            out.append(f"cable {c.name!r}: its least bend radius, {written(scene, r)} at t = "
+                       f"{self.min_bend_t[i]:.4g} s, spans fewer than {BEND_RESOLUTION:g} of its elements "
+                       f"({written(scene, step)} each): the simulated rod cannot resolve a bend that tight and reads "
+                       f"it larger than it is (its limit is {written(scene, c.min_bend_radius)}); to see it, "
+                       f"segments = {need} at least, and again finer until it settles (docs/physics.md, Bends the "
+                       "elements cannot resolve)")
         return tuple(out)
 
     def twist_profiles(self) -> list[TwistProfile | None]:
