@@ -61,6 +61,20 @@ def test_a_route_through_a_part_is_named_with_where_along_the_cable(tmp_path):
     assert "from s = 160 to 240 mm" in w and "up to 20 mm inside" in w
 
 
+def test_without_dynamics_it_says_the_route_is_checked_where_it_lies(tmp_path):
+    """A static check simulates nothing: the warning says so, not that the
+    simulation will push the cable out."""
+    (moving,) = _warnings(tmp_path)
+    path = tmp_path / "static.toml"
+    path.write_text(SCENE.format(contact='"cable-structure"', block_y=0.0).replace(
+        "[effects]\n", "[effects]\ndynamics = false\n"))
+    scene = load_scene(path)
+    (static,) = route_warnings(scene, *plan_cables(scene))
+    assert "the simulation will push it out" in moving and "simulat" in static
+    assert "push it out" not in static and "nothing is simulated (dynamics = false)" in static
+    assert static.split(";")[0] == moving.split(";")[0]        # the same place and depth
+
+
 def test_beside_the_part_or_without_contact_nothing_is_said(tmp_path):
     # the end sits in its socket by design (its attachment window), and a block beside the route is no warning
     assert _warnings(tmp_path, block_y=45.0) == ()

@@ -53,9 +53,12 @@ def route_warnings(scene: Scene, frames: Frames, meshes: dict, plans: list[Cable
             if not inside.any():
                 continue
             where = s[inside]
+            # nothing is stepped without dynamics: the route is checked where it lies
+            then = ("the simulation will push it out at the start" if scene.effects.dynamics else
+                    "nothing is simulated (dynamics = false): it is checked there, a hard contact")
             out.append(f"cables[{i}] {plan.cable.name!r}: its initial shape runs through part "
                        f"{obstacles.names[k]!r} from s = {fmt(where.min() / scene.scale)} to "
                        f"{fmt(where.max() / scene.scale)} {unit} along the cable (up to "
-                       f"{float(-d[inside].min()) / scene.scale:.3g} {unit} inside); the simulation will "
-                       "push it out at the start: route it around the part (via points, clips)")
+                       f"{float(-d[inside].min()) / scene.scale:.3g} {unit} inside); {then}: route it "
+                       "around the part (via points, clips)")
     return tuple(out)
