@@ -65,7 +65,7 @@ import numpy as np
 
 from cablecheck.checker.arrays import ranges
 from cablecheck.checker.bvh import aabb_pairs, assembly_pairs, obb_overlap, prefix_hits, transformed_aabb
-from cablecheck.checker.closest import row_norm
+from cablecheck.checker.closest import cross, row_norm
 from cablecheck.checker.convex import CONVEX, convex_pairs, support
 from cablecheck.checker.hullbound import hull_separations
 from cablecheck.checker.partset import PartSet, Placement
@@ -178,6 +178,63 @@ def _triangle_pairs(parts: PartSet, placed: Placement, i: np.ndarray, j: np.ndar
     hl = np.einsum("nji,nj->ni", np.abs(rj), h)
     r2, tj = parts.forest.query(j[row], cl - hl, cl + hl)
     return ti[r2], tj, row[r2]
+
+
+FIRST_PASS = 4
+"""Triangle pairs of a part pair measured first (those whose boxes lie
+nearest), their least distance bounding the pair's from above."""
+
+
+def _least_distances(a: np.ndarray, b: np.ndarray, row: np.ndarray,
+                     err: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`triangle_distance` of triangle pairs ``a``, ``b`` (n, 3, 3) of
+    part pairs ``row``, where it can matter: each row's ``FIRST_PASS`` pairs
+    whose boxes lie nearest are measured first, and the least of those
+    bounds the row's least distance from above; a pair whose boxes lie
+    farther than that plus the row's tessellation error ``err`` (n,) (a
+    curved primitive's true surface may lie that much nearer) can hold
+    neither that least nor a triangle the curved check needs, and answers
+    inf (its closest points 0). Every row's least distance, its pair and
+    closest points are those of measuring every pair, to the bit: a mesh
+    resting against a box within the clearance had all its triangles within
+    the clearance of the box's measured at every state (the zoo's Spot arm,
+    a tool on its forearm: 1.9 of its 6.5 s)."""
+    n = len(row)
+    d = np.full(n, np.inf)
+    p, q = np.zeros((n, 3)), np.zeros((n, 3))
+    if n == 0:
+        return d, p, q
+    gap = np.maximum(np.maximum(a.min(axis=1) - b.max(axis=1), b.min(axis=1) - a.max(axis=1)), 0.0)
+    gap = np.sqrt(np.einsum("ij,ij->i", gap, gap))       # the boxes' distance: no more than the triangles'
+    # and one triangle wholly on one side of the other's plane is at least that far from it
+    gap = np.maximum(gap, np.maximum(_plane_separation(a, b), _plane_separation(b, a)))
+    o = np.lexsort((gap, row))
+    head = np.r_[0, np.flatnonzero(row[o][1:] != row[o][:-1]) + 1]
+    rank = np.arange(n) - np.repeat(head, np.diff(np.r_[head, n]))
+    first = o[rank < FIRST_PASS]
+    d[first], p[first], q[first] = triangle_distance(a[first], b[first])
+    upper = np.full(int(row.max()) + 1, np.inf)
+    np.minimum.at(upper, row[first], d[first])
+    # rounding: the boxes' distance and the triangles' each err by a few ulp of the coordinates
+    slack = 1e-9 * (1.0 + np.abs(a).max(axis=(1, 2)) + np.abs(b).max(axis=(1, 2)))
+    rest = np.ones(n, bool)
+    rest[first] = False
+    rest &= gap <= upper[row] + err + slack
+    if rest.any():
+        d[rest], p[rest], q[rest] = triangle_distance(a[rest], b[rest])
+    return d, p, q
+
+
+def _plane_separation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(n,) how far triangles ``b`` (n, 3, 3) lie wholly on one side of the
+    planes of triangles ``a``: the least distance of their corners to the
+    plane where all three are on one side, else 0 (and 0 for a degenerate
+    ``a``): no more than the triangles' distance."""
+    n = cross(a[:, 1] - a[:, 0], a[:, 2] - a[:, 0])
+    length = np.sqrt(np.einsum("ij,ij->i", n, n))
+    h = np.einsum("ikj,ij->ik", b - a[:, None, 0], n) / np.where(length > 0.0, length, 1.0)[:, None]
+    one_side = (h.min(axis=1) > 0.0) | (h.max(axis=1) < 0.0)
+    return np.where(one_side & (length > 0.0), np.abs(h).min(axis=1), 0.0)
 
 
 def _first_per_row(row: np.ndarray, value: np.ndarray) -> np.ndarray:
@@ -364,8 +421,8 @@ def _triangle_values(parts: PartSet, placed: Placement, i: np.ndarray, j: np.nda
         where[row[cr]] = 0.5 * (a[cr].mean(axis=1) + b[cr].mean(axis=1))
         run_deep, run_at = _edge_runs(parts, placed, n, i, j, row[cr], ti[cr], tj[cr], a[cr], b[cr])
         rest = ~cr & ~crossing[row]
-        d, p, q = triangle_distance(a[rest], b[rest])
         r = row[rest]
+        d, p, q = _least_distances(a[rest], b[rest], r, err[r])
         first = _first_per_row(r, d)
         dist[r[first]] = d[first]
         where[r[first]] = 0.5 * (p[first] + q[first])

@@ -706,3 +706,38 @@ def test_hull_separation_along_a_carried_axis_is_a_lower_bound(ra, rb, x, y, z, 
         assert sep <= 1e-6
     else:
         assert sep <= fcl.distance(a_obj, ref_b, fcl.DistanceRequest(), fcl.DistanceResult()) + 1e-6
+
+
+@settings(max_examples=12)
+@given(st.lists(st.tuples(st.integers(0, 6), st.integers(0, 6)), min_size=1, max_size=6), st.integers(1, 12),
+       st.integers(0, 2**32 - 1), st.sampled_from([0.0, 2.0, 8.0]))
+def test_triangle_pairs_left_out_by_their_bounds_change_no_record(pairs, n_states, seed, clearance):
+    """The triangle pairs whose boxes, or the side of one's plane the other
+    lies on, put them farther than the least distance found first (plus a
+    curved primitive's tessellation error) are not measured: the records of
+    meshes and curved primitives at drawn poses are those of measuring every
+    pair (FIRST_PASS past any pair's count), to the bit."""
+    import cablecheck.checker.parts as parts_module
+
+    rng = np.random.default_rng(seed)
+    shapes = [mesh_shape(np.asarray(m.vertices), np.asarray(m.faces)) for m in _MESHES]
+    shapes += [Shape(ShapeType.CYLINDER, [2.0, 10.0]), Shape(ShapeType.SPHERE, [5.0])]
+    ps = PartSet.build([f"p{k}" for k in range(len(shapes))], shapes, tolerance=0.1)
+    ij = sorted({(min(a, b), max(a, b)) for a, b in pairs if a != b})
+    if not ij:
+        return
+    i, j = (np.array(x, np.int64) for x in zip(*ij))
+    from scipy.spatial.transform import Rotation
+    for k in range(n_states):
+        poses = np.tile(np.eye(4), (len(shapes), 1, 1))
+        poses[:, :3, :3] = Rotation.random(len(shapes), random_state=(seed + k) % 2**31).as_matrix()
+        poses[:, :3, 3] = rng.uniform(-30, 30, (len(shapes), 3))
+        placed = ps.place(poses)
+        got = check_parts(ps, placed, clearance, pairs=(i, j))
+        first = parts_module.FIRST_PASS
+        try:
+            parts_module.FIRST_PASS = 10**9
+            want = check_parts(ps, placed, clearance, pairs=(i, j))
+        finally:
+            parts_module.FIRST_PASS = first
+        assert _records(got) == _records(want)
