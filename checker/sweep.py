@@ -418,6 +418,26 @@ def probes_inside_batch(parts: PartSet, placed: Placement, a: np.ndarray, b: np.
     cnt = ps[a[rows] + 1] - first
     row = np.repeat(rows, cnt)                            # pair row of each probe
     idx = ranges(first, cnt)
+    # only a's probes inside b's box as a's frame sees it (the box's own box
+    # there, a little grown) can be inside b: a large mesh beside a small
+    # part has most of its probes left out before any is moved
+    box = np.flatnonzero(~parts.plane[b[rows]])
+    if len(box):
+        ra, rb = placed.rot[a[rows[box]]], placed.rot[b[rows[box]]]
+        gap = placed.pos[b[rows[box]]] - placed.pos[a[rows[box]]]
+        if shift is not None:
+            gap = gap - np.asarray(shift, float)[rows[box]]
+        lo, hi = transformed_aabb(parts.lo[b[rows[box]]], parts.hi[b[rows[box]]], np.einsum("nji,njk->nik", ra, rb),
+                                  np.einsum("nji,nj->ni", ra, gap))
+        grow = 1e-9 * (1.0 + np.abs(lo).max(axis=1) + np.abs(hi).max(axis=1))
+        row_lo = np.full((len(a), 3), -np.inf)
+        row_hi = np.full((len(a), 3), np.inf)
+        row_lo[rows[box]], row_hi[rows[box]] = lo - grow[:, None], hi + grow[:, None]
+        local = parts.probes[idx]
+        near = np.all((local >= row_lo[row]) & (local <= row_hi[row]), axis=1)
+        row, idx = row[near], idx[near]
+        if not len(row):
+            return out
     pa, pb = a[row], b[row]
     world = placed.world(pa, parts.probes[idx][:, None, :])
     if shift is not None:
