@@ -741,3 +741,32 @@ def test_triangle_pairs_left_out_by_their_bounds_change_no_record(pairs, n_state
         finally:
             parts_module.FIRST_PASS = first
         assert _records(got) == _records(want)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_pairs_at_many_states_checked_a_few_states_a_call_are_each_states_own_check(seed):
+    """With a small TILE_TRIANGLES the states of check_pairs_many are laid out
+    and checked a few at a time (a large mesh at a long batch): each
+    state's records are still those of check_parts at that state alone."""
+    import cablecheck.checker.parts as parts_module
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(seed)
+    shapes = [mesh_shape(np.asarray(m.vertices), np.asarray(m.faces)) for m in _MESHES]
+    shapes += [Shape(ShapeType.CYLINDER, [2.0, 10.0]), Shape(ShapeType.SPHERE, [5.0])]
+    ps = PartSet.build([f"p{k}" for k in range(len(shapes))], shapes, tolerance=0.1)
+    i, j = np.array([0, 0, 3, 5]), np.array([1, 6, 4, 6])
+    n_states = 23
+    batch = np.tile(np.eye(4), (n_states, len(shapes), 1, 1))
+    batch[:, :, :3, :3] = Rotation.random(n_states * len(shapes), random_state=seed).as_matrix().reshape(
+        n_states, len(shapes), 3, 3)
+    batch[:, :, :3, 3] = rng.uniform(-25, 25, (n_states, len(shapes), 3))
+    most = parts_module.TILE_TRIANGLES
+    try:
+        parts_module.TILE_TRIANGLES = 2000          # 1-2 states a call for these parts
+        many = PartChecker(ps, 2.0).check_pairs_many(batch, i, j)
+    finally:
+        parts_module.TILE_TRIANGLES = most
+    assert sum(len(r) for r in many) > 0
+    for poses, got in zip(batch, many):
+        assert _records(got) == _records(check_parts(ps, ps.place(poses), 2.0, pairs=(i, j)))
