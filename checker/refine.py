@@ -25,8 +25,12 @@ a few hundredths of a millimetre apart where both capsules and MuJoCo say
 they overlap. Every soft cable-cable record is measured again, its two
 cables' elements as capsules, and exact's record replaces it.
 
+:func:`refined_self_records` does it for a cable against itself (a
+coil pressed on its own turns): method ``exact`` of that cable alone, its
+places kept at least the self window apart along it as the points' are.
+
 Not here: which records a state has (:mod:`cablecheck.checker.interference`),
-self records, and cable-cable pairs the points read past the clearance.
+and cable-cable or self pairs the points read past the clearance.
 """
 
 from __future__ import annotations
@@ -35,10 +39,11 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from cablecheck.checker.recheck import Recheck, exact_records_many
 from cablecheck.checker.closest import row_norm, segment_segment
+from cablecheck.checker.interference import Checker
+from cablecheck.checker.recheck import Recheck, exact_records_many
 from cablecheck.checker.records import PART_TYPES, Interference, NearMiss, PairType, Severity, severity_of
-from cablecheck.checker.scene_state import CableState
+from cablecheck.checker.scene_state import CableState, CheckConfig
 
 _ROUNDING = 1.0 + 1e-9
 """A record at the error bound itself (a corner touching the cable half way between two points)
@@ -194,3 +199,31 @@ def _closest_elements(pa: np.ndarray, pb: np.ndarray, upper: np.ndarray):
         best[k[head]] = d[head]
         out_a[k[head]], out_b[k[head]], out_u[k[head]], out_v[k[head]] = ia[head], ib[head], u[head], v[head]
     return best, np.arange(n_s), out_a, out_b, out_u, out_v
+
+
+def refined_self_records(records: Sequence[Sequence[Interference]], cables: Callable[[int], Mapping[str, CableState]],
+                         clearance: float) -> list[dict[int, Interference]]:
+    """Per state, the replacements {id(points record): exact record} of its
+    soft self records: method ``exact``'s self record of that cable alone
+    (its elements as capsules, two places at least the self window apart
+    along it: never farther than the points' value), where it is no farther
+    than the points' value.
+
+    Args:
+        records: per state (S), its cable records by method points.
+        cables: state index -> its cables by name (asked only for states
+            with a record to refine).
+        clearance: the run's clearance.
+    """
+    out: list[dict[int, Interference]] = [{} for _ in records]
+    exact = None
+    for i, recs in enumerate(records):
+        for r in recs:                                                  # a state's few records
+            if PairType(r.type) is not PairType.SELF or r.severity is not Severity.SOFT:
+                continue
+            if exact is None:
+                exact = Checker([], CheckConfig(method="exact", clearance=clearance))
+            found = [e for e in exact.check([cables(i)[r.a]]) if PairType(e.type) is PairType.SELF]
+            if found and found[0].min_distance <= r.min_distance:
+                out[i][id(r)] = found[0]
+    return out

@@ -330,3 +330,40 @@ def test_two_cables_pressed_together_read_as_exact_reads_them(rot, angle, jitter
         assert abs(got.s - e_rec.s) <= 1e-9 * (1.0 + far) and abs(got.s_b - e_rec.s_b) <= 1e-9 * (1.0 + far)
     else:
         assert got is p_rec                          # hard by points: exact's is harder still
+
+
+@settings(max_examples=examples(40), deadline=None)
+@given(st.floats(0.002, 0.008), st.floats(-0.5, 1.5), st.floats(0.5, 3.0), rotations(), st.sampled_from([0.0, 500.0]),
+       st.integers(3, 9))
+def test_a_cable_pressed_on_its_own_turn_reads_as_exact_reads_it(radius, gap, leg, rot, far, per_leg):
+    """A hairpin: two straight legs joined by a half turn, the legs' surfaces
+    a drawn gap apart (from half a radius into each other to 1.5 radii
+    clear), each leg a drawn number of elements: a soft self record by
+    points becomes method exact's self record of the cable (the same value,
+    so the same severity; MuJoCo's capsules agree with exact), never
+    farther than the points'."""
+    from cablecheck.checker.refine import refined_self_records
+
+    clearance = 0.004
+    centre = 2.0 * radius + gap * radius                  # the legs' axes apart
+    length = leg * 0.05
+    s = np.linspace(0.0, length, per_leg + 1)
+    turn = np.linspace(0.0, np.pi, 9)[1:-1]
+    bend = 0.5 * centre
+    line = np.concatenate([
+        np.stack([s[::-1], np.zeros_like(s), np.zeros_like(s)], axis=1)[:-1],
+        np.stack([-bend * np.sin(turn), bend - bend * np.cos(turn), np.zeros_like(turn)], axis=1),
+        np.stack([s, np.full_like(s, centre), np.zeros_like(s)], axis=1)])
+    cable = CableState("c", line @ rot.T + far, radius)
+    points = Checker([], CheckConfig(method="points", clearance=clearance)).check([cable])
+    exact = Checker([], CheckConfig(method="exact", clearance=clearance)).check([cable])
+    p_rec, e_rec = _record(points, PairType.SELF, "c"), _record(exact, PairType.SELF, "c")
+    if p_rec is None:
+        return
+    assert e_rec is not None and e_rec.min_distance <= p_rec.min_distance + 1e-12 * (1.0 + far)
+    got = refined_self_records([points], lambda i: {"c": cable}, clearance)[0].get(id(p_rec), p_rec)
+    event(f"points {p_rec.severity.value}, exact {e_rec.severity.value}")
+    if p_rec.severity is Severity.SOFT:
+        assert got.min_distance == e_rec.min_distance and got.severity is e_rec.severity
+    else:
+        assert got is p_rec

@@ -49,7 +49,7 @@ from cablecheck.checker.parts import PartChecker
 from cablecheck.checker.recheck import Recheck
 from cablecheck.checker.interference.hits import record_order
 from cablecheck.checker.records import PART_TYPES, Interference, PairType
-from cablecheck.checker.refine import near_miss_records, refined_cable_records, refined_records
+from cablecheck.checker.refine import near_miss_records, refined_cable_records, refined_records, refined_self_records
 from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from cablecheck.checker.shapes import Shape
 from cablecheck.checker.validation import SimulatorPairs, Validation, ValidationSummary
@@ -474,6 +474,10 @@ class StepChecks:
         if len(self._names) > 1:          # two hoses pressed together: their soft records measured again too
             for swap, more in zip(swaps, refined_cable_records([r.cable_records for r in results], cables,
                                                                self.config.clearance)):
+                swap.update(more)
+        if "self" in self.built.scene.effects.contact:      # and a cable pressed on its own turns
+            for swap, more in zip(swaps, refined_self_records([r.cable_records for r in results], cables,
+                                                              self.config.clearance)):
                 swap.update(more)
         found = near_miss_records([r.near_misses for r in results], cables, placed, self._recheck)
         out = []
