@@ -61,6 +61,20 @@ def test_a_route_through_a_part_is_named_with_where_along_the_cable(tmp_path):
     assert "from s = 160 to 240 mm" in w and "up to 20 mm inside" in w
 
 
+def test_a_plate_between_two_vertices_is_found_too(tmp_path):
+    """A plate 4 mm thick across the route at x = 210, between the vertices
+    at 200 and 220: no vertex is inside it, the element between them passes
+    through it (a ring, a thin bracket), and that is named as the vertices
+    inside a part are."""
+    path = tmp_path / "plate.toml"
+    path.write_text(SCENE.format(contact='"cable-structure"', block_y=0.0).replace(
+        "size = [50, 40, 20]\npos = [200,", "size = [2, 40, 20]\npos = [210,"))
+    scene = load_scene(path)
+    (w,) = route_warnings(scene, *plan_cables(scene))
+    assert w.startswith("cables[0] 'hose': its initial shape runs through part 'frame/block'")
+    assert "from s = 210 to 210 mm" in w and "up to 2 mm inside" in w     # its deepest place: the plate's middle
+
+
 def test_without_dynamics_it_says_the_route_is_checked_where_it_lies(tmp_path):
     """A static check simulates nothing: the warning says so, not that the
     simulation will push the cable out."""

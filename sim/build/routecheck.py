@@ -5,7 +5,9 @@ via point inside a bracket) starts the simulation with the cable inside a
 solid it collides with: the first steps push it out violently, the run
 crawls and its strain and events are nonsense, and nothing says why. With
 `cable-structure` contact on, :func:`route_warnings` measures every vertex of
-every cable's routed shape at t = 0 against each part it collides with
+every cable's routed shape at t = 0, and every element between two of
+them (a plate or a ring an element passes through between its ends),
+against each part it collides with
 (`cablecheck.build.obstacles.Obstacles`: scene parts that are not keep-outs, the mjcf
 model's colliding geoms) and names each part a cable's centreline enters:
 the cable, the part, the stretch of arc length (scene units) and how deep.
@@ -24,7 +26,7 @@ import numpy as np
 from cablecheck.build.cableplan import CablePlan
 from cablecheck.build.obstacles import Obstacles
 from cablecheck.build.startframes import Frames
-from cablecheck.checker.shapes import signed_distance
+from cablecheck.checker.shapes import segment_signed_distance, signed_distance
 from cablecheck.scene.errors import fmt
 from cablecheck.scene.records import Scene
 
@@ -46,19 +48,30 @@ def route_warnings(scene: Scene, frames: Frames, meshes: dict, plans: list[Cable
             (np.abs(s[:, None] - held[None, :]) > zone * radius).all(axis=1)
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         near = np.flatnonzero(np.all((obstacles.lo <= hi) & (obstacles.hi >= lo), axis=1))
+        free_el = free[:-1] & free[1:]
         for k in near.tolist():     # the parts whose boxes meet the cable's: a few, once per scene
             local = (pts - obstacles.pos[k]) @ obstacles.rot[k]
-            d = signed_distance(obstacles.shape(k), local)[0]
-            inside = (d < 0.0) & free
-            if not inside.any():
+            shape = obstacles.shape(k)
+            d = signed_distance(shape, local)[0]
+            # and between them: an element through a plate or a ring has both ends outside it; the
+            # distance changes no faster than along the element, so only one as long as its ends'
+            # distances together can reach the part
+            d_el, t_el = np.zeros(len(pts) - 1), np.zeros(len(pts) - 1)
+            maybe = np.flatnonzero(free_el & (d[:-1] + d[1:] <= (1.0 + 1e-9) * np.diff(s)))
+            if len(maybe):
+                d_el[maybe], t_el[maybe] = segment_signed_distance(shape, local[maybe], local[maybe + 1])
+            inside, crossing = (d < 0.0) & free, (d_el < 0.0) & free_el
+            if not inside.any() and not crossing.any():
                 continue
-            where = s[inside]
+            s_el = s[:-1] + t_el * np.diff(s)
+            where = np.concatenate([s[inside], s_el[crossing]])
+            deepest = float(-min(d[inside].min(initial=0.0), d_el[crossing].min(initial=0.0)))
             # nothing is stepped without dynamics: the route is checked where it lies
             then = ("the simulation will push it out at the start" if scene.effects.dynamics else
                     "nothing is simulated (dynamics = false): it is checked there, a hard contact")
             out.append(f"cables[{i}] {plan.cable.name!r}: its initial shape runs through part "
                        f"{obstacles.names[k]!r} from s = {fmt(where.min() / scene.scale)} to "
                        f"{fmt(where.max() / scene.scale)} {unit} along the cable (up to "
-                       f"{float(-d[inside].min()) / scene.scale:.3g} {unit} inside); {then}: route it "
+                       f"{deepest / scene.scale:.3g} {unit} inside); {then}: route it "
                        "around the part (via points, clips)")
     return tuple(out)
