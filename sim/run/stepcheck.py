@@ -304,6 +304,8 @@ class StepChecks:
         self._active_near = self._active_apart = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         # the allowed ones among them, measured at the sampled states alone (ALLOWED_INTERVAL)
         self._allowed_near = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+        self._allowed_start: tuple[np.ndarray, np.ndarray, list[Interference]] = (np.zeros(0, np.int64),
+                                                                                 np.zeros((0, 4, 4)), [])
         self._allowed_memo: dict[tuple[str, str], bool] = {}   # (a, b) part names -> an allowed pair
         self._allowed_slot = np.nan         # the ALLOWED_INTERVAL slot of the last state checked
         # the near pairs' parts, their poses and records where they were split (`_start_active_gaps`)
@@ -670,6 +672,9 @@ class StepChecks:
                             for a, b in zip(ai.tolist(), aj.tolist())], bool).reshape(-1)   # the few active pairs
         self._allowed_near = (ai[near & allowed], aj[near & allowed])
         self._active_near = (ai[near & ~allowed], aj[near & ~allowed])
+        # the allowed ones' records here too, for the sampled states where their parts have not moved
+        used = np.unique(np.concatenate(self._allowed_near))
+        self._allowed_start = (used, poses[used], self._pair_records(poses, *self._allowed_near, "allowed"))
         # their records where none of their parts has moved since (a robot's base on its table), kept
         # from the last split when the same pairs' parts have not moved since either
         used = np.unique(np.concatenate(self._active_near))
@@ -755,8 +760,14 @@ class StepChecks:
                     out[k] = recs
         if len(self._allowed_near[0]):
             at = np.flatnonzero(sampled) if sampled is not None else np.arange(n)
-            if len(at):
-                for k, recs in zip(at.tolist(), self.part_checker.check_pairs_many(poses[at], *self._allowed_near)):
+            used, at_start, kept = self._allowed_start
+            still = (poses[at][:, used] == at_start[None]).all(axis=(1, 2, 3))   # to the bit: the same records
+            for k in at[still].tolist():                  # a mobile robot's base on the table it is allowed on
+                out[k] = out[k] + list(kept)
+            moved = at[~still]
+            if len(moved):
+                for k, recs in zip(moved.tolist(), self.part_checker.check_pairs_many(poses[moved],
+                                                                                   *self._allowed_near)):
                     out[k] = out[k] + recs
         ai, aj = self._active_apart
         if not len(ai):
