@@ -37,10 +37,25 @@ def taut_margin(length, rest_length):
 
 
 def arc_length(points: np.ndarray) -> np.ndarray:
-    """Cumulative arc length (n,) of a polyline (n, 3), starting at 0."""
-    p = np.asarray(points, dtype=float).reshape(-1, 3)
-    seg = row_norm(np.diff(p, axis=0))
+    """Cumulative arc length (n,) of a polyline (n, 3), starting at 0; of
+    each of m polylines (m, n, 3) at once, (m, n)."""
+    p = np.asarray(points, dtype=float)
+    if p.ndim == 3:
+        s = np.zeros(p.shape[:2])
+        np.cumsum(row_norm(np.diff(p, axis=1)), axis=1, out=s[:, 1:])
+        return s
+    seg = row_norm(np.diff(p.reshape(-1, 3), axis=0))
     return np.concatenate([[0.0], np.cumsum(seg)])
+
+
+def element_gaps(pa: np.ndarray, pb: np.ndarray) -> np.ndarray:
+    """(m, na, nb) how far apart the bounding spheres (about each element's
+    middle, half its length across) of the elements of polylines pa
+    (m, na + 1, 3) and pb (m, nb + 1, 3) are, state by state: no more than
+    the elements' own distance."""
+    ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
+    ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
+    return row_norm(ma[:, :, None, :] - mb[:, None, :, :]) - ha[:, :, None] - hb[:, None, :]
 
 
 def resample(points: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]:

@@ -212,7 +212,7 @@ def _least_distances(a: np.ndarray, b: np.ndarray, row: np.ndarray,
     if n == 0:
         return d, p, q
     gap = np.maximum(np.maximum(a.min(axis=1) - b.max(axis=1), b.min(axis=1) - a.max(axis=1)), 0.0)
-    gap = np.sqrt(np.einsum("ij,ij->i", gap, gap))       # the boxes' distance: no more than the triangles'
+    gap = row_norm(gap)                                  # the boxes' distance: no more than the triangles'
     # and one triangle wholly on one side of the other's plane is at least that far from it
     gap = np.maximum(gap, np.maximum(_plane_separation(a, b), _plane_separation(b, a)))
     o = np.lexsort((gap, row))
@@ -238,7 +238,7 @@ def _plane_separation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     plane where all three are on one side, else 0 (and 0 for a degenerate
     ``a``): no more than the triangles' distance."""
     n = cross(a[:, 1] - a[:, 0], a[:, 2] - a[:, 0])
-    length = np.sqrt(np.einsum("ij,ij->i", n, n))
+    length = row_norm(n)
     h = np.einsum("ikj,ij->ik", b - a[:, None, 0], n) / np.where(length > 0.0, length, 1.0)[:, None]
     one_side = (h.min(axis=1) > 0.0) | (h.max(axis=1) < 0.0)
     return np.where(one_side & (length > 0.0), np.abs(h).min(axis=1), 0.0)

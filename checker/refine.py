@@ -39,7 +39,8 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from cablecheck.checker.closest import row_norm, segment_segment
+from cablecheck.checker.cable import arc_length, element_gaps
+from cablecheck.checker.closest import segment_segment
 from cablecheck.checker.interference import Checker
 from cablecheck.checker.recheck import Recheck, exact_records_many
 from cablecheck.checker.records import PART_TYPES, Interference, NearMiss, PairType, Severity, severity_of
@@ -153,9 +154,8 @@ def refined_cable_records(records: Sequence[Sequence[Interference]], cables: Cal
         pb = np.stack([c[b].points for c in states])
         ra, rb = float(states[0][a].radius), float(states[0][b].radius)
         value = np.array([r.min_distance for _, r in found], float)
-        d, row, ea, eb, u, v = _closest_elements(pa, pb, value + ra + rb)
-        arc_a = _arc(pa)
-        arc_b = _arc(pb)
+        d, ea, eb, u, v = _closest_elements(pa, pb, value + ra + rb)
+        arc_a, arc_b = arc_length(pa), arc_length(pb)
         for k, (i, r) in enumerate(found):
             if not np.isfinite(d[k]):
                 continue
@@ -171,22 +171,15 @@ def refined_cable_records(records: Sequence[Sequence[Interference]], cables: Cal
     return out
 
 
-def _arc(p: np.ndarray) -> np.ndarray:
-    """(S, n) arc lengths along polylines (S, n, 3)."""
-    return np.concatenate([np.zeros((len(p), 1)), np.cumsum(row_norm(np.diff(p, axis=1)), axis=1)], axis=1)
-
-
 def _closest_elements(pa: np.ndarray, pb: np.ndarray, upper: np.ndarray):
     """Per state k, the least segment distance between the elements of
     polylines pa[k] (na, 3) and pb[k] (nb, 3), looking only at element
     pairs whose bounding spheres come within ``upper[k]`` (inf where none
-    does): (distance, state, element of a, element of b, parameter on a,
-    parameter on b), one row a state; the least by distance, then by the
-    elements' order (a tie goes to the first pair along a, then b)."""
+    does): (distance, element of a, element of b, parameter on a, parameter
+    on b), one row a state; the least by distance, then by the elements'
+    order (a tie goes to the first pair along a, then b)."""
     n_s = len(pa)
-    ca, cb = 0.5 * (pa[:, :-1] + pa[:, 1:]), 0.5 * (pb[:, :-1] + pb[:, 1:])       # (S, E, 3)
-    ha, hb = 0.5 * row_norm(np.diff(pa, axis=1)), 0.5 * row_norm(np.diff(pb, axis=1))
-    gap = row_norm(ca[:, :, None, :] - cb[:, None, :, :]) - ha[:, :, None] - hb[:, None, :]   # (S, Ea, Eb)
+    gap = element_gaps(pa, pb)                                                       # (S, Ea, Eb)
     slack = 1e-9 * (1.0 + np.abs(pa).max(axis=(1, 2)) + np.abs(pb).max(axis=(1, 2)))     # rounding
     k, ia, ib = np.nonzero(gap <= (upper + slack)[:, None, None])
     d, u, v, _, _ = segment_segment(pa[k, ia], pa[k, ia + 1], pb[k, ib], pb[k, ib + 1])
@@ -198,7 +191,7 @@ def _closest_elements(pa: np.ndarray, pb: np.ndarray, upper: np.ndarray):
         head = o[np.r_[True, k[o][1:] != k[o][:-1]]]
         best[k[head]] = d[head]
         out_a[k[head]], out_b[k[head]], out_u[k[head]], out_v[k[head]] = ia[head], ib[head], u[head], v[head]
-    return best, np.arange(n_s), out_a, out_b, out_u, out_v
+    return best, out_a, out_b, out_u, out_v
 
 
 def refined_self_records(records: Sequence[Sequence[Interference]], cables: Callable[[int], Mapping[str, CableState]],

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from cablecheck.checker.cable import arc_length
-from cablecheck.checker.closest import point_segment, row_norm
+from cablecheck.checker.closest import point_segment
 from cablecheck.checker.shapes import Shape, signed_distance
 
 
@@ -64,8 +64,7 @@ def on_cable_many(points: np.ndarray, s_b: np.ndarray, where: np.ndarray, reach:
     m, n = p.shape[:2]
     if n < 2:
         return p[:, 0].copy()
-    s = np.zeros((m, n))
-    np.cumsum(row_norm(p[:, 1:] - p[:, :-1]), axis=1, out=s[:, 1:])
+    s = arc_length(p)
     j = np.clip((s <= np.asarray(s_b, float)[:, None]).sum(axis=1) - 1, 0, n - 2)
     # the elements within `reach` of j (clipped at the ends: a repeated element changes no minimum)
     k = np.clip(j[:, None] + np.arange(-reach, reach + 1)[None], 0, n - 2)            # (m, 2 reach + 1)

@@ -58,7 +58,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cablecheck.checker.cable import self_pair_window
+from cablecheck.checker.cable import arc_length, element_gaps, self_pair_window
 from cablecheck.checker.closest import row_norm, segment_segment, segment_segment_apart
 from cablecheck.checker.records import Interference, PairType
 from cablecheck.checker.scene_state import Exclusion
@@ -313,9 +313,7 @@ class WearMap:
         qa, qb before, (m, n, 3)."""
         m, na, nb = len(pa), pa.shape[1] - 1, pb.shape[1] - 1
         # element pairs whose bounding spheres come within the clearance, then exact
-        ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
-        ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
-        gap = row_norm(ma[:, :, None, :] - mb[:, None, :, :]) - ha[:, :, None] - hb[:, None, :]
+        gap = element_gaps(pa, pb)
         st, ia, ib = np.nonzero(gap < self.radii[c] + self.radii[b] + self.clearance)
         if b == c:
             # the checker's self rule (cablecheck.checker.cable.self_pair_excluded): only
@@ -323,8 +321,7 @@ class WearMap:
             # count, the nearest such places of each element pair
             # (segment_segment_apart), wherever the elements' own closest
             # places lie; elements wholly within the window are its own bends
-            s = np.zeros((m, na + 1))
-            np.cumsum(row_norm(pa[:, 1:] - pa[:, :-1]), axis=1, out=s[:, 1:])
+            s = arc_length(pa)
             w = self_pair_window(self.radii[c], self.clearance)
             lo, hi = np.minimum(ia, ib), np.maximum(ia, ib)
             reach = s[st, hi + 1] - s[st, lo] >= w

@@ -147,3 +147,28 @@ def test_element_pieces_is_densify_batchs_split(lengths, spacing):
     assert np.array_equal(made, want) and np.all(want >= 1)
     assert np.all(np.linalg.norm(np.diff(pts, axis=0), axis=1) / want <= spacing * (1 + 1e-9))
     assert element_pieces(np.array([3.0]), np.inf)[0] == 1.0
+
+
+def test_arc_lengths_of_many_polylines_and_element_gaps_against_brute_force():
+    """arc_length of m polylines at once is each one's own, summed by hand;
+    element_gaps never exceeds two elements' distance, sampled densely."""
+    from cablecheck.checker.cable import arc_length, element_gaps
+
+    rng = np.random.default_rng(3)
+    pa, pb = rng.normal(size=(4, 6, 3)), rng.normal(size=(4, 5, 3)) + 0.5
+    s = arc_length(pa)
+    for k in range(4):
+        by_hand = [0.0]
+        for i in range(5):
+            by_hand.append(by_hand[-1] + float(np.sqrt(((pa[k, i + 1] - pa[k, i]) ** 2).sum())))
+        assert np.allclose(s[k], by_hand, rtol=0, atol=1e-12)
+        assert np.array_equal(s[k], arc_length(pa[k]))
+    gaps = element_gaps(pa, pb)
+    t = np.linspace(0.0, 1.0, 201)[:, None]
+    for k in range(4):
+        for i in range(5):
+            for j in range(4):
+                x = pa[k, i] + t * (pa[k, i + 1] - pa[k, i])
+                y = pb[k, j] + t * (pb[k, j + 1] - pb[k, j])
+                sampled = np.sqrt(((x[:, None] - y[None]) ** 2).sum(axis=2)).min()
+                assert gaps[k, i, j] <= sampled + 1e-12
