@@ -672,13 +672,11 @@ class StepChecks:
                             for a, b in zip(ai.tolist(), aj.tolist())], bool).reshape(-1)   # the few active pairs
         self._allowed_near = (ai[near & allowed], aj[near & allowed])
         self._active_near = (ai[near & ~allowed], aj[near & ~allowed])
-        # the allowed ones' records here too, for the sampled states where their parts have not moved
-        used = np.unique(np.concatenate(self._allowed_near))
-        self._allowed_start = (used, poses[used], self._pair_records(poses, *self._allowed_near, "allowed"))
         # their records where none of their parts has moved since (a robot's base on its table), kept
-        # from the last split when the same pairs' parts have not moved since either
-        used = np.unique(np.concatenate(self._active_near))
-        self._near_start = (used, poses[used], self._pair_records(poses, *self._active_near, "near"))
+        # from the last split when the same pairs' parts have not moved since either; the allowed
+        # ones' too, for the sampled states where their parts have not moved
+        self._near_start = self._records_at(poses, self._active_near, "near")
+        self._allowed_start = self._records_at(poses, self._allowed_near, "allowed")
         self._active_apart = (ai[~near], aj[~near])
         self._active_split = True
         self._apart_gaps = [self._pair_gaps(poses, a, b, v, u) for a, b, v, u in
@@ -750,25 +748,12 @@ class StepChecks:
         if not self._active_split:
             return self.part_checker.check_pairs_many(poses, *self._part_active)
         if len(self._active_near[0]):
-            used, at_start, records = self._near_start
-            still = (poses[:, used] == at_start[None]).all(axis=(1, 2, 3))   # to the bit: the same records
-            moved = np.flatnonzero(~still)
-            out = [list(records) if k else [] for k in still.tolist()]
-            if len(moved):
-                for k, recs in zip(moved.tolist(), self.part_checker.check_pairs_many(poses[moved],
-                                                                                   *self._active_near)):
-                    out[k] = recs
+            out = self._kept_or_checked(poses, np.arange(n), self._active_near, self._near_start)
         if len(self._allowed_near[0]):
             at = np.flatnonzero(sampled) if sampled is not None else np.arange(n)
-            used, at_start, kept = self._allowed_start
-            still = (poses[at][:, used] == at_start[None]).all(axis=(1, 2, 3))   # to the bit: the same records
-            for k in at[still].tolist():                  # a mobile robot's base on the table it is allowed on
-                out[k] = out[k] + list(kept)
-            moved = at[~still]
-            if len(moved):
-                for k, recs in zip(moved.tolist(), self.part_checker.check_pairs_many(poses[moved],
-                                                                                   *self._allowed_near)):
-                    out[k] = out[k] + recs
+            for k, recs in zip(at.tolist(), self._kept_or_checked(poses, at, self._allowed_near,
+                                                                  self._allowed_start)):
+                out[k] = out[k] + recs
         ai, aj = self._active_apart
         if not len(ai):
             return out
@@ -798,6 +783,27 @@ class StepChecks:
             for t, recs in zip(states.tolist(), self.part_checker.check_pairs_many(poses[states], ai[k:k + 1],
                                                                                    aj[k:k + 1])):
                 out[t] = out[t] + recs
+        return out
+
+    def _records_at(self, poses: np.ndarray, pairs: tuple[np.ndarray, np.ndarray],
+                    slot: str) -> tuple[np.ndarray, np.ndarray, list[Interference]]:
+        """(their parts, those parts' poses, records) of part pairs at poses (P, 4, 4): what
+        `_kept_or_checked` keeps where none of those parts has moved since."""
+        used = np.unique(np.concatenate(pairs))
+        return used, poses[used], self._pair_records(poses, *pairs, slot)
+
+    def _kept_or_checked(self, poses: np.ndarray, at: np.ndarray, pairs: tuple[np.ndarray, np.ndarray],
+                         start: tuple[np.ndarray, np.ndarray, list[Interference]]) -> list[list[Interference]]:
+        """The records of part pairs at states `at` of poses (S, P, 4, 4): those of `start`
+        (`_records_at`) where none of their parts has moved since, to the bit (a robot's
+        base on its table), else checked, the moved states in one call."""
+        used, at_start, kept = start
+        still = (poses[at][:, used] == at_start[None]).all(axis=(1, 2, 3))
+        out = [list(kept) if k else [] for k in still.tolist()]
+        moved = np.flatnonzero(~still)
+        if len(moved):
+            for k, recs in zip(moved.tolist(), self.part_checker.check_pairs_many(poses[at[moved]], *pairs)):
+                out[k] = recs
         return out
 
     def _same_body_records(self, poses: np.ndarray) -> list[Interference]:
