@@ -363,6 +363,10 @@ def test_a_cable_pressed_on_its_own_turn_reads_as_exact_reads_it(radius, gap, le
     assert e_rec is not None and e_rec.min_distance <= p_rec.min_distance + 1e-12 * (1.0 + far)
     got = refined_self_records([points], lambda i: {"c": cable}, clearance)[0].get(id(p_rec), p_rec)
     event(f"points {p_rec.severity.value}, exact {e_rec.severity.value}")
+    # by hand: the legs run parallel, their axes `centre` apart, and far enough along them past
+    # the self window, so the capsules come within centre - 2 r = gap r there (nearer still
+    # where the half turn's chords pass the other leg, as a tight turn's do)
+    assert e_rec.min_distance <= gap * radius + 1e-9 * (1.0 + far)
     if p_rec.severity is Severity.SOFT:
         assert got.min_distance == e_rec.min_distance and got.severity is e_rec.severity
     else:
