@@ -302,7 +302,8 @@ def segment_signed_distance(shape: Shape, a: np.ndarray, b: np.ndarray, upper: n
 
 
 def least_signed_distance(shapes: list[Shape], rotations: np.ndarray, positions: np.ndarray,
-                          points: np.ndarray, limit: float | None = None) -> np.ndarray:
+                          points: np.ndarray, limit: float | None = None,
+                          bounds: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Least signed distance (n,) from world points to shapes placed in the world.
 
     Args:
@@ -315,13 +316,18 @@ def least_signed_distance(shapes: list[Shape], rotations: np.ndarray, positions:
             exceeds it is answered with that box distance (a lower bound,
             above the limit) for that mesh instead of searching its
             triangles. Values below the limit are always exact.
+        bounds: None, or (lo, hi) (P, 3) the parts' world boxes (infinite
+            for a plane), with a limit: only the (part, point) pairs whose
+            point lies within the limit of the part's box are measured, any
+            other part being beyond the limit of that point; a point with no
+            such part gets +inf. Without it every part meets every point.
 
-    Every point is taken into every part's frame at once; primitives of one
-    type are answered in one batched call and each mesh in one call (its
-    k-d tree, not its bound grid: these points are seldom asked again). No
-    broad phase (meant for a few parts and points, e.g. placing a cable's
-    initial shape; :mod:`cablecheck.checker.interference` prunes for the per-step
-    checks). No parts: +inf.
+    The measured pairs' points are taken into their parts' frames at once;
+    primitives of one type are answered in one batched call and each mesh
+    in one call (its k-d tree, not its bound grid: these points are seldom
+    asked again). No broad phase beyond `bounds` (meant for placing a
+    cable's initial shape; :mod:`cablecheck.checker.interference` prunes for
+    the per-step checks). No parts: +inf.
     """
     p = np.asarray(points, dtype=float).reshape(-1, 3)
     out = np.full(len(p), np.inf)
@@ -329,20 +335,34 @@ def least_signed_distance(shapes: list[Shape], rotations: np.ndarray, positions:
         return out
     rot = np.asarray(rotations, float).reshape(-1, 3, 3)
     pos = np.asarray(positions, float).reshape(-1, 3)
-    local = np.einsum("pji,pnj->pni", rot, p[None, :, :] - pos[:, None, :])   # (P, n, 3)
+    if bounds is not None and limit is not None:
+        lo, hi = (np.asarray(b, float).reshape(-1, 3) for b in bounds)
+        near = np.all((p[None, :, :] >= lo[:, None, :] - limit) & (p[None, :, :] <= hi[:, None, :] + limit),
+                      axis=2)                                     # (P, n)
+        pi, ni = np.nonzero(near)
+    else:
+        pi, ni = np.repeat(np.arange(len(shapes)), len(p)), np.tile(np.arange(len(p)), len(shapes))
+    if not len(pi):
+        return out
+    local = np.einsum("kji,kj->ki", rot[pi], p[ni] - pos[pi])        # each pair's point in its part's frame
     kinds: dict = {}
     for k, sh in enumerate(shapes):     # group parts: one call per type or mesh
         kinds.setdefault(("mesh", id(sh)) if sh.mesh is not None else sh.type, []).append(k)
-    for members in kinds.values():
-        members = np.asarray(members)
+    group = np.empty(len(shapes), int)
+    for g, members in enumerate(kinds.values()):
+        group[members] = g
+    sizes = size_rows(shapes)
+    pair_group = group[pi]
+    for g, members in enumerate(kinds.values()):
+        sel = np.flatnonzero(pair_group == g)
+        if not len(sel):
+            continue
         sh = shapes[members[0]]
-        loc = local[members].reshape(-1, 3)
         if sh.mesh is not None:
-            d = _mesh_least(sh.mesh, loc, limit)
+            d = _mesh_least(sh.mesh, local[sel], limit)
         else:
-            size = np.repeat(size_rows([shapes[m] for m in members]), len(p), axis=0)
-            d = signed_distance_value_batch(sh.type, size, loc)
-        out = np.minimum(out, d.reshape(len(members), len(p)).min(axis=0))
+            d = signed_distance_value_batch(sh.type, sizes[pi[sel]], local[sel])
+        np.minimum.at(out, ni[sel], d)
     return out
 
 

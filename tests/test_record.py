@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 import pytest
+from hypothesis import given, settings, strategies as st
 from rerun.chunk import RrdReader
 
 from cablecheck.cli.main import main, version
@@ -776,6 +777,63 @@ def test_labels_of_spots_shown_together_are_lifted_apart():
     lifts = label_lifts(odd, dict.fromkeys(odd, 0.1), 0.30000000000000004)
     assert sorted(v[0] for v in lifts.values()) == pytest.approx(0.115 + 0.30000000000000004 * np.arange(6))
 
+
+
+def _lifts_one_label_at_a_time(rows, radii, step):
+    """label_lifts as first written: each label against every label placed before it
+    at its frame, in plain Python (the reference the vectorised search must match)."""
+    from cablecheck.record.marks import CHAR_WIDTH, LABEL_ABOVE
+    lifts = {path: np.array([LABEL_ABOVE * radii[path]] * len(r)) for path, r in rows.items()}
+    by_frame = {}
+    for path in sorted(rows):
+        for k, row in enumerate(rows[path]):
+            by_frame.setdefault(row[0], []).append((path, k))
+    for shown in by_frame.values():
+        if len(shown) < 2:
+            continue
+        placed = []
+        for path, k in shown:
+            where, label = rows[path][k][1], rows[path][k][3]
+            half = 0.5 * CHAR_WIDTH * step * len(label)
+            z = where[2] + lifts[path][k]
+            moved = True
+            while moved:
+                moved = False
+                for x, y, pz, other in placed:
+                    if abs(z - pz) < 0.999 * step and np.hypot(where[0] - x, where[1] - y) < half + other:
+                        z = pz + step
+                        moved = True
+            lifts[path][k] = z - where[2]
+            placed.append((float(where[0]), float(where[1]), z, half))
+    return lifts
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n_pairs=st.integers(1, 60), spread=st.floats(1.0, 400.0),
+       step=st.floats(0.5, 20.0))
+def test_label_lifts_match_placing_one_label_at_a_time(seed, n_pairs, spread, step):
+    """Drawn spots over a few frames, crowded or spread, labels of drawn lengths: the
+    lifts equal, to the bit, those of placing each label against every one before it,
+    and no two labels shown at a frame overlap."""
+    from cablecheck.record.marks import CHAR_WIDTH, label_lifts
+    rng = np.random.default_rng(seed)
+    rows, radii = {}, {}
+    for p in range(n_pairs):
+        frames = np.sort(rng.choice(6, size=int(rng.integers(1, 6)), replace=False))
+        rows[f"pair{p:03d}"] = [(int(f), rng.uniform(-spread, spread, 3), None, "x" * int(rng.integers(3, 40)), "x")
+                                for f in frames]
+        radii[f"pair{p:03d}"] = float(rng.uniform(0.5, 10.0))
+    got = label_lifts(rows, radii, step)
+    want = _lifts_one_label_at_a_time(rows, radii, step)
+    assert set(got) == set(want) and all(np.array_equal(got[p], want[p]) for p in got)
+    for f in range(6):
+        shown = [(r[1], r[3], got[p][k]) for p, rs in rows.items() for k, r in enumerate(rs) if r[0] == f]
+        for i in range(len(shown)):
+            for j in range(i):
+                (a, la, za), (b, lb, zb) = shown[i], shown[j]
+                wide = 0.5 * CHAR_WIDTH * step * (len(la) + len(lb))
+                if np.hypot(a[0] - b[0], a[1] - b[1]) < wide:
+                    assert abs((a[2] + za) - (b[2] + zb)) >= 0.999 * step
 
 FLOOR_SCENE = """
 [scene]

@@ -53,6 +53,48 @@ def test_least_signed_distance_with_a_limit_is_exact_below_it():
     assert np.all(got[~below] >= limit) and np.all(got[~below] <= exact[~below])
 
 
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), limit=st.floats(0.01, 0.5))
+def test_least_signed_distance_with_bounds_measures_only_near_pairs(seed, limit):
+    """With the parts' world boxes, only points within the limit of a box
+    are measured against that part: drawn parts (a plane among them) and
+    points, the values below the limit the same as one by one; a point
+    beyond the limit of every box gets +inf, any other value stays beyond
+    the limit."""
+    from cablecheck.checker.shapes import least_signed_distance
+    rng = np.random.default_rng(seed)
+    kinds = [ShapeType.BOX, ShapeType.SPHERE, ShapeType.CAPSULE, ShapeType.CYLINDER, ShapeType.ELLIPSOID]
+    shapes = [Shape(kinds[k % 5], rng.uniform(0.02, 0.3, 3)[: 1 if kinds[k % 5] is ShapeType.SPHERE else
+                                                            2 if kinds[k % 5] in (ShapeType.CAPSULE, ShapeType.CYLINDER) else 3])
+              for k in range(int(rng.integers(1, 12)))]
+    box = trimesh.creation.box([0.2, 0.3, 0.4])
+    shapes.append(mesh_shape(box.vertices, box.faces))
+    if rng.random() < 0.5:
+        shapes.append(Shape(ShapeType.PLANE, [0, 0, 0]))
+    rot = []
+    for _ in shapes:
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        rot.append(q * np.sign(np.linalg.det(q)))
+    rot = np.array(rot)
+    pos = rng.uniform(-2.0, 2.0, (len(shapes), 3))
+    pos[-1, 2] -= 2.5
+    lo, hi = np.full((len(shapes), 3), -np.inf), np.full((len(shapes), 3), np.inf)
+    for k, sh in enumerate(shapes):
+        if sh.type is not ShapeType.PLANE:
+            a, b = sh.local_bounds()
+            corners = np.array(np.meshgrid(*zip(a, b), indexing="ij")).reshape(3, -1).T @ rot[k].T + pos[k]
+            lo[k], hi[k] = corners.min(axis=0), corners.max(axis=0)
+    pts = rng.uniform(-2.5, 2.5, (300, 3))
+    one_by_one = np.min([signed_distance(s, (pts - p) @ r)[0] for s, r, p in zip(shapes, rot, pos)], axis=0)
+    got = least_signed_distance(shapes, rot, pos, pts, limit=limit, bounds=(lo, hi))
+    below = one_by_one < limit
+    assert np.allclose(got[below], one_by_one[below], rtol=0, atol=1e-12)
+    assert np.all(got[~below] >= limit)
+    gap = np.maximum(np.maximum(lo[:, None] - pts[None], pts[None] - hi[:, None]), 0.0)
+    far = np.all(np.linalg.norm(gap, axis=2) > limit * np.sqrt(3), axis=0)
+    assert np.all(np.isinf(got[far]))
+
+
 def test_mesh_shape_is_kept_by_content_and_bounded(monkeypatch):
     """The same vertices and faces give the same shape (its grid shared);
     other content gives another; the last made are kept up to

@@ -105,5 +105,6 @@ class Obstacles:
             lo, hi = points.min(axis=0) - radius, points.max(axis=0) + radius
             near = np.flatnonzero(np.all((self.lo <= hi) & (self.hi >= lo), axis=1))
             shapes = [self.shape(k) for k in near.tolist()]
-            return radius - least_signed_distance(shapes, self.rot[near], self.pos[near], points, limit=radius)
+            return radius - least_signed_distance(shapes, self.rot[near], self.pos[near], points, limit=radius,
+                                                  bounds=(self.lo[near], self.hi[near]))
         return depth

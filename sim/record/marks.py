@@ -242,7 +242,9 @@ def label_lifts(rows: dict[str, list], radii: dict[str, float], step: float) -> 
     `step` high and :data:`CHAR_WIDTH` x `step` per character wide, across
     in the horizontal plane), then up by steps until it does not. Pairs in
     path order, so a pair's label keeps its place while the others come and
-    go."""
+    go. Whether two labels overlap across is found for a frame's labels at
+    once; a label then rises past those alone, in their order (a harness's
+    frame shows hundreds of labels, each overlapping a few)."""
     lifts = {path: np.array([LABEL_ABOVE * radii[path]] * len(r)) for path, r in rows.items()}
     by_frame: dict[int, list[tuple[str, int]]] = {}
     for path in sorted(rows):
@@ -251,20 +253,24 @@ def label_lifts(rows: dict[str, list], radii: dict[str, float], step: float) -> 
     for shown in by_frame.values():
         if len(shown) < 2:
             continue
-        placed: list[tuple[float, float, float, float]] = []          # x, y, z, half width
-        for path, k in shown:
-            where, label = rows[path][k][1], rows[path][k][3]
-            half = 0.5 * CHAR_WIDTH * step * len(label)
-            z = where[2] + lifts[path][k]
+        where = np.array([rows[path][k][1] for path, k in shown], float).reshape(-1, 3)
+        half = np.array([0.5 * CHAR_WIDTH * step * len(rows[path][k][3]) for path, k in shown])
+        # across[i, j]: labels i and j overlap in the horizontal plane, whatever their heights
+        across = np.hypot(where[:, None, 0] - where[None, :, 0], where[:, None, 1] - where[None, :, 1]) \
+            < half[:, None] + half[None, :]
+        placed = np.empty(len(shown))                         # each label's height, once placed
+        for i, (path, k) in enumerate(shown):
+            z = where[i, 2] + lifts[path][k]
+            under = placed[np.flatnonzero(across[i, :i])].tolist()
             moved = True
             while moved:
                 moved = False
-                for x, y, pz, other in placed:
+                for pz in under:
                     # (a label a whole step above another is clear of it: the test leaves
                     # a margin, or rounding in pz + step could keep it "overlapping" forever)
-                    if abs(z - pz) < 0.999 * step and np.hypot(where[0] - x, where[1] - y) < half + other:
+                    if abs(z - pz) < 0.999 * step:
                         z = pz + step
                         moved = True
-            lifts[path][k] = z - where[2]
-            placed.append((float(where[0]), float(where[1]), z, half))
+            lifts[path][k] = z - where[i, 2]
+            placed[i] = z
     return lifts
