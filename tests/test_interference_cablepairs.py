@@ -9,6 +9,10 @@ from test_interference import as_dict, assert_same, brute_exact, brute_points
 from cablecheck.checker.cable import densify_batch
 from cablecheck.checker.interference import Checker, check_state
 from cablecheck.checker.records import PairType
+from cablecheck.checker.arrays import ranges, within
+from cablecheck.checker.cable import self_pair_window
+from cablecheck.checker.interference.cablepairs import point_pair_rows
+from cablecheck.checker.interference.hits import TYPE_ORDER, worst_records
 from cablecheck.checker.scene_state import CableState, CheckConfig
 
 pytestmark = pytest.mark.filterwarnings("error")
@@ -56,6 +60,73 @@ def test_cable_pairs_many_is_each_states_self_and_cable_cable():
             assert all(np.array_equal(a.where, b.where) for a, b in zip(recs, want))
             seen |= {r.type for r in want}
     assert seen == {PairType.SELF, PairType.CABLE_CABLE}
+
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.one_of(polylines(min_points=3, max_points=16, step=0.02).map(lambda x: (x, None)),
+                          coils(max_points=24).map(lambda c: (c.points, c.radius))), min_size=1, max_size=6),
+       st.data())
+def test_cable_pairs_many_prunes_nothing_the_product_holds(drawn, data):
+    """Drawn cables, some active pairs of centres drawn at random (a centre with
+    itself, neighbours, across cables), some states, the points of every centre
+    or of the active ones and their neighbours only: the records equal, to the
+    bit, those of pairing every point next to each active centre with every
+    one next to its partner, nothing pruned. Coils among them come back on
+    themselves: a point against a piece's midpoint of its own cable."""
+    from cablecheck.checker.interference.discrete import around_centres
+    lines = [x for x, _ in drawn]
+    radii = np.array([r if r is not None else data.draw(st.floats(0.002, 0.01)) for _, r in drawn])
+    cfg = CheckConfig(clearance=data.draw(st.floats(0.0, 0.01)), spacing=data.draw(st.sampled_from([0.5, 1.0, 2.0])))
+    checker = Checker([], cfg)
+    offsets = np.concatenate([[0], np.cumsum([len(x) for x in lines])])
+    n = int(offsets[-1])
+    base = np.concatenate(lines)
+    states = base[None] + data.draw(coords((data.draw(st.integers(1, 3)), n, 3), -2e-3, 2e-3))
+    pieces = [densify_batch(x, offsets, cfg.spacing * radii, source=True)[4] for x in states]
+    assume(all(np.array_equal(pieces[0], q) for q in pieces))
+    k = data.draw(st.integers(1, 3 * n))
+    seed = data.draw(st.integers(0, 2 ** 32 - 1))
+    rng = np.random.default_rng(seed)
+    ci, cj = rng.integers(0, n, k), rng.integers(0, n, k)
+    cj = np.where(rng.random(k) < 0.3, np.clip(ci + rng.integers(-2, 3, k), 0, n - 1), cj)
+    keep = around_centres(np.r_[ci, cj], n) if data.draw(st.booleans()) else None
+    dense = checker.densify_many(states, offsets, radii, keep=keep)
+    names = [f"c{x}" for x in range(len(lines))]
+    got = checker.cable_pairs_many(names, radii, dense, (ci, cj))
+    want = _next_to_active_every_pair(cfg.clearance, names, radii, dense, (ci, cj))
+    for g, w in zip(got, want):
+        assert [(r.type, r.a, r.b, r.min_distance, r.s, r.s_b) for r in g] == \
+            [(r.type, r.a, r.b, r.min_distance, r.s, r.s_b) for r in w]
+        assert all(np.array_equal(a.where, b.where) for a, b in zip(g, w))
+
+
+
+def test_cable_pairs_many_hairpin_of_long_elements_against_the_product():
+    """A hairpin whose legs are a few long elements each (8 radii), the far leg
+    shifted along by part of a spacing so that a point faces the midpoint of a
+    piece across: with active pairs drawn among the legs' centres, the pruned
+    pass gives the product's records, some of them at a piece's midpoint."""
+    r = 0.004
+    cfg = CheckConfig(clearance=0.002)
+    checker = Checker([], cfg)
+    at_mid = 0
+    for shift in np.linspace(0.0, 2 * r, 9):
+        leg = np.arange(6) * 8 * r
+        a = np.stack([leg, np.zeros(6), np.zeros(6)], axis=1)
+        b = np.stack([leg[::-1] + shift, np.full(6, 2 * r + 0.001), np.zeros(6)], axis=1)
+        turn = np.array([[leg[-1] + 4 * r, r + 0.0005, 0.0]])
+        pts = np.concatenate([a, turn, b])
+        offsets = np.array([0, len(pts)])
+        rng = np.random.default_rng(int(shift * 1e6))
+        ci, cj = rng.integers(0, 6, 20), rng.integers(7, 13, 20)
+        dense = checker.densify_many(pts[None], offsets, np.array([r]))
+        got = checker.cable_pairs_many(["c"], np.array([r]), dense, (ci, cj))
+        want = _next_to_active_every_pair(cfg.clearance, ["c"], np.array([r]), dense, (ci, cj))
+        assert [(x.type, x.min_distance, x.s, x.s_b) for x in got[0]] == \
+            [(x.type, x.min_distance, x.s, x.s_b) for x in want[0]]
+        at_mid += sum(not np.any(np.isclose(x.s_b, dense.s, rtol=0, atol=1e-12)) for x in got[0])
+    assert at_mid > 0
 
 
 @settings(max_examples=40, deadline=None)
@@ -148,3 +219,83 @@ def test_self_rule_at_the_windows_edge_a_hairpin():
     d_e = _self_distance(check_state([cable], [], CheckConfig(method="exact", clearance=5.0)))
     d_p = _self_distance(check_state([cable], [], CheckConfig(method="points", clearance=5.0)))
     assert d_e == pytest.approx(2 * a / leg, abs=1e-12) and d_e < d_p - 0.4
+
+
+def _next_to_active_every_pair(clearance, names, radii, dense, active):
+    """cable_pairs_many as first written: every point next to centre i paired with
+    every one next to j (and with the pieces' midpoints), made distinct by sorting,
+    nothing pruned: the reference the pruned pass must equal."""
+    n_s, n, n_c = dense.states, dense.centres, dense.cables
+    out: list[list[Interference]] = [[] for _ in range(n_s)]
+    ci, cj = (np.asarray(x, np.int64) for x in active)
+    if n_s == 0 or len(ci) == 0:
+        return out
+    radii = np.asarray(radii, float)
+    p, s, poly, src, own = dense.p, dense.s, dense.poly, dense.src, dense.own
+    cab, rad = poly % n_c, radii[poly % n_c]
+    m = len(p) // n_s                                  # points per state (the same in each)
+    if m * n_s != len(p) or not np.all(src.reshape(n_s, m) - n * np.arange(n_s)[:, None] == src[:m]):
+        raise ValueError("every state must split its elements into as many pieces as the first")
+    # one state's layout: the points next to each centre (its own point,
+    # the points inside its two elements) and the pieces inside them
+    c0, own0 = src[:m], own[:m]
+    # a piece: two consecutive points of one element (or an element's last
+    # and its far end), never across centres left out (densify_many's keep)
+    piece0 = np.r_[(poly[1:m] == poly[:m - 1]) & (c0[1:] - c0[:-1] <= 1), False]
+    pt_c = np.concatenate([c0[own0], c0[~own0], c0[~own0] + 1])           # centre each point is next to
+    pt_i = np.concatenate([np.flatnonzero(own0), np.flatnonzero(~own0), np.flatnonzero(~own0)])
+    pc_c = np.concatenate([c0[piece0], c0[piece0] + 1])                  # centre each piece is next to
+    pc_i = np.concatenate([np.flatnonzero(piece0)] * 2)
+
+    def around(centres, of_c, of_i):
+        """(which entry, item index) for the items next to each centre."""
+        o = np.argsort(of_c, kind="stable")
+        of_c, of_i = of_c[o], of_i[o]
+        lo = np.searchsorted(of_c, centres, "left")
+        cnt = np.searchsorted(of_c, centres, "right") - lo
+        entry = np.repeat(np.arange(len(centres)), cnt)
+        return entry, of_i[ranges(lo, cnt)]
+
+    def product(ea, xa, eb, xb):
+        """Every (x, y) with x from side a and y from side b of one entry."""
+        oa, ob = np.argsort(ea, kind="stable"), np.argsort(eb, kind="stable")
+        ea, xa, eb, xb = ea[oa], xa[oa], eb[ob], xb[ob]
+        na = np.bincount(ea, minlength=len(ci))
+        nb = np.bincount(eb, minlength=len(ci))
+        fa, fb = np.cumsum(na) - na, np.cumsum(nb) - nb
+        per = na * nb
+        e = np.repeat(np.arange(len(ci)), per)
+        r = within(per)
+        return xa[fa[e] + r // np.maximum(nb[e], 1)], xb[fb[e] + r % np.maximum(nb[e], 1)]
+
+    def tiled(x, y):
+        """Unique (x, y) of one state, for every state."""
+        key = np.unique(x * m + y)
+        off = (m * np.arange(n_s))[:, None]
+        return ((key // m)[None] + off).ravel(), ((key % m)[None] + off).ravel()
+
+    ia, xa = around(ci, pt_c, pt_i)
+    ib, xb = around(cj, pt_c, pt_i)
+    x, y = product(ia, xa, ib, xb)
+    lo, hi = tiled(np.minimum(x, y), np.maximum(x, y))
+    keep = lo != hi
+    lo, hi = lo[keep], hi[keep]
+    same = cab[lo] == cab[hi]
+    # a point against the midpoint of a piece not touching it
+    pa, qa = around(ci, pc_c, pc_i)
+    pb, qb = around(cj, pc_c, pc_i)
+    q1, e1 = product(ia, xa, pb, qb)
+    q2, e2 = product(ib, xb, pa, qa)
+    q, e = tiled(np.r_[q1, q2], np.r_[e1, e2])
+    keep = (cab[q] == cab[e]) & (q != e) & (q != e + 1)
+    rows = point_pair_rows(p, s, cab, rad, self_pair_window(rad, clearance), clearance, clearance,
+                           (lo[~same], hi[~same]), (lo[same], hi[same]), (q[keep], e[keep]))
+    t, a, b, v, w, sb = ([] for _ in range(6))
+    for kind, a_k, b_k, v_k, w_k, sb_k, rec in rows:
+        o = slice(None) if rec is None else rec
+        t.append(np.full(len(v_k[o]), TYPE_ORDER.index(kind)))
+        for acc, x in zip((a, b, v, w, sb), (a_k, b_k, v_k, w_k, sb_k)):
+            acc.append(x[o])
+    t, a, b, v, w, sb = (np.concatenate(x) for x in (t, a, b, v, w, sb))
+    return worst_records(n_s, w // m, t, a, b, v, p[w], s[w], sb, clearance, names, lambda _: names)
+

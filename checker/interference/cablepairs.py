@@ -345,58 +345,97 @@ def cable_pairs_many(clearance: float, names: Sequence[str], radii: np.ndarray, 
     m = len(p) // n_s                                  # points per state (the same in each)
     if m * n_s != len(p) or not np.all(src.reshape(n_s, m) - n * np.arange(n_s)[:, None] == src[:m]):
         raise ValueError("every state must split its elements into as many pieces as the first")
-    # one state's layout: the points next to each centre (its own point,
-    # the points inside its two elements) and the pieces inside them
+    # One state's layout in atoms: a centre's own point (atom 2c) and the
+    # points inside the element after it (atom 2c + 1), each a run of the
+    # layout; the points next to centre c are those of atoms 2c - 1, 2c and
+    # 2c + 1. A piece (two consecutive points of one element, or an
+    # element's last and its far end; never across centres left out,
+    # densify_many's keep) belongs to the element of its first point; the
+    # pieces next to centre c are those of elements c - 1 and c. The active
+    # centre pairs give distinct atom pairs (and point atom, piece element
+    # pairs); in each state those whose bounding spheres lie beyond the
+    # limit are dropped (a lower bound, with a margin against rounding), and
+    # only then are their points paired: each point pair the product of the
+    # points next to the active centres holds, once, less those the bound
+    # puts beyond the limit (no record, no candidate).
     c0, own0 = src[:m], own[:m]
-    # a piece: two consecutive points of one element (or an element's last
-    # and its far end), never across centres left out (densify_many's keep)
+    atom = 2 * c0 + (~own0).astype(np.int64)
+    if np.any(atom[1:] < atom[:-1]):
+        raise ValueError("every state's points must run along its centres")
+    a_first = np.searchsorted(atom, np.arange(2 * n), "left")
+    a_count = np.searchsorted(atom, np.arange(2 * n), "right") - a_first
     piece0 = np.r_[(poly[1:m] == poly[:m - 1]) & (c0[1:] - c0[:-1] <= 1), False]
-    pt_c = np.concatenate([c0[own0], c0[~own0], c0[~own0] + 1])           # centre each point is next to
-    pt_i = np.concatenate([np.flatnonzero(own0), np.flatnonzero(~own0), np.flatnonzero(~own0)])
-    pc_c = np.concatenate([c0[piece0], c0[piece0] + 1])                  # centre each piece is next to
-    pc_i = np.concatenate([np.flatnonzero(piece0)] * 2)
+    pieces = np.flatnonzero(piece0)                     # each piece by its first point
+    e_first = np.searchsorted(c0[pieces], np.arange(n), "left")
+    e_count = np.searchsorted(c0[pieces], np.arange(n), "right") - e_first
+    centre_cable = np.zeros(n, np.int64)
+    centre_cable[c0] = cab[:m]
+    state_row = m * np.arange(n_s)[:, None]
 
-    def around(centres, of_c, of_i):
-        """(which entry, item index) for the items next to each centre."""
-        o = np.argsort(of_c, kind="stable")
-        of_c, of_i = of_c[o], of_i[o]
-        lo = np.searchsorted(of_c, centres, "left")
-        cnt = np.searchsorted(of_c, centres, "right") - lo
-        entry = np.repeat(np.arange(len(centres)), cnt)
-        return entry, of_i[ranges(lo, cnt)]
+    def runs_spheres(values: np.ndarray, first: np.ndarray, count: np.ndarray) -> np.ndarray:
+        """(S, K) per state the farthest of each run's values (S, rows) from the run's first."""
+        live = np.flatnonzero(count)
+        run = np.repeat(live, count[live])
+        far = row_norm((values - values[:, first[run]]).reshape(-1, 3)).reshape(n_s, -1)
+        rad = np.zeros((n_s, len(first)))
+        rad[:, live] = np.maximum.reduceat(far, first[live] - first[live[0]], axis=1) if len(live) else 0.0
+        return rad
 
-    def product(ea, xa, eb, xb):
-        """Every (x, y) with x from side a and y from side b of one entry."""
-        oa, ob = np.argsort(ea, kind="stable"), np.argsort(eb, kind="stable")
-        ea, xa, eb, xb = ea[oa], xa[oa], eb[ob], xb[ob]
-        na = np.bincount(ea, minlength=len(ci))
-        nb = np.bincount(eb, minlength=len(ci))
-        fa, fb = np.cumsum(na) - na, np.cumsum(nb) - nb
+    pts = p.reshape(n_s, m, 3)
+    a_rad = runs_spheres(pts, a_first, a_count)                             # (S, 2n)
+    mids = 0.5 * (pts[:, pieces] + pts[:, pieces + 1])                      # (S, pieces, 3)
+    e_rad = runs_spheres(mids, e_first, e_count) if len(pieces) else np.zeros((n_s, n))
+
+    def combos(x: np.ndarray, y: np.ndarray, size_y: int, ordered: bool) -> tuple[np.ndarray, np.ndarray]:
+        """The distinct (x, y) of rows of candidates x (E, k) and y (E, l) of each entry."""
+        x, y = np.repeat(x, y.shape[1], axis=1).ravel(), np.tile(y, (1, x.shape[1])).ravel()
+        if not ordered:
+            x, y = np.minimum(x, y), np.maximum(x, y)
+        key = np.unique((x + 1) * (size_y + 2) + (y + 1))      # -1 (no such centre) included
+        return key // (size_y + 2) - 1, key % (size_y + 2) - 1
+
+    def kept(ref_a: np.ndarray, ref_b: np.ndarray, lim: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(state, index) of the (S, K) pairs whose references (S, K, 3) are within lim (S, K)."""
+        if lim.size == 0:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        near = within_reach(ref_a.reshape(-1, 3), ref_b.reshape(-1, 3), lim.ravel())
+        return np.divmod(np.flatnonzero(near), lim.shape[1])
+
+    def product(st, a0, na, b0, nb):
+        """Every (x, y), x in rows a0 .. a0 + na - 1 and y in b0 .. b0 + nb - 1 of state st (global rows)."""
         per = na * nb
-        e = np.repeat(np.arange(len(ci)), per)
+        k = np.repeat(np.arange(len(per)), per)
         r = within(per)
-        return xa[fa[e] + r // np.maximum(nb[e], 1)], xb[fb[e] + r % np.maximum(nb[e], 1)]
+        off = m * st[k]
+        return a0[k] + r // nb[k] + off, b0[k] + r % nb[k] + off
 
-    def tiled(x, y):
-        """Unique (x, y) of one state, for every state."""
-        key = np.unique(x * m + y)
-        off = (m * np.arange(n_s))[:, None]
-        return ((key // m)[None] + off).ravel(), ((key % m)[None] + off).ravel()
-
-    ia, xa = around(ci, pt_c, pt_i)
-    ib, xb = around(cj, pt_c, pt_i)
-    x, y = product(ia, xa, ib, xb)
-    lo, hi = tiled(np.minimum(x, y), np.maximum(x, y))
-    keep = lo != hi
+    near_atoms = np.stack([2 * ci - 1, 2 * ci, 2 * ci + 1], axis=1)
+    near_atoms_j = np.stack([2 * cj - 1, 2 * cj, 2 * cj + 1], axis=1)
+    x, y = combos(near_atoms, near_atoms_j, 2 * n, ordered=False)
+    ok = (x >= 0) & (y < 2 * n)
+    x, y = x[ok], y[ok]
+    ok = (a_count[x] > 0) & (a_count[y] > 0)
+    x, y = x[ok], y[ok]
+    rx, ry = a_first[x], a_first[y]
+    lim = clearance + a_rad[:, x] + a_rad[:, y] + radii[centre_cable[x // 2]] + radii[centre_cable[y // 2]]
+    st, k = kept(pts[:, rx], pts[:, ry], lim)
+    lo, hi = product(st, rx[k], a_count[x[k]], ry[k], a_count[y[k]])
+    keep = lo < hi                                      # one atom with itself: each pair once
     lo, hi = lo[keep], hi[keep]
     same = cab[lo] == cab[hi]
-    # a point against the midpoint of a piece not touching it
-    pa, qa = around(ci, pc_c, pc_i)
-    pb, qb = around(cj, pc_c, pc_i)
-    q1, e1 = product(ia, xa, pb, qb)
-    q2, e2 = product(ib, xb, pa, qa)
-    q, e = tiled(np.r_[q1, q2], np.r_[e1, e2])
-    keep = (cab[q] == cab[e]) & (q != e) & (q != e + 1)
+    # a point against the midpoint of a piece of its own cable not touching it
+    near_elems = np.stack([ci - 1, ci], axis=1)
+    near_elems_j = np.stack([cj - 1, cj], axis=1)
+    qa, qe = combos(np.r_[near_atoms, near_atoms_j], np.r_[near_elems_j, near_elems], n, ordered=True)
+    ok = (qa >= 0) & (qa < 2 * n) & (qe >= 0)
+    qa, qe = qa[ok], qe[ok]
+    ok = (a_count[qa] > 0) & (e_count[qe] > 0) & (centre_cable[qa // 2] == centre_cable[qe])
+    qa, qe = qa[ok], qe[ok]
+    lim = clearance + a_rad[:, qa] + e_rad[:, qe] + 2 * radii[centre_cable[qe]]
+    st, k = kept(pts[:, a_first[qa]], mids[:, e_first[qe]], lim)
+    q, e = product(st, a_first[qa[k]], a_count[qa[k]], e_first[qe[k]], e_count[qe[k]])
+    e = pieces[e - m * (q // m)] + m * (q // m)         # piece numbers to their first points' rows
+    keep = (q != e) & (q != e + 1)
     rows = point_pair_rows(p, s, cab, rad, self_pair_window(rad, clearance), clearance, clearance,
                            (lo[~same], hi[~same]), (lo[same], hi[same]), (q[keep], e[keep]))
     t, a, b, v, w, sb = ([] for _ in range(6))
