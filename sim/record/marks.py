@@ -4,7 +4,7 @@
 cable a, in a colour no cable or part uses; its label (the pair and its
 distance) on a point just above the sphere, lifted further where another
 spot's label shown at the same time would overlap it (with a leader down
-to the sphere); the segment (the gap) to the closest point on the other
+to the sphere), for the deepest dozen spots of a frame (`LABELS_SHOWN`); the segment (the gap) to the closest point on the other
 side (`cablecheck.checker.spot`), and a thin line through it that runs on out of the
 sphere (so the gap's direction shows outside the marker); all shown from
 the frame a clash is seen and emptied at the frame after each run of such
@@ -71,8 +71,8 @@ class ClashMarks:
         self.built, self.unit, self.units, self.shapes = built, unit, units, shapes
         self._cable_index = {c.name: i for i, c in enumerate(built.cables)}
         self._part_index = {p.name: k for k, p in enumerate(built.parts)}
-        # pair path -> rows (frame, where, other side or None, label, cable a), scene units
-        self._rows: dict[str, list[tuple[int, np.ndarray, np.ndarray | None, str, str]]] = {}
+        # pair path -> rows (frame, where, other side or None, label, cable a, distance), scene units
+        self._rows: dict[str, list[tuple[int, np.ndarray, np.ndarray | None, str, str, float]]] = {}
         # part index -> (rows of a pair, row, where (world, m), part pose), and cable index ->
         # (rows, row, where, s_b, the cable's centres): closest points still to find
         self._part_spots: dict[int, list[tuple]] = {}
@@ -97,7 +97,8 @@ class ClashMarks:
             elif m.kind in ("cable-structure", "keepout") and self.shapes is not None and m.b in self._part_index:
                 k = self._part_index[m.b]
                 self._part_spots.setdefault(k, []).append((rows, len(rows), where, np.asarray(poses[k], float)))
-            rows.append((frame, where / u, None, f"{pair_text(m.a, m.b)}: {m.distance / u:.3g} {self.units}", m.a))
+            rows.append((frame, where / u, None, f"{pair_text(m.a, m.b)}: {m.distance / u:.3g} {self.units}", m.a,
+                         m.distance / u))
             if self._lane.get(path) != m.state:
                 self._set_lane(path, frame, m.state)
         for path in [p for p, s in self._lane.items() if p not in now and s != "clear"]:
@@ -123,8 +124,8 @@ class ClashMarks:
                   for spots in self._cable_spots.values()]
         for spots, points in found:
             for (rows, i, *_), other in zip(spots, points / u):
-                frame, where, _, label, a = rows[i]
-                rows[i] = (frame, where, other, label, a)
+                frame, where, _, label, a, d = rows[i]
+                rows[i] = (frame, where, other, label, a, d)
         self._part_spots, self._cable_spots = {}, {}
 
     def send(self, rec: rr.RecordingStream, times: np.ndarray, bounds: tuple[np.ndarray, np.ndarray],
@@ -155,31 +156,21 @@ class ClashMarks:
                    lifts: np.ndarray) -> None:
         """One pair's spot (a wire sphere of `radius`, scene units, standing out of
         the cable; the cable, the gap and the part stay visible inside it), its
-        label `lifts` (one per row, scene units) above its centre, and its gap."""
-        frames, centres, labels, segs, anchors = [], [], [], [], []
-        last = -2
-
-        def empty(frame):
-            frames.append(frame)
-            centres.append(None)
-            labels.append(None)
-            segs.append(None)
-            anchors.append(None)
-
-        for (frame, where, other, label, _), lift in zip(rows, lifts):
-            if frame > last + 1 and last >= 0 and last + 1 < n_f:
-                empty(last + 1)
-            frames.append(frame)
-            centres.append(where)
-            labels.append(label)
-            segs.append(None if other is None else np.stack([where, other]))
-            anchors.append(where + np.array([0.0, 0.0, lift]))
-            last = frame
-        if last + 1 < n_f:
-            empty(last + 1)
-        lengths = np.array([0 if c is None else 1 for c in centres], np.int32)
-        pts = np.array([c for c in centres if c is not None]).reshape(-1, 3)
-        tops = np.array([a for a in anchors if a is not None]).reshape(-1, 3)
+        label `lifts` (one per row, scene units; NaN: no label at that frame)
+        above its centre, and its gap. Its rows at once, as arrays."""
+        frame = np.array([r[0] for r in rows], np.int64)
+        where = np.array([r[1] for r in rows], float).reshape(-1, 3)
+        other = np.array([np.full(3, np.nan) if r[2] is None else r[2] for r in rows], float).reshape(-1, 3)
+        shown = ~np.isnan(lifts)
+        labels = [r[3] if k else "" for r, k in zip(rows, shown)]
+        top = where.copy()
+        top[:, 2] += np.where(shown, lifts, LABEL_ABOVE * radius)
+        # emptied at the frame after each run of frames (an entry with nothing in it)
+        ends = frame[np.r_[frame[1:] > frame[:-1] + 1, True]] + 1
+        ends = ends[ends < n_f]
+        frames = np.r_[frame, ends]
+        order = np.argsort(frames, kind="stable")
+        lengths = np.r_[np.ones(len(frame), np.int32), np.zeros(len(ends), np.int32)][order]
         # the sizes go with the centres: an empty row has no sphere at all (a size without
         # a centre would draw one at the origin); the label rides on a point above the
         # sphere (lifted clear of its neighbours' labels, `label_lifts`), the segment to
@@ -187,38 +178,33 @@ class ClashMarks:
         # the views' default (`cablecheck.record.layout`): one chunk per pair, where a style and
         # a gap entity would make four
         e, p = rr.Ellipsoids3D, rr.Points3D
-        columns = [column(e.descriptor_centers(), vec3(pts), lengths),
-                   column(e.descriptor_half_sizes(), vec3(np.full((len(pts), 3), radius)), lengths),
-                   column(p.descriptor_positions(), vec3(tops), lengths),
-                   column(p.descriptor_labels(), strings([x for x in labels if x is not None]), lengths)]
-        # per row: the gap (thick), and the line through it across the sphere and out of it
-        # (thin: the gap's direction stays visible outside the marker); a lifted label's leader
-        lines, widths, counts = [], [], []
-        for seg, centre, top in zip(segs, centres, anchors):
-            n = 0
-            if seg is not None:
-                lines.append(seg)
-                widths.append(GAP_WIDTH * radius)
-                n += 1
-                d = seg[1] - seg[0]
-                length = float(np.linalg.norm(d))
-                if length > 1e-9 * radius:
-                    d /= length
-                    lines.append(np.stack([seg[0] - THROUGH * radius * d, seg[0] + THROUGH * radius * max(
-                        1.0, length / radius + 0.3) * d]))
-                    widths.append(THIN_WIDTH * radius)
-                    n += 1
-            if top is not None and top[2] - centre[2] > 1.01 * radius * LABEL_ABOVE:
-                lines.append(np.stack([centre + np.array([0.0, 0.0, radius]), top]))
-                widths.append(0.5 * THIN_WIDTH * radius)
-                n += 1
-            counts.append(n)
-        if lines:
-            pairs = np.stack(lines)                                      # (k, 2, 3)
+        columns = [column(e.descriptor_centers(), vec3(where), lengths),
+                   column(e.descriptor_half_sizes(), vec3(np.full((len(where), 3), radius)), lengths),
+                   column(p.descriptor_positions(), vec3(top), lengths),
+                   column(p.descriptor_labels(), strings(labels), lengths)]
+        # per row, in this order: the gap (thick); the line through it across the sphere
+        # and out of it (thin: the gap's direction stays visible outside the marker); a
+        # lifted label's leader
+        gap = ~np.isnan(other[:, 0])
+        d = other - where
+        length = np.sqrt(np.einsum("ij,ij->i", d, d))
+        through = gap & (length > 1e-9 * radius)
+        d = d / np.where(through, length, 1.0)[:, None]
+        reach = THROUGH * radius * np.maximum(1.0, length / radius + 0.3)
+        leader = shown & (top[:, 2] - where[:, 2] > 1.01 * radius * LABEL_ABOVE)
+        up = where + np.array([0.0, 0.0, radius])
+        slots = np.stack([np.stack([where, other], axis=1),
+                          np.stack([where - THROUGH * radius * d, where + reach[:, None] * d], axis=1),
+                          np.stack([up, top], axis=1)], axis=1)                # (rows, 3, 2, 3)
+        width = np.broadcast_to(np.array([GAP_WIDTH, THIN_WIDTH, 0.5 * THIN_WIDTH]) * radius, (len(rows), 3))
+        present = np.stack([gap, through, leader], axis=1)
+        counts = np.r_[present.sum(axis=1), np.zeros(len(ends), np.int64)][order].astype(np.int32)
+        if present.any():
+            pairs = slots[present]                                           # (k, 2, 3), row by row
             columns += [column(rr.LineStrips3D.descriptor_strips(),
                                strips(pairs.reshape(-1, 3), np.arange(0, 2 * len(pairs) + 1, 2)), counts),
-                        column(rr.LineStrips3D.descriptor_radii(), floats(widths, np.float32), counts)]
-        rec.send_columns(f"world/interference/{path}", indexes=index(frames), columns=columns)
+                        column(rr.LineStrips3D.descriptor_radii(), floats(width[present], np.float32), counts)]
+        rec.send_columns(f"world/interference/{path}", indexes=index(frames[order]), columns=columns)
 
 
 LABEL_STEP = 0.03
@@ -229,6 +215,10 @@ LABEL_ABOVE = 1.15
 """A label's lift above its spot's centre, in sphere radii, with no neighbour in the way."""
 CHAR_WIDTH = 0.55
 """A label's character width in label heights (the overlap test's width)."""
+LABELS_SHOWN = 12
+"""Labels shown at one frame at most, those of its deepest spots: a harness's
+frame can hold hundreds of clashes, whose labels stacked clear of each other
+would rise metres above it (and cost seconds to place); a dozen reads."""
 GAP_WIDTH = 0.2
 THIN_WIDTH = 0.06
 THROUGH = 1.7
@@ -237,40 +227,44 @@ THROUGH = 1.7
 
 def label_lifts(rows: dict[str, list], radii: dict[str, float], step: float) -> dict[str, np.ndarray]:
     """How far above its spot's centre each spot row's label goes (scene
-    units; per pair path, one per row): just above the sphere, unless
-    another label shown at that frame would then overlap it (taken as a box
-    `step` high and :data:`CHAR_WIDTH` x `step` per character wide, across
-    in the horizontal plane), then up by steps until it does not. Pairs in
-    path order, so a pair's label keeps its place while the others come and
-    go. Whether two labels overlap across is found for a frame's labels at
-    once; a label then rises past those alone, in their order (a harness's
-    frame shows hundreds of labels, each overlapping a few)."""
+    units; per pair path, one per row; NaN: no label at that frame): just
+    above the sphere, unless another label shown at that frame would then
+    overlap it (taken as a box `step` high and :data:`CHAR_WIDTH` x `step`
+    per character wide, across in the horizontal plane), then up by steps
+    until it does not. At most :data:`LABELS_SHOWN` labels a frame, those of
+    its deepest spots (the others keep their spheres and gaps; the clash
+    list has every pair). Pairs in path order, so a pair's label keeps its
+    place while the others come and go."""
     lifts = {path: np.array([LABEL_ABOVE * radii[path]] * len(r)) for path, r in rows.items()}
     by_frame: dict[int, list[tuple[str, int]]] = {}
     for path in sorted(rows):
         for k, row in enumerate(rows[path]):
             by_frame.setdefault(row[0], []).append((path, k))
     for shown in by_frame.values():
+        if len(shown) > LABELS_SHOWN:
+            depth = np.array([rows[path][k][5] for path, k in shown], float)
+            labelled = np.zeros(len(shown), bool)
+            labelled[np.argsort(depth, kind="stable")[:LABELS_SHOWN]] = True      # deepest, then path order
+            for (path, k), keep in zip(shown, labelled.tolist()):
+                if not keep:
+                    lifts[path][k] = np.nan
+            shown = [x for x, keep in zip(shown, labelled.tolist()) if keep]
         if len(shown) < 2:
             continue
-        where = np.array([rows[path][k][1] for path, k in shown], float).reshape(-1, 3)
-        half = np.array([0.5 * CHAR_WIDTH * step * len(rows[path][k][3]) for path, k in shown])
-        # across[i, j]: labels i and j overlap in the horizontal plane, whatever their heights
-        across = np.hypot(where[:, None, 0] - where[None, :, 0], where[:, None, 1] - where[None, :, 1]) \
-            < half[:, None] + half[None, :]
-        placed = np.empty(len(shown))                         # each label's height, once placed
-        for i, (path, k) in enumerate(shown):
-            z = where[i, 2] + lifts[path][k]
-            under = placed[np.flatnonzero(across[i, :i])].tolist()
+        placed: list[tuple[float, float, float, float]] = []          # x, y, z, half width
+        for path, k in shown:
+            where, label = rows[path][k][1], rows[path][k][3]
+            half = 0.5 * CHAR_WIDTH * step * len(label)
+            z = where[2] + lifts[path][k]
             moved = True
             while moved:
                 moved = False
-                for pz in under:
+                for x, y, pz, other in placed:
                     # (a label a whole step above another is clear of it: the test leaves
                     # a margin, or rounding in pz + step could keep it "overlapping" forever)
-                    if abs(z - pz) < 0.999 * step:
+                    if abs(z - pz) < 0.999 * step and np.hypot(where[0] - x, where[1] - y) < half + other:
                         z = pz + step
                         moved = True
-            lifts[path][k] = z - where[i, 2]
-            placed[i] = z
+            lifts[path][k] = z - where[2]
+            placed.append((float(where[0]), float(where[1]), z, half))
     return lifts
