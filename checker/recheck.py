@@ -28,6 +28,8 @@ from dataclasses import replace
 import numpy as np
 
 from cablecheck.checker.interference import Checker
+from cablecheck.checker.arrays import ranges
+from cablecheck.checker.closest import row_norm
 from cablecheck.checker.interference.discrete import discretise
 from cablecheck.checker.interference.hits import Hits, worst_records
 from cablecheck.checker.interference.structure import PartTable, structure_exact_pairs
@@ -294,44 +296,135 @@ def exact_records_many(checker: Checker, cables: Sequence[CableState | None], po
                        spans: np.ndarray | None = None) -> list[Interference | None]:
     """The record ``checker.check([cable], pose, exclusions)`` gives the pair
     ``key`` of a cable against a one-part exact checker's part at each of S
-    states (poses (S, 4, 4); None: clear, or no cable there), in one pass:
-    the S cables discretised together (each on its own, the same bits),
-    every element of cable s paired with part s only. ``below`` (S,): only
-    the elements that may come below a state's value are measured, so its
-    record is the same where the pair comes below it, and may be missing or
-    not the pair's least where it does not. ``spans`` (S, 2): only the
-    elements of cable s between those arc lengths (along it as it lies) are
-    measured."""
+    states (poses (S, 4, 4); None: clear, or no cable there), in one pass
+    (:func:`exact_records_pairs` with that checker and pair for every state)."""
+    n = len(cables)
+    return exact_records_pairs([checker] * n, [key] * n, cables, poses, exclusions, below, spans)
+
+
+def exact_records_pairs(checkers: Sequence[Checker], keys: Sequence[tuple[str, str, str]],
+                        cables: Sequence[CableState | None], poses: np.ndarray, exclusions: Sequence[Exclusion],
+                        below: Sequence[float] | None = None,
+                        spans: np.ndarray | None = None) -> list[Interference | None]:
+    """For each of S copies, the record ``checkers[s].check([cables[s]],
+    poses[s], exclusions)`` gives the pair ``keys[s]`` (a cable against a
+    one-part exact checker's part posed at poses (S, 4, 4); None: clear, or
+    no cable there), in one pass, whichever parts and pairs the copies hold
+    (a batch of states' records of many pairs). ``below`` (S,): only the
+    elements that may come below a copy's value are measured, so its record
+    is the same where the pair comes below it, and may be missing or not the
+    pair's least where it does not. ``spans`` (S, 2): only the elements of
+    cable s between those arc lengths (along it as it lies) are measured.
+
+    Copies of one cable object with no attachment window against their part
+    share its discrete points (a cable resting on many parts is discretised
+    once; each on its own, the same bits as alone). A copy measures only the
+    discrete elements within the arc-length span of its cable's elements
+    whose bounding spheres come within its limit of the part's bounding
+    sphere (the others cannot come below it: a superset of what the full
+    check's broad phase keeps, so the same records)."""
     out: list[Interference | None] = [None] * len(cables)
-    rows = [i for i, c in enumerate(cables) if c is not None]
-    if not rows or checker._tab is None:
+    rows = [i for i, c in enumerate(cables) if c is not None and checkers[i]._tab is not None]
+    if not rows:
         return out
     n = len(rows)
-    part = checker.parts[0]
-    tab = PartTable([part] * n).posed(np.ascontiguousarray(poses[rows], dtype=float))
-    # the cable's windows against the part, once per copy (copy s against part s)
-    one = checker._exclusion_table([key[1]], exclusions)
-    key_e, lo, hi, _ = one.excl
-    copy = np.repeat(np.arange(n), len(key_e))
-    excl = (copy * n + copy, np.tile(lo, n), np.tile(hi, n), n)
-    cut_c = np.repeat(np.arange(n), len(one.cable))
-    cuts = (np.concatenate([cut_c, cut_c]), np.concatenate([np.tile(one.lo, n), np.tile(one.hi, n)]))
-    dp = discretise([cables[i] for i in rows], checker.config, cuts)
-    hits = Hits()
+    config = checkers[rows[0]].config
+    if any(checkers[i].config != config for i in rows):
+        raise ValueError("the copies' checkers must share one configuration")
+    parts = [checkers[i].parts[0] for i in rows]
+    tab = PartTable(parts).posed(np.ascontiguousarray(poses[rows], dtype=float))
+    # each copy's windows against its part (copy s against part s), a table per checker and cable
+    tables: dict[tuple[int, str], object] = {}
+    ones = []
+    for i in rows:
+        at = (id(checkers[i]), keys[i][1])
+        if at not in tables:
+            tables[at] = checkers[i]._exclusion_table([keys[i][1]], exclusions)
+        ones.append(tables[at])
+    # the polylines to discretise: one per cable object without windows, one per copy with them
+    shared: dict[int, int] = {}
+    polys: list[CableState] = []
+    poly_of = np.empty(n, np.int64)
+    for c, (i, one) in enumerate(zip(rows, ones)):
+        if len(one.cable) == 0 and id(cables[i]) in shared:
+            poly_of[c] = shared[id(cables[i])]
+            continue
+        poly_of[c] = len(polys)
+        if len(one.cable) == 0:
+            shared[id(cables[i])] = len(polys)
+        polys.append(cables[i])
+    counts = np.array([len(one.excl[0]) for one in ones], np.int64)
+    copy = np.repeat(np.arange(n), counts)
+    cat = lambda xs: np.concatenate(xs) if xs else np.zeros(0)
+    excl = (poly_of[copy] * n + copy, cat([one.excl[1] for one in ones]), cat([one.excl[2] for one in ones]), n)
+    order = np.argsort(excl[0], kind="stable")
+    excl = (excl[0][order], excl[1][order], excl[2][order], n)
+    cut_c = np.repeat(poly_of, [len(one.cable) for one in ones])
+    cuts = (np.concatenate([cut_c, cut_c]), np.concatenate([cat([one.lo for one in ones]), cat([one.hi for one in ones])]))
+    dp = discretise(polys, config, cuts)
+    limit = np.full(n, config.clearance) if below is None else \
+        np.minimum(np.asarray(below, float)[rows], config.clearance)
+    lo, hi = _sphere_spans([cables[i] for i in rows], tab, limit)
+    if spans is not None:
+        span = np.asarray(spans, float)[rows]
+        lo, hi = np.maximum(lo, span[:, 0]), np.minimum(hi, span[:, 1])
+    # each copy's discrete elements reaching into its span (a generous pad: a superset is
+    # the same records), found in the elements ordered by polyline and arc length
     seg = dp.seg
-    if spans is not None:       # the elements that reach into their copy's span
-        span = np.asarray(spans, float)[rows][dp.cable[seg]]
-        pad = 1e-9 * (1.0 + np.abs(span).max(axis=1))            # the arc lengths' own rounding
-        seg = seg[(dp.s[seg + 1] >= span[:, 0] - pad) & (dp.s[seg] <= span[:, 1] + pad)]
-    limit = None if below is None else np.asarray(below, float)[rows][dp.cable[seg]]
-    structure_exact_pairs(dp, tab, checker.config, excl, hits, seg, dp.cable[seg], limit)
+    length = np.r_[0.0, np.maximum.reduceat(dp.s, np.r_[0, np.flatnonzero(np.diff(dp.cable)) + 1])]
+    shift = np.cumsum(length + 1.0)[:-1]                          # polyline k's arc lengths from shift[k]
+    pad = 1e-6 * (1.0 + np.abs(dp.s).max(initial=0.0))
+    start = dp.s[seg] + shift[dp.cable[seg]]
+    stop = dp.s[seg + 1] + shift[dp.cable[seg]]
+    live = hi >= lo
+    first = np.searchsorted(stop, lo + shift[poly_of] - pad, "left")
+    last = np.searchsorted(start, hi + shift[poly_of] + pad, "right")
+    many = np.where(live, np.maximum(last - first, 0), 0)
+    i0 = seg[ranges(first, many)]
+    pk = np.repeat(np.arange(n), many)
+    own = dp.cable[i0] == poly_of[pk]
+    i0, pk = i0[own], pk[own]
+    hits = Hits()
+    structure_exact_pairs(dp, tab, config, excl, hits, i0, pk, None if below is None else limit[pk])
     if hits.parts:
-        t, a, _, v, w, s_at, sb = (np.concatenate(x) for x in zip(*hits.parts))
-        found = worst_records(n, a, t, np.zeros_like(a), np.zeros_like(a), v, w, s_at, sb,
-                              checker.config.clearance, [key[1]], lambda _: [key[2]])
+        t, _, b, v, w, s_at, sb = (np.concatenate(x) for x in zip(*hits.parts))
+        found = worst_records(n, b, t, np.zeros_like(b), np.zeros_like(b), v, w, s_at, sb,
+                              config.clearance, ["a"], lambda _: ["b"])
         for i, recs in zip(rows, found):
-            out[i] = _record(recs, key)
+            kind, a_name, b_name = keys[i]
+            out[i] = next((replace(r, a=a_name, b=b_name) for r in recs if PairType(r.type) == kind), None)
     return out
+
+
+def _sphere_spans(cables: Sequence[CableState], tab: PartTable, limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) (S,) per copy the arc lengths, along its cable as it lies,
+    of the first and last of its elements whose bounding sphere (about its
+    middle, half its length across, grown by the radius) comes within
+    ``limit`` of part s's bounding sphere (a plane's: everywhere); lo > hi
+    where none does."""
+    n = len(cables)
+    pts = np.concatenate([np.asarray(c.points, float) for c in cables])
+    ends = np.cumsum([len(c.points) for c in cables])
+    owner = np.repeat(np.arange(n), [len(c.points) for c in cables])
+    e = np.flatnonzero(owner[:-1] == owner[1:])                    # element e joins points e, e + 1
+    step = row_norm(pts[e + 1] - pts[e])
+    s = np.zeros(len(pts))
+    s[e + 1] = step
+    s = np.cumsum(s)
+    s -= np.repeat(s[np.r_[0, ends[:-1]]], [len(c.points) for c in cables])   # each cable from 0
+    centre = np.zeros((n, 3))
+    reach = np.full(n, np.inf)
+    fin = tab.finite
+    centre[fin] = np.einsum("kij,kj->ki", tab.rot[fin], tab.c_loc) + tab.trans[fin]
+    reach[fin] = tab.half_diag
+    k = owner[e]
+    radius = np.array([c.radius for c in cables], float)
+    gap = row_norm(0.5 * (pts[e] + pts[e + 1]) - centre[k]) - 0.5 * step - reach[k] - radius[k]
+    near = ~(gap > limit[k] + 1e-9 * (1.0 + np.abs(limit[k]) + np.abs(pts[e]).max(axis=1)))   # rounding
+    lo, hi = np.full(n, np.inf), np.full(n, -np.inf)
+    np.minimum.at(lo, k[near], s[e[near]])
+    np.maximum.at(hi, k[near], s[e[near] + 1])
+    return lo, hi
 
 
 def _record(records, key: tuple[str, str, str]) -> Interference | None:

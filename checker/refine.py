@@ -39,10 +39,11 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from cablecheck.checker.cable import arc_length, element_gaps
-from cablecheck.checker.closest import segment_segment
+from cablecheck.checker.arrays import within
+from cablecheck.checker.cable import arc_length
+from cablecheck.checker.closest import row_norm, segment_segment
 from cablecheck.checker.interference import Checker
-from cablecheck.checker.recheck import Recheck, exact_records_many
+from cablecheck.checker.recheck import Recheck, exact_records_pairs
 from cablecheck.checker.records import PART_TYPES, Interference, NearMiss, PairType, Severity, severity_of
 from cablecheck.checker.scene_state import CableState, CheckConfig
 
@@ -81,20 +82,31 @@ def refined_records(records: Sequence[Sequence[Interference]], cables: Callable[
 def _measured(wanted: dict, cables: Callable[[int], Mapping[str, CableState]], poses: np.ndarray,
               recheck: Recheck, below: Callable, span: Callable | None = None):
     """For each pair (type, a, b) of ``wanted`` and its [(state, item)]: the
-    items and method exact's records of the pair at their states, in one
-    pass a pair (`exact_records_many`, each state measured below
-    ``below(item)``, and between the arc lengths ``span(item)``)."""
+    items and method exact's records of the pair at their states, every
+    pair at every state in one pass (`exact_records_pairs`, each state
+    measured below ``below(item)``, and between the arc lengths
+    ``span(item)``)."""
     asked: dict[int, Mapping[str, CableState]] = {}
+    checkers, keys, states, items, parts = [], [], [], [], []
     for key, found in wanted.items():
-        _, a, b = key
-        k = recheck.index[b]
-        rows = [i for i, _ in found]
-        for i in rows:
+        k = recheck.index[key[2]]
+        for i, x in found:
             if i not in asked:
                 asked[i] = cables(i)
-        spans = None if span is None else np.array([span(x) for _, x in found], float)
-        yield found, exact_records_many(recheck.exact_checker(k), [asked[i][a] for i in rows], poses[rows, k],
-                                        recheck.exclusions, key, below=[below(x) for _, x in found], spans=spans)
+            checkers.append(recheck.exact_checker(k))
+            keys.append(key)
+            states.append(i)
+            items.append(x)
+            parts.append(k)
+    if not items:
+        return
+    spans = None if span is None else np.array([span(x) for x in items], float)
+    exact = exact_records_pairs(checkers, keys, [asked[i][key[1]] for i, key in zip(states, keys)],
+                                poses[states, parts], recheck.exclusions, below=[below(x) for x in items], spans=spans)
+    at = 0
+    for found in wanted.values():
+        yield found, exact[at:at + len(found)]
+        at += len(found)
 
 
 def near_miss_records(near: Sequence[Sequence[NearMiss]], cables: Callable[[int], Mapping[str, CableState]],
@@ -143,32 +155,44 @@ def refined_cable_records(records: Sequence[Sequence[Interference]], cables: Cal
         clearance: soft below it (the severity of exact's value).
     """
     out: list[dict[int, Interference]] = [{} for _ in records]
-    wanted: dict[tuple[str, str], list[tuple[int, Interference]]] = {}
+    found: list[tuple[int, Interference, CableState, CableState]] = []
+    asked: dict[int, Mapping[str, CableState]] = {}
     for i, recs in enumerate(records):
         for r in recs:                                                  # a state's few records
             if PairType(r.type) is PairType.CABLE_CABLE and r.severity is Severity.SOFT:
-                wanted.setdefault((r.a, r.b), []).append((i, r))
-    for (a, b), found in wanted.items():
-        states = [cables(i) for i, _ in found]
-        pa = np.stack([c[a].points for c in states])                    # (S, na, 3)
-        pb = np.stack([c[b].points for c in states])
-        ra, rb = float(states[0][a].radius), float(states[0][b].radius)
-        value = np.array([r.min_distance for _, r in found], float)
+                if i not in asked:
+                    asked[i] = cables(i)
+                found.append((i, r, asked[i][r.a], asked[i][r.b]))
+    # every pair at every state at once, stacked by the two cables' numbers of centres
+    shapes: dict[tuple[int, int], list[int]] = {}
+    for k, (_, _, ca, cb) in enumerate(found):
+        shapes.setdefault((len(ca.points), len(cb.points)), []).append(k)
+    for group in shapes.values():
+        pa = np.stack([np.asarray(found[k][2].points, float) for k in group])      # (S, na, 3)
+        pb = np.stack([np.asarray(found[k][3].points, float) for k in group])
+        ra = np.array([found[k][2].radius for k in group], float)
+        rb = np.array([found[k][3].radius for k in group], float)
+        value = np.array([found[k][1].min_distance for k in group], float)
         d, ea, eb, u, v = _closest_elements(pa, pb, value + ra + rb)
         arc_a, arc_b = arc_length(pa), arc_length(pb)
-        for k, (i, r) in enumerate(found):
-            if not np.isfinite(d[k]):
+        for row, k in enumerate(group):
+            i, r = found[k][:2]
+            if not np.isfinite(d[row]):
                 continue
-            dist = float(d[k] - ra - rb)
+            dist = float(d[row] - ra[row] - rb[row])
             if dist > r.min_distance:                                   # rounding: never above the points'
                 continue
-            ia, ib = int(ea[k]), int(eb[k])
-            where = pa[k, ia] + u[k] * (pa[k, ia + 1] - pa[k, ia])
-            s_a = arc_a[k, ia] + u[k] * (arc_a[k, ia + 1] - arc_a[k, ia])
-            s_b = arc_b[k, ib] + v[k] * (arc_b[k, ib + 1] - arc_b[k, ib])
-            out[i][id(r)] = Interference(PairType.CABLE_CABLE, a, b, dist, severity_of(dist, clearance),
+            ia, ib = int(ea[row]), int(eb[row])
+            where = pa[row, ia] + u[row] * (pa[row, ia + 1] - pa[row, ia])
+            s_a = arc_a[row, ia] + u[row] * (arc_a[row, ia + 1] - arc_a[row, ia])
+            s_b = arc_b[row, ib] + v[row] * (arc_b[row, ib + 1] - arc_b[row, ib])
+            out[i][id(r)] = Interference(PairType.CABLE_CABLE, r.a, r.b, dist, severity_of(dist, clearance),
                                          where, float(s_a), float(s_b))
     return out
+
+
+CHUNK = 8
+"""Elements per chunk in `_closest_elements`' first pass."""
 
 
 def _closest_elements(pa: np.ndarray, pb: np.ndarray, upper: np.ndarray):
@@ -177,11 +201,32 @@ def _closest_elements(pa: np.ndarray, pb: np.ndarray, upper: np.ndarray):
     pairs whose bounding spheres come within ``upper[k]`` (inf where none
     does): (distance, element of a, element of b, parameter on a, parameter
     on b), one row a state; the least by distance, then by the elements'
-    order (a tie goes to the first pair along a, then b)."""
+    order (a tie goes to the first pair along a, then b).
+
+    Elements are first taken :data:`CHUNK` at a time along each polyline,
+    in spheres holding their elements' spheres: only element pairs of chunk
+    pairs within reach are compared, by the same test (`element_gaps`' gap,
+    the same bits), so the same pairs are measured as comparing all."""
     n_s = len(pa)
-    gap = element_gaps(pa, pb)                                                       # (S, Ea, Eb)
-    slack = 1e-9 * (1.0 + np.abs(pa).max(axis=(1, 2)) + np.abs(pb).max(axis=(1, 2)))     # rounding
-    k, ia, ib = np.nonzero(gap <= (upper + slack)[:, None, None])
+    ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
+    ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
+    scale = 1.0 + np.abs(pa).max(axis=(1, 2)) + np.abs(pb).max(axis=(1, 2))
+    reach = upper + 1e-9 * scale                                                    # rounding
+    ca, ra_ = _chunk_spheres(ma, ha)
+    cb, rb_ = _chunk_spheres(mb, hb)
+    near = row_norm(ca[:, :, None] - cb[:, None, :]) - ra_[:, :, None] - rb_[:, None, :] \
+        <= (reach + 1e-9 * scale)[:, None, None]                                    # (S, Ca, Cb), a margin
+    k, x, y = np.nonzero(near)
+    na, nb = ma.shape[1], mb.shape[1]
+    cnt_a = np.minimum(CHUNK, na - CHUNK * x)
+    cnt_b = np.minimum(CHUNK, nb - CHUNK * y)
+    per = cnt_a * cnt_b
+    row = np.repeat(np.arange(len(k)), per)
+    r = within(per)
+    k, ia, ib = k[row], CHUNK * x[row] + r // cnt_b[row], CHUNK * y[row] + r % cnt_b[row]
+    gap = row_norm(ma[k, ia] - mb[k, ib]) - ha[k, ia] - hb[k, ib]
+    o = gap <= reach[k]
+    k, ia, ib = k[o], ia[o], ib[o]
     d, u, v, _, _ = segment_segment(pa[k, ia], pa[k, ia + 1], pb[k, ib], pb[k, ib + 1])
     best = np.full(n_s, np.inf)
     out_a, out_b = np.zeros(n_s, np.int64), np.zeros(n_s, np.int64)
@@ -192,6 +237,16 @@ def _closest_elements(pa: np.ndarray, pb: np.ndarray, upper: np.ndarray):
         best[k[head]] = d[head]
         out_a[k[head]], out_b[k[head]], out_u[k[head]], out_v[k[head]] = ia[head], ib[head], u[head], v[head]
     return best, out_a, out_b, out_u, out_v
+
+
+def _chunk_spheres(mid: np.ndarray, half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(S, C, 3) centres and (S, C) radii of spheres about each run of
+    :data:`CHUNK` elements (middles (S, E, 3), half lengths (S, E)) holding
+    their spheres: about the run's first middle."""
+    first = np.arange(0, mid.shape[1], CHUNK)
+    centre = mid[:, first]
+    far = row_norm(mid - np.repeat(centre, CHUNK, axis=1)[:, :mid.shape[1]]) + half
+    return centre, np.maximum.reduceat(far, first, axis=1) * (1 + 1e-12)
 
 
 def refined_self_records(records: Sequence[Sequence[Interference]], cables: Callable[[int], Mapping[str, CableState]],

@@ -306,6 +306,8 @@ def _segment_faces(m: MeshData, a: np.ndarray, b: np.ndarray, redo: np.ndarray, 
     reach = bound[:, None] * (1 + 1e-12) + 1e-300
     lo, hi = np.minimum(a[redo], b[redo]) - reach, np.maximum(a[redo], b[redo]) + reach
     local, fi2 = m.forest.query(np.zeros(len(redo), np.int64), lo, hi)
+    if not len(local):            # no face within the bound of any (a cap below every face)
+        return best, tb, fb
     rows2 = redo[local]
     d2, t2, _ = segment_triangle(a[rows2], b[rows2], m.a[fi2], m.b[fi2], m.c[fi2])
     o = np.lexsort((d2, rows2))

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from hypothesis import given, settings, strategies as st
 
 from cablecheck.checker.recheck import Recheck, convex_hull_shape
 from cablecheck.checker.records import PairType
@@ -113,3 +114,63 @@ def test_near_on_a_self_pair_measures_with_the_wider_window(recheck):
     for limit in (11.0, 11.9):
         w = (np.pi + limit) / chord_arc                        # the window, as arc of the circle
         assert state.near(key, limit) == pytest.approx(14.0 * np.sin(w / 14.0) - 2.0, abs=0.03)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), copies=st.integers(1, 30), windows=st.booleans(), limited=st.booleans())
+def test_exact_records_of_many_pairs_at_once_are_each_pairs_alone(seed, copies, windows, limited):
+    """Drawn cables against drawn parts (a mesh, primitives, a keep-out; some
+    with attachment windows), each copy its own pair, pose and state, some
+    limited below a value or to a span: exact_records_pairs gives, to the
+    bit, each copy's record as exact_records_many of its pair alone, which
+    is the one-part exact checker's own check."""
+    from cablecheck.checker.recheck import exact_records_many, exact_records_pairs
+    from cablecheck.checker.scene_state import Exclusion
+    rng = np.random.default_rng(seed)
+    parts = [PartState("bracket", mesh_shape(BRACKET.vertices, BRACKET.faces), np.eye(4)),
+             PartState("ball", Shape(ShapeType.SPHERE, [10.0]), np.eye(4)),
+             PartState("box", Shape(ShapeType.BOX, [8.0, 5.0, 12.0]), np.eye(4)),
+             PartState("zone", Shape(ShapeType.CAPSULE, [6.0, 10.0]), np.eye(4), keepout=True)]
+    names = ["c0", "c1", "c2"]
+    excl = [Exclusion("c1", "box", 0.0, 30.0), Exclusion("c2", "ball", 40.0, 60.0)] if windows else []
+    recheck = Recheck(parts, CheckConfig("points", clearance=3.0), excl)
+    drawn = []                          # a few cable objects, each shared by several copies
+    for _ in range(5):
+        a = names[int(rng.integers(0, 3))]
+        centre = rng.uniform(-15.0, 45.0, 3)
+        d = rng.normal(size=3)
+        d /= np.linalg.norm(d)
+        pts = centre + np.linspace(-60.0, 60.0, int(rng.integers(3, 12)))[:, None] * d + rng.normal(size=(1, 3)) * 2.0
+        drawn.append(CableState(a, pts, float(rng.uniform(1.0, 4.0))))
+    keys, cables, poses, below, spans, checkers = [], [], [], [], [], []
+    for _ in range(copies):
+        k = int(rng.integers(0, len(parts)))
+        cable = drawn[int(rng.integers(0, len(drawn)))]
+        a = cable.name
+        cables.append(cable)
+        keys.append((PairType.KEEPOUT if parts[k].keepout else CS, a, parts[k].name))
+        pose = np.eye(4)
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        pose[:3, :3] = q * np.sign(np.linalg.det(q))
+        pose[:3, 3] = rng.uniform(0.0, 30.0, 3)
+        poses.append(pose)
+        below.append(float(rng.uniform(-5.0, 3.0)))
+        lo = float(rng.uniform(0.0, 80.0))
+        spans.append((lo, lo + float(rng.uniform(5.0, 60.0))))
+        checkers.append(recheck.exact_checker(k))
+    poses = np.array(poses)
+    b, sp = (below, np.array(spans)) if limited else (None, None)
+    got = exact_records_pairs(checkers, keys, cables, poses, excl, b, sp)
+    for i in range(copies):
+        alone = exact_records_many(checkers[i], [cables[i]], poses[i][None], excl, keys[i],
+                                   None if b is None else [b[i]], None if sp is None else sp[i][None])[0]
+        assert (got[i] is None) == (alone is None)
+        if alone is not None:
+            assert (got[i].type, got[i].a, got[i].b, got[i].min_distance, got[i].s, got[i].severity) == \
+                (alone.type, alone.a, alone.b, alone.min_distance, alone.s, alone.severity)
+            assert np.array_equal(got[i].where, alone.where)
+        own = [r for r in checkers[i].check([cables[i]], poses[i][None], excl) if r.type in (CS, PairType.KEEPOUT)]
+        if not limited:
+            assert [(r.min_distance, r.s) for r in own] == ([] if alone is None else [(alone.min_distance, alone.s)])
+        elif own and own[0].min_distance < b[i] and sp[i][0] <= own[0].s <= sp[i][1]:
+            assert alone is not None and alone.min_distance == own[0].min_distance

@@ -139,3 +139,21 @@ def test_segment_through_a_convex_mesh_is_measured_at_its_deepest_point(seed, sc
         assert d[i] == pytest.approx(ref, abs=1e-9 * scale), (i, d[i], ref)
         # the reported place is at that depth
         assert f(t[i]) == pytest.approx(d[i], abs=1e-9 * scale)
+
+
+def test_a_cap_below_every_face_answers_the_cap():
+    """mesh_segment_unsigned with an upper bound and a cap: segments outside a
+    closed box mesh whose caps come within no face are answered at the cap
+    (face -1), one whose cap reaches the box exactly; before, a call where no
+    segment's cap reached any face failed on its empty list of faces."""
+    from cablecheck.checker.segments import mesh_segment_unsigned
+    box = trimesh.creation.box([2.0, 2.0, 2.0])
+    m = mesh_shape(box.vertices, box.faces).mesh
+    a = np.array([[5.0, -1.0, 0.0], [0.0, 0.0, 4.0]])
+    b = np.array([[5.0, 1.0, 0.0], [0.0, 0.5, 4.0]])
+    gap = np.array([4.0, 3.0])                       # each segment's distance to the box
+    d, t, face = mesh_segment_unsigned(m, a, b, upper=gap + 0.5, cap=np.array([1.0, 1.0]))
+    assert np.allclose(d, 1.0) and np.all(face == -1)
+    d, t, face = mesh_segment_unsigned(m, a, b, upper=gap + 0.5, cap=np.array([1.0, 3.5]))
+    assert d[0] == pytest.approx(1.0) and face[0] == -1
+    assert d[1] == pytest.approx(3.0, abs=1e-12) and face[1] >= 0
