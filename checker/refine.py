@@ -191,10 +191,6 @@ def refined_cable_records(records: Sequence[Sequence[Interference]], cables: Cal
     return out
 
 
-CHUNK = 8
-"""Elements per chunk in `_closest_elements`' first pass."""
-
-
 def _closest_elements(pa: np.ndarray, pb: np.ndarray, upper: np.ndarray):
     """Per state k, the least segment distance between the elements of
     polylines pa[k] (na, 3) and pb[k] (nb, 3), looking only at element
@@ -203,27 +199,32 @@ def _closest_elements(pa: np.ndarray, pb: np.ndarray, upper: np.ndarray):
     on b), one row a state; the least by distance, then by the elements'
     order (a tie goes to the first pair along a, then b).
 
-    Elements are first taken :data:`CHUNK` at a time along each polyline,
-    in spheres holding their elements' spheres: only element pairs of chunk
-    pairs within reach are compared, by the same test (`element_gaps`' gap,
-    the same bits), so the same pairs are measured as comparing all."""
+    An element of a whose sphere comes within ``upper`` of no point of b's
+    middles' box (grown by b's longest half element) is within it of no
+    element of b (and so for b): the spheres of the elements left on both
+    sides are compared pair by pair (`element_gaps`' gap, the same bits),
+    the same pairs as comparing all (two crossing hoses keep a few elements
+    each of their forty)."""
     n_s = len(pa)
     ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
     ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
     scale = 1.0 + np.abs(pa).max(axis=(1, 2)) + np.abs(pb).max(axis=(1, 2))
     reach = upper + 1e-9 * scale                                                    # rounding
-    ca, ra_ = _chunk_spheres(ma, ha)
-    cb, rb_ = _chunk_spheres(mb, hb)
-    near = row_norm(ca[:, :, None] - cb[:, None, :]) - ra_[:, :, None] - rb_[:, None, :] \
-        <= (reach + 1e-9 * scale)[:, None, None]                                    # (S, Ca, Cb), a margin
-    k, x, y = np.nonzero(near)
-    na, nb = ma.shape[1], mb.shape[1]
-    cnt_a = np.minimum(CHUNK, na - CHUNK * x)
-    cnt_b = np.minimum(CHUNK, nb - CHUNK * y)
-    per = cnt_a * cnt_b
-    row = np.repeat(np.arange(len(k)), per)
+
+    def facing(m, h, other, other_h):
+        """(S, E) the elements whose spheres come within reach of the other side's box."""
+        grow = (reach + other_h.max(axis=1) + 1e-9 * scale)[:, None] + h            # (S, E), a margin
+        lo, hi = other.min(axis=1)[:, None, :], other.max(axis=1)[:, None, :]
+        return np.all((m >= lo - grow[..., None]) & (m <= hi + grow[..., None]), axis=2)
+
+    ka, ia = np.nonzero(facing(ma, ha, mb, hb))
+    kb, ib = np.nonzero(facing(mb, hb, ma, ha))
+    na, nb = np.bincount(ka, minlength=n_s), np.bincount(kb, minlength=n_s)
+    fa, fb = np.cumsum(na) - na, np.cumsum(nb) - nb
+    per = na * nb
+    k = np.repeat(np.arange(n_s), per)
     r = within(per)
-    k, ia, ib = k[row], CHUNK * x[row] + r // cnt_b[row], CHUNK * y[row] + r % cnt_b[row]
+    ia, ib = ia[fa[k] + r // np.maximum(nb[k], 1)], ib[fb[k] + r % np.maximum(nb[k], 1)]
     gap = row_norm(ma[k, ia] - mb[k, ib]) - ha[k, ia] - hb[k, ib]
     o = gap <= reach[k]
     k, ia, ib = k[o], ia[o], ib[o]
@@ -237,16 +238,6 @@ def _closest_elements(pa: np.ndarray, pb: np.ndarray, upper: np.ndarray):
         best[k[head]] = d[head]
         out_a[k[head]], out_b[k[head]], out_u[k[head]], out_v[k[head]] = ia[head], ib[head], u[head], v[head]
     return best, out_a, out_b, out_u, out_v
-
-
-def _chunk_spheres(mid: np.ndarray, half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(S, C, 3) centres and (S, C) radii of spheres about each run of
-    :data:`CHUNK` elements (middles (S, E, 3), half lengths (S, E)) holding
-    their spheres: about the run's first middle."""
-    first = np.arange(0, mid.shape[1], CHUNK)
-    centre = mid[:, first]
-    far = row_norm(mid - np.repeat(centre, CHUNK, axis=1)[:, :mid.shape[1]]) + half
-    return centre, np.maximum.reduceat(far, first, axis=1) * (1 + 1e-12)
 
 
 def refined_self_records(records: Sequence[Sequence[Interference]], cables: Callable[[int], Mapping[str, CableState]],

@@ -375,7 +375,7 @@ def test_a_cable_pressed_on_its_own_turn_reads_as_exact_reads_it(radius, gap, le
 
 def _closest_elements_of_all_pairs(pa, pb, upper):
     """_closest_elements as first written: every element pair's gap (element_gaps),
-    the reference the chunked first pass must equal."""
+    the reference the pruned search must equal."""
     from cablecheck.checker.cable import element_gaps
     from cablecheck.checker.closest import segment_segment
     n_s = len(pa)
@@ -397,7 +397,7 @@ def _closest_elements_of_all_pairs(pa, pb, upper):
 @settings(max_examples=examples(80), deadline=None)
 @given(st.integers(0, 2**32 - 1), st.integers(2, 40), st.integers(2, 40), st.integers(1, 6),
        st.sampled_from([1e-3, 1.0, 1e3]), st.sampled_from([0.0, 1e4]))
-def test_closest_elements_by_chunks_are_those_of_every_pair(seed, na, nb, states, unit, far):
+def test_closest_elements_pruned_are_those_of_every_pair(seed, na, nb, states, unit, far):
     """Drawn polylines (random walks crossing each other, many states, mm or m,
     far from the origin) and drawn limits, some at an element pair's exact
     gap: the chunked search returns, to the bit, what comparing every
