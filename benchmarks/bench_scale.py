@@ -2,7 +2,11 @@
 
 Scenes come from :func:`cablecheck.bench.harness.harness_scene` (cables of ``--segments``
 elements threaded through non-overlapping parts, a few within the
-clearance, one carriage rising and falling once over the run), settled for
+clearance, one carriage rising and falling once over the run; with
+``--layout crossing`` the runs table's come from
+:func:`cablecheck.bench.crossing.crossing_scene` instead: two families of
+cables crossing and resting on each other among parts scattered at random,
+a third of them hugging a route), settled for
 ``--settle`` seconds before t = 0 (default :data:`cablecheck.bench.harness.SETTLE`, which
 brings the 64 x 1,000 harness to rest; ``--settle 0`` runs them from their
 drooped routes, every cable falling into its sag over the first 0.2 s and
@@ -297,24 +301,30 @@ def build_table(parts: list[int], before: str | None, mem_gb: float) -> tuple[st
 
 def run_table(grid: list[tuple[int, int]], duration: float, segments: int, mem_gb: float, out: Path,
               validate: bool, before: str | None = None, growth_too: bool = False,
-              settle: float = 0.0) -> tuple[str, list[dict]]:
+              settle: float = 0.0, layout: str = "lattice") -> tuple[str, list[dict]]:
     """Each grid scene run by this checkout and, with ``before``, by that git
     revision (the same scene file, one process each, rows side by side),
     settled ``settle`` seconds before t = 0 (not timed per simulated second:
-    the report's timing starts after it)."""
+    the report's timing starts after it). ``layout``: "lattice"
+    (:func:`cablecheck.bench.harness.harness_scene`, each cable in its own
+    channel) or "crossing" (:func:`cablecheck.bench.crossing.crossing_scene`,
+    cables crossing and resting on each other among scattered parts)."""
+    from cablecheck.bench.crossing import crossing_scene
     from cablecheck.bench.harness import harness_scene, write_scene
+
+    make = (lambda c, p, **kw: crossing_scene(max(c, 2), p, **kw)) if layout == "crossing" else harness_scene
 
     trees = [("this checkout", REPO)]
     if before:
         trees.append((f"before ({before})", _export(before)))
     rows, found = [], []
     for c, p in grid:
-        data = harness_scene(c, p, segments=segments, duration=duration, settle=settle)
+        data = make(c, p, segments=segments, duration=duration, settle=settle)
         data["check"]["validate"] = validate
-        scene = write_scene(data, out / f"harness_{c}x{p}.toml")
+        scene = write_scene(data, out / f"{layout}_{c}x{p}.toml")
         for k, (label, path) in enumerate(trees):
             tag = "" if k == 0 else "_before"
-            rep, rec = out / f"harness_{c}x{p}{tag}.json", out / f"harness_{c}x{p}{tag}.rrd"
+            rep, rec = out / f"{layout}_{c}x{p}{tag}.json", out / f"{layout}_{c}x{p}{tag}.rrd"
             rep.unlink(missing_ok=True)
             code, wall, rss, so, se = _child(["-m", "cablecheck.cli.main", "run", str(scene), "--report", str(rep),
                                               "--record", str(rec)], path, mem_gb, 3600)
@@ -340,7 +350,7 @@ def run_table(grid: list[tuple[int, int]], duration: float, segments: int, mem_g
                 rows.append([label, c, p, None, None, None, None, None, None, wall, rss, None,
                              f"failed ({code}): {last[:80]}"])
                 found.append({"code": label, "cables": c, "parts": p, "failed": last, "peak_rss_mb": rss})
-    title = (f"Runs: seconds per simulated second ({duration} s simulated after {settle} s of settling, "
+    title = (f"Runs ({layout} layout): seconds per simulated second ({duration} s simulated after {settle} s of settling, "
              f"{segments} elements per cable, "
              f"validation {'on' if validate else 'off'}), one process per row, address space <= {mem_gb} GB")
     if growth_too:
@@ -439,6 +449,10 @@ def main() -> int:
     ap.add_argument("--settle", type=float, default=None,
                     help="seconds settled before t = 0 in the runs and the profile (default cablecheck.bench.harness.SETTLE)")
     ap.add_argument("--harness", action="store_true", help="also run the 64 x 1,000 harness scene")
+    ap.add_argument("--layout", choices=("lattice", "crossing"), default="lattice",
+                    help="the runs table's scenes: each cable in its own channel through a lattice of parts "
+                         "(cablecheck.bench.harness), or two families crossing and resting on each other among "
+                         "scattered parts (cablecheck.bench.crossing)")
     ap.add_argument("--rec-growth", action="store_true",
                     help="also run each scene for half the duration: the recording's growth per simulated second")
     ap.add_argument("--no-validate", action="store_true", help="runs without the MuJoCo comparison")
@@ -496,7 +510,7 @@ def main() -> int:
     for name, fn in (("build", lambda: build_table(build_parts, a.before or None, a.mem_limit_gb)),
                      ("runs", lambda: run_table(grid, duration, a.segments, a.mem_limit_gb, a.out,
                                                 not a.no_validate, a.before or None, a.rec_growth,
-                                                settle)),
+                                                settle, a.layout)),
                      ("queries", lambda: query_table(grid, a.segments, a.mem_limit_gb, a.out)),
                      ("static", lambda: static_table([tuple(ints(a.static))], a.segments, a.mem_limit_gb, a.out))):
         if name not in a.tables.split(","):

@@ -1,0 +1,48 @@
+"""The scale benchmark's second harness layout (cablecheck.bench.crossing): cables of
+two families crossing, parts scattered clear of the routes and of each other, a
+third hugging a route, and a small one run: cables on cables at and inside the
+clearance, as MuJoCo finds them too."""
+
+import numpy as np
+import pytest
+
+from cablecheck.bench.crossing import HUG_EVERY, crossing_scene, parts_overlap, routes_gap
+from cablecheck.bench.harness import write_scene
+from cablecheck.scene.load import load_scene
+
+
+@pytest.mark.parametrize("cables, parts", [(2, 10), (7, 90), (16, 300)])
+def test_sizes_parse_parts_keep_clear_and_some_hug_a_route(tmp_path, cables, parts):
+    data = crossing_scene(cables, parts, segments=12, duration=0.5)
+    scene = load_scene(write_scene(data, tmp_path / "c.toml"))
+    assert len(scene.cables) == cables and len(scene.parts) == parts + 1              # + the slider's plate
+    trunk = [c for c in data["cables"] if c["name"].startswith("trunk/")]
+    branch = [c for c in data["cables"] if c["name"].startswith("branch/")]
+    assert len(trunk) == cables // 2 and len(branch) == cables - cables // 2
+    # every branch crosses every trunk cable, above it
+    for t in trunk:
+        for b in branch:
+            assert 0 < b["start"]["pos"][0] < t["end"]["pos"][0] and 0 < t["start"]["pos"][1] < b["end"]["pos"][1]
+            assert b["start"]["pos"][2] > t["start"]["pos"][2]
+    gap = routes_gap(data)
+    assert gap.min() >= 1.0 - 1e-9 and parts_overlap(data) == 0
+    assert (gap <= 6.0 + 1e-9).sum() >= parts // HUG_EVERY
+
+
+def test_bad_sizes_are_refused():
+    with pytest.raises(ValueError):
+        crossing_scene(1, 10)
+
+
+def test_a_small_crossing_harness_runs_with_cables_on_cables(tmp_path):
+    """Four cables, the branches sagging onto the trunk: cable-cable records the
+    checker and MuJoCo's contacts both see, and the run complete."""
+    from cablecheck.run.runner import RunOptions, run_scene
+
+    data = crossing_scene(4, 30, segments=16, duration=0.05, settle=0.3)
+    scene = load_scene(write_scene(data, tmp_path / "c.toml"))
+    report = run_scene(scene, RunOptions(report=tmp_path / "r.json", record=None))
+    assert report["complete"]
+    pairs = {(e["a"], e["b"]) for e in report["events"] if e["type"] == "cable-cable"}
+    assert pairs and all(a.split("/")[0] != b.split("/")[0] for a, b in pairs)
+    assert report["validation"]["agreement"] >= 0.9
