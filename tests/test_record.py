@@ -875,6 +875,86 @@ def test_a_spots_rows_sent_as_arrays_read_back_row_by_row(tmp_path):
         assert np.allclose(r.get("LineStrips3D:radii") or [], widths, rtol=1e-6)
 
 
+
+def test_between_samples_only_the_updated_pairs_and_their_cables_are_given(tmp_path):
+    """A frame between the regular samples (an event's worst instant) gives
+    rows to its updated pairs and keeps their cables' shapes only: another
+    clash still shown keeps its last row, its spot not emptied until the
+    frame after it is last shown, and a cable of no updated pair (moved, its
+    colours the same) keeps its last shape; a pair shown again after a gap
+    gets a row though not asked for."""
+    import rerun as rr
+    from types import SimpleNamespace
+    from cablecheck.record.cables import CableFrames
+    from cablecheck.record.columns import times as sim_time
+    from cablecheck.record.marks import ClashMarks, Mark
+    rest = np.linspace(0.0, 100.0, 11)
+    cables = [SimpleNamespace(name=n, rest_s=rest, element_length=10.0, radius=2.0) for n in ("a", "b")]
+    built = SimpleNamespace(cables=cables, parts=[SimpleNamespace(name="p")])
+    marks = ClashMarks(built, 1.0, "mm", None)
+    frames = CableFrames(built, 1.0)
+    line = np.stack([rest, np.zeros(11), np.zeros(11)], axis=1)
+    on_part = lambda d: Mark("cable-structure", "a", "p", d, "soft", np.array([50.0, 0.0, 0.0]), 50.0, None)
+    on_cable = lambda d: Mark("cable-cable", "a", "b", d, "soft", np.array([20.0, 0.0, 0.0]), 20.0, None)
+    A, B = ("cable-structure", "a", "p"), ("cable-cable", "a", "b")
+    script = [([on_part(1.0), on_cable(1.5)], None), ([on_part(0.5), on_cable(1.4)], {A}),
+              ([on_part(0.6), on_cable(1.3)], set()), ([on_part(0.7)], None), ([on_part(0.8)], set()),
+              ([on_part(0.9), on_cable(1.2)], set())]
+    given = []
+    for f, (ms, update) in enumerate(script):
+        _, updated = marks.add(f, ms, [line + f, line + f], np.zeros((1, 4, 4)), update)
+        frames.add(f, [line + f, line + f], ms, True, None if update is None else {n for _, a, b in updated for n in (a, b)})
+        given.append(updated)
+    assert given == [{A, B}, {A}, set(), {A}, set(), {B}]
+    assert frames._frames == [[0, 1, 3, 5], [0, 3, 5]]
+    record = tmp_path / "light.rrd"
+    rec = rr.RecordingStream("light-test")
+    rec.save(str(record))
+    marks.send(rec, np.arange(6) * 0.01, (np.zeros(3), np.full(3, 100.0)), 2.0)
+    rec.disconnect()
+    def at(path):
+        return {round(r["t"] / 0.01): len(r.get("Ellipsoids3D:centers") or []) for r in _rows(record, path)
+                if r["t"] is not None}
+    assert at("/world/interference/cable-structure/a/p") == {0: 1, 1: 1, 3: 1}
+    assert at("/world/interference/cable-cable/a/b") == {0: 1, 3: 0, 5: 1}
+
+
+
+def test_a_harness_of_many_elements_keeps_its_shapes_within_the_budget(tmp_path):
+    """A crossing harness of 26 cables of 40 elements (1,040 elements, over
+    CABLE_SHAPES / RECORD_RATE): its cables' shapes come at every second
+    regular sample at most (and at their own events' instants between
+    samples); each event's worst instant still shows its spot, and its
+    cables' last shape then lies within a quarter radius of their centres."""
+    from cablecheck.bench.crossing import RADIUS, crossing_scene
+    from cablecheck.bench.harness import write_scene
+    from cablecheck.run.runner import CABLE_SHAPES, RECORD_RATE
+    data = crossing_scene(26, 5, segments=40, duration=0.1, settle=0.2)
+    scene = write_scene(data, tmp_path / "c.toml")
+    record = tmp_path / "c.rrd"
+    assert main(["run", str(scene), "--record", str(record), "--quiet", "--fail-on", "never",
+                 "--report", str(tmp_path / "c.json")]) == 0
+    report = json.loads((tmp_path / "c.json").read_text())
+    assert 26 * 40 * RECORD_RATE > CABLE_SHAPES
+    samples = np.round(np.arange(0.0, 0.1 + 1e-9, 1.0 / RECORD_RATE), 6)
+    events = [e for e in report["events"] if e["type"] == "cable-cable"]
+    assert events
+    from cablecheck.record.style import escape
+    for c in data["cables"]:
+        times = np.round([r["t"] for r in _cable_rows(record, escape(c["name"]))], 6)
+        assert len(times)
+        own = {round(e["t_worst"], 6) for e in events if c["name"] in (e["a"], e["b"])} | \
+              {round(e["t_start"], 6) for e in events if c["name"] in (e["a"], e["b"])}
+        regular = [t for t in times if t in samples and t not in own]
+        odd = [t for t in regular if round(t * RECORD_RATE) % 2 and t < samples[-1]]
+        assert not odd, (c["name"], odd)
+    from cablecheck.record.style import pair_path
+    for e in events[:5]:
+        spot = [r for r in _rows(record, f"/world/interference/{pair_path('cable-cable', e['a'], e['b'])}")
+                if r["t"] is not None and r["t"] == pytest.approx(e["t_worst"], abs=1e-9)]
+        assert spot and spot[0]["Ellipsoids3D:centers"]
+
+
 FLOOR_SCENE = """
 [scene]
 name = "on-floor"

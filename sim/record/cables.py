@@ -23,7 +23,11 @@ where it moved by more than :data:`STILL` radii since the last shape kept
 At a frame recorded only because an event starts or ends there (not one
 of the run's regular samples) a cable's shape is kept only if its state
 colours change there: the colours change exactly when the clash does, and
-a harness of many cables does not store every shape at every step.
+a harness of many cables does not store every shape at every step. At a
+frame between the regular samples (an event's worst instant, start or
+end), only that event's cables are given, where their colours change or
+they moved more than :data:`LIGHT_STILL` radii; the others' shapes and
+colours stand, at most a sample old.
 Buffered per frame and sent in one column per cable when the recording is
 closed.
 
@@ -57,6 +61,12 @@ STILL = 0.05
 """A cable whose centres all moved less than this many radii (in each
 coordinate) since its last kept shape is not stored again at a frame: the
 viewer shows the kept one, off by a twentieth of the cable's thickness."""
+LIGHT_STILL = 0.25
+"""At an event's worst instant between the regular samples, its cables'
+shapes are kept only where they moved more than this many radii since
+their last kept shape: the spot then sits within a quarter of the
+cable's thickness of the cable drawn (a harness's events deepen at most
+steps: keeping every shape of theirs stored most cables at most steps)."""
 LABEL_AT = (0.5, 0.3, 0.7, 0.4, 0.6, 0.2, 0.8)
 """Where along each cable (fraction of its length, in the scene's order of
 cables, cycled) its name goes if nothing else is near there."""
@@ -131,22 +141,32 @@ class CableFrames:
         self._states: list[list[np.ndarray]] = [[] for _ in built.cables]
         self._frames: list[list[int]] = [[] for _ in built.cables]
 
-    def add(self, frame: int, cables: list[np.ndarray], marks: list[Mark], sampled: bool = True) -> None:
+    def add(self, frame: int, cables: list[np.ndarray], marks: list[Mark], sampled: bool = True,
+            keep: set[str] | None = None) -> None:
         """One frame: body centres (metres) and the clashes that colour them.
         A cable's shape is kept where its states change, and at a `sampled`
         frame where any centre moved more than :data:`STILL` radii since its
         last kept shape (a frame recorded only because an event starts or
-        ends there, not `sampled`, keeps it only where its states change)."""
+        ends there, not `sampled`, keeps it only where its states change);
+        with `keep` (a frame between the regular samples), a cable not named
+        there keeps its last shape and colours, and one named there is kept
+        where its states change or it moved more than :data:`LIGHT_STILL`
+        radii (an event's worst instant, start or end: its own cables)."""
         state = [np.zeros(len(c.rest_s) - 1, np.uint8) for c in self.built.cables]
         for m in marks:
             self._state_near(state, m.a, m.s, _RANK[m.state], whole=(m.kind == "taut"))
             if m.s_b is not None and m.b in self._index:
                 self._state_near(state, m.b, m.s_b, _RANK[m.state], whole=False)
         u = self.unit
+        names = [c.name for c in self.built.cables]
         for i, pts in enumerate(cables):
             pts = np.asarray(pts, float) / u
+            if keep is not None and names[i] not in keep and self._states[i]:
+                continue                    # between samples, a cable of no updated pair stands
+            taken = sampled and (keep is None or names[i] in keep)
+            still = self._still[i] * (1.0 if keep is None else LIGHT_STILL / STILL)
             if self._states[i] and np.array_equal(self._states[i][-1], state[i]) and (
-                    not sampled or np.abs(pts - self._points[i][-1]).max() <= self._still[i]):
+                    not taken or np.abs(pts - self._points[i][-1]).max() <= still):
                 continue
             self._frames[i].append(frame)
             self._points[i].append(pts)

@@ -79,14 +79,31 @@ class ClashMarks:
         self._cable_spots: dict[int, list[tuple]] = {}
         self._lane: dict[str, str] = {}
         self._lanes: dict[str, tuple[list[int], list[str]]] = {}
+        # pair path -> the frames it is shown at (a row at each, or the last row standing)
+        self._present: dict[str, list[int]] = {}
 
-    def add(self, frame: int, marks: list[Mark], cables: list[np.ndarray], poses: np.ndarray) -> bool:
-        """The frame's clashes; True if any is shown."""
+    def add(self, frame: int, marks: list[Mark], cables: list[np.ndarray], poses: np.ndarray,
+            update: set[tuple[str, str, str]] | None = None) -> tuple[bool, set[tuple[str, str, str]]]:
+        """The frame's clashes: whether any is shown, and the pairs (kind, a, b)
+        given a row. ``update``: at a frame between the run's regular samples,
+        the pairs to give a row (an event's worst or start there); any other
+        pair still shown keeps its last row, unless it was not shown at the
+        frame before (then it gets one too). None: every pair."""
         u = self.unit
         now = set()
+        updated: set[tuple[str, str, str]] = set()
         for m in marks:
             path = pair_path(m.kind, m.a, m.b)
             now.add(path)
+            present = self._present.setdefault(path, [])
+            key = (m.kind, m.a, m.b)
+            if update is not None and key not in update and present and present[-1] == frame - 1:
+                present.append(frame)
+                if self._lane.get(path) != m.state:
+                    self._set_lane(path, frame, m.state)
+                continue
+            present.append(frame)
+            updated.add(key)
             rows = self._rows.setdefault(path, [])
             # the other side's closest point is found with the others of its part or cable at the end
             where = np.asarray(m.where, float)
@@ -103,7 +120,7 @@ class ClashMarks:
                 self._set_lane(path, frame, m.state)
         for path in [p for p, s in self._lane.items() if p not in now and s != "clear"]:
             self._set_lane(path, frame, "clear")
-        return bool(now)
+        return bool(now), updated
 
     def _set_lane(self, path: str, frame: int, state: str) -> None:
         self._lane[path] = state
@@ -145,7 +162,7 @@ class ClashMarks:
                  for path, rows in self._rows.items()}
         lifts = label_lifts(self._rows, radii, LABEL_STEP * diag / self.unit)
         for path, rows in self._rows.items():
-            self._send_spot(rec, path, rows, n_f, index, radii[path], lifts[path])
+            self._send_spot(rec, path, rows, n_f, index, radii[path], lifts[path], self._present[path])
 
     def _radius(self, cable: str) -> float:
         i = self._cable_index.get(cable)
@@ -153,20 +170,23 @@ class ClashMarks:
 
     @staticmethod
     def _send_spot(rec: rr.RecordingStream, path: str, rows: list, n_f: int, index, radius: float,
-                   lifts: np.ndarray) -> None:
+                   lifts: np.ndarray, present: list[int] | None = None) -> None:
         """One pair's spot (a wire sphere of `radius`, scene units, standing out of
         the cable; the cable, the gap and the part stay visible inside it), its
         label `lifts` (one per row, scene units; NaN: no label at that frame)
-        above its centre, and its gap. Its rows at once, as arrays."""
+        above its centre, and its gap, emptied at the frame after each run of
+        `present` frames (those of the rows where None). Its rows at once, as
+        arrays."""
         frame = np.array([r[0] for r in rows], np.int64)
+        shown = frame if present is None else np.asarray(present, np.int64)
         where = np.array([r[1] for r in rows], float).reshape(-1, 3)
         other = np.array([np.full(3, np.nan) if r[2] is None else r[2] for r in rows], float).reshape(-1, 3)
+        ends = shown[np.r_[shown[1:] > shown[:-1] + 1, True]] + 1
         shown = ~np.isnan(lifts)
         labels = [r[3] if k else "" for r, k in zip(rows, shown)]
         top = where.copy()
         top[:, 2] += np.where(shown, lifts, LABEL_ABOVE * radius)
         # emptied at the frame after each run of frames (an entry with nothing in it)
-        ends = frame[np.r_[frame[1:] > frame[:-1] + 1, True]] + 1
         ends = ends[ends < n_f]
         frames = np.r_[frame, ends]
         order = np.argsort(frames, kind="stable")

@@ -128,7 +128,8 @@ class Recorder:
     def log_step(self, t: float, cables: list[np.ndarray], part_poses: np.ndarray,
                  marks: list[Mark], strain: np.ndarray, bend: np.ndarray,
                  near: dict[tuple[str, str, str], float] | None = None,
-                 qpos: np.ndarray | None = None, sampled: bool = True) -> None:
+                 qpos: np.ndarray | None = None, sampled: bool = True,
+                 update: set[tuple[str, str, str]] | None = None, shapes: bool = True) -> None:
         """One frame: moving parts' poses, cables (coloured near the clashes),
         the clashes' spots, per-cable series and pair distances. `sampled`:
         one of the run's regular samples; False for a frame recorded only
@@ -138,7 +139,13 @@ class Recorder:
         pairs a full check since the last frame evaluated up to its horizon,
         (type, a, b) -> distance in metres (a pair's distance line runs while
         it is below the clearance or in the last full check's list, and breaks
-        when it leaves both). Starts the frame the other `log_*` calls of
+        when it leaves both). `update`: at a frame between the regular
+        samples (an event's worst instant, or its start), the pairs (kind, a,
+        b) whose spots, distances and cables are given there; the other
+        clashes stand as last given (`ClashMarks.add`). None: every one.
+        `shapes` False (a regular sample of a scene of many cable elements,
+        `cablecheck.run.runner.CABLE_SHAPES`): the cables of no updated pair
+        stand as last given. Starts the frame the other `log_*` calls of
         this time add to."""
         u = self.unit
         frame = len(self._times)
@@ -148,7 +155,9 @@ class Recorder:
         if vis is not None:
             self._vis_poses.append(vis)
         self._contacts.append(None)
-        self.cables.add(frame, cables, marks, sampled)
+        shown, updated = self.marks.add(frame, marks, cables, part_poses, update)
+        keep = None if update is None else {n for _, a, b in updated | update for n in (a, b)}
+        self.cables.add(frame, cables, marks, sampled, keep if shapes else (keep or set()))
         self._sampled = sampled
         add = self.series.add
         for (strain_path, strain_label, bend_path, bend_label), e, b in zip(self._cable_series, strain, bend):
@@ -156,7 +165,6 @@ class Recorder:
                 add(strain_path, frame, 100.0 * float(e), strain_label)
             if sampled and np.isfinite(b):
                 add(bend_path, frame, float(b / u), bend_label)
-        shown = self.marks.add(frame, marks, cables, part_poses)
         if shown != self._dimmed:      # parts translucent while a clash is shown
             self._dimmed = shown
             self._dim_changes.append((frame, shown))
@@ -164,7 +172,8 @@ class Recorder:
         for m in marks:
             path = _distance_path(m.kind, m.a, m.b)
             known.add(path)
-            add(path, frame, m.distance / u, f"{m.kind}: {pair_text(m.a, m.b)}")
+            if update is None or (m.kind, m.a, m.b) in updated:
+                add(path, frame, m.distance / u, f"{m.kind}: {pair_text(m.a, m.b)}")
         if near is not None:
             self._near_paths = set()
             for (kind, a, b), d in near.items():

@@ -34,6 +34,7 @@ the report.
 
 from __future__ import annotations
 
+import math
 import time
 import traceback
 from collections.abc import Callable, Iterator
@@ -97,6 +98,14 @@ if TYPE_CHECKING:
 
 RECORD_RATE = 100.0
 """Recorded frames per simulated second (checks still run at every checked step)."""
+
+CABLE_SHAPES = 100_000
+"""Element shapes per simulated second the regular samples record at most:
+a scene of more cable elements than CABLE_SHAPES / RECORD_RATE (1,000)
+gives its cables' shapes at every second, third, ... regular sample only
+(28 bytes an element a frame: 64 hoses of 40 elements at 100 Hz alone were
+7 MB a simulated second). Its events' worst instants, starts and ends still
+give their own cables' shapes."""
 
 
 @dataclass(frozen=True)
@@ -308,8 +317,10 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         timer.skip()          # opening the recording is no step's cost (it was never timed)
         tracker = EventTracker(hold=3 * every * scene.timestep, allow=checks.allow)
         joints = JointLog(built, sim.motion)
+        elements = sum(len(c.rest_s) - 1 for c in built.cables)
+        shape_every = max(1, math.ceil(elements * RECORD_RATE / CABLE_SHAPES))
         out = _Checked(built, tracker, recorder, timer, progress, record_stride, sim.total_steps, joints, wear,
-                       checks.exclusions, evidence=options.html is not None)
+                       checks.exclusions, evidence=options.html is not None, shape_every=shape_every)
     except BaseException:
         if ahead is not None:
             ahead.close()
@@ -454,8 +465,9 @@ class _Checked:
 
     def __init__(self, built: Built, tracker: EventTracker, recorder: Recorder | None, timer: _Timer,
                  progress: Progress | None, record_stride: int, total_steps: int, joints: JointLog,
-                 wear: WearMap, exclusions=(), evidence: bool = False):
+                 wear: WearMap, exclusions=(), evidence: bool = False, shape_every: int = 1):
         self.built, self.tracker, self.recorder, self.timer = built, tracker, recorder, timer
+        self.shape_every = shape_every          # regular samples per one giving every cable's shape
         self.joints = joints
         self.wear = wear
         self.near = _NearPairs(built, exclusions, built.scene.check.clearance)
@@ -570,15 +582,21 @@ class _Checked:
             if res.near is not None:
                 self.pending_near = res.near     # a full check's candidates, shown at the next frame
             self.timer.lap("check")
-            # a regular sample, the last step, or an event's worst so far: a whole frame
-            sampled = (self.checked % self.record_stride == 0 or state.step == self.total_steps
-                       or k in worst_states)
+            # a regular sample or the last step: a whole frame; an event's worst so far, or
+            # a start or an end, between them: a frame of those events' pairs (the others stand)
+            last = state.step == self.total_steps
+            regular = self.checked % self.record_stride == 0 or last
+            shapes = last or (self.checked // self.record_stride) % self.shape_every == 0
+            sampled = regular or k in worst_states
+            update = None if regular else (
+                {(PairType(p[0]).value, p[1], p[2]) for (p, _), at in deepest.items() if at == k}
+                | {(PairType(e.type).value, e.a, e.b) for e in (*started, *closed)})
             if recorder and (sampled or started or closed):
                 allow = self.tracker.allow   # allowed pairs are drawn as clear
                 shown = (replace(res, records=[r for r in res.records if not allow.match(self.tracker.key(r))])
                          if allow else res)
                 _record_step(recorder, state, shown, started, closed, self.near,
-                             self.pending_near, scale, self.built.scene.units, sampled)
+                             self.pending_near, scale, self.built.scene.units, sampled, update, shapes)
                 self.pending_near = None
                 if self.joints:
                     recorder.log_joints(self.joints.names, self.joints.units, self.joints.values(state.t)[0])
@@ -697,10 +715,15 @@ def _twist_moment(defn, radius: float, length: float, twist: float) -> float:
 
 
 def _record_step(recorder: Recorder, state, res, started, closed, near: _NearPairs, pending,
-                 unit: float, units: str, sampled: bool = True) -> None:
+                 unit: float, units: str, sampled: bool = True, update: set | None = None,
+                 shapes: bool = True) -> None:
     """One recorded frame: the step's clashes as marks, the pairs evaluated
     near the clearance (approach history), contacts, agreement, event entries
-    (`started`: the events starting here, as they started)."""
+    (`started`: the events starting here, as they started). `update`: at a
+    frame between the regular samples, the pairs given there (`Recorder.log_step`);
+    MuJoCo's contacts are then not given again (those of the last sample stand).
+    `shapes`: at a regular sample, whether every cable's shape is given
+    (`CABLE_SHAPES`)."""
     from cablecheck.record.marks import (
         Mark,  # imported already by the run's Recorder (a recording run)
     )
@@ -708,8 +731,9 @@ def _record_step(recorder: Recorder, state, res, started, closed, near: _NearPai
     marks = [Mark(PairType(r.type).value, r.a, r.b, float(r.min_distance), Severity(r.severity).value,
                   np.asarray(r.where), float(r.s), r.s_b) for r in res.records]
     recorder.log_step(state.t, state.cables, state.part_poses, marks, strain=res.strain, bend=res.bend,
-                      near=None if pending is None else near.distances(pending), qpos=state.qpos, sampled=sampled)
-    if res.contacts is not None:
+                      near=None if pending is None else near.distances(pending), qpos=state.qpos, sampled=sampled,
+                      update=update, shapes=shapes)
+    if res.contacts is not None and update is None:
         recorder.log_contacts(res.contacts.pos)
     if res.agreement is not None:
         recorder.log_scalar("validation/agreement", res.agreement, label="agreement with MuJoCo")
