@@ -23,10 +23,10 @@ Not here: building, running, timing (``benchmarks/bench_scale.py``).
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from scipy.spatial import cKDTree
+
+from cablecheck.bench.harness import bounding_radius
 
 SPAN = 1000.0
 """Length of the square the cables cross, mm."""
@@ -47,16 +47,6 @@ SLIDER_TRAVEL = 40.0
 """The slider's rise, mm."""
 
 KINDS = ("box", "cylinder", "sphere", "capsule", "ellipsoid")
-
-
-def _bounding_radius(kind: str, raw: np.ndarray) -> float:
-    if kind == "box":
-        return float(np.linalg.norm(raw))
-    if kind == "cylinder":
-        return float(math.hypot(raw[0], raw[1]))
-    if kind == "capsule":
-        return float(raw[0] + raw[1])
-    return float(np.max(raw[:1] if kind == "sphere" else raw))
 
 
 def crossing_scene(n_cables: int = 64, n_parts: int = 1000, segments: int = 40, duration: float = 1.0,
@@ -122,7 +112,8 @@ def _scatter(rng: np.random.Generator, n_parts: int, a: np.ndarray, b: np.ndarra
         tries += batch
         kinds = [KINDS[(len(parts) + k) % len(KINDS)] for k in range(batch)]
         raw = rng.uniform(3.0, 9.0, (batch, 3))
-        rho = np.array([_bounding_radius(k, r) for k, r in zip(kinds, raw)])
+        sizes = [r[:1] if k == "sphere" else r[:2] if k in ("cylinder", "capsule") else r for k, r in zip(kinds, raw)]
+        rho = np.array([bounding_radius(k, x) for k, x in zip(kinds, sizes)])
         pos = rng.uniform([0.0, 0.0, 60.0], [SPAN, SPAN, 260.0], (batch, 3))
         t = np.clip(np.einsum("nri,ri->nr", pos[:, None, :] - a[None], d) / np.einsum("ri,ri->r", d, d), 0.0, 1.0)
         gap = np.linalg.norm(pos[:, None, :] - (a[None] + t[..., None] * d[None]), axis=2).min(axis=1) - rho - RADIUS
@@ -134,10 +125,7 @@ def _scatter(rng: np.random.Generator, n_parts: int, a: np.ndarray, b: np.ndarra
                 continue
             if len(radii) and (np.linalg.norm(centres - pos[k], axis=1) < radii + rho[k] + 0.5).any():
                 continue
-            kind = kinds[k]
-            size = {"box": raw[k], "ellipsoid": raw[k], "sphere": raw[k, :1], "cylinder": raw[k, :2],
-                    "capsule": raw[k, :2]}[kind]
-            parts.append({"name": f"frame/p{len(parts)}", "shape": kind, "size": [float(x) for x in size],
+            parts.append({"name": f"frame/p{len(parts)}", "shape": kinds[k], "size": [float(x) for x in sizes[k]],
                           "pos": [float(x) for x in pos[k]],
                           "euler": [float(x) for x in rng.uniform(-180.0, 180.0, 3)]})
             centres = np.vstack([centres, pos[k]])
@@ -154,7 +142,7 @@ def routes_gap(data: dict) -> np.ndarray:
     d = b - a
     parts = [p for p in data["parts"] if p.get("body", "world") == "world"]
     pos = np.array([p["pos"] for p in parts], float)
-    rho = np.array([_bounding_radius(p["shape"], np.array(p["size"], float)) for p in parts])
+    rho = np.array([bounding_radius(p["shape"], np.array(p["size"], float)) for p in parts])
     t = np.clip(np.einsum("nri,ri->nr", pos[:, None, :] - a[None], d) / np.einsum("ri,ri->r", d, d), 0.0, 1.0)
     return np.linalg.norm(pos[:, None, :] - (a[None] + t[..., None] * d[None]), axis=2).min(axis=1) - rho - RADIUS
 
@@ -163,6 +151,6 @@ def parts_overlap(data: dict) -> int:
     """How many pairs of world parts' bounding spheres meet (for tests: none)."""
     parts = [p for p in data["parts"] if p.get("body", "world") == "world"]
     pos = np.array([p["pos"] for p in parts], float)
-    rho = np.array([_bounding_radius(p["shape"], np.array(p["size"], float)) for p in parts])
+    rho = np.array([bounding_radius(p["shape"], np.array(p["size"], float)) for p in parts])
     pairs = cKDTree(pos).query_pairs(2 * float(rho.max()), output_type="ndarray")
     return int((np.linalg.norm(pos[pairs[:, 0]] - pos[pairs[:, 1]], axis=1) < rho[pairs[:, 0]] + rho[pairs[:, 1]]).sum())

@@ -60,7 +60,8 @@ by 0.7 s. Longer spans (few cables among many parts) sag more and need more."""
 KINDS = ("box", "cylinder", "capsule", "sphere", "ellipsoid")
 
 
-def _bounding_radius(kind: str, size: np.ndarray) -> float:
+def bounding_radius(kind: str, size: np.ndarray) -> float:
+    """The radius of a sphere about a primitive part's origin holding it (its size as the scene gives it)."""
     if kind == "box":
         return float(np.linalg.norm(size))
     if kind in ("cylinder",):
@@ -108,7 +109,7 @@ def harness_scene(n_cables: int = 64, n_parts: int = 1000, segments: int = 40, d
         raw = rng.uniform(4.0, 12.0, size=3)
         size = {"box": raw, "ellipsoid": raw, "sphere": raw[:1], "cylinder": raw[:2],
                 "capsule": raw[:2]}[kind]
-        rho = _bounding_radius(kind, size)
+        rho = bounding_radius(kind, size)
         if rho > MAX_RADIUS:
             size = size * (MAX_RADIUS / rho)
             rho = MAX_RADIUS
@@ -184,7 +185,7 @@ def _drop_overlaps(parts: list[dict]) -> list[dict]:
     if not parts:
         return parts
     c = np.array([p["pos"] for p in parts], float)
-    r = np.array([_bounding_radius(p["shape"], np.array(p["size"])) for p in parts])
+    r = np.array([bounding_radius(p["shape"], np.array(p["size"])) for p in parts])
     pairs = cKDTree(c).query_pairs(2 * float(r.max()) + CLEARANCE, output_type="ndarray")
     if not len(pairs):
         return parts
