@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from helpers import examples
 from hypothesis import given, settings, strategies as st
 
 from cablecheck.checker.recheck import Recheck, convex_hull_shape
@@ -116,7 +117,7 @@ def test_near_on_a_self_pair_measures_with_the_wider_window(recheck):
         assert state.near(key, limit) == pytest.approx(14.0 * np.sin(w / 14.0) - 2.0, abs=0.03)
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=examples(20), deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), copies=st.integers(1, 30), windows=st.booleans(), limited=st.booleans())
 def test_exact_records_of_many_pairs_at_once_are_each_pairs_alone(seed, copies, windows, limited):
     """Drawn cables against drawn parts (a mesh, primitives, a keep-out; some

@@ -929,14 +929,14 @@ def test_a_harness_of_many_elements_keeps_its_shapes_within_the_budget(tmp_path)
     from cablecheck.bench.crossing import RADIUS, crossing_scene
     from cablecheck.bench.harness import write_scene
     from cablecheck.run.runner import CABLE_SHAPES, RECORD_RATE
-    data = crossing_scene(26, 5, segments=40, duration=0.1, settle=0.2)
+    data = crossing_scene(26, 5, segments=40, duration=0.06, settle=0.1)
     scene = write_scene(data, tmp_path / "c.toml")
     record = tmp_path / "c.rrd"
     assert main(["run", str(scene), "--record", str(record), "--quiet", "--fail-on", "never",
                  "--report", str(tmp_path / "c.json")]) == 0
     report = json.loads((tmp_path / "c.json").read_text())
     assert 26 * 40 * RECORD_RATE > CABLE_SHAPES
-    samples = np.round(np.arange(0.0, 0.1 + 1e-9, 1.0 / RECORD_RATE), 6)
+    samples = np.round(np.arange(0.0, 0.06 + 1e-9, 1.0 / RECORD_RATE), 6)
     events = [e for e in report["events"] if e["type"] == "cable-cable"]
     assert events
     from cablecheck.record.style import escape
