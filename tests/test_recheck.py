@@ -120,8 +120,8 @@ def test_near_on_a_self_pair_measures_with_the_wider_window(recheck):
 @settings(max_examples=examples(20), deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), copies=st.integers(1, 30), windows=st.booleans(), limited=st.booleans())
 def test_exact_records_of_many_pairs_at_once_are_each_pairs_alone(seed, copies, windows, limited):
-    """Drawn cables against drawn parts (a mesh, primitives, a keep-out; some
-    with attachment windows), each copy its own pair, pose and state, some
+    """Drawn cables against drawn parts (a mesh, primitives, a keep-out, a
+    plane; some with attachment windows), each copy its own pair, pose and state, some
     limited below a value or to a span: exact_records_pairs gives, to the
     bit, each copy's record as exact_records_many of its pair alone, which
     is the one-part exact checker's own check."""
@@ -131,7 +131,8 @@ def test_exact_records_of_many_pairs_at_once_are_each_pairs_alone(seed, copies, 
     parts = [PartState("bracket", mesh_shape(BRACKET.vertices, BRACKET.faces), np.eye(4)),
              PartState("ball", Shape(ShapeType.SPHERE, [10.0]), np.eye(4)),
              PartState("box", Shape(ShapeType.BOX, [8.0, 5.0, 12.0]), np.eye(4)),
-             PartState("zone", Shape(ShapeType.CAPSULE, [6.0, 10.0]), np.eye(4), keepout=True)]
+             PartState("zone", Shape(ShapeType.CAPSULE, [6.0, 10.0]), np.eye(4), keepout=True),
+             PartState("floor", Shape(ShapeType.PLANE, [0.0, 0.0, 0.0]), np.eye(4))]
     names = ["c0", "c1", "c2"]
     excl = [Exclusion("c1", "box", 0.0, 30.0), Exclusion("c2", "ball", 40.0, 60.0)] if windows else []
     recheck = Recheck(parts, CheckConfig("points", clearance=3.0), excl)
