@@ -32,6 +32,7 @@ from cablecheck.checker.arrays import ranges
 from cablecheck.checker.closest import row_norm
 from cablecheck.checker.interference.discrete import discretise
 from cablecheck.checker.interference.hits import Hits, worst_records
+from cablecheck.checker.interference.pipeline import cable_cable_exact
 from cablecheck.checker.interference.structure import PartTable, structure_exact_pairs
 from cablecheck.checker.records import PART_TYPES, Interference, PairType
 from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
@@ -225,6 +226,8 @@ class StateRecheck:
         names = [a] if kind == PairType.SELF else [a, b]
         if any(n not in self.cables for n in names):
             return None
+        if kind == PairType.CABLE_CABLE:
+            return _distance(cable_cable_exact([self.cables[n] for n in names], self.owner.config), key)
         found = self.owner._cables.check([self.cables[n] for n in names])
         return _distance(found, key)
 

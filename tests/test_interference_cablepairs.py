@@ -299,3 +299,19 @@ def _next_to_active_every_pair(clearance, names, radii, dense, active):
     t, a, b, v, w, sb = (np.concatenate(x) for x in (t, a, b, v, w, sb))
     return worst_records(n_s, w // m, t, a, b, v, p[w], s[w], sb, clearance, names, lambda _: names)
 
+
+
+@settings(max_examples=40, deadline=None)
+@given(cable_sets(max_cables=3, max_points=14), st.floats(0.0, 0.01), st.sampled_from([0.5, 2.0]))
+def test_cable_cable_exact_alone_is_the_checks_own(cables, clearance, spacing):
+    """cable_cable_exact (the second opinion on a pair of cables, no search
+    along each cable) gives, bits and places included, the cable-cable
+    records of Checker.check with method exact, on drawn random walks that
+    fold and cross."""
+    from cablecheck.checker.interference.pipeline import cable_cable_exact
+    cfg = CheckConfig(method="exact", clearance=clearance, spacing=spacing)
+    got = cable_cable_exact(cables, cfg)
+    want = [r for r in Checker([], cfg).check(cables) if r.type == PairType.CABLE_CABLE]
+    assert [(r.type, r.a, r.b, r.min_distance, r.s, r.s_b) for r in got] == \
+        [(r.type, r.a, r.b, r.min_distance, r.s, r.s_b) for r in want]
+    assert all(np.array_equal(a.where, b.where) for a, b in zip(got, want))

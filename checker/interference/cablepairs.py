@@ -223,8 +223,10 @@ def point_pair_rows(p: np.ndarray, s: np.ndarray, cab: np.ndarray, rad: np.ndarr
     return rows
 
 
-def cable_pairs_exact(dp: Discrete, ch: Chunks, clearance: float, hits: Hits) -> None:
-    """Element-element pairs (capsule chains), self and cable-cable.
+def cable_pairs_exact(dp: Discrete, ch: Chunks, clearance: float, hits: Hits, self_pairs: bool = True) -> None:
+    """Element-element pairs (capsule chains), self and cable-cable (with
+    ``self_pairs`` False, cable-cable alone: the same candidates, bits
+    included, without the search along each cable).
 
     Element pairs are pruned by lower bounds on their distance before the
     exact segment-segment distance: the midpoints' distance minus the half
@@ -259,7 +261,7 @@ def cable_pairs_exact(dp: Discrete, ch: Chunks, clearance: float, hits: Hits) ->
 
     ea, eb = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
     pt = np.ascontiguousarray(p.T)
-    for k in range(1, min(NEAR, n - 2) + 1):
+    for k in range(1, min(NEAR, n - 2) + 1 if self_pairs else 1):
         # Elements e and e + k: the cheap arc-length test and the chord bound
         # on whole slices, the rest on the few survivors.
         m = n - k - 1
@@ -280,6 +282,7 @@ def cable_pairs_exact(dp: Discrete, ch: Chunks, clearance: float, hits: Hits) ->
         ok = within_reach(mid[i], mid[j], rad[i] + rad[j] + clearance + half[i] + half[j])
         ea.append(np.minimum(i[ok], j[ok]))
         eb.append(np.maximum(i[ok], j[ok]))
+        same &= self_pairs
         i, j = ch.expand(ca[same], cb[same])
         i, j = np.minimum(i, j), np.maximum(i, j)
         o = j - i > NEAR

@@ -254,6 +254,22 @@ class Checker:
         return Checked(hits.records(config.clearance, cable_names, names), found, near_misses)
 
 
+def cable_cable_exact(cables: Sequence[CableState], config: CheckConfig) -> list[Interference]:
+    """The cable-cable records :meth:`Checker.check` gives these cables with
+    method exact and no parts, to the bit, without their self pairs, bends
+    or tautness (a second opinion on one pair of cables: the search along
+    each cable was most of its cost)."""
+    config = CheckConfig(method="exact", spacing=config.spacing, clearance=config.clearance)
+    hits = Hits()
+    if len(cables) > 1:
+        dp = discretise(cables, config, (np.zeros(0, np.int64), np.zeros(0)))
+        has_next = np.concatenate([dp.cable[:-1] == dp.cable[1:], [False]])
+        ch = Chunks(dp.p, dp.s, dp.cable, has_next, dp.seg, 2.0 * float(dp.radius.max()) + config.clearance)
+        cable_pairs_exact(dp, ch, config.clearance, hits, self_pairs=False)
+    names = [c.name for c in cables]
+    return hits.records(config.clearance, names, lambda _: names)
+
+
 def near_miss_errors(cables: Sequence[CableState], config: CheckConfig) -> np.ndarray:
     """(C,) per cable, how far past the clearance a cable-part pair may read by
     method ``points`` and still be inside it (:func:`points_error`); 0 for
