@@ -3,7 +3,6 @@ two families crossing, parts scattered clear of the routes and of each other, a
 third hugging a route, and a small one run: cables on cables at and inside the
 clearance, as MuJoCo finds them too."""
 
-import numpy as np
 import pytest
 
 from cablecheck.bench.crossing import HUG_EVERY, crossing_scene, parts_overlap, routes_gap

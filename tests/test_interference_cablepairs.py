@@ -226,7 +226,7 @@ def _next_to_active_every_pair(clearance, names, radii, dense, active):
     every one next to j (and with the pieces' midpoints), made distinct by sorting,
     nothing pruned: the reference the pruned pass must equal."""
     n_s, n, n_c = dense.states, dense.centres, dense.cables
-    out: list[list[Interference]] = [[] for _ in range(n_s)]
+    out = [[] for _ in range(n_s)]
     ci, cj = (np.asarray(x, np.int64) for x in active)
     if n_s == 0 or len(ci) == 0:
         return out

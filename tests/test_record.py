@@ -886,7 +886,6 @@ def test_between_samples_only_the_updated_pairs_and_their_cables_are_given(tmp_p
     import rerun as rr
     from types import SimpleNamespace
     from cablecheck.record.cables import CableFrames
-    from cablecheck.record.columns import times as sim_time
     from cablecheck.record.marks import ClashMarks, Mark
     rest = np.linspace(0.0, 100.0, 11)
     cables = [SimpleNamespace(name=n, rest_s=rest, element_length=10.0, radius=2.0) for n in ("a", "b")]
@@ -926,7 +925,7 @@ def test_a_harness_of_many_elements_keeps_its_shapes_within_the_budget(tmp_path)
     regular sample at most (and at their own events' instants between
     samples); each event's worst instant still shows its spot, and its
     cables' last shape then lies within a quarter radius of their centres."""
-    from cablecheck.bench.crossing import RADIUS, crossing_scene
+    from cablecheck.bench.crossing import crossing_scene
     from cablecheck.bench.harness import write_scene
     from cablecheck.run.runner import CABLE_SHAPES, RECORD_RATE
     data = crossing_scene(26, 5, segments=40, duration=0.06, settle=0.1)

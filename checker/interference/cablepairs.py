@@ -34,7 +34,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from cablecheck.checker.arrays import ranges, within
+from cablecheck.checker.arrays import within
 from cablecheck.checker.cable import self_pair_excluded, self_pair_window
 from cablecheck.checker.closest import row_norm, segment_segment, segment_segment_apart
 from cablecheck.checker.interference.broad import (
@@ -373,7 +373,6 @@ def cable_pairs_many(clearance: float, names: Sequence[str], radii: np.ndarray, 
     e_count = np.searchsorted(c0[pieces], np.arange(n), "right") - e_first
     centre_cable = np.zeros(n, np.int64)
     centre_cable[c0] = cab[:m]
-    state_row = m * np.arange(n_s)[:, None]
 
     def runs_spheres(values: np.ndarray, first: np.ndarray, count: np.ndarray) -> np.ndarray:
         """(S, K) per state the farthest of each run's values (S, rows) from the run's first."""
