@@ -567,7 +567,9 @@ class _Checked:
             if (recorder or self.keeper is not None) and (res.records or closed):
                 for event in self.tracker.worst_at(state.t):
                     deepest[event] = k
-        worst_states = set(deepest.values())
+        deepest_at: dict[int, set[tuple[str, str, str]]] = {}     # state -> the pairs whose worst is there
+        for (pair, _), k in deepest.items():
+            deepest_at.setdefault(k, set()).add((PairType(pair[0]).value, pair[1], pair[2]))
         if self.keeper is not None:
             self.keeper.take(states, results, deepest)
         self.timer.lap("check")
@@ -587,11 +589,10 @@ class _Checked:
             last = state.step == self.total_steps
             regular = self.checked % self.record_stride == 0 or last
             shapes = last or (self.checked // self.record_stride) % self.shape_every == 0
-            sampled = regular or k in worst_states
-            update = None if regular else (
-                {(PairType(p[0]).value, p[1], p[2]) for (p, _), at in deepest.items() if at == k}
-                | {(PairType(e.type).value, e.a, e.b) for e in (*started, *closed)})
+            sampled = regular or k in deepest_at
             if recorder and (sampled or started or closed):
+                update = None if regular else (
+                    deepest_at.get(k, set()) | {(PairType(e.type).value, e.a, e.b) for e in (*started, *closed)})
                 allow = self.tracker.allow   # allowed pairs are drawn as clear
                 shown = (replace(res, records=[r for r in res.records if not allow.match(self.tracker.key(r))])
                          if allow else res)
