@@ -2,7 +2,7 @@
 
 Many passes expand "group i has count[i] items starting at start[i]" into
 flat index arrays without a Python loop; `within` and `ranges` are that
-expansion, written once. `first_least` picks each group's least value
+expansion, and `products` every pair of two such groups, written once. `first_least` picks each group's least value
 without sorting. This module holds no geometry.
 """
 
@@ -20,6 +20,19 @@ def within(count: np.ndarray) -> np.ndarray:
 def ranges(start: np.ndarray, count: np.ndarray) -> np.ndarray:
     """start[i] .. start[i] + count[i] - 1 for every group i, concatenated."""
     return np.repeat(np.asarray(start, np.int64), count) + within(count)
+
+
+def products(count_a: np.ndarray, count_b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every pair of group i's count_a[i] items on one side and count_b[i] on
+    the other, group by group, the first side's outer: (group, x, y), each
+    (sum(count_a * count_b),), with 0 <= x < count_a[group] and 0 <= y <
+    count_b[group]."""
+    count_b = np.asarray(count_b, np.int64)
+    per = np.asarray(count_a, np.int64) * count_b
+    group = np.repeat(np.arange(len(per)), per)
+    r = within(per)
+    nb = np.maximum(count_b[group], 1)
+    return group, r // nb, r % nb
 
 
 TABLE_KEYS = 1 << 16

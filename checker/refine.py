@@ -39,7 +39,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from cablecheck.checker.arrays import within
+from cablecheck.checker.arrays import products
 from cablecheck.checker.cable import arc_length
 from cablecheck.checker.closest import row_norm, segment_segment
 from cablecheck.checker.interference import Checker
@@ -146,7 +146,8 @@ def refined_cable_records(records: Sequence[Sequence[Interference]], cables: Cal
 
     The points lie on the centrelines, so their value bounds exact's from
     above: only element pairs whose bounding spheres come within it are
-    measured, all the states asking for one pair in one pass.
+    measured (`_closest_elements`), every pair at every state in one pass
+    for each pair of cable sizes.
 
     Args:
         records: per state (S), its cable records by method points.
@@ -220,11 +221,8 @@ def _closest_elements(pa: np.ndarray, pb: np.ndarray, upper: np.ndarray):
     ka, ia = np.nonzero(facing(ma, ha, mb, hb))
     kb, ib = np.nonzero(facing(mb, hb, ma, ha))
     na, nb = np.bincount(ka, minlength=n_s), np.bincount(kb, minlength=n_s)
-    fa, fb = np.cumsum(na) - na, np.cumsum(nb) - nb
-    per = na * nb
-    k = np.repeat(np.arange(n_s), per)
-    r = within(per)
-    ia, ib = ia[fa[k] + r // np.maximum(nb[k], 1)], ib[fb[k] + r % np.maximum(nb[k], 1)]
+    k, x, y = products(na, nb)
+    ia, ib = ia[(np.cumsum(na) - na)[k] + x], ib[(np.cumsum(nb) - nb)[k] + y]
     gap = row_norm(ma[k, ia] - mb[k, ib]) - ha[k, ia] - hb[k, ib]
     o = gap <= reach[k]
     k, ia, ib = k[o], ia[o], ib[o]

@@ -25,6 +25,17 @@ def test_within_and_ranges_are_the_concatenated_aranges(drawn):
     assert got_ranges.tolist() == want_ranges
 
 
+@given(st.lists(st.tuples(st.integers(0, 5), st.integers(0, 5)), max_size=12))
+def test_products_are_every_pair_of_each_group_by_the_loop(drawn):
+    """products against the nested loop over each group's two sides (empty sides too)."""
+    from cablecheck.checker.arrays import products
+    count_a = np.array([a for a, _ in drawn], np.int64)
+    count_b = np.array([b for _, b in drawn], np.int64)
+    want = [(g, x, y) for g, (a, b) in enumerate(drawn) for x in range(a) for y in range(b)]
+    group, x, y = products(count_a, count_b)
+    assert list(zip(group.tolist(), x.tolist(), y.tolist())) == want
+
+
 def _sorted_first_least(state, key, value):
     order = np.lexsort((np.arange(len(value)), value, key, state))
     s, k = state[order], key[order]

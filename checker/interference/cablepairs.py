@@ -34,7 +34,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from cablecheck.checker.arrays import within
+from cablecheck.checker.arrays import products
 from cablecheck.checker.cable import self_pair_excluded, self_pair_window
 from cablecheck.checker.closest import row_norm, segment_segment, segment_segment_apart
 from cablecheck.checker.interference.broad import (
@@ -405,11 +405,9 @@ def cable_pairs_many(clearance: float, names: Sequence[str], radii: np.ndarray, 
 
     def product(st, a0, na, b0, nb):
         """Every (x, y), x in rows a0 .. a0 + na - 1 and y in b0 .. b0 + nb - 1 of state st (global rows)."""
-        per = na * nb
-        k = np.repeat(np.arange(len(per)), per)
-        r = within(per)
+        k, x, y = products(na, nb)
         off = m * st[k]
-        return a0[k] + r // nb[k] + off, b0[k] + r % nb[k] + off
+        return a0[k] + x + off, b0[k] + y + off
 
     near_atoms = np.stack([2 * ci - 1, 2 * ci, 2 * ci + 1], axis=1)
     near_atoms_j = np.stack([2 * cj - 1, 2 * cj, 2 * cj + 1], axis=1)
