@@ -134,6 +134,7 @@ class CableFrames:
     def __init__(self, built: Built, unit: float):
         self.built, self.unit = built, unit
         self._index = {c.name: i for i, c in enumerate(built.cables)}
+        self._names = [c.name for c in built.cables]
         self._element_s = [0.5 * (c.rest_s[1:] + c.rest_s[:-1]) for c in built.cables]
         self._near = [max(2.0 * c.element_length, 3.0 * c.radius) for c in built.cables]
         self._still = [STILL * c.radius / unit for c in built.cables]
@@ -158,12 +159,11 @@ class CableFrames:
             if m.s_b is not None and m.b in self._index:
                 self._state_near(state, m.b, m.s_b, _RANK[m.state], whole=False)
         u = self.unit
-        names = [c.name for c in self.built.cables]
-        for i, pts in enumerate(cables):
+        for i, (pts, name) in enumerate(zip(cables, self._names)):
             pts = np.asarray(pts, float) / u
-            if keep is not None and names[i] not in keep and self._states[i]:
+            if keep is not None and name not in keep and self._states[i]:
                 continue                    # between samples, a cable of no updated pair stands
-            taken = sampled and (keep is None or names[i] in keep)
+            taken = sampled and (keep is None or name in keep)
             still = self._still[i] * (1.0 if keep is None else LIGHT_STILL / STILL)
             if self._states[i] and np.array_equal(self._states[i][-1], state[i]) and (
                     not taken or np.abs(pts - self._points[i][-1]).max() <= still):

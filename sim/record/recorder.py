@@ -140,7 +140,7 @@ class Recorder:
         (type, a, b) -> distance in metres (a pair's distance line runs while
         it is below the clearance or in the last full check's list, and breaks
         when it leaves both). `update`: at a frame between the regular
-        samples (an event's worst instant, or its start), the pairs (kind, a,
+        samples (an event's worst instant, its start or its end), the pairs (kind, a,
         b) whose spots, distances and cables are given there; the other
         clashes stand as last given (`ClashMarks.add`). None: every one.
         `shapes` False (a regular sample of a scene of many cable elements,
