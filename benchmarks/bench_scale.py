@@ -6,7 +6,7 @@ clearance, one carriage rising and falling once over the run; with
 ``--layout crossing`` the runs table's come from
 :func:`cablecheck.bench.crossing.crossing_scene` instead: two families of
 cables crossing and resting on each other among parts scattered at random,
-a third of them hugging a route), settled for
+a third of them with their bounding spheres within 6 mm of a route), settled for
 ``--settle`` seconds before t = 0 (default :data:`cablecheck.bench.harness.SETTLE`, which
 brings the 64 x 1,000 harness to rest; ``--settle 0`` runs them from their
 drooped routes, every cable falling into its sag over the first 0.2 s and
