@@ -33,6 +33,7 @@ import rerun as rr
 from cablecheck.build.built import Built
 from cablecheck.build.drawn import DrawnGeom
 from cablecheck.checker.shapes import Shape
+from cablecheck.record.batches import batches, placement, shapes
 from cablecheck.record.cables import CableFrames
 from cablecheck.record.clashes import Settings, send_clash_list, send_log
 from cablecheck.record.columns import Once, column, floats, named, rgba, strings, times as sim_time, vec3
@@ -259,7 +260,7 @@ class Recorder:
         send_clash_list(rec, self._events, self._event_joints, self.unit, self.settings.units, self._event_status,
                         names)
         scale = self.wear_scale()
-        send_wear(rec, self.built, self._wear, self._rest, self.unit, scale, self._touched_parts())
+        send_wear(rec, self.built, self._wear, self._rest, self.unit, scale, *self._touched_parts())
         twisted = []        # the cables whose rod carried twist: a chart of it along each
         for c, p in zip(self.built.cables, self._twist):
             if p is not None and len(p.s):
@@ -284,13 +285,24 @@ class Recorder:
         extent = float(np.abs(np.concatenate(bounds)).max()) if bounds is not None else 1.0
         return wear_scale(self._wear, self.unit, self.settings.units, steps, extent)
 
-    def _touched_parts(self) -> dict:
-        """The parts some cable's wear names as touched: name -> (shape, pose at t = 0)."""
+    def _touched_parts(self) -> tuple[dict, list]:
+        """The parts some cable's wear names as touched, as at t = 0: name ->
+        (shape, pose) of those drawn alone, and (entity path, archetype, columns) of the
+        batches of many (`cablecheck.record.batches`)."""
         touched = {t for w in self._wear for t in w.touches if t is not None}
         if self._poses0 is None:
-            return {}
-        return {p.name: (self.scene.shape(p, pose), pose) for p, pose in zip(self.built.parts, self._poses0)
-                if p.name in touched}
+            return {}, []
+        which = np.array([p.name in touched for p in self.built.parts], bool)
+        parts = [p for p, t in zip(self.built.parts, which) if t]
+        poses = self._poses0[which]
+        found = batches(parts, np.zeros(len(parts), bool), "wear_map/parts")
+        alone = np.ones(len(parts), bool)
+        for b in found:
+            alone[b.members] = False
+        return ({p.name: (self.scene.shape(p, pose), pose) for p, pose, a in zip(parts, poses, alone) if a},
+                [(b.path, b.archetype, shapes(b.archetype, [parts[k] for k in b.members], self.unit)
+                  + placement(b.archetype, [parts[k] for k in b.members], poses[None, b.members], self.unit))
+                 for b in found])
 
     @property
     def names(self) -> list[str]:

@@ -2,7 +2,9 @@
 
 Each part's shape (filled) and, for parts on the world, its pose are one
 static entry per part in its own frame (`world/parts/<assembly path>`); a
-part riding a moving body gets its pose per frame. The mjcf model's visual
+part riding a moving body gets its pose per frame. Many parts of one kind
+under one assembly level are the instances of one entity instead
+(`cablecheck.record.batches`). The mjcf model's visual
 geoms (`world/visual/<body>/<geom>`, those MuJoCo never collides) are drawn
 in their own colours, static in their body's frame, the body's pose coming
 from the frame's qpos through MuJoCo's kinematics. Colours live on the
@@ -26,6 +28,7 @@ import rerun as rr
 
 from cablecheck.build.built import Built, PartModel
 from cablecheck.build.drawn import DrawnGeom
+from cablecheck.record.batches import batches, placement, shapes
 from cablecheck.record.columns import Column, column, mat3, rgba, vec3
 from cablecheck.record.style import (
     FLOOR,
@@ -103,6 +106,10 @@ class SceneGeometry:
         self.built, self.unit = built, unit
         moving = {name for name in built.body_ids if name != "world"}
         self.moving_parts = np.array([p.body in moving for p in built.parts], bool)
+        self.batches = batches(built.parts, self.moving_parts, "world/parts")
+        self._alone = np.ones(len(built.parts), bool)      # parts drawn as entities of their own
+        for b in self.batches:
+            self._alone[b.members] = False
         m = built.model
         self.visuals = tuple(drawn)
         visuals = self.visuals
@@ -123,7 +130,12 @@ class SceneGeometry:
         self._points = scene_points(self.built, part_poses, rest)
         self.bounds = ((self._points.min(axis=0), self._points.max(axis=0)) if len(self._points)
                        else (np.full(3, -0.5), np.full(3, 0.5)))
-        for k, part in enumerate(self.built.parts):
+        for b in self.batches:
+            members = [self.built.parts[k] for k in b.members]
+            at = [] if b.moving else placement(b.archetype, members, part_poses[None, b.members], u)
+            rec.send_columns(b.path, indexes=[], columns=shapes(b.archetype, members, u) + at)
+        for k in np.flatnonzero(self._alone):
+            part = self.built.parts[k]
             shape = self.shape(part, part_poses[k])
             if self.moving_parts[k]:
                 rec.log(part_path(part.name), shape, static=True)
@@ -180,9 +192,19 @@ class SceneGeometry:
 
     def send_motion(self, rec: rr.RecordingStream, index: list, poses: list[np.ndarray],
                     vis_poses: list[np.ndarray]) -> None:
-        """Poses of the moving parts (F, M, 4, 4) and visual bodies (F, B, 4, 4), one column per entity."""
+        """Poses of the moving parts (F, M, 4, 4) and visual bodies (F, B, 4, 4), one column per entity
+        (a batch of parts: a row of its instances' poses per frame)."""
         u = self.unit
         moving = np.flatnonzero(self.moving_parts)
+        if poses:
+            every_part = np.stack(poses)
+            slot = np.cumsum(self.moving_parts) - 1                 # part index -> index among the moving
+            for b in self.batches:
+                if b.moving:
+                    rec.send_columns(b.path, indexes=index, columns=placement(
+                        b.archetype, [self.built.parts[k] for k in b.members], every_part[:, slot[b.members]], u))
+            moving = moving[self._alone[moving]]
+            poses = list(every_part[:, self._alone[self.moving_parts]])
         paths = ([part_path(self.built.parts[k].name) for k in moving] if poses else []) + \
                 ([self._vis_body_paths[int(b)] for b in self.moving_visual_bodies] if vis_poses else [])
         stacks = [np.stack(p) for p in (poses, vis_poses) if p]
@@ -205,7 +227,9 @@ class SceneGeometry:
         parts_rgba = np.where(on[:, None], np.array(PART_DIMMED, np.uint8)[None], plain[None])
         floor_rgba = np.where(on[:, None], np.array(FLOOR_DIMMED, np.uint8)[None], np.array(FLOOR, np.uint8)[None])
         first = [rr.TimeColumn("sim_time", duration=times[:1])]
-        for part in self.built.parts:
+        for b in self.batches:      # one colour a row, every instance's
+            rec.send_columns(b.path, indexes=index, columns=[column(b.archetype.descriptor_colors(), rgba(parts_rgba))])
+        for part in (p for p, alone in zip(self.built.parts, self._alone) if alone):
             if part.keepout:
                 own = np.array(KEEPOUT_COLOUR, np.uint8)[None]
                 rec.send_columns(part_path(part.name), indexes=first, columns=_colour_columns(part, own))
@@ -219,5 +243,5 @@ class SceneGeometry:
                 colour[3] = min(colour[3], FLOOR[3])
             faded = np.array([*colour[:3], min(colour[3], PART_DIMMED[3] if vis.shape != "plane" else FLOOR_DIMMED[3])],
                              np.uint8)
-            rgba = np.where(on[:, None], faded[None], colour[None])
-            rec.send_columns(visual_paths(vis.body, vis.name)[1], indexes=index, columns=_colour_columns(vis, rgba))
+            shade = np.where(on[:, None], faded[None], colour[None])
+            rec.send_columns(visual_paths(vis.body, vis.name)[1], indexes=index, columns=_colour_columns(vis, shade))

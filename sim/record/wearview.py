@@ -7,7 +7,8 @@ noise floor or touched nothing (over contact time instead when nothing in
 the run slid more than the floor), and the cable's name at its middle;
 `wear_map/legend`: the scale as a colour bar under the cables with its
 values and units; `wear_map/parts/<path>`: the parts the cables touch, as
-at t = 0 (the rest shapes' time), translucent.
+at t = 0 (the rest shapes' time), translucent (many of one kind under one
+assembly level: one entity, `cablecheck.record.batches`).
 `wear/<cable>/<measure>`: a bar chart per measure (`contact_time`,
 `sliding`, `bend_cycles`) over the bins.
 
@@ -168,12 +169,14 @@ def send_bars(rec: rr.RecordingStream, path: str, at: np.ndarray, values: np.nda
 
 
 def send_wear(rec: rr.RecordingStream, built: Built, wear: list, rest: list[np.ndarray] | None,
-              unit: float, scale: WearScale, part_shapes: dict | None = None) -> None:
+              unit: float, scale: WearScale, part_shapes: dict | None = None, part_batches: list = ()) -> None:
     """Each cable's wear (:class:`cablecheck.checker.wear.CableWear`): colour along its rest
     shape (`rest`, metres; else as routed) on the run's `scale`, its name, and
     a bar chart per measure, each one static chunk; the scale's colour bar;
     `part_shapes`: name -> (archetype in its own frame, pose at t = 0 in
-    metres) of the parts the cables touch, drawn beside them."""
+    metres) of the parts the cables touch, drawn beside them; `part_batches`:
+    (entity path, archetype, columns) of those touched parts drawn many to an entity
+    (`cablecheck.record.batches`)."""
     line = rr.LineStrips3D
     shapes = []
     for i, w in enumerate(wear):
@@ -199,6 +202,8 @@ def send_wear(rec: rr.RecordingStream, built: Built, wear: list, rest: list[np.n
                  else column(type(shape).descriptor_colors(), rgba([PART_FADED])))
         rec.log(path, shape, rr.Transform3D(translation=pose[:3, 3] / unit, mat3x3=pose[:3, :3]), static=True)
         rec.send_columns(path, indexes=[], columns=[faded])
+    for path, kind, columns in part_batches:
+        rec.send_columns(path, indexes=[], columns=[*columns, column(kind.descriptor_colors(), rgba([PART_FADED]), [1])])
     if shapes:
         send_legend(rec, np.concatenate(shapes), scale, max(c.radius for c in built.cables) / unit)
 
