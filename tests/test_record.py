@@ -31,7 +31,9 @@ from cablecheck.record.style import (
     cable_colour,
     pair_path,
 )
-from cablecheck.record.wearview import wear_colours
+from cablecheck.record import wearview
+from cablecheck.record.wearview import CHARTED_CABLES, charted, wear_colours
+from tests.helpers import examples
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -997,3 +999,48 @@ def test_floors_are_translucent_and_more_so_while_a_clash_is_shown(tmp_path: Pat
     colours = [c for r in _rows(record, "/world/parts/floor") if r.get("Boxes3D:colors") for c in r["Boxes3D:colors"]]
     assert colours and all(c & 255 < 255 for c in colours)   # translucent throughout
     assert set(colours) <= {_packed(FLOOR), _packed(FLOOR_DIMMED)} and _packed(FLOOR_DIMMED) in colours
+
+
+@settings(max_examples=examples(60), deadline=None)
+@given(amounts=st.lists(st.sampled_from([0.0, 0.5, 1.0, 2.0]) | st.floats(0, 10), min_size=0, max_size=20))
+def test_the_charted_cables_are_the_most_worn_in_scene_order(amounts):
+    """Against a sort of every cable by amount, then scene order: the first `CHARTED_CABLES` of it."""
+    names = [f"c{k}" for k in range(len(amounts))]
+    picked = charted(names, amounts)
+    ranked = sorted(range(len(amounts)), key=lambda k: (-amounts[k], k))[:CHARTED_CABLES]
+    assert picked == tuple(names[k] for k in sorted(ranked))
+
+
+def test_a_harness_of_more_cables_than_charts_charts_the_most_worn_and_says_so(tmp_path: Path, monkeypatch):
+    """Three cables on the plate, one end dragged along it: with one chart allowed, the dragged cable's
+    wear is charted (data and view), the still ones' are not, the wear map still draws all three, and
+    the summary names the charted cable."""
+    monkeypatch.setattr(wearview, "CHARTED_CABLES", 1)
+    still = "".join(f"""
+[[cables]]
+name = "{name}"
+radius = 3.0
+start = {{ pos = [-60, {y}, 120] }}
+via = [ [0, {y}, 3] ]
+end = {{ pos = [200, {y}, 3] }}
+segments = 24
+""" for name, y in (("still_a", 40), ("still_b", -40)))
+    scene = tmp_path / "three.toml"
+    scene.write_text(ON_PLATE + still)
+    record = tmp_path / "t.rrd"
+    assert main(["run", str(scene), "--record", str(record), "--quiet", "--fail-on", "never"]) == 0
+    report = json.loads(record.with_suffix(".json").read_text())
+    most = max(report["cables"], key=lambda c: max(c["wear"]["sliding"]))["name"]
+    assert most == "lead"
+    entities = _entities(record)
+    assert {e for e in entities if e.startswith("/wear/")} == {f"/wear/lead/{m}" for m in
+                                                               ("contact_time", "sliding", "bend_cycles")}
+    assert {f"/wear_map/{c}" for c in ("lead", "still_a", "still_b")} <= entities
+    reader = RrdReader(record)
+    (store,) = reader.blueprints()
+    views = [n for chunk in reader.stream(store=store) for batch in [chunk.to_record_batch()]
+             if "ViewBlueprint:display_name" in batch.schema.names
+             for row in batch.column("ViewBlueprint:display_name").to_pylist() for n in row]
+    assert sorted(v.split(":")[0] for v in views if v.startswith("Wear ") and "per bin" in v) == ["Wear lead"] * 3
+    (summary,) = _rows(record, "/summary")
+    assert "wear bar charts of the 1 most worn of 3 cables (lead)" in summary["TextDocument:text"][0]

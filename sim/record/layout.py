@@ -85,6 +85,7 @@ class Extent:
       series_roots: the first levels of every series path (`checks`, `joints`, ...).
       twist: whether any cable's twist is plotted.
       twisted: the cables whose twist along them is charted (`twist/<name>/max_moment`).
+      worn: the cables whose wear is charted (`wear/<name>/<measure>`).
     """
 
     bounds: tuple[np.ndarray, np.ndarray]
@@ -92,6 +93,7 @@ class Extent:
     series_roots: frozenset[str]
     twist: bool
     twisted: tuple[str, ...] = ()
+    worn: tuple[str, ...] = ()
 
 
 def _eye(bounds, target: np.ndarray, distance: float, unit: float) -> rrb.EyeControls3D:
@@ -153,7 +155,8 @@ def blueprint(built: Built, events: list, wear: list, extent: Extent, clearance:
         *[rrb.TimeSeriesView(name=titles.get(root, root), origin=root)
           for root in sorted(extent.series_roots - {"checks", "cables", "validation"})],
         *[rrb.BarChartView(name=f"Wear {w.name}: {m} per bin ({unit_})", origin=f"wear/{escape(w.name)}/{m}")
-          for w in wear for m, unit_ in (("contact_time", "s"), ("sliding", units), ("bend_cycles", "cycles"))],
+          for w in wear if w.name in extent.worn
+          for m, unit_ in (("contact_time", "s"), ("sliding", units), ("bend_cycles", "cycles"))],
         *[rrb.BarChartView(name=f"Twist {name}: largest moment along it (N m; {units} from its start)",
                            origin=f"twist/{escape(name)}/max_moment") for name in extent.twisted],
     ]

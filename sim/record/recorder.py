@@ -42,7 +42,15 @@ from cablecheck.record.marks import ClashMarks, Mark
 from cablecheck.record.scene import SceneGeometry
 from cablecheck.record.series import SeriesSet, send_limit_lines
 from cablecheck.record.style import CONTACT_COLOUR, cable_colour, escape, pair_path, pair_text
-from cablecheck.record.wearview import WearScale, send_bars, send_wear, wear_scale
+from cablecheck.record.wearview import (
+    WearScale,
+    charted,
+    charts_note,
+    send_bars,
+    send_wear,
+    wear_scale,
+    worn_amounts,
+)
 
 
 @cache
@@ -260,18 +268,21 @@ class Recorder:
         send_clash_list(rec, self._events, self._event_joints, self.unit, self.settings.units, self._event_status,
                         names)
         scale = self.wear_scale()
-        send_wear(rec, self.built, self._wear, self._rest, self.unit, scale, *self._touched_parts())
-        twisted = []        # the cables whose rod carried twist: a chart of it along each
-        for c, p in zip(self.built.cables, self._twist):
-            if p is not None and len(p.s):
-                send_bars(rec, f"twist/{escape(c.name)}/max_moment", p.s / self.unit, p.max_moment)
-                twisted.append(c.name)
+        worn = charted([w.name for w in self._wear], worn_amounts(self._wear, scale))
+        send_wear(rec, self.built, self._wear, self._rest, self.unit, scale, *self._touched_parts(), charts=worn)
+        # the cables whose rod carried twist, the most twisted: a chart of it along each
+        profiles = [(c.name, p) for c, p in zip(self.built.cables, self._twist) if p is not None and len(p.s)]
+        twisted = charted([n for n, _ in profiles], [float(p.max_moment.max()) for _, p in profiles])
+        for name, p in profiles:
+            if name in twisted:
+                send_bars(rec, f"twist/{escape(name)}/max_moment", p.s / self.unit, p.max_moment)
         doc = rr.TextDocument
         rec.send_columns("summary", indexes=[sim_time(np.zeros(1))],
-                         columns=[column(doc.descriptor_text(), strings([self._summary])),
+                         columns=[column(doc.descriptor_text(), strings([self._summary + charts_note(
+                             len(self._wear), worn, len(profiles), twisted)])),
                                   column(doc.descriptor_media_type(), strings(["text/markdown"]))])
         extent = Extent(bounds, self.series.lowest("checks/"), frozenset(p.split("/")[0] for p in self.series.series),
-                        any(p.startswith("cables/twist/") for p in self.series.series), tuple(twisted))
+                        any(p.startswith("cables/twist/") for p in self.series.series), twisted, worn)
         rec.send_blueprint(blueprint(self.built, self._events, self._wear, extent, self.settings.clearance, scale,
                                      self.unit, self.settings.units, self._event_status is not None, names),
                            make_active=True, make_default=True)

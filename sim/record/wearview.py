@@ -17,6 +17,7 @@ Not here: measuring wear (`cablecheck.checker.wear`).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
 
@@ -36,6 +37,39 @@ PART_FADED = (160, 160, 170, 60)
 """The touched parts in the wear view: translucent, so the cables' colours show through."""
 LEGEND_STEPS = 24
 """Colours in the legend's bar."""
+
+
+CHARTED_CABLES = 8
+"""Cables whose wear bar charts (and twist chart) the recording holds, the
+most worn (most twisted) first: a harness of 64 cables would have 256 chart
+tabs, each a view of the layout and kilobytes of recording (a chart's
+schema alone), 3.3 MB of 24 on a 64-cable harness. The wear map and the
+report cover every cable; the summary says which cables are charted."""
+
+
+def charted(names: Sequence[str], amounts: Sequence[float]) -> tuple[str, ...]:
+    """The :data:`CHARTED_CABLES` names of the largest `amounts` (ties: the
+    earlier name), in the order given."""
+    order = np.argsort(-np.asarray(amounts, float), kind="stable")[:CHARTED_CABLES]
+    return tuple(names[k] for k in sorted(order.tolist()))
+
+
+def worn_amounts(wear: list, scale: WearScale) -> list[float]:
+    """Each cable's most worn bin on the run's scale's measure (sliding, else contact time)."""
+    return [float(np.max(w.sliding if scale.measure == "sliding" else w.contact_time, initial=0.0)) for w in wear]
+
+
+def charts_note(cables: int, worn: Sequence[str], twisted_of: int, twisted: Sequence[str]) -> str:
+    """A paragraph for the summary when the recording charts fewer cables
+    than it has (:data:`CHARTED_CABLES`), naming those it charts; empty otherwise."""
+    notes = []
+    if len(worn) < cables:
+        notes.append(f"wear bar charts of the {len(worn)} most worn of {cables} cables ({', '.join(worn)})")
+    if len(twisted) < twisted_of:
+        notes.append(f"twist charts of the {len(twisted)} most twisted of {twisted_of} ({', '.join(twisted)})")
+    if not notes:
+        return ""
+    return "\n\nCharted in this recording: " + "; ".join(notes) + ". The wear map and the report cover every cable.\n"
 
 
 SLIDING_FLOOR = 1e-6
@@ -169,10 +203,12 @@ def send_bars(rec: rr.RecordingStream, path: str, at: np.ndarray, values: np.nda
 
 
 def send_wear(rec: rr.RecordingStream, built: Built, wear: list, rest: list[np.ndarray] | None,
-              unit: float, scale: WearScale, part_shapes: dict | None = None, part_batches: list = ()) -> None:
+              unit: float, scale: WearScale, part_shapes: dict | None = None, part_batches: list = (),
+              charts: Sequence[str] | None = None) -> None:
     """Each cable's wear (:class:`cablecheck.checker.wear.CableWear`): colour along its rest
     shape (`rest`, metres; else as routed) on the run's `scale`, its name, and
-    a bar chart per measure, each one static chunk; the scale's colour bar;
+    for the cables named in `charts` (default: every cable) a bar chart per
+    measure, each one static chunk; the scale's colour bar;
     `part_shapes`: name -> (archetype in its own frame, pose at t = 0 in
     metres) of the parts the cables touch, drawn beside them; `part_batches`:
     (entity path, archetype, columns) of those touched parts drawn many to an entity
@@ -183,7 +219,7 @@ def send_wear(rec: rr.RecordingStream, built: Built, wear: list, rest: list[np.n
         name = escape(w.name)
         edges = np.append(w.s, w.length) / unit
         for measure, values in (("contact_time", w.contact_time), ("sliding", w.sliding / unit),
-                                ("bend_cycles", w.bend_cycles)):
+                                ("bend_cycles", w.bend_cycles)) if charts is None or w.name in charts else ():
             send_bars(rec, f"wear/{name}/{measure}", edges[:-1], values, np.diff(edges))
         pts = np.asarray(rest[i] if rest is not None else built.cables[i].routed, float) / unit
         shapes.append(pts)
