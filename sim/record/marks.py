@@ -183,7 +183,7 @@ class ClashMarks:
         other = np.array([np.full(3, np.nan) if r[2] is None else r[2] for r in rows], float).reshape(-1, 3)
         ends = shown[np.r_[shown[1:] > shown[:-1] + 1, True]] + 1
         shown = ~np.isnan(lifts)
-        labels = [r[3] if k else "" for r, k in zip(rows, shown)]
+        labels = [r[3] for r, k in zip(rows, shown) if k]
         top = where.copy()
         top[:, 2] += np.where(shown, lifts, LABEL_ABOVE * radius)
         # emptied at the frame after each run of frames (an entry with nothing in it)
@@ -191,17 +191,19 @@ class ClashMarks:
         frames = np.r_[frame, ends]
         order = np.argsort(frames, kind="stable")
         lengths = np.r_[np.ones(len(frame), np.int32), np.zeros(len(ends), np.int32)][order]
+        labelled = np.r_[shown.astype(np.int32), np.zeros(len(ends), np.int32)][order]
         # the sizes go with the centres: an empty row has no sphere at all (a size without
         # a centre would draw one at the origin); the label rides on a point above the
-        # sphere (lifted clear of its neighbours' labels, `label_lifts`), the segment to
+        # sphere (lifted clear of its neighbours' labels, `label_lifts`; none in a row
+        # whose label is not shown, a frame of more than `LABELS_SHOWN` spots), the segment to
         # the other side (emptied with the marker) in the same entity, and the style is
         # the views' default (`cablecheck.record.layout`): one chunk per pair, where a style and
         # a gap entity would make four
         e, p = rr.Ellipsoids3D, rr.Points3D
         columns = [column(e.descriptor_centers(), vec3(where), lengths),
                    column(e.descriptor_half_sizes(), vec3(np.full((len(where), 3), radius)), lengths),
-                   column(p.descriptor_positions(), vec3(top), lengths),
-                   column(p.descriptor_labels(), strings(labels), lengths)]
+                   column(p.descriptor_positions(), vec3(top[shown]), labelled),
+                   column(p.descriptor_labels(), strings(labels), labelled)]
         # per row, in this order: the gap (thick); the line through it across the sphere
         # and out of it (thin: the gap's direction stays visible outside the marker); a
         # lifted label's leader
