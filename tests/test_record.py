@@ -1047,3 +1047,57 @@ segments = 24
     assert sorted(v.split(":")[0] for v in views if v.startswith("Wear ") and "per bin" in v) == ["Wear lead"] * 3
     (summary,) = _rows(record, "/summary")
     assert "wear bar charts of the 1 most worn of 3 cables (lead)" in summary["TextDocument:text"][0]
+
+
+@settings(max_examples=examples(25), deadline=None)
+@given(seed=st.integers(0, 2**31), step=st.sampled_from([0.0, 0.01, 0.05, 0.3]), n=st.integers(2, 40),
+       drift=st.sampled_from([0.0, 0.02]))
+def test_a_still_spot_is_stored_once_and_every_frame_shows_it_within_its_tolerance(tmp_path_factory, seed,
+                                                                                     step, n, drift):
+    """A spot resting, jittering (steps of `step` radii a frame) or drifting slowly (`drift` radii a frame
+    along x, under the tolerance each frame; gaps coming and going, labels shown at
+    some frames, runs broken, frames between samples): read back, what the viewer shows at every frame
+    (the last row at or before it) is the frame's spot within SPOT_STILL radii, its gap there exactly when
+    the frame has one, its label exactly at the labelled frames (and no other); rows between samples and
+    at a run's start are all there."""
+    import rerun as rr
+    from cablecheck.record.columns import times as sim_time
+    from cablecheck.record.marks import LABEL_ABOVE, SPOT_STILL, ClashMarks
+    rng = np.random.default_rng(seed)
+    radius = 2.0
+    frames = np.sort(rng.choice(np.arange(3 * n), n, replace=False))
+    where = 100.0 + np.cumsum(rng.normal(0.0, step * radius, (n, 3)), axis=0)
+    where[:, 0] += drift * radius * frames
+    gap = rng.random(n) < 0.7
+    other = [w + [0.0, 0.0, -3.0] + rng.normal(0.0, step * radius, 3) if g else None for w, g in zip(where, gap)]
+    labelled = rng.random(n) < 0.3
+    lifts = np.where(labelled, LABEL_ABOVE * radius, np.nan)
+    between = {int(f) for f in frames if rng.random() < 0.1}
+    rows = [(int(f), w, o, f"a / b: {k}", "a", -1.0) for k, (f, w, o) in enumerate(zip(frames, where, other))]
+    times = np.arange(3 * n + 2) * 0.01
+    rec = rr.RecordingStream("still-spot")
+    path = tmp_path_factory.mktemp("s") / "s.rrd"
+    rec.save(str(path))
+    ClashMarks._send_spot(rec, "cable-cable/a/b", rows, 3 * n + 1, lambda f: [sim_time(times[np.asarray(f, int)])],
+                          radius, lifts, list(frames), between)
+    rec.disconnect()
+    got = [r for r in _rows(path, "/world/interference/cable-cable/a/b") if r["t"] is not None]
+    at = [round(r["t"] / 0.01) for r in got]
+    assert at == sorted(at)
+    for k, f in enumerate(frames.tolist()):
+        if f in between or k == 0 or f - 1 not in frames:
+            assert f in at                                      # an event's instant, a run's start: as measured
+        last = max(i for i, g in enumerate(at) if g <= f)
+        shown = {key: next((got[i][key] for i in range(last, -1, -1) if got[i].get(key) is not None), None)
+                 for key in ("Ellipsoids3D:centers", "Points3D:labels", "LineStrips3D:strips")}
+        assert np.abs(np.array(shown["Ellipsoids3D:centers"]) - where[k]).max() <= SPOT_STILL * radius + 1e-4
+        assert shown["Points3D:labels"] == ([f"a / b: {k}"] if labelled[k] else [])
+        strips = shown["LineStrips3D:strips"] or []
+        if gap[k]:
+            assert np.abs(np.array(strips[0][1]) - other[k]).max() <= SPOT_STILL * radius + 1e-4
+        else:
+            assert not strips                               # no gap, and a label just above: no leader
+    if step == 0.0 and drift == 0.0 and not gap.any() and not labelled.any() and not between:
+        last_of_run = frames[np.r_[np.diff(frames) > 1, True]]
+        # one row per run and its emptying (none after the recording's last frame)
+        assert len(got) == len(last_of_run) + int(np.sum(last_of_run + 1 < 3 * n + 1))

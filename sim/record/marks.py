@@ -81,6 +81,7 @@ class ClashMarks:
         self._lanes: dict[str, tuple[list[int], list[str]]] = {}
         # pair path -> the frames it is shown at (a row at each, or the last row standing)
         self._present: dict[str, list[int]] = {}
+        self._between: set[int] = set()         # the frames between the regular samples
 
     def add(self, frame: int, marks: list[Mark], cables: list[np.ndarray], poses: np.ndarray,
             update: set[tuple[str, str, str]] | None = None) -> tuple[bool, set[tuple[str, str, str]]]:
@@ -92,6 +93,8 @@ class ClashMarks:
         u = self.unit
         now = set()
         updated: set[tuple[str, str, str]] = set()
+        if update is not None:
+            self._between.add(frame)
         for m in marks:
             path = pair_path(m.kind, m.a, m.b)
             now.add(path)
@@ -162,7 +165,8 @@ class ClashMarks:
                  for path, rows in self._rows.items()}
         lifts = label_lifts(self._rows, radii, LABEL_STEP * diag / self.unit)
         for path, rows in self._rows.items():
-            self._send_spot(rec, path, rows, n_f, index, radii[path], lifts[path], self._present[path])
+            self._send_spot(rec, path, rows, n_f, index, radii[path], lifts[path], self._present[path],
+                            self._between)
 
     def _radius(self, cable: str) -> float:
         i = self._cable_index.get(cable)
@@ -170,19 +174,28 @@ class ClashMarks:
 
     @staticmethod
     def _send_spot(rec: rr.RecordingStream, path: str, rows: list, n_f: int, index, radius: float,
-                   lifts: np.ndarray, present: list[int] | None = None) -> None:
+                   lifts: np.ndarray, present: list[int] | None = None, between: set[int] = frozenset()) -> None:
         """One pair's spot (a wire sphere of `radius`, scene units, standing out of
         the cable; the cable, the gap and the part stay visible inside it), its
         label `lifts` (one per row, scene units; NaN: no label at that frame)
         above its centre, and its gap, emptied at the frame after each run of
         `present` frames (those of the rows where None). Its rows at once, as
-        arrays."""
+        arrays; a row that shows no label, follows none, and moves its sphere
+        and its gap's ends no more than :data:`SPOT_STILL` of the sphere's
+        radius from the last row kept is left out (the last one stands), unless
+        it starts a run or lies between the regular samples (`between`: an
+        event's worst instant, start or end, shown as measured there)."""
         frame = np.array([r[0] for r in rows], np.int64)
-        shown = frame if present is None else np.asarray(present, np.int64)
+        on = frame if present is None else np.asarray(present, np.int64)
         where = np.array([r[1] for r in rows], float).reshape(-1, 3)
         other = np.array([np.full(3, np.nan) if r[2] is None else r[2] for r in rows], float).reshape(-1, 3)
-        ends = shown[np.r_[shown[1:] > shown[:-1] + 1, True]] + 1
+        ends = on[np.r_[on[1:] > on[:-1] + 1, True]] + 1
         shown = ~np.isnan(lifts)
+        keep = _moving_rows(where, other, shown, np.isin(frame - 1, on, invert=True)
+                            | np.isin(frame, np.fromiter(between, np.int64, len(between))), SPOT_STILL * radius)
+        if not keep.all():
+            rows = [r for r, k in zip(rows, keep.tolist()) if k]
+            frame, where, other, shown, lifts = frame[keep], where[keep], other[keep], shown[keep], lifts[keep]
         labels = [r[3] for r, k in zip(rows, shown) if k]
         top = where.copy()
         top[:, 2] += np.where(shown, lifts, LABEL_ABOVE * radius)
@@ -227,6 +240,42 @@ class ClashMarks:
                                strips(pairs.reshape(-1, 3), np.arange(0, 2 * len(pairs) + 1, 2)), counts),
                         column(rr.LineStrips3D.descriptor_radii(), floats(width[present], np.float32), counts)]
         rec.send_columns(f"world/interference/{path}", indexes=index(frames[order]), columns=columns)
+
+
+SPOT_STILL = 0.05
+"""A spot's row is kept where its sphere or its gap's far end moved more than
+this many sphere radii since the last row kept (or where its label shows or
+is cleared, a run starts, an event's instant falls): a crossing resting on
+another stores its spot once, not at every sample."""
+
+
+def _moving_rows(where: np.ndarray, other: np.ndarray, labelled: np.ndarray, forced: np.ndarray,
+                 still: float) -> np.ndarray:
+    """(n,) the spot rows to keep (see `ClashMarks._send_spot`): the first, every
+    `forced` or `labelled` one and the one after a labelled one, every one whose
+    gap appears or goes, and every one whose centre `where` or gap end `other`
+    (n, 3; NaN: no gap) lies more than `still` from the last row kept's."""
+    n = len(where)
+    gap = ~np.isnan(other[:, 0])
+    keep = forced | labelled
+    keep[1:] |= labelled[:-1] | (gap[1:] != gap[:-1])
+    if n:
+        keep[0] = True
+    if keep.all():
+        return keep
+    # compared with the last row kept, not the row before (a slow drift is stored)
+    # each row's sphere centre and gap end (a row without a gap: its centre twice), as floats:
+    # a loop along the rows, each compared with the last kept (tens of thousands in a harness)
+    at = np.concatenate([where, np.where(gap[:, None], other, where)], axis=1).tolist()
+    kept = keep.tolist()
+    j = 0
+    for k in range(1, n):
+        if not kept[k] and max(abs(x - y) for x, y in zip(at[k], at[j])) > still:
+            kept[k] = True
+        if kept[k]:
+            j = k
+    keep = np.array(kept, bool)
+    return keep
 
 
 LABEL_STEP = 0.03
