@@ -67,7 +67,47 @@ def test_parts_are_batched_by_kind_assembly_level_and_motion():
     assert list(found["world/parts/other/_boxes"].members) == list(range(3 * n - 1, 4 * n - 1))
     moving[:n] = True                                                           # now all move: one batch
     again = {b.path: b for b in batches(parts, moving, "world/parts")}
-    assert again["world/parts/frame/_boxes"].moving and not again["world/parts/other/_boxes"].moving
+    assert again["world/parts/frame/_moving_boxes"].moving and not again["world/parts/other/_boxes"].moving
+    # many small assemblies (a bracket of a base, an arm and a pin each): their kinds pooled at the root
+    brackets = [_part(f"bracket{k}/{p}", shape) for k in range(n) for p, shape in
+                (("base", "box"), ("arm", "box"), ("pin", "cylinder"))]
+    pooled = {b.path: b for b in batches(brackets, np.zeros(len(brackets), bool), "world/parts")}
+    assert set(pooled) == {"world/parts/_boxes", "world/parts/_cylinders"}
+    assert len(pooled["world/parts/_boxes"].members) == 2 * n
+
+
+@settings(max_examples=examples(60), deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["", "a", "a/b", "c"]), st.sampled_from([*SHAPES, "mesh", "plane"]),
+                          st.booleans(), st.booleans()), min_size=20, max_size=120),
+       st.integers(2, 6))
+def test_every_batch_is_of_one_kind_and_motion_and_only_small_pools_are_left(drawn, threshold):
+    """Drawn parts (assembly level, shape, moving, keep-out), any threshold: each part in one batch at
+    most, paths distinct, a batch of one archetype and one motion, BATCH_PARTS or more; a part left out
+    is a mesh, a plane, a keep-out, or one of fewer than the threshold of its kind and motion so left."""
+    import cablecheck.record.batches as module
+    old, module.BATCH_PARTS = module.BATCH_PARTS, threshold
+    try:
+        parts = [_part(f"{level}/p{k}" if level else f"p{k}", shape, keepout=keep)
+                 for k, (level, shape, _, keep) in enumerate(drawn)]
+        moving = np.array([go for _, _, go, _ in drawn], bool)
+        found = batches(parts, moving, "world/parts")
+    finally:
+        module.BATCH_PARTS = old
+    members = np.concatenate([b.members for b in found]) if found else np.zeros(0, int)
+    assert len(set(members.tolist())) == len(members)
+    assert len({b.path for b in found}) == len(found)
+    kind = {"box": "boxes", "sphere": "ellipsoids", "ellipsoid": "ellipsoids", "capsule": "capsules",
+            "cylinder": "cylinders"}
+    for b in found:
+        assert len(b.members) >= threshold
+        assert {kind[parts[k].shape] for k in b.members} == {b.path.rsplit("_", 1)[1]}
+        assert set(moving[b.members].tolist()) == {b.moving} and ("_moving_" in b.path) == b.moving
+        assert not any(parts[k].keepout for k in b.members)
+    left: dict = {}
+    for k, part in enumerate(parts):
+        if k not in members and part.shape in kind and not part.keepout:
+            left.setdefault((kind[part.shape], bool(moving[k])), []).append(k)
+    assert all(len(v) < threshold for v in left.values())
 
 
 def _sample(shape: str, size: np.ndarray) -> np.ndarray:
@@ -192,8 +232,8 @@ def _lone_size(shape: str, row: dict) -> np.ndarray:
     return np.array([row["Cylinders3D:radii"][0], row["Cylinders3D:lengths"][0] / 2, 0.0])
 
 
-def _batch_path(root: str, level: str, shape: str) -> str:
-    return f"/{root}/{level}/_" + {"box": "boxes", "sphere": "ellipsoids", "ellipsoid": "ellipsoids",
+def _batch_path(root: str, level: str, shape: str, moving: bool = False) -> str:
+    return f"/{root}/{level}/_" + ("moving_" if moving else "") + {"box": "boxes", "sphere": "ellipsoids", "ellipsoid": "ellipsoids",
                                    "capsule": "capsules", "cylinder": "cylinders"}[shape]
 
 
@@ -216,7 +256,7 @@ def test_a_scene_of_many_parts_draws_each_where_it_is_drawn_alone(tmp_path: Path
     assert np.allclose(blocks["Boxes3D:centers"], BLOCKS, atol=1e-9)
     checked = 0
     for shape in ("box", "ellipsoid", "capsule", "cylinder"):
-        rows = _rows(batched, _batch_path("world/parts", "carriage", shape))
+        rows = _rows(batched, _batch_path("world/parts", "carriage", shape, moving=True))
         static = next(r for r in rows if r["t"] is None)
         names = static[next(k for k in static if k.endswith(":labels"))]
         timed = [r for r in rows if r["t"] is not None and any(k.endswith(":quaternions") and v for k, v in r.items())]

@@ -5,8 +5,8 @@ module of this package that writes each part:
 - `world/parts/<assembly path>`, `world/visual/<body>/<geom>`: the parts
   and the mjcf model's visual geoms, translucent while a clash is shown,
   floors always (:mod:`.scene`); many parts of one kind under one assembly
-  level as the instances of one entity, `world/parts/<level>/_boxes` and
-  so on (:mod:`.batches`);
+  level (or in all, where no level holds enough) as the instances of one
+  entity, `world/parts/<level>/_boxes` and so on (:mod:`.batches`);
 - `world/cables/<name>`: each cable as a chain of shaded capsules (one per
   element) at its true radius in its own colour, named, only the elements
   near a clash's worst place in its state colour (:mod:`.cables`);

@@ -5,9 +5,11 @@ A part is an entity of its own (`world/parts/<assembly path>`) unless
 :data:`BATCH_PARTS` or more parts of one kind (boxes; spheres and
 ellipsoids; capsules; cylinders) sit under the same assembly level and
 either all stay put or all move: those are drawn as the instances of one
-entity, `<root>/<assembly level>/_<kind>`
-(`world/parts/frame/_boxes`), each instance labelled with its part's name
-(shown on hover and in the selection, not drawn). A chunk of the recording
+entity, `<root>/<assembly level>/_<kind>` (`world/parts/frame/_boxes`;
+`_moving_boxes` for those that move), and so are the rest of a kind
+where they number as many (`world/parts/_boxes`: parts of no assembly,
+or a harness's 300 brackets of three parts each), each instance labelled
+with its part's name (shown on hover and in the selection, not drawn). A chunk of the recording
 costs kilobytes whatever it holds: 1,000 parts as entities of their own
 took 5.5 MB before any of them moved, batched 43 kB (measured with rerun
 0.41, 1,000 boxes and their colour timelines). Meshes, planes and
@@ -64,16 +66,27 @@ class Batch:
 
 def batches(parts: Sequence[PartModel], moving: np.ndarray, root: str) -> list[Batch]:
     """The batches among `parts` (`moving` (n,) bool: each rides a moving
-    body), their entities under `root`; a part in none is drawn on its own."""
+    body), their entities under `root`: of each kind, those that stay put
+    and those that move apart, first per assembly level
+    (`<root>/<level>/_boxes`, `_moving_boxes`, ...), then the rest of the
+    kind together (`<root>/_boxes`: parts of no assembly, or of many small
+    ones), wherever there are :data:`BATCH_PARTS` or more. A part in none is
+    drawn on its own."""
     groups: dict[tuple, list[int]] = {}
     for k, part in enumerate(parts):
         kind = _KIND.get(part.shape)
         if kind is None or part.keepout:
             continue
-        parent = part.name.split("/")[:-1]
-        groups.setdefault((tuple(parent), kind, bool(moving[k])), []).append(k)
-    return [Batch("/".join([root, *(escape(p) for p in parent), _LEAF[kind]]), kind, np.array(members), go)
-            for (parent, kind, go), members in groups.items() if len(members) >= BATCH_PARTS]
+        groups.setdefault((tuple(part.name.split("/")[:-1]), kind, bool(moving[k])), []).append(k)
+    found, rest = [], {}
+    for (level, kind, go), members in groups.items():
+        if level and len(members) >= BATCH_PARTS:
+            found.append((level, kind, go, members))
+        else:
+            rest.setdefault((kind, go), []).extend(members)
+    found += [((), kind, go, sorted(members)) for (kind, go), members in rest.items() if len(members) >= BATCH_PARTS]
+    return [Batch("/".join([root, *(escape(p) for p in level), ("_moving" if go else "") + _LEAF[kind]]), kind,
+                  np.array(members), go) for level, kind, go, members in found]
 
 
 def _sizes(kind: type, parts: Sequence[PartModel], unit: float) -> np.ndarray:
