@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from rerun.chunk import RrdReader
 
 from cablecheck.cli.main import main
 from cablecheck.run.runner import RunOptions, run_scene
@@ -394,3 +395,39 @@ def test_event_positions_print_at_the_scene_units_precision_far_from_the_origin(
     row = next(line for line in out_far.splitlines() if "post" in line and "cable-structure" in line)
     x = float(row.split("(")[1].split(",")[0])
     assert abs(x - offset) < 1000 and len(row.split("(")[1].split(",")[0].split(".")[1]) == 2
+
+
+def test_the_console_script_exits_at_once_after_what_an_exit_must_do(tmp_path: Path):
+    """`exit_at_once`: the status given, the standard streams flushed (a line without its newline
+    too), a thread that is no daemon waited for, and the exit handlers run (one writes a file) before
+    the process ends without the interpreter's teardown."""
+    script = f"""
+import atexit, sys, threading, time
+from pathlib import Path
+from cablecheck.cli.main import exit_at_once
+atexit.register(lambda: Path({str(tmp_path / 'handler')!r}).write_text("ran"))
+worker = threading.Thread(target=lambda: (time.sleep(0.3), Path({str(tmp_path / 'thread')!r}).write_text("done")))
+worker.start()
+print("no newline", end="")
+print("on stderr", end="", file=sys.stderr)
+exit_at_once(3)
+print("never")
+"""
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert proc.returncode == 3
+    assert proc.stdout == "no newline" and proc.stderr == "on stderr"
+    assert (tmp_path / "handler").read_text() == "ran" and (tmp_path / "thread").read_text() == "done"
+
+
+def test_the_console_script_runs_a_scene_to_its_report(tmp_path: Path):
+    """The installed entry point (`cablecheck.cli.main:console`) end to end: its exit status the
+    command's, the report and the recording whole."""
+    scene = tmp_path / "drawer.toml"
+    scene.write_text((ROOT / "scenes" / "drawer_pinch.toml").read_text())
+    proc = subprocess.run([sys.executable, "-c", "from cablecheck.cli.main import console; console()", "run",
+                           str(scene), "--record", str(tmp_path / "d.rrd"), "--quiet"],
+                          capture_output=True, text=True, cwd=tmp_path)
+    assert proc.returncode == 1, proc.stderr                    # drawer_pinch has a hard event
+    report = json.loads((tmp_path / "d.json").read_text())
+    assert report["complete"] and report["summary"]["hard"] == 1
+    assert [c.entity_path for c in RrdReader(tmp_path / "d.rrd").stream()]
