@@ -321,6 +321,41 @@ def test_a_failing_variant_is_a_row_with_its_error(tiny, scheduler, tmp_path):
     assert rows[0].status is Status.DONE
 
 
+def test_spare_work_runs_once_on_a_thread_of_its_own_while_a_core_is_idle(tiny, scheduler, tmp_path,
+                                                                          monkeypatch):
+    """`spare` (a study's plot imports): once, on a daemon thread of its own, when fewer variants run
+    than the machine has cores (three cores, two workers: from the start); on a machine of one core two
+    workers never leave one idle: not at all."""
+    import threading
+
+    from cablecheck.study.execute import VariantTask, run_variants
+
+    study = load_study(tiny)
+    found = variants(study)
+    bundle, datas = make_bundle(study.scene_path, [v.data for v in found])
+    tasks = [VariantTask(id=v.id, data=d, record=False) for v, d in zip(found, datas)]
+    values = {v.id: v.values for v in found}
+    calls = []
+
+    def spare():
+        calls.append((threading.current_thread().name, threading.current_thread().daemon))
+
+    def ran() -> list:
+        for t in threading.enumerate():
+            if t.name == "cablecheck-spare":
+                t.join()
+        return list(calls)
+
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1, 2})
+    rows, complete = run_variants(tasks, values, bundle, tmp_path, scheduler=scheduler, spare=spare)
+    assert complete and all(r.status is Status.DONE for r in rows)
+    assert ran() == [("cablecheck-spare", True)]
+    calls.clear()
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0})
+    rows, complete = run_variants(tasks, values, bundle, tmp_path, scheduler=scheduler, spare=spare)
+    assert complete and ran() == []
+
+
 def _largest_end_distance(scene) -> float:
     """The largest distance between the power cable's ends over the drawer's
     keyframes (scene units): the start rides on the world, the end on the

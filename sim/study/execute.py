@@ -54,6 +54,7 @@ import os
 import shutil
 import socket
 import tempfile
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -254,7 +255,7 @@ def scene_hash(data: dict, bundle: Bundle) -> str:
 def run_variants(tasks: list[VariantTask], values: dict[str, tuple], bundle: Bundle, out: Path, *,
                  workers: int | None = None, scheduler: str | None = None,
                  stop=None, progress: Progress | None = None, judged: tuple = ((), None),
-                 resume: bool = False) -> tuple[list[Row], bool]:
+                 resume: bool = False, spare: Callable[[], None] | None = None) -> tuple[list[Row], bool]:
     """Run every task on the cluster; write each variant's outputs under
     `out`/variants/<id>/ as it arrives. Returns the rows in task order and
     whether every task was run (False after a stop request: unfinished
@@ -265,12 +266,13 @@ def run_variants(tasks: list[VariantTask], values: dict[str, tuple], bundle: Bun
     attribute polled while waiting (`cablecheck.run.stop.StopRequest`). `judged`: the
     study's (requirements, goal) each row is judged by. `resume`: keep the
     variants already in `out` whose scene hash is the task's (see
-    `run_batch`); without it, `out`/variants is emptied first."""
+    `run_batch`); without it, `out`/variants is emptied first. `spare`:
+    work for a core the variants leave idle (`run_batch`)."""
     with cluster(workers, scheduler, stop) as cl:
         if not resume:
             clear_variants(out)
         rows, complete = run_batch(cl, tasks, values, bundle, out, stop=stop, progress=progress,
-                                   judged=judged, resume=resume)
+                                   judged=judged, resume=resume, spare=spare)
     if complete:
         prune_variants(out, [r.id for r in rows])
     return rows, complete
@@ -313,12 +315,17 @@ def kept_row(task: VariantTask, values: tuple, digest: str, folder: Path, judged
 
 def run_batch(cl: Cluster, tasks: list[VariantTask], values: dict[str, tuple], bundle: Bundle, out: Path, *,
               stop=None, progress: Progress | None = None, judged: tuple = ((), None),
-              done: int = 0, total: int | None = None, resume: bool = False) -> tuple[list[Row], bool]:
+              done: int = 0, total: int | None = None, resume: bool = False,
+              spare: Callable[[], None] | None = None) -> tuple[list[Row], bool]:
     """`run_variants` on an open `cluster`: one batch of a study (a search
     runs several); `done` and `total` count the study's variants for
     `progress`. With `resume`, a variant whose folder holds a finished run
     of the same scene hash (`kept_row`) is not run again: its row is read
-    from its report."""
+    from its report. `spare` is called once, on a daemon thread of its own,
+    as soon as fewer variants run than this machine has cores (one worker
+    on two cores: from the start; as many workers as cores: when the last
+    variants leave a core idle): the outputs' imports (matplotlib, 0.3-0.4
+    s) then cost no variant anything."""
     folder = Path(out) / "variants"
     rows: dict[str, Row] = {}
     complete = True
@@ -351,11 +358,16 @@ def run_batch(cl: Cluster, tasks: list[VariantTask], values: dict[str, tuple], b
                                  key=f"cablecheck-{tag}-{t.id}", pure=False,
                                  priority=len(todo) - k): t   # in study order
                    for k, t in enumerate(todo)}
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    threads = sum(client.nthreads().values()) if futures and spare is not None else 0
     try:
         while futures:
             if stop is not None and stop.asked:
                 complete = False
                 break
+            if spare is not None and min(len(futures), threads) < cores:
+                threading.Thread(target=spare, name="cablecheck-spare", daemon=True).start()
+                spare = None
             finished = [f for f in futures if f.done()]
             if not finished:
                 time.sleep(POLL_S)
@@ -410,7 +422,8 @@ def _collect(future, task: VariantTask, values: tuple, folder: Path, judged: tup
 
 
 def run_search(study, record: bool, out: Path, *, workers: int | None = None, scheduler: str | None = None,
-               stop=None, progress: Progress | None = None, resume: bool = False) -> tuple[list[Row], bool]:
+               stop=None, progress: Progress | None = None, resume: bool = False,
+               spare: Callable[[], None] | None = None) -> tuple[list[Row], bool]:
     """A study's search (``[search] method = "optimise"``): rounds of
     variants in the varied keys' ranges on one cluster, each round's points
     proposed by `cablecheck.study.search.Search` from the rows so far
@@ -420,7 +433,9 @@ def run_search(study, record: bool, out: Path, *, workers: int | None = None, sc
     Each round's scenes are checked (`cablecheck.study.definition.check_variant`) before the
     round runs; a point the scene refuses is a failed row with the scene's
     complaint, not run. `resume` keeps finished variants as `run_batch`
-    does: the search proposes the same points from the same rows."""
+    does: the search proposes the same points from the same rows. `spare`
+    as `run_batch` takes it, offered to every round (it must bear being
+    called again)."""
 
     lo = [v.bounds[0] for v in study.vary]
     hi = [v.bounds[1] for v in study.vary]
@@ -450,7 +465,8 @@ def run_search(study, record: bool, out: Path, *, workers: int | None = None, sc
                 tasks = [VariantTask(id=v.id, data=d, record=record) for v, d in zip(runnable, datas)]
                 ran, complete = run_batch(cl, tasks, {v.id: v.values for v in runnable}, bundle, out, stop=stop,
                                           progress=progress, judged=(study.requirements, study.goal),
-                                          done=len(rows) + len(refused), total=budget, resume=resume)
+                                          done=len(rows) + len(refused), total=budget, resume=resume,
+                                          spare=spare)
                 got.update((r.id, r) for r in ran)
             batch_rows = [got[v.id] for v in found]
             rows += batch_rows

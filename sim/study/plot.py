@@ -51,6 +51,18 @@ def write_outputs(folder: Path, study: Study, rows: list[Row], *, complete: bool
     return paths
 
 
+def load_matplotlib():
+    """matplotlib's pyplot on the Agg backend (no display), loaded on first
+    use: 0.3-0.4 s, which a study spends on a core its variants leave idle
+    (`cablecheck.study.execute.run_batch`'s `spare`) before it plots."""
+    import matplotlib  # slow to load: only when a plot is drawn
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
 def _numeric(values) -> bool:
     return all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in values)
 
@@ -65,10 +77,7 @@ def plot_map(path: Path, study: Study, rows: list[Row], units: str) -> None:
     by its least margin (with requirements; else its worst distance), the
     runs that keep every requirement ringed, failed runs crossed, the best
     starred."""
-    import matplotlib  # slow to load: only when a plot is drawn
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = load_matplotlib()
 
     done = [r for r in rows if r.status is Status.DONE]
     field, label = ("margin", f"least margin ({units})") if study.requirements else \
@@ -178,10 +187,7 @@ def plot(path: Path, study: Study, rows: list[Row], units: str, window: Window |
     with the values. A length window is shaded with its recommendation
     marked; the least margin has the requirements' line; the best run is
     starred."""
-    import matplotlib  # slow to load: only when a plot is drawn
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = load_matplotlib()
     from matplotlib.ticker import MaxNLocator
 
     done = [r for r in rows if r.status is Status.DONE]

@@ -32,7 +32,7 @@ from cablecheck.study.definition import (
     varied_cables,
 )
 from cablecheck.study.execute import VariantTask, run_search, run_variants
-from cablecheck.study.plot import write_outputs
+from cablecheck.study.plot import load_matplotlib, write_outputs
 from cablecheck.study.result import Row, Window, length_window
 
 
@@ -85,13 +85,14 @@ def run_study(study_file: str | Path, out: str | Path = "studies", *, workers: i
                  f"the Dask scheduler at {scheduler}" if scheduler else f"{local} local worker process(es)")
     if searching:
         rows, complete = run_search(study, record, folder, workers=workers, scheduler=scheduler, stop=stop,
-                                    progress=progress, resume=resume)
+                                    progress=progress, resume=resume, spare=load_matplotlib)
     else:
         bundle, datas = make_bundle(study.scene_path, [v.data for v in found])
         tasks = [VariantTask(id=v.id, data=d, record=record) for v, d in zip(found, datas)]
         rows, complete = run_variants(tasks, {v.id: v.values for v in found}, bundle, folder, workers=workers,
                                       scheduler=scheduler, stop=stop, progress=progress,
-                                      judged=(study.requirements, study.goal), resume=resume)
+                                      judged=(study.requirements, study.goal), resume=resume,
+                                      spare=load_matplotlib)
     units = scenes[0].units
     window = None   # no window, and no recommendation, from an interrupted study
     vary = study.vary[0] if len(study.vary) == 1 else None
