@@ -19,3 +19,26 @@ def write_text(path: Path, text: str) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(text)
     return path
+
+
+def recorded_rows(record: Path, entity: str) -> list[dict]:
+    """Every row a rerun recording holds at `entity`, in time order: {column: value} plus "t" (s) or None
+    for a static row."""
+    import pyarrow as pa
+    from rerun.chunk import RrdReader
+
+    rows = []
+    for chunk in RrdReader(record).stream():
+        if chunk.entity_path != entity:
+            continue
+        batch = chunk.to_record_batch()
+        n = chunk.num_rows
+        # sim_time in nanoseconds (not every one is a whole number of microseconds)
+        times = (batch.column("sim_time").cast(pa.int64()).to_numpy() * 1e-9 if "sim_time" in batch.schema.names
+                 else [None] * n)
+        data = {k: batch.column(k).to_pylist() for k in batch.schema.names if "RowId" not in k and k != "sim_time"}
+        for i in range(n):
+            row = {k: v[i] for k, v in data.items()}
+            row["t"] = None if times[i] is None else float(times[i])
+            rows.append(row)
+    return sorted(rows, key=lambda r: (r["t"] is not None, r["t"] or 0.0))

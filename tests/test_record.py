@@ -33,7 +33,7 @@ from cablecheck.record.style import (
 )
 from cablecheck.record import wearview
 from cablecheck.record.wearview import CHARTED_CABLES, charted, wear_colours
-from tests.helpers import examples
+from tests.helpers import examples, recorded_rows as _rows
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -43,25 +43,6 @@ def _run(scene: str, out: Path) -> tuple[dict, Path]:
     assert main(["run", str(ROOT / "scenes" / scene), "--record", str(record), "--quiet",
                  "--fail-on", "never", "--report", str(record.with_suffix(".json"))]) == 0
     return json.loads(record.with_suffix(".json").read_text()), record
-
-
-def _rows(record: Path, entity: str) -> list[dict]:
-    """Every row logged at `entity`, in time order: {column: value} plus "t" (s) or None for static."""
-    rows = []
-    for chunk in RrdReader(record).stream():
-        if chunk.entity_path != entity:
-            continue
-        batch = chunk.to_record_batch()
-        n = chunk.num_rows
-        # sim_time in nanoseconds (not every one is a whole number of microseconds)
-        times = (batch.column("sim_time").cast(pa.int64()).to_numpy() * 1e-9 if "sim_time" in batch.schema.names
-                 else [None] * n)
-        data = {k: batch.column(k).to_pylist() for k in batch.schema.names if "RowId" not in k and k != "sim_time"}
-        for i in range(n):
-            row = {k: v[i] for k, v in data.items()}
-            row["t"] = None if times[i] is None else float(times[i])
-            rows.append(row)
-    return sorted(rows, key=lambda r: (r["t"] is not None, r["t"] or 0.0))
 
 
 def _clash_rows(record: Path) -> list[dict]:

@@ -18,28 +18,13 @@ from cablecheck.build.built import PartModel
 from cablecheck.cli.main import main
 from cablecheck.record import batches as batching
 from cablecheck.record.batches import BATCH_PARTS, batches, placement, shapes
-from tests.helpers import examples
+from tests.helpers import examples, recorded_rows as _rows
 
 SHAPES = ("box", "sphere", "ellipsoid", "capsule", "cylinder")
 
 
 def _part(name: str, shape: str, size=(0.01, 0.02, 0.03), keepout=False) -> PartModel:
     return PartModel(name, 0, "world", shape, np.array(size, float), None, None, keepout)
-
-
-def _rows(record: Path, entity: str) -> list[dict]:
-    """Every row logged at `entity`: {component: value}, plus "t" (s; None if static)."""
-    rows = []
-    for chunk in RrdReader(record).stream():
-        if chunk.entity_path != entity:
-            continue
-        batch = chunk.to_record_batch()
-        names = [k for k in batch.schema.names if "RowId" not in k and k != "sim_time"]
-        times = (batch.column("sim_time").to_numpy().astype("int64") * 1e-9 if "sim_time" in batch.schema.names
-                 else [None] * chunk.num_rows)
-        for i in range(chunk.num_rows):
-            rows.append({"t": times[i], **{k: batch.column(k)[i].as_py() for k in names}})
-    return rows
 
 
 def _matrix(q) -> np.ndarray:
