@@ -188,7 +188,7 @@ def plot(path: Path, study: Study, rows: list[Row], units: str, window: Window |
     marked; the least margin has the requirements' line; the best run is
     starred."""
     plt = load_matplotlib()
-    from matplotlib.ticker import MaxNLocator
+    from matplotlib.ticker import MaxNLocator  # slow to load: only when a plot is drawn
 
     done = [r for r in rows if r.status is Status.DONE]
     ncol = len(study.vary)
