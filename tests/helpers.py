@@ -24,12 +24,19 @@ def write_text(path: Path, text: str) -> Path:
 def recorded_rows(record: Path, entity: str) -> list[dict]:
     """Every row a rerun recording holds at `entity`, in time order: {column: value} plus "t" (s) or None
     for a static row."""
+    return recorded_entities(record, entity, whole=True).get(entity, [])
+
+
+def recorded_entities(record: Path, prefix: str, whole: bool = False) -> dict[str, list[dict]]:
+    """The rows (as `recorded_rows` gives them) of every entity whose path starts with `prefix` (with
+    `whole`: is `prefix`), read in one pass."""
     import pyarrow as pa
     from rerun.chunk import RrdReader
 
-    rows = []
+    found: dict[str, list[dict]] = {}
     for chunk in RrdReader(record).stream():
-        if chunk.entity_path != entity:
+        path = chunk.entity_path
+        if not (path == prefix if whole else path.startswith(prefix)):
             continue
         batch = chunk.to_record_batch()
         n = chunk.num_rows
@@ -37,8 +44,9 @@ def recorded_rows(record: Path, entity: str) -> list[dict]:
         times = (batch.column("sim_time").cast(pa.int64()).to_numpy() * 1e-9 if "sim_time" in batch.schema.names
                  else [None] * n)
         data = {k: batch.column(k).to_pylist() for k in batch.schema.names if "RowId" not in k and k != "sim_time"}
+        rows = found.setdefault(path, [])
         for i in range(n):
             row = {k: v[i] for k, v in data.items()}
             row["t"] = None if times[i] is None else float(times[i])
             rows.append(row)
-    return sorted(rows, key=lambda r: (r["t"] is not None, r["t"] or 0.0))
+    return {path: sorted(rows, key=lambda r: (r["t"] is not None, r["t"] or 0.0)) for path, rows in found.items()}

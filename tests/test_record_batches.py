@@ -18,7 +18,7 @@ from cablecheck.build.built import PartModel
 from cablecheck.cli.main import main
 from cablecheck.record import batches as batching
 from cablecheck.record.batches import BATCH_PARTS, batches, placement, shapes
-from tests.helpers import examples, recorded_rows as _rows
+from tests.helpers import examples, recorded_entities, recorded_rows as _rows
 
 SHAPES = ("box", "sphere", "ellipsoid", "capsule", "cylinder")
 
@@ -240,6 +240,7 @@ def test_a_scene_of_many_parts_draws_each_where_it_is_drawn_alone(tmp_path: Path
     assert blocks["Boxes3D:labels"] == [f"frame/block{k:02d}" for k in range(len(BLOCKS))]
     assert np.allclose(blocks["Boxes3D:centers"], BLOCKS, atol=1e-9)
     checked = 0
+    lone_rows = recorded_entities(alone, "/world/parts/carriage/")
     for shape in ("box", "ellipsoid", "capsule", "cylinder"):
         rows = _rows(batched, _batch_path("world/parts", "carriage", shape, moving=True))
         static = next(r for r in rows if r["t"] is None)
@@ -251,7 +252,7 @@ def test_a_scene_of_many_parts_draws_each_where_it_is_drawn_alone(tmp_path: Path
             for i, name in enumerate(names):
                 kind = SHAPES[int(name[-2:]) % len(SHAPES)]
                 centre, rot, size = _recorded(kind, merged, i)
-                lone = _rows(alone, "/world/parts/" + name)
+                lone = lone_rows["/world/parts/" + name]
                 pose = next(r for r in lone if r["t"] is not None and r["t"] == pytest.approx(row["t"], abs=1e-12)
                             and r.get("Transform3D:translation"))
                 mat = np.array(pose["Transform3D:mat3x3"]).reshape(3, 3).T      # rerun: column by column
