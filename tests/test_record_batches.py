@@ -59,6 +59,11 @@ def test_parts_are_batched_by_kind_assembly_level_and_motion():
     pooled = {b.path: b for b in batches(brackets, np.zeros(len(brackets), bool), "world/parts")}
     assert set(pooled) == {"world/parts/_boxes", "world/parts/_cylinders"}
     assert len(pooled["world/parts/_boxes"].members) == 2 * n
+    # on a frame, under the level they share; beside the frame's own boxes, in one batch with them
+    framed = [_part(f"frame/{p.name}", p.shape) for p in brackets] + [_part(f"frame/b{k}", "box") for k in range(n)]
+    found = {b.path: b for b in batches(framed, np.zeros(len(framed), bool), "world/parts")}
+    assert set(found) == {"world/parts/frame/_boxes", "world/parts/frame/_cylinders"}
+    assert len(found["world/parts/frame/_boxes"].members) == 3 * n
 
 
 @settings(max_examples=examples(60), deadline=None)
@@ -88,6 +93,8 @@ def test_every_batch_is_of_one_kind_and_motion_and_only_small_pools_are_left(dra
         assert {kind[parts[k].shape] for k in b.members} == {b.path.rsplit("_", 1)[1]}
         assert set(moving[b.members].tolist()) == {b.moving} and ("_moving_" in b.path) == b.moving
         assert not any(parts[k].keepout for k in b.members)
+        level = b.path[len("world/parts/"):].rsplit("/", 1)[0] if b.path.count("/") > 2 else ""
+        assert all(parts[k].name.startswith(level + "/") for k in b.members) if level else True
     left: dict = {}
     for k, part in enumerate(parts):
         if k not in members and part.shape in kind and not part.keepout:

@@ -7,8 +7,10 @@ ellipsoids; capsules; cylinders) sit under the same assembly level and
 either all stay put or all move: those are drawn as the instances of one
 entity, `<root>/<assembly level>/_<kind>` (`world/parts/frame/_boxes`;
 `_moving_boxes` for those that move), and so are the rest of a kind
-where they number as many (`world/parts/_boxes`: parts of no assembly,
-or a harness's 300 brackets of three parts each), each instance labelled
+where they number as many, under the levels they share
+(`world/parts/frame/_boxes` for a harness's 300 brackets
+`frame/bracket017/base`, `.../arm`; `world/parts/_boxes` for parts of no
+assembly), each instance labelled
 with its part's name (shown on hover and in the selection, not drawn). A chunk of the recording
 costs kilobytes whatever it holds: 1,000 parts as entities of their own
 took 5.5 MB before any of them moved, batched 43 kB (measured with rerun
@@ -25,6 +27,7 @@ Not here: which parts there are, their colours or when they are drawn
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -69,24 +72,30 @@ def batches(parts: Sequence[PartModel], moving: np.ndarray, root: str) -> list[B
     body), their entities under `root`: of each kind, those that stay put
     and those that move apart, first per assembly level
     (`<root>/<level>/_boxes`, `_moving_boxes`, ...), then the rest of the
-    kind together (`<root>/_boxes`: parts of no assembly, or of many small
-    ones), wherever there are :data:`BATCH_PARTS` or more. A part in none is
-    drawn on its own."""
+    kind together under the levels they share (`<root>/frame/_boxes` for
+    `frame/bracket07/base` and the like; `<root>/_boxes` for parts of no
+    assembly), wherever there are :data:`BATCH_PARTS` or more. A part in
+    none is drawn on its own."""
     groups: dict[tuple, list[int]] = {}
     for k, part in enumerate(parts):
         kind = _KIND.get(part.shape)
         if kind is None or part.keepout:
             continue
         groups.setdefault((tuple(part.name.split("/")[:-1]), kind, bool(moving[k])), []).append(k)
-    found, rest = [], {}
+    found: dict[tuple, list[int]] = {}
+    rest: dict[tuple, list[int]] = {}
     for (level, kind, go), members in groups.items():
         if level and len(members) >= BATCH_PARTS:
-            found.append((level, kind, go, members))
+            found[level, kind, go] = members
         else:
             rest.setdefault((kind, go), []).extend(members)
-    found += [((), kind, go, sorted(members)) for (kind, go), members in rest.items() if len(members) >= BATCH_PARTS]
+    for (kind, go), members in rest.items():
+        if len(members) >= BATCH_PARTS:
+            # under the assembly levels its parts share (a batch already there takes them in)
+            level = tuple(os.path.commonprefix([parts[k].name.split("/")[:-1] for k in members]))
+            found[level, kind, go] = sorted(found.get((level, kind, go), []) + members)
     return [Batch("/".join([root, *(escape(p) for p in level), ("_moving" if go else "") + _LEAF[kind]]), kind,
-                  np.array(members), go) for level, kind, go, members in found]
+                  np.array(members), go) for (level, kind, go), members in found.items()]
 
 
 def _sizes(kind: type, parts: Sequence[PartModel], unit: float) -> np.ndarray:
