@@ -113,6 +113,8 @@ class Event:
       min_distance: smallest signed distance (units of the records).
       where: (3,) worst point on cable a.
       s: arc length along cable a at the worst point.
+      s_b: for two cables (or a cable and itself), the arc length along b
+        there; else None.
     """
 
     type: PairType
@@ -126,6 +128,7 @@ class Event:
     min_distance: float
     where: np.ndarray
     s: float
+    s_b: float | None = None
 
 
 @dataclass(frozen=True)
@@ -218,7 +221,8 @@ class EventTracker:
     def _event(k: PairKey, ev: _Open) -> Event:
         w = ev.worst
         return Event(k[0], w.a, w.b, ev.severity, phase_of(ev.t_start), ev.t_start, ev.t_last,
-                     ev.t_worst, float(w.min_distance), np.asarray(w.where), float(w.s))
+                     ev.t_worst, float(w.min_distance), np.asarray(w.where), float(w.s),
+                     None if w.s_b is None else float(w.s_b))
 
     def _close(self, k: PairKey) -> Event:
         event = self._event(k, self._open.pop(k))

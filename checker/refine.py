@@ -29,13 +29,22 @@ cables' elements as capsules, and exact's record replaces it.
 coil pressed on its own turns): method ``exact`` of that cable alone, its
 places kept at least the self window apart along it as the points' are.
 
+A hard record's depth: the points may read it shallower than it is by up
+to half the gap between two points (a cable straight through a sheet
+thinner than that gap reads the nearest point's depth: 2.4 mm for exact's
+5.5 through a 1 mm plate, at a 5 mm radius). :func:`deepest_candidates`
+picks, state by state, each pair's hard records that may hold its least
+exact distance (within that bound of the pair's least points value so far);
+the three functions above measure those again too, so an event's worst
+depth, time and place are method exact's.
+
 Not here: which records a state has (:mod:`cablecheck.checker.interference`),
 and cable-cable or self pairs the points read past the clearance.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 
 import numpy as np
 
@@ -52,11 +61,51 @@ _ROUNDING = 1.0 + 1e-9
 is measured again, however its last bits round."""
 
 
+def deepest_candidates(records: Sequence[Sequence[Interference]], types: Collection,
+                       bound: Callable[[Interference], float], least: Mapping[tuple, float] | None = None
+                       ) -> tuple[list[set[int]], dict[tuple, float]]:
+    """Per state (in time order), the ids of its hard records of `types`
+    that may hold their pair's least exact distance: those whose points
+    value lies within `bound(record)` of the least hard value of the pair
+    so far in its run of states with a record (`least`: as the states
+    before these left it), and that ``least`` after these states (a pair
+    with no record at a state starts a new run).
+
+    `bound` is how far below the points' value exact's may lie: the points
+    sit on the centrelines at most a piece apart, so every place of a
+    centreline has a point within half a piece, and a distance changes no
+    faster than the place it is measured from (half a piece for a cable
+    against a part; half of each cable's for two cables; a whole piece for
+    a cable against itself). The state of a run where exact's least lies is
+    always taken: its points value is at most exact's least plus the bound,
+    and the least so far is never below exact's least. Taken in time order
+    with the least carried over, any batching of the states takes the same
+    records."""
+    least = dict(least or {})
+    out: list[set[int]] = []
+    for recs in records:
+        taken: set[int] = set()
+        present = set()
+        for r in recs:
+            key = (r.type, r.a, r.b)
+            present.add(key)
+            if r.severity is Severity.HARD and PairType(r.type) in types:
+                low = min(least.get(key, np.inf), r.min_distance)
+                least[key] = low
+                if r.min_distance - low <= bound(r) * _ROUNDING + 1e-12 * abs(r.min_distance):
+                    taken.add(id(r))
+        for key in [k for k in least if k not in present]:      # clear at this state: its run ends
+            del least[key]
+        out.append(taken)
+    return out, least
+
+
 def refined_records(records: Sequence[Sequence[Interference]], cables: Callable[[int], Mapping[str, CableState]],
-                    poses: np.ndarray, recheck: Recheck, errors: Mapping[str, float]
-                    ) -> list[dict[int, Interference]]:
+                    poses: np.ndarray, recheck: Recheck, errors: Mapping[str, float],
+                    deepest: Sequence[set[int]] | None = None) -> list[dict[int, Interference]]:
     """Per state, the replacements {id(points record): exact record} of its
-    soft cable-part records within their cable's error of touching (at it too).
+    soft cable-part records within their cable's error of touching (at it
+    too), and of its hard ones named in `deepest` (:func:`deepest_candidates`).
 
     Args:
         records: per state (S), its cable records by method points.
@@ -65,12 +114,15 @@ def refined_records(records: Sequence[Sequence[Interference]], cables: Callable[
         poses: (S, K, 4, 4) the checked parts' poses, in ``recheck``'s order.
         recheck: the exact one-part checkers (the run's exclusion windows).
         errors: cable name -> the points' error bound (``points_error``).
+        deepest: per state, ids of hard records to measure again too.
     """
     out: list[dict[int, Interference]] = [{} for _ in records]
     wanted: dict[tuple[PairType, str, str], list[tuple[int, Interference]]] = {}
     for i, recs in enumerate(records):
+        deep = deepest[i] if deepest is not None else ()
         for r in recs:                                                  # a state's few records
-            if PairType(r.type) in PART_TYPES and r.severity is Severity.SOFT and r.min_distance <= errors[r.a] * _ROUNDING:
+            if PairType(r.type) in PART_TYPES and (
+                    (r.severity is Severity.SOFT and r.min_distance <= errors[r.a] * _ROUNDING) or id(r) in deep):
                 wanted.setdefault((PairType(r.type), r.a, r.b), []).append((i, r))
     for found, exact in _measured(wanted, cables, poses, recheck, lambda r: r.min_distance):   # near touching
         for (i, r), e in zip(found, exact):
@@ -138,9 +190,10 @@ def near_miss_records(near: Sequence[Sequence[NearMiss]], cables: Callable[[int]
 
 
 def refined_cable_records(records: Sequence[Sequence[Interference]], cables: Callable[[int], Mapping[str, CableState]],
-                          clearance: float) -> list[dict[int, Interference]]:
+                          clearance: float, deepest: Sequence[set[int]] | None = None) -> list[dict[int, Interference]]:
     """Per state, the replacements {id(points record): exact record} of its
-    soft cable-cable records: the least distance between the two cables'
+    soft cable-cable records, and of its hard ones named in `deepest`
+    (:func:`deepest_candidates`): the least distance between the two cables'
     elements as capsules (segment distances less both radii, method
     ``exact``'s measure), its place on cable a and both arc lengths.
 
@@ -159,8 +212,9 @@ def refined_cable_records(records: Sequence[Sequence[Interference]], cables: Cal
     found: list[tuple[int, Interference, CableState, CableState]] = []
     asked: dict[int, Mapping[str, CableState]] = {}
     for i, recs in enumerate(records):
+        deep = deepest[i] if deepest is not None else ()
         for r in recs:                                                  # a state's few records
-            if PairType(r.type) is PairType.CABLE_CABLE and r.severity is Severity.SOFT:
+            if PairType(r.type) is PairType.CABLE_CABLE and (r.severity is Severity.SOFT or id(r) in deep):
                 if i not in asked:
                     asked[i] = cables(i)
                 found.append((i, r, asked[i][r.a], asked[i][r.b]))
@@ -239,9 +293,10 @@ def _closest_elements(pa: np.ndarray, pb: np.ndarray, upper: np.ndarray):
 
 
 def refined_self_records(records: Sequence[Sequence[Interference]], cables: Callable[[int], Mapping[str, CableState]],
-                         clearance: float) -> list[dict[int, Interference]]:
+                         clearance: float, deepest: Sequence[set[int]] | None = None) -> list[dict[int, Interference]]:
     """Per state, the replacements {id(points record): exact record} of its
-    soft self records: method ``exact``'s self record of that cable alone
+    soft self records, and of its hard ones named in `deepest`
+    (:func:`deepest_candidates`): method ``exact``'s self record of that cable alone
     (its elements as capsules, two places at least the self window apart
     along it: never farther than the points' value), where it is no farther
     than the points' value.
@@ -255,8 +310,9 @@ def refined_self_records(records: Sequence[Sequence[Interference]], cables: Call
     out: list[dict[int, Interference]] = [{} for _ in records]
     exact = None
     for i, recs in enumerate(records):
+        deep = deepest[i] if deepest is not None else ()
         for r in recs:                                                  # a state's few records
-            if PairType(r.type) is not PairType.SELF or r.severity is not Severity.SOFT:
+            if PairType(r.type) is not PairType.SELF or (r.severity is not Severity.SOFT and id(r) not in deep):
                 continue
             if exact is None:
                 exact = Checker([], CheckConfig(method="exact", clearance=clearance))

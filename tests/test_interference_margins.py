@@ -173,3 +173,15 @@ def test_events_nearer_than_the_samples_take_their_place_and_cables_read_their_n
     assert (a.other, a.min_distance, a.s) == ("box", -0.001, 0.3)
     assert (b.other, b.min_distance, b.s) == ("a", 0.006, 0.7)        # b's own place along it
     assert c is None
+
+
+def test_a_cable_pair_event_that_takes_the_place_keeps_both_cables_nearest():
+    """Two cables whose event reads as near as the samples or nearer: the pair's row is the event's, and
+    each cable still reads its nearest, the second at its own place along it (the event's `s_b`)."""
+    pair = Closest(PairType.CABLE_CABLE, "a", "b", -0.0015, 0.058, np.ones(3), 0.15, 0.12)
+    event = SimpleNamespace(type="cable-cable", a="a", b="b", min_distance=-0.0015, t_worst=0.122,
+                            where=np.full(3, 2.0), s=0.151, s_b=0.121)
+    (row,) = with_events([pair], [event])
+    assert (row.t, row.s, row.s_b) == (0.122, 0.151, 0.121)
+    a, b = per_cable([row], ["a", "b"])
+    assert (a.other, a.s, b.other, b.s) == ("b", 0.151, "a", 0.121)

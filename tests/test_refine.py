@@ -415,3 +415,157 @@ def test_closest_elements_pruned_are_those_of_every_pair(seed, na, nb, states, u
     want = _closest_elements_of_all_pairs(pa, pb, upper)
     for g, w in zip(got, want):
         assert np.array_equal(g, w)
+
+
+_THROUGH = """
+[scene]
+name = "through"
+units = "{units}"
+duration = {duration}
+settle = 0.0
+
+[effects]
+dynamics = false
+
+[check]
+clearance = {clearance}
+
+[[bodies]]
+name = "sheet"
+pos = [{x0}, {far}, {far}]
+
+[[parts]]
+name = "sheet/plate"
+body = "sheet"
+shape = "box"
+size = [{half}, {wide}, {wide}]
+euler = [0, {tilt}, 0]
+
+[[motion]]
+body = "sheet"
+keys = [ {{ t = 0.0, pos = [{x0}, {far}, {far}] }}, {{ t = {duration}, pos = [{x1}, {far}, {far}] }} ]
+
+[[cables]]
+name = "lead"
+radius = {radius}
+start = {{ pos = [{a}, {far}, {far}] }}
+end = {{ pos = [{b}, {far}, {far}] }}
+length = {length}
+segments = {segments}
+"""
+
+
+def _through(tmp_path, method: str, **drawn) -> dict:
+    scene = tmp_path / f"through_{method}.toml"
+    scene.write_text(_THROUGH.format(**drawn))
+    report = tmp_path / f"through_{method}.json"
+    from cablecheck.cli.main import main
+
+    assert main(["run", str(scene), "--no-record", "--report", str(report), "--quiet", "--fail-on", "never",
+                 "--method", method]) == 0
+    return json.loads(report.read_text())
+
+
+@settings(max_examples=examples(5), deadline=None)
+@given(radius=st.floats(2.0, 6.0), half=st.floats(0.05, 1.0), start=st.floats(0.0, 1.0), tilt=st.sampled_from([0, 25]),
+       units=st.sampled_from(["mm", "m"]), far=st.sampled_from([0.0, 1.0e4]), segments=st.integers(8, 14))
+def test_a_cable_through_a_sheet_reads_its_whole_depth_as_exact_does(tmp_path_factory, radius, half, start, tilt,
+                                                                     units, far, segments):
+    """A straight cable through a sheet thinner than the gap between its points, the sheet sliding
+    along it by a few gaps over the run (dynamics off): method points' hard event is as deep as
+    method exact's and the analytic depth (the radius plus half the sheet, square to the cable or
+    tilted), though the points alone read it shallower by up to half a gap."""
+    unit = 1.0 if units == "mm" else 1e-3
+    r = radius * unit
+    drawn = dict(units=units, duration=0.1, clearance=2.0 * unit, radius=r, half=half * unit, wide=60 * unit,
+                 tilt=tilt, far=far * unit, a=-100 * unit, b=100 * unit, length=200 * unit, segments=segments,
+                 x0=(start * 7.0 - 3.0) * unit, x1=(start * 7.0 + 8.0) * unit)
+    tmp = tmp_path_factory.mktemp("through")
+    got, want = _through(tmp, "points", **drawn), _through(tmp, "exact", **drawn)
+    (ev,), (ex,) = got["events"], want["events"]
+    assert ev["severity"] == ex["severity"] == "hard"
+    depth = (radius + half) * unit          # the centreline through the sheet's middle, tilted or not
+    scale = 1e-9 * (1.0 + far) * unit
+    assert abs(ex["min_distance"] + depth) <= scale + 1e-9 * depth
+    assert abs(ev["min_distance"] - ex["min_distance"]) <= scale + 1e-9 * depth
+
+
+_CROSSED = """
+[scene]
+name = "crossed"
+units = "mm"
+duration = 0.02
+settle = 0.0
+
+[effects]
+dynamics = false
+
+[check]
+clearance = 1.0
+
+[[cables]]
+name = "a"
+radius = {ra}
+start = {{ pos = [-100, 0, 0] }}
+end = {{ pos = [100, 0, 0] }}
+length = 200.0
+segments = {segments}
+
+[[cables]]
+name = "b"
+radius = {rb}
+start = {{ pos = [{x}, -100, {z}] }}
+end = {{ pos = [{x}, 100, {z}] }}
+length = 200.0
+segments = {segments}
+"""
+
+
+@settings(max_examples=examples(5), deadline=None)
+@given(ra=st.floats(2.0, 5.0), rb=st.floats(2.0, 5.0), sink=st.floats(0.1, 0.9), x=st.floats(-10.0, 10.0),
+       segments=st.integers(8, 12))
+def test_two_cables_pressed_into_each_other_read_their_whole_overlap(tmp_path_factory, ra, rb, sink, x, segments):
+    """Two straight cables crossing square, their centrelines `sink` of the radii's sum apart, where they
+    cross drawn anywhere between points: the hard cable-cable event reads the analytic overlap (the
+    centrelines' distance less both radii), as method exact does."""
+    z = (1.0 - sink) * (ra + rb)
+    tmp = tmp_path_factory.mktemp("crossed")
+    scene = tmp / "crossed.toml"
+    scene.write_text(_CROSSED.format(ra=ra, rb=rb, x=x, z=z, segments=segments))
+    from cablecheck.cli.main import main
+
+    assert main(["run", str(scene), "--no-record", "--report", str(tmp / "r.json"), "--quiet", "--fail-on", "never"]) == 0
+    (ev,) = [e for e in json.loads((tmp / "r.json").read_text())["events"] if e["type"] == "cable-cable"]
+    assert ev["severity"] == "hard" and abs(ev["min_distance"] - (z - ra - rb)) <= 1e-9 * (ra + rb)
+
+
+@settings(max_examples=examples(60), deadline=None)
+@given(st.lists(st.lists(st.tuples(st.sampled_from(["p", "q", "c"]), st.sampled_from(["hard", "soft"]),
+                                   st.floats(-3.0, 1.0)), max_size=3, unique_by=lambda x: x[0]), min_size=1, max_size=8),
+       st.floats(0.0, 2.0), st.integers(1, 8))
+def test_the_deepest_candidates_are_the_hard_records_near_their_runs_least_so_far(states, bound, cut):
+    """Against a loop over each pair's run of states: a hard record is a candidate exactly where its value
+    lies within `bound` of the least hard value of its pair from its run's first state to this one
+    (soft records never are), whether the states come in one batch or two (`cut`)."""
+    from cablecheck.checker.records import Interference
+    from cablecheck.checker.refine import deepest_candidates
+
+    kinds = {"p": (PairType.CABLE_STRUCTURE, "lead", "plate"), "q": (PairType.CABLE_STRUCTURE, "lead", "post"),
+             "c": (PairType.CABLE_CABLE, "lead", "other")}
+    records = [[Interference(kinds[k][0], kinds[k][1], kinds[k][2], v, Severity(sev), np.zeros(3), 0.0)
+                for k, sev, v in recs] for recs in states]
+    types = (PairType.CABLE_STRUCTURE, PairType.CABLE_CABLE)
+    whole, _ = deepest_candidates(records, types, lambda r: bound)
+    first, least = deepest_candidates(records[:cut], types, lambda r: bound)
+    second, _ = deepest_candidates(records[cut:], types, lambda r: bound, least)
+    assert first + second == whole
+    for i, recs in enumerate(records):
+        for r in recs:
+            key = (r.type, r.a, r.b)
+            start = i
+            while start > 0 and any((x.type, x.a, x.b) == key for x in records[start - 1]):
+                start -= 1
+            hard = [x.min_distance for s in records[start:i + 1] for x in s
+                    if (x.type, x.a, x.b) == key and x.severity is Severity.HARD]
+            want = r.severity is Severity.HARD and r.min_distance - min(hard) <= bound * (1 + 1e-9) + 1e-12 * abs(r.min_distance)
+            assert (id(r) in whole[i]) == want

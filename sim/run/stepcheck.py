@@ -49,7 +49,13 @@ from cablecheck.checker.parts import PartChecker
 from cablecheck.checker.recheck import Recheck
 from cablecheck.checker.interference.hits import record_order
 from cablecheck.checker.records import PART_TYPES, Interference, PairType
-from cablecheck.checker.refine import near_miss_records, refined_cable_records, refined_records, refined_self_records
+from cablecheck.checker.refine import (
+    deepest_candidates,
+    near_miss_records,
+    refined_cable_records,
+    refined_records,
+    refined_self_records,
+)
 from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from cablecheck.checker.shapes import Shape
 from cablecheck.checker.validation import SimulatorPairs, Validation, ValidationSummary
@@ -365,6 +371,9 @@ class StepChecks:
         self.hull_gaps = HullGaps(built) if detector is not None else None   # cables held on a hull
         self._recheck = Recheck(self.checker.parts, config, self.exclusions)
         self._points_error = {c.name: points_error(c.radius, config.spacing) for c in built.cables}
+        # half the longest gap between two of a cable's points (method points: `spacing` radii at most)
+        self._half_piece = {c.name: 0.5 * config.spacing * c.radius for c in built.cables}
+        self._least_hard: dict[tuple, float] = {}       # each pair's least hard value in its run so far
         # how far past the clearance a cable-part pair may read and still be inside it (method points)
         self._near_errors = (np.array([self._points_error[n] for n in self._names], float)
                              if config.method == "points" and not config.face_plane else None)
@@ -476,15 +485,20 @@ class StepChecks:
             return memo[i]
 
         placed = poses[:, self.checked_parts]
-        swaps = refined_records([r.cable_records for r in results], cables, placed, self._recheck,
-                                self._points_error)
+        records = [r.cable_records for r in results]
+        # the hard records that may hold their pair's deepest place, by their pair's points'
+        # spacing (half a piece on each cable), the least so far carried from batch to batch
+        # (`deepest_candidates`)
+        half = self._half_piece
+        deepest, self._least_hard = deepest_candidates(
+            records, PART_TYPES + (PairType.CABLE_CABLE, PairType.SELF),
+            lambda r: half[r.a] + (half[r.b] if r.b in half else 0.0), self._least_hard)
+        swaps = refined_records(records, cables, placed, self._recheck, self._points_error, deepest)
         if len(self._names) > 1:          # two hoses pressed together: their soft records measured again too
-            for swap, more in zip(swaps, refined_cable_records([r.cable_records for r in results], cables,
-                                                               self.config.clearance)):
+            for swap, more in zip(swaps, refined_cable_records(records, cables, self.config.clearance, deepest)):
                 swap.update(more)
         if "self" in self.built.scene.effects.contact:      # and a cable pressed on its own turns
-            for swap, more in zip(swaps, refined_self_records([r.cable_records for r in results], cables,
-                                                              self.config.clearance)):
+            for swap, more in zip(swaps, refined_self_records(records, cables, self.config.clearance, deepest)):
                 swap.update(more)
         found = near_miss_records([r.near_misses for r in results], cables, placed, self._recheck)
         out = []
