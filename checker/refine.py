@@ -33,10 +33,10 @@ A hard record's depth: the points may read it shallower than it is by up
 to half the gap between two points (a cable straight through a sheet
 thinner than that gap reads the nearest point's depth: 2.4 mm for exact's
 5.5 through a 1 mm plate, at a 5 mm radius). :func:`deepest_candidates`
-picks, state by state, each pair's hard records that may hold its least
-exact distance (within that bound of the pair's least points value so far);
-the three functions above measure those again too, so an event's worst
-depth, time and place are method exact's.
+picks, state by state, each pair's hard records that are its deepest by
+the points so far; the three functions above measure those again too, so
+an event's worst depth and place are method exact's at the state the
+points read deepest.
 
 Not here: which records a state has (:mod:`cablecheck.checker.interference`),
 and cable-cable or self pairs the points read past the clearance.
@@ -62,25 +62,23 @@ is measured again, however its last bits round."""
 
 
 def deepest_candidates(records: Sequence[Sequence[Interference]], types: Collection,
-                       bound: Callable[[Interference], float], least: Mapping[tuple, float] | None = None
-                       ) -> tuple[list[set[int]], dict[tuple, float]]:
+                       least: Mapping[tuple, float] | None = None) -> tuple[list[set[int]], dict[tuple, float]]:
     """Per state (in time order), the ids of its hard records of `types`
-    that may hold their pair's least exact distance: those whose points
-    value lies within `bound(record)` of the least hard value of the pair
-    so far in its run of states with a record (`least`: as the states
-    before these left it), and that ``least`` after these states (a pair
-    with no record at a state starts a new run).
-
-    `bound` is how far below the points' value exact's may lie: the points
-    sit on the centrelines at most a piece apart, so every place of a
-    centreline has a point within half a piece, and a distance changes no
-    faster than the place it is measured from (half a piece for a cable
-    against a part; half of each cable's for two cables; a whole piece for
-    a cable against itself). The state of a run where exact's least lies is
-    always taken: its points value is at most exact's least plus the bound,
-    and the least so far is never below exact's least. Taken in time order
+    that are their pair's deepest by the points so far in its run of states
+    with a record (at or below the least before them; `least`: as the
+    states before these left it), and that ``least`` after these states (a
+    pair with no record at a state starts a new run). Taken in time order
     with the least carried over, any batching of the states takes the same
-    records."""
+    records.
+
+    Measured again with method exact, these make an event's worst exact's
+    at the state the points read deepest. Exact's own least may lie at
+    another state, by at most the points' error deeper (half a piece a
+    cable: every place of a centreline has a point within half a piece,
+    and a distance changes no faster than the place it is measured from);
+    taking every hard record within that bound of the least would find it
+    too, at the cost of measuring nearly every state of a lasting hard
+    contact again (the zoo's Fetch: checks 2.3 -> 3.2 s)."""
     least = dict(least or {})
     out: list[set[int]] = []
     for recs in records:
@@ -89,11 +87,9 @@ def deepest_candidates(records: Sequence[Sequence[Interference]], types: Collect
         for r in recs:
             key = (r.type, r.a, r.b)
             present.add(key)
-            if r.severity is Severity.HARD and PairType(r.type) in types:
-                low = min(least.get(key, np.inf), r.min_distance)
-                least[key] = low
-                if r.min_distance - low <= bound(r) * _ROUNDING + 1e-12 * abs(r.min_distance):
-                    taken.add(id(r))
+            if r.severity is Severity.HARD and PairType(r.type) in types and r.min_distance <= least.get(key, np.inf):
+                least[key] = r.min_distance
+                taken.add(id(r))
         for key in [k for k in least if k not in present]:      # clear at this state: its run ends
             del least[key]
         out.append(taken)

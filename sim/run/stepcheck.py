@@ -371,8 +371,6 @@ class StepChecks:
         self.hull_gaps = HullGaps(built) if detector is not None else None   # cables held on a hull
         self._recheck = Recheck(self.checker.parts, config, self.exclusions)
         self._points_error = {c.name: points_error(c.radius, config.spacing) for c in built.cables}
-        # half the longest gap between two of a cable's points (method points: `spacing` radii at most)
-        self._half_piece = {c.name: 0.5 * config.spacing * c.radius for c in built.cables}
         self._least_hard: dict[tuple, float] = {}       # each pair's least hard value in its run so far
         # how far past the clearance a cable-part pair may read and still be inside it (method points)
         self._near_errors = (np.array([self._points_error[n] for n in self._names], float)
@@ -486,13 +484,10 @@ class StepChecks:
 
         placed = poses[:, self.checked_parts]
         records = [r.cable_records for r in results]
-        # the hard records that may hold their pair's deepest place, by their pair's points'
-        # spacing (half a piece on each cable), the least so far carried from batch to batch
-        # (`deepest_candidates`)
-        half = self._half_piece
+        # the hard records deepest by the points so far in their pair's run, the least carried
+        # from batch to batch (`deepest_candidates`)
         deepest, self._least_hard = deepest_candidates(
-            records, PART_TYPES + (PairType.CABLE_CABLE, PairType.SELF),
-            lambda r: half[r.a] + (half[r.b] if r.b in half else 0.0), self._least_hard)
+            records, PART_TYPES + (PairType.CABLE_CABLE, PairType.SELF), self._least_hard)
         swaps = refined_records(records, cables, placed, self._recheck, self._points_error, deepest)
         if len(self._names) > 1:          # two hoses pressed together: their soft records measured again too
             for swap, more in zip(swaps, refined_cable_records(records, cables, self.config.clearance, deepest)):
