@@ -10,8 +10,9 @@ it touches. :func:`refined_records` measures those records again, the cable
 against that part alone with method ``exact`` (every state asking for one
 pair in one pass, only the elements that may come below the points' value),
 and the exact record replaces the points' one: the same or nearer, never
-clear where the points found a record. Records farther than the error from
-touching keep the points' value: their class cannot change.
+clear where the points found a record. Soft records farther than the
+error from touching keep the points' value: their class cannot change (a
+hard record's depth: below).
 
 :func:`near_miss_records` does the same on the clearance's side: a pair
 the points read at or past the clearance by less than their error is
