@@ -1060,7 +1060,7 @@ def test_a_still_spot_is_stored_once_and_every_frame_shows_it_within_its_toleran
     path = tmp_path_factory.mktemp("s") / "s.rrd"
     rec.save(str(path))
     ClashMarks._send_spot(rec, "cable-cable/a/b", rows, 3 * n + 1, lambda f: [sim_time(times[np.asarray(f, int)])],
-                          radius, lifts, list(frames), between)
+                          radius, lifts, list(frames), np.array(sorted(between), np.int64))
     rec.disconnect()
     got = [r for r in _rows(path, "/world/interference/cable-cable/a/b") if r["t"] is not None]
     at = [round(r["t"] / 0.01) for r in got]

@@ -98,6 +98,14 @@ def batches(parts: Sequence[PartModel], moving: np.ndarray, root: str) -> list[B
                   np.array(members), go) for (level, kind, go), members in found.items()]
 
 
+def alone(count: int, found: Sequence[Batch]) -> np.ndarray:
+    """(count,) bool: the parts in none of the batches `found`, drawn as entities of their own."""
+    mask = np.ones(count, bool)
+    for b in found:
+        mask[b.members] = False
+    return mask
+
+
 def _sizes(kind: type, parts: Sequence[PartModel], unit: float) -> np.ndarray:
     """(n, 3) each part's MuJoCo size as the archetype's half-sizes, or (n, 2) radius and half-length."""
     size = np.array([np.resize(np.asarray(p.size, float), 3) for p in parts]) / unit

@@ -164,9 +164,9 @@ class ClashMarks:
         radii = {path: max(2.5 * self._radius(rows[0][4]) + 0.5 * clearance, 0.01 * diag) / self.unit
                  for path, rows in self._rows.items()}
         lifts = label_lifts(self._rows, radii, LABEL_STEP * diag / self.unit)
+        between = np.array(sorted(self._between), np.int64)
         for path, rows in self._rows.items():
-            self._send_spot(rec, path, rows, n_f, index, radii[path], lifts[path], self._present[path],
-                            self._between)
+            self._send_spot(rec, path, rows, n_f, index, radii[path], lifts[path], self._present[path], between)
 
     def _radius(self, cable: str) -> float:
         i = self._cable_index.get(cable)
@@ -174,7 +174,7 @@ class ClashMarks:
 
     @staticmethod
     def _send_spot(rec: rr.RecordingStream, path: str, rows: list, n_f: int, index, radius: float,
-                   lifts: np.ndarray, present: list[int] | None = None, between: set[int] = frozenset()) -> None:
+                   lifts: np.ndarray, present: list[int] | None = None, between: np.ndarray | None = None) -> None:
         """One pair's spot (a wire sphere of `radius`, scene units, standing out of
         the cable; the cable, the gap and the part stay visible inside it), its
         label `lifts` (one per row, scene units; NaN: no label at that frame)
@@ -183,16 +183,18 @@ class ClashMarks:
         arrays; a row that shows no label, follows none, and moves its sphere
         and its gap's ends no more than :data:`SPOT_STILL` of the sphere's
         radius from the last row kept is left out (the last one stands), unless
-        it starts a run or lies between the regular samples (`between`: an
-        event's worst instant, start or end, shown as measured there)."""
+        it starts a run or lies between the regular samples (`between`, frame
+        numbers: an event's worst instant, start or end, shown as measured there)."""
         frame = np.array([r[0] for r in rows], np.int64)
         on = frame if present is None else np.asarray(present, np.int64)
         where = np.array([r[1] for r in rows], float).reshape(-1, 3)
         other = np.array([np.full(3, np.nan) if r[2] is None else r[2] for r in rows], float).reshape(-1, 3)
         ends = on[np.r_[on[1:] > on[:-1] + 1, True]] + 1
         shown = ~np.isnan(lifts)
-        keep = _moving_rows(where, other, shown, np.isin(frame - 1, on, invert=True)
-                            | np.isin(frame, np.fromiter(between, np.int64, len(between))), SPOT_STILL * radius)
+        forced = np.isin(frame - 1, on, invert=True)                          # a run's start
+        if between is not None:
+            forced |= np.isin(frame, between)
+        keep = _moving_rows(where, other, shown, forced, SPOT_STILL * radius)
         if not keep.all():
             rows = [r for r, k in zip(rows, keep.tolist()) if k]
             frame, where, other, shown, lifts = frame[keep], where[keep], other[keep], shown[keep], lifts[keep]

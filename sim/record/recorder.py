@@ -33,7 +33,7 @@ import rerun as rr
 from cablecheck.build.built import Built
 from cablecheck.build.drawn import DrawnGeom
 from cablecheck.checker.shapes import Shape
-from cablecheck.record.batches import batches, placement, shapes
+from cablecheck.record.batches import alone, batches, placement, shapes
 from cablecheck.record.cables import CableFrames
 from cablecheck.record.clashes import Settings, send_clash_list, send_log
 from cablecheck.record.columns import Once, column, floats, named, rgba, strings, times as sim_time, vec3
@@ -307,10 +307,8 @@ class Recorder:
         parts = [p for p, t in zip(self.built.parts, which) if t]
         poses = self._poses0[which]
         found = batches(parts, np.zeros(len(parts), bool), "wear_map/parts")
-        alone = np.ones(len(parts), bool)
-        for b in found:
-            alone[b.members] = False
-        return ({p.name: (self.scene.shape(p, pose), pose) for p, pose, a in zip(parts, poses, alone) if a},
+        own = alone(len(parts), found)
+        return ({p.name: (self.scene.shape(p, pose), pose) for p, pose, a in zip(parts, poses, own) if a},
                 [(b.path, b.archetype, shapes(b.archetype, [parts[k] for k in b.members], self.unit)
                   + placement(b.archetype, [parts[k] for k in b.members], poses[None, b.members], self.unit))
                  for b in found])

@@ -28,7 +28,7 @@ import rerun as rr
 
 from cablecheck.build.built import Built, PartModel
 from cablecheck.build.drawn import DrawnGeom
-from cablecheck.record.batches import batches, placement, shapes
+from cablecheck.record.batches import alone, batches, placement, shapes
 from cablecheck.record.columns import Column, column, mat3, rgba, vec3
 from cablecheck.record.style import (
     FLOOR,
@@ -107,9 +107,7 @@ class SceneGeometry:
         moving = {name for name in built.body_ids if name != "world"}
         self.moving_parts = np.array([p.body in moving for p in built.parts], bool)
         self.batches = batches(built.parts, self.moving_parts, "world/parts")
-        self._alone = np.ones(len(built.parts), bool)      # parts drawn as entities of their own
-        for b in self.batches:
-            self._alone[b.members] = False
+        self._alone = alone(len(built.parts), self.batches)     # parts drawn as entities of their own
         m = built.model
         self.visuals = tuple(drawn)
         visuals = self.visuals
@@ -195,20 +193,20 @@ class SceneGeometry:
         """Poses of the moving parts (F, M, 4, 4) and visual bodies (F, B, 4, 4), one column per entity
         (a batch of parts: a row of its instances' poses per frame)."""
         u = self.unit
-        moving = np.flatnonzero(self.moving_parts)
+        stacks, paths = [], []
         if poses:
-            every_part = np.stack(poses)
+            every_part = np.stack(poses)                                        # (F, M, 4, 4)
             slot = np.cumsum(self.moving_parts) - 1                 # part index -> index among the moving
             for b in self.batches:
                 if b.moving:
                     rec.send_columns(b.path, indexes=index, columns=placement(
                         b.archetype, [self.built.parts[k] for k in b.members], every_part[:, slot[b.members]], u))
-            moving = moving[self._alone[moving]]
-            poses = list(every_part[:, self._alone[self.moving_parts]])
-        paths = ([part_path(self.built.parts[k].name) for k in moving] if poses else []) + \
-                ([self._vis_body_paths[int(b)] for b in self.moving_visual_bodies] if vis_poses else [])
-        stacks = [np.stack(p) for p in (poses, vis_poses) if p]
-        if not stacks:
+            stacks.append(every_part[:, self._alone[self.moving_parts]])
+            paths += [part_path(self.built.parts[k].name) for k in np.flatnonzero(self.moving_parts & self._alone)]
+        if vis_poses:
+            stacks.append(np.stack(vis_poses))                                  # (F, B, 4, 4)
+            paths += [self._vis_body_paths[int(b)] for b in self.moving_visual_bodies]
+        if not paths:
             return
         every = np.concatenate(stacks, axis=1)                                  # (F, M + B, 4, 4)
         t = rr.Transform3D
@@ -229,7 +227,7 @@ class SceneGeometry:
         first = [rr.TimeColumn("sim_time", duration=times[:1])]
         for b in self.batches:      # one colour a row, every instance's
             rec.send_columns(b.path, indexes=index, columns=[column(b.archetype.descriptor_colors(), rgba(parts_rgba))])
-        for part in (p for p, alone in zip(self.built.parts, self._alone) if alone):
+        for part in (p for p, own in zip(self.built.parts, self._alone) if own):
             if part.keepout:
                 own = np.array(KEEPOUT_COLOUR, np.uint8)[None]
                 rec.send_columns(part_path(part.name), indexes=first, columns=_colour_columns(part, own))
