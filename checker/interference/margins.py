@@ -392,7 +392,7 @@ def with_events(closest: Sequence[Closest], events: Sequence) -> tuple[Closest, 
             continue            # bend and taut: no distance between two things
         c = rows.get(k)
         if c is None or e.min_distance <= c.min_distance:      # a tie: the event's place, as the events list it
-            s_b = getattr(e, "s_b", None) if k[0] is PairType.CABLE_CABLE else None   # the other cable's place too
+            s_b = e.s_b if k[0] is PairType.CABLE_CABLE else None     # the other cable's place too
             rows[k] = Closest(k[0], e.a, e.b, float(e.min_distance), float(e.t_worst),
                               np.asarray(e.where, float), float(e.s), None if s_b is None else float(s_b))
     return tuple(sorted(rows.values(), key=lambda c: (c.min_distance, c.t, c.a, c.b)))

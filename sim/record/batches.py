@@ -98,6 +98,15 @@ def batches(parts: Sequence[PartModel], moving: np.ndarray, root: str) -> list[B
                   np.array(members), go) for (level, kind, go), members in found.items()]
 
 
+def static_columns(batch: Batch, parts: Sequence[PartModel], poses: np.ndarray, unit: float) -> list[Column]:
+    """A batch's one static row: its instances' sizes and names (:func:`shapes`)
+    and, for parts that stay put, their poses (`poses` (n, 4, 4) of all
+    `parts`, metres; :func:`placement`); a moving batch's poses come per frame."""
+    members = [parts[k] for k in batch.members]
+    at = [] if batch.moving else placement(batch.archetype, members, poses[None, batch.members], unit)
+    return shapes(batch.archetype, members, unit) + at
+
+
 def alone(count: int, found: Sequence[Batch]) -> np.ndarray:
     """(count,) bool: the parts in none of the batches `found`, drawn as entities of their own."""
     mask = np.ones(count, bool)

@@ -33,7 +33,7 @@ import rerun as rr
 from cablecheck.build.built import Built
 from cablecheck.build.drawn import DrawnGeom
 from cablecheck.checker.shapes import Shape
-from cablecheck.record.batches import alone, batches, placement, shapes
+from cablecheck.record.batches import alone, batches, static_columns
 from cablecheck.record.cables import CableFrames
 from cablecheck.record.clashes import Settings, send_clash_list, send_log
 from cablecheck.record.columns import Once, column, floats, named, rgba, strings, times as sim_time, vec3
@@ -309,9 +309,7 @@ class Recorder:
         found = batches(parts, np.zeros(len(parts), bool), "wear_map/parts")
         own = alone(len(parts), found)
         return ({p.name: (self.scene.shape(p, pose), pose) for p, pose, a in zip(parts, poses, own) if a},
-                [(b.path, b.archetype, shapes(b.archetype, [parts[k] for k in b.members], self.unit)
-                  + placement(b.archetype, [parts[k] for k in b.members], poses[None, b.members], self.unit))
-                 for b in found])
+                [(b.path, b.archetype, static_columns(b, parts, poses, self.unit)) for b in found])
 
     @property
     def names(self) -> list[str]:

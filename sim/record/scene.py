@@ -28,7 +28,7 @@ import rerun as rr
 
 from cablecheck.build.built import Built, PartModel
 from cablecheck.build.drawn import DrawnGeom
-from cablecheck.record.batches import alone, batches, placement, shapes
+from cablecheck.record.batches import alone, batches, placement, static_columns
 from cablecheck.record.columns import Column, column, mat3, rgba, vec3
 from cablecheck.record.style import (
     FLOOR,
@@ -129,9 +129,7 @@ class SceneGeometry:
         self.bounds = ((self._points.min(axis=0), self._points.max(axis=0)) if len(self._points)
                        else (np.full(3, -0.5), np.full(3, 0.5)))
         for b in self.batches:
-            members = [self.built.parts[k] for k in b.members]
-            at = [] if b.moving else placement(b.archetype, members, part_poses[None, b.members], u)
-            rec.send_columns(b.path, indexes=[], columns=shapes(b.archetype, members, u) + at)
+            rec.send_columns(b.path, indexes=[], columns=static_columns(b, self.built.parts, part_poses, u))
         for k in np.flatnonzero(self._alone):
             part = self.built.parts[k]
             shape = self.shape(part, part_poses[k])
