@@ -62,7 +62,13 @@ from cablecheck.checker.cable import arc_length, element_gaps, self_pair_window
 from cablecheck.checker.closest import row_norm, segment_segment, segment_segment_apart
 from cablecheck.checker.records import Interference, PairType
 from cablecheck.checker.scene_state import Exclusion
-from cablecheck.checker.shapes import Shape, ShapeType, segment_signed_distance, signed_distance
+from cablecheck.checker.arrays import within
+from cablecheck.checker.primitives import signed_distance_batch
+from cablecheck.checker.segments import segment_signed_distance_mixed
+from cablecheck.checker.shapes import Shape, ShapeType, segment_signed_distance, signed_distance, size_rows
+
+_ALL_TYPES = list(ShapeType)
+"""Shape types by the codes `segment_signed_distance_mixed` takes."""
 
 REVERSAL_STRAIN = 1e-3
 """Surface bending strain (radius times change of curvature) a bend must swing
@@ -156,8 +162,14 @@ class WearMap:
         self.rest_s = [np.asarray(s, float) for s in rest_s]
         self.radii = np.asarray(radii, float)
         self.shapes = {name: (k, shape) for k, (name, shape) in enumerate(parts)}
-        # each part's box in its own frame (infinite for planes)
-        self._part_box = {name: shape.local_bounds() for name, shape in parts}
+        # each part's box in its own frame (infinite for planes), its shape as rows of arrays
+        bounds = [shape.local_bounds() for _, shape in parts]
+        self._lo = np.array([lo for lo, _ in bounds], float).reshape(-1, 3)
+        self._hi = np.array([hi for _, hi in bounds], float).reshape(-1, 3)
+        self._shapes = [shape for _, shape in parts]
+        self._mesh = np.array([shape.type is ShapeType.MESH for shape in self._shapes], bool)
+        self._codes = np.array([_ALL_TYPES.index(shape.type) for shape in self._shapes], np.int64)
+        self._sizes = size_rows(self._shapes) if parts else np.zeros((0, 3))
         self.clearance = float(clearance)
         mid = [0.5 * (s[1:] + s[:-1]) for s in self.rest_s]
         self._excluded: dict[tuple[int, str], np.ndarray] = {}
@@ -242,14 +254,13 @@ class WearMap:
         slide = [np.zeros((n_s, n)) for n in n_el]
         o = self._offsets
         span = lambda c: slice(o[c], o[c + 1])
+        on_parts = [(c, other, np.asarray(idx)) for (c, what, other), idx in groups.items() if what == "part"]
+        for (c, other, idx), (hit, moved) in zip(on_parts, self._against_parts(on_parts, points, prev_points,
+                                                                               poses, prev_poses)):
+            self._take(c, other, idx, hit, moved, touch, slide, dt)
         for (c, what, other), idx in groups.items():
             idx = np.asarray(idx)
-            if what == "part":
-                k, shape = self.shapes[other]
-                hit, moved = self._against_part(c, other, shape, points[idx][:, span(c)],
-                                                prev_points[idx][:, span(c)], poses[idx, k], prev_poses[idx, k])
-                self._take(c, other, idx, hit, moved, touch, slide, dt)
-            else:
+            if what == "cable":
                 b = self.index[other]
                 hit_a, moved_a, hit_b, moved_b = self._against_cable(
                     c, b, points[idx][:, span(c)], points[idx][:, span(b)],
@@ -273,37 +284,86 @@ class WearMap:
         acc = self._partner_time[c].setdefault(partner, np.zeros(hit.shape[1]))
         acc += (dt[idx, None] * hit).sum(axis=0)
 
-    def _against_part(self, c: int, part: str, shape: Shape, pts: np.ndarray, prev: np.ndarray,
-                      pose: np.ndarray, prev_pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(m, B) elements within the clearance of the part at m steps, and the
-        tangential slip of each since the step before; pts, prev (m, n, 3),
-        pose, prev_pose (m, 4, 4)."""
-        m, n = pts.shape[:2]
-        local = np.einsum("mni,mij->mnj", pts - pose[:, None, :3, 3], pose[:, :3, :3])   # R^T (p - o)
-        a, b = local[:, :-1].reshape(-1, 3), local[:, 1:].reshape(-1, 3)
-        # only elements whose box meets the part's box, both grown by the contact reach
-        grow = self.radii[c] + self.clearance
-        lo, hi = self._part_box[part]
-        keep = np.all((np.minimum(a, b) <= hi + grow) & (np.maximum(a, b) >= lo - grow), axis=1)
-        excluded = self._excluded.get((c, part))
-        if excluded is not None:
-            keep &= ~np.tile(excluded, m)
+    def _against_parts(self, groups: list[tuple[int, str, np.ndarray]], points: np.ndarray, prev: np.ndarray,
+                       poses: np.ndarray, prev_poses: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """For each (cable c, part, steps idx (m,)) of ``groups``: (m, B) the
+        cable's elements within the clearance of the part at those steps, and
+        the tangential slip of each since the step before. points, prev (S, N,
+        3), poses, prev_poses (S, P, 4, 4). Every pair's elements at every
+        step in one pass (primitives in one distance call, each mesh in one),
+        the values of measuring each pair on its own."""
+        if not groups:
+            return []
+        o = self._offsets
+        cab = np.array([c for c, _, _ in groups], np.int64)
+        part = np.array([self.shapes[name][0] for _, name, _ in groups], np.int64)
+        steps = np.array([len(idx) for _, _, idx in groups], np.int64)
+        n_el = o[cab + 1] - o[cab] - 1
+        # one row per (pair, step), then one per (pair, step, element), pair after pair
+        pair = np.repeat(np.arange(len(groups)), steps)
+        step = np.concatenate([idx for _, _, idx in groups])
+        count = n_el[pair]
+        row = np.repeat(np.arange(len(pair)), count)
+        elem = within(count)
+        first = o[cab[pair]][row] + elem
+        k = part[pair][row]
+        st = step[row]
+
+        def local(pts, pose, at):
+            """R^T (p - o): the rows' points at index ``at`` in their part's frame."""
+            q = pose[step, part[pair]]                                           # (rows of pairs, 4, 4)
+            return np.einsum("ni,nij->nj", pts[st, at] - q[row, :3, 3], q[row, :3, :3])
+
+        a, b = local(points, poses, first), local(points, poses, first + 1)
+        rad = self.radii[cab[pair]][row]
+        grow = (rad + self.clearance)[:, None]
+        keep = np.all((np.minimum(a, b) <= self._hi[k] + grow) & (np.maximum(a, b) >= self._lo[k] - grow), axis=1)
+        ends = np.cumsum(steps * n_el)
+        for g, (c, name, idx) in enumerate(groups):             # the few pairs with an attachment window
+            excluded = self._excluded.get((c, name))
+            if excluded is not None:
+                keep[ends[g] - len(idx) * n_el[g]:ends[g]] &= ~np.tile(excluded, len(idx))
         cand = np.flatnonzero(keep)
+        d, u = self._element_distances(k[cand], a[cand], b[cand], rad[cand] + self.clearance)
+        near = (d - rad[cand]) < self.clearance
         hit = np.zeros(len(a), bool)
         moved = np.zeros(len(a))
-        if len(cand):
-            d, u = _element_distance(shape, a[cand], b[cand], self.radii[c] + self.clearance)
-            near = (d - self.radii[c]) < self.clearance
-            i, u = cand[near], u[near]
-            hit[i] = True
-            if len(i):
-                prev_local = np.einsum("mni,mij->mnj", prev - prev_pose[:, None, :3, 3], prev_pose[:, :3, :3])
-                pa, pb = prev_local[:, :-1].reshape(-1, 3), prev_local[:, 1:].reshape(-1, 3)
-                now = a[i] + u[:, None] * (b[i] - a[i])
-                then = pa[i] + u[:, None] * (pb[i] - pa[i])
-                _, closest = signed_distance(shape, now)
-                moved[i] = _tangential(now - then, now - closest)
-        return hit.reshape(m, n - 1), moved.reshape(m, n - 1)
+        i, u = cand[near], u[near]
+        hit[i] = True
+        if len(i):
+            pa, pb = local(prev, prev_poses, first), local(prev, prev_poses, first + 1)
+            now = a[i] + u[:, None] * (b[i] - a[i])
+            then = pa[i] + u[:, None] * (pb[i] - pa[i])
+            moved[i] = _tangential(now - then, now - self._closest(k[i], now))
+        return [(h.reshape(len(idx), -1), m.reshape(len(idx), -1))
+                for (_, _, idx), h, m in zip(groups, np.split(hit, ends[:-1]), np.split(moved, ends[:-1]))]
+
+    def _element_distances(self, k: np.ndarray, a: np.ndarray, b: np.ndarray,
+                           limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`_element_distance` of elements ``a b`` (n, 3) against parts
+        ``k`` (n,), each in its part's frame: all primitives in one call, each
+        mesh in one."""
+        d, t = np.full(len(k), np.inf), np.zeros(len(k))
+        mesh = self._mesh[k]
+        sel = np.flatnonzero(~mesh)
+        if len(sel):
+            d[sel], t[sel] = segment_signed_distance_mixed(self._codes[k[sel]], self._sizes[k[sel]], a[sel], b[sel])
+        for part in np.unique(k[mesh]):
+            sel = np.flatnonzero(k == part)
+            d[sel], t[sel] = _element_distance(self._shapes[part], a[sel], b[sel], limit[sel])
+        return d, t
+
+    def _closest(self, k: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """(n, 3) the nearest surface points of parts ``k`` (n,) to points ``x`` in their frames."""
+        out = np.zeros_like(x)
+        for part in np.unique(k[self._mesh[k]]):
+            sel = np.flatnonzero(k == part)
+            out[sel] = signed_distance(self._shapes[part], x[sel])[1]
+        codes = self._codes[k]
+        for code in np.unique(codes[~self._mesh[k]]):
+            sel = np.flatnonzero((codes == code) & ~self._mesh[k])
+            out[sel] = signed_distance_batch(_ALL_TYPES[code], self._sizes[k[sel]], x[sel])[1]
+        return out
 
     def _against_cable(self, c: int, b: int, pa: np.ndarray, pb: np.ndarray, qa: np.ndarray,
                        qb: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -403,12 +463,13 @@ def _element_distance(shape: Shape, a: np.ndarray, b: np.ndarray,
     of the element's ends and middle (its exact segment search costs a
     millisecond an element on a CAD mesh; elements are a few radii long, so
     this errs by at most the element's sag over half its length). With
-    ``limit``, a mesh's sample that provably lies beyond it may be answered
+    ``limit`` (one, or one an element), a mesh's sample that provably lies beyond it may be answered
     by a lower bound above it (the caller keeps elements below it only)."""
     if shape.type is not ShapeType.MESH:
         return segment_signed_distance(shape, a, b)
     n = len(a)
-    d, _ = signed_distance(shape, np.concatenate([a, 0.5 * (a + b), b]), limit)
+    lim = None if limit is None else np.tile(np.broadcast_to(np.asarray(limit, float), (n,)), 3)
+    d, _ = signed_distance(shape, np.concatenate([a, 0.5 * (a + b), b]), lim)
     d = d.reshape(3, n)
     k = np.argmin(d, axis=0)
     return d[k, np.arange(n)], 0.5 * k
