@@ -49,10 +49,9 @@ from collections.abc import Callable, Collection, Mapping, Sequence
 
 import numpy as np
 
-from cablecheck.checker.arrays import products
 from cablecheck.checker.cable import arc_length
-from cablecheck.checker.closest import row_norm, segment_segment
 from cablecheck.checker.interference import Checker
+from cablecheck.checker.interference.cablepairs import closest_elements
 from cablecheck.checker.recheck import Recheck, exact_records_pairs
 from cablecheck.checker.records import PART_TYPES, Interference, NearMiss, PairType, Severity, severity_of
 from cablecheck.checker.scene_state import CableState, CheckConfig
@@ -196,7 +195,7 @@ def refined_cable_records(records: Sequence[Sequence[Interference]], cables: Cal
 
     The points lie on the centrelines, so their value bounds exact's from
     above: only element pairs whose bounding spheres come within it are
-    measured (`_closest_elements`), every pair at every state in one pass
+    measured (`closest_elements`), every pair at every state in one pass
     for each pair of cable sizes.
 
     Args:
@@ -225,7 +224,7 @@ def refined_cable_records(records: Sequence[Sequence[Interference]], cables: Cal
         ra = np.array([found[k][2].radius for k in group], float)
         rb = np.array([found[k][3].radius for k in group], float)
         value = np.array([found[k][1].min_distance for k in group], float)
-        d, ea, eb, u, v = _closest_elements(pa, pb, value + ra + rb)
+        d, ea, eb, u, v = closest_elements(pa, pb, value + ra + rb)
         arc_a, arc_b = arc_length(pa), arc_length(pb)
         for row, k in enumerate(group):
             i, r = found[k][:2]
@@ -241,52 +240,6 @@ def refined_cable_records(records: Sequence[Sequence[Interference]], cables: Cal
             out[i][id(r)] = Interference(PairType.CABLE_CABLE, r.a, r.b, dist, severity_of(dist, clearance),
                                          where, float(s_a), float(s_b))
     return out
-
-
-def _closest_elements(pa: np.ndarray, pb: np.ndarray, upper: np.ndarray):
-    """Per state k, the least segment distance between the elements of
-    polylines pa[k] (na, 3) and pb[k] (nb, 3), looking only at element
-    pairs whose bounding spheres come within ``upper[k]`` (inf where none
-    does): (distance, element of a, element of b, parameter on a, parameter
-    on b), one row a state; the least by distance, then by the elements'
-    order (a tie goes to the first pair along a, then b).
-
-    An element of a whose sphere comes within ``upper`` of no point of b's
-    middles' box (grown by b's longest half element) is within it of no
-    element of b (and so for b): the spheres of the elements left on both
-    sides are compared pair by pair (`element_gaps`' gap, the same bits),
-    the same pairs as comparing all (two crossing hoses keep a few elements
-    each of their forty)."""
-    n_s = len(pa)
-    ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
-    ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
-    scale = 1.0 + np.abs(pa).max(axis=(1, 2)) + np.abs(pb).max(axis=(1, 2))
-    reach = upper + 1e-9 * scale                                                    # rounding
-
-    def facing(m, h, other, other_h):
-        """(S, E) the elements whose spheres come within reach of the other side's box."""
-        grow = (reach + other_h.max(axis=1) + 1e-9 * scale)[:, None] + h            # (S, E), a margin
-        lo, hi = other.min(axis=1)[:, None, :], other.max(axis=1)[:, None, :]
-        return np.all((m >= lo - grow[..., None]) & (m <= hi + grow[..., None]), axis=2)
-
-    ka, ia = np.nonzero(facing(ma, ha, mb, hb))
-    kb, ib = np.nonzero(facing(mb, hb, ma, ha))
-    na, nb = np.bincount(ka, minlength=n_s), np.bincount(kb, minlength=n_s)
-    k, x, y = products(na, nb)
-    ia, ib = ia[(np.cumsum(na) - na)[k] + x], ib[(np.cumsum(nb) - nb)[k] + y]
-    gap = row_norm(ma[k, ia] - mb[k, ib]) - ha[k, ia] - hb[k, ib]
-    o = gap <= reach[k]
-    k, ia, ib = k[o], ia[o], ib[o]
-    d, u, v, _, _ = segment_segment(pa[k, ia], pa[k, ia + 1], pb[k, ib], pb[k, ib + 1])
-    best = np.full(n_s, np.inf)
-    out_a, out_b = np.zeros(n_s, np.int64), np.zeros(n_s, np.int64)
-    out_u, out_v = np.zeros(n_s), np.zeros(n_s)
-    if len(k):
-        o = np.lexsort((ib, ia, d, k))
-        head = o[np.r_[True, k[o][1:] != k[o][:-1]]]
-        best[k[head]] = d[head]
-        out_a[k[head]], out_b[k[head]], out_u[k[head]], out_v[k[head]] = ia[head], ib[head], u[head], v[head]
-    return best, out_a, out_b, out_u, out_v
 
 
 def refined_self_records(records: Sequence[Sequence[Interference]], cables: Callable[[int], Mapping[str, CableState]],

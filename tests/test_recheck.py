@@ -176,3 +176,44 @@ def test_exact_records_of_many_pairs_at_once_are_each_pairs_alone(seed, copies, 
             assert [(r.min_distance, r.s) for r in own] == ([] if alone is None else [(alone.min_distance, alone.s)])
         elif own and own[0].min_distance < b[i] and sp[i][0] <= own[0].s <= sp[i][1]:
             assert alone is not None and alone.min_distance == own[0].min_distance
+
+
+@settings(max_examples=examples(30), deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), mm=st.booleans(), far=st.booleans())
+def test_a_batchs_cable_cable_opinions_are_each_states_alone(seed, mm, far):
+    """Two drawn cables (a zero-length element, crossings, touching and
+    overlapping, clear) over 20 states, in m or mm, at the origin or a
+    kilometre out: a batch's exact opinion of the pair at each state (found
+    a window of states at a time, the centrelines' elements as capsules) is
+    the one state's own check (its elements split into pieces, the same
+    segments: the same value to the rounding of the pieces' ends)."""
+    rng = np.random.default_rng(seed)
+    unit = 1000.0 if mm else 1.0
+    origin = (np.array([1000.0, -700.0, 300.0]) if far else np.zeros(3)) * unit
+    clearance = 0.005 * unit
+    recheck = Recheck([], CheckConfig("points", clearance=clearance), [])
+    n_a, n_b = rng.integers(2, 9, 2)
+    base_a = rng.uniform(-0.05, 0.05, (n_a, 3))
+    base_b = rng.uniform(-0.05, 0.05, (n_b, 3))
+    if n_a > 2:
+        base_a[1] = base_a[0]                                         # a zero-length element
+    ra, rb = rng.uniform(0.002, 0.01, 2) * unit
+    states = []
+    for i in range(20):
+        shift = np.array([0.0, 0.0, 0.004 * (i - 10)])
+        a = CableState("a", origin + (base_a + 0.002 * i * rng.standard_normal(3)) * unit, float(ra))
+        b = CableState("b", origin + (base_b + shift) * unit, float(rb))
+        states.append([a, b])
+    batch = recheck.many(states, np.zeros((20, 0, 4, 4)))
+    key = (CC, "a", "b")
+    got = [batch.at(i).exact(key) for i in range(20)]
+    alone = [recheck.at(s, np.zeros((0, 4, 4))).exact(key) for s in states]
+    tol = 1e-12 * (unit + float(np.abs(origin).max()))
+    for g, want in zip(got, alone):
+        if g is None and want is None:
+            continue
+        if g is None or want is None:      # clear on one side: at the clearance on the other
+            assert (g if want is None else want) >= clearance - tol, (g, want)
+        else:
+            assert g == pytest.approx(want, abs=tol)
+    assert any(g is not None for g in got) or all(w is None for w in alone)

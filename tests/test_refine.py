@@ -373,50 +373,6 @@ def test_a_cable_pressed_on_its_own_turn_reads_as_exact_reads_it(radius, gap, le
         assert got is p_rec
 
 
-def _closest_elements_of_all_pairs(pa, pb, upper):
-    """_closest_elements as first written: every element pair's gap (element_gaps),
-    the reference the pruned search must equal."""
-    from cablecheck.checker.cable import element_gaps
-    from cablecheck.checker.closest import segment_segment
-    n_s = len(pa)
-    gap = element_gaps(pa, pb)
-    slack = 1e-9 * (1.0 + np.abs(pa).max(axis=(1, 2)) + np.abs(pb).max(axis=(1, 2)))
-    k, ia, ib = np.nonzero(gap <= (upper + slack)[:, None, None])
-    d, u, v, _, _ = segment_segment(pa[k, ia], pa[k, ia + 1], pb[k, ib], pb[k, ib + 1])
-    best = np.full(n_s, np.inf)
-    out = [np.zeros(n_s, np.int64), np.zeros(n_s, np.int64), np.zeros(n_s), np.zeros(n_s)]
-    if len(k):
-        o = np.lexsort((ib, ia, d, k))
-        head = o[np.r_[True, k[o][1:] != k[o][:-1]]]
-        best[k[head]] = d[head]
-        for x, y in zip(out, (ia, ib, u, v)):
-            x[k[head]] = y[head]
-    return (best, *out)
-
-
-@settings(max_examples=examples(80), deadline=None)
-@given(st.integers(0, 2**32 - 1), st.integers(2, 40), st.integers(2, 40), st.integers(1, 6),
-       st.sampled_from([1e-3, 1.0, 1e3]), st.sampled_from([0.0, 1e4]))
-def test_closest_elements_pruned_are_those_of_every_pair(seed, na, nb, states, unit, far):
-    """Drawn polylines (random walks crossing each other, many states, mm or m,
-    far from the origin) and drawn limits, some at an element pair's exact
-    gap: the chunked search returns, to the bit, what comparing every
-    element pair's bounding spheres returns."""
-    from cablecheck.checker.refine import _closest_elements
-    rng = np.random.default_rng(seed)
-    pa = far + unit * np.cumsum(rng.normal(size=(states, na, 3)), axis=1)
-    pb = far + unit * np.cumsum(rng.normal(size=(states, nb, 3)), axis=1)
-    pb[:, 0] = pa[:, na // 2]                                           # they meet somewhere
-    upper = unit * rng.uniform(0.0, 3.0, states)
-    from cablecheck.checker.cable import element_gaps
-    gaps = element_gaps(pa, pb)
-    upper[0] = gaps[0].ravel()[rng.integers(0, gaps[0].size)]          # a limit right at a gap
-    got = _closest_elements(pa, pb, upper)
-    want = _closest_elements_of_all_pairs(pa, pb, upper)
-    for g, w in zip(got, want):
-        assert np.array_equal(g, w)
-
-
 _THROUGH = """
 [scene]
 name = "through"

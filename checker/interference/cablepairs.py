@@ -23,7 +23,9 @@ cable, all of which the self rule then drops. Both halves keep only
 candidates that can be below the clearance and compute their values
 exactly as a direct pair loop would. :func:`cable_pairs_many` takes given
 pairs of body centres over many states at once and shares
-:func:`point_pair_rows` with the single-state pass.
+:func:`point_pair_rows` with the single-state pass. :func:`closest_elements`
+measures one pair of cables as capsules at many states at once (a second
+look at a pair the points read: refinement, validation's second opinion).
 
 Deliberately not here: parts, bend and taut, the reduction to records.
 """
@@ -447,3 +449,48 @@ def cable_pairs_many(clearance: float, names: Sequence[str], radii: np.ndarray, 
     t, a, b, v, w, sb = (np.concatenate(x) for x in (t, a, b, v, w, sb))
     return worst_records(n_s, w // m, t, a, b, v, p[w], s[w], sb, clearance, names, lambda _: names)
 
+
+def closest_elements(pa: np.ndarray, pb: np.ndarray, upper: np.ndarray):
+    """Per state k, the least segment distance between the elements of
+    polylines pa[k] (na, 3) and pb[k] (nb, 3), looking only at element
+    pairs whose bounding spheres come within ``upper[k]`` (inf where none
+    does): (distance, element of a, element of b, parameter on a, parameter
+    on b), one row a state; the least by distance, then by the elements'
+    order (a tie goes to the first pair along a, then b).
+
+    An element of a whose sphere comes within ``upper`` of no point of b's
+    middles' box (grown by b's longest half element) is within it of no
+    element of b (and so for b): the spheres of the elements left on both
+    sides are compared pair by pair (`element_gaps`' gap, the same bits),
+    the same pairs as comparing all (two crossing hoses keep a few elements
+    each of their forty)."""
+    n_s = len(pa)
+    ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
+    ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
+    scale = 1.0 + np.abs(pa).max(axis=(1, 2)) + np.abs(pb).max(axis=(1, 2))
+    reach = upper + 1e-9 * scale                                                    # rounding
+
+    def facing(m, h, other, other_h):
+        """(S, E) the elements whose spheres come within reach of the other side's box."""
+        grow = (reach + other_h.max(axis=1) + 1e-9 * scale)[:, None] + h            # (S, E), a margin
+        lo, hi = other.min(axis=1)[:, None, :], other.max(axis=1)[:, None, :]
+        return np.all((m >= lo - grow[..., None]) & (m <= hi + grow[..., None]), axis=2)
+
+    ka, ia = np.nonzero(facing(ma, ha, mb, hb))
+    kb, ib = np.nonzero(facing(mb, hb, ma, ha))
+    na, nb = np.bincount(ka, minlength=n_s), np.bincount(kb, minlength=n_s)
+    k, x, y = products(na, nb)
+    ia, ib = ia[(np.cumsum(na) - na)[k] + x], ib[(np.cumsum(nb) - nb)[k] + y]
+    gap = row_norm(ma[k, ia] - mb[k, ib]) - ha[k, ia] - hb[k, ib]
+    o = gap <= reach[k]
+    k, ia, ib = k[o], ia[o], ib[o]
+    d, u, v, _, _ = segment_segment(pa[k, ia], pa[k, ia + 1], pb[k, ib], pb[k, ib + 1])
+    best = np.full(n_s, np.inf)
+    out_a, out_b = np.zeros(n_s, np.int64), np.zeros(n_s, np.int64)
+    out_u, out_v = np.zeros(n_s), np.zeros(n_s)
+    if len(k):
+        o = np.lexsort((ib, ia, d, k))
+        head = o[np.r_[True, k[o][1:] != k[o][:-1]]]
+        best[k[head]] = d[head]
+        out_a[k[head]], out_b[k[head]], out_u[k[head]], out_v[k[head]] = ia[head], ib[head], u[head], v[head]
+    return best, out_a, out_b, out_u, out_v
