@@ -89,10 +89,8 @@ class Recheck:
         cables' concatenated, and the parts' poses (S, K, 4, 4). A state's
         cable is made only when a second opinion asks for it."""
         points = np.asarray(points, float)
-        ends = np.cumsum([len(c.points) for c in cables])
-        spans = {c.name: (int(e) - len(c.points), int(e)) for c, e in zip(cables, ends)}
-        template = {c.name: c for c in cables}
-        states = [_StateCables(template, spans, x) for x in points]
+        states = cables_by_state(cables, points)
+        spans = states[0].spans if states else {}
         return BatchRecheck(self, states, np.asarray(poses, float), (points, spans))
 
     def exact_checker(self, k: int) -> Checker:
@@ -202,17 +200,29 @@ class BatchRecheck:
         return self._hull_points[key]
 
 
+def cables_by_state(cables: Sequence[CableState], points: np.ndarray) -> list[Mapping[str, CableState]]:
+    """Each state's cables by name from arrays: the cables as at any one
+    state (names, radii, rest coordinates) and every state's body centres
+    (S, N, 3), the cables' concatenated. A state's cable is made when first
+    asked for, and is the same object when asked again (copies of one cable
+    share its discrete points, `exact_records_pairs`)."""
+    ends = np.cumsum([len(c.points) for c in cables])
+    spans = {c.name: (int(e) - len(c.points), int(e)) for c, e in zip(cables, ends)}
+    template = {c.name: c for c in cables}
+    return [_StateCables(template, spans, x) for x in np.asarray(points, float)]
+
+
 class _StateCables(Mapping):
     """One state's cables by name, each made from the state's body centres
-    when first asked for (:meth:`Recheck.many_points`)."""
+    when first asked for (`cables_by_state`)."""
 
     def __init__(self, template: dict[str, CableState], spans: dict[str, tuple[int, int]], points: np.ndarray):
-        self._template, self._spans, self._points = template, spans, points
+        self._template, self.spans, self._points = template, spans, points
         self._made: dict[str, CableState] = {}
 
     def __getitem__(self, name: str) -> CableState:
         if name not in self._made:
-            lo, hi = self._spans[name]
+            lo, hi = self.spans[name]
             self._made[name] = replace(self._template[name], points=self._points[lo:hi])
         return self._made[name]
 

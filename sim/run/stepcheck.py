@@ -46,7 +46,7 @@ from cablecheck.checker.interference.excused import ExcusedLog, ExcusedWorst
 from cablecheck.checker.interference.margins import Closest, MarginLog
 from cablecheck.checker.interference.structure import PartTable, point_distances
 from cablecheck.checker.parts import PartChecker
-from cablecheck.checker.recheck import Recheck
+from cablecheck.checker.recheck import Recheck, cables_by_state
 from cablecheck.checker.interference.hits import record_order
 from cablecheck.checker.records import PART_TYPES, Interference, PairType
 from cablecheck.checker.refine import (
@@ -422,7 +422,7 @@ class StepChecks:
                 j += 1
         if sampled is not None:
             out = self._allowed_sampled(out, sampled)
-        out = self._refined(states, poses, out)
+        out = self._refined(states, pts, poses, out)
         times = np.array([s.t for s in states])
         if self.excused:
             self.excused.add(times, pts, poses[:, self.checked_parts])
@@ -464,7 +464,7 @@ class StepChecks:
                 out[i] = replace(res, records=[r for r in res.records if id(r) not in gone])
         return out
 
-    def _refined(self, states: Sequence[StepState], poses: np.ndarray,
+    def _refined(self, states: Sequence[StepState], pts: np.ndarray, poses: np.ndarray,
                  results: list[StepResult]) -> list[StepResult]:
         """Method ``points``: its soft cable-part records within the method's
         own error of touching replaced by method ``exact``'s
@@ -475,12 +475,8 @@ class StepChecks:
         finds them inside (:func:`cablecheck.checker.refine.near_miss_records`)."""
         if self.config.method != "points":
             return results
-        memo: dict[int, dict] = {}
-
-        def cables(i: int) -> dict:
-            if i not in memo:
-                memo[i] = {c.name: c for c in self._cable_states(states[i])}
-            return memo[i]
+        by_state = cables_by_state(self._cable_states(states[0]), pts)   # a cable made where a record asks
+        cables = by_state.__getitem__
 
         placed = poses[:, self.checked_parts]
         records = [r.cable_records for r in results]
