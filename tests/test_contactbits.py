@@ -1,5 +1,6 @@
 """Contact bits (cablecheck.build.contactbits): only the listed interactions push back,
-and an MJCF model's own bits are kept and filter the part pairs."""
+an MJCF model's own bits are kept and filter the part pairs, and the detection
+model collides the cables alone."""
 
 from __future__ import annotations
 
@@ -34,8 +35,9 @@ def test_the_models_own_bits_are_kept_and_filter_part_pairs(tmp_path):
     for name, own in {"stand/column": (1, 1), "link/capsule0": (2, 0), "link/sphere2": (0, 2)}.items():
         g = by[name]
         assert (m.geom_contype[g], m.geom_conaffinity[g]) == (own[0], own[1] | cable | part)
-        assert (det.geom_contype[g], det.geom_conaffinity[g]) == (own[0], own[1] | cable | part)
+        assert (det.geom_contype[g], det.geom_conaffinity[g]) == (0, cable)    # detection: cables' contacts only
     assert (m.geom_contype[by["cell/table"]], m.geom_conaffinity[by["cell/table"]]) == (part, part | cable)
+    assert (det.geom_contype[by["cell/table"]], det.geom_conaffinity[by["cell/table"]]) == (0, cable)
     # without part-part the model's geoms take no part in collisions but the cable's
     only_cable = arm_built(tmp_path, visuals=True)
     g = [p.geom_id for p in only_cable.parts if p.name == "stand/column"][0]
@@ -47,3 +49,22 @@ def test_the_models_own_bits_are_kept_and_filter_part_pairs(tmp_path):
     assert skip[idx["link/capsule0"], idx["post/rod"]] and skip[idx["post/rod"], idx["link/lug"]]
     # scene parts meet every model geom
     assert not skip[idx["cell/table"], idx["link/capsule0"]] and not skip[idx["cell/table"], idx["stand/column"]]
+
+
+def test_the_detection_model_reports_only_the_cables_contacts(tmp_path):
+    """Parts that meet each other (the arm's rod in its column, with
+    part-part contact on in the simulation model): the simulation model
+    collides them; the detection model, whose contacts validation compares
+    with the cables' records only, reports the cables' contacts and no
+    part-part one."""
+    import mujoco
+
+    built = arm_built(tmp_path, visuals=True, effects=("cable-structure", "part-part"))
+    found = {}
+    for name, model in (("simulation", built.model), ("detection", built.detect)):
+        d = mujoco.MjData(model)
+        mujoco.mj_forward(model, d)
+        flex = np.asarray(d.contact.flex[:d.ncon]).reshape(-1, 2)
+        found[name] = (int(np.sum((flex < 0).all(axis=1))), int(np.sum((flex >= 0).any(axis=1))))
+    assert found["simulation"][0] > 0            # parts pressed together where part-part is asked
+    assert found["detection"][0] == 0

@@ -9,9 +9,9 @@ that is not convex is joined by rigid flexes of its triangles (every vertex
 on the geom's body: MuJoCo's documented way to collide a general
 non-convex mesh, XMLreference "flex/body"), and the geom itself stops
 meeting the cables, so a cable's contacts with that part are flex-flex
-contacts with the mesh's own triangles, margin contacts included. The
-geom keeps its other bits (part-part contacts stay the hull's; the
-checker does not compare them).
+contacts with the mesh's own triangles, margin contacts included (the
+detection model collides nothing but the cables, `cablecheck.build.contactbits`,
+so the geom itself then meets nothing).
 
 Why a rigid flex and not a convex decomposition (CoACD, V-HACD): the flex
 is the mesh itself, to MuJoCo's float precision, with no tolerance, no
