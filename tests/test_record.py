@@ -1082,3 +1082,53 @@ def test_a_still_spot_is_stored_once_and_every_frame_shows_it_within_its_toleran
         last_of_run = frames[np.r_[np.diff(frames) > 1, True]]
         # one row per run and its emptying (none after the recording's last frame)
         assert len(got) == len(last_of_run) + int(np.sum(last_of_run + 1 < 3 * n + 1))
+
+
+@settings(max_examples=examples(40), deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), mm=st.booleans())
+def test_a_frames_element_states_are_each_marks_own(seed, mm):
+    """Cables of drawn element counts and lengths (m or mm), a frame's drawn
+    marks (soft and hard, taut ones, on one cable or two, on an unknown
+    cable, places at an element's reach exactly): each element's state, all
+    marks at once, is what taking the marks one by one gives (the highest
+    rank of the marks whose place on the element's cable lies within the
+    cable's reach of the element's middle; a taut mark: all its cable)."""
+    from types import SimpleNamespace
+
+    from cablecheck.record.cables import _RANK, CableFrames
+    from cablecheck.record.marks import Mark
+    rng = np.random.default_rng(seed)
+    unit = 1000.0 if mm else 1.0
+    cables = []
+    for k in range(int(rng.integers(1, 5))):
+        n = int(rng.integers(2, 30))
+        rest = np.r_[0.0, np.cumsum(rng.uniform(0.005, 0.03, n - 1))] * unit
+        cables.append(SimpleNamespace(name=f"c{k}", rest_s=rest, element_length=float(np.diff(rest).mean()),
+                                      radius=float(rng.uniform(0.002, 0.01)) * unit))
+    frames = CableFrames(SimpleNamespace(cables=cables), unit=1.0)
+    names = [c.name for c in cables] + ["elsewhere"]
+    marks = []
+    for _ in range(int(rng.integers(0, 12))):
+        a, b = rng.choice(names, 2)
+        kind = rng.choice(["cable-structure", "cable-cable", "taut", "bend"])
+        ca = next((c for c in cables if c.name == a), cables[0])
+        s = float(rng.uniform(-0.1, 1.1) * ca.rest_s[-1])
+        if rng.random() < 0.3:                                       # exactly at an element's reach
+            mid = 0.5 * (ca.rest_s[1:] + ca.rest_s[:-1])
+            s = float(mid[rng.integers(len(mid))] + max(2.0 * ca.element_length, 3.0 * ca.radius))
+        s_b = float(rng.uniform(0.0, 1.0) * unit) if kind == "cable-cable" else None
+        marks.append(Mark(str(kind), str(a), str(b), 0.0, str(rng.choice(["soft", "hard"])), np.zeros(3), s, s_b))
+    want = [np.zeros(len(c.rest_s) - 1, np.uint8) for c in cables]
+    index = {c.name: i for i, c in enumerate(cables)}
+    for m in marks:                                                       # one mark at a time
+        for name, s, whole in ((m.a, m.s, m.kind == "taut"), (m.b, m.s_b, False)):
+            if name not in index or s is None:
+                continue
+            c = cables[index[name]]
+            mid = 0.5 * (c.rest_s[1:] + c.rest_s[:-1])
+            near = np.ones(len(mid), bool) if whole else \
+                np.abs(mid - s) <= max(2.0 * c.element_length, 3.0 * c.radius)
+            want[index[name]][near] = np.maximum(want[index[name]][near], _RANK[m.state])
+    got = np.split(frames._element_states(marks), np.cumsum([len(w) for w in want])[:-1])
+    for g, w in zip(got, want):
+        np.testing.assert_array_equal(g, w)

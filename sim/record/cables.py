@@ -42,6 +42,7 @@ import pyarrow as pa
 import rerun as rr
 
 from cablecheck.build.built import Built
+from cablecheck.checker.arrays import ranges
 from cablecheck.record.columns import (
     Once,
     Sometimes,
@@ -137,6 +138,17 @@ class CableFrames:
         self._names = [c.name for c in built.cables]
         self._element_s = [0.5 * (c.rest_s[1:] + c.rest_s[:-1]) for c in built.cables]
         self._near = [max(2.0 * c.element_length, 3.0 * c.radius) for c in built.cables]
+        # every cable's element places in one array, and laid apart along one axis to search them all at once
+        sizes = np.array([len(e) for e in self._element_s], np.int64)
+        self._ends = np.cumsum(sizes)
+        self._starts = self._ends - sizes
+        self._all_s = np.concatenate(self._element_s) if self._element_s else np.zeros(0)
+        self._near_arr = np.array(self._near, float)
+        length = np.array([e[-1] - e[0] if len(e) else 0.0 for e in self._element_s]) + 4.0 * self._near_arr + 1.0
+        first = np.array([e[0] if len(e) else 0.0 for e in self._element_s])
+        self._shift = np.cumsum(length) - length - first
+        self._flat_s = self._all_s + np.repeat(self._shift, sizes)
+        self._pad = 1e-6 * (1.0 + float(np.abs(self._flat_s).max(initial=0.0)))
         self._still = [STILL * c.radius / unit for c in built.cables]
         self._points: list[list[np.ndarray]] = [[] for _ in built.cables]
         self._states: list[list[np.ndarray]] = [[] for _ in built.cables]
@@ -153,11 +165,7 @@ class CableFrames:
         there keeps its last shape and colours, and one named there is kept
         where its states change or it moved more than :data:`LIGHT_STILL`
         radii (an event's worst instant, start or end: its own cables)."""
-        state = [np.zeros(len(c.rest_s) - 1, np.uint8) for c in self.built.cables]
-        for m in marks:
-            self._state_near(state, m.a, m.s, _RANK[m.state], whole=(m.kind == "taut"))
-            if m.s_b is not None and m.b in self._index:
-                self._state_near(state, m.b, m.s_b, _RANK[m.state], whole=False)
+        state = np.split(self._element_states(marks), self._ends[:-1])
         u = self.unit
         for i, (pts, name) in enumerate(zip(cables, self._names)):
             pts = np.asarray(pts, float) / u
@@ -172,12 +180,37 @@ class CableFrames:
             self._points[i].append(pts)
             self._states[i].append(state[i])
 
-    def _state_near(self, state: list[np.ndarray], cable: str, s: float, rank: int, whole: bool) -> None:
-        i = self._index.get(cable)
-        if i is None:
-            return
-        near = np.ones(len(state[i]), bool) if whole else np.abs(self._element_s[i] - s) <= self._near[i]
-        state[i][near] = np.maximum(state[i][near], rank)
+    def _element_states(self, marks: list[Mark]) -> np.ndarray:
+        """Every cable's element states (all cables' elements in one array):
+        the highest rank of the marks on each, a mark colouring the elements
+        within its cable's reach (`_near`) of its place on cable a (all of a
+        taut cable's) and of its place on cable b; all marks at once."""
+        out = np.zeros(int(self._ends[-1]), np.uint8)
+        cab, s, rank, whole = [], [], [], []
+        for m in marks:                                                  # the frame's marks, as arrays
+            i = self._index.get(m.a)
+            if i is not None:
+                cab.append(i), s.append(m.s), rank.append(_RANK[m.state]), whole.append(m.kind == "taut")
+            j = self._index.get(m.b) if m.s_b is not None else None
+            if j is not None:
+                cab.append(j), s.append(m.s_b), rank.append(_RANK[m.state]), whole.append(False)
+        if not cab:
+            return out
+        cab, s, rank, whole = np.array(cab), np.array(s, float), np.array(rank, np.uint8), np.array(whole)
+        # each mark's elements: a generous range of the cable's (sorted) element places, then the test itself
+        first = self._starts[cab]
+        count = self._ends[cab] - first
+        lo = np.where(whole, first, first + np.maximum(
+            np.searchsorted(self._flat_s, s + self._shift[cab] - self._near_arr[cab] - self._pad, "left") - first, 0))
+        hi = np.where(whole, first + count, np.minimum(
+            np.searchsorted(self._flat_s, s + self._shift[cab] + self._near_arr[cab] + self._pad, "right"),
+            first + count))
+        n = np.maximum(hi - lo, 0)
+        row = np.repeat(np.arange(len(cab)), n)
+        el = ranges(lo, n)
+        ok = whole[row] | (np.abs(self._all_s[el] - s[row]) <= self._near_arr[cab[row]])
+        np.maximum.at(out, el[ok], rank[row[ok]])
+        return out
 
     def send(self, rec: rr.RecordingStream, times: np.ndarray) -> None:
         """Every cable's frames, one column per cable (`times`: each frame's,

@@ -89,7 +89,8 @@ class ClashMarks:
         given a row. ``update``: at a frame between the run's regular samples,
         the pairs to give a row (an event's worst or start there); any other
         pair still shown keeps its last row, unless it was not shown at the
-        frame before (then it gets one too). None: every pair."""
+        frame before (then it gets one too). None: every pair. ``cables``
+        (the frame's body centres) are kept as given, not copied."""
         u = self.unit
         now = set()
         updated: set[tuple[str, str, str]] = set()
@@ -113,7 +114,7 @@ class ClashMarks:
             if m.kind in ("self", "cable-cable") and m.s_b is not None and m.b in self._cable_index:
                 i = self._cable_index[m.b]
                 self._cable_spots.setdefault(i, []).append((rows, len(rows), where, m.s_b,
-                                                            np.array(cables[i], float)))
+                                                            np.asarray(cables[i], float)))
             elif m.kind in ("cable-structure", "keepout") and self.shapes is not None and m.b in self._part_index:
                 k = self._part_index[m.b]
                 self._part_spots.setdefault(k, []).append((rows, len(rows), where, np.asarray(poses[k], float)))
