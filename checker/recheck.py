@@ -29,6 +29,7 @@ import numpy as np
 
 from cablecheck.checker.interference import Checker
 from cablecheck.checker.arrays import ranges
+from cablecheck.checker.cable import polyline_arc_lengths
 from cablecheck.checker.closest import row_norm
 from cablecheck.checker.interference.discrete import discretise
 from cablecheck.checker.interference.hits import Hits, worst_records
@@ -394,13 +395,19 @@ def exact_records_pairs(checkers: Sequence[Checker], keys: Sequence[tuple[str, s
     excl = (excl[0][order], excl[1][order], excl[2][order], n)
     cut_c = np.repeat(poly_of, [len(one.cable) for one in ones])
     cuts = (np.concatenate([cut_c, cut_c]), np.concatenate([cat([one.lo for one in ones]), cat([one.hi for one in ones])]))
-    dp = discretise(polys, config, cuts)
     limit = np.full(n, config.clearance) if below is None else \
         np.minimum(np.asarray(below, float)[rows], config.clearance)
     lo, hi = _sphere_spans([cables[i] for i in rows], tab, limit)
     if spans is not None:
         span = np.asarray(spans, float)[rows]
         lo, hi = np.maximum(lo, span[:, 0]), np.minimum(hi, span[:, 1])
+    # only the centres of the elements some copy of a polyline may measure are densified (the same
+    # points: a cable resting on one part is a few of its elements there); a polyline with windows whole
+    windowed = np.zeros(len(polys), bool)
+    windowed[cut_c] = True
+    centres = np.concatenate([c.points for c in polys])
+    keep = _kept_centres(polys, centres, poly_of, lo, hi, windowed)
+    dp = discretise(polys, config, cuts, keep, centres)
     # each copy's discrete elements reaching into its span (a generous pad: a superset is
     # the same records), found in the elements ordered by polyline and arc length
     seg = dp.seg
@@ -427,6 +434,53 @@ def exact_records_pairs(checkers: Sequence[Checker], keys: Sequence[tuple[str, s
             kind, a_name, b_name = keys[i]
             out[i] = next((replace(r, a=a_name, b=b_name) for r in recs if PairType(r.type) == kind), None)
     return out
+
+
+def _kept_centres(polys: Sequence[CableState], centres: np.ndarray, poly_of: np.ndarray, lo: np.ndarray,
+                  hi: np.ndarray, whole: np.ndarray) -> np.ndarray:
+    """(N,) bool over the polylines' centres (concatenated): for each
+    polyline, the contiguous run of centres from the start of the first to
+    the end of the last of its elements that meet some of its copies' spans
+    [lo, hi] (arc lengths as it lies), grown by twice the pad the span search
+    uses (`exact_records_pairs`) so every discrete element that search can
+    take is densified; every centre of a polyline in ``whole``, and the first
+    of one no span meets (a polyline keeps a point)."""
+    count = np.array([len(c.points) for c in polys], np.int64)
+    offsets = np.r_[0, np.cumsum(count)]
+    owner = np.repeat(np.arange(len(polys)), count)
+    e = np.flatnonzero(owner[:-1] == owner[1:])                    # element e joins centres e, e + 1
+    step = np.zeros(len(centres) - 1)
+    step[e] = row_norm(centres[e + 1] - centres[e])
+    s = polyline_arc_lengths(step, offsets)
+    live = hi >= lo
+    lo_p = np.full(len(polys), np.inf)
+    hi_p = np.full(len(polys), -np.inf)
+    np.minimum.at(lo_p, poly_of[live], lo[live])
+    np.maximum.at(hi_p, poly_of[live], hi[live])
+    pad = 2e-6 * (1.0 + float(np.abs(s).max(initial=0.0)))
+    k = owner[e]
+    meets = whole[k] | ((s[e + 1] >= lo_p[k] - pad) & (s[e] <= hi_p[k] + pad))
+    first = offsets[:-1].copy()                                    # no element meets: the first centre alone
+    last = offsets[:-1].copy()
+    hit = e[meets]
+    if len(hit):
+        has = np.zeros(len(polys), bool)
+        has[owner[hit]] = True
+        lowest = np.full(len(polys), len(centres))
+        highest = np.full(len(polys), -1)
+        np.minimum.at(lowest, owner[hit], hit)
+        np.maximum.at(highest, owner[hit], hit + 1)
+        first = np.where(has, lowest, first)
+        last = np.where(has, highest, last)
+    return _runs(first, last, len(centres))
+
+
+def _runs(first: np.ndarray, last: np.ndarray, n: int) -> np.ndarray:
+    """(n,) bool: True from first[k] to last[k] (inclusive) for every k."""
+    mark = np.zeros(n + 1, np.int64)
+    np.add.at(mark, first, 1)
+    np.add.at(mark, last + 1, -1)
+    return np.cumsum(mark[:-1]) > 0
 
 
 def _sphere_spans(cables: Sequence[CableState], tab: PartTable, limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

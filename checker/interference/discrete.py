@@ -65,13 +65,21 @@ def rest_table(cables: Sequence[CableState]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def discretise(
-    cables: Sequence[CableState], config: CheckConfig, cuts: tuple[np.ndarray, np.ndarray]
+    cables: Sequence[CableState], config: CheckConfig, cuts: tuple[np.ndarray, np.ndarray],
+    keep: np.ndarray | None = None, points: np.ndarray | None = None
 ) -> Discrete:
-    """Densify every cable; add points at the material coordinates ``cuts`` = (cable, m)."""
+    """Densify every cable; add points at the material coordinates ``cuts`` = (cable, m).
+
+    ``keep`` (N,) over the cables' body centres, concatenated: only those
+    emit (each itself and the points inside its element after it), the same
+    points as densifying all (`densify_batch`); each cable must keep one
+    contiguous run of its centres, at least one, and the whole of a cable
+    with cuts. ``points``: the centres concatenated, where the caller has
+    them."""
     radii = np.array([c.radius for c in cables], dtype=float)
-    pts = np.concatenate([c.points for c in cables])
+    pts = np.concatenate([c.points for c in cables]) if points is None else points
     offsets = np.concatenate([[0], np.cumsum([len(c.points) for c in cables])])
-    p, s, cable, _, src, _, frac = densify_batch(pts, offsets, config.spacing * radii, source=True)
+    p, s, cable, _, src, _, frac = densify_batch(pts, offsets, config.spacing * radii, source=True, keep=keep)
     has, rest = rest_table(cables)
     m = material_coordinates(s, src, frac, has[cable], rest)
     cut_c, cut_m = cuts
