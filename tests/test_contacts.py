@@ -64,9 +64,9 @@ def test_kinds_and_names(tmp_path):
     # the lead lies 2 mm above both boxes (its radius 3 mm): cable-structure and keep-out
     assert ("cable-structure", "lead", "frame/block") in got
     assert ("keepout", "lead", "slider/zone") in got
-    # the two boxes overlap by 10 mm: a part against a keep-out part, no cable on either side
-    part = [i for i, (a, b) in enumerate(zip(c.a, c.b)) if {a, b} == {"frame/block", "slider/zone"}]
-    assert part and all(c.kind[i] == "keepout" and c.elem_a[i] == -1 and c.elem_b[i] == -1 for i in part)
+    # the two boxes overlap by 10 mm, a part in a keep-out part: the detection model collides the
+    # cables alone (validation compares cable pairs only), so no contact has no cable on it
+    assert not any(c.elem_a[i] == -1 and c.elem_b[i] == -1 for i in range(len(c.dist)))
     cable = [i for i, a in enumerate(c.a) if a == "lead"]
     # 12 elements and the short held edge at each clamped end (cablecheck.build.cableplan.clamp_edges)
     assert all(0 <= c.elem_a[i] < 14 and c.elem_b[i] == -1 for i in cable)
