@@ -36,9 +36,10 @@ the element pairs whose bounding spheres meet, exactly (self: the checker's
 self rule, the nearest of the two elements' places at least
 :func:`cablecheck.checker.cable.self_pair_window` apart along the cable). Keep-outs
 are clearance zones, not surfaces, and make no wear; an attachment window
-(the cable held in a part) is not contact either. Cost: one vectorised
-distance call per pair in contact per batch of steps; nothing when nothing
-touches. Contact may be measured at every `stride`-th step only (the run
+(the cable held in a part) is not contact either. Cost: for a batch of
+steps, one distance call for every cable-part pair in contact (all
+primitives at once, each mesh on its own) and one per cable pair in
+contact; nothing when nothing touches. Contact may be measured at every `stride`-th step only (the run
 measures it at the recording's rate), each measurement counting for the
 time since the last; bends are followed at every step.
 
@@ -58,12 +59,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cablecheck.checker.arrays import within
 from cablecheck.checker.cable import arc_length, element_gaps, self_pair_window
 from cablecheck.checker.closest import row_norm, segment_segment, segment_segment_apart
+from cablecheck.checker.primitives import signed_distance_batch
 from cablecheck.checker.records import Interference, PairType
 from cablecheck.checker.scene_state import Exclusion
-from cablecheck.checker.arrays import within
-from cablecheck.checker.primitives import signed_distance_batch
 from cablecheck.checker.segments import segment_signed_distance_mixed
 from cablecheck.checker.shapes import Shape, ShapeType, segment_signed_distance, signed_distance, size_rows
 
@@ -309,12 +310,13 @@ class WearMap:
         k = part[pair][row]
         st = step[row]
 
-        def local(pts, pose, at):
-            """R^T (p - o): the rows' points at index ``at`` in their part's frame."""
-            q = pose[step, part[pair]]                                           # (rows of pairs, 4, 4)
-            return np.einsum("ni,nij->nj", pts[st, at] - q[row, :3, 3], q[row, :3, :3])
+        def local(pts, pose, rows):
+            """R^T (p - o): the element ends of ``rows`` in their part's frame."""
+            q = pose[st[rows], k[rows]]
+            return [np.einsum("ni,nij->nj", pts[st[rows], first[rows] + end] - q[:, :3, 3], q[:, :3, :3])
+                    for end in (0, 1)]
 
-        a, b = local(points, poses, first), local(points, poses, first + 1)
+        a, b = local(points, poses, slice(None))
         rad = self.radii[cab[pair]][row]
         grow = (rad + self.clearance)[:, None]
         keep = np.all((np.minimum(a, b) <= self._hi[k] + grow) & (np.maximum(a, b) >= self._lo[k] - grow), axis=1)
@@ -331,9 +333,9 @@ class WearMap:
         i, u = cand[near], u[near]
         hit[i] = True
         if len(i):
-            pa, pb = local(prev, prev_poses, first), local(prev, prev_poses, first + 1)
+            pa, pb = local(prev, prev_poses, i)
             now = a[i] + u[:, None] * (b[i] - a[i])
-            then = pa[i] + u[:, None] * (pb[i] - pa[i])
+            then = pa + u[:, None] * (pb - pa)
             moved[i] = _tangential(now - then, now - self._closest(k[i], now))
         return [(h.reshape(len(idx), -1), m.reshape(len(idx), -1))
                 for (_, _, idx), h, m in zip(groups, np.split(hit, ends[:-1]), np.split(moved, ends[:-1]))]
