@@ -428,11 +428,12 @@ def exact_records_pairs(checkers: Sequence[Checker], keys: Sequence[tuple[str, s
     structure_exact_pairs(dp, tab, config, excl, hits, i0, pk, None if below is None else limit[pk])
     if hits.parts:
         t, _, b, v, w, s_at, sb = (np.concatenate(x) for x in zip(*hits.parts))
-        found = worst_records(n, b, t, np.zeros_like(b), np.zeros_like(b), v, w, s_at, sb,
-                              config.clearance, ["a"], lambda _: ["b"])
+        # copy b's records of cable keys[rows[b]][1] against part keys[rows[b]][2], named so at once
+        a_names, b_names = [keys[i][1] for i in rows], [keys[i][2] for i in rows]
+        found = worst_records(n, b, t, b, b, v, w, s_at, sb, config.clearance, a_names, lambda _: b_names)
         for i, recs in zip(rows, found):
-            kind, a_name, b_name = keys[i]
-            out[i] = next((replace(r, a=a_name, b=b_name) for r in recs if PairType(r.type) == kind), None)
+            kind = keys[i][0]
+            out[i] = next((r for r in recs if PairType(r.type) == kind), None)
     return out
 
 

@@ -226,19 +226,18 @@ def refined_cable_records(records: Sequence[Sequence[Interference]], cables: Cal
         value = np.array([found[k][1].min_distance for k in group], float)
         d, ea, eb, u, v = closest_elements(pa, pb, value + ra + rb)
         arc_a, arc_b = arc_length(pa), arc_length(pb)
-        for row, k in enumerate(group):
-            i, r = found[k][:2]
-            if not np.isfinite(d[row]):
-                continue
-            dist = float(d[row] - ra[row] - rb[row])
-            if dist > r.min_distance:                                   # rounding: never above the points'
-                continue
-            ia, ib = int(ea[row]), int(eb[row])
-            where = pa[row, ia] + u[row] * (pa[row, ia + 1] - pa[row, ia])
-            s_a = arc_a[row, ia] + u[row] * (arc_a[row, ia + 1] - arc_a[row, ia])
-            s_b = arc_b[row, ib] + v[row] * (arc_b[row, ib + 1] - arc_b[row, ib])
-            out[i][id(r)] = Interference(PairType.CABLE_CABLE, r.a, r.b, dist, severity_of(dist, clearance),
-                                         where, float(s_a), float(s_b))
+        # every row's record at once (a row with no element pair within reach: element 0, dropped below)
+        rows = np.arange(len(group))
+        dist = d - ra - rb
+        where = pa[rows, ea] + u[:, None] * (pa[rows, ea + 1] - pa[rows, ea])
+        s_a = arc_a[rows, ea] + u * (arc_a[rows, ea + 1] - arc_a[rows, ea])
+        s_b = arc_b[rows, eb] + v * (arc_b[rows, eb + 1] - arc_b[rows, eb])
+        kept = np.isfinite(d) & (dist <= value)                       # rounding: never above the points'
+        for row, x, sa, sb in zip(np.flatnonzero(kept).tolist(), dist[kept].tolist(), s_a[kept].tolist(),
+                                  s_b[kept].tolist()):
+            i, r = found[group[row]][:2]
+            out[i][id(r)] = Interference(PairType.CABLE_CABLE, r.a, r.b, x, severity_of(x, clearance),
+                                         where[row], sa, sb)
     return out
 
 
