@@ -224,7 +224,7 @@ class _StateCables(Mapping):
     def __getitem__(self, name: str) -> CableState:
         if name not in self._made:
             lo, hi = self.spans[name]
-            self._made[name] = replace(self._template[name], points=self._points[lo:hi])
+            self._made[name] = self._template[name].with_points(self._points[lo:hi])
         return self._made[name]
 
     def __contains__(self, name: object) -> bool:

@@ -59,3 +59,29 @@ def test_check_config_refuses_unknown_methods_and_bad_numbers():
     for clearance in (-1e-9, np.inf):
         with pytest.raises(ValueError, match="clearance must be >= 0"):
             CheckConfig(clearance=clearance)
+
+
+def test_with_points_is_replace_with_its_checks():
+    """A cable at other centres is what dataclasses.replace makes (every
+    field, the points as floats), and the points are checked as the
+    constructor checks them: as many, finite."""
+    import dataclasses
+
+    import numpy as np
+    import pytest
+
+    from cablecheck.checker.scene_state import CableState
+
+    cable = CableState("a", np.zeros((4, 3)) + np.arange(4)[:, None], 0.01, 0.05, 3.0, np.arange(4.0))
+    moved = np.arange(12, dtype=np.int64).reshape(4, 3)
+    got, want = cable.with_points(moved), dataclasses.replace(cable, points=moved)
+    for field in dataclasses.fields(CableState):
+        np.testing.assert_array_equal(getattr(got, field.name), getattr(want, field.name))
+    assert got.points.dtype == want.points.dtype == float
+    assert got.rest_s is cable.rest_s and cable.points[1, 0] == 1.0          # the original untouched
+    with pytest.raises(ValueError, match="points must be"):
+        cable.with_points(np.zeros((3, 3)))
+    bad = np.zeros((4, 3))
+    bad[2, 1] = np.nan
+    with pytest.raises(ValueError, match="NaN"):
+        cable.with_points(bad)
