@@ -345,16 +345,20 @@ def _closest_elements_of_all_pairs(pa, pb, upper):
 def test_closest_elements_pruned_are_those_of_every_pair(seed, na, nb, states, unit, far):
     """Drawn polylines (random walks crossing each other, many states, mm or m,
     far from the origin) and drawn limits, some at an element pair's exact
-    gap: the chunked search returns, to the bit, what comparing every
+    gap, some none (inf): the swept search returns, to the bit, what comparing every
     element pair's bounding spheres returns."""
     rng = np.random.default_rng(seed)
     pa = far + unit * np.cumsum(rng.normal(size=(states, na, 3)), axis=1)
     pb = far + unit * np.cumsum(rng.normal(size=(states, nb, 3)), axis=1)
     pb[:, 0] = pa[:, na // 2]                                           # they meet somewhere
+    if nb <= na and rng.random() < 0.5:                                 # or lie side by side
+        pb = pa[:, :nb] + unit * rng.normal(scale=0.5, size=3)
     upper = unit * rng.uniform(0.0, 3.0, states)
     from cablecheck.checker.cable import element_gaps
     gaps = element_gaps(pa, pb)
     upper[0] = gaps[0].ravel()[rng.integers(0, gaps[0].size)]          # a limit right at a gap
+    if states > 1:
+        upper[-1] = np.inf                                              # no limit: every pair
     got = closest_elements(pa, pb, upper)
     want = _closest_elements_of_all_pairs(pa, pb, upper)
     for g, w in zip(got, want):

@@ -36,7 +36,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from cablecheck.checker.arrays import products
+from cablecheck.checker.arrays import products, ranges
 from cablecheck.checker.cable import self_pair_excluded, self_pair_window
 from cablecheck.checker.closest import row_norm, segment_segment, segment_segment_apart
 from cablecheck.checker.interference.broad import (
@@ -458,29 +458,40 @@ def closest_elements(pa: np.ndarray, pb: np.ndarray, upper: np.ndarray):
     on b), one row a state; the least by distance, then by the elements'
     order (a tie goes to the first pair along a, then b).
 
-    An element of a whose sphere comes within ``upper`` of no point of b's
-    middles' box (grown by b's longest half element) is within it of no
-    element of b (and so for b): the spheres of the elements left on both
-    sides are compared pair by pair (`element_gaps`' gap, the same bits),
-    the same pairs as comparing all (two crossing hoses keep a few elements
-    each of their forty)."""
+    Element pairs are found by sweep: each state's middles projected on the
+    axis along which b's middles spread most (a distance shrinks under
+    projection), an element of a paired with those of b whose projections
+    lie within ``upper`` plus both half lengths of its own (b's longest
+    taken); the spheres of those pairs are then compared (`element_gaps`'
+    gap, the same bits), the same pairs as comparing all. Two hoses lying
+    side by side keep a few elements of b for each of a, not all of them."""
     n_s = len(pa)
     ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
     ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
     scale = 1.0 + np.abs(pa).max(axis=(1, 2)) + np.abs(pb).max(axis=(1, 2))
     reach = upper + 1e-9 * scale                                                    # rounding
-
-    def facing(m, h, other, other_h):
-        """(S, E) the elements whose spheres come within reach of the other side's box."""
-        grow = (reach + other_h.max(axis=1) + 1e-9 * scale)[:, None] + h            # (S, E), a margin
-        lo, hi = other.min(axis=1)[:, None, :], other.max(axis=1)[:, None, :]
-        return np.all((m >= lo - grow[..., None]) & (m <= hi + grow[..., None]), axis=2)
-
-    ka, ia = np.nonzero(facing(ma, ha, mb, hb))
-    kb, ib = np.nonzero(facing(mb, hb, ma, ha))
-    na, nb = np.bincount(ka, minlength=n_s), np.bincount(kb, minlength=n_s)
-    k, x, y = products(na, nb)
-    ia, ib = ia[(np.cumsum(na) - na)[k] + x], ib[(np.cumsum(nb) - nb)[k] + y]
+    n_a, n_b = ma.shape[1], mb.shape[1]
+    axis = np.argmax(mb.max(axis=1) - mb.min(axis=1), axis=1)                      # (S,)
+    xa = np.take_along_axis(ma, axis[:, None, None], axis=2)[..., 0]               # (S, Ea)
+    xb = np.take_along_axis(mb, axis[:, None, None], axis=2)[..., 0]               # (S, Eb)
+    width = np.where(np.isfinite(reach), reach, 0.0) + hb.max(axis=1) + 1e-9 * scale   # (S,), a margin
+    # the states laid apart along one line (state k from k * apart), b's projections sorted in each
+    apart = 4.0 * float(np.max(scale + width + ha.max(axis=1))) + 1.0
+    shift = apart * np.arange(n_s)
+    order = np.argsort(xb, axis=1, kind="stable")
+    line = (np.take_along_axis(xb, order, axis=1) + shift[:, None]).ravel()
+    pad = 4.0 * np.spacing(apart * max(n_s, 1))                                    # the shift's rounding
+    at = xa + shift[:, None]
+    w = (width[:, None] + ha) + pad
+    own = np.repeat(np.arange(n_s) * n_b, n_a)                                     # each row's own run
+    everything = np.repeat(~np.isfinite(reach), n_a)                               # no limit: every pair
+    lo = np.where(everything, own, np.maximum(np.searchsorted(line, (at - w).ravel(), "left"), own))
+    hi = np.where(everything, own + n_b, np.minimum(np.searchsorted(line, (at + w).ravel(), "right"), own + n_b))
+    count = np.maximum(hi - lo, 0)                              # none where the limit is below -ha - hb
+    flat_b = ranges(lo, count)
+    k = flat_b // n_b
+    ia = np.repeat(np.arange(n_s * n_a) % n_a, count)
+    ib = order.ravel()[flat_b]
     gap = row_norm(ma[k, ia] - mb[k, ib]) - ha[k, ia] - hb[k, ib]
     o = gap <= reach[k]
     k, ia, ib = k[o], ia[o], ib[o]
