@@ -24,7 +24,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from cablecheck.checker.arrays import within
+from cablecheck.checker.arrays import ranges, within
 from cablecheck.checker.closest import cross, row_norm
 
 TAUT_STRAIN = 0.01
@@ -56,6 +56,54 @@ def element_gaps(pa: np.ndarray, pb: np.ndarray) -> np.ndarray:
     ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
     ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
     return row_norm(ma[:, :, None, :] - mb[:, None, :, :]) - ha[:, :, None] - hb[:, None, :]
+
+
+def element_pairs_within(pa: np.ndarray, pb: np.ndarray, reach: np.ndarray
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The element pairs of polylines pa (S, na + 1, 3) and pb (S, nb + 1, 3)
+    whose bounding spheres come within ``reach`` (S,) of each other, state by
+    state (inf: every pair): (state, element of a, element of b, gap), each
+    (n,), the gap `element_gaps`' to the bit, in no particular order.
+
+    Found by sweep, not by every pair: each state's middles projected on the
+    axis along which b's spread most (a distance shrinks under projection),
+    an element of a is paired with those of b whose projections lie within
+    the reach and both half lengths of its own (b's longest taken); only
+    those pairs' gaps are computed. Two hoses lying side by side pair a few
+    elements of b with each of a, not all of them."""
+    n_s = len(pa)
+    ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
+    ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
+    scale = 1.0 + np.abs(pa).max(axis=(1, 2), initial=0.0) + np.abs(pb).max(axis=(1, 2), initial=0.0)
+    reach = np.asarray(reach, float) + 1e-9 * scale                                # rounding
+    n_a, n_b = ma.shape[1], mb.shape[1]
+    if n_s == 0 or n_a == 0 or n_b == 0:
+        z = np.zeros(0, np.int64)
+        return z, z, z, np.zeros(0)
+    axis = np.argmax(mb.max(axis=1) - mb.min(axis=1), axis=1)                      # (S,)
+    xa = np.take_along_axis(ma, axis[:, None, None], axis=2)[..., 0]               # (S, Ea)
+    xb = np.take_along_axis(mb, axis[:, None, None], axis=2)[..., 0]               # (S, Eb)
+    width = np.where(np.isfinite(reach), reach, 0.0) + hb.max(axis=1) + 1e-9 * scale   # (S,), a margin
+    # the states laid apart along one line (state k from k * apart), b's projections sorted in each
+    apart = 4.0 * float(np.max(scale + np.abs(width) + ha.max(axis=1))) + 1.0
+    shift = apart * np.arange(n_s)
+    order = np.argsort(xb, axis=1, kind="stable")
+    line = (np.take_along_axis(xb, order, axis=1) + shift[:, None]).ravel()
+    pad = 4.0 * np.spacing(apart * n_s)                                            # the shift's rounding
+    at = xa + shift[:, None]
+    w = (width[:, None] + ha) + pad
+    own = np.repeat(np.arange(n_s) * n_b, n_a)                                     # each state's own run
+    everything = np.repeat(~np.isfinite(reach), n_a)
+    lo = np.where(everything, own, np.maximum(np.searchsorted(line, (at - w).ravel(), "left"), own))
+    hi = np.where(everything, own + n_b, np.minimum(np.searchsorted(line, (at + w).ravel(), "right"), own + n_b))
+    count = np.maximum(hi - lo, 0)                              # none where the reach is below -ha - hb
+    flat_b = ranges(lo, count)
+    k = flat_b // n_b
+    ia = np.repeat(np.arange(n_s * n_a) % n_a, count)
+    ib = order.ravel()[flat_b]
+    gap = row_norm(ma[k, ia] - mb[k, ib]) - ha[k, ia] - hb[k, ib]
+    o = gap <= reach[k]
+    return k[o], ia[o], ib[o], gap[o]
 
 
 def resample(points: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]:

@@ -60,7 +60,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cablecheck.checker.arrays import within
-from cablecheck.checker.cable import arc_length, element_gaps, self_pair_window
+from cablecheck.checker.cable import arc_length, element_pairs_within, self_pair_window
 from cablecheck.checker.closest import row_norm, segment_segment, segment_segment_apart
 from cablecheck.checker.primitives import signed_distance_batch
 from cablecheck.checker.records import Interference, PairType
@@ -375,8 +375,10 @@ class WearMap:
         qa, qb before, (m, n, 3)."""
         m, na, nb = len(pa), pa.shape[1] - 1, pb.shape[1] - 1
         # element pairs whose bounding spheres come within the clearance, then exact
-        gap = element_gaps(pa, pb)
-        st, ia, ib = np.nonzero(gap < self.radii[c] + self.radii[b] + self.clearance)
+        limit = self.radii[c] + self.radii[b] + self.clearance
+        st, ia, ib, gap = element_pairs_within(pa, pb, np.full(m, limit))
+        near = gap < limit
+        st, ia, ib = st[near], ia[near], ib[near]
         if b == c:
             # the checker's self rule (cablecheck.checker.cable.self_pair_excluded): only
             # places at least the window apart along the cable's centreline

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from helpers import examples
 from hypothesis import given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
@@ -172,3 +173,32 @@ def test_arc_lengths_of_many_polylines_and_element_gaps_against_brute_force():
                 y = pb[k, j] + t * (pb[k, j + 1] - pb[k, j])
                 sampled = np.sqrt(((x[:, None] - y[None]) ** 2).sum(axis=2)).min()
                 assert gaps[k, i, j] <= sampled + 1e-12
+
+
+@settings(max_examples=examples(60), deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), na=st.integers(1, 30), nb=st.integers(1, 30), states=st.integers(1, 5),
+       unit=st.sampled_from([1e-3, 1.0, 1e3]), far=st.sampled_from([0.0, 1e4]), self_pair=st.booleans())
+def test_element_pairs_within_are_every_pairs_gaps_within_reach(seed, na, nb, states, unit, far, self_pair):
+    """Drawn polylines (random walks, side by side, one against itself; mm
+    or m, far out) and reaches (at a pair's gap exactly, negative, none):
+    the swept pairs are those whose `element_gaps` gap (to the bit) lies
+    within the reach (and its rounding margin), each once."""
+    from cablecheck.checker.cable import element_gaps, element_pairs_within
+    rng = np.random.default_rng(seed)
+    pa = far + unit * np.cumsum(rng.normal(size=(states, na + 1, 3)), axis=1)
+    pb = far + unit * np.cumsum(rng.normal(size=(states, nb + 1, 3)), axis=1)
+    if self_pair:
+        pb = pa
+    elif nb <= na and rng.random() < 0.5:
+        pb = pa[:, :nb + 1] + unit * rng.normal(scale=0.5, size=3)
+    gaps = element_gaps(pa, pb)
+    reach = unit * rng.uniform(-0.5, 3.0, states)
+    reach[0] = gaps[0].ravel()[rng.integers(0, gaps[0].size)]
+    if states > 1:
+        reach[-1] = np.inf
+    k, ia, ib, gap = element_pairs_within(pa, pb, reach)
+    slack = 1e-9 * (1.0 + np.abs(pa).max(axis=(1, 2)) + np.abs(pb).max(axis=(1, 2)))
+    want = set(zip(*np.nonzero(gaps <= (reach + slack)[:, None, None])))
+    got = list(zip(k.tolist(), ia.tolist(), ib.tolist()))
+    assert len(got) == len(set(got)) and set(got) == {tuple(int(x) for x in w) for w in want}
+    np.testing.assert_array_equal(gap, gaps[k, ia, ib])

@@ -36,8 +36,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from cablecheck.checker.arrays import products, ranges
-from cablecheck.checker.cable import self_pair_excluded, self_pair_window
+from cablecheck.checker.arrays import products
+from cablecheck.checker.cable import element_pairs_within, self_pair_excluded, self_pair_window
 from cablecheck.checker.closest import row_norm, segment_segment, segment_segment_apart
 from cablecheck.checker.interference.broad import (
     NEAR,
@@ -454,47 +454,12 @@ def closest_elements(pa: np.ndarray, pb: np.ndarray, upper: np.ndarray):
     """Per state k, the least segment distance between the elements of
     polylines pa[k] (na, 3) and pb[k] (nb, 3), looking only at element
     pairs whose bounding spheres come within ``upper[k]`` (inf where none
-    does): (distance, element of a, element of b, parameter on a, parameter
-    on b), one row a state; the least by distance, then by the elements'
-    order (a tie goes to the first pair along a, then b).
-
-    Element pairs are found by sweep: each state's middles projected on the
-    axis along which b's middles spread most (a distance shrinks under
-    projection), an element of a paired with those of b whose projections
-    lie within ``upper`` plus both half lengths of its own (b's longest
-    taken); the spheres of those pairs are then compared (`element_gaps`'
-    gap, the same bits), the same pairs as comparing all. Two hoses lying
-    side by side keep a few elements of b for each of a, not all of them."""
+    does; `element_pairs_within`): (distance, element of a, element of b,
+    parameter on a, parameter on b), one row a state; the least by
+    distance, then by the elements' order (a tie goes to the first pair
+    along a, then b)."""
     n_s = len(pa)
-    ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
-    ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
-    scale = 1.0 + np.abs(pa).max(axis=(1, 2)) + np.abs(pb).max(axis=(1, 2))
-    reach = upper + 1e-9 * scale                                                    # rounding
-    n_a, n_b = ma.shape[1], mb.shape[1]
-    axis = np.argmax(mb.max(axis=1) - mb.min(axis=1), axis=1)                      # (S,)
-    xa = np.take_along_axis(ma, axis[:, None, None], axis=2)[..., 0]               # (S, Ea)
-    xb = np.take_along_axis(mb, axis[:, None, None], axis=2)[..., 0]               # (S, Eb)
-    width = np.where(np.isfinite(reach), reach, 0.0) + hb.max(axis=1) + 1e-9 * scale   # (S,), a margin
-    # the states laid apart along one line (state k from k * apart), b's projections sorted in each
-    apart = 4.0 * float(np.max(scale + width + ha.max(axis=1))) + 1.0
-    shift = apart * np.arange(n_s)
-    order = np.argsort(xb, axis=1, kind="stable")
-    line = (np.take_along_axis(xb, order, axis=1) + shift[:, None]).ravel()
-    pad = 4.0 * np.spacing(apart * max(n_s, 1))                                    # the shift's rounding
-    at = xa + shift[:, None]
-    w = (width[:, None] + ha) + pad
-    own = np.repeat(np.arange(n_s) * n_b, n_a)                                     # each row's own run
-    everything = np.repeat(~np.isfinite(reach), n_a)                               # no limit: every pair
-    lo = np.where(everything, own, np.maximum(np.searchsorted(line, (at - w).ravel(), "left"), own))
-    hi = np.where(everything, own + n_b, np.minimum(np.searchsorted(line, (at + w).ravel(), "right"), own + n_b))
-    count = np.maximum(hi - lo, 0)                              # none where the limit is below -ha - hb
-    flat_b = ranges(lo, count)
-    k = flat_b // n_b
-    ia = np.repeat(np.arange(n_s * n_a) % n_a, count)
-    ib = order.ravel()[flat_b]
-    gap = row_norm(ma[k, ia] - mb[k, ib]) - ha[k, ia] - hb[k, ib]
-    o = gap <= reach[k]
-    k, ia, ib = k[o], ia[o], ib[o]
+    k, ia, ib, _ = element_pairs_within(pa, pb, upper)
     d, u, v, _, _ = segment_segment(pa[k, ia], pa[k, ia + 1], pb[k, ib], pb[k, ib + 1])
     best = np.full(n_s, np.inf)
     out_a, out_b = np.zeros(n_s, np.int64), np.zeros(n_s, np.int64)
