@@ -356,7 +356,9 @@ def exact_records_pairs(checkers: Sequence[Checker], keys: Sequence[tuple[str, s
     discrete elements within the arc-length span of its cable's elements
     whose bounding spheres come within its limit of the part's bounding
     sphere (the others cannot come below it: a superset of what the full
-    check's broad phase keeps, so the same records)."""
+    check's broad phase keeps, so the same records), and a cable is
+    densified only over the run of its centres its copies' spans cover
+    (`_kept_centres`: the same points)."""
     out: list[Interference | None] = [None] * len(cables)
     rows = [i for i, c in enumerate(cables) if c is not None and checkers[i]._tab is not None]
     if not rows:
@@ -473,15 +475,9 @@ def _kept_centres(polys: Sequence[CableState], centres: np.ndarray, poly_of: np.
         np.maximum.at(highest, owner[hit], hit + 1)
         first = np.where(has, lowest, first)
         last = np.where(has, highest, last)
-    return _runs(first, last, len(centres))
-
-
-def _runs(first: np.ndarray, last: np.ndarray, n: int) -> np.ndarray:
-    """(n,) bool: True from first[k] to last[k] (inclusive) for every k."""
-    mark = np.zeros(n + 1, np.int64)
-    np.add.at(mark, first, 1)
-    np.add.at(mark, last + 1, -1)
-    return np.cumsum(mark[:-1]) > 0
+    keep = np.zeros(len(centres), bool)
+    keep[ranges(first, last - first + 1)] = True
+    return keep
 
 
 def _sphere_spans(cables: Sequence[CableState], tab: PartTable, limit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
