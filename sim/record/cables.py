@@ -186,17 +186,16 @@ class CableFrames:
         within its cable's reach (`_near`) of its place on cable a (all of a
         taut cable's) and of its place on cable b; all marks at once."""
         out = np.zeros(int(self._ends[-1]), np.uint8)
-        cab, s, rank, whole = [], [], [], []
-        for m in marks:                                                  # the frame's marks, as arrays
-            i = self._index.get(m.a)
-            if i is not None:
-                cab.append(i), s.append(m.s), rank.append(_RANK[m.state]), whole.append(m.kind == "taut")
-            j = self._index.get(m.b) if m.s_b is not None else None
-            if j is not None:
-                cab.append(j), s.append(m.s_b), rank.append(_RANK[m.state]), whole.append(False)
-        if not cab:
+        places = []                                      # the frame's marks' places: (cable, s, rank, whole)
+        for m in marks:
+            if m.a in self._index:
+                places.append((self._index[m.a], m.s, _RANK[m.state], m.kind == "taut"))
+            if m.s_b is not None and m.b in self._index:
+                places.append((self._index[m.b], m.s_b, _RANK[m.state], False))
+        if not places:
             return out
-        cab, s, rank, whole = np.array(cab), np.array(s, float), np.array(rank, np.uint8), np.array(whole)
+        cab, s, rank, whole = (np.array(x) for x in zip(*places))
+        s, rank = s.astype(float), rank.astype(np.uint8)
         # each mark's elements: a generous range of the cable's (sorted) element places, then the test itself
         first = self._starts[cab]
         count = self._ends[cab] - first
