@@ -214,6 +214,18 @@ class StepResult:
 
 
 @dataclass(frozen=True)
+class _PairsAt:
+    """Part pairs split at a full check (`StepChecks._records_at`): their parts
+    (used), those parts' poses there (at_start), all parts' poses there and the
+    memo slot their records are checked in (`StepChecks._pair_records`)."""
+
+    used: np.ndarray
+    at_start: np.ndarray
+    poses: np.ndarray
+    slot: str
+
+
+@dataclass(frozen=True)
 class ApartPair:
     """An active part pair apart, as last measured (`StepChecks._pair_gaps`).
 
@@ -315,13 +327,11 @@ class StepChecks:
         self._active_near = self._active_apart = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         # the allowed ones among them, measured at the sampled states alone (ALLOWED_INTERVAL)
         self._allowed_near = (np.zeros(0, np.int64), np.zeros(0, np.int64))
-        self._allowed_start: tuple[np.ndarray, np.ndarray, list[Interference]] = (np.zeros(0, np.int64),
-                                                                                 np.zeros((0, 4, 4)), [])
+        self._allowed_start = _PairsAt(np.zeros(0, np.int64), np.zeros((0, 4, 4)), np.zeros((0, 4, 4)), "allowed")
         self._allowed_memo: dict[tuple[str, str], bool] = {}   # (a, b) part names -> an allowed pair
         self._allowed_slot = np.nan         # the ALLOWED_INTERVAL slot of the last state checked
         # the near pairs' parts, their poses and records where they were split (`_start_active_gaps`)
-        self._near_start: tuple[np.ndarray, np.ndarray, list[Interference]] = (np.zeros(0, np.int64),
-                                                                              np.zeros((0, 4, 4)), [])
+        self._near_start = _PairsAt(np.zeros(0, np.int64), np.zeros((0, 4, 4)), np.zeros((0, 4, 4)), "near")
         if self.checker.bounds_gaps:
             corner = np.maximum(np.abs(rigid.lo), np.abs(rigid.hi))
             rho = np.sqrt(np.einsum("ij,ij->i", corner, corner))     # inf for planes
@@ -795,20 +805,20 @@ class StepChecks:
                 out[t] = out[t] + recs
         return out
 
-    def _records_at(self, poses: np.ndarray, pairs: tuple[np.ndarray, np.ndarray],
-                    slot: str) -> tuple[np.ndarray, np.ndarray, list[Interference]]:
-        """(their parts, those parts' poses, records) of part pairs at poses (P, 4, 4): what
-        `_kept_or_checked` keeps where none of those parts has moved since."""
+    def _records_at(self, poses: np.ndarray, pairs: tuple[np.ndarray, np.ndarray], slot: str) -> _PairsAt:
+        """Part pairs at poses (P, 4, 4), whose records `_kept_or_checked` keeps where none
+        of their parts has moved since: their parts and poses, the records checked when a
+        state first asks for them (parts that move at every state, a slider's, never do)."""
         used = np.unique(np.concatenate(pairs))
-        return used, poses[used], self._pair_records(poses, *pairs, slot)
+        return _PairsAt(used, poses[used], np.array(poses, float), slot)
 
     def _kept_or_checked(self, poses: np.ndarray, at: np.ndarray, pairs: tuple[np.ndarray, np.ndarray],
-                         start: tuple[np.ndarray, np.ndarray, list[Interference]]) -> list[list[Interference]]:
-        """The records of part pairs at states `at` of poses (S, P, 4, 4): those of `start`
+                         start: _PairsAt) -> list[list[Interference]]:
+        """The records of part pairs at states `at` of poses (S, P, 4, 4): those at `start`
         (`_records_at`) where none of their parts has moved since, to the bit (a robot's
         base on its table), else checked, the moved states in one call."""
-        used, at_start, kept = start
-        still = (poses[at][:, used] == at_start[None]).all(axis=(1, 2, 3))
+        still = (poses[at][:, start.used] == start.at_start[None]).all(axis=(1, 2, 3))
+        kept = self._pair_records(start.poses, *pairs, start.slot) if still.any() else []
         out = [list(kept) if k else [] for k in still.tolist()]
         moved = np.flatnonzero(~still)
         if len(moved):
