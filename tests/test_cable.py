@@ -202,3 +202,35 @@ def test_element_pairs_within_are_every_pairs_gaps_within_reach(seed, na, nb, st
     got = list(zip(k.tolist(), ia.tolist(), ib.tolist()))
     assert len(got) == len(set(got)) and set(got) == {tuple(int(x) for x in w) for w in want}
     np.testing.assert_array_equal(gap, gaps[k, ia, ib])
+
+
+@settings(max_examples=examples(60), deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), unit=st.sampled_from([1e-3, 1.0]))
+def test_an_element_keeps_its_rest_pieces_while_it_stretches_a_little(seed, unit):
+    """Elements of drawn rest lengths (some at a multiple of the spacing,
+    some just below one) stretched and relaxed by up to PIECES_STRETCH:
+    each splits into the same number of pieces at every state, and no piece
+    is ever longer than the spacing (the points' error bound); stretched
+    further, an element gets the pieces its length needs."""
+    from cablecheck.checker.cable import PIECES_STRETCH, densify_batch, rest_pieces
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(3, 12))
+    lim = 2.0 * unit
+    rest_len = rng.uniform(0.3, 5.0, n - 1) * lim
+    rest_len[0] = lim * int(rng.integers(1, 4))                        # a multiple of the spacing
+    rest_len[-1] = lim * int(rng.integers(1, 4)) * (1 - 1e-9)          # just below one
+    rest = np.r_[0.0, np.cumsum(rest_len)]
+    least = rest_pieces(rest, np.array([0, n]), np.array([lim]))
+    counts = []
+    for factor in np.r_[rng.uniform(1.0 - 3 * PIECES_STRETCH, 1.0 + PIECES_STRETCH, 6), 1.0 + PIECES_STRETCH]:
+        direction = rng.normal(size=(n - 1, 3))
+        direction /= np.linalg.norm(direction, axis=1)[:, None]
+        pts = np.r_[np.zeros((1, 3)), np.cumsum(direction * (rest_len * factor)[:, None], axis=0)]
+        p, s, _, _, src, own, _ = densify_batch(pts, np.array([0, n]), np.array([lim]), source=True, least=least)
+        counts.append(np.bincount(src[~own], minlength=n)[:-1] + 1)     # pieces per element
+        assert np.diff(s).max() <= lim * (1 + 1e-9)
+    assert all(np.array_equal(c, counts[0]) for c in counts)
+    stretched = np.r_[np.zeros((1, 3)), np.cumsum(np.tile([[1.0, 0.0, 0.0]], (n - 1, 1)) * (rest_len * 1.5)[:, None],
+                                                  axis=0)]
+    p, s, _, _ = densify_batch(stretched, np.array([0, n]), np.array([lim]), least=least)
+    assert np.diff(s).max() <= lim * (1 + 1e-9)

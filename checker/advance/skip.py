@@ -111,6 +111,9 @@ class Advancement:
         part_solids: the parts' boxes, symmetry and tessellation errors for
             the part-pair condition (:class:`~cablecheck.checker.advance.partpairs.PartSolids`),
             or None (their bounding radii alone).
+        least: (N - 1,) the least pieces the checker splits each element
+            into (`cablecheck.checker.cable.rest_pieces`), or None (those
+            its length needs).
 
     Attributes:
         full, skipped: full checks started (or stopped) and states proven clear so far.
@@ -125,7 +128,7 @@ class Advancement:
     def __init__(self, offsets: np.ndarray, spacing: np.ndarray, part_radius: np.ndarray,
                  clearance: float, stretch: float, radius: np.ndarray | None = None,
                  part_box: tuple[np.ndarray, np.ndarray] | None = None,
-                 part_solids: PartSolids | None = None):
+                 part_solids: PartSolids | None = None, least: np.ndarray | None = None):
         offsets = np.asarray(offsets, np.int64)
         cable_of_pt = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
         self._valid = cable_of_pt[:-1] == cable_of_pt[1:]
@@ -133,6 +136,8 @@ class Advancement:
         self._lim = np.asarray(spacing, float)[cable_of_pt[:-1]]
         # per element: the limit (inf between cables) and 1 for a real element
         self._lim_all = np.where(self._valid, self._lim, np.inf)
+        # and the least pieces the checker splits it into (densify_batch's `least`; 1 between cables)
+        self._least = np.ones(len(self._valid)) if least is None else np.where(self._valid, least, 1.0)
         self._validf = self._valid.astype(float)
         # the first element of every cable that has one: without radii the
         # stretch is summed per cable (an arc length moves with its own
@@ -220,7 +225,7 @@ class Advancement:
         pos = np.array(poses[:, :3, 3], float)
         seg_raw = row_norm(pts[1:] - pts[:-1])
         # pieces per element, densify_batch's arithmetic (1 between cables)
-        pieces = np.where(self._valid, element_pieces(seg_raw, self._lim), 1.0)
+        pieces = np.where(self._valid, element_pieces(seg_raw, self._lim, self._least), 1.0)
         scale = max(float(np.abs(pts).max(initial=0.0)), float(np.abs(pos).max(initial=0.0)))
         mu = 1e-9 * (1.0 + scale)
         g_cable = float(gaps.cable) - mu
@@ -285,7 +290,7 @@ class Advancement:
             b = min(a + self._step, total)
             x, move, dq, diag, dcc, d, seg = _states(pts[a:b], since.start.pts)
             # the conditions that name no pair first: pieces, stretch, part pairs
-            pieces = element_pieces(seg, self._lim_all[:, None])
+            pieces = element_pieces(seg, self._lim_all[:, None], self._least[:, None])
             n = leading((pieces == since.pieces[:, None]).all(axis=0) & self._stretch_ok(seg, since))
             dp = np.zeros((n_parts, n))
             if n and n_parts:
@@ -442,7 +447,7 @@ class Advancement:
             x, seg = x[:, :, :n], seg[:, :n]
             # every element still splits into as many pieces (elements
             # joining two cables: limit inf, 1 piece at the start and now)
-            pieces = element_pieces(seg, self._lim_all[:, None])
+            pieces = element_pieces(seg, self._lim_all[:, None], self._least[:, None])
             ok = (pieces == since.pieces[:, None]).all(axis=0) & \
                 self._stretch_ok(seg, since)
             n = leading(ok)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cablecheck.checker.cable import densify_batch, material_coordinates, tile_offsets
+from cablecheck.checker.cable import densify_batch, material_coordinates, rest_pieces, tile_offsets
 from cablecheck.checker.scene_state import CableState, CheckConfig
 
 
@@ -79,8 +79,11 @@ def discretise(
     radii = np.array([c.radius for c in cables], dtype=float)
     pts = np.concatenate([c.points for c in cables]) if points is None else points
     offsets = np.concatenate([[0], np.cumsum([len(c.points) for c in cables])])
-    p, s, cable, _, src, _, frac = densify_batch(pts, offsets, config.spacing * radii, source=True, keep=keep)
     has, rest = rest_table(cables)
+    # a cable with rest coordinates keeps its elements' pieces as it stretches a little (rest_pieces)
+    least = np.where(np.repeat(has, np.diff(offsets))[:-1], rest_pieces(rest, offsets, config.spacing * radii), 1.0)
+    p, s, cable, _, src, _, frac = densify_batch(pts, offsets, config.spacing * radii, source=True, keep=keep,
+                                                 least=least)
     m = material_coordinates(s, src, frac, has[cable], rest)
     cut_c, cut_m = cuts
     if len(cut_c):
@@ -164,8 +167,12 @@ def densify_many(pts: np.ndarray, offsets: np.ndarray, radii: np.ndarray, spacin
     if keep is not None:
         keep = np.asarray(keep, bool)
         keep = keep.ravel() if keep.ndim == 2 else np.tile(keep, n_s)
+    least = None
+    if rest is not None:       # each element's least pieces (rest_pieces), state after state
+        per = np.r_[rest_pieces(rest, offsets, spacing * radii), 1.0]
+        least = np.tile(per, n_s)[:-1]
     p, s, poly, _, src, own, frac = densify_batch(pts.reshape(-1, 3), tile_offsets(offsets, n_s),
-                                                  np.tile(spacing * radii, n_s), source=True, keep=keep)
+                                                  np.tile(spacing * radii, n_s), source=True, keep=keep, least=least)
     if rest is None:
         m = s
     else:

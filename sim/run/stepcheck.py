@@ -38,7 +38,7 @@ from cablecheck.build.built import Built
 from cablecheck.build.checkview import DEFAULT_PRECISION_M, part_set, part_shapes, selection, start_part_poses
 from cablecheck.checker.advance import Advancement, PartSolids, part_pair_bounds
 from cablecheck.checker.advance.partpairs import PartPairGaps
-from cablecheck.checker.cable import CableMeasures, taut_margin
+from cablecheck.checker.cable import CableMeasures, rest_pieces, taut_margin
 from cablecheck.checker.events import AllowList, AllowRule
 from cablecheck.checker.interference import Checker, single_records_many
 from cablecheck.checker.interference.discrete import around_centres, points_error
@@ -345,7 +345,9 @@ class StepChecks:
             solid_hi[checked] = np.maximum(solid_hi[checked], box_hi[checked])
             solids = PartSolids(solid_lo, solid_hi, rigid.axial, rigid.error)
             self.advance = Advancement(offsets, config.spacing * radii, rho, config.clearance,
-                                       self.stretch, radii, (box_lo, box_hi), solids)
+                                       self.stretch, radii, (box_lo, box_hi), solids,
+                                       rest_pieces(np.concatenate([c.rest_s for c in built.cables]), offsets,
+                                                   config.spacing * radii))
             # the active part pairs' own conditions, one a pair, restarted from their measured distances
             self._pair_gaps_args = (rho, solids)
             self._moving_pairs = self.part_checker.moving_pairs()
