@@ -62,14 +62,15 @@ import numpy as np
 from cablecheck.checker.arrays import within
 from cablecheck.checker.cable import arc_length, element_pairs_within, self_pair_window
 from cablecheck.checker.closest import row_norm, segment_segment, segment_segment_apart
+from cablecheck.checker.interference.structure import PartTable
 from cablecheck.checker.primitives import signed_distance_batch
 from cablecheck.checker.records import Interference, PairType
-from cablecheck.checker.scene_state import Exclusion
+from cablecheck.checker.scene_state import Exclusion, PartState
 from cablecheck.checker.segments import segment_signed_distance_mixed
-from cablecheck.checker.shapes import Shape, ShapeType, segment_signed_distance, signed_distance, size_rows
+from cablecheck.checker.shapes import SHAPE_CODE, Shape, ShapeType, segment_signed_distance, signed_distance
 
 _ALL_TYPES = list(ShapeType)
-"""Shape types by the codes `segment_signed_distance_mixed` takes."""
+"""Shape types by their codes (`SHAPE_CODE`, `PartTable.type`)."""
 
 REVERSAL_STRAIN = 1e-3
 """Surface bending strain (radius times change of curvature) a bend must swing
@@ -163,14 +164,10 @@ class WearMap:
         self.rest_s = [np.asarray(s, float) for s in rest_s]
         self.radii = np.asarray(radii, float)
         self.shapes = {name: (k, shape) for k, (name, shape) in enumerate(parts)}
-        # each part's box in its own frame (infinite for planes), its shape as rows of arrays
-        bounds = [shape.local_bounds() for _, shape in parts]
-        self._lo = np.array([lo for lo, _ in bounds], float).reshape(-1, 3)
-        self._hi = np.array([hi for _, hi in bounds], float).reshape(-1, 3)
+        # the parts as arrays (types, sizes, each one's box in its own frame: infinite for planes)
         self._shapes = [shape for _, shape in parts]
-        self._mesh = np.array([shape.type is ShapeType.MESH for shape in self._shapes], bool)
-        self._codes = np.array([_ALL_TYPES.index(shape.type) for shape in self._shapes], np.int64)
-        self._sizes = size_rows(self._shapes) if parts else np.zeros((0, 3))
+        self._tab = PartTable([PartState(name, shape, np.eye(4)) for name, shape in parts])
+        self._mesh = self._tab.type == SHAPE_CODE[ShapeType.MESH]
         self.clearance = float(clearance)
         mid = [0.5 * (s[1:] + s[:-1]) for s in self.rest_s]
         self._excluded: dict[tuple[int, str], np.ndarray] = {}
@@ -319,7 +316,7 @@ class WearMap:
         a, b = local(points, poses, slice(None))
         rad = self.radii[cab[pair]][row]
         grow = (rad + self.clearance)[:, None]
-        keep = np.all((np.minimum(a, b) <= self._hi[k] + grow) & (np.maximum(a, b) >= self._lo[k] - grow), axis=1)
+        keep = np.all((np.minimum(a, b) <= self._tab.hi[k] + grow) & (np.maximum(a, b) >= self._tab.lo[k] - grow), axis=1)
         ends = np.cumsum(steps * n_el)
         for g, (c, name, idx) in enumerate(groups):             # the few pairs with an attachment window
             excluded = self._excluded.get((c, name))
@@ -349,7 +346,7 @@ class WearMap:
         mesh = self._mesh[k]
         sel = np.flatnonzero(~mesh)
         if len(sel):
-            d[sel], t[sel] = segment_signed_distance_mixed(self._codes[k[sel]], self._sizes[k[sel]], a[sel], b[sel])
+            d[sel], t[sel] = segment_signed_distance_mixed(self._tab.type[k[sel]], self._tab.size[k[sel]], a[sel], b[sel])
         for part in np.unique(k[mesh]):
             sel = np.flatnonzero(k == part)
             d[sel], t[sel] = _element_distance(self._shapes[part], a[sel], b[sel], limit[sel])
@@ -361,10 +358,10 @@ class WearMap:
         for part in np.unique(k[self._mesh[k]]):
             sel = np.flatnonzero(k == part)
             out[sel] = signed_distance(self._shapes[part], x[sel])[1]
-        codes = self._codes[k]
+        codes = self._tab.type[k]
         for code in np.unique(codes[~self._mesh[k]]):
             sel = np.flatnonzero((codes == code) & ~self._mesh[k])
-            out[sel] = signed_distance_batch(_ALL_TYPES[code], self._sizes[k[sel]], x[sel])[1]
+            out[sel] = signed_distance_batch(_ALL_TYPES[code], self._tab.size[k[sel]], x[sel])[1]
         return out
 
     def _against_cable(self, c: int, b: int, pa: np.ndarray, pb: np.ndarray, qa: np.ndarray,
