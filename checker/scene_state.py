@@ -80,8 +80,7 @@ class CableState:
         pts = np.asarray(self.points, dtype=float)
         if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) < 2:
             raise ValueError(f"cable {self.name!r}: points must be (n, 3) with n >= 2, got {pts.shape}")
-        if not np.all(np.isfinite(pts)):
-            raise ValueError(f"cable {self.name!r}: points contain NaN or infinite values")
+        self._check_finite(pts)
         if not (np.isfinite(self.radius) and self.radius > 0):
             raise ValueError(f"cable {self.name!r}: radius must be positive, got {self.radius}")
         object.__setattr__(self, "points", pts)
@@ -100,11 +99,14 @@ class CableState:
         pts = np.asarray(points, dtype=float)
         if pts.shape != self.points.shape:
             raise ValueError(f"cable {self.name!r}: points must be {self.points.shape}, got {pts.shape}")
-        if not np.isfinite(pts).all():
-            raise ValueError(f"cable {self.name!r}: points contain NaN or infinite values")
+        self._check_finite(pts)
         out = copy.copy(self)
         object.__setattr__(out, "points", pts)
         return out
+
+    def _check_finite(self, pts: np.ndarray) -> None:
+        if not np.all(np.isfinite(pts)):
+            raise ValueError(f"cable {self.name!r}: points contain NaN or infinite values")
 
 
 @dataclass(frozen=True)
