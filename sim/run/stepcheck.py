@@ -216,11 +216,10 @@ class StepResult:
 @dataclass(frozen=True)
 class _PairsAt:
     """Part pairs split at a full check (`StepChecks._records_at`): their parts
-    (used), those parts' poses there (at_start), all parts' poses there and the
-    memo slot their records are checked in (`StepChecks._pair_records`)."""
+    (used), all parts' poses there and the memo slot their records are checked
+    in (`StepChecks._pair_records`)."""
 
     used: np.ndarray
-    at_start: np.ndarray
     poses: np.ndarray
     slot: str
 
@@ -310,6 +309,8 @@ class StepChecks:
                                         else np.asarray(focus, bool))
         self.focus_names = None if focus is None else {p.name for p, keep in zip(built.parts, checked) if keep}
         offsets = np.concatenate([[0], np.cumsum([c.count for c in built.cables])])  # cable starts in pts
+        # material coordinate (rest arc length) of every body centre: the exclusion windows' measure
+        self._rest = np.concatenate([c.rest_s for c in built.cables]) if built.cables else np.zeros(0)
         radii = np.array([c.radius for c in built.cables], float)
         self.horizon = ADVANCE_HORIZON_RADII * float(radii.max()) if (advance and len(radii)) else 0.0
         self.stretch = ADVANCE_STRETCH_RADII * float(radii.min()) if len(radii) else 0.0
@@ -327,11 +328,11 @@ class StepChecks:
         self._active_near = self._active_apart = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         # the allowed ones among them, measured at the sampled states alone (ALLOWED_INTERVAL)
         self._allowed_near = (np.zeros(0, np.int64), np.zeros(0, np.int64))
-        self._allowed_start = _PairsAt(np.zeros(0, np.int64), np.zeros((0, 4, 4)), np.zeros((0, 4, 4)), "allowed")
+        self._allowed_start = _PairsAt(np.zeros(0, np.int64), np.zeros((0, 4, 4)), "allowed")
         self._allowed_memo: dict[tuple[str, str], bool] = {}   # (a, b) part names -> an allowed pair
         self._allowed_slot = np.nan         # the ALLOWED_INTERVAL slot of the last state checked
         # the near pairs' parts, their poses and records where they were split (`_start_active_gaps`)
-        self._near_start = _PairsAt(np.zeros(0, np.int64), np.zeros((0, 4, 4)), np.zeros((0, 4, 4)), "near")
+        self._near_start = _PairsAt(np.zeros(0, np.int64), np.zeros((0, 4, 4)), "near")
         if self.checker.bounds_gaps:
             corner = np.maximum(np.abs(rigid.lo), np.abs(rigid.hi))
             rho = np.sqrt(np.einsum("ij,ij->i", corner, corner))     # inf for planes
@@ -346,8 +347,7 @@ class StepChecks:
             solids = PartSolids(solid_lo, solid_hi, rigid.axial, rigid.error)
             self.advance = Advancement(offsets, config.spacing * radii, rho, config.clearance,
                                        self.stretch, radii, (box_lo, box_hi), solids,
-                                       rest_pieces(np.concatenate([c.rest_s for c in built.cables]), offsets,
-                                                   config.spacing * radii))
+                                       rest_pieces(self._rest, offsets, config.spacing * radii))
             # the active part pairs' own conditions, one a pair, restarted from their measured distances
             self._pair_gaps_args = (rho, solids)
             self._moving_pairs = self.part_checker.moving_pairs()
@@ -365,8 +365,6 @@ class StepChecks:
         self._offsets = offsets
         self._budget = max(int(PROMOTE_SHARE * offsets[-1]), PROMOTE_MIN)
         self._radii = radii
-        # material coordinate (rest arc length) of every body centre: the exclusion windows' measure
-        self._rest = np.concatenate([c.rest_s for c in built.cables]) if built.cables else np.zeros(0)
         # what the attachment windows leave out of the checks, measured on its own
         self.excused = ExcusedLog(self.exclusions, self.checker.parts, self._names, offsets, self._rest, radii,
                                   config.clearance)
@@ -812,14 +810,14 @@ class StepChecks:
         of their parts has moved since: their parts and poses, the records checked when a
         state first asks for them (parts that move at every state, a slider's, never do)."""
         used = np.unique(np.concatenate(pairs))
-        return _PairsAt(used, poses[used], np.array(poses, float), slot)
+        return _PairsAt(used, np.array(poses, float), slot)
 
     def _kept_or_checked(self, poses: np.ndarray, at: np.ndarray, pairs: tuple[np.ndarray, np.ndarray],
                          start: _PairsAt) -> list[list[Interference]]:
         """The records of part pairs at states `at` of poses (S, P, 4, 4): those at `start`
         (`_records_at`) where none of their parts has moved since, to the bit (a robot's
         base on its table), else checked, the moved states in one call."""
-        still = (poses[at][:, start.used] == start.at_start[None]).all(axis=(1, 2, 3))
+        still = (poses[at][:, start.used] == start.poses[start.used][None]).all(axis=(1, 2, 3))
         kept = self._pair_records(start.poses, *pairs, start.slot) if still.any() else []
         out = [list(kept) if k else [] for k in still.tolist()]
         moved = np.flatnonzero(~still)
