@@ -48,22 +48,14 @@ def arc_length(points: np.ndarray) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(seg)])
 
 
-def element_gaps(pa: np.ndarray, pb: np.ndarray) -> np.ndarray:
-    """(m, na, nb) how far apart the bounding spheres (about each element's
-    middle, half its length across) of the elements of polylines pa
-    (m, na + 1, 3) and pb (m, nb + 1, 3) are, state by state: no more than
-    the elements' own distance."""
-    ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
-    ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
-    return row_norm(ma[:, :, None, :] - mb[:, None, :, :]) - ha[:, :, None] - hb[:, None, :]
-
-
 def element_pairs_within(pa: np.ndarray, pb: np.ndarray, reach: np.ndarray
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The element pairs of polylines pa (S, na + 1, 3) and pb (S, nb + 1, 3)
-    whose bounding spheres come within ``reach`` (S,) of each other, state by
-    state (inf: every pair): (state, element of a, element of b, gap), each
-    (n,), the gap `element_gaps`' to the bit, in no particular order.
+    whose bounding spheres (about each element's middle, half its length
+    across) come within ``reach`` (S,) of each other, state by state (inf:
+    every pair): (state, element of a, element of b, gap), each (n,), in no
+    particular order. The gap, the middles' distance less both half lengths,
+    is no more than the elements' own distance.
 
     Found by sweep, not by every pair: each state's middles projected on the
     axis along which b's spread most (a distance shrinks under projection),

@@ -150,10 +150,21 @@ def test_element_pieces_is_densify_batchs_split(lengths, spacing):
     assert element_pieces(np.array([3.0]), np.inf)[0] == 1.0
 
 
+def element_gaps(pa: np.ndarray, pb: np.ndarray) -> np.ndarray:
+    """(m, na, nb) how far apart the bounding spheres (about each element's
+    middle, half its length across) of every element pair of polylines pa
+    (m, na + 1, 3) and pb (m, nb + 1, 3) are, state by state: the every-pair
+    reference of `element_pairs_within` (and of `closest_elements`)."""
+    from cablecheck.checker.closest import row_norm
+    ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
+    ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
+    return row_norm(ma[:, :, None, :] - mb[:, None, :, :]) - ha[:, :, None] - hb[:, None, :]
+
+
 def test_arc_lengths_of_many_polylines_and_element_gaps_against_brute_force():
     """arc_length of m polylines at once is each one's own, summed by hand;
-    element_gaps never exceeds two elements' distance, sampled densely."""
-    from cablecheck.checker.cable import arc_length, element_gaps
+    the reference element_gaps never exceeds two elements' distance, sampled densely."""
+    from cablecheck.checker.cable import arc_length
 
     rng = np.random.default_rng(3)
     pa, pb = rng.normal(size=(4, 6, 3)), rng.normal(size=(4, 5, 3)) + 0.5
@@ -183,7 +194,7 @@ def test_element_pairs_within_are_every_pairs_gaps_within_reach(seed, na, nb, st
     or m, far out) and reaches (at a pair's gap exactly, negative, none):
     the swept pairs are those whose `element_gaps` gap (to the bit) lies
     within the reach (and its rounding margin), each once."""
-    from cablecheck.checker.cable import element_gaps, element_pairs_within
+    from cablecheck.checker.cable import element_pairs_within
     rng = np.random.default_rng(seed)
     pa = far + unit * np.cumsum(rng.normal(size=(states, na + 1, 3)), axis=1)
     pb = far + unit * np.cumsum(rng.normal(size=(states, nb + 1, 3)), axis=1)

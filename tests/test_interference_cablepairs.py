@@ -321,7 +321,7 @@ def test_cable_cable_exact_alone_is_the_checks_own(cables, clearance, spacing):
 def _closest_elements_of_all_pairs(pa, pb, upper):
     """closest_elements as first written: every element pair's gap (element_gaps),
     the reference the pruned search must equal."""
-    from cablecheck.checker.cable import element_gaps
+    from test_cable import element_gaps
     from cablecheck.checker.closest import segment_segment
     n_s = len(pa)
     gap = element_gaps(pa, pb)
@@ -354,7 +354,7 @@ def test_closest_elements_pruned_are_those_of_every_pair(seed, na, nb, states, u
     if nb <= na and rng.random() < 0.5:                                 # or lie side by side
         pb = pa[:, :nb] + unit * rng.normal(scale=0.5, size=3)
     upper = unit * rng.uniform(0.0, 3.0, states)
-    from cablecheck.checker.cable import element_gaps
+    from test_cable import element_gaps
     gaps = element_gaps(pa, pb)
     upper[0] = gaps[0].ravel()[rng.integers(0, gaps[0].size)]          # a limit right at a gap
     if states > 1:
