@@ -269,7 +269,7 @@ def _reference_wear(names, rest_s, radii, parts, clearance, exclusions, steps):
     return contact, sliding, partner
 
 
-@settings(max_examples=examples(10), deadline=None)
+@settings(max_examples=examples(6), deadline=None)           # about 0.3 s a draw: the reference is a plain loop
 @given(seed=st.integers(0, 2 ** 32 - 1), batched=st.booleans())
 def test_many_pairs_at_once_are_each_pair_measured_alone(seed, batched):
     """Cables among parts of every kind (a mesh too) that turn and slide,
