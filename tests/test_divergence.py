@@ -311,6 +311,24 @@ def test_error_before_any_step_exits_4_with_a_report(tmp_path: Path, monkeypatch
     assert "Traceback" in err and "the model builder broke" in err     # asked for, with the env var
 
 
+def test_error_before_any_step_is_printed_as_such(tmp_path: Path, monkeypatch, capsys):
+    # without --quiet: the summary says where the run stopped, the error is one line (no KeyError
+    # of a summary that looked for a last step)
+    import cablecheck.run.runner
+
+    def broken(*a, **k):
+        raise RuntimeError("the model builder broke")
+
+    monkeypatch.setattr(cablecheck.run.runner, "build_simulation", broken)
+    monkeypatch.delenv("CABLECHECK_TRACEBACK", raising=False)
+    report = tmp_path / "r.json"
+    assert main(["run", str(_scene(tmp_path, SMALL)), "--no-record", "--report", str(report)]) == EXIT_ERROR
+    out, err = capsys.readouterr()
+    assert "FAILED (report marked incomplete) before its first step" in out and str(report) in out
+    assert "RuntimeError: the model builder broke" in err and "KeyError" not in err + out
+    assert "Traceback" not in err
+
+
 def test_bad_input_still_exits_2(tmp_path: Path, capsys):
     bad = _scene(tmp_path, SMALL.replace("radius = 3.0", "radius = -3.0"))
     assert main(["run", str(bad), "--no-record", "--report", str(tmp_path / "r.json")]) == 2

@@ -114,6 +114,10 @@ def print_summary(report: dict, report_path: Path) -> None:
               "DIVERGED (report marked incomplete)" if report.get("physics_error") else
               "FAILED (report marked incomplete)" if report.get("error") else
               "INTERRUPTED (report marked incomplete)")
+    if "t_end" not in s:     # failed before its first step: no settings, cables or checks to print
+        print(f"{report['scene']}: {status} before its first step, after {report['timing']['total_s']:.2f} s")
+        print(f"  report: {report_path}")
+        return
     print(f"{report['scene']}: {status}, {s['steps']} steps to t = {s['t_end']:.3f} s, "
           f"{s['checked_steps']} checked, method {s['method']}")
     for c in report["cables"]:
