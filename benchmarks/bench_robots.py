@@ -36,9 +36,11 @@ validation: a contact event whose pair the validation found agreeing
 there is no false alarm of the checker's; a bend or taut event is no
 contact, and has no second opinion).
 
-Needs the optional ``zoo`` extra (``pip install -e .[zoo]``, or
-``pip install --no-deps robosuite gymnasium-robotics``: only their model
-files are read, nothing of them is imported). Arms whose package is
+Needs robosuite and gymnasium-robotics installed without their
+dependencies (``pip install --no-deps robosuite gymnasium-robotics``:
+only their model files are read, nothing of them is imported; their
+dependencies bring MuJoCo 3, whose ``mujoco`` module replaces the one of
+``mujoco-core`` 4 that cablecheck needs). Arms whose package is
 missing are named and skipped; with none installed the benchmark says so
 and exits 2.
 
@@ -711,8 +713,8 @@ def main(argv=None) -> int:
     if missing:
         print(f"bench_robots: package(s) not installed: {', '.join(missing)}; skipping "
               f"{', '.join(n for n in names if roots[ZOO[n].package] is None)}. Install the optional extra: "
-              "pip install -e '.[zoo]' (or pip install --no-deps robosuite gymnasium-robotics: only their "
-              "model files are read)", file=sys.stderr)
+              "pip install --no-deps robosuite gymnasium-robotics (only their model files are read; their "
+              "dependencies would replace mujoco-core's mujoco module with MuJoCo 3)", file=sys.stderr)
     names = [n for n in names if roots[ZOO[n].package] is not None]
     if not names:
         print("bench_robots: no arm of the zoo is installed; nothing to run", file=sys.stderr)

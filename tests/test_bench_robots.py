@@ -1,4 +1,4 @@
-"""benchmarks/bench_robots.py: its pure helpers always; one arm's scene when the zoo extra is installed."""
+"""benchmarks/bench_robots.py: its pure helpers always; one arm's scene when robosuite is installed (pip install --no-deps)."""
 
 from __future__ import annotations
 
@@ -77,11 +77,11 @@ def test_missing_packages_are_explained_not_a_traceback(monkeypatch, capsys):
     monkeypatch.setattr(bench, "package_root", lambda package: None)
     assert bench.main(["--scenes-only"]) == 2
     err = capsys.readouterr().err
-    assert "not installed: gymnasium-robotics, robosuite" in err and "pip install -e '.[zoo]'" in err
+    assert "not installed: gymnasium-robotics, robosuite" in err and "pip install --no-deps robosuite gymnasium-robotics" in err
     assert "no arm of the zoo is installed" in err
 
 
-@pytest.mark.skipif(bench.package_root("robosuite") is None, reason="robosuite (the zoo extra) is not installed")
+@pytest.mark.skipif(bench.package_root("robosuite") is None, reason="robosuite (pip install --no-deps robosuite) is not installed")
 def test_one_arm_scene_loads(tmp_path):
     arm = bench.ZOO["panda"]
     path, _, clear = bench.scene_for("panda", arm, bench.package_root(arm.package), tmp_path, None, None)
