@@ -71,6 +71,16 @@ class MeshData:
         whose box meets a box, for many boxes in one pass."""
         return TriangleForest.build(self.tri_lo, self.tri_hi, np.zeros(len(self.faces), np.int64), 1)
 
+    @cached_property
+    def convex(self) -> bool:
+        """The mesh is closed and convex (trimesh's test: no two faces meet
+        at an edge folded inward beyond its tolerance), asked the first time
+        a segment goes inside it: its depth along a segment is then the least
+        of its face planes' distances (:func:`cablecheck.checker.segments.segment_sd_mesh`)."""
+        import trimesh  # loaded already by build
+
+        return self.closed and bool(trimesh.Trimesh(vertices=self.vertices, faces=self.faces, process=False).is_convex)
+
     @staticmethod
     def build(vertices: np.ndarray, faces: np.ndarray) -> MeshData:
         """Check closure with trimesh, orient outward, precompute normals and tree."""

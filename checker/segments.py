@@ -7,11 +7,13 @@ segment's length; the ellipsoid finds the root of the derivative (the
 outward normal at the closest point dotted with the segment) by
 safeguarded secant steps to 1e-14 of the segment's length. Meshes are
 exact while the segment stays outside; a penetrating segment's depth is
-searched from the deepest of nine evenly spaced samples by golden section
-between its neighbours: exact (1e-13 of that stretch) where the depth is
-concave along the segment, as inside a convex mesh, and never shallower
-than the samples in a concave one (there the deepest point between other
-samples can be missed). Not here: point queries (:mod:`cablecheck.checker.primitives`,
+searched from the deepest of nine evenly spaced samples between its
+neighbours: inside a convex mesh (:attr:`MeshData.convex`), where the depth
+is the least of the face planes' distances, by the crossings of the
+tangents at the bracket's ends (exact at the kink, a few passes); in any
+other by golden section (exact, 1e-13 of that stretch, where the depth is
+concave along the segment). Never shallower than the samples (in a concave
+mesh the deepest point between other samples can be missed). Not here: point queries (:mod:`cablecheck.checker.primitives`,
 :mod:`cablecheck.checker.meshdata`), poses (:mod:`cablecheck.checker.shapes`).
 """
 
@@ -354,16 +356,30 @@ def segment_sd_mesh(m: MeshData, a: np.ndarray, b: np.ndarray, upper: np.ndarray
         dmin = ds[np.arange(len(cand)), j]
         tmin = ts[j]
         # the deepest sample's neighbours bracket the deepest point where the
-        # depth is concave along the segment (inside a convex mesh: the least
-        # of its face planes' distances); a golden-section search there finds
-        # it to 1e-13 of the bracket, never shallower than the sample
+        # depth is concave along the segment; a search there finds it, never
+        # shallower than the sample
         lo, hi = ts[np.maximum(j - 1, 0)], ts[np.minimum(j + 1, len(ts) - 1)]
         ca, cd = a[cand], (b - a)[cand]
+        span = (hi - lo)[:, None] * cd                  # the bracket along each segment
 
-        def depth(u):
-            return sd_mesh(m, ca + (lo + u * (hi - lo))[:, None] * cd)[0]
+        def depth(u, rows):
+            # the signed distance and its derivative along the bracket: the unit vector from the
+            # closest point, outward (a subgradient where two faces are equally near)
+            x = ca[rows] + lo[rows, None] * cd[rows] + u[:, None] * span[rows]
+            ds, cl = sd_mesh(m, x)
+            v = x - cl
+            size = row_norm(v)
+            slope = np.einsum("ij,ij->i", v, span[rows]) / np.where(size > 0.0, size, 1.0)
+            return ds, np.where(ds < 0.0, -slope, slope)
 
-        dg, ug = _golden_min(depth, len(cand))
+        if m.convex:
+            # inside a convex mesh the depth is the least of its face planes' distances, piecewise
+            # linear: the tangents at the bracket's ends cross at its kink, found in a few passes
+            dg, ug = _derivative_min(depth, len(cand))
+        else:
+            # a concave one: golden section, 1e-13 of the bracket, which on a depth not concave
+            # along the segment finds a deeper point than the tangents more often than not
+            dg, ug = _golden_min(lambda u: depth(u, np.arange(len(cand)))[0], len(cand))
         deeper = dg < dmin
         dmin, tmin = np.where(deeper, dg, dmin), np.where(deeper, lo + ug * (hi - lo), tmin)
         d[cand] = np.minimum(dmin, 0.0)

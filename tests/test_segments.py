@@ -142,6 +142,50 @@ def test_segment_through_a_convex_mesh_is_measured_at_its_deepest_point(seed, sc
         assert f(t[i]) == pytest.approx(d[i], abs=1e-9 * scale)
 
 
+@settings(max_examples=examples(6), deadline=None)     # 60 segments and a linear program each
+@given(seed=st.integers(0, 2**32 - 1), scale=st.sampled_from([1.0, 1e-3, 1e3]), far=st.sampled_from([0.0, 1e3]))
+def test_depth_inside_a_convex_hull_is_its_linear_programs(seed, scale, far):
+    """Inside a convex mesh (here the hull of random points, in m or mm, at
+    the origin or a kilometre out) the signed distance is the greatest of
+    the face planes' distances, so a segment's deepest point solves a linear
+    program: least z with every face's distance at (a + t (b - a)) at most
+    z, 0 <= t <= 1 (scipy's linprog). The tangents' crossings
+    (segment_sd_mesh on a convex mesh) give its depth and a place at it."""
+    from scipy.optimize import linprog
+    rng = np.random.default_rng(seed)
+    hull = trimesh.convex.convex_hull(rng.normal(size=(int(rng.integers(8, 120)), 3)))
+    offset = np.array([far, -far, 0.5 * far])
+    shape = mesh_shape(np.asarray(hull.vertices) * scale + offset, np.asarray(hull.faces))
+    m = shape.mesh
+    assert m.convex
+    a = rng.normal(scale=0.6, size=(60, 3)) * scale + offset
+    b = a + rng.normal(scale=0.8, size=(60, 3)) * scale
+    d, t = segment_signed_distance(shape, a, b)
+    n, on = m.face_normals, m.a
+    checked = 0
+    for i in range(len(a)):
+        # z >= n . (a + t (b - a) - on) for every face
+        rows = np.c_[n @ (b[i] - a[i]), -np.ones(len(n))]
+        lp = linprog([0.0, 1.0], A_ub=rows, b_ub=-np.einsum("fj,fj->f", n, a[i] - on),
+                     bounds=[(0.0, 1.0), (None, None)], method="highs")
+        if lp.fun > -1e-6 * scale:          # not inside: exact's unsigned search answers it
+            continue
+        checked += 1
+        assert d[i] == pytest.approx(lp.fun, abs=1e-9 * scale), (i, d[i], lp.fun)
+        at = a[i] + t[i] * (b[i] - a[i])
+        assert np.max(n @ at - np.einsum("fj,fj->f", n, on)) == pytest.approx(d[i], abs=1e-9 * scale)
+    assert checked >= 5
+
+
+def test_a_mesh_is_convex_when_closed_with_no_fold_inward():
+    box = trimesh.creation.box([2.0, 1.0, 3.0])
+    assert mesh_shape(box.vertices, box.faces).mesh.convex
+    ring = trimesh.creation.annulus(r_min=0.5, r_max=1.0, height=0.6)
+    assert not mesh_shape(ring.vertices, ring.faces).mesh.convex
+    # closed but open: one face less
+    assert not mesh_shape(box.vertices, box.faces[1:]).mesh.convex
+
+
 def test_a_cap_below_every_face_answers_the_cap():
     """mesh_segment_unsigned with an upper bound and a cap: segments outside a
     closed box mesh whose caps come within no face are answered at the cap
