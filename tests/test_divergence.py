@@ -329,6 +329,18 @@ def test_error_before_any_step_is_printed_as_such(tmp_path: Path, monkeypatch, c
     assert "Traceback" not in err
 
 
+def test_a_mujoco_of_another_major_version_is_named(tmp_path: Path, monkeypatch, capsys):
+    # a package depending on `mujoco` 3.x replaces mujoco-core 4's module: the run says so, exit 4
+    import mujoco
+    monkeypatch.setattr(mujoco, "__version__", "3.17.0")
+    monkeypatch.delenv("CABLECHECK_TRACEBACK", raising=False)
+    report = tmp_path / "r.json"
+    assert main(["run", str(_scene(tmp_path, SMALL)), "--no-record", "--report", str(report)]) == EXIT_ERROR
+    err = capsys.readouterr().err
+    assert "cablecheck needs MuJoCo 4" in err and "MuJoCo 3.17.0" in err and "Traceback" not in err
+    assert json.loads(report.read_text())["complete"] is False
+
+
 def test_bad_input_still_exits_2(tmp_path: Path, capsys):
     bad = _scene(tmp_path, SMALL.replace("radius = 3.0", "radius = -3.0"))
     assert main(["run", str(bad), "--no-record", "--report", str(tmp_path / "r.json")]) == 2

@@ -151,6 +151,20 @@ def _fmt(values) -> str:
     return " ".join(repr(float(v)) for v in np.ravel(values))
 
 
+MUJOCO_MAJOR = 4
+"""The MuJoCo these models are written for (pyproject: mujoco-core 4)."""
+
+
+def require_mujoco(found: str) -> None:
+    """Raise RuntimeError naming the MuJoCo found when it is not `MUJOCO_MAJOR`'s: another package's
+    dependency on the `mujoco` package 3.x replaces mujoco-core 4's `mujoco` module, and the models
+    then fail to compile in ways that name no cause (a flex not found by name)."""
+    if int(found.split(".")[0]) != MUJOCO_MAJOR:
+        raise RuntimeError(f"cablecheck needs MuJoCo {MUJOCO_MAJOR} (the mujoco-core package) but Python imports "
+                           f"MuJoCo {found}: another package's `mujoco` {found.split('.')[0]}.x replaced its module "
+                           "(pip uninstall mujoco; pip install --force-reinstall --no-deps mujoco-core)")
+
+
 def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[np.ndarray, np.ndarray]],
              detect: bool, frames: Frames, rest: bool = False) -> tuple[mujoco.MjModel, np.ndarray]:
     """The model, and (ngeom, 2) contype, conaffinity of each geom of the mjcf
@@ -164,6 +178,7 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
     simulation model with `rest` and then moves the held vertices to their
     routed places (`move_held`: `flex_vert` only), so every cable is
     straight at rest."""
+    require_mujoco(mujoco.__version__)
     origin = frames.origin
     spec = base_spec(scene)
     _set_options(spec, scene)
