@@ -6,6 +6,7 @@ test_meshgrid, test_segments)."""
 import numpy as np
 import pytest
 import trimesh
+from helpers import examples
 from hypothesis import given, settings, strategies as st
 
 from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape, signed_distance
@@ -142,3 +143,27 @@ def test_primitive_bounds_touch_the_surface_on_every_axis(kind, size):
     extremes = np.concatenate([np.diag(hi[0]), np.diag(lo[0])])
     d = signed_distance(shape, extremes)[0]
     assert np.all(np.abs(d) <= 1e-9 * (1 + np.max(size)))
+
+
+@settings(max_examples=examples(30), deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), limit=st.sampled_from([0.0, 1e-3, 0.05, 0.4]), scale=st.sampled_from([1.0, 1e3]))
+def test_points_in_boxes_are_the_every_pair_test(seed, limit, scale):
+    """The (box, point) pairs within the limit of each box, found by sorting
+    the points along x, are those of testing every point in every box, in
+    the same order: drawn boxes (a plane's infinite one among them) and
+    points, some exactly on a box's grown face."""
+    from cablecheck.checker.shapes import _in_boxes
+    rng = np.random.default_rng(seed)
+    n_p, n_b = int(rng.integers(0, 60)), int(rng.integers(0, 12))
+    lo = rng.uniform(-1.0, 1.0, (n_b, 3)) * scale
+    hi = lo + rng.uniform(0.0, 0.8, (n_b, 3)) * scale
+    if n_b and rng.random() < 0.5:
+        lo[0], hi[0] = -np.inf, np.inf
+    p = rng.uniform(-1.5, 1.5, (n_p, 3)) * scale
+    if n_p and n_b and np.isfinite(lo[-1, 0]):       # on the grown faces, exactly
+        p[: n_p // 3, 0] = hi[-1, 0] + limit * scale
+        p[n_p // 3: n_p // 2, 1] = lo[-1, 1] - limit * scale
+    dense = np.all((p[None] >= lo[:, None] - limit * scale) & (p[None] <= hi[:, None] + limit * scale), axis=2)
+    pi, ni = _in_boxes(p, lo, hi, limit * scale)
+    want_i, want_n = np.nonzero(dense)
+    assert np.array_equal(pi, want_i) and np.array_equal(ni, want_n)
