@@ -5,6 +5,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import numpy as np
+
 LONG = os.environ.get("HYPOTHESIS_PROFILE") == "long"
 """A long local run of the property tests (HYPOTHESIS_PROFILE=long, tests/conftest.py)."""
 
@@ -50,3 +52,14 @@ def recorded_entities(record: Path, prefix: str, whole: bool = False) -> dict[st
             row["t"] = None if times[i] is None else float(times[i])
             rows.append(row)
     return {path: sorted(rows, key=lambda r: (r["t"] is not None, r["t"] or 0.0)) for path, rows in found.items()}
+
+
+def element_gaps(pa: np.ndarray, pb: np.ndarray) -> np.ndarray:
+    """(m, na, nb) how far apart the bounding spheres (about each element's
+    middle, half its length across) of every element pair of polylines pa
+    (m, na + 1, 3) and pb (m, nb + 1, 3) are, state by state: the every-pair
+    reference of `element_pairs_within` (and of `closest_elements`)."""
+    from cablecheck.checker.closest import row_norm
+    ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
+    ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
+    return row_norm(ma[:, :, None, :] - mb[:, None, :, :]) - ha[:, :, None] - hb[:, None, :]

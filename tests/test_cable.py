@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from helpers import examples
+from helpers import element_gaps, examples
 from hypothesis import given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
@@ -148,17 +148,6 @@ def test_element_pieces_is_densify_batchs_split(lengths, spacing):
     assert np.array_equal(made, want) and np.all(want >= 1)
     assert np.all(np.linalg.norm(np.diff(pts, axis=0), axis=1) / want <= spacing * (1 + 1e-9))
     assert element_pieces(np.array([3.0]), np.inf)[0] == 1.0
-
-
-def element_gaps(pa: np.ndarray, pb: np.ndarray) -> np.ndarray:
-    """(m, na, nb) how far apart the bounding spheres (about each element's
-    middle, half its length across) of every element pair of polylines pa
-    (m, na + 1, 3) and pb (m, nb + 1, 3) are, state by state: the every-pair
-    reference of `element_pairs_within` (and of `closest_elements`)."""
-    from cablecheck.checker.closest import row_norm
-    ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
-    ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
-    return row_norm(ma[:, :, None, :] - mb[:, None, :, :]) - ha[:, :, None] - hb[:, None, :]
 
 
 def test_arc_lengths_of_many_polylines_and_element_gaps_against_brute_force():

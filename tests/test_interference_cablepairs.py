@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from helpers import examples
+from helpers import element_gaps, examples
 from hypothesis import assume, given, settings, strategies as st
 from strategies import cable_sets, coils, coords, polylines
 from test_interference import as_dict, assert_same, brute_exact, brute_points
@@ -321,7 +321,6 @@ def test_cable_cable_exact_alone_is_the_checks_own(cables, clearance, spacing):
 def _closest_elements_of_all_pairs(pa, pb, upper):
     """closest_elements as first written: every element pair's gap (element_gaps),
     the reference the pruned search must equal."""
-    from test_cable import element_gaps
     from cablecheck.checker.closest import segment_segment
     n_s = len(pa)
     gap = element_gaps(pa, pb)
@@ -354,7 +353,6 @@ def test_closest_elements_pruned_are_those_of_every_pair(seed, na, nb, states, u
     if nb <= na and rng.random() < 0.5:                                 # or lie side by side
         pb = pa[:, :nb] + unit * rng.normal(scale=0.5, size=3)
     upper = unit * rng.uniform(0.0, 3.0, states)
-    from test_cable import element_gaps
     gaps = element_gaps(pa, pb)
     upper[0] = gaps[0].ravel()[rng.integers(0, gaps[0].size)]          # a limit right at a gap
     if states > 1:
