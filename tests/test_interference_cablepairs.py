@@ -361,3 +361,33 @@ def test_closest_elements_pruned_are_those_of_every_pair(seed, na, nb, states, u
     want = _closest_elements_of_all_pairs(pa, pb, upper)
     for g, w in zip(got, want):
         assert np.array_equal(g, w)
+
+
+@settings(max_examples=examples(40), deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), scale=st.sampled_from([1.0, 1e-3, 1e3]), far=st.sampled_from([0.0, 1e3]),
+       limit=st.sampled_from([0.0, 0.3, -0.2]))
+def test_pairs_within_squared_keep_every_pair_below_the_limit(seed, scale, far, limit):
+    """The squared-distance test that spares computing a value for most
+    candidate point pairs keeps every pair whose value (distance less both
+    radii) is below the limit: drawn points in m and mm, a kilometre out,
+    some pairs exactly at the limit, a negative limit; and it drops most of
+    the pairs far beyond it."""
+    from cablecheck.checker.closest import row_norm
+    from cablecheck.checker.interference.cablepairs import _within_squared
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 80))
+    p = far + rng.uniform(-1.0, 1.0, (n, 3)) * scale
+    rad = rng.uniform(0.01, 0.2, n) * scale
+    i, j = rng.integers(0, n, 300), rng.integers(0, n, 300)
+    # some pairs at the limit exactly: j moved to distance limit + r_i + r_j from i
+    d = rng.normal(size=(20, 3))
+    d /= row_norm(d)[:, None]
+    p[j[:20]] = p[i[:20]] + d * np.maximum(limit * scale + rad[i[:20]] + rad[j[:20]], 0.0)[:, None]
+    lim = limit * scale
+    ki, kj = _within_squared(p, (i, j), lim + rad[i] + rad[j])
+    kept = set(zip(ki.tolist(), kj.tolist()))
+    below = row_norm(p[i] - p[j]) - rad[i] - rad[j] < lim
+    assert {(a, b) for a, b, x in zip(i.tolist(), j.tolist(), below) if x} <= kept
+    # (a reach at or below 0 keeps only points that coincide, whose value may be anything)
+    far_off = (row_norm(p[i] - p[j]) - rad[i] - rad[j] > lim + 1e-6 * scale) & (row_norm(p[i] - p[j]) > 0.0)
+    assert not ({(a, b) for a, b, x in zip(i.tolist(), j.tolist(), far_off) if x} & kept)

@@ -184,6 +184,25 @@ def cable_pairs_points(dp: Discrete, ch: Chunks, clearance: float, hits: Hits,
         hits.add(kind, a, b, v, p.take(i, axis=0), s.take(i), s_b, rec)
 
 
+def _within_squared(p: np.ndarray, pairs: tuple[np.ndarray, np.ndarray], reach: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs (i, j) of points ``p`` whose squared distance, a coordinate
+    at a time, is within ``reach`` (n,) a little widened: a superset of
+    those whose distance is below it, for the exact value to be taken of
+    these alone (a harness's cable pairs keep one in fourteen; the value of
+    every pair, as rows of three, cost twice this test)."""
+    i, j = pairs
+    if len(i) == 0:
+        return i, j
+    x, y, z = (np.ascontiguousarray(p[:, k]) for k in range(3))
+    d2 = np.square(x[i] - x[j])
+    d2 += np.square(y[i] - y[j])
+    d2 += np.square(z[i] - z[j])
+    r = np.maximum(reach, 0.0) * (1.0 + 1e-9) + 1e-300
+    keep = np.flatnonzero(d2 <= r * r)
+    return i[keep], j[keep]
+
+
 def point_pair_rows(p: np.ndarray, s: np.ndarray, cab: np.ndarray, rad: np.ndarray, reach: np.ndarray,
                     clearance: float, limit: float, cable_cable: tuple[np.ndarray, np.ndarray],
                     self_points: tuple[np.ndarray, np.ndarray],
@@ -205,7 +224,7 @@ def point_pair_rows(p: np.ndarray, s: np.ndarray, cab: np.ndarray, rad: np.ndarr
         per kind, (type, cable a, cable b, value, place index i (the place
         on a: where and s), arc length on b, record mask or None for all).
     """
-    i, j = cable_cable
+    i, j = _within_squared(p, cable_cable, limit + rad[cable_cable[0]] + rad[cable_cable[1]])
     v = row_norm(p[i] - p[j]) - rad[i] - rad[j]
     o = v < limit
     i, j = i[o], j[o]
