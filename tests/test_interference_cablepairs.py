@@ -366,14 +366,14 @@ def test_closest_elements_pruned_are_those_of_every_pair(seed, na, nb, states, u
 @settings(max_examples=examples(40), deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), scale=st.sampled_from([1.0, 1e-3, 1e3]), far=st.sampled_from([0.0, 1e3]),
        limit=st.sampled_from([0.0, 0.3, -0.2]))
-def test_pairs_within_squared_keep_every_pair_below_the_limit(seed, scale, far, limit):
-    """The squared-distance test that spares computing a value for most
-    candidate point pairs keeps every pair whose value (distance less both
-    radii) is below the limit: drawn points in m and mm, a kilometre out,
-    some pairs exactly at the limit, a negative limit; and it drops most of
+def test_pruning_keeps_every_point_pair_below_the_limit(seed, scale, far, limit):
+    """The pruning test (rows_within) that spares computing a value for
+    most candidate point pairs keeps every pair whose value (distance less
+    both radii) is below the limit: drawn points in m and mm, a kilometre
+    out, some pairs exactly at the limit, a negative limit; and it drops
     the pairs far beyond it."""
     from cablecheck.checker.closest import row_norm
-    from cablecheck.checker.interference.cablepairs import _within_squared
+    from cablecheck.checker.interference.broad import rows_within
     rng = np.random.default_rng(seed)
     n = int(rng.integers(2, 80))
     p = far + rng.uniform(-1.0, 1.0, (n, 3)) * scale
@@ -384,10 +384,12 @@ def test_pairs_within_squared_keep_every_pair_below_the_limit(seed, scale, far, 
     d /= row_norm(d)[:, None]
     p[j[:20]] = p[i[:20]] + d * np.maximum(limit * scale + rad[i[:20]] + rad[j[:20]], 0.0)[:, None]
     lim = limit * scale
-    ki, kj = _within_squared(p, (i, j), lim + rad[i] + rad[j])
+    keep = rows_within(p, i, j, lim + rad[i] + rad[j])
+    ki, kj = i[keep], j[keep]
     kept = set(zip(ki.tolist(), kj.tolist()))
     below = row_norm(p[i] - p[j]) - rad[i] - rad[j] < lim
     assert {(a, b) for a, b, x in zip(i.tolist(), j.tolist(), below) if x} <= kept
-    # (a reach at or below 0 keeps only points that coincide, whose value may be anything)
-    far_off = (row_norm(p[i] - p[j]) - rad[i] - rad[j] > lim + 1e-6 * scale) & (row_norm(p[i] - p[j]) > 0.0)
+    # (a reach below 0 is taken as its size: pruning only)
+    reach = lim + rad[i] + rad[j]
+    far_off = row_norm(p[i] - p[j]) > np.abs(reach) + 1e-6 * scale
     assert not ({(a, b) for a, b, x in zip(i.tolist(), j.tolist(), far_off) if x} & kept)

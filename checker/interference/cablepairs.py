@@ -184,25 +184,6 @@ def cable_pairs_points(dp: Discrete, ch: Chunks, clearance: float, hits: Hits,
         hits.add(kind, a, b, v, p.take(i, axis=0), s.take(i), s_b, rec)
 
 
-def _within_squared(p: np.ndarray, pairs: tuple[np.ndarray, np.ndarray], reach: np.ndarray
-                    ) -> tuple[np.ndarray, np.ndarray]:
-    """The pairs (i, j) of points ``p`` whose squared distance, a coordinate
-    at a time, is within ``reach`` (n,) a little widened: a superset of
-    those whose distance is below it, for the exact value to be taken of
-    these alone (a harness's cable pairs keep one in fourteen; the value of
-    every pair, as rows of three, cost twice this test)."""
-    i, j = pairs
-    if len(i) == 0:
-        return i, j
-    x, y, z = (np.ascontiguousarray(p[:, k]) for k in range(3))
-    d2 = np.square(x[i] - x[j])
-    d2 += np.square(y[i] - y[j])
-    d2 += np.square(z[i] - z[j])
-    r = np.maximum(reach, 0.0) * (1.0 + 1e-9) + 1e-300
-    keep = np.flatnonzero(d2 <= r * r)
-    return i[keep], j[keep]
-
-
 def point_pair_rows(p: np.ndarray, s: np.ndarray, cab: np.ndarray, rad: np.ndarray, reach: np.ndarray,
                     clearance: float, limit: float, cable_cable: tuple[np.ndarray, np.ndarray],
                     self_points: tuple[np.ndarray, np.ndarray],
@@ -224,7 +205,7 @@ def point_pair_rows(p: np.ndarray, s: np.ndarray, cab: np.ndarray, rad: np.ndarr
         per kind, (type, cable a, cable b, value, place index i (the place
         on a: where and s), arc length on b, record mask or None for all).
     """
-    i, j = _within_squared(p, cable_cable, limit + rad[cable_cable[0]] + rad[cable_cable[1]])
+    i, j = cable_cable
     v = row_norm(p[i] - p[j]) - rad[i] - rad[j]
     o = v < limit
     i, j = i[o], j[o]
@@ -444,6 +425,12 @@ def cable_pairs_many(clearance: float, names: Sequence[str], radii: np.ndarray, 
     keep = lo < hi                                      # one atom with itself: each pair once
     lo, hi = lo[keep], hi[keep]
     same = cab[lo] == cab[hi]
+    # most points of two cables' near atoms lie beyond the limit: pruned as the full check prunes
+    # its pairs, before their values are taken (a harness keeps one in fourteen; valuing them all
+    # cost twice the test)
+    two_i, two_j = lo[~same], hi[~same]
+    near = rows_within(p, two_i, two_j, rad[two_i] + rad[two_j] + clearance)
+    two_i, two_j = two_i[near], two_j[near]
     # a point against the midpoint of a piece of its own cable not touching it
     near_elems = np.stack([ci - 1, ci], axis=1)
     near_elems_j = np.stack([cj - 1, cj], axis=1)
@@ -458,7 +445,7 @@ def cable_pairs_many(clearance: float, names: Sequence[str], radii: np.ndarray, 
     e = pieces[e - m * (q // m)] + m * (q // m)         # piece numbers to their first points' rows
     keep = (q != e) & (q != e + 1)
     rows = point_pair_rows(p, s, cab, rad, self_pair_window(rad, clearance), clearance, clearance,
-                           (lo[~same], hi[~same]), (lo[same], hi[same]), (q[keep], e[keep]))
+                           (two_i, two_j), (lo[same], hi[same]), (q[keep], e[keep]))
     t, a, b, v, w, sb = ([] for _ in range(6))
     for kind, a_k, b_k, v_k, w_k, sb_k, rec in rows:
         o = slice(None) if rec is None else rec
