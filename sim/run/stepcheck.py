@@ -634,7 +634,11 @@ class StepChecks:
             if checked.gaps is not None:
                 gaps = checked.gaps.on_parts(self._checked_index, len(self.built.parts))   # built part indices
                 parts, cable_pairs = gaps.part_candidates, gaps.cable_candidates
-                near = (parts, cable_pairs)
+                # the candidates as the points measured them (the gaps count a cable-part
+                # candidate from the clearance plus its cable's points' error, a bound the
+                # recording's approach lines are not)
+                near = (parts if self._near_errors is None else
+                        parts._replace(value=parts.value + self._near_errors[parts.cable]), cable_pairs)
                 # pairs within ACTIVE_HORIZONS of the clearance (records, and a
                 # cable held in a part just inside its attachment window) would
                 # stop the skipping at once: evaluated on their own wherever
