@@ -84,7 +84,7 @@ def test_without_dynamics_it_says_the_route_is_checked_where_it_lies(tmp_path):
         "[effects]\n", "[effects]\ndynamics = false\n"))
     scene = load_scene(path)
     (static,) = route_warnings(scene, *plan_cables(scene))
-    assert "the simulation will push it out" in moving and "simulat" in static
+    assert "contact pushes it out where it can" in moving and "simulat" in static
     assert "push it out" not in static and "nothing is simulated (dynamics = false)" in static
     assert static.split(";")[0] == moving.split(";")[0]        # the same place and depth
 

@@ -67,7 +67,10 @@ def route_warnings(scene: Scene, frames: Frames, meshes: dict, plans: list[Cable
             where = np.concatenate([s[inside], s_el[crossing]])
             deepest = float(-min(d[inside].min(initial=0.0), d_el[crossing].min(initial=0.0)))
             # nothing is stepped without dynamics: the route is checked where it lies
-            then = ("the simulation will push it out at the start" if scene.effects.dynamics else
+            # a contact pushes it out unless the cable is threaded through the part (up through a
+            # disc to a clamp on its top): then it stays, a hard static event of the run
+            then = ("the simulation starts from it (contact pushes it out where it can; threaded through "
+                    "the part, it stays: a hard static event)" if scene.effects.dynamics else
                     "nothing is simulated (dynamics = false): it is checked there, a hard contact")
             out.append(f"cables[{i}] {plan.cable.name!r}: its initial shape runs through part "
                        f"{obstacles.names[k]!r} from s = {fmt(where.min() / scene.scale)} to "
