@@ -316,6 +316,31 @@ def test_short_names_keep_the_levels_that_tell_names_apart():
                    "left/rail": "left/rail", "right/rail": "right/rail", "hose": "hose", "drawer/back": "back"}
 
 
+def _short_names_every_pair(names) -> dict[str, str]:
+    """short_names as first written: each name's tail against every other name's (the reference)."""
+    full = sorted(set(names))
+    levels = {n: n.split("/") for n in full}
+    short = {}
+    for n in full:
+        parts = levels[n]
+        for k in range(1, len(parts) + 1):
+            tail = parts[-k:]
+            if not any(m != n and levels[m][-k:] == tail for m in full):
+                break
+        short[n] = "/".join(tail)
+    return short
+
+
+@settings(max_examples=examples(40), deadline=None)
+@given(st.lists(st.lists(st.sampled_from(["a", "b", "rail", "frame", "left", "x/y"]), min_size=1, max_size=4)
+                .map("/".join), max_size=30))
+def test_short_names_are_those_of_comparing_every_pair(names):
+    """Drawn assembly paths (repeated, one a tail of another, a name twice): the
+    short names counted by tail are those of comparing each name with every other."""
+    from cablecheck.record.style import short_names
+    assert short_names(names) == _short_names_every_pair(names)
+
+
 def test_the_event_log_has_one_start_and_one_end_per_event_levelled_by_severity(pinch, crossing):
     for report, record in (pinch, crossing):
         log = [r for r in _rows(record, "/events")]

@@ -11,6 +11,7 @@ Not here: what is logged where (the other modules of `cablecheck.record`).
 
 from __future__ import annotations
 
+from collections import Counter
 from functools import cache
 
 CLEAR = (70, 160, 255)
@@ -82,13 +83,16 @@ def short_names(names) -> dict[str, str]:
     another name keeps its parents until the two differ (`left/rail`,
     `right/rail`)."""
     full = sorted(set(names))
-    levels = {n: n.split("/") for n in full}
+    levels = {n: tuple(n.split("/")) for n in full}
+    depth = max(map(len, levels.values()), default=0)
+    # how many names end in each tail of k levels: a tail only its own name ends in tells it apart
+    # (every name against every other, a harness's 1,064 names cost a quarter second a call)
+    ends = [Counter(parts[-k:] for parts in levels.values() if len(parts) >= k) for k in range(1, depth + 1)]
     short = {}
-    for n in full:
-        parts = levels[n]
+    for n, parts in levels.items():
         for k in range(1, len(parts) + 1):
             tail = parts[-k:]
-            if not any(m != n and levels[m][-k:] == tail for m in full):
+            if ends[k - 1][tail] == 1:
                 break
         short[n] = "/".join(tail)
     return short
