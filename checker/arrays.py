@@ -3,7 +3,7 @@
 Many passes expand "group i has count[i] items starting at start[i]" into
 flat index arrays without a Python loop; `within` and `ranges` are that
 expansion, and `products` every pair of two such groups, written once. `first_least` picks each group's least value
-without sorting. This module holds no geometry.
+without sorting. `all_columns` is numpy's ``all(axis=1)`` for a few columns. This module holds no geometry.
 """
 
 from __future__ import annotations
@@ -15,6 +15,17 @@ def within(count: np.ndarray) -> np.ndarray:
     """0 .. count[i] - 1 for every group i, concatenated: (sum(count),)."""
     count = np.asarray(count, np.int64)
     return np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+
+
+def all_columns(mask: np.ndarray) -> np.ndarray:
+    """(n,) each row of a boolean (n, k) ``mask`` all true, for a few columns
+    (a box test's three axes): the columns ANDed, the same answer as
+    ``np.all(mask, axis=1)``, which costs ten times as much there
+    (numpy's reduction, row by row)."""
+    out = mask[:, 0]
+    for k in range(1, mask.shape[1]):
+        out = out & mask[:, k]
+    return out
 
 
 def ranges(start: np.ndarray, count: np.ndarray) -> np.ndarray:

@@ -35,7 +35,7 @@ from functools import cached_property
 
 import numpy as np
 
-from cablecheck.checker.arrays import ranges, within
+from cablecheck.checker.arrays import all_columns, ranges, within
 
 LEAF_SIZE = 8
 """Triangles per leaf of a part's tree."""
@@ -219,7 +219,7 @@ class TriangleForest:
         out_q: list[np.ndarray] = []
         out_t: list[np.ndarray] = []
         while len(q):
-            hit = np.all((self.node_lo[n] <= hi[q]) & (lo[q] <= self.node_hi[n]), axis=1)
+            hit = all_columns((self.node_lo[n] <= hi[q]) & (lo[q] <= self.node_hi[n]))
             q, n = q[hit], n[hit]
             leaf = self.left[n] < 0
             if leaf.any():
@@ -234,7 +234,7 @@ class TriangleForest:
         if not out_q:
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
         rq, rt = np.concatenate(out_q), np.concatenate(out_t)
-        ok = np.all((self.tri_lo[rt] <= hi[rq]) & (lo[rq] <= self.tri_hi[rt]), axis=1)
+        ok = all_columns((self.tri_lo[rt] <= hi[rq]) & (lo[rq] <= self.tri_hi[rt]))
         return rq[ok], rt[ok]
 
 
@@ -316,7 +316,7 @@ def aabb_pairs(lo: np.ndarray, hi: np.ndarray, margin: float = 0.0) -> tuple[np.
     a = np.repeat(np.arange(n), cnt)
     b = a + 1 + within(cnt)
     i, j = order[a], order[b]
-    ok = np.all((lo[i, 1:] <= hi[j, 1:]) & (lo[j, 1:] <= hi[i, 1:]), axis=1)
+    ok = all_columns((lo[i, 1:] <= hi[j, 1:]) & (lo[j, 1:] <= hi[i, 1:]))
     i, j = i[ok], j[ok]
     return np.minimum(i, j), np.maximum(i, j)
 
@@ -462,7 +462,7 @@ def assembly_pairs(asm: Assemblies, lo: np.ndarray, hi: np.ndarray, a_lo: np.nda
         return row, child
 
     def overlap(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        return np.all((node_lo[x] <= node_hi[y]) & (node_lo[y] <= node_hi[x]), axis=1)
+        return all_columns((node_lo[x] <= node_hi[y]) & (node_lo[y] <= node_hi[x]))
 
     out_i: list[np.ndarray] = []
     out_j: list[np.ndarray] = []

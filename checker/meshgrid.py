@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from cablecheck.checker.arrays import all_columns
 from cablecheck.checker.closest import point_triangle, row_norm
 from cablecheck.checker.meshnearest import faces_within, mesh_nearest, mesh_sign
 
@@ -80,7 +81,7 @@ class BoundGrid:
         if self.values is None:
             self._allocate()
         ijk = np.floor((p - self.origin) / self.h).astype(np.int64)
-        inside = np.all((ijk >= 0) & (ijk < self.dims), axis=1)
+        inside = all_columns((ijk >= 0) & (ijk < self.dims))
         ijk = ijk[inside]
         return inside, np.ravel_multi_index(ijk.T, self.dims), self.origin + (ijk + 0.5) * self.h
 

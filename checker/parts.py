@@ -63,7 +63,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from cablecheck.checker.arrays import ranges
+from cablecheck.checker.arrays import all_columns, ranges
 from cablecheck.checker.bvh import aabb_pairs, assembly_pairs, obb_overlap, prefix_hits, transformed_aabb
 from cablecheck.checker.closest import cross, row_norm
 from cablecheck.checker.convex import CONVEX, convex_pairs, support
@@ -97,7 +97,7 @@ def candidate_pairs(parts: PartSet, placed: Placement, clearance: float,
             return empty
         lo = placed.lo[f].min(axis=0) - clearance
         hi = placed.hi[f].max(axis=0) + clearance
-        asm_hit = np.all((placed.asm_lo <= hi) & (lo <= placed.asm_hi), axis=1)
+        asm_hit = all_columns((placed.asm_lo <= hi) & (lo <= placed.asm_hi))
         keep = fin & (focus | prefix_hits(parts.assemblies, asm_hit))
     if assemblies:
         i, j = assembly_pairs(parts.assemblies, placed.lo, placed.hi, placed.asm_lo, placed.asm_hi,

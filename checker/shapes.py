@@ -53,7 +53,7 @@ import numpy as np
 
 # The modules below do the work; their public names are re-exported here,
 # where the rest of the checker has always imported them from.
-from cablecheck.checker.arrays import ranges
+from cablecheck.checker.arrays import all_columns, ranges
 from cablecheck.checker.meshdata import MeshData, sd_mesh, sd_mesh_face_plane
 from cablecheck.checker.primitives import (
     ShapeType,
@@ -378,7 +378,7 @@ def _in_boxes(p: np.ndarray, lo: np.ndarray, hi: np.ndarray, limit: float) -> tu
     pi = np.repeat(np.arange(len(lo)), count)
     ni = order[ranges(first, count)]
     q = p[ni]
-    keep = np.all((q >= lo[pi] - limit) & (q <= hi[pi] + limit), axis=1)
+    keep = all_columns((q >= lo[pi] - limit) & (q <= hi[pi] + limit))
     pi, ni = pi[keep], ni[keep]
     o = np.lexsort((ni, pi))
     return pi[o], ni[o]

@@ -46,7 +46,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cablecheck.checker.arrays import ranges
+from cablecheck.checker.arrays import all_columns, ranges
 from cablecheck.checker.bvh import obb_overlap, prefix_hits, transformed_aabb
 from cablecheck.checker.partset import PROBE_DEPTH, TOUCH, PartSet, Placement
 from cablecheck.checker.shapes import signed_distance, signed_distance_value_batch
@@ -146,7 +146,7 @@ def sweep(parts: PartSet, placed: Placement, moving: np.ndarray, direction: np.n
     s_c, s_h = 0.5 * (s_lo + s_hi), 0.5 * (s_hi - s_lo)
     # 2. assemblies, then part OBBs
     w_lo, w_hi = transformed_aabb(s_lo[None], s_hi[None], f[None], np.zeros((1, 3)))
-    asm_hit = np.all((placed.asm_lo <= w_hi) & (w_lo <= placed.asm_hi), axis=1)
+    asm_hit = all_columns((placed.asm_lo <= w_hi) & (w_lo <= placed.asm_hi))
     cand = np.flatnonzero(stat & ~parts.plane & prefix_hits(parts.assemblies, asm_hit))
     k = len(cand)
     if k:
@@ -187,7 +187,7 @@ def sweep(parts: PartSet, placed: Placement, moving: np.ndarray, direction: np.n
     over[f_part[now][cross]] = True
     start_lo, start_hi = placed.lo[mv].min(axis=0), placed.hi[mv].max(axis=0)
     near = cand[~over[cand]]
-    near = near[np.all((placed.lo[near] <= start_hi) & (start_lo <= placed.hi[near]), axis=1)]
+    near = near[all_columns((placed.lo[near] <= start_hi) & (start_lo <= placed.hi[near]))]
     over |= _contained(parts, placed, mv, near)
     # 4b. first contact
     t_best = np.full(len(parts.names), np.inf)
@@ -434,7 +434,7 @@ def probes_inside_batch(parts: PartSet, placed: Placement, a: np.ndarray, b: np.
         row_hi = np.full((len(a), 3), np.inf)
         row_lo[rows[box]], row_hi[rows[box]] = lo - grow[:, None], hi + grow[:, None]
         local = parts.probes[idx]
-        near = np.all((local >= row_lo[row]) & (local <= row_hi[row]), axis=1)
+        near = all_columns((local >= row_lo[row]) & (local <= row_hi[row]))
         row, idx = row[near], idx[near]
         if not len(row):
             return out
@@ -443,7 +443,7 @@ def probes_inside_batch(parts: PartSet, placed: Placement, a: np.ndarray, b: np.
     if shift is not None:
         world = world + np.asarray(shift, float)[row][:, None, :]
     pts = placed.local(pb, world)[:, 0]
-    inbox = np.all((pts >= parts.lo[pb]) & (pts <= parts.hi[pb]), axis=1) | parts.plane[pb]
+    inbox = all_columns((pts >= parts.lo[pb]) & (pts <= parts.hi[pb])) | parts.plane[pb]
     row, pb, pts = row[inbox], pb[inbox], pts[inbox]
     if not len(row):
         return out
@@ -479,7 +479,7 @@ def probes_inside(parts: PartSet, placed: Placement, a: int, b: int,
     pts = placed.local(np.full(1, b), world)[0]
     tol = float(parts.touch(np.array([a]), np.array([b]))[0])
     if not parts.plane[b]:
-        inbox = np.all((pts >= parts.lo[b]) & (pts <= parts.hi[b]), axis=1)
+        inbox = all_columns((pts >= parts.lo[b]) & (pts <= parts.hi[b]))
         pts = pts[inbox]
     if not len(pts):
         return None

@@ -59,7 +59,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cablecheck.checker.arrays import within
+from cablecheck.checker.arrays import all_columns, within
 from cablecheck.checker.cable import arc_length, element_pairs_within, self_pair_window
 from cablecheck.checker.closest import row_norm, segment_segment, segment_segment_apart
 from cablecheck.checker.interference.structure import PartTable
@@ -316,7 +316,7 @@ class WearMap:
         a, b = local(points, poses, slice(None))
         rad = self.radii[cab[pair]][row]
         grow = (rad + self.clearance)[:, None]
-        keep = np.all((np.minimum(a, b) <= self._tab.hi[k] + grow) & (np.maximum(a, b) >= self._tab.lo[k] - grow), axis=1)
+        keep = all_columns((np.minimum(a, b) <= self._tab.hi[k] + grow) & (np.maximum(a, b) >= self._tab.lo[k] - grow))
         ends = np.cumsum(steps * n_el)
         for g, (c, name, idx) in enumerate(groups):             # the few pairs with an attachment window
             excluded = self._excluded.get((c, name))

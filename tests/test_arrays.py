@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from helpers import examples
+from hypothesis import given, settings, strategies as st
 
 from cablecheck.checker import arrays
 from cablecheck.checker.arrays import ranges, within
@@ -57,3 +58,13 @@ def test_first_least_is_each_groups_first_least_value_in_group_order(keys, state
     value[7] = np.nan
     assert np.array_equal(arrays.first_least(state, key, value, keys), _sorted_first_least(state, key, value))
     assert len(arrays.first_least(state[:0], key[:0], value[:0], keys)) == 0
+
+
+@settings(max_examples=examples(30), deadline=None)
+@given(rows=st.integers(0, 40), cols=st.integers(1, 4), seed=st.integers(0, 2**32 - 1))
+def test_all_columns_is_numpys_all_over_rows(rows, cols, seed):
+    from cablecheck.checker.arrays import all_columns
+    mask = np.random.default_rng(seed).random((rows, cols)) < 0.8
+    got = all_columns(mask)
+    assert got.dtype == bool and got.shape == (rows,)
+    assert np.array_equal(got, np.all(mask, axis=1))

@@ -28,6 +28,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from cablecheck.checker.arrays import all_columns
 from cablecheck.checker.closest import row_norm
 from cablecheck.checker.interference.broad import chunk_part_pairs
 from cablecheck.checker.interference.discrete import DenseStates
@@ -270,7 +271,7 @@ def segments_within(tab: PartTable, pk: np.ndarray, a: np.ndarray, b: np.ndarray
     :func:`segment_distances`)."""
     limit = np.broadcast_to(np.asarray(limit, float), (len(pk),))
     thr = (rad + limit)[:, None]
-    box = np.all((np.maximum(a, b) >= tab.lo[pk] - thr) & (np.minimum(a, b) <= tab.hi[pk] + thr), axis=1)
+    box = all_columns((np.maximum(a, b) >= tab.lo[pk] - thr) & (np.minimum(a, b) <= tab.hi[pk] + thr))
     idx = np.flatnonzero(box)
     half = 0.5 * row_norm(b[idx] - a[idx])
     mid = point_distances(tab, pk[idx], 0.5 * (a[idx] + b[idx]), False, limit[idx] + half + rad[idx])

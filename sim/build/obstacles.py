@@ -18,6 +18,7 @@ import numpy as np
 
 from cablecheck.build.modelread import mesh_arrays
 from cablecheck.build.startframes import Frames
+from cablecheck.checker.arrays import all_columns
 from cablecheck.checker.shapes import Shape, ShapeType, least_signed_distance, mesh_shape
 from cablecheck.scene.frames import euler_matrix
 from cablecheck.scene.mjcf import SHAPES, base_model, colliding_parts
@@ -103,7 +104,7 @@ class Obstacles:
         comes within the radius), which is all `cablecheck.build.route` asks."""
         def depth(points: np.ndarray) -> np.ndarray:
             lo, hi = points.min(axis=0) - radius, points.max(axis=0) + radius
-            near = np.flatnonzero(np.all((self.lo <= hi) & (self.hi >= lo), axis=1))
+            near = np.flatnonzero(all_columns((self.lo <= hi) & (self.hi >= lo)))
             shapes = [self.shape(k) for k in near.tolist()]
             return radius - least_signed_distance(shapes, self.rot[near], self.pos[near], points, limit=radius,
                                                   bounds=(self.lo[near], self.hi[near]))

@@ -26,6 +26,7 @@ import numpy as np
 from cablecheck.build.cableplan import CablePlan
 from cablecheck.build.obstacles import Obstacles
 from cablecheck.build.startframes import Frames
+from cablecheck.checker.arrays import all_columns
 from cablecheck.checker.shapes import segment_signed_distance, signed_distance
 from cablecheck.scene.errors import fmt
 from cablecheck.scene.records import Scene
@@ -47,7 +48,7 @@ def route_warnings(scene: Scene, frames: Frames, meshes: dict, plans: list[Cable
         free = np.ones(len(pts), bool) if not len(held) else \
             (np.abs(s[:, None] - held[None, :]) > zone * radius).all(axis=1)
         lo, hi = pts.min(axis=0), pts.max(axis=0)
-        near = np.flatnonzero(np.all((obstacles.lo <= hi) & (obstacles.hi >= lo), axis=1))
+        near = np.flatnonzero(all_columns((obstacles.lo <= hi) & (obstacles.hi >= lo)))
         free_el = free[:-1] & free[1:]
         for k in near.tolist():     # the parts whose boxes meet the cable's: a few, once per scene
             local = (pts - obstacles.pos[k]) @ obstacles.rot[k]
