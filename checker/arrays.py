@@ -3,7 +3,8 @@
 Many passes expand "group i has count[i] items starting at start[i]" into
 flat index arrays without a Python loop; `within` and `ranges` are that
 expansion, and `products` every pair of two such groups, written once. `first_least` picks each group's least value
-without sorting. `all_columns` is numpy's ``all(axis=1)`` for a few columns. This module holds no geometry.
+without sorting. `all_columns`, `max_columns` and `min_columns` are numpy's ``all``, ``max`` and ``min``
+over ``axis=1`` for a few columns. This module holds no geometry.
 """
 
 from __future__ import annotations
@@ -25,6 +26,24 @@ def all_columns(mask: np.ndarray) -> np.ndarray:
     out = mask[:, 0]
     for k in range(1, mask.shape[1]):
         out = out & mask[:, k]
+    return out
+
+
+def max_columns(x: np.ndarray) -> np.ndarray:
+    """(n,) each row's largest of an (n, k) array's few columns: ``np.max(x,
+    axis=1)``'s values (NaN where a row holds one), at a fifth of its cost
+    there (:func:`all_columns`)."""
+    out = x[:, 0]
+    for k in range(1, x.shape[1]):
+        out = np.maximum(out, x[:, k])
+    return out
+
+
+def min_columns(x: np.ndarray) -> np.ndarray:
+    """(n,) each row's least of an (n, k) array's few columns (:func:`max_columns`)."""
+    out = x[:, 0]
+    for k in range(1, x.shape[1]):
+        out = np.minimum(out, x[:, k])
     return out
 
 

@@ -20,6 +20,7 @@ from enum import Enum
 
 import numpy as np
 
+from cablecheck.checker.arrays import max_columns, min_columns
 from cablecheck.checker.closest import row_norm
 
 
@@ -52,7 +53,7 @@ def _sd_box_value(h: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     """Signed distance to boxes without the closest point: (d, q, inside)."""
     q = np.abs(p) - h
     outside = row_norm(np.maximum(q, 0.0))
-    inside = np.max(q, axis=1)
+    inside = max_columns(q)
     return np.where(inside > 0.0, outside, inside), q, inside
 
 
@@ -75,8 +76,8 @@ def _sd_box_face_plane(h: np.ndarray, p: np.ndarray) -> np.ndarray:
     the nearest face *plane*, which underestimates near edges and corners.
     """
     q = np.abs(p) - h
-    inside = np.max(q, axis=1)
-    return np.where(inside > 0.0, np.min(np.abs(q), axis=1), inside)
+    inside = max_columns(q)
+    return np.where(inside > 0.0, min_columns(np.abs(q)), inside)
 
 
 def _sd_sphere(rad: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -211,7 +212,7 @@ def sd_ellipsoid(e: np.ndarray, p: np.ndarray, u0: np.ndarray | None = None) -> 
     rest = 1.0 - np.sum(np.where(pole, 0.0, x / es) ** 2, axis=1)
     use_eq = (u == 0.0) | (rest >= 0.25)
     yp = np.where(pole, ys, 0.0)
-    ymax = np.max(yp, axis=1)
+    ymax = max_columns(yp)
     dirn = _unit_or(yp / np.where(ymax > 0.0, ymax, 1.0)[:, None], _EZ)
     xeq = (es[:, 2] * np.sqrt(np.maximum(rest, 0.0)))[:, None] * dirn
     x = np.where(use_eq[:, None] & pole, xeq, x)

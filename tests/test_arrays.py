@@ -68,3 +68,14 @@ def test_all_columns_is_numpys_all_over_rows(rows, cols, seed):
     got = all_columns(mask)
     assert got.dtype == bool and got.shape == (rows,)
     assert np.array_equal(got, np.all(mask, axis=1))
+
+
+@settings(max_examples=examples(30), deadline=None)
+@given(rows=st.integers(0, 40), cols=st.integers(1, 4), seed=st.integers(0, 2**32 - 1), nan=st.booleans())
+def test_max_and_min_columns_are_numpys_over_rows(rows, cols, seed, nan):
+    from cablecheck.checker.arrays import max_columns, min_columns
+    x = np.random.default_rng(seed).normal(size=(rows, cols))
+    if nan and rows:
+        x[rows // 2, cols - 1] = np.nan         # propagated, as numpy's max and min do
+    assert np.array_equal(max_columns(x), np.max(x, axis=1), equal_nan=True)
+    assert np.array_equal(min_columns(x), np.min(x, axis=1), equal_nan=True)
