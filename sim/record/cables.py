@@ -136,16 +136,16 @@ class CableFrames:
         self.built, self.unit = built, unit
         self._index = {c.name: i for i, c in enumerate(built.cables)}
         self._names = [c.name for c in built.cables]
-        self._element_s = [0.5 * (c.rest_s[1:] + c.rest_s[:-1]) for c in built.cables]
-        self._near = [max(2.0 * c.element_length, 3.0 * c.radius) for c in built.cables]
+        element_s = [0.5 * (c.rest_s[1:] + c.rest_s[:-1]) for c in built.cables]
+        # how far along its cable a mark colours elements, each cable's
+        self._near = np.array([max(2.0 * c.element_length, 3.0 * c.radius) for c in built.cables], float)
         # every cable's element places in one array, and laid apart along one axis to search them all at once
-        sizes = np.array([len(e) for e in self._element_s], np.int64)
+        sizes = np.array([len(e) for e in element_s], np.int64)
         self._ends = np.cumsum(sizes)
         self._starts = self._ends - sizes
-        self._all_s = np.concatenate(self._element_s) if self._element_s else np.zeros(0)
-        self._near_arr = np.array(self._near, float)
-        length = np.array([e[-1] - e[0] if len(e) else 0.0 for e in self._element_s]) + 4.0 * self._near_arr + 1.0
-        first = np.array([e[0] if len(e) else 0.0 for e in self._element_s])
+        self._all_s = np.concatenate(element_s) if element_s else np.zeros(0)
+        length = np.array([e[-1] - e[0] if len(e) else 0.0 for e in element_s]) + 4.0 * self._near + 1.0
+        first = np.array([e[0] if len(e) else 0.0 for e in element_s])
         self._shift = np.cumsum(length) - length - first
         self._flat_s = self._all_s + np.repeat(self._shift, sizes)
         self._pad = 1e-6 * (1.0 + float(np.abs(self._flat_s).max(initial=0.0)))
@@ -200,14 +200,14 @@ class CableFrames:
         first = self._starts[cab]
         count = self._ends[cab] - first
         lo = np.where(whole, first, first + np.maximum(
-            np.searchsorted(self._flat_s, s + self._shift[cab] - self._near_arr[cab] - self._pad, "left") - first, 0))
+            np.searchsorted(self._flat_s, s + self._shift[cab] - self._near[cab] - self._pad, "left") - first, 0))
         hi = np.where(whole, first + count, np.minimum(
-            np.searchsorted(self._flat_s, s + self._shift[cab] + self._near_arr[cab] + self._pad, "right"),
+            np.searchsorted(self._flat_s, s + self._shift[cab] + self._near[cab] + self._pad, "right"),
             first + count))
         n = np.maximum(hi - lo, 0)
         row = np.repeat(np.arange(len(cab)), n)
         el = ranges(lo, n)
-        ok = whole[row] | (np.abs(self._all_s[el] - s[row]) <= self._near_arr[cab[row]])
+        ok = whole[row] | (np.abs(self._all_s[el] - s[row]) <= self._near[cab[row]])
         np.maximum.at(out, el[ok], rank[row[ok]])
         return out
 
