@@ -12,7 +12,7 @@ from buildscenes import slider_scene
 from hypothesis import given
 from strategies import coords
 
-from cablecheck.build.built import CABLE_PREFIX
+from cablecheck.build.built import CABLE_PREFIX, end_roll_body
 from cablecheck.build.cablephysics import contact_time_constant, edge_time_constant
 from cablecheck.build.mjspec import PLANE_GRID, SIM_MARGIN_FRACTION, euler_quat, part_size, set_step
 from cablecheck.build.stages import build
@@ -142,3 +142,54 @@ def test_a_scene_whose_names_hold_xml_characters_runs_and_records(tmp_path):
     pairs = {(e["a"], e["b"]) for e in report["events"]}
     assert (cable, part) in pairs and {n for pair in pairs for n in pair} == {cable, part}
     assert (tmp_path / "r.rrd").stat().st_size > 0
+
+
+_CLASSED = """<mujoco>
+  <default>
+    <default class="robot">
+      <joint limited="true" damping="50"/>
+      <geom condim="4" solref="0.01 1" solimp="0.99 0.99 0.01" friction="2 0.1 0.01" group="3"/>
+    </default>
+  </default>
+  <worldbody>
+    <body name="stand" pos="0 0 0.2" {cls}>
+      <geom name="column" type="box" size="0.03 0.03 0.1"/>
+      <body name="link" pos="0 0 0.15">
+        <joint name="j" type="hinge" axis="0 0 1" range="-90 90"/>
+        <geom name="arm" type="capsule" fromto="0 0 0 0.25 0 0" size="0.02"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>"""
+
+
+@pytest.mark.parametrize("detect", [False, True])
+def test_what_the_scene_adds_to_an_mjcf_body_ignores_its_childclass(tmp_path, detect):
+    """A clamped end's roll hinge and a part on a link whose body has a
+    childclass are built as on the same link without one: a class limiting
+    its joints without a range (MuJoCo refuses the hinge: range 0 0) or
+    damping them, or giving its geoms their own contact parameters, reaches
+    none of what the scene adds. (gymnasium-robotics' kitchen Franka failed
+    to compile; Fetch's gripper class gave a tool part condim 4.)"""
+    def built(cls: str):
+        (tmp_path / "arm.xml").write_text(_CLASSED.format(cls=cls))
+        data = {"scene": {"name": "t", "units": "m", "duration": 0.05, "settle": 0.05, "mjcf": "arm.xml"},
+                "effects": {"contact": ["cable-structure"]},
+                "parts": [{"name": "tool", "body": "link", "shape": "box", "size": [0.02, 0.02, 0.02],
+                           "pos": [0.3, 0, 0]}],
+                "cables": [{"name": "hose", "radius": 0.005, "start": {"pos": [-0.2, 0, 0.3]},
+                            "end": {"body": "link", "pos": [0.2, 0, 0.04]}, "length": 0.6, "segments": 16}]}
+        b = build(parse_scene(data, tmp_path / "s.toml"))
+        return b.detect if detect else b.model
+
+    classed, plain = built('childclass="robot"'), built("")
+    assert classed.jnt_limited[classed.joint("j").id] == 1           # the model's own joint keeps its class
+    assert classed.geom_condim[classed.geom("arm").id] == 4
+    roll = classed.joint(end_roll_body("hose")).id
+    assert roll == plain.joint(end_roll_body("hose")).id
+    assert classed.jnt_limited[roll] == plain.jnt_limited[roll] == 0
+    assert classed.dof_damping[classed.jnt_dofadr[roll]] == plain.dof_damping[plain.jnt_dofadr[roll]] == 0.0
+    g, h = classed.geom("tool").id, plain.geom("tool").id
+    for field in ("geom_condim", "geom_solref", "geom_solimp", "geom_friction", "geom_group", "geom_margin",
+                  "geom_contype", "geom_conaffinity", "geom_priority", "geom_solmix", "geom_gap"):
+        assert np.array_equal(getattr(classed, field)[g], getattr(plain, field)[h]), field

@@ -224,7 +224,9 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
         parent = spec.worldbody if part.body == "world" else spec.body(part.body)
         contype, conaff = part_bits(scene, bits, detect, part.keepout)
         pos = np.asarray(part.pos, float) - (origin if part.body == "world" else 0.0)
-        common = dict(name=part.name, pos=list(pos), quat=list(euler_quat(part.euler)),
+        # the main class, not the body's childclass: a part on an mjcf link keeps cablecheck's contact
+        # parameters, not the robot's (Fetch's gripper class gives condim 4, solref and solimp)
+        common = dict(default=spec.default, name=part.name, pos=list(pos), quat=list(euler_quat(part.euler)),
                       contype=contype, conaffinity=conaff, margin=margin,
                       rgba=[0.9, 0.5, 0.1, 0.3] if part.keepout else [0.6, 0.6, 0.65, 1.0])
         if part.shape == "mesh":
@@ -356,11 +358,13 @@ def _add_end_roll(spec: mujoco.MjSpec, plan: CablePlan, frames: Frames) -> None:
     name = end_roll_body(plan.cable.name)
     pos = frames.to_local(body, plan.routed[end])
     axis = pos - frames.to_local(body, plan.routed[inner])
-    roll = parent.add_body(name=name, pos=list(pos), gravcomp=1.0)
+    # the main class, not the body's childclass: a link's class may limit its joints (range 0 0,
+    # which MuJoCo refuses) or damp them (Fetch's: 50)
+    roll = parent.add_body(default=spec.default, name=name, pos=list(pos), gravcomp=1.0)
     roll.explicitinertial = True
     roll.mass = ROLL_MASS
     roll.inertia = [ROLL_MASS * plan.cable.radius ** 2] * 3
-    roll.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(axis / np.linalg.norm(axis)),
+    roll.add_joint(default=spec.default, name=name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(axis / np.linalg.norm(axis)),
                    armature=BASE_ARMATURE)
     flex = next(f for f in spec.flexes if f.name == f"{CABLE_PREFIX}{plan.cable.name}")
     bodies = list(flex.vertbody)
