@@ -348,6 +348,69 @@ def test_many_states_and_pairs_at_once_answer_as_one_by_one(drawn, k):
     assert gaps.clear(gaps.moves(states).T, states).tolist() == one_by_one
 
 
+def _rigid(rng, amount: float) -> np.ndarray:
+    out = np.eye(4)
+    out[:3, :3] = _random_rotation(rng)
+    out[:3, 3] = rng.uniform(-amount, amount, 3)
+    return out
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_pair_its_groups_boxes_prove_apart_has_no_record(seed):
+    """Brute force against the part-part check: three rigid groups of
+    drawn parts (boxes, spheres, cylinders, capsules, coarse meshes; a
+    floor plane beside the first), each carried by its own drawn rigid
+    motion from a start far apart to states near each other. With the
+    parts' own relative-move and box tests switched off, the groups' boxes
+    alone prove many pairs clear that the world moves do not, and no pair
+    proven has a record at its state; with everything on, the groups never
+    prove fewer than the parts' tests alone, and the states at once answer
+    as each alone."""
+    rng = np.random.default_rng(seed)
+    kinds = [ShapeType.BOX, ShapeType.SPHERE, ShapeType.CYLINDER, ShapeType.CAPSULE, "mesh"]
+    clearance = 0.05
+    shapes, group, local = [Shape(ShapeType.PLANE, [])], [0], [np.eye(4)]
+    local[0][2, 3] = -2.0                                    # a floor under the first group
+    for g in range(3):
+        for _ in range(rng.integers(2, 6)):
+            shapes.append(_shape(kinds[rng.integers(5)], rng.uniform(0.03, 0.15, 3)))
+            group.append(g)
+            local.append(_rigid(rng, 0.3))
+    group, local = np.array(group), np.array(local)
+    n = len(shapes)
+    ps = PartSet.build([f"p{k}" for k in range(n)], shapes, tolerance=1e-2)
+    i, j = np.triu_indices(n, 1)
+    keep = group[i] != group[j]
+    i, j = i[keep], j[keep]
+
+    def placed(carry: list[np.ndarray]) -> np.ndarray:    # one rigid motion per group
+        return np.stack(carry)[group] @ local
+
+    apart = [np.eye(4), np.eye(4), np.eye(4)]
+    apart[1][0, 3], apart[2][0, 3] = 30.0, -30.0
+    start = placed(apart)
+    states = np.stack([placed([_rigid(rng, 0.1), _rigid(rng, rng.uniform(0.3, 2.0)), _rigid(rng, rng.uniform(0.3, 2.0))])
+                       for _ in range(40)])
+
+    def gaps(groups: bool, alone: bool) -> PartPairGaps:
+        g = PartPairGaps(_radius(ps), clearance, PartSolids(ps.lo, ps.hi, ps.axial, ps.error, group if groups else None))
+        g.start(start, (i, j), part_pair_bounds(ps, ps.place(start), i, j))
+        if alone:               # the parts' own tests proving nothing: what is proven, the groups proved
+            g._relative_moves = lambda poses, rows: np.full((len(rows), len(poses)), np.inf)
+            g._separated = lambda poses, rows: np.zeros((len(rows), len(poses)), bool)
+        return g
+
+    by_groups, by_moves = gaps(True, True).clear_pairs(states), gaps(False, True).clear_pairs(states)
+    assert by_groups.sum() > by_moves.sum() + 20
+    for s, pose in enumerate(states):
+        found = {frozenset((r.a, r.b)) for r in check_parts(ps, ps.place(pose), clearance)}
+        assert not found & {frozenset((f"p{i[k]}", f"p{j[k]}")) for k in np.flatnonzero(by_groups[:, s])}
+    full = gaps(True, False)
+    ok = full.clear_pairs(states)
+    assert not (gaps(False, False).clear_pairs(states) & ~ok).any()
+    assert np.array_equal(ok, np.stack([full.clear_pairs(p[None])[:, 0] for p in states], axis=1))
+
+
 # ---- whole runs with moving meshes: the skip rule against checking every step in full ----
 
 _MESH_FILES = {"torus.stl": lambda: trimesh.creation.torus(30.0, 6.0, major_sections=32, minor_sections=12),

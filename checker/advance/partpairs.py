@@ -85,12 +85,40 @@ class PartSolids:
         error: (P,) the part's tessellation error, held off the turned
             bound as a margin (the part-part check measures curved parts
             on their true shapes, never above the true distance).
+        group: (P,) int, the rigid body each part rides on (parts of one
+            group never move relative to each other), or None: the
+            condition then tests no group's box (:class:`PartPairGaps`).
     """
 
     lo: np.ndarray
     hi: np.ndarray
     axial: np.ndarray
     error: np.ndarray
+    group: np.ndarray | None = None
+
+
+def _boxes_apart(half: np.ndarray, mid: np.ndarray, frame: np.ndarray, i: np.ndarray, j: np.ndarray,
+                 poses: np.ndarray, mu: float, clearance: float, plane: np.ndarray | None = None) -> np.ndarray:
+    """(n, S): boxes i and j (n,) (half extents and centres (B, 3) in the
+    frames of parts ``frame`` (B,); ``plane`` (B,) marks half-spaces) more
+    than ``clearance`` apart on a box axis (:func:`box_bounds`) at each of
+    poses (S, P, 4, 4), past a rounding margin: ``mu`` plus 1e-9 of the
+    boxes' extent from the origin (what the part-part check's own rounding
+    allowance grows with)."""
+    n_s, n = len(poses), len(i)
+    both = np.concatenate([i, j])
+    placed = poses[:, frame[both]]                                     # (S, 2n, 4, 4)
+    rot = placed[..., :3, :3].reshape(-1, 3, 3)                        # (S * 2n, 3, 3), state-major
+    pos = placed[..., :3, 3].reshape(-1, 3)
+    c = np.einsum("nij,nj->ni", rot, np.tile(mid[both], (n_s, 1))) + pos
+    first = (np.arange(n_s)[:, None] * 2 * n + np.arange(n)[None]).ravel()     # state-major rows
+    second = first + n
+    ti, tj = np.tile(i, n_s), np.tile(j, n_s)
+    flat = np.zeros(len(half), bool) if plane is None else plane
+    sep = box_bounds(half, flat, ti, tj, (rot[first], c[first], pos[first]), (rot[second], c[second], pos[second]))
+    extent = np.abs(c).max(axis=1) + half[np.tile(both, n_s)].max(axis=1)
+    margin = mu + 1e-9 * (extent[first] + extent[second])
+    return (sep - clearance > margin).reshape(n_s, n).T
 
 
 def _turned_z(v: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
@@ -145,6 +173,52 @@ class PairStart:
     s0: np.ndarray
     c0: np.ndarray
     q0_sin: np.ndarray
+    groups: "GroupBoxes | None" = None
+
+
+@dataclass(frozen=True, slots=True)
+class GroupBoxes:
+    """Each rigid group's box at a start: the box of its boxed parts' boxes
+    (not a plane's, not a part without a box: those pairs are left to the
+    other tests), in the frame of one of them (``ref``), which carries it
+    (the parts of a group keep their relative poses).
+
+    Attributes:
+        of: (P,) each part's group index (into the arrays below).
+        inside: (P,) the part's box is in its group's.
+        ref: (G,) the part whose frame holds the group's box.
+        half, mid: (G, 3) the box's half extents and centre in that frame.
+    """
+
+    of: np.ndarray
+    inside: np.ndarray
+    ref: np.ndarray
+    half: np.ndarray
+    mid: np.ndarray
+
+
+def group_boxes(group: np.ndarray, poses: np.ndarray, corners: np.ndarray, boxed: np.ndarray) -> GroupBoxes:
+    """:class:`GroupBoxes` of parts in groups ``group`` (P,) at poses (P, 4, 4),
+    from each part's box corners (P, 8, 3) in its frame (``boxed`` (P,):
+    the part has a box)."""
+    _, of = np.unique(group, return_inverse=True)
+    n_g = int(of.max()) + 1 if len(of) else 0
+    idx = np.flatnonzero(boxed)
+    ref = np.zeros(n_g, np.int64)
+    ref[of[idx[::-1]]] = idx[::-1]                       # each group's first boxed part (0: none)
+    # the boxed parts' corners in their group's reference frame: R_ref^T (R_p c + t_p - t_ref)
+    p = poses[idx]
+    r_ref, t_ref = poses[ref[of[idx]], :3, :3], poses[ref[of[idx]], :3, 3]
+    world = np.einsum("pij,pkj->pki", p[:, :3, :3], corners[idx]) + p[:, None, :3, 3]
+    local = np.einsum("pji,pkj->pki", r_ref, world - t_ref[:, None, :])
+    lo = np.zeros((n_g, 3))
+    hi = np.zeros((n_g, 3))
+    if len(idx):
+        lo[of[idx]] = np.inf
+        hi[of[idx]] = -np.inf
+        np.minimum.at(lo, of[idx], local.min(axis=1))
+        np.maximum.at(hi, of[idx], local.max(axis=1))
+    return GroupBoxes(of, np.asarray(boxed, bool), ref, 0.5 * (hi - lo), 0.5 * (hi + lo))
 
 
 class PartPairGaps:
@@ -188,6 +262,11 @@ class PartPairGaps:
     a state where its boxes (:class:`PartSolids`, holding the part-part
     check's own boxes) are more than the clearance apart on a box axis
     (:func:`box_bounds`): the check's oriented-box test rejects it there.
+    Before those, with the parts' rigid groups known (``solids.group``),
+    every pair of two groups whose boxes (:class:`GroupBoxes`, holding
+    their parts' boxes) are that far apart at the state is clear at once:
+    a gripper's two dozen finger capsules against an arm's links and a
+    table are a few group pairs a state, not hundreds of part pairs.
 
     Args:
         part_radius: (P,) bounding radius of each part about its frame's
@@ -203,6 +282,7 @@ class PartPairGaps:
         self._plane = ~np.isfinite(self._rho)
         self._axial = np.zeros(n, bool) if solids is None else np.asarray(solids.axial, bool)
         self._error = np.zeros(n) if solids is None else np.asarray(solids.error, float)
+        self._group = None if solids is None or solids.group is None else np.asarray(solids.group, np.int64)
         self._boxed = np.zeros(n, bool)
         self._corners = np.zeros((n, 8, 3))                            # (P, 8, 3), 0 where unboxed
         if solids is not None:
@@ -248,8 +328,11 @@ class PartPairGaps:
         q0, s0, c0 = self._relative(poses[None], f, m)
         q0, s0, c0 = q0[0], s0[0], c0[0]
         q0_sin = np.stack([q0[:, 1], -q0[:, 0]], axis=1)   # M10 - M01 against Q's top rows
+        groups = None
+        if self._group is not None and len(pi):
+            groups = group_boxes(self._group, poses, self._corners, self._boxed & ~self._plane)
         return PairStart(poses, pi, pj, g_pair, g_rel, mu, bool(np.all(g_pair > 0)), f, m, turn,
-                         q0, s0, c0, q0_sin)
+                         q0, s0, c0, q0_sin, groups)
 
     def stop(self) -> None:
         """Prove nothing until the next :meth:`start`."""
@@ -328,12 +411,34 @@ class PartPairGaps:
         at = self._at
         ok = dp[at.pi] + dp[at.pj] < at.g_pair[:, None]
         rows = np.flatnonzero(~ok.all(axis=1))
+        if len(rows) and at.groups is not None:
+            ok[rows] |= self._groups_apart(poses, rows)
+            rows = rows[~ok[rows].all(axis=1)]
         if len(rows):
             ok[rows] |= self._relative_moves(poses, rows) < at.g_rel[rows, None]
             rows = rows[~ok[rows].all(axis=1) & self._known[at.pi[rows]] & self._known[at.pj[rows]]]
             if len(rows):
                 ok[rows] |= self._separated(poses, rows)
         return ok
+
+    def _groups_apart(self, poses: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """(n, S): pairs ``rows`` whose two groups' boxes (:class:`GroupBoxes`)
+        are more than the clearance apart at poses (S, P, 4, 4) itself, by
+        :meth:`_separated`'s margin: every part's box lies in its group's,
+        so no two of their parts come within the clearance there. Each pair
+        of groups is measured once."""
+        gb = self._at.groups
+        i, j = self._at.pi[rows], self._at.pj[rows]
+        ga, gc = gb.of[i], gb.of[j]
+        out = np.zeros((len(rows), len(poses)), bool)
+        use = np.flatnonzero(gb.inside[i] & gb.inside[j])
+        if not len(use):
+            return out
+        n_g = len(gb.ref)
+        key, inv = np.unique(ga[use] * n_g + gc[use], return_inverse=True)
+        sep = _boxes_apart(gb.half, gb.mid, gb.ref, key // n_g, key % n_g, poses, self._at.mu, self.clearance)
+        out[use] = sep[inv]
+        return out
 
     def _separated(self, poses: np.ndarray, rows: np.ndarray) -> np.ndarray:
         """(n, S): pairs ``rows`` (both parts boxed or planes) whose boxes'
@@ -344,20 +449,8 @@ class PartPairGaps:
         The margin: the start's, plus 1e-9 of the boxes' extent from the
         origin (what the test's own rounding allowance grows with)."""
         i, j = self._at.pi[rows], self._at.pj[rows]
-        n_s, n = len(poses), len(rows)
-        both = np.concatenate([i, j])
-        placed = poses[:, both]                                            # (S, 2n, 4, 4)
-        rot = placed[..., :3, :3].reshape(-1, 3, 3)                        # (S * 2n, 3, 3), state-major
-        pos = placed[..., :3, 3].reshape(-1, 3)
-        c = np.einsum("nij,nj->ni", rot, np.tile(self._mid[both], (n_s, 1))) + pos
-        first = (np.arange(n_s)[:, None] * 2 * n + np.arange(n)[None]).ravel()     # state-major rows
-        second = first + n
-        ti, tj = np.tile(i, n_s), np.tile(j, n_s)
-        sep = box_bounds(self._half, self._plane, ti, tj, (rot[first], c[first], pos[first]),
-                         (rot[second], c[second], pos[second]))
-        extent = np.abs(c).max(axis=1) + self._half[np.tile(both, n_s)].max(axis=1)
-        margin = self._at.mu + 1e-9 * (extent[first] + extent[second])
-        return (sep - self.clearance > margin).reshape(n_s, n).T
+        return _boxes_apart(self._half, self._mid, np.arange(len(self._half)), i, j, poses, self._at.mu,
+                            self.clearance, self._plane)
 
     def clear(self, dp: np.ndarray, poses: np.ndarray) -> np.ndarray:
         """The condition per state (S,) from the parts' moves dp (P, S)

@@ -344,7 +344,9 @@ class StepChecks:
             solid_lo, solid_hi = rigid.lo.copy(), rigid.hi.copy()
             solid_lo[checked] = np.minimum(solid_lo[checked], box_lo[checked])
             solid_hi[checked] = np.maximum(solid_hi[checked], box_hi[checked])
-            solids = PartSolids(solid_lo, solid_hi, rigid.axial, rigid.error)
+            group_of = {g: k for k, g in enumerate(dict.fromkeys(rigid.groups))}
+            solids = PartSolids(solid_lo, solid_hi, rigid.axial, rigid.error,
+                                np.array([group_of[g] for g in rigid.groups], np.int64))
             self.advance = Advancement(offsets, config.spacing * radii, rho, config.clearance,
                                        self.stretch, radii, (box_lo, box_hi), solids,
                                        rest_pieces(self._rest, offsets, config.spacing * radii))
