@@ -2,7 +2,8 @@
 
 Issue 29 item 2. Each arm is a public MuJoCo model shipped with its meshes
 in a PyPI package (robosuite's ``models/assets/robots/<arm>/robot.xml``,
-gymnasium-robotics' Fetch), used as it comes: its visual meshes drawn and
+gymnasium-robotics' Fetch and kitchen Franka: include fragments, wrapped
+as they are), used as it comes: its visual meshes drawn and
 never checked, its collision meshes or primitives as the parts. On each
 the benchmark writes a scene (units m) in a temporary folder:
 
@@ -157,6 +158,14 @@ ZOO: dict[str, Arm] = {
                  fragment={"compiler": {"angle": "radian", "coordinate": "local", "meshdir": "envs/assets/stls/fetch",
                                         "texturedir": "envs/assets/textures"},
                            "assets": "envs/assets/fetch/shared.xml", "body": "envs/assets/fetch/robot.xml"}),
+    "kitchen_franka": Arm("gymnasium_robotics", "envs/assets/kitchen_franka/franka_assets/chain.xml",
+                          ("robot:panda0_joint1", "robot:panda0_joint2", "robot:panda0_joint4", "robot:panda0_joint6",
+                           "robot:panda0_joint7"), (0, -20, -120, 100, 45),
+                          "panda0_link0", ("panda0_link3", "panda0_link5"), "panda0_link6", "panda0_link7",
+                          fragment={"compiler": {"angle": "radian",
+                                                 "meshdir": "envs/assets/kitchen_franka/franka_assets/meshes"},
+                                    "assets": "envs/assets/kitchen_franka/franka_assets/assets.xml",
+                                    "body": "envs/assets/kitchen_franka/franka_assets/chain.xml"}),
 }
 PACKAGES = {"robosuite": "robosuite", "gymnasium_robotics": "gymnasium-robotics"}
 
@@ -236,8 +245,9 @@ def standalone(arm: Arm, root: Path, folder: Path) -> Path:
         return root / arm.model
     f = arm.fragment
     comp = " ".join(f'{k}="{(root / v) if k.endswith("dir") else v}"' for k, v in f["compiler"].items())
-    xml = (f'<mujoco model="{Path(arm.model).parent.name}">\n  <compiler {comp}/>\n'
-           f'  <include file="{root / f["assets"]}"/>\n'
+    # the compiler after the assets: an included file's own relative meshdir (the kitchen Franka's) is overridden
+    xml = (f'<mujoco model="{Path(arm.model).parent.name}">\n'
+           f'  <include file="{root / f["assets"]}"/>\n  <compiler {comp}/>\n'
            f'  <worldbody>\n    <include file="{root / f["body"]}"/>\n  </worldbody>\n</mujoco>\n')
     path = folder / f"{Path(arm.model).parent.name}_standalone.xml"
     path.write_text(xml)

@@ -94,6 +94,25 @@ def test_one_arm_scene_loads(tmp_path):
     assert csv[0] == "t," + ",".join(arm.joints) and len(csv) == len(bench.PROGRAM) + 1
 
 
+@pytest.mark.skipif(bench.package_root("gymnasium_robotics") is None,
+                    reason="gymnasium-robotics (pip install --no-deps gymnasium-robotics) is not installed")
+@pytest.mark.parametrize("name", [n for n, a in bench.ZOO.items() if a.fragment is not None])
+def test_a_fragment_arm_is_wrapped_and_its_scene_loads(tmp_path, name):
+    """The include fragments (Fetch; the kitchen Franka, whose assets file sets
+    its own relative meshdir and whose links carry a childclass limiting every
+    joint) load on their own and as the benchmark's scene."""
+    import mujoco
+
+    arm = bench.ZOO[name]
+    root = bench.package_root(arm.package)
+    m = mujoco.MjModel.from_xml_path(str(bench.standalone(arm, root, tmp_path)))
+    assert all(mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j) >= 0 for j in arm.joints)
+    path, _, _ = bench.scene_for(name, arm, root, tmp_path, None, None)
+    out = subprocess.run([sys.executable, "-c", "import sys; from cablecheck.cli.main import main; sys.exit(main())",
+                          "check", str(path)], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stdout + out.stderr
+
+
 def test_doc_section_is_replaced_between_its_markers_only(tmp_path):
     doc = tmp_path / "performance.md"
     doc.write_text("# P\n\n<!-- bench_startup -->\nstartup\n<!-- /bench_startup -->\n\n"
