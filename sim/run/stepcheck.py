@@ -351,7 +351,8 @@ class StepChecks:
                                        self.stretch, radii, (box_lo, box_hi), solids,
                                        rest_pieces(self._rest, offsets, config.spacing * radii))
             # the active part pairs' own conditions, one a pair, restarted from their measured distances
-            self._pair_gaps_args = (rho, solids)
+            # (no group boxes: a pair's own tests are tighter than its bodies', and cost less alone)
+            self._pair_gaps_args = (rho, replace(solids, group=None))
             self._moving_pairs = self.part_checker.moving_pairs()
             self._checked_index = np.nonzero(checked)[0]
             self._checker_index = np.cumsum(checked) - 1          # built part -> checker part
