@@ -11,6 +11,12 @@ LONG = os.environ.get("HYPOTHESIS_PROFILE") == "long"
 """A long local run of the property tests (HYPOTHESIS_PROFILE=long, tests/conftest.py)."""
 
 
+def seeds(n: int) -> range:
+    """Seeds of a parametrised test drawing whole scenes (seconds each): ``n``
+    in CI, ten times as many under the long profile."""
+    return range(10 * n if LONG else n)
+
+
 def examples(n: int) -> int:
     """``max_examples`` for a property test drawing scenes: ``n`` (what CI runs, derandomised),
     or 30 times as many under the long profile."""
