@@ -219,7 +219,7 @@ def _turning_scene_text(seed: int) -> str:
     return text + _one_cable(rng)
 
 
-@pytest.mark.parametrize("seed", range(2))
+@pytest.mark.parametrize("seed", seeds(1))
 def test_turning_part_pairs_skip_without_changing_answers(seed: int, tmp_path):
     """Part pairs bounded relative to each other and modulo turns about a
     solid's axis (which alone prove about a thousand pair-states clear in
@@ -439,7 +439,7 @@ def _turning_mesh_scene_text(seed: int, folder: Path) -> str:
     return text + _one_cable(rng)
 
 
-@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("seed", seeds(2))
 def test_active_mesh_part_pairs_bounded_from_their_distances_change_no_answer(seed: int, tmp_path):
     """Mesh part pairs whose boxes stay within the clearance (active) are bounded from their measured
     distances between full checks and measured again where the bound fails, and a pair within the
