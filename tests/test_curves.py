@@ -71,3 +71,29 @@ def test_at_many_is_at_time_by_time_to_the_bit(ys, kind, ts):
     for t, v, r in zip(ts, value, rate):
         one_v, one_r = curve.at(float(t))
         assert np.array_equal(v, one_v) and np.array_equal(r, one_r)
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.lists(st.sampled_from([0.0, 60.0, -45.0, 1e-3, 179.99]), min_size=2, max_size=7),
+       st.lists(st.floats(0.01, 3.0), min_size=6, max_size=6), st.sampled_from(["cubic", "linear"]),
+       st.lists(st.floats(-1.0, 8.0), min_size=1, max_size=30))
+def test_a_motion_never_leaves_its_samples_range_even_by_rounding(ys, steps, kind, ts):
+    """Keys repeated at their extremes (a joint keyed at its range's end, back
+    to 0 at the last key), on uneven times, evaluated anywhere (the keys'
+    times and the last included): every value lies within the samples' least
+    and greatest exactly, as `at`, `at_many` and `sample` give it; the
+    polynomial alone leaves them by rounding (keys 0, 60, 0 over 1 s each:
+    -4.4e-16 at the end)."""
+    times = np.concatenate([[0.0], np.cumsum(steps[:len(ys) - 1])])
+    values = np.radians(np.array(ys))[:, None]
+    curve = merge([interpolant(times, values, kind)], [values])
+    t = np.concatenate([times, np.array(ts)])
+    got = np.concatenate([curve.sample(t)[:, 0], curve.at_many(t)[0][:, 0], [curve.at(float(x))[0][0] for x in t]])
+    assert got.min() >= values.min() and got.max() <= values.max()
+
+
+def test_keys_back_to_zero_read_zero_at_the_last():
+    times, values = np.array([0.0, 1.0, 2.0]), np.radians(np.array([[0.0], [60.0], [0.0]]))
+    poly = interpolant(times, values, "cubic")
+    assert poly(2.0)[0] != 0.0                      # the sum of the last interval's rounded terms
+    assert merge([poly], [values]).at(2.0)[0][0] == 0.0

@@ -66,13 +66,14 @@ class Motion:
 
     def __init__(self, built: Built):
         scene = built.scene
-        polys, joints, bodies = [], [], []
+        polys, samples, joints, bodies = [], [], [], []
         for m in scene.motions:
             tr = m.trajectory
             n = len(tr.times)
             columns = np.hstack([tr.joint_values, (tr.body_pos - built.origin).reshape(n, -1),
                                  np.radians(tr.body_euler).reshape(n, -1)])
             polys.append(interpolant(tr.times, columns, tr.interpolation))
+            samples.append(columns)
             joints.append([built.joints[j] for j in tr.joints])
             bodies.append(list(tr.bodies))
         driven = {b for names in bodies for b in names}
@@ -80,11 +81,13 @@ class Motion:
             if b.name not in driven:
                 pose = np.concatenate([np.asarray(b.pos, float) - built.origin, np.radians(b.euler)])
                 polys.append(interpolant(np.zeros(1), pose[None, :], "linear"))
+                samples.append(pose[None, :])
                 joints.append([])
                 bodies.append([b.name])
         if not polys:
             polys.append(interpolant(np.zeros(1), np.zeros((1, 0)), "linear"))
-        merged = merge(polys)
+            samples.append(np.zeros((1, 0)))
+        merged = merge(polys, samples)
         # Channel order in the merged curve: per motion [joints, body pos, body euler];
         # gather the indices of each kind once, so apply() indexes arrays.
         joint_idx, pos_idx, rot_idx = [], [], []
