@@ -173,7 +173,6 @@ class PairStart:
     s0: np.ndarray
     c0: np.ndarray
     q0_sin: np.ndarray
-    groups: "GroupBoxes | None" = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -283,6 +282,8 @@ class PartPairGaps:
         self._axial = np.zeros(n, bool) if solids is None else np.asarray(solids.axial, bool)
         self._error = np.zeros(n) if solids is None else np.asarray(solids.error, float)
         self._group = None if solids is None or solids.group is None else np.asarray(solids.group, np.int64)
+        self._boxes: GroupBoxes | None = None      # the group boxes of the start `_boxes_of`
+        self._boxes_of: PairStart | None = None
         self._boxed = np.zeros(n, bool)
         self._corners = np.zeros((n, 8, 3))                            # (P, 8, 3), 0 where unboxed
         if solids is not None:
@@ -328,11 +329,8 @@ class PartPairGaps:
         q0, s0, c0 = self._relative(poses[None], f, m)
         q0, s0, c0 = q0[0], s0[0], c0[0]
         q0_sin = np.stack([q0[:, 1], -q0[:, 0]], axis=1)   # M10 - M01 against Q's top rows
-        groups = None
-        if self._group is not None and len(pi):
-            groups = group_boxes(self._group, poses, self._corners, self._boxed & ~self._plane)
         return PairStart(poses, pi, pj, g_pair, g_rel, mu, bool(np.all(g_pair > 0)), f, m, turn,
-                         q0, s0, c0, q0_sin, groups)
+                         q0, s0, c0, q0_sin)
 
     def stop(self) -> None:
         """Prove nothing until the next :meth:`start`."""
@@ -411,7 +409,7 @@ class PartPairGaps:
         at = self._at
         ok = dp[at.pi] + dp[at.pj] < at.g_pair[:, None]
         rows = np.flatnonzero(~ok.all(axis=1))
-        if len(rows) and at.groups is not None:
+        if len(rows) and self._group is not None:
             ok[rows] |= self._groups_apart(poses, rows)
             rows = rows[~ok[rows].all(axis=1)]
         if len(rows):
@@ -427,7 +425,10 @@ class PartPairGaps:
         :meth:`_separated`'s margin: every part's box lies in its group's,
         so no two of their parts come within the clearance there. Each pair
         of groups is measured once."""
-        gb = self._at.groups
+        if self._boxes_of is not self._at:      # the start's group boxes, made when first asked for
+            self._boxes = group_boxes(self._group, self._at.poses, self._corners, self._boxed & ~self._plane)
+            self._boxes_of = self._at
+        gb = self._boxes
         i, j = self._at.pi[rows], self._at.pj[rows]
         ga, gc = gb.of[i], gb.of[j]
         out = np.zeros((len(rows), len(poses)), bool)
