@@ -60,8 +60,12 @@ class Recheck:
         exclusions: the run's exclusion windows.
     """
 
-    def __init__(self, parts: Sequence[PartState], config: CheckConfig, exclusions: Sequence[Exclusion]):
+    def __init__(self, parts: Sequence[PartState], config: CheckConfig, exclusions: Sequence[Exclusion],
+                 held: Sequence[Exclusion] = ()):
+        """``held``: windows over each cable's elements with a vertex held by
+        a body, against that body's parts (:meth:`StateRecheck.held_clear`)."""
         self.parts = list(parts)
+        self.held = list(held)
         self.index = {p.name: k for k, p in enumerate(self.parts)}
         self.config = CheckConfig(method="exact", spacing=config.spacing, clearance=config.clearance)
         self.points = CheckConfig(method="points", spacing=config.spacing, clearance=config.clearance)
@@ -261,6 +265,21 @@ class StateRecheck:
             return _distance(cable_cable_exact([self.cables[n] for n in names], self.owner.config), key)
         found = self.owner._cables.check([self.cables[n] for n in names])
         return _distance(found, key)
+
+    def held_clear(self, key: tuple[str, str, str]) -> bool:
+        """The cable-part pair clear with method exact once the cable's
+        elements with a vertex held by the part's own body (`Recheck.held`)
+        are left out; False where it has none: what MuJoCo sees of the pair,
+        as it collides no flex element with the geoms of a body holding one
+        of its vertices."""
+        kind, a, b = key
+        held = [e for e in self.owner.held if e.cable == a and e.part == b]
+        k = self.owner.index.get(b)
+        if not held or kind not in PART_TYPES or k is None or a not in self.cables:
+            return False
+        found = self.owner._checker(k, False, True).check([self.cables[a]], self.poses[k][None],
+                                                          self.owner.exclusions + held)
+        return _distance(found, key) is None
 
     def hull(self, key: tuple[str, str, str], exact: bool = True) -> float | None:
         """A cable against the convex hull of the mesh part b, with method

@@ -384,6 +384,14 @@ class Reason(StrEnum):
       itself only where its elements overlap (no margin: measured, crossings
       of one cable 2, 0.3 and 0.01 mm apart gave no contact, 0.3 mm deep
       gave one at -0.3 mm).
+    - ``held element``: a cable-part pair the checker finds within the
+      clearance and MuJoCo clear of it, clear by method exact once the
+      cable's elements with a vertex held by the part's own body are left
+      out: MuJoCo collides no flex element with the geoms of a body that
+      holds one of its vertices (measured: a sphere 1 mm from the middle of
+      a cable's first long element, whose inner end the world holds, on the
+      world and on a scene body, gave no contact; 1 mm from a free element,
+      one).
     - ``unexplained``: no check explains it.
     """
 
@@ -391,6 +399,7 @@ class Reason(StrEnum):
     CONVEX_HULL = "convex hull"
     BETWEEN_POINTS = "between points"
     SELF_NO_MARGIN = "self, no margin"
+    HELD_ELEMENT = "held element"
     UNEXPLAINED = "unexplained"
 
 
@@ -404,6 +413,11 @@ class Recheck(Protocol):
 
     def near(self, key: tuple[str, str, str], limit: float) -> float | None:
         """Method exact's distance when below ``limit`` (>= the clearance), else None."""
+        ...
+
+    def held_clear(self, key: tuple[str, str, str]) -> bool:
+        """The cable-part pair clear by method exact without the cable's
+        elements with a vertex held by the part's body (False where it has none)."""
         ...
 
 
@@ -587,7 +601,7 @@ class Validation:
         distances known, convex hull (by discrete points), between points,
         convex hull (by method exact: credited only where the mesh's own exact
         distance did not explain it), at a boundary with one side clear, self
-        with no margin; else unexplained. ``second``
+        with no margin, held element; else unexplained. ``second``
         gives the second opinions (None: nothing can be checked but the
         distances themselves)."""
         c = self.clearance
@@ -619,6 +633,8 @@ class Validation:
         if (kind == PairType.SELF and dm is None and dc is not None and exact is not None
                 and 0.0 <= exact < c and 0.0 <= dc):
             return Reason.SELF_NO_MARGIN, exact
+        if opinion is not None and kind in PART_TYPES and cm is None and dc is not None and opinion.held_clear(key):
+            return Reason.HELD_ELEMENT, None
         return Reason.UNEXPLAINED, None
 
     @property

@@ -484,9 +484,13 @@ class _Opinion:
     """Second opinions as given: method exact's distance and ``near``'s
     (found up to the limit asked); every call recorded."""
 
-    def __init__(self, exact=None, near=None, hull=None):
-        self._exact, self._near, self._hull = exact, near, hull
+    def __init__(self, exact=None, near=None, hull=None, held=False):
+        self._exact, self._near, self._hull, self._held = exact, near, hull, held
         self.calls = []
+
+    def held_clear(self, key):
+        self.calls.append(("held", key))
+        return self._held
 
     def exact(self, key):
         self.calls.append(("exact", key))
@@ -576,8 +580,8 @@ finite = st.one_of(st.none(), st.floats(-2.0, 7.0), st.floats(4.85, 5.15), st.fl
 
 @settings(max_examples=300, deadline=None)
 @given(finite, finite, finite, finite, finite, st.sampled_from(["points", "exact"]),
-       st.sampled_from([SELF, CC_KEY, ("cable-structure", "c", "mesh")]), st.booleans())
-def test_a_label_is_given_only_where_its_claim_holds(dc, dm, exact, near, hull, method, key, asked):
+       st.sampled_from([SELF, CC_KEY, ("cable-structure", "c", "mesh")]), st.booleans(), st.booleans())
+def test_a_label_is_given_only_where_its_claim_holds(dc, dm, exact, near, hull, method, key, asked, held):
     """Drawn distances of both sides and drawn second opinions: whatever
     label comes out, the claim it makes holds for these numbers (written
     here from the documented claims, not from the code); a disagreement's
@@ -587,7 +591,7 @@ def test_a_label_is_given_only_where_its_claim_holds(dc, dm, exact, near, hull, 
     dc = None if dc is not None and dc >= c else dc                  # a record is below the clearance
     dm = None if dm is not None and dm >= c else dm
     assume(severity_of(dc, c) != severity_of(dm, c))
-    opinion = _Opinion(exact, near, hull) if asked else None
+    opinion = _Opinion(exact, near, hull, held) if asked else None
     v = Validation(clearance=c, method=method, mesh_parts=frozenset({"mesh"}))
     reason, value = v.explain(key, dc, dm, lambda: opinion)
     inf = float("inf")
@@ -606,6 +610,9 @@ def test_a_label_is_given_only_where_its_claim_holds(dc, dm, exact, near, hull, 
     elif reason is Reason.SELF_NO_MARGIN:
         assert key == SELF and dm is None and dc is not None and 0.0 <= dc < c
         assert value is not None and 0.0 <= value < c and value == (dc if method == "exact" else exact)
+    elif reason is Reason.HELD_ELEMENT:
+        assert key[0] == "cable-structure" and opinion is not None and held
+        assert dc is not None and severity_of(dm, c) is None and value is None
     else:
         assert reason is Reason.UNEXPLAINED and value is None
 
@@ -717,3 +724,51 @@ end = {{ pos = [-107.91369599999999, 180.764679, 98.297222] }}
     assert val["unexplained"] == 0 and val["reasons"] == {"at a boundary": val["compared_steps"]}
     for d in val["disagreements"]:
         assert abs(d["second"] - 5.0) <= 0.1 and (d["checker"] is None) != (d["mujoco"] is None)
+
+
+@pytest.mark.parametrize("body", ["world", "carrier"])
+def test_a_part_beside_a_held_element_in_a_run(tmp_path, body):
+    """End to end: a sphere 1 mm from a cable's first long element, whose
+    inner end the clamp's body holds, sphere and clamp on the same body (the
+    world, or a scene body): MuJoCo collides no flex element with the
+    geoms of a body holding one of its vertices, so it sees nothing (or the
+    next element, free, 2.7 mm off) where the checker reads the pair within
+    the clearance; every such step is 'held element' (checked: clear without
+    those elements), none unexplained. Beside a free element MuJoCo agrees."""
+    from cablecheck.run.runner import RunOptions, run_scene
+    from cablecheck.scene.load import load_scene
+
+    def run(x: float) -> dict:
+        carrier = '[[bodies]]\nname = "carrier"\npos = [0.0, 0.0, 0.0]\n' if body == "carrier" else ""
+        on = f'body = "{body}", ' if body == "carrier" else ""
+        (tmp_path / "s.toml").write_text(f"""
+[scene]
+name = "held"
+units = "mm"
+duration = 0.02
+settle = 0.1
+[effects]
+gravity = false
+contact = ["cable-structure"]
+[check]
+clearance = 2.0
+{carrier}
+[[parts]]
+name = "beside"
+{"body = 'carrier'" if body == "carrier" else ""}
+shape = "sphere"
+size = [3.0]
+pos = [{x}, 6.5, 0.0]
+[[cables]]
+name = "c"
+radius = 2.5
+start = {{ {on}pos = [0.0, 0.0, 0.0] }}
+end = {{ pos = [300.0, 0.0, 0.0] }}
+segments = 10
+""")
+        return run_scene(load_scene(tmp_path / "s.toml"), RunOptions(report=tmp_path / "r.json", record=None))["validation"]
+
+    for x in (18.0, 25.0):                                 # beside the first long element (1.5 to 30 mm)
+        val = run(x)
+        assert val["reasons"] == {"held element": val["compared_steps"]} and val["unexplained"] == 0
+    assert run(45.0)["agreement"] == 1.0                   # beside the free element from 30 to 60 mm

@@ -382,7 +382,7 @@ class StepChecks:
                                      hull_parts(built.parts, built.detect),
                                      allow=self.allow)
         self.hull_gaps = HullGaps(built) if detector is not None else None   # cables held on a hull
-        self._recheck = Recheck(self.checker.parts, config, self.exclusions)
+        self._recheck = Recheck(self.checker.parts, config, self.exclusions, held_element_exclusions(built))
         self._points_error = {c.name: points_error(c.radius, config.spacing) for c in built.cables}
         self._least_hard: dict[tuple, float] = {}       # each pair's least hard value in its run so far
         # how far past the clearance a cable-part pair may read and still be inside it (method points)
@@ -977,6 +977,36 @@ def attachment_exclusions(built: Built, shapes: Sequence[Shape] | None = None,
             to_end = bool(hi >= c.rest_s[c.count - 1])
             out += [Exclusion(c.name, names[k], float(lo), float(hi), window, to_end) for k in fastened.tolist()]
     return sorted(set(out), key=lambda e: (e.cable, e.part, e.s_min, e.window))
+
+
+def held_element_exclusions(built: Built) -> list[Exclusion]:
+    """Windows over each cable's elements with a vertex held by a body (the
+    elements either side of an end's or clip's held vertices), against that
+    body's parts. MuJoCo collides no flex element with the geoms of a body
+    that holds one of its vertices (measured: a sphere 1 mm from the middle
+    of a cable's first long element, whose inner end the world holds, on the
+    world and on a scene body: no contact; 1 mm from an element wholly free:
+    a contact), so its contacts never show those elements near those parts.
+    Not excusals: the checker measures those elements as any other;
+    validation reads a pair clear without them before it calls a
+    checker-only pair unexplained (`cablecheck.checker.validation.Reason.HELD_ELEMENT`)."""
+    m = built.model
+    part_body = np.array([int(m.geom_bodyid[p.geom_id]) for p in built.parts], np.int64)
+    out = []
+    for c in built.cables:
+        by_body: dict[int, set] = {}
+        for a in c.attachments:               # the elements either side of each held vertex
+            by_body.setdefault(built.body_ids[a.body], set()).update({a.vertex - 1, a.vertex})
+        for body, elems in by_body.items():
+            e = np.array(sorted(x for x in elems if 0 <= x < c.count - 1), np.int64)
+            if not len(e):
+                continue
+            cut = np.flatnonzero(np.diff(e) > 1) + 1             # runs of consecutive elements
+            for run in np.split(e, cut):
+                lo, hi = float(c.rest_s[run[0]]), float(c.rest_s[run[-1] + 1])
+                out += [Exclusion(c.name, built.parts[k].name, lo, hi, "held element", bool(run[-1] + 1 == c.count - 1))
+                        for k in np.flatnonzero(part_body == body).tolist()]
+    return sorted(set(out), key=lambda x: (x.cable, x.part, x.s_min))
 
 
 def _start_table(built: Built, shapes: Sequence[Shape] | None, poses: np.ndarray | None) -> PartTable:
