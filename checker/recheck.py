@@ -65,7 +65,9 @@ class Recheck:
         """``held``: windows over each cable's elements with a vertex held by
         a body, against that body's parts (:meth:`StateRecheck.held_clear`)."""
         self.parts = list(parts)
-        self.held = list(held)
+        self._held: dict[tuple[str, str], list[Exclusion]] = {}
+        for e in held:
+            self._held.setdefault((e.cable, e.part), []).append(e)
         self.index = {p.name: k for k, p in enumerate(self.parts)}
         self.config = CheckConfig(method="exact", spacing=config.spacing, clearance=config.clearance)
         self.points = CheckConfig(method="points", spacing=config.spacing, clearance=config.clearance)
@@ -73,6 +75,10 @@ class Recheck:
         self._checkers: dict[tuple[int, bool, bool], Checker] = {}
         self._hulls: dict[int, Shape] = {}
         self._cables = Checker([], self.config)
+
+    def held_for(self, key: tuple[str, str, str]) -> list[Exclusion]:
+        """The held-element windows of the pair (type, cable, part); none for other pairs."""
+        return self._held.get((key[1], key[2]), []) if key[0] in PART_TYPES else []
 
     def is_mesh(self, name: str) -> bool:
         """The part `name` is a mesh."""
@@ -135,6 +141,7 @@ class BatchRecheck:
         self._hull_points: dict[tuple[str, str, str], list[float | None]] = {}
         self._exact: dict[tuple[str, str, str], dict[int, float | None]] = {}
         self._hull_exact: dict[tuple[str, str, str], dict[int, float | None]] = {}
+        self._held_exact: dict[tuple[str, str, str], dict[int, float | None]] = {}
 
     def at(self, i: int) -> "StateRecheck":
         """The second opinions at the batch's state i."""
@@ -165,23 +172,32 @@ class BatchRecheck:
             found.update((j, float(v) if v < clearance else None) for j, v in zip(rows, d))
         return found[i]
 
+    def held_exact(self, key: tuple[str, str, str], i: int) -> float | None:
+        """:meth:`exact_part` with the pair's held elements left out too
+        (`Recheck.held_for`), by the same windows of states."""
+        return self._windowed(self._held_exact, key, i, hull=False,
+                              exclusions=self.owner.exclusions + self.owner.held_for(key))
+
     def hull_exact(self, key: tuple[str, str, str], i: int) -> float | None:
         """The cable-part pair's distance to the part's convex hull with
         method exact at state i (:meth:`exact_part` on the hull)."""
         return self._windowed(self._hull_exact, key, i, hull=True)
 
-    def _windowed(self, cache: dict, key: tuple[str, str, str], i: int, hull: bool) -> float | None:
+    def _windowed(self, cache: dict, key: tuple[str, str, str], i: int, hull: bool,
+                  exclusions: Sequence[Exclusion] | None = None) -> float | None:
         """Exact opinions of a pair by windows of states: the states from i
         on not yet found, `EXACT_WINDOW` of them, in one `exact_many` call
         (a pair disagreeing at one state mostly does at the next few; the
-        exact check of a mesh costs in proportion to the states asked)."""
+        exact check of a mesh costs in proportion to the states asked);
+        `exclusions`: the run's (None) or those given."""
         found = cache.setdefault(key, {})
         if i not in found:
             _, a, b = key
             k = self.owner.index[b]
             rows = [j for j in range(i, min(i + EXACT_WINDOW, len(self.cables))) if j not in found]
             values = exact_many(self.owner._checker(k, hull, True), [self.cables[j].get(a) for j in rows],
-                                self.poses[rows, k], self.owner.exclusions, key)
+                                self.poses[rows, k], self.owner.exclusions if exclusions is None else exclusions,
+                                key)
             found.update(zip(rows, values))
         return found[i]
 
@@ -268,15 +284,17 @@ class StateRecheck:
 
     def held_clear(self, key: tuple[str, str, str]) -> bool:
         """The cable-part pair clear with method exact once the cable's
-        elements with a vertex held by the part's own body (`Recheck.held`)
+        elements with a vertex held by the part's own body (`Recheck.held_for`)
         are left out; False where it has none: what MuJoCo sees of the pair,
         as it collides no flex element with the geoms of a body holding one
         of its vertices."""
-        kind, a, b = key
-        held = [e for e in self.owner.held if e.cable == a and e.part == b]
+        _, a, b = key
+        held = self.owner.held_for(key)
         k = self.owner.index.get(b)
-        if not held or kind not in PART_TYPES or k is None or a not in self.cables:
+        if not held or k is None or a not in self.cables:
             return False
+        if self.batch is not None:
+            return self.batch.held_exact(key, self.index) is None
         found = self.owner._checker(k, False, True).check([self.cables[a]], self.poses[k][None],
                                                           self.owner.exclusions + held)
         return _distance(found, key) is None

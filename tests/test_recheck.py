@@ -217,3 +217,34 @@ def test_a_batchs_cable_cable_opinions_are_each_states_alone(seed, mm, far):
         else:
             assert g == pytest.approx(want, abs=tol)
     assert any(g is not None for g in got) or all(w is None for w in alone)
+
+
+@pytest.mark.parametrize("x", [18.0, 25.0, 45.0])
+def test_held_clear_leaves_out_the_held_elements_alone(x):
+    """A cable along x (elements 0-1.5-30-60-... mm, its first two vertices
+    held) beside a sphere (radius 3 mm, its centre 6.5 mm off the axis, the
+    cable's radius 2.5 mm: 1 mm from the axis's nearest element, clearance
+    2 mm). Left out, the held elements (0 to 30 mm) leave the pair at the
+    sphere's distance to the next element by the closed form (beside them:
+    from (30, 0, 0), 2.7 mm or more, clear; beside a free element: 1 mm,
+    not clear); one state alone and a batch of states answer alike; a pair
+    with no held window is never cleared so."""
+    from cablecheck.checker.shapes import Shape, ShapeType
+    from cablecheck.checker.scene_state import Exclusion
+
+    pts = np.array([[0.0, 0, 0], [1.5, 0, 0], [30.0, 0, 0], [60.0, 0, 0], [90.0, 0, 0]])
+    s = pts[:, 0].copy()
+    cable = CableState("c", pts, 2.5, None, 90.0, s)
+    pose = np.eye(4)
+    pose[:3, 3] = [x, 6.5, 0.0]
+    part = PartState("ball", Shape(ShapeType.SPHERE, [3.0]), pose)
+    held = [Exclusion("c", "ball", 0.0, 30.0, "held element", False)]
+    key = ("cable-structure", "c", "ball")
+    nearest = min(np.linalg.norm(pose[:3, 3] - np.array([min(max(x, lo), hi), 0.0, 0.0]))
+                  for lo, hi in ((30.0, 60.0), (60.0, 90.0))) - 5.5
+    want = nearest >= 2.0
+    rc = Recheck([part], CheckConfig(spacing=2.0, clearance=2.0), [], held)
+    one = rc.at([cable], pose[None]).held_clear(key)
+    many = rc.many([[cable]] * 3, np.stack([pose[None]] * 3)).at(1).held_clear(key)
+    assert one == many == want
+    assert Recheck([part], CheckConfig(spacing=2.0, clearance=2.0), []).at([cable], pose[None]).held_clear(key) is False
