@@ -713,8 +713,7 @@ class PartChecker:
         self.assemblies = assemblies
         self.clearance = clearance
         self.focus = focus
-        g = {name: k for k, name in enumerate(dict.fromkeys(parts.groups))}
-        self._group = np.array([g[x] for x in parts.groups], np.int64)
+        self._group = parts.group_index
         n = len(parts.names)
         self._skip = np.zeros((n, n), bool) if skip is None else np.asarray(skip, bool)
         self._static: tuple[list[Interference], np.ndarray, np.ndarray] | None = None

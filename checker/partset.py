@@ -217,6 +217,12 @@ class PartSet:
         return Placement(rot, pos, centre, lo, hi, a_lo, a_hi)
 
     @cached_property
+    def group_index(self) -> np.ndarray:
+        """(P,) each part's rigid group (``groups``) numbered in order of first appearance."""
+        number = {g: k for k, g in enumerate(dict.fromkeys(self.groups))}
+        return np.array([number[g] for g in self.groups], np.int64)
+
+    @cached_property
     def probe_start(self) -> np.ndarray:
         """(P + 1,) part k's probes are ``probes[probe_start[k]:probe_start[k + 1]]``."""
         return np.searchsorted(self.probe_part, np.arange(len(self.names) + 1))

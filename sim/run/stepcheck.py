@@ -344,9 +344,7 @@ class StepChecks:
             solid_lo, solid_hi = rigid.lo.copy(), rigid.hi.copy()
             solid_lo[checked] = np.minimum(solid_lo[checked], box_lo[checked])
             solid_hi[checked] = np.maximum(solid_hi[checked], box_hi[checked])
-            group_of = {g: k for k, g in enumerate(dict.fromkeys(rigid.groups))}
-            solids = PartSolids(solid_lo, solid_hi, rigid.axial, rigid.error,
-                                np.array([group_of[g] for g in rigid.groups], np.int64))
+            solids = PartSolids(solid_lo, solid_hi, rigid.axial, rigid.error, rigid.group_index)
             self.advance = Advancement(offsets, config.spacing * radii, rho, config.clearance,
                                        self.stretch, radii, (box_lo, box_hi), solids,
                                        rest_pieces(self._rest, offsets, config.spacing * radii))
@@ -886,6 +884,11 @@ def cable_states(built: Built, points: list[np.ndarray]) -> list[CableState]:
             for c, p in zip(built.cables, points)]
 
 
+def part_bodies(built: Built) -> np.ndarray:
+    """(P,) the body id of each built part."""
+    return np.array([int(built.model.geom_bodyid[p.geom_id]) for p in built.parts], np.int64)
+
+
 def part_pairs_skipped(built: Built) -> np.ndarray:
     """(P, P) bool: part pairs the part-part check leaves out, as MuJoCo does.
 
@@ -905,7 +908,7 @@ def part_pairs_skipped(built: Built) -> np.ndarray:
     t = 0)."""
     m = built.model
     scene_names = {p.name for p in built.scene.parts}
-    body = np.array([int(m.geom_bodyid[p.geom_id]) for p in built.parts], np.int64)
+    body = part_bodies(built)
     weld = m.body_weldid[body]
     parent = m.body_weldid[m.body_parentid[weld]]       # the weld group above each part's weld group
     base = np.array([p.name not in scene_names for p in built.parts], bool)
@@ -953,7 +956,7 @@ def attachment_exclusions(built: Built, shapes: Sequence[Shape] | None = None,
     reach = built.scene.check.clearance
     m = built.model
     names = [p.name for p in built.parts]
-    part_body = np.array([int(m.geom_bodyid[p.geom_id]) for p in built.parts], np.int64)
+    part_body = part_bodies(built)
     table = None
     out = []
     for c in built.cables:
@@ -990,8 +993,7 @@ def held_element_exclusions(built: Built) -> list[Exclusion]:
     Not excusals: the checker measures those elements as any other;
     validation reads a pair clear without them before it calls a
     checker-only pair unexplained (`cablecheck.checker.validation.Reason.HELD_ELEMENT`)."""
-    m = built.model
-    part_body = np.array([int(m.geom_bodyid[p.geom_id]) for p in built.parts], np.int64)
+    part_body = part_bodies(built)
     out = []
     for c in built.cables:
         by_body: dict[int, set] = {}
