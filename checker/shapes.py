@@ -51,9 +51,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from cablecheck.checker.arrays import all_columns, ranges
+
 # The modules below do the work; their public names are re-exported here,
 # where the rest of the checker has always imported them from.
-from cablecheck.checker.arrays import all_columns, ranges
 from cablecheck.checker.meshdata import MeshData, sd_mesh, sd_mesh_face_plane
 from cablecheck.checker.primitives import (
     ShapeType,
