@@ -267,7 +267,7 @@ def test_full_every_step_checks_and_compares_every_step(small_scene: Path, tmp_p
 
 def test_ctrl_c_stops_after_the_batch_and_a_second_stops_at_once(small_scene: Path, tmp_path: Path):
     """SIGINT asks the run to stop: the states already simulated are checked
-    and reported (the simulation, stepping ahead on its own thread, may have
+    and reported (the simulation, stepping ahead on its own, may have
     simulated them all by then); a second SIGINT raises at once (the batch
     is left out)."""
     import signal

@@ -174,16 +174,43 @@ def test_outcome_record_gives_the_report(tmp_path: Path):
 EXAMPLES = Path(__file__).resolve().parents[1] / "scenes"
 
 
-def test_simulating_ahead_on_a_thread_gives_the_same_report(tmp_path: Path):
+@pytest.mark.parametrize("in_a_process", [True, False])
+def test_simulating_ahead_gives_the_same_report(tmp_path: Path, monkeypatch, in_a_process: bool):
     """A dynamic scene with contact, validation and recording: stepping the
-    simulation on a thread of its own (cablecheck.run.ahead) gives the report of the
-    run on one thread, timing apart."""
+    simulation ahead in a process of its own (cablecheck.run.apart) or on a
+    thread (cablecheck.run.ahead) gives the report of the run on one thread,
+    timing apart."""
+    import cablecheck.run.runner as runner
+
+    monkeypatch.setattr(runner, "AHEAD_IN_A_PROCESS", in_a_process)
     scene = load_scene(EXAMPLES / "crossing.toml")
     one = run_scene(scene, RunOptions(report=tmp_path / "one.json", record=tmp_path / "one.rrd", overlap=False))
     two = run_scene(scene, RunOptions(report=tmp_path / "two.json", record=tmp_path / "two.rrd"))
     assert one["events"] and one["validation"]["compared_steps"] > 0
     assert _text(two) == _text(one).replace("one.rrd", "two.rrd")
     assert two["timing"]["sim_s"] > 0
+
+
+@pytest.mark.parametrize("overlap", [True, False])
+def test_mujocos_messages_while_stepping_reach_the_report(tmp_path: Path, monkeypatch, overlap: bool):
+    """A message MuJoCo raises while the simulation steps (in a process of its
+    own, cablecheck.run.apart, or here) is counted in the report's warnings, once."""
+    import mujoco
+
+    import cablecheck.run.loop as loop
+
+    steps = loop.Simulation.steps
+
+    def talking(self, *a, **k):
+        for state in steps(self, *a, **k):
+            if state.step == 3:
+                mujoco.get_mju_user_warning()("Solver said 1.5 things. Time = 0.006.")
+            yield state
+
+    monkeypatch.setattr(loop.Simulation, "steps", talking)
+    report = run_scene(load_scene(EXAMPLES / "crossing.toml"),
+                       RunOptions(report=tmp_path / "r.json", record=None, overlap=overlap))
+    assert report["complete"] and report["warnings"] == {"Solver said # things.": 1}
 
 
 def test_the_detection_model_is_made_on_a_thread_of_its_own(tmp_path: Path, monkeypatch):

@@ -203,7 +203,7 @@ def example_scenes_table(sizes: BenchSizes, out: Path) -> tuple[Table, dict]:
         "check: cable and part-part checks, strain and bend per step; validate: the detection model's "
         "collision pass (mj_kinematics, mj_flex, mj_collision) and comparing its contacts; record: rerun logging (sampled at 100 frames per simulated second).",
         "realtime_factor: simulated seconds over the step loop's wall time (the report's loop_s: the "
-        "simulation stepping ahead on its own thread while the checks run; it settles and starts stepping "
+        "simulation stepping ahead in a process of its own while the checks run; it settles and starts stepping "
         "while the run still builds, so the loop is shorter than the simulation); _total is the whole run's.",
         "full_checks / proven_clear: checked steps run in full and steps the skip rule (cablecheck.checker.advance) "
         "proved clear; a pair inside the clearance (or whose own bound fails) is then checked on its own.",

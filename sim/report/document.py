@@ -132,16 +132,17 @@ class AdvanceOutcome:
 @dataclass(frozen=True)
 class Timing:
     """Seconds: `total` the whole run's wall-clock time; each of `STAGES` the
-    CPU time of the thread that ran it (the simulation may step ahead on a
-    thread of its own, `cablecheck.run.ahead`: stages overlap, and waiting for the
-    other side is no stage's time); `collision`: MuJoCo's own collision
+    CPU time of the thread that ran it (the simulation may step ahead in a
+    process of its own, `cablecheck.run.apart`, or on a thread,
+    `cablecheck.run.ahead`: stages overlap, and waiting for the other side is
+    no stage's time); `collision`: MuJoCo's own collision
     passes on the detection model (their CPU time), a part of the validate stage
     (what validation costs at least), or None when the run does not
     validate; `loop`: the wall-clock time of the step loop (checking,
     validating, the wear map and the recording to its close, and the
     simulating they wait for: the run without building; the simulation
-    may have settled and stepped ahead on its own thread while the run
-    was still building), or None where not measured."""
+    may have settled and stepped ahead on its own while the run was still
+    building), or None where not measured."""
 
     total: float
     stages: dict[str, float]

@@ -5,7 +5,9 @@ prints each message and appends it to `MUJOCO_LOG.TXT` in the working
 directory. A run (`cablecheck.run.runner`) enters a `MujocoMessages` for its whole
 length: MuJoCo's warnings then come to it instead (`mujoco.set_mju_user_warning`;
 the Python bindings call it from whichever thread steps, so the simulation
-stepping ahead on its own thread, `cablecheck.run.ahead`, is covered), and the
+stepping ahead on its own thread, `cablecheck.run.ahead`, is covered; one
+stepping in a process of its own, `cablecheck.run.apart`, takes them there
+and hands them back at its end: `MujocoMessages.add`), and the
 default handler's log file is switched off (`mujoco.MjLogConfig`), so
 nothing is written to the working directory and the terminal is not
 flooded. What the messages said is kept for the report instead:
@@ -92,6 +94,14 @@ class MujocoMessages:
         mujoco.set_mju_user_warning(self._old_handler)
         _set_log_file(self._old_file)
 
+    def add(self, counts: dict[str, int], first: dict[str, str]) -> None:
+        """Take messages counted elsewhere (a simulation stepped in another
+        process, `cablecheck.run.apart`): `counts` by kind, `first` their first texts."""
+        with self._lock:
+            self.counts.update(counts)
+            for kind, text in first.items():
+                self.first.setdefault(kind, text)
+
     def others(self) -> dict[str, int]:
         """Counts of the messages that are not one of MuJoCo's counted kinds."""
         names = {name for _, name in _KINDS}
@@ -127,11 +137,12 @@ def data_warnings(data: mujoco.MjData | None) -> dict[str, int]:
 
 def warning_counts(datas, messages: MujocoMessages | None) -> dict[str, int]:
     """MuJoCo's warnings of a run by kind: the counters of every data it
-    stepped or collided (`datas`, None entries skipped), summed, and the
-    `messages` of no counted kind; sorted by kind."""
+    stepped or collided (`datas`, None entries skipped; a dict: the counters
+    of a data stepped in another process, as `data_warnings` gives them),
+    summed, and the `messages` of no counted kind; sorted by kind."""
     total: Counter[str] = Counter()
     for d in datas:
-        total.update(data_warnings(d))
+        total.update(d if isinstance(d, dict) else data_warnings(d))
     if messages is not None:
         total.update(messages.others())
     return dict(sorted(total.items()))

@@ -3,8 +3,9 @@
 Data flows one way: scene -> models -> steps -> (cable body centres, part
 poses) -> per-cable measures, checks and MuJoCo's contacts (`cablecheck.run.stepcheck`,
 a batch of consecutive steps at a time) -> events, report and recording.
-With dynamics the simulation settles and steps on a thread of its own
-from the moment its model is built (`cablecheck.run.ahead`), a third builds
+With dynamics the simulation settles and steps in a process of its own
+(`cablecheck.run.apart`; on a thread where there is no fork, `cablecheck.run.ahead`)
+from the moment its model is built, a thread builds
 the detection model (`cablecheck.build.stages.with_detection`, `cablecheck.detection.detector`) and
 this one prepares the checks and the recording; the states come out in order, the
 same as on one thread. `run_scene` owns the order of those stages, their
@@ -37,6 +38,7 @@ from __future__ import annotations
 import math
 import time
 import traceback
+from collections import Counter
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, replace
@@ -82,11 +84,13 @@ from cablecheck.report.outputs import OutputPathError
 from cablecheck.report.render import Spot, render_spots
 from cablecheck.report.review import ReviewError, load_review, match
 from cablecheck.run.ahead import StepsAhead, depth_for, thread_cpu
+from cablecheck.run.apart import StepsApart
+from cablecheck.run.apart import available as apart_available
 from cablecheck.run.divergence import DivergenceWatch, PhysicsError
 from cablecheck.run.jointspace import JointLog
 from cablecheck.run.kinematic import KinematicSimulation
 from cablecheck.run.loop import Simulation
-from cablecheck.run.mjlog import MujocoMessages, warning_counts
+from cablecheck.run.mjlog import MujocoMessages, data_warnings, warning_counts
 from cablecheck.run.stepcheck import BATCH, BATCH_MAX, StepChecks, next_batch
 from cablecheck.run.stop import StopRequest
 from cablecheck.scene.allow import check_allow_names
@@ -96,6 +100,11 @@ from cablecheck.scene.records import Scene
 
 if TYPE_CHECKING:
     from cablecheck.record.recorder import Recorder
+
+AHEAD_IN_A_PROCESS = True
+"""A run with dynamics steps its simulation ahead in a process of its own
+where fork is (`cablecheck.run.apart`), else on a thread
+(`cablecheck.run.ahead`); tests set it False to run the thread here too."""
 
 RECORD_RATE = 100.0
 """Recorded frames per simulated second (checks still run at every checked step)."""
@@ -127,8 +136,9 @@ class RunOptions:
         come within it since the last full check (:mod:`cablecheck.checker.advance`;
         the same events, pairs and MuJoCo comparison as checking every step
         in full). False checks every step in full.
-      overlap: simulate the next steps on a thread of their own while the
-        last ones are checked (`cablecheck.run.ahead`: the same states, events and
+      overlap: simulate the next steps in a process of their own while the
+        last ones are checked (`cablecheck.run.apart`, or on a thread where
+        there is no fork, `cablecheck.run.ahead`: the same states, events and
         report; on two cores the run takes about the larger side's time,
         not the sum). False runs every stage on the calling thread (a study
         worker, which is one core's share already).
@@ -154,9 +164,10 @@ Progress = Callable[[str, float, float], None]
 
 
 class _Timer:
-    """CPU seconds per stage of the thread that runs the stages (`cablecheck.run.ahead`:
-    the simulation may run on another thread, which counts its own; waiting
-    for it is no stage's time)."""
+    """CPU seconds per stage of the thread that runs the stages (the
+    simulation may run in another process or thread, `cablecheck.run.apart`,
+    `cablecheck.run.ahead`, which counts its own; waiting for it is no stage's
+    time)."""
 
     def __init__(self):
         self.total = dict.fromkeys(STAGES, 0.0)
@@ -286,20 +297,26 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     if progress:
         progress("settle", 0, max(sim.settle_steps, 1))
 
-    def settle() -> None:
-        if not stop.asked:
-            sim.settle(None if progress is None else
-                       (lambda k: progress("settle", k, sim.settle_steps) if k % 50 == 0 else None),
-                       stop=lambda: stop.asked)
+    def settle(report: Progress | None = progress, halted: Callable[[], bool] = lambda: stop.asked) -> None:
+        if not halted():
+            sim.settle(None if report is None else
+                       (lambda k: report("settle", k, sim.settle_steps) if k % 50 == 0 else None),
+                       stop=halted)
 
     every = scene.check.every
     # the states until a stop is asked (polled before each state is made)
     states = _until(sim.steps(contacts=False, every=every), lambda: stop.asked)
-    ahead = None
+    ahead: StepsApart | StepsAhead | None = None
     if options.overlap and scene.effects.dynamics and not static:
-        # dynamics: the simulation settles and steps ahead on a thread of its own (cablecheck.run.ahead)
-        # while the detection model and the checks are prepared here
-        ahead = StepsAhead(states, depth_for(sim.state_bytes()), before=settle)
+        # dynamics: the simulation settles and steps ahead in a process of its own (cablecheck.run.apart;
+        # on a thread where there is no fork, cablecheck.run.ahead) while the detection model and the
+        # checks are prepared here
+        depth = depth_for(sim.state_bytes())
+        if AHEAD_IN_A_PROCESS and apart_available():
+            ahead = StepsApart(states, depth, before=settle, progress=progress,
+                               finish=_simulation_messages(sim, messages), halted=lambda: stop.asked)
+        else:
+            ahead = StepsAhead(states, depth, before=settle)
     else:
         settle()
     # the detection model compiled on a thread of its own meanwhile (`_detection`)
@@ -383,6 +400,8 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         if ahead is not None:
             ahead.close()
             timer.total["sim"] += ahead.cpu
+            if isinstance(ahead, StepsApart) and ahead.finished is not None:
+                messages.add(*ahead.finished[1:])     # MuJoCo's messages while it stepped in its process
         closed = {id(ev) for ev in tracker.events}
         events = tuple(tracker.finish())
         worn = wear.result()
@@ -428,7 +447,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         event_hold=tracker.hold, baseline=compared,
         review=None if notes is None else match(options.review, notes, events),
         validation=ends.validation, advance=ends.advance,
-        warnings=warning_counts([sim.data if isinstance(sim, Simulation) else None,   # a static check has none
+        warnings=warning_counts([_stepped_warnings(sim, ahead),   # a static check has none
                                  detector.detect_data if detector else None], messages),
         part_warnings=ends.part_warnings,
         physics_warnings=noted + tuple(built.warnings) + ends.hull_warnings + out.compression_warnings() + out.bend_warnings(),
@@ -437,6 +456,26 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
                       detector.collision_seconds() if detector is not None else None, loop_s,
                       watch.seconds if watch is not None else None),
         recording=options.record, physics_error=diverged, error=error, html=html)
+
+
+def _simulation_messages(sim: Simulation, messages: MujocoMessages) -> Callable[[], tuple]:
+    """What a simulation stepped in another process (`StepsApart`) raised
+    there, taken at its end: its data's warning counters and MuJoCo's
+    messages since it was forked (those before are this process's)."""
+    counts, first = Counter(messages.counts), dict(messages.first)
+    return lambda: (data_warnings(sim.data), dict(messages.counts - counts),
+                    {k: v for k, v in messages.first.items() if k not in first})
+
+
+def _stepped_warnings(sim, ahead) -> dict[str, int] | mujoco.MjData | None:
+    """The stepped simulation's warning counters (`warning_counts`): its own
+    data's, or, stepped in a process of its own, those it sent at its end
+    (none when it died: the run's error says so)."""
+    if not isinstance(sim, Simulation):
+        return None
+    if isinstance(ahead, StepsApart):
+        return ahead.finished[0] if ahead.finished is not None else {}
+    return sim.data
 
 
 def _stopped_entry(diverged: PhysicsError | None, error: RunError | None, t_last: float
@@ -460,7 +499,7 @@ def _until(states: Iterator, stop: Callable[[], bool]) -> Iterator:
 
 
 def _check_batch(batch: list, checks: StepChecks, out: _Checked, timer: _Timer,
-                 ahead: StepsAhead | None, watch: DivergenceWatch | None) -> PhysicsError | None:
+                 ahead: StepsApart | StepsAhead | None, watch: DivergenceWatch | None) -> PhysicsError | None:
     """Check a batch of states and take it in, up to its first diverged
     state (`cablecheck.run.divergence`), which is returned; the time since the last
     lap was the simulation's, or with `ahead` the wait for it (no stage's).
