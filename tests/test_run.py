@@ -213,38 +213,6 @@ def test_mujocos_messages_while_stepping_reach_the_report(tmp_path: Path, monkey
     assert report["complete"] and report["warnings"] == {"Solver said # things.": 1}
 
 
-def test_the_detection_model_is_made_on_a_thread_of_its_own(tmp_path: Path, monkeypatch):
-    """The detection model and its detector are made on a thread of their own
-    (cablecheck.run.runner._detection) while the run prepares its checks, and
-    an error raised there ends the run as one raised on the caller's thread
-    before the first step would: an incomplete report naming it."""
-    import threading
-
-    import cablecheck.run.runner as runner
-
-    made_on, real = [], runner.with_detection
-
-    def spied(built, planned):
-        made_on.append(threading.current_thread())
-        return real(built, planned)
-
-    scene = load_scene(EXAMPLES / "crossing.toml")
-    monkeypatch.setattr(runner, "with_detection", spied)
-    report = run_scene(scene, RunOptions(report=tmp_path / "r.json", record=None))
-    assert report["complete"] and report["validation"]["compared_steps"] > 0
-    assert len(made_on) == 1 and made_on[0] is not threading.current_thread()
-    assert made_on[0].name.startswith("cablecheck-detection")
-
-    def broken(built, planned):
-        raise RuntimeError("detection and simulation models differ in structure")
-
-    monkeypatch.setattr(runner, "with_detection", broken)
-    report = run_scene(scene, RunOptions(report=tmp_path / "e.json", record=None))
-    assert report["complete"] is False and report["error"]["type"] == "RuntimeError"
-    assert report["error"]["message"] == "detection and simulation models differ in structure"
-    assert json.loads((tmp_path / "e.json").read_text())["complete"] is False
-
-
 def test_a_stopped_run_checks_every_step_simulated_ahead(tmp_path: Path):
     """A stop asked while the simulation runs ahead of the checks (it may
     have simulated them all by then): every step simulated is checked."""

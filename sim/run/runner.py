@@ -5,9 +5,9 @@ poses) -> per-cable measures, checks and MuJoCo's contacts (`cablecheck.run.step
 a batch of consecutive steps at a time) -> events, report and recording.
 With dynamics the simulation settles and steps in a process of its own
 (`cablecheck.run.apart`; on a thread where there is no fork, `cablecheck.run.ahead`)
-from the moment its model is built, a thread builds
+from the moment its model is built, while this thread builds
 the detection model (`cablecheck.build.stages.with_detection`, `cablecheck.detection.detector`) and
-this one prepares the checks and the recording; the states come out in order, the
+prepares the checks and the recording; the states come out in order, the
 same as on one thread. `run_scene` owns the order of those stages, their
 timing, and what happens on Ctrl-C: the loop stops after the step being
 simulated (its batch is checked first), the recording is finished and
@@ -40,7 +40,6 @@ import time
 import traceback
 from collections import Counter
 from collections.abc import Callable, Iterator
-from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -251,28 +250,6 @@ def run_error(exc: BaseException, t: float | None = None) -> RunError:
                     "".join(traceback.format_exception(type(exc), exc, exc.__traceback__)), t)
 
 
-def _detection(built: Built, planned: tuple) -> Future:
-    """`built` with its detection model (`with_detection`) and that model's
-    `Detector`, made on a thread of its own: `result()` waits for them and
-    raises what making them raised. MuJoCo's compiler releases Python's
-    interpreter lock (as `DrawnLoad`'s does), so the second core compiles
-    the detection model, its concave meshes' surface patches most of the
-    work (robosuite's Tiago: 0.5 s), while this thread checks the routes
-    and prepares the checks. The same model and detector as made on this
-    thread (the same calls on the same input; nothing else uses either
-    until `result()`)."""
-    pool = ThreadPoolExecutor(1, thread_name_prefix="cablecheck-detection")
-    try:
-        return pool.submit(_detecting, built, planned)
-    finally:
-        pool.shutdown(wait=False)    # the thread ends with its one task
-
-
-def _detecting(built: Built, planned: tuple) -> tuple[Built, Detector]:
-    built = with_detection(built, planned)
-    return built, Detector(built)
-
-
 def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: StopRequest,
          start: float, warn: Callable[[str], None] | None, messages: MujocoMessages) -> RunOutcome:
     baseline = load_baseline(options.baseline) if options.baseline is not None else None   # bad input first
@@ -319,8 +296,6 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
             ahead = StepsAhead(states, depth, before=settle)
     else:
         settle()
-    # the detection model compiled on a thread of its own meanwhile (`_detection`)
-    detection = _detection(built, planned) if validate and not static else None
     try:
         # the routed shapes against the parts they collide with, while the simulation settles
         routes = () if static else route_warnings(scene, *planned)
@@ -329,8 +304,9 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
                 warn(w)
         noted += routes
         detector = None
-        if detection is not None:
-            built, detector = detection.result()
+        if validate and not static:
+            built = with_detection(built, planned)
+            detector = Detector(built)
         timer = _Timer()
         config = CheckConfig(method=options.method or scene.check.method,
                              spacing=options.spacing or scene.check.spacing,
