@@ -67,8 +67,36 @@ BEFORE = "99b3d34"
 """Default ``--before``: the last revision building part trees recursively in Python."""
 
 
-def _child(args: list[str], env_path: Path, mem_gb: float, timeout: float) -> tuple[int, float, float, str, str]:
-    """Run ``python args`` with PYTHONPATH=env_path; (exit status, wall s, peak RSS MB, stdout, stderr)."""
+PSS_EVERY = 0.25
+"""Seconds between two samples of a child's memory (`_tree_pss_mb`)."""
+
+
+def _tree_pss_mb(pid: int) -> float:
+    """The proportional set size (MB) of process `pid` and its descendants
+    now, from Linux's /proc (0 for what cannot be read): what they hold of
+    the machine's memory together, each page shared between them counted
+    once. A run whose simulation steps in a process of its own
+    (`cablecheck.run.apart`) is two processes, and ``ru_maxrss`` gives the
+    larger of the two, counting their shared pages in each: the sum of
+    their resident sizes counts them twice."""
+    total, todo = 0, [pid]
+    while todo:
+        p = todo.pop()
+        try:
+            with open(f"/proc/{p}/smaps_rollup") as f:
+                total += next(int(line.split()[1]) for line in f if line.startswith("Pss:"))
+            for task in os.listdir(f"/proc/{p}/task"):
+                with open(f"/proc/{p}/task/{task}/children") as f:
+                    todo += [int(c) for c in f.read().split()]
+        except (OSError, ValueError, StopIteration):
+            continue
+    return total / 1024.0
+
+
+def _child(args: list[str], env_path: Path, mem_gb: float, timeout: float
+           ) -> tuple[int, float, float, str, str, float]:
+    """Run ``python args`` with PYTHONPATH=env_path; (exit status, wall s, peak RSS MB, stdout, stderr,
+    peak PSS MB of the child and its own children together, sampled every `PSS_EVERY` s)."""
     limit = int(mem_gb * 2 ** 30)
 
     def cap():
@@ -76,11 +104,17 @@ def _child(args: list[str], env_path: Path, mem_gb: float, timeout: float) -> tu
 
     env = dict(os.environ, PYTHONPATH=str(env_path))
     t0 = time.perf_counter()
+    pss = 0.0
     with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
         proc = subprocess.Popen([sys.executable, *args], stdout=out, stderr=err, env=env,
                                 preexec_fn=cap, cwd=str(env_path))
         try:
-            _, status, usage = os.wait4(proc.pid, 0)
+            while True:
+                done, status, usage = os.wait4(proc.pid, os.WNOHANG)
+                if done:
+                    break
+                pss = max(pss, _tree_pss_mb(proc.pid))
+                time.sleep(PSS_EVERY)
         except KeyboardInterrupt:
             proc.kill()
             raise
@@ -88,7 +122,7 @@ def _child(args: list[str], env_path: Path, mem_gb: float, timeout: float) -> tu
         proc.returncode = os.waitstatus_to_exitcode(status)
         out.seek(0)
         err.seek(0)
-        return proc.returncode, wall, usage.ru_maxrss / 1024.0, out.read(), err.read()
+        return proc.returncode, wall, usage.ru_maxrss / 1024.0, out.read(), err.read(), pss
 
 
 # -- in-process modes (run in a child) ------------------------------------------------
@@ -276,7 +310,7 @@ def build_table(parts: list[int], before: str | None, mem_gb: float) -> tuple[st
     rows, found = [], []
     me = str(Path(__file__).resolve())
     for label, path in trees:
-        code, wall, rss, out, err = _child(["-c", "import numpy, scipy, trimesh"], path, mem_gb, 600)
+        code, wall, rss, out, err, _ = _child(["-c", "import numpy, scipy, trimesh"], path, mem_gb, 600)
         rows.append([label, "import", None, None, None, rss])
     from cablecheck.bench.harness import harness_scene
 
@@ -287,7 +321,7 @@ def build_table(parts: list[int], before: str | None, mem_gb: float) -> tuple[st
                                     "types": [q["shape"] for q in data["parts"]],
                                     "sizes": [[1e-3 * x for x in q["size"]] for q in data["parts"]]}))
         for label, path in trees:
-            code, wall, rss, out, err = _child([me, "--mode-build", str(spec)], path, mem_gb, 1800)
+            code, wall, rss, out, err, _ = _child([me, "--mode-build", str(spec)], path, mem_gb, 1800)
             if code == 0:
                 res = json.loads(out.strip().splitlines()[-1])
                 rows.append([label, res["parts"], res["triangles"], res["seconds"], wall, rss])
@@ -326,7 +360,7 @@ def run_table(grid: list[tuple[int, int]], duration: float, segments: int, mem_g
             tag = "" if k == 0 else "_before"
             rep, rec = out / f"{layout}_{c}x{p}{tag}.json", out / f"{layout}_{c}x{p}{tag}.rrd"
             rep.unlink(missing_ok=True)
-            code, wall, rss, so, se = _child(["-m", "cablecheck.cli.main", "run", str(scene), "--report", str(rep),
+            code, wall, rss, so, se, pss = _child(["-m", "cablecheck.cli.main", "run", str(scene), "--report", str(rep),
                                               "--record", str(rec)], path, mem_gb, 3600)
             if code in (0, 1) and rep.exists():
                 t = json.loads(rep.read_text())["timing"]
@@ -340,26 +374,29 @@ def run_table(grid: list[tuple[int, int]], duration: float, segments: int, mem_g
                        "check_s": t["check_s"] * per, "validate_s": t["validate_s"] * per,
                        "record_s": t["record_s"] * per, "cvr_over_sim": ratio,
                        "total_s": t["total_s"] * per, "process_s": wall,
-                       "peak_rss_mb": rss, "recording_mb_per_s": None if size is None else size * per,
+                       "peak_rss_mb": rss, "peak_pss_mb": pss,
+                       "recording_mb_per_s": None if size is None else size * per,
                        "recording_growth_mb_per_s": growth}
                 found.append(row)
                 rows.append([label, c, p, row["sim_s"], row["check_s"], row["validate_s"], row["record_s"],
-                             ratio, row["total_s"], wall, rss, row["recording_mb_per_s"], growth])
+                             ratio, row["total_s"], wall, rss, pss, row["recording_mb_per_s"], growth])
             else:
                 last = (se.strip().splitlines() or ["?"])[-1]
-                rows.append([label, c, p, None, None, None, None, None, None, wall, rss, None,
+                rows.append([label, c, p, None, None, None, None, None, None, wall, rss, pss, None,
                              f"failed ({code}): {last[:80]}"])
-                found.append({"code": label, "cables": c, "parts": p, "failed": last, "peak_rss_mb": rss})
+                found.append({"code": label, "cables": c, "parts": p, "failed": last, "peak_rss_mb": rss,
+                              "peak_pss_mb": pss})
     title = (f"Runs ({layout} layout): seconds per simulated second ({duration} s simulated after {settle} s of settling, "
              f"{segments} elements per cable, "
              f"validation {'on' if validate else 'off'}), one process per row, address space <= {mem_gb} GB")
     if growth_too:
         title += ("; rec_growth: the recording's growth per simulated second, (size - size of the same "
                   "run at half the duration) / (half the duration), without what is written once")
-    title += "; (c+v+r)/sim: check + validate + record over sim"
+    title += ("; (c+v+r)/sim: check + validate + record over sim; peak_rss_mb: the larger process's "
+              f"(ru_maxrss), peak_pss_mb: the run's processes together, sampled every {PSS_EVERY:g} s")
     return _table(title, ["code", "cables", "parts", "sim", "check", "validate", "record", "(c+v+r)/sim",
                           "total", "process_s",
-                          "peak_rss_mb", "rec_mb_per_s", "rec_growth"], rows), found
+                          "peak_rss_mb", "peak_pss_mb", "rec_mb_per_s", "rec_growth"], rows), found
 
 
 def _growth(data: dict, size: float, duration: float, stem: Path, path: Path, mem_gb: float) -> float | None:
@@ -386,7 +423,7 @@ def query_table(grid: list[tuple[int, int]], segments: int, mem_gb: float, out: 
     me = str(Path(__file__).resolve())
     for c, p in grid:
         scene = write_scene(harness_scene(c, p, segments=segments, duration=1.0), out / f"query_{c}x{p}.toml")
-        code, wall, rss, so, se = _child([me, "--mode-queries", str(scene)], REPO, mem_gb, 3600)
+        code, wall, rss, so, se, _ = _child([me, "--mode-queries", str(scene)], REPO, mem_gb, 3600)
         if code != 0:
             rows.append([c, p, None, None, None, None, None, None, None, f"failed: {(se.strip().splitlines() or ['?'])[-1][:80]}"])
             continue
@@ -416,7 +453,7 @@ def static_table(cases: list[tuple[int, int]], segments: int, mem_gb: float, out
         scene = write_scene(data, out / f"static_{c}x{p}.toml")
         res = {}
         for label, extra in (("no model", []), ("MuJoCo model", ["--with-model"])):
-            code, wall, rss, so, se = _child([me, "--mode-static", str(scene), *extra], REPO, mem_gb, 3600)
+            code, wall, rss, so, se, _ = _child([me, "--mode-static", str(scene), *extra], REPO, mem_gb, 3600)
             if code != 0:
                 rows.append([c, p, label, None, None, None, None, None, None, None, wall, rss,
                              f"failed: {(se.strip().splitlines() or ['?'])[-1][:80]}"])
@@ -492,7 +529,7 @@ def main() -> int:
         data = harness_scene(c, p, segments=a.segments, duration=duration, settle=settle)
         data["check"]["validate"] = not a.no_validate
         scene = write_scene(data, a.out / f"profile_{c}x{p}.toml")
-        code, wall, rss, so, se = _child([str(Path(__file__).resolve()), "--mode-profile", str(scene)], REPO,
+        code, wall, rss, so, se, _ = _child([str(Path(__file__).resolve()), "--mode-profile", str(scene)], REPO,
                                          a.mem_limit_gb, 3600)
         print(so)
         print(f"exit {code}, {wall:.1f} s, peak RSS {rss:.0f} MB (profiled; one run + one traced run)")

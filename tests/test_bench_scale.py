@@ -23,3 +23,20 @@ def test_static_table_runs_without_a_model_and_beside_one(tmp_path):
     assert static["events"] == mujoco["events"] and static["pairs"] == mujoco["pairs"]
     assert static["checker_points"] > 0 and static["fcl_points"] > 0 and static["n_points"] > 0
     assert "fcl/checker" in out.stdout
+
+
+def test_a_runs_memory_counts_its_processes_together():
+    """bench_scale's peak_pss_mb sums a process and its children (a run whose
+    simulation steps in a process of its own is two): a parent and a forked
+    child each holding 100 MB of their own read about 200 MB together, where
+    ru_maxrss gives the larger of the two, about 100 MB."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        from bench_scale import _child
+    finally:
+        sys.path.remove(str(ROOT / "benchmarks"))
+    code = ("import os, time; pid = os.fork(); a = (b'2' if pid == 0 else b'1') * (100 * 2 ** 20); "
+            "time.sleep(1.5); os._exit(0) if pid == 0 else os.waitpid(pid, 0)")
+    status, _, rss, _, err, pss = _child(["-c", code], ROOT, 4.0, 60)
+    assert status == 0, err
+    assert 100 <= rss < 190 and 200 <= pss < 280
