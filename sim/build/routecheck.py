@@ -53,7 +53,7 @@ def route_warnings(scene: Scene, frames: Frames, meshes: dict, plans: list[Cable
         for k in near.tolist():     # the parts whose boxes meet the cable's: a few, once per scene
             local = (pts - obstacles.pos[k]) @ obstacles.rot[k]
             shape = obstacles.shape(k)
-            d = signed_distance(shape, local)[0]
+            d = signed_distance(shape, local, limit=0.0)[0]
             # and between them: an element through a plate or a ring has both ends outside it; the
             # distance changes no faster than along the element, so only one as long as its ends'
             # distances together can reach the part
