@@ -116,6 +116,24 @@ def test_a_stop_asked_here_ends_the_child_after_the_states_in_flight():
     assert taken == list(range(len(taken))) and 5 <= len(taken) <= 5 + 1 + 3
 
 
+def test_a_stop_asked_while_the_child_sets_up_ends_it_at_once():
+    """No state taken yet (the run still builds): the stop reaches the child
+    settling all the same, which ends its set-up and makes no state."""
+    asked_at = time.perf_counter() + 0.2
+
+    def settle(report, halted):
+        end = time.perf_counter() + 10.0
+        while not halted() and time.perf_counter() < end:    # ten seconds of settling unless stopped
+            time.sleep(0.005)
+
+    apart = StepsApart(iter(range(3)), 8, before=settle, halted=lambda: time.perf_counter() > asked_at)
+    time.sleep(0.5)                              # the run building: nothing taken
+    start = time.perf_counter()
+    assert list(apart) == []
+    apart.close()
+    assert time.perf_counter() - start < 1.0 and apart.before_cpu < 1.0
+
+
 def test_child_cpu_is_counted_and_waiting_is_not():
     def busy():
         for k in range(3):

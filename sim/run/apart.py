@@ -29,8 +29,10 @@ thread (as the thread's settling reports from its own).
 
 Stops: the run's stop request lives in the run's process, so the child
 polls a shared flag instead, before each state (and settling, between its
-steps); the run raises it when `halted()` says so, as it takes each state,
-and on `close()`. The child ignores SIGINT and SIGTERM: Ctrl-C reaches the
+steps); the run raises it when `halted()` says so (looked at as it takes
+each state, and every `HALT_EVERY` seconds while the child is quiet, so a
+Ctrl-C while the run still builds ends the settling at once), and on
+`close()`. The child ignores SIGINT and SIGTERM: Ctrl-C reaches the
 whole process group, and the run, not the child, decides what a stop
 means (every state made before it is handed on and checked).
 
@@ -76,6 +78,9 @@ CHUNK = 16
 """Most states the child sends in one message (fewer when it would otherwise
 wait for a slot with states in hand, and at the end)."""
 
+HALT_EVERY = 0.05
+"""Seconds between two looks at `halted` while no message comes from the child."""
+
 CLOSE_WAIT = 2.0
 """Seconds `close()` waits for the child to end after the state it is
 making before it kills it."""
@@ -118,8 +123,10 @@ class StepsApart:
         the arguments `before` gave its progress callable.
       finish: called in the child after the last state (or an error or a
         stop); its value (picklable) becomes `finished`.
-      halted: polled in the run's process as each state is taken; once it
-        returns True the child makes no further state.
+      halted: polled in the run's process as each state is taken, and every
+        `HALT_EVERY` seconds meanwhile (on the reading thread); once it
+        returns True the child makes no further state (and ends its set-up
+        when that polls its flag).
 
     Attributes:
       cpu: the child's CPU seconds making and sending the states so far,
@@ -164,6 +171,8 @@ class StepsApart:
         try:
             while True:
                 try:
+                    while not self._recv.poll(HALT_EVERY):   # a stop asked here reaches a child still settling
+                        self._check_halt()
                     raw = self._recv.recv_bytes()
                 except (EOFError, OSError):
                     self._process.join()
@@ -205,9 +214,12 @@ class StepsApart:
                 if self._closed:
                     return
                 self._slots.release()
-                if self._halted is not None and not self._halt.is_set() and self._halted():
-                    self._halt.set()
+                self._check_halt()
                 yield state
+
+    def _check_halt(self) -> None:
+        if self._halted is not None and not self._halt.is_set() and self._halted():
+            self._halt.set()
 
     def close(self) -> None:
         """Stop the child (after the state it is making), wait for it and for what it sent."""
