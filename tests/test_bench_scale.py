@@ -28,8 +28,10 @@ def test_static_table_runs_without_a_model_and_beside_one(tmp_path):
 def test_a_runs_memory_counts_its_processes_together():
     """bench_scale's peak_pss_mb sums a process and its children (a run whose
     simulation steps in a process of its own is two): a parent and a forked
-    child each holding 100 MB of their own read about 200 MB together, where
-    ru_maxrss gives the larger of the two, about 100 MB."""
+    child each holding 100 MB of their own read about 200 MB together (the
+    parent alone, about 100). ru_maxrss is not compared: a process forked
+    from a large one (this test's worker) keeps that one's size as its
+    high-water mark through exec."""
     sys.path.insert(0, str(ROOT / "benchmarks"))
     try:
         from bench_scale import _child
@@ -37,6 +39,6 @@ def test_a_runs_memory_counts_its_processes_together():
         sys.path.remove(str(ROOT / "benchmarks"))
     code = ("import os, time; pid = os.fork(); a = (b'2' if pid == 0 else b'1') * (100 * 2 ** 20); "
             "time.sleep(1.5); os._exit(0) if pid == 0 else os.waitpid(pid, 0)")
-    status, _, rss, _, err, pss = _child(["-c", code], ROOT, 4.0, 60)
+    status, _, _, _, err, pss = _child(["-c", code], ROOT, 4.0, 60)
     assert status == 0, err
-    assert 100 <= rss < 190 and 200 <= pss < 280
+    assert 190 <= pss < 280          # 200 MiB and the interpreters, their shared pages split
