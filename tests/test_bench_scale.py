@@ -38,7 +38,7 @@ def test_a_runs_memory_counts_its_processes_together():
     finally:
         sys.path.remove(str(ROOT / "benchmarks"))
     code = ("import os, time; pid = os.fork(); a = (b'2' if pid == 0 else b'1') * (100 * 2 ** 20); "
-            "time.sleep(1.5); os._exit(0) if pid == 0 else os.waitpid(pid, 0)")
+            "time.sleep(0.8); os._exit(0) if pid == 0 else os.waitpid(pid, 0)")
     status, _, _, _, err, pss = _child(["-c", code], ROOT, 4.0, 60)
     assert status == 0, err
     assert 190 <= pss < 280          # 200 MiB and the interpreters, their shared pages split

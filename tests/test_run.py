@@ -191,10 +191,9 @@ def test_simulating_ahead_gives_the_same_report(tmp_path: Path, monkeypatch, in_
     assert two["timing"]["sim_s"] > 0
 
 
-@pytest.mark.parametrize("overlap", [True, False])
-def test_mujocos_messages_while_stepping_reach_the_report(tmp_path: Path, monkeypatch, overlap: bool):
-    """A message MuJoCo raises while the simulation steps (in a process of its
-    own, cablecheck.run.apart, or here) is counted in the report's warnings, once."""
+def test_mujocos_messages_while_stepping_reach_the_report(tmp_path: Path, monkeypatch):
+    """A message MuJoCo raises while the simulation steps in a process of its
+    own (cablecheck.run.apart) is counted in the report's warnings, once."""
     import mujoco
 
     import cablecheck.run.loop as loop
@@ -209,7 +208,7 @@ def test_mujocos_messages_while_stepping_reach_the_report(tmp_path: Path, monkey
 
     monkeypatch.setattr(loop.Simulation, "steps", talking)
     report = run_scene(load_scene(EXAMPLES / "crossing.toml"),
-                       RunOptions(report=tmp_path / "r.json", record=None, overlap=overlap))
+                       RunOptions(report=tmp_path / "r.json", record=None))
     assert report["complete"] and report["warnings"] == {"Solver said # things.": 1}
 
 
