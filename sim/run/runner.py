@@ -256,8 +256,6 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     notes = load_review(options.review) if options.review is not None else None
     validate = scene.check.validate
     static = not needs_model(scene)     # nothing calls for MuJoCo: no model is built (cablecheck.build.static)
-    # the mjcf model's visual geoms, which only the recording draws, compiled on a thread of their own
-    drawn = DrawnLoad(scene) if options.record and not static else None
     planned = None if static else plan_cables(scene)
     noted = scene.warnings
     # the simulation model first: the detection model is compiled while it settles
@@ -296,6 +294,9 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
             ahead = StepsAhead(states, depth, before=settle)
     else:
         settle()
+    # the mjcf model's visual geoms, which only the recording draws, compiled on a thread of their own
+    # (started after the simulation's process is forked: no compile is under way in the fork)
+    drawn = DrawnLoad(scene) if options.record and not static else None
     try:
         # the routed shapes against the parts they collide with, while the simulation settles
         routes = () if static else route_warnings(scene, *planned)
