@@ -13,10 +13,12 @@ scene step) and waits for it while the checks hold it, and both sides ran
 the simulation keeps its model, data, script and the states' generator as
 they were (nothing of them is pickled) and steps on the other core without
 waiting for anything. Measured side by side with the thread, 2026-11-29, three
-runs each (`cablecheck run --no-record`): robosuite's Tiago zoo scene 4.72-4.96
--> 4.21-4.45 s, the checks and validation 2.11-2.30 -> 1.85-1.97 CPU s;
-gymnasium's kitchen Franka with a hose resting on its links 3.29-3.43 ->
-2.91 s; the crossing harness's first 0.3 s 23.0 -> 21.1 s.
+runs each (`cablecheck run --no-record`): robosuite's Tiago zoo scene 4.91-5.00
+-> 4.29-4.36 s, the checks and validation 2.20-2.32 -> 1.91-1.93 CPU s;
+gymnasium's kitchen Franka with a hose resting on its links 3.38-3.40 ->
+2.91-3.07 s; the Fetch 4.66-4.93 -> 4.33-4.61 s; the 64 x 1,000 crossing
+harness, whose own simulation is its wall time, (c+v+r)/sim 1.30 -> 1.26
+(`benchmarks/bench_scale.py`).
 
 What crosses: each state, pickled (its arrays: a few kB to a few hundred kB),
 in chunks of up to `CHUNK` through a pipe; a thread of the run's
