@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import trimesh
 from hypothesis import given, settings, strategies as st
+from helpers import examples
 from strategies import coords, poses
 
 from cablecheck.checker.advance.partpairs import PartPairGaps, PartSolids, part_pair_bounds
@@ -495,7 +496,7 @@ segments = 10
     return text
 
 
-@settings(max_examples=4, deadline=None)
+@settings(max_examples=examples(2), deadline=None)
 @given(st.fixed_dictionaries({
     "gap": st.floats(-1.0, 3.0), "clearance": st.sampled_from([0.5, 2.0]), "torus_keepout": st.booleans(),
     "slide_y": st.floats(-20, 20), "rod_x": st.floats(-10, 10), "rod_z": st.floats(-30, 30),
