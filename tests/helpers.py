@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import time
 from pathlib import Path
 
 import numpy as np
@@ -69,3 +70,13 @@ def element_gaps(pa: np.ndarray, pb: np.ndarray) -> np.ndarray:
     ma, mb = 0.5 * (pa[:, 1:] + pa[:, :-1]), 0.5 * (pb[:, 1:] + pb[:, :-1])
     ha, hb = 0.5 * row_norm(pa[:, 1:] - pa[:, :-1]), 0.5 * row_norm(pb[:, 1:] - pb[:, :-1])
     return row_norm(ma[:, :, None, :] - mb[:, None, :, :]) - ha[:, :, None] - hb[:, None, :]
+
+
+def busy_states(n: int, seconds: float):
+    """States 0 .. n - 1, each after `seconds` of the making thread's own CPU
+    time (a simulation's cost, for the threads and processes that make them)."""
+    for k in range(n):
+        t = time.thread_time()
+        while time.thread_time() - t < seconds:
+            pass
+        yield k

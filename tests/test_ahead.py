@@ -11,6 +11,7 @@ import time
 
 import pytest
 from hypothesis import given, settings, strategies as st
+from helpers import busy_states
 
 from cablecheck.run.ahead import AHEAD_BYTES, DEPTH, MAX_DEPTH, SWITCH_INTERVAL, StepsAhead, depth_for
 
@@ -57,14 +58,7 @@ def test_close_stops_the_worker_early():
 
 
 def test_worker_cpu_is_counted_and_waiting_is_not():
-    def busy():
-        for k in range(3):
-            t = time.thread_time()
-            while time.thread_time() - t < 0.02:   # 20 ms of the worker's CPU per state
-                pass
-            yield k
-
-    ahead = StepsAhead(busy(), depth=1)
+    ahead = StepsAhead(busy_states(3, 0.02), depth=1)   # 20 ms of the worker's CPU per state
     time.sleep(0.2)                               # the worker waits on a full queue meanwhile
     assert list(ahead) == [0, 1, 2]
     ahead.close()

@@ -19,7 +19,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from cablecheck.run.apart import StepsApart, available
-from tests.helpers import examples
+from tests.helpers import busy_states, examples
 
 pytestmark = pytest.mark.skipif(not available(), reason="no fork here: runs step ahead on a thread")
 
@@ -135,14 +135,7 @@ def test_a_stop_asked_while_the_child_sets_up_ends_it_at_once():
 
 
 def test_child_cpu_is_counted_and_waiting_is_not():
-    def busy():
-        for k in range(3):
-            t = time.thread_time()
-            while time.thread_time() - t < 0.02:   # 20 ms of the child's CPU per state
-                pass
-            yield k
-
-    apart = StepsApart(busy(), 1)
+    apart = StepsApart(busy_states(3, 0.02), 1)   # 20 ms of the child's CPU per state
     time.sleep(0.2)                               # the child waits for a slot meanwhile
     assert list(apart) == [0, 1, 2]
     apart.close()

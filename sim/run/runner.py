@@ -272,7 +272,10 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     if progress:
         progress("settle", 0, max(sim.settle_steps, 1))
 
-    def settle(report: Progress | None = progress, halted: Callable[[], bool] = lambda: stop.asked) -> None:
+    def asked() -> bool:
+        return stop.asked
+
+    def settle(report: Progress | None = progress, halted: Callable[[], bool] = asked) -> None:
         if not halted():
             sim.settle(None if report is None else
                        (lambda k: report("settle", k, sim.settle_steps) if k % 50 == 0 else None),
@@ -280,7 +283,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
 
     every = scene.check.every
     # the states until a stop is asked (polled before each state is made)
-    states = _until(sim.steps(contacts=False, every=every), lambda: stop.asked)
+    states = _until(sim.steps(contacts=False, every=every), asked)
     ahead: StepsApart | StepsAhead | None = None
     if options.overlap and scene.effects.dynamics and not static:
         # dynamics: the simulation settles and steps ahead in a process of its own (cablecheck.run.apart;
@@ -289,7 +292,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
         depth = depth_for(sim.state_bytes())
         if AHEAD_IN_A_PROCESS and apart_available():
             ahead = StepsApart(states, depth, before=settle, progress=progress,
-                               finish=_simulation_messages(sim, messages), halted=lambda: stop.asked)
+                               finish=_simulation_messages(sim, messages), halted=asked)
         else:
             ahead = StepsAhead(states, depth, before=settle)
     else:
