@@ -144,11 +144,15 @@ def test_a_scene_whose_names_hold_xml_characters_runs_and_records(tmp_path):
     assert (tmp_path / "r.rrd").stat().st_size > 0
 
 
+_ROBOT_DEFAULTS = """<joint limited="true" damping="50" frictionloss="0.1" armature="0.01"/>
+      <geom condim="4" solref="0.01 1" solimp="0.99 0.99 0.01" friction="2 0.1 0.01" group="3"/>"""
+
 _CLASSED = """<mujoco>
+  {option}
   <default>
+    {main}
     <default class="robot">
-      <joint limited="true" damping="50"/>
-      <geom condim="4" solref="0.01 1" solimp="0.99 0.99 0.01" friction="2 0.1 0.01" group="3"/>
+      {robot}
     </default>
   </default>
   <worldbody>
@@ -164,32 +168,51 @@ _CLASSED = """<mujoco>
 
 
 @pytest.mark.parametrize("detect", [False, True])
-def test_what_the_scene_adds_to_an_mjcf_body_ignores_its_childclass(tmp_path, detect):
-    """A clamped end's roll hinge and a part on a link whose body has a
-    childclass are built as on the same link without one: a class limiting
-    its joints without a range (MuJoCo refuses the hinge: range 0 0) or
-    damping them, or giving its geoms their own contact parameters, reaches
-    none of what the scene adds. (gymnasium-robotics' kitchen Franka failed
-    to compile; Fetch's gripper class gave a tool part condim 4.)"""
-    def built(cls: str):
-        (tmp_path / "arm.xml").write_text(_CLASSED.format(cls=cls))
+@pytest.mark.parametrize("where", ["childclass", "main"])
+def test_what_the_scene_adds_to_an_mjcf_body_ignores_its_classes(tmp_path, detect, where):
+    """A clamped end's roll hinge, a part on a link and a scripted body of the
+    scene are built as in the same model without classes (MuJoCo's own
+    defaults): a class limiting its joints without a range (MuJoCo refuses
+    the hinge: range 0 0), damping them or adding friction loss, or giving
+    its geoms their own contact parameters, reaches none of what the scene
+    adds, whether it is the link's childclass or the model's main class; and
+    the model's noslip iterations (none with flexes) stop nothing.
+    (gymnasium-robotics' kitchen Franka failed to compile on its childclass,
+    its Adroit hand on its main class; Fetch's gripper class gave a tool part
+    condim 4.)"""
+    def built(classes: bool):
+        main = _ROBOT_DEFAULTS if classes and where == "main" else ""
+        cls = 'childclass="robot"' if classes and where == "childclass" else ""
+        option = '<option noslip_iterations="20"/>' if classes else ""
+        (tmp_path / "arm.xml").write_text(_CLASSED.format(option=option, main=main, robot=_ROBOT_DEFAULTS, cls=cls))
         data = {"scene": {"name": "t", "units": "m", "duration": 0.05, "settle": 0.05, "mjcf": "arm.xml"},
                 "effects": {"contact": ["cable-structure"]},
+                "bodies": [{"name": "slider", "pos": [0.0, 0.4, 0.1]}],
                 "parts": [{"name": "tool", "body": "link", "shape": "box", "size": [0.02, 0.02, 0.02],
-                           "pos": [0.3, 0, 0]}],
+                           "pos": [0.3, 0, 0]},
+                          {"name": "block", "body": "slider", "shape": "box", "size": [0.02, 0.02, 0.02]}],
                 "cables": [{"name": "hose", "radius": 0.005, "start": {"pos": [-0.2, 0, 0.3]},
                             "end": {"body": "link", "pos": [0.2, 0, 0.04]}, "length": 0.6, "segments": 16}]}
         b = build(parse_scene(data, tmp_path / "s.toml"))
         return b.detect if detect else b.model
 
-    classed, plain = built('childclass="robot"'), built("")
+    classed, plain = built(True), built(False)
     assert classed.jnt_limited[classed.joint("j").id] == 1           # the model's own joint keeps its class
     assert classed.geom_condim[classed.geom("arm").id] == 4
     roll = classed.joint(end_roll_body("hose")).id
     assert roll == plain.joint(end_roll_body("hose")).id
     assert classed.jnt_limited[roll] == plain.jnt_limited[roll] == 0
     assert classed.dof_damping[classed.jnt_dofadr[roll]] == plain.dof_damping[plain.jnt_dofadr[roll]] == 0.0
-    g, h = classed.geom("tool").id, plain.geom("tool").id
-    for field in ("geom_condim", "geom_solref", "geom_solimp", "geom_friction", "geom_group", "geom_margin",
-                  "geom_contype", "geom_conaffinity", "geom_priority", "geom_solmix", "geom_gap"):
-        assert np.array_equal(getattr(classed, field)[g], getattr(plain, field)[h]), field
+    for field in ("dof_frictionloss", "dof_armature"):
+        assert getattr(classed, field)[classed.jnt_dofadr[roll]] == getattr(plain, field)[plain.jnt_dofadr[roll]]
+    free, free_plain = classed.joint("slider/free").id, plain.joint("slider/free").id
+    dofs = slice(classed.jnt_dofadr[free], classed.jnt_dofadr[free] + 6)
+    dofs_plain = slice(plain.jnt_dofadr[free_plain], plain.jnt_dofadr[free_plain] + 6)
+    for field in ("dof_damping", "dof_frictionloss", "dof_armature"):
+        assert np.array_equal(getattr(classed, field)[dofs], getattr(plain, field)[dofs_plain]), field
+    assert classed.opt.noslip_iterations == 0
+    for part in ("tool", "block"):
+        g, h = classed.geom(part).id, plain.geom(part).id
+        for field in ("geom_condim", "geom_solref", "geom_solimp", "geom_friction", "geom_group", "geom_margin",
+                      "geom_contype", "geom_conaffinity", "geom_priority", "geom_solmix", "geom_gap"):
+            assert np.array_equal(getattr(classed, field)[g], getattr(plain, field)[h]), (part, field)

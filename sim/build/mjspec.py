@@ -138,6 +138,9 @@ def _set_options(spec: mujoco.MjSpec, scene: Scene) -> None:
     opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     opt.tolerance = 1e-8
     opt.iterations = max(opt.iterations, 100)
+    # no noslip pass: MuJoCo refuses it with flexes under the discrete integrator (an mjcf model's
+    # `noslip_iterations`, gymnasium's Adroit hand 20, stopped every run on it)
+    opt.noslip_iterations = 0
     opt.gravity = [0.0, 0.0, -9.81] if scene.effects.gravity else [0.0, 0.0, 0.0]
     opt.viscosity = 0.0  # no medium: cables are damped by their own material (`rayleigh_damping`)
     opt.density = 0.0
@@ -212,10 +215,11 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
         g.contype, g.conaffinity = model_bits(scene, bits, detect, (int(g.contype), int(g.conaffinity)))
         g.margin = margin
 
+    neutral = neutral_default(spec)     # what the scene adds takes MuJoCo's defaults, not the mjcf model's
     for body in scene.bodies:
-        b = spec.worldbody.add_body(name=body.name, pos=list(np.asarray(body.pos, float) - origin),
+        b = spec.worldbody.add_body(default=neutral, name=body.name, pos=list(np.asarray(body.pos, float) - origin),
                                     quat=list(euler_quat(body.euler)), gravcomp=1.0)
-        b.add_freejoint(name=f"{body.name}/free").armature = BASE_ARMATURE
+        b.add_joint(default=neutral, type=mujoco.mjtJoint.mjJNT_FREE, name=f"{body.name}/free").armature = BASE_ARMATURE
         # a free body needs mass; parts on it carry none of their own here
         b.explicitinertial = True
         b.mass = 1.0
@@ -224,9 +228,10 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
         parent = spec.worldbody if part.body == "world" else spec.body(part.body)
         contype, conaff = part_bits(scene, bits, detect, part.keepout)
         pos = np.asarray(part.pos, float) - (origin if part.body == "world" else 0.0)
-        # the main class, not the body's childclass: a part on an mjcf link keeps cablecheck's contact
-        # parameters, not the robot's (Fetch's gripper class gives condim 4, solref and solimp)
-        common = dict(default=spec.default, name=part.name, pos=list(pos), quat=list(euler_quat(part.euler)),
+        # MuJoCo's defaults, not the body's childclass nor the model's main class: a part on an mjcf
+        # link keeps cablecheck's contact parameters, not the robot's (Fetch's gripper class gives
+        # condim 4, solref and solimp)
+        common = dict(default=neutral, name=part.name, pos=list(pos), quat=list(euler_quat(part.euler)),
                       contype=contype, conaffinity=conaff, margin=margin,
                       rgba=[0.9, 0.5, 0.1, 0.3] if part.keepout else [0.6, 0.6, 0.65, 1.0])
         if part.shape == "mesh":
@@ -246,7 +251,7 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
         placed = frames.at_qpos0(scene, plans) if rest else frames
         for plan in plans:
             _hold_vertices(spec, plan, placed, rest)
-            _add_end_roll(spec, plan, frames)
+            _add_end_roll(spec, plan, frames, neutral)
             _add_clip_rolls(spec, plan, scene.timestep)
     try:
         model = spec.compile()
@@ -328,6 +333,34 @@ def _hold_vertices(spec: mujoco.MjSpec, plan: CablePlan, frames: Frames, rest: b
         b.inertia = [b.mass * (2.0 * c.radius) ** 2 / 6.0] * 3
 
 
+NEUTRAL_CLASS = "cablecheck:neutral"
+"""The default class `neutral_default` adds to a model."""
+
+_NEUTRAL_JOINT = ("limited", "range", "actfrclimited", "actfrcrange", "actgravcomp", "stiffness", "springref",
+                  "springdamper", "damping", "frictionloss", "margin", "solref_limit", "solimp_limit",
+                  "solref_friction", "solimp_friction", "armature", "ref", "group")
+_NEUTRAL_GEOM = ("condim", "contype", "conaffinity", "friction", "solref", "solimp", "solmix", "priority", "gap",
+                 "margin", "group", "density", "fluid_ellipsoid", "fluid_coefs")
+
+
+def neutral_default(spec: mujoco.MjSpec) -> mujoco.MjsDefault:
+    """A default class of `spec` whose joints and geoms take MuJoCo's own
+    defaults (those of an empty model) for every attribute that acts on the
+    physics, whatever the mjcf model's main class sets: for the bodies,
+    joints and geoms the scene adds (its parts, its scripted bodies, an end's
+    roll hinge). A class of the model's would give them its values: Adroit's
+    main class limits every joint (`limited="true"`, no range: MuJoCo refuses
+    the roll hinge), damps it and adds friction loss; Fetch's and the kitchen
+    Franka's childclasses did the same on their links."""
+    own = spec.add_default(NEUTRAL_CLASS, spec.default)
+    empty = mujoco.MjSpec()              # kept alive while its defaults are read
+    for attr in _NEUTRAL_JOINT:
+        setattr(own.joint, attr, getattr(empty.default.joint, attr))
+    for attr in _NEUTRAL_GEOM:
+        setattr(own.geom, attr, getattr(empty.default.geom, attr))
+    return own
+
+
 def end_clamp(plan: CablePlan) -> tuple[str, list[int]] | None:
     """The body and the two vertices of a cable's clamped end, or None (a pinned or free end)."""
     held = [h for h in plan.held if h.kind == "end"]
@@ -336,7 +369,7 @@ def end_clamp(plan: CablePlan) -> tuple[str, list[int]] | None:
     return held[0].body, sorted(h.vertex for h in held)
 
 
-def _add_end_roll(spec: mujoco.MjSpec, plan: CablePlan, frames: Frames) -> None:
+def _add_end_roll(spec: mujoco.MjSpec, plan: CablePlan, frames: Frames, neutral: mujoco.MjsDefault) -> None:
     """Hold a clamped end through a child body of its holder, the end roll
     body: at the routed end point, on a hinge about the routed end edge
     (on which both held vertices lie, so turning it moves nothing), which
@@ -358,13 +391,14 @@ def _add_end_roll(spec: mujoco.MjSpec, plan: CablePlan, frames: Frames) -> None:
     name = end_roll_body(plan.cable.name)
     pos = frames.to_local(body, plan.routed[end])
     axis = pos - frames.to_local(body, plan.routed[inner])
-    # the main class, not the body's childclass: a link's class may limit its joints (range 0 0,
-    # which MuJoCo refuses) or damp them (Fetch's: 50)
-    roll = parent.add_body(default=spec.default, name=name, pos=list(pos), gravcomp=1.0)
+    # MuJoCo's defaults (`neutral_default`), not a class of the model's: a link's class or
+    # the model's main one may limit its joints (range 0 0, which MuJoCo refuses: Adroit's main
+    # class) or damp them (Fetch's: 50)
+    roll = parent.add_body(default=neutral, name=name, pos=list(pos), gravcomp=1.0)
     roll.explicitinertial = True
     roll.mass = ROLL_MASS
     roll.inertia = [ROLL_MASS * plan.cable.radius ** 2] * 3
-    roll.add_joint(default=spec.default, name=name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(axis / np.linalg.norm(axis)),
+    roll.add_joint(default=neutral, name=name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(axis / np.linalg.norm(axis)),
                    armature=BASE_ARMATURE)
     flex = next(f for f in spec.flexes if f.name == f"{CABLE_PREFIX}{plan.cable.name}")
     bodies = list(flex.vertbody)
