@@ -282,7 +282,7 @@ def test_door_hinge_pin_never_forces_full_checks(tmp_path):
     assert _strip(cable(runs["door"])) == _strip(cable(runs["no_allow"]))
 
 
-@pytest.mark.parametrize("seed", seeds(2))
+@pytest.mark.parametrize("seed", seeds(1))
 def test_sparse_part_gaps_change_no_answer(seed: int, tmp_path, monkeypatch):
     """The sparse centre-part gaps (forced on these small scenes) give the
     answers of checking every step in full, and skip steps as the dense table

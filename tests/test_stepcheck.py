@@ -41,15 +41,15 @@ def test_batch_size_changes_no_answer(name: str, tmp_path, monkeypatch):
     monkeypatch.setattr(cablecheck.run.stepcheck, "PROMOTE_MIN", 0)
     scene = load_scene(SCENES / f"{name}.toml")
     reports = []
-    # fixed batches of 1, 7 and BATCH states, then the run's own (growing) batches
-    for size, most in ((1, 1), (7, 7), (cablecheck.run.runner.BATCH, cablecheck.run.runner.BATCH), (cablecheck.run.runner.BATCH, cablecheck.run.runner.BATCH_MAX)):
+    # fixed batches of 1 and 7 states, then the run's own (BATCH, growing to BATCH_MAX)
+    for size, most in ((1, 1), (7, 7), (cablecheck.run.runner.BATCH, cablecheck.run.runner.BATCH_MAX)):
         monkeypatch.setattr(cablecheck.run.runner, "BATCH", size)
         monkeypatch.setattr(cablecheck.run.runner, "BATCH_MAX", most)
         rep = run_scene(scene, RunOptions(report=tmp_path / f"{size}-{most}.json", record=None))
         reports.append(_strip(_comparable(rep)))
     adv = reports[0]["advance"]
     assert adv["full_checks"] > 1 and adv["proven_clear_steps"] > 0   # both kinds in the batches
-    assert reports[0] == reports[1] == reports[2] == reports[3]
+    assert reports[0] == reports[1] == reports[2]
 
 
 def test_active_part_pairs_batch_size_changes_no_answer(tmp_path, monkeypatch):
@@ -58,13 +58,13 @@ def test_active_part_pairs_batch_size_changes_no_answer(tmp_path, monkeypatch):
     answers, allowed pairs included."""
     scene = load_scene(Path(__file__).resolve().parent / "scenes" / "door.toml")
     reports = []
-    for size, most in ((1, 1), (7, 7), (cablecheck.run.runner.BATCH, cablecheck.run.runner.BATCH), (cablecheck.run.runner.BATCH, cablecheck.run.runner.BATCH_MAX)):
+    for size, most in ((1, 1), (7, 7), (cablecheck.run.runner.BATCH, cablecheck.run.runner.BATCH_MAX)):
         monkeypatch.setattr(cablecheck.run.runner, "BATCH", size)
         monkeypatch.setattr(cablecheck.run.runner, "BATCH_MAX", most)
         rep = run_scene(scene, RunOptions(report=tmp_path / f"{size}-{most}.json", record=None))
         reports.append(_strip({**_comparable(rep), "allowed": rep["allowed"]}))
     assert reports[0]["advance"]["proven_clear_steps"] > reports[0]["advance"]["full_checks"]
-    assert reports[0]["allowed"] and reports[0] == reports[1] == reports[2] == reports[3]
+    assert reports[0]["allowed"] and reports[0] == reports[1] == reports[2]
 
 
 def test_neighbour_links_in_the_kinematic_tree():

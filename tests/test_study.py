@@ -220,14 +220,7 @@ def scheduler():
                 time.sleep(0.3)
         yield address
     finally:
-        for p in reversed(procs):
-            p.send_signal(signal.SIGTERM)
-        for p in procs:
-            try:
-                p.wait(timeout=5)
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait()
+        _stop(procs)
 
 
 def _rows(folder: Path) -> list[dict]:
@@ -372,13 +365,18 @@ def _largest_end_distance(scene) -> float:
 
 
 def test_example_window_matches_the_geometry(scheduler, tmp_path, capsys):
-    """The example study: a length shorter than the largest distance between
-    the ends over the motion (less the 1 % allowance) must be taut, so the
-    window cannot start below it; and the printed answer is the window."""
-    assert main(["study", str(EXAMPLE), "--scheduler", scheduler, "--out", str(tmp_path),
+    """The example study (at half its count of lengths over the same range, for
+    CI's time): a length shorter than the largest distance between the ends
+    over the motion (less the 1 % allowance) must be taut, so the window cannot
+    start below it; and the printed answer is the window."""
+    text = EXAMPLE.read_text()
+    assert 'scene = "../drawer.toml"' in text and "count = 8" in text
+    path = write_text(tmp_path / "example.toml", text.replace('"../drawer.toml"', f'"{EXAMPLE.parent.parent}/drawer.toml"')
+                      .replace("count = 8", "count = 4"))
+    assert main(["study", str(path), "--scheduler", scheduler, "--out", str(tmp_path),
                  "--no-record"]) == 1
     printed = capsys.readouterr().out
-    study = load_study(EXAMPLE)
+    study = load_study(path)
     reach = _largest_end_distance(load_scene(study.scene_path))
     assert reach == pytest.approx(575.0)
     rows = [Row(id=r["id"], values=(float(r["cables.power.length"]),), status=Status(r["status"]),
@@ -557,8 +555,8 @@ def _stop(procs: list[subprocess.Popen]) -> None:
         if p.poll() is None:
             p.send_signal(signal.SIGTERM)
     for p in procs:
-        try:
-            p.wait(timeout=5)
+        try:    # a worker without its nanny at times outlives SIGTERM (Dask's, not under test here)
+            p.wait(timeout=1)
         except subprocess.TimeoutExpired:
             p.kill()
             p.wait()
