@@ -46,7 +46,7 @@ def main(argv=None) -> None:
 
     scene = load_scene(SCENE)
     surfaces = build(scene)
-    with mock.patch.object(cablecheck.build.mjspec, "add_surfaces", lambda spec, model, cable_bit: model):
+    with mock.patch.object(cablecheck.build.mjspec, "add_surfaces", lambda spec, like, cable_bit: []):
         hulls = build(scene)
     with mock.patch.object(cablecheck.detection.mesh, "PATCH_TRIANGLES", 10 ** 9):
         whole = build(scene)

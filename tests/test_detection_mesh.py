@@ -114,6 +114,55 @@ def test_only_non_convex_mesh_geoms_get_a_surface_and_cable_flexes_keep_their_id
     assert surface_geoms(convex.detect)[0].size == 0 and hull_parts(convex.parts, convex.detect) == {"u"}
 
 
+def _triangles(verts: np.ndarray, faces: np.ndarray) -> set:
+    """Each triangle as the set of its three vertices' coordinates (exact bits)."""
+    return {frozenset(map(tuple, verts[f].tolist())) for f in faces}
+
+
+def test_a_surface_is_its_geoms_mesh_in_the_detection_model_itself(tmp_path):
+    """The surfaces are read from the simulation model, which compiles the same
+    meshes (the detection model compiles once): every concave mesh geom's
+    patches together hold exactly its mesh's non-degenerate triangles, where
+    the detection model itself puts them (its own mesh vertices and geom
+    frame), to the bit. The robot cell's links (mjcf meshes, some bodies
+    without a name) and a part's U on a scripted body."""
+    import mujoco
+
+    from pathlib import Path
+    cell = load_scene(Path(__file__).resolve().parents[1] / "scenes" / "robot_cell.toml")
+    for built in (build(cell), build(_scene(tmp_path, 0.0))):
+        m = built.detect
+        flexes, geoms = surface_geoms(m)
+        assert len(set(geoms.tolist())) >= 1
+        for g in sorted(set(geoms.tolist())):
+            mid = int(m.geom_dataid[g])
+            va, vn = int(m.mesh_vertadr[mid]), int(m.mesh_vertnum[mid])
+            fa, fn = int(m.mesh_faceadr[mid]), int(m.mesh_facenum[mid])
+            rot = np.zeros(9)
+            mujoco.mju_quat2Mat(rot, m.geom_quat[g])
+            verts = m.mesh_vert[va:va + vn].astype(float) @ rot.reshape(3, 3).T + m.geom_pos[g]
+            faces = m.mesh_face[fa:fa + fn].astype(int)
+            faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])]
+            held = set()
+            for f in flexes[geoms == g].tolist():
+                assert (m.flex_vertbodyid[m.flex_vertadr[f]:m.flex_vertadr[f] + m.flex_vertnum[f]]
+                        == m.geom_bodyid[g]).all()
+                fv = m.flex_vert[m.flex_vertadr[f]:m.flex_vertadr[f] + m.flex_vertnum[f]]
+                fe = m.flex_elem[m.flex_elemdataadr[f]:m.flex_elemdataadr[f] + 3 * m.flex_elemnum[f]].reshape(-1, 3)
+                held |= _triangles(fv, fe)
+            assert held == _triangles(verts, faces), g
+
+
+def test_a_surface_read_under_another_geoms_id_is_refused():
+    """`check_surfaces`: a geom whose compiled id is not the one its mesh was
+    read under would give its surface to another geom."""
+    class Geom:
+        id = 4
+    detection_mesh.check_surfaces([(Geom(), 4)])
+    with pytest.raises(RuntimeError, match="numbers geom 3 as 4"):
+        detection_mesh.check_surfaces([(Geom(), 3)])
+
+
 @pytest.mark.parametrize("gap", [0.003, 0.0005, -0.002])
 @pytest.mark.parametrize("units, shift", [("m", (0.0, 0.0, 0.0)), ("mm", (400.0, -250.0, 120.0))])
 def test_mujoco_distance_is_the_mesh_surface_distance(tmp_path, gap, units, shift):

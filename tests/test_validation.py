@@ -385,7 +385,7 @@ def test_convex_hull_disagreement_in_a_run(tmp_path, monkeypatch, surfaces):
     from cablecheck.run.runner import RunOptions, run_scene
     from cablecheck.scene.load import load_scene
     if not surfaces:
-        monkeypatch.setattr(cablecheck.build.mjspec, "add_surfaces", lambda spec, model, cable_bit: model)
+        monkeypatch.setattr(cablecheck.build.mjspec, "add_surfaces", lambda spec, like, cable_bit: [])
     v, f = _fork()
     trimesh.Trimesh(v, f).export(tmp_path / "fork.stl")
     (tmp_path / "fork.toml").write_text("""

@@ -53,7 +53,7 @@ from cablecheck.build.cablephysics import (
 from cablecheck.build.cableplan import CablePlan, clamped_clips
 from cablecheck.build.contactbits import ContactBits, cable_bits, model_bits, part_bits
 from cablecheck.build.startframes import Frames
-from cablecheck.detection.mesh import add_surfaces
+from cablecheck.detection.mesh import add_surfaces, check_surfaces
 from cablecheck.scene.errors import SceneError
 from cablecheck.scene.frames import euler_matrix
 from cablecheck.scene.mjcf import lean_spec
@@ -169,7 +169,8 @@ def require_mujoco(found: str) -> None:
 
 
 def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[np.ndarray, np.ndarray]],
-             detect: bool, frames: Frames, rest: bool = False) -> tuple[mujoco.MjModel, np.ndarray]:
+             detect: bool, frames: Frames, rest: bool = False,
+             like: mujoco.MjModel | None = None) -> tuple[mujoco.MjModel, np.ndarray]:
     """The model, and (ngeom, 2) contype, conaffinity of each geom of the mjcf
     model as written (0, 0 for the geoms the scene adds).
 
@@ -180,7 +181,12 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
     one would keep a kink as rest curvature. `build` compiles the
     simulation model with `rest` and then moves the held vertices to their
     routed places (`move_held`: `flex_vert` only), so every cable is
-    straight at rest."""
+    straight at rest.
+
+    `detect`: the detection model; `like` is then the simulation model,
+    compiled from the same scene and plans, whose meshes (as MuJoCo
+    processed them) give the concave meshes' surfaces
+    (`cablecheck.detection.mesh.add_surfaces`)."""
     require_mujoco(mujoco.__version__)
     origin = frames.origin
     spec = base_spec(scene)
@@ -253,13 +259,17 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
             _hold_vertices(spec, plan, placed, rest)
             _add_end_roll(spec, plan, frames, neutral)
             _add_clip_rolls(spec, plan, scene.timestep)
+    if detect and like is None:
+        raise ValueError("the detection model reads its meshes from the simulation's: pass it as `like`")
+    # concave meshes as their true surface, not MuJoCo's hull (cablecheck.detection.mesh)
+    surfaces = add_surfaces(spec, like, bits.cable) if detect else []
     try:
         model = spec.compile()
-        if detect:  # concave meshes as their true surface, not MuJoCo's hull (cablecheck.detection.mesh)
-            model = add_surfaces(spec, model, bits.cable)
+        if detect:
             never_stepped(model)
     except Exception as e:  # MuJoCo's compiler raises ValueError with its message
         raise SceneError(scene.path, "(model)", f"MuJoCo cannot compile the scene: {e}") from None
+    check_surfaces(surfaces)
     own_bits = np.zeros((model.ngeom, 2), np.int64)
     for g, contype, conaff in own:
         own_bits[g.id] = contype, conaff

@@ -145,7 +145,7 @@ def with_detection(built: Built, planned: tuple) -> Built:
     # compiled on the rest shape as the simulation is, then held where it holds:
     # on the routed shape a held end could fold exactly back onto the free
     # vertices' rest line, which MuJoCo refuses (a degenerate flex hinge)
-    det = compile_model(scene, plans, meshes, detect=True, frames=frames, rest=True)[0]
+    det = compile_model(scene, plans, meshes, detect=True, frames=frames, rest=True, like=built.model)[0]
     move_held(det, plans, frames)
     if det.nq != built.model.nq or det.ngeom != built.model.ngeom:
         raise RuntimeError("detection and simulation models differ in structure")

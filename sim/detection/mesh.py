@@ -76,21 +76,29 @@ def is_convex(vertices: np.ndarray, faces: np.ndarray) -> bool:
     return bool(mesh.is_convex)
 
 
-def _surface_meshes(spec: mujoco.MjSpec, model: mujoco.MjModel) -> list[tuple[mujoco.MjsGeom, np.ndarray, np.ndarray]]:
-    """(spec geom, vertices in its body's frame, faces) of each colliding,
-    non-convex mesh geom of `model`, compiled from `spec`."""
+def _surface_meshes(spec: mujoco.MjSpec, like: mujoco.MjModel
+                    ) -> list[tuple[mujoco.MjsGeom, int, int, np.ndarray, np.ndarray]]:
+    """(spec geom, its id, its body's id, vertices in that body's frame, faces) of
+    each colliding, non-convex mesh geom of `spec` as it stands (its contact
+    bits set), the meshes read from `like`: a model compiled from a spec of
+    the same structure (the simulation's), which MuJoCo's compiler numbers
+    as `spec` lists them (`check_surfaces` confirms it after the compile).
+    So the detection model compiles once, not once more to read its own
+    meshes."""
     out = []
-    for g in spec.geoms:
-        gid = g.id
-        if gid < 0 or int(model.geom_type[gid]) != int(mujoco.mjtGeom.mjGEOM_MESH):
-            continue
-        if not (model.geom_contype[gid] or model.geom_conaffinity[gid]):
-            continue  # visual
-        mid = int(model.geom_dataid[gid])
-        va, vn = int(model.mesh_vertadr[mid]), int(model.mesh_vertnum[mid])
-        fa, fn = int(model.mesh_faceadr[mid]), int(model.mesh_facenum[mid])
-        verts = model.mesh_vert[va:va + vn].astype(float)
-        faces = model.mesh_face[fa:fa + fn].astype(int)
+    geoms = spec.geoms
+    if len(geoms) != like.ngeom:
+        raise RuntimeError(f"the detection model's geoms ({len(geoms)}) are not the simulation's ({like.ngeom})")
+    for gid, g in enumerate(geoms):
+        if int(g.type) != int(like.geom_type[gid]):
+            raise RuntimeError(f"the detection model's geom {gid} is not the simulation's")
+        if int(g.type) != int(mujoco.mjtGeom.mjGEOM_MESH) or not (g.contype or g.conaffinity):
+            continue  # visual, or no mesh
+        mid = int(like.geom_dataid[gid])
+        va, vn = int(like.mesh_vertadr[mid]), int(like.mesh_vertnum[mid])
+        fa, fn = int(like.mesh_faceadr[mid]), int(like.mesh_facenum[mid])
+        verts = like.mesh_vert[va:va + vn].astype(float)
+        faces = like.mesh_face[fa:fa + fn].astype(int)
         if is_convex(verts, faces):
             continue
         # a face naming one vertex twice (MuJoCo merges an STL's repeated
@@ -98,27 +106,27 @@ def _surface_meshes(spec: mujoco.MjSpec, model: mujoco.MjModel) -> list[tuple[mu
         # nothing its neighbours do not cover
         faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])]
         rot = np.zeros(9)
-        mujoco.mju_quat2Mat(rot, model.geom_quat[gid])
-        out.append((g, verts @ rot.reshape(3, 3).T + model.geom_pos[gid], faces))
+        mujoco.mju_quat2Mat(rot, like.geom_quat[gid])
+        out.append((g, gid, int(like.geom_bodyid[gid]), verts @ rot.reshape(3, 3).T + like.geom_pos[gid], faces))
     return out
 
 
-def add_surfaces(spec: mujoco.MjSpec, model: mujoco.MjModel, cable_bit: int) -> mujoco.MjModel:
-    """The detection model with each colliding non-convex mesh geom's surface
-    as rigid flexes (its patches, `patches`) meeting the cables (and the geom no longer meeting
-    them); `model` itself when there is none. `spec` was compiled into
-    `model`; `cable_bit` is the cables' contype bit."""
-    found = _surface_meshes(spec, model)
-    if not found:
-        return model
-    for g, verts, faces in found:
+def add_surfaces(spec: mujoco.MjSpec, like: mujoco.MjModel, cable_bit: int) -> list[tuple[mujoco.MjsGeom, int]]:
+    """Add to the detection model's `spec`, before it compiles, each colliding
+    non-convex mesh geom's surface as rigid flexes (its patches, `patches`)
+    meeting the cables, and stop the geom itself meeting them; its meshes
+    read from `like` (`_surface_meshes`). Returns those geoms and the ids
+    they were read under, for `check_surfaces` after the compile.
+    `cable_bit` is the cables' contype bit."""
+    found = _surface_meshes(spec, like)
+    for g, gid, body_id, verts, faces in found:
         body = g.parent
         if not body.name:  # a flex names its body; the detection model's body names are not read
-            body.name = f"{SURFACE_PREFIX}body{body.id}"
+            body.name = f"{SURFACE_PREFIX}body{body_id}"
         for k, tri in enumerate(patches(verts[faces].mean(axis=1), PATCH_TRIANGLES)):
             used, local = np.unique(faces[tri], return_inverse=True)    # the patch's own vertices
             f = spec.add_flex()
-            f.name = f"{SURFACE_PREFIX}{g.id}/{k}"
+            f.name = f"{SURFACE_PREFIX}{gid}/{k}"
             f.dim = 2
             f.radius = SURFACE_RADIUS
             f.vertbody = [body.name]
@@ -128,7 +136,16 @@ def add_surfaces(spec: mujoco.MjSpec, model: mujoco.MjModel, cable_bit: int) -> 
             f.margin = 0.0  # MuJoCo adds the two flexes' margins; the cable's is the clearance
             f.selfcollide = mujoco.mjtFlexSelf.mjFLEXSELF_NONE
         g.conaffinity = int(g.conaffinity) & ~cable_bit
-    return spec.compile()
+    return [(g, gid) for g, gid, *_ in found]
+
+
+def check_surfaces(added: list[tuple[mujoco.MjsGeom, int]]) -> None:
+    """After the compile: each geom `add_surfaces` gave a surface has the
+    id its mesh was read under (RuntimeError otherwise: the surfaces would
+    be another geom's)."""
+    for g, gid in added:
+        if g.id != gid:
+            raise RuntimeError(f"the detection model numbers geom {gid} as {g.id}: its surface would be another's")
 
 
 def patches(centroids: np.ndarray, most: int) -> list[np.ndarray]:
