@@ -212,6 +212,45 @@ def test_mujocos_messages_while_stepping_reach_the_report(tmp_path: Path, monkey
     assert report["complete"] and report["warnings"] == {"Solver said # things.": 1}
 
 
+@pytest.mark.parametrize("how", ["complete", "stopped", "failed set-up"])
+def test_the_set_ups_objects_are_left_out_of_collections_during_the_loop_alone(tmp_path: Path, monkeypatch,
+                                                                              how: str):
+    """The objects the set-up made (the models, parts, imports) are frozen out
+    of Python's collections while the states are checked (gc.freeze: a full
+    collection in the loop no longer traverses them all), and given back
+    however the run ends: complete, stopped, or failed before its loop (a
+    process running many scenes, a study's worker, collects them as before)."""
+    import gc
+
+    import cablecheck.run.runner as runner
+
+    scene = load_scene(EXAMPLES / "crossing.toml")
+    frozen, check_batch = [], runner._check_batch
+
+    def counting(*a, **k):
+        frozen.append(gc.get_freeze_count())
+        return check_batch(*a, **k)
+
+    monkeypatch.setattr(runner, "_check_batch", counting)
+    stop = StopRequest()
+    if how == "failed set-up":
+        def failing(*a, **k):
+            raise RuntimeError("no checks")
+        monkeypatch.setattr(runner, "StepChecks", failing)
+
+    def progress(stage, done, total):
+        if how == "stopped" and stage == "run" and done >= 10:
+            stop.asked = True
+
+    assert gc.get_freeze_count() == 0
+    report = run_scene(scene, RunOptions(report=tmp_path / "r.json", record=None), progress=progress, stop=stop)
+    assert gc.get_freeze_count() == 0
+    if how == "failed set-up":
+        assert not frozen and report["complete"] is False and "no checks" in json.dumps(report["error"])
+    else:
+        assert frozen and min(frozen) > 10_000 and report["complete"] is (how == "complete")
+
+
 def test_a_stopped_run_checks_every_step_simulated_ahead(tmp_path: Path):
     """A stop asked while the simulation runs ahead of the checks (it may
     have simulated them all by then): every step simulated is checked."""
