@@ -22,6 +22,7 @@ built on first use and kept. This module decides nothing: the comparison
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
@@ -32,11 +33,11 @@ from cablecheck.checker.arrays import ranges
 from cablecheck.checker.cable import polyline_arc_lengths
 from cablecheck.checker.closest import row_norm
 from cablecheck.checker.interference.discrete import discretise
-from cablecheck.checker.interference.hits import Hits, worst_records
+from cablecheck.checker.interference.hits import TYPE_ORDER, Hits
 from cablecheck.checker.interference.cablepairs import closest_elements
 from cablecheck.checker.interference.pipeline import cable_cable_exact
 from cablecheck.checker.interference.structure import PartTable, structure_exact_pairs
-from cablecheck.checker.records import PART_TYPES, Interference, PairType
+from cablecheck.checker.records import PART_TYPES, Interference, PairType, severity_of
 from cablecheck.checker.scene_state import CableState, CheckConfig, Exclusion, PartState
 from cablecheck.checker.shapes import Shape, ShapeType, mesh_shape
 
@@ -401,11 +402,20 @@ def exact_records_pairs(checkers: Sequence[Checker], keys: Sequence[tuple[str, s
     if not rows:
         return out
     n = len(rows)
-    config = checkers[rows[0]].config
-    if any(checkers[i].config != config for i in rows):
+    # the few checkers the copies share (a pair's every state asks its own), each copy's one of them
+    distinct: dict[int, int] = {}
+    first: list[Checker] = []
+    which = np.empty(n, np.int64)
+    for c, i in enumerate(rows):
+        k = distinct.get(id(checkers[i]))
+        if k is None:
+            k = distinct[id(checkers[i])] = len(first)
+            first.append(checkers[i])
+        which[c] = k
+    config = first[0].config
+    if any(ch.config != config for ch in first):
         raise ValueError("the copies' checkers must share one configuration")
-    parts = [checkers[i].parts[0] for i in rows]
-    tab = PartTable(parts).posed(np.ascontiguousarray(poses[rows], dtype=float))
+    tab = PartTable([ch.parts[0] for ch in first]).rows(which).posed(np.ascontiguousarray(poses[rows], dtype=float))
     # each copy's windows against its part (copy s against part s), a table per checker and cable
     tables: dict[tuple[int, str], object] = {}
     ones = []
@@ -467,13 +477,32 @@ def exact_records_pairs(checkers: Sequence[Checker], keys: Sequence[tuple[str, s
     structure_exact_pairs(dp, tab, config, excl, hits, i0, pk, None if below is None else limit[pk])
     if hits.parts:
         t, _, b, v, w, s_at, sb = (np.concatenate(x) for x in zip(*hits.parts))
-        # copy b's records of cable keys[rows[b]][1] against part keys[rows[b]][2], named so at once
-        a_names, b_names = [keys[i][1] for i in rows], [keys[i][2] for i in rows]
-        found = worst_records(n, b, t, b, b, v, w, s_at, sb, config.clearance, a_names, lambda _: b_names)
-        for i, recs in zip(rows, found):
-            kind = keys[i][0]
-            out[i] = next((r for r in recs if PairType(r.type) == kind), None)
+        for c, rec in _worst_of_each(b, t, v, w, s_at, sb, config.clearance, [keys[i] for i in rows]):
+            out[rows[c]] = rec
     return out
+
+
+def _worst_of_each(copy: np.ndarray, t: np.ndarray, value: np.ndarray, where: np.ndarray, s: np.ndarray,
+                   s_b: np.ndarray, clearance: float, keys: Sequence[tuple[str, str, str]]):
+    """(copy, record) of each copy whose candidates (copy, type, value, place, arc
+    lengths) hold one below the clearance of its key's type (type, cable, part):
+    what `worst_records` gives each copy, taken as a state of its own, of that
+    pair, at once. A copy's one part gives all its candidates one type (a
+    keep-out's or a structure part's), so the copy alone is the pair."""
+    keep = value < clearance
+    copy, t, v, w, s, sb = (x[keep] for x in (copy, t, value, where, s, s_b))
+    if not len(v):
+        return
+    # worst_records' order: the least value, ties to the smallest arc lengths
+    o = np.lexsort((np.nan_to_num(sb, nan=-np.inf), s, v, copy))
+    head = o[np.r_[True, copy[o][1:] != copy[o][:-1]]]
+    for c, t_i, d, s_i, sb_i, w_i in zip(copy[head].tolist(), t[head].tolist(), v[head].tolist(),
+                                         s[head].tolist(), sb[head].tolist(), w[head]):
+        kind, a, b = keys[c]
+        ptype = TYPE_ORDER[t_i]
+        if ptype == kind:
+            yield c, Interference(type=ptype, a=a, b=b, min_distance=d, severity=severity_of(d, clearance),
+                                  where=w_i, s=s_i, s_b=None if math.isnan(sb_i) else sb_i)
 
 
 def _kept_centres(polys: Sequence[CableState], centres: np.ndarray, poly_of: np.ndarray, lo: np.ndarray,
@@ -522,29 +551,46 @@ def _sphere_spans(cables: Sequence[CableState], tab: PartTable, limit: np.ndarra
     of the first and last of its elements whose bounding sphere (about its
     middle, half its length across, grown by the radius) comes within
     ``limit`` of part s's bounding sphere (a plane's: everywhere); lo > hi
-    where none does."""
+    where none does. Each cable object's elements and arc lengths (each
+    from 0 on its own, `polyline_arc_lengths`) are laid out once, however
+    many copies share it (a state's cable against each part it rests on)."""
     n = len(cables)
-    pts = np.concatenate([np.asarray(c.points, float) for c in cables])
-    ends = np.cumsum([len(c.points) for c in cables])
-    owner = np.repeat(np.arange(n), [len(c.points) for c in cables])
+    index: dict[int, int] = {}
+    uniq: list[CableState] = []
+    of = np.empty(n, np.int64)
+    for c, cab in enumerate(cables):
+        k = index.get(id(cab))
+        if k is None:
+            k = index[id(cab)] = len(uniq)
+            uniq.append(cab)
+        of[c] = k
+    count = np.array([len(c.points) for c in uniq], np.int64)
+    offsets = np.r_[0, np.cumsum(count)]
+    pts = np.concatenate([np.asarray(c.points, float) for c in uniq])
+    owner = np.repeat(np.arange(len(uniq)), count)
     e = np.flatnonzero(owner[:-1] == owner[1:])                    # element e joins points e, e + 1
-    step = row_norm(pts[e + 1] - pts[e])
-    s = np.zeros(len(pts))
-    s[e + 1] = step
-    s = np.cumsum(s)
-    s -= np.repeat(s[np.r_[0, ends[:-1]]], [len(c.points) for c in cables])   # each cable from 0
+    step = np.zeros(max(len(pts) - 1, 0))
+    step[e] = row_norm(pts[e + 1] - pts[e])
+    s = polyline_arc_lengths(step, offsets)
+    mid = 0.5 * (pts[e] + pts[e + 1])
+    half = 0.5 * step[e]
+    scale = np.abs(pts[e]).max(axis=1)
+    radius = np.array([c.radius for c in uniq], float)[of]
+    # each copy's elements: its cable's, in order
+    elems = np.maximum(count - 1, 0)
+    first = np.r_[0, np.cumsum(elems)][:-1]
+    rows = ranges(first[of], elems[of])
+    k = np.repeat(np.arange(n), elems[of])
     centre = np.zeros((n, 3))
     reach = np.full(n, np.inf)
     fin = tab.finite
     centre[fin] = np.einsum("kij,kj->ki", tab.rot[fin], tab.c_loc) + tab.trans[fin]
     reach[fin] = tab.half_diag
-    k = owner[e]
-    radius = np.array([c.radius for c in cables], float)
-    gap = row_norm(0.5 * (pts[e] + pts[e + 1]) - centre[k]) - 0.5 * step - reach[k] - radius[k]
-    near = ~(gap > limit[k] + 1e-9 * (1.0 + np.abs(limit[k]) + np.abs(pts[e]).max(axis=1)))   # rounding
+    gap = row_norm(mid[rows] - centre[k]) - half[rows] - reach[k] - radius[k]
+    near = ~(gap > limit[k] + 1e-9 * (1.0 + np.abs(limit[k]) + scale[rows]))   # rounding
     lo, hi = np.full(n, np.inf), np.full(n, -np.inf)
-    np.minimum.at(lo, k[near], s[e[near]])
-    np.maximum.at(hi, k[near], s[e[near] + 1])
+    np.minimum.at(lo, k[near], s[e[rows[near]]])
+    np.maximum.at(hi, k[near], s[e[rows[near]] + 1])
     return lo, hi
 
 

@@ -231,3 +231,27 @@ def test_near_entries_keep_a_centre_whose_element_alone_comes_near():
     away = pose(t=(0.0, 0.0, -0.5))
     si, ci, _ = checker.near_entries(pts[None], away[None, None], off, radii, entries)
     assert len(si) == 0
+
+
+def test_a_tables_rows_are_the_table_of_those_parts():
+    """PartTable.rows(idx): the same arrays, to the bit, as the table built
+    from the parts in that order (a part repeated, a plane and a mesh among
+    them), without building it again."""
+    import trimesh
+
+    from cablecheck.checker.interference.structure import PartTable
+    from cablecheck.checker.shapes import mesh_shape
+    box = trimesh.creation.box(extents=[4.0, 6.0, 8.0])
+    rng = np.random.default_rng(3)
+    parts = [PartState("ball", Shape(ShapeType.SPHERE, [3.0]), pose(rot(rng), (1.0, 2.0, 3.0))),
+             PartState("floor", Shape(ShapeType.PLANE, [0.0, 0.0, 0.0]), pose(None, (0.0, 0.0, -5.0))),
+             PartState("mesh", mesh_shape(box.vertices, box.faces), pose(rot(rng), (7.0, -1.0, 2.0))),
+             PartState("zone", Shape(ShapeType.CAPSULE, [1.5, 4.0]), pose(rot(rng), (0.0, 3.0, 0.0)), keepout=True)]
+    idx = np.array([2, 0, 0, 3, 1, 2, 3])
+    got, want = PartTable(parts).rows(idx), PartTable([parts[k] for k in idx])
+    for name in ("size", "type", "lo", "hi", "keepout", "is_plane", "finite", "planes", "c_loc", "half_diag",
+                 "rot", "trans"):
+        assert np.array_equal(getattr(got, name), getattr(want, name)), name
+    assert got.names == want.names and [p.name for p in got.parts] == [p.name for p in want.parts]
+    assert (got.mesh_group >= 0).tolist() == (want.mesh_group >= 0).tolist()
+    assert all(got.mesh_shapes[g] is want.mesh_shapes[h] for g, h in zip(got.mesh_group, want.mesh_group) if g >= 0)

@@ -87,6 +87,25 @@ class PartTable:
         self.rot = np.array([pt.pose[:3, :3] for pt in parts]).reshape(k, 3, 3)
         self.trans = np.array([pt.pose[:3, 3] for pt in parts]).reshape(k, 3)
 
+    def rows(self, idx: np.ndarray) -> PartTable:
+        """The parts ``idx`` (n,) of this table, in that order (a part may
+        repeat): each array's rows taken, the same bits, nothing built again
+        from the parts (a batch's thousands of copies of a few parts)."""
+        idx = np.asarray(idx, np.int64)
+        out = copy.copy(self)
+        at = idx.tolist()
+        out.parts = [self.parts[k] for k in at]
+        out.names = [self.names[k] for k in at]
+        out.size, out.type, out.lo, out.hi = (x[idx] for x in (self.size, self.type, self.lo, self.hi))
+        out.keepout, out.mesh_group, out.is_plane = self.keepout[idx], self.mesh_group[idx], self.is_plane[idx]
+        out.finite = np.nonzero(~out.is_plane)[0]
+        out.planes = np.nonzero(out.is_plane)[0]
+        fin = out.finite
+        out.c_loc = 0.5 * (out.lo[fin] + out.hi[fin])
+        out.half_diag = 0.5 * row_norm(out.hi[fin] - out.lo[fin])
+        out.rot, out.trans = self.rot[idx], self.trans[idx]
+        return out
+
     def posed(self, poses: np.ndarray | None) -> PartTable:
         """This table with poses (K, 4, 4) (None: the parts' own poses)."""
         if poses is None:
