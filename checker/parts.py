@@ -745,24 +745,46 @@ class PartChecker:
         gives those pairs."""
         if not len(i):
             return []
-        fast = self._primitive_pairs_many(np.asarray(poses, float)[None], np.asarray(i, np.int64),
-                                          np.asarray(j, np.int64))
-        if fast is not None:
-            return fast[0]
-        return check_parts(self.parts, self.parts.place(poses), self.clearance, self.focus, pairs=(i, j))
+        fast, si, sj = self._primitive_pairs_many(np.asarray(poses, float)[None], np.asarray(i, np.int64),
+                                                  np.asarray(j, np.int64))
+        found = fast[0]
+        if len(si):
+            found = found + _check_indexed(self.parts, self.parts.place(poses), self.clearance, self.focus, None,
+                                           True, (si, sj))
+        return [r for _, _, r in self._in_pair_order(found)]
 
     def check_pairs_many(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray) -> list[list[Interference]]:
         """:meth:`check_pairs` at S states at once (poses (S, P, 4, 4)), to
-        the bit: the parts of the pairs are laid out once per state in one
-        :meth:`PartSet.tiled` set (built once per choice of parts), so a
-        batch of states costs about one call's numpy overhead."""
+        the bit: the pairs of two primitives at all the states in one call
+        (`_primitive_pairs_many`), the others' parts laid out once per state
+        (`_triangle_pairs_many`), so a batch of states costs about one call's
+        numpy overhead, and two boxes apart (a hand's palm above its table)
+        send only their own pair to the triangles."""
         n_s = len(poses)
-        out: list[list[Interference]] = [[] for _ in range(n_s)]
         if not len(i) or not n_s:
-            return out
-        fast = self._primitive_pairs_many(np.asarray(poses, float), np.asarray(i, np.int64), np.asarray(j, np.int64))
-        if fast is not None:
-            return fast
+            return [[] for _ in range(n_s)]
+        # the pairs of two primitives at every state at once; the rest (a mesh, a plane, two boxes
+        # apart at some state) by their triangles, laid out once per state for them alone
+        fast, i, j = self._primitive_pairs_many(np.asarray(poses, float), np.asarray(i, np.int64),
+                                                np.asarray(j, np.int64))
+        if not len(i):
+            return [[r for _, _, r in found] for found in fast]
+        slow = self._triangle_pairs_many(poses, i, j)
+        return [[r for _, _, r in self._in_pair_order(a + b)] for a, b in zip(fast, slow)]
+
+    def _in_pair_order(self, found: list[tuple[int, int, Interference]]) -> list[tuple[int, int, Interference]]:
+        """(i, j, record) of one state, two lists' worth, in the order :func:`check_parts` gives
+        them: the pairs without a plane by (i, j), then the planes' in the order found."""
+        plane = self.parts.plane
+        return sorted(found, key=lambda x: (1, 0, 0) if plane[x[0]] or plane[x[1]] else (0, x[0], x[1]))
+
+    def _triangle_pairs_many(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray
+                             ) -> list[list[tuple[int, int, Interference]]]:
+        """:func:`check_parts` of pairs (i, j) at S states at once (poses (S, P, 4, 4)), each record with
+        its two parts: the pairs' parts laid out once per state in one :meth:`PartSet.tiled` set
+        (built once per choice of parts), so a batch of states costs about one call's numpy overhead."""
+        n_s = len(poses)
+        out: list[list[tuple[int, int, Interference]]] = [[] for _ in range(n_s)]
         used, local = np.unique(np.concatenate([i, j]), return_inverse=True)
         k = len(used)
         key = tuple(used.tolist())
@@ -785,8 +807,8 @@ class PartChecker:
             vi, vj = (li[None] + shift).ravel(), (lj[None] + shift).ravel()
             vi, vj = np.minimum(vi, vj), np.maximum(vi, vj)
             placed = view.place(poses.reshape(-1, 4, 4))
-            for a, _, rec in _check_indexed(view, placed, self.clearance, focus, None, True, (vi, vj)):
-                out[lo + a // k].append(rec)
+            for a, b, rec in _check_indexed(view, placed, self.clearance, focus, None, True, (vi, vj)):
+                out[lo + a // k].append((int(used[a % k]), int(used[b % k]), rec))
         return out
 
     def pair_values(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray, reach: float,
@@ -806,25 +828,33 @@ class PartChecker:
         """:func:`hull_separations_along` of the pair (a, b) at poses (S, P, 4, 4)."""
         return hull_separations_along(self.parts, poses, a, b, axis, at)
 
-    def _primitive_pairs_many(self, poses: np.ndarray, i: np.ndarray,
-                              j: np.ndarray) -> list[list[Interference]] | None:
-        """:meth:`check_pairs_many` when every pair is two primitives (no
-        plane): the oriented-box test and :func:`cablecheck.checker.convex.convex_pairs`
-        on the pairs at all the states in one call, straight from the poses
-        (what :func:`check_parts` does with the same rows, whose answers
-        depend on each row alone); None when some pair needs its triangles
-        (two boxes apart) or is no pair of primitives."""
+    def _primitive_pairs_many(self, poses: np.ndarray, i: np.ndarray, j: np.ndarray
+                              ) -> tuple[list[list[tuple[int, int, Interference]]], np.ndarray, np.ndarray]:
+        """The records, per state of poses (S, P, 4, 4), of the pairs of two
+        primitives (no plane) among (i, j): the oriented-box test and
+        :func:`cablecheck.checker.convex.convex_pairs` on those pairs at all the
+        states in one call, straight from the poses (what :func:`check_parts`
+        does with the same rows, whose answers depend on each row alone), each
+        record with its two parts, in pair order; and the pairs (i < j, in
+        pair order) left to their triangles: a mesh or a plane in them, or two
+        boxes apart at some state (convex_pairs leaves their distance to the
+        caller)."""
         parts, kind = self.parts, self.parts.convex_kind
         i, j = np.minimum(i, j), np.maximum(i, j)
         order = np.lexsort((j, i))
         i, j = i[order], j[order]
-        if (kind[i] < 0).any() or (kind[j] < 0).any():
-            return None
+        n_s = len(poses)
+        out: list[list[tuple[int, int, Interference]]] = [[] for _ in range(n_s)]
+        prim = (kind[i] >= 0) & (kind[j] >= 0)
+        left_i, left_j = i[~prim], j[~prim]
+        i, j = i[prim], j[prim]
         if self.focus is not None:
             focus = np.asarray(self.focus, bool)
             keep = focus[i] != focus[j]
             i, j = i[keep], j[keep]
-        n_s, n = len(poses), len(i)
+        n = len(i)
+        if not n:
+            return out, left_i, left_j
         a, b = np.tile(i, n_s), np.tile(j, n_s)
         rot_a, rot_b = poses[:, i, :3, :3].reshape(-1, 3, 3), poses[:, j, :3, :3].reshape(-1, 3, 3)
         pos_a, pos_b = poses[:, i][..., :3, 3].reshape(-1, 3), poses[:, j][..., :3, 3].reshape(-1, 3)
@@ -833,15 +863,19 @@ class PartChecker:
         c_a = np.einsum("nij,nj->ni", rot_a, mid[a]) + pos_a
         c_b = np.einsum("nij,nj->ni", rot_b, mid[b]) + pos_b
         near = np.flatnonzero(obb_overlap(c_a, rot_a, half[a], c_b, rot_b, half[b]))
-        out: list[list[Interference]] = [[] for _ in range(n_s)]
         if not len(near):
-            return out
+            return out, left_i, left_j
         size = parts.sd_groups[2]
         ka, kb = a[near], b[near]
         value, where, _, apart = convex_pairs(kind[ka], size[ka], rot_a[near], pos_a[near],
                                               kind[kb], size[kb], rot_b[near], pos_b[near], self.clearance)
         if apart.any():
-            return None
+            # two boxes apart at some state: that pair by its triangles at every state
+            gone = np.zeros(n, bool)
+            gone[near[apart] % n] = True
+            kept = ~gone[near % n]
+            near, ka, kb, value, where = near[kept], ka[kept], kb[kept], value[kept], where[kept]
+            left_i, left_j = _sorted(np.concatenate([left_i, i[gone]]), np.concatenate([left_j, j[gone]]))
         touch = parts.touch(ka, kb)
         rec_k = np.flatnonzero((value < -touch) | ((touch < value) & (value < self.clearance)))
         # one record per state and pair: plain Python values, taken in one pass each
@@ -849,8 +883,8 @@ class PartChecker:
                                             where[rec_k], (near[rec_k] // n).tolist()):
             rec = _record(parts, a_k, b_k, v_k, w_k, self.clearance)
             if rec is not None:
-                out[s_k].append(rec)
-        return out
+                out[s_k].append((a_k, b_k, rec))
+        return out, left_i, left_j
 
     def moving_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         """(i, j) arrays, i < j: the part pairs that can move relative to

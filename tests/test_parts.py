@@ -254,19 +254,24 @@ def test_moving_pairs_equal_all_pairs_filtered(seed):
     assert list(zip(i.tolist(), j.tolist())) == want
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("seed", [0, 1, 2, 3, 4])
 def test_pairs_at_many_states_are_each_states_own_check(seed):
-    """check_pairs_many on primitive pairs (one call for every state) and on
-    pairs with a mesh (laid out once per state), and check_pairs: each
-    state's records are what the part-part check of those pairs gives it
-    alone, places bit for bit; keep-out zones and a focus included."""
+    """check_pairs_many on primitive pairs (one call for every state), on
+    pairs with a mesh or a plane and two boxes apart (laid out once per
+    state, the primitive pairs beside them still in one call), and
+    check_pairs: each state's records, in their order, are what the
+    part-part check of those pairs gives it alone, places bit for bit;
+    keep-out zones and a focus included."""
     rng = np.random.default_rng(seed)
     kinds = [ShapeType.BOX, ShapeType.SPHERE, ShapeType.CYLINDER, ShapeType.CAPSULE, ShapeType.ELLIPSOID]
-    with_mesh = seed == 2
+    with_mesh = seed in (2, 4)
     shapes = [Shape(kinds[k], rng.uniform(0.05, 0.3, 3)) for k in rng.integers(0, 5, 5)]
     if with_mesh:
         tm = trimesh.creation.icosphere(subdivisions=1, radius=0.2)
         shapes[0] = mesh_shape(np.asarray(tm.vertices), np.asarray(tm.faces))
+    if seed >= 3:           # two boxes (apart at some states), and a plane
+        shapes[1] = shapes[3] = Shape(ShapeType.BOX, rng.uniform(0.05, 0.2, 3))
+        shapes[4] = Shape(ShapeType.PLANE, [0.0, 0.0, 0.0])
     names = ["p0", "p1", "zone/p2", "p3", "p4"]
     ps = PartSet.build(names, shapes, keepout=[False, False, True, False, False], tolerance=5e-3)
     i, j = np.array([0, 0, 1, 2, 3, 1]), np.array([1, 2, 3, 4, 4, 4])
