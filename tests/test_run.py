@@ -217,9 +217,10 @@ def test_the_set_ups_objects_are_left_out_of_collections_during_the_loop_alone(t
                                                                               how: str):
     """The objects the set-up made (the models, parts, imports) are frozen out
     of Python's collections while the states are checked (gc.freeze: a full
-    collection in the loop no longer traverses them all), and given back
-    however the run ends: complete, stopped, or failed before its loop (a
-    process running many scenes, a study's worker, collects them as before)."""
+    collection in the loop no longer traverses them all), and the youngest
+    generation collected less often (LOOP_GC_YOUNG); both given back however
+    the run ends: complete, stopped, or failed before its loop (a process
+    running many scenes, a study's worker, collects as before)."""
     import gc
 
     import cablecheck.run.runner as runner
@@ -229,6 +230,7 @@ def test_the_set_ups_objects_are_left_out_of_collections_during_the_loop_alone(t
 
     def counting(*a, **k):
         frozen.append(gc.get_freeze_count())
+        assert gc.get_threshold()[0] == runner.LOOP_GC_YOUNG
         return check_batch(*a, **k)
 
     monkeypatch.setattr(runner, "_check_batch", counting)
@@ -243,8 +245,9 @@ def test_the_set_ups_objects_are_left_out_of_collections_during_the_loop_alone(t
             stop.asked = True
 
     assert gc.get_freeze_count() == 0
+    before = gc.get_threshold()
     report = run_scene(scene, RunOptions(report=tmp_path / "r.json", record=None), progress=progress, stop=stop)
-    assert gc.get_freeze_count() == 0
+    assert gc.get_freeze_count() == 0 and gc.get_threshold() == before
     if how == "failed set-up":
         assert not frozen and report["complete"] is False and "no checks" in json.dumps(report["error"])
     else:
