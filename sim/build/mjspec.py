@@ -154,6 +154,16 @@ def _fmt(values) -> str:
     return " ".join(repr(float(v)) for v in np.ravel(values))
 
 
+DETECT_CCD_TOLERANCE = 1e-7
+"""The detection model's tolerance of MuJoCo's convex collision (GJK/EPA,
+metres; MuJoCo's default 1e-6). At the default a cable resting on a part
+read up to 1.4e-7 m apart from the exact distance, and a contact the
+checker finds touching (-1.4e-7 m) MuJoCo read just clear (+2e-10 m):
+classed hard and soft, a disagreement at every step, 17.5 % of a resting
+hose's (step, pair) classifications on four primitives
+(benchmarks/bench_near.py). At 1e-7 they agree; the robot cell's collision
+pass costs 15 % more (1e-9: 45 %)."""
+
 MUJOCO_MAJOR = 4
 """The MuJoCo these models are written for (pyproject: mujoco-core 4)."""
 
@@ -261,6 +271,8 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
             _add_clip_rolls(spec, plan, scene.timestep)
     if detect and like is None:
         raise ValueError("the detection model reads its meshes from the simulation's: pass it as `like`")
+    if detect:
+        spec.option.ccd_tolerance = DETECT_CCD_TOLERANCE
     # concave meshes as their true surface, not MuJoCo's hull (cablecheck.detection.mesh)
     surfaces = add_surfaces(spec, like, bits.cable) if detect else []
     try:
