@@ -6,7 +6,8 @@ what is near, not what is there. Each scene here is a 5 mm hose clamped at
 both ends on a rig that turns and rocks, lying across ``N`` primitive parts
 on that rig (boxes, capsules, cylinders, spheres, ellipsoids in turn, their
 tops 1 mm below the hose's underside), with ``F`` more parts on the rig
-200 mm to the side of it, never near. Nothing can be skipped for the near
+200 mm to the side of it, never near
+(:func:`cablecheck.bench.scenes.resting_hose_text`). Nothing can be skipped for the near
 pairs: the hose rests on them for the whole run.
 
 Each scene runs in this process (`run_scene`, no recording, validation on)
@@ -37,65 +38,14 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-SHAPES = (("box", "[12, 25, 8]", 8.0, "[0, 0, 0]"), ("capsule", "[8, 25]", 8.0, "[90, 0, 0]"),
-          ("cylinder", "[10, 20]", 10.0, "[90, 0, 0]"), ("sphere", "[12]", 12.0, "[0, 0, 0]"),
-          ("ellipsoid", "[14, 20, 9]", 9.0, "[0, 0, 0]"))
-"""(shape, size, half height below the top, euler): the parts in turn, each
-with its top at z = -1 mm in the rig's frame (the hose's underside at 1 mm)."""
-
-PITCH = 38.0
-"""mm between the near parts along the hose."""
-
-
-def scene_text(near: int, far: int, duration: float) -> str:
-    """The rig scene with ``near`` parts under the hose and ``far`` beside it (mm)."""
-    parts = []
-    for k in range(near + far):
-        shape, size, below, euler = SHAPES[k % len(SHAPES)]
-        x = 40.0 + PITCH * (k if k < near else k - near)
-        y = 0.0 if k < near else 200.0 + 40.0 * ((k - near) // max(near, 1))
-        parts.append(f'[[parts]]\nname = "rig/p{k}"\nbody = "rig"\nshape = "{shape}"\nsize = {size}\n'
-                     f'pos = [{x}, {y}, {-1.0 - below}]\neuler = {euler}\n')
-    length = 40.0 + PITCH * max(near, 1)
-    return f'''[scene]
-name = "near-{near}-far-{far}"
-units = "mm"
-duration = {duration}
-settle = 0.5
-
-[effects]
-contact = ["cable-structure"]
-
-[check]
-clearance = 3.0
-
-[[bodies]]
-name = "rig"
-pos = [0, 0, 300]
-
-{"".join(parts)}
-[[cables]]
-name = "hose"
-radius = 5.0
-start = {{ body = "rig", pos = [0, 0, 5] }}
-end = {{ body = "rig", pos = [{length}, 0, 5] }}
-length = {length + 2.0}
-young = 5e6
-density = 1200
-
-[[motion]]
-body = "rig"
-keys = [{{t = 0, euler = [0, 0, 0]}}, {{t = {duration / 2}, euler = [0, 8, 60]}}, {{t = {duration}, euler = [0, 0, 120]}}]
-'''
-
-
 def run_row(near: int, far: int, duration: float, folder: Path) -> dict:
     """One scene's row: what it came near, and its CPU per checked step."""
+    from cablecheck.bench.scenes import resting_hose_text
     from cablecheck.run.runner import RunOptions, run_scene
     from cablecheck.scene.load import load_scene
 
     path = folder / f"near{near}_far{far}.toml"
-    path.write_text(scene_text(near, far, duration))
+    path.write_text(resting_hose_text(near, far, duration))
     r = run_scene(load_scene(path), RunOptions(report=path.with_suffix(".json"), record=None))
     t, adv = r["timing"], r["settings"]["advance"] or {}
     touched = sorted({e["b"] for e in r["events"] if e["type"] == "cable-structure"})

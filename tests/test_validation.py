@@ -774,59 +774,6 @@ segments = 10
     assert run(45.0)["agreement"] == 1.0                   # beside the free element from 30 to 60 mm
 
 
-RESTING = """
-[scene]
-name = "resting"
-units = "mm"
-duration = 0.6
-settle = 0.5
-[effects]
-contact = ["cable-structure"]
-[check]
-clearance = 3.0
-[[bodies]]
-name = "rig"
-pos = [0, 0, 300]
-[[parts]]
-name = "rig/box"
-body = "rig"
-shape = "box"
-size = [12, 25, 8]
-pos = [40, 0, -9]
-[[parts]]
-name = "rig/capsule"
-body = "rig"
-shape = "capsule"
-size = [8, 25]
-pos = [78, 0, -9]
-euler = [90, 0, 0]
-[[parts]]
-name = "rig/cylinder"
-body = "rig"
-shape = "cylinder"
-size = [10, 20]
-pos = [116, 0, -11]
-euler = [90, 0, 0]
-[[parts]]
-name = "rig/ball"
-body = "rig"
-shape = "sphere"
-size = [12]
-pos = [154, 0, -13]
-[[cables]]
-name = "hose"
-radius = 5.0
-start = { body = "rig", pos = [0, 0, 5] }
-end = { body = "rig", pos = [192, 0, 5] }
-length = 194
-young = 5e6
-density = 1200
-[[motion]]
-body = "rig"
-keys = [{t = 0, euler = [0, 0, 0]}, {t = 0.3, euler = [0, 8, 60]}, {t = 0.6, euler = [0, 0, 120]}]
-"""
-
-
 def test_a_hose_resting_on_parts_is_classed_alike_by_both_sides(tmp_path):
     """A hose lying on four primitives (box, capsule, cylinder, sphere) on a
     turning rig touches two of them, at a distance of 0 within rounding: the
@@ -836,11 +783,12 @@ def test_a_hose_resting_on_parts_is_classed_alike_by_both_sides(tmp_path):
     pair) disagreements, all at a boundary. The detection model's tolerance
     (DETECT_CCD_TOLERANCE) makes both sides read the same distances to 1e-11 m
     and class every pair alike."""
+    from cablecheck.bench.scenes import resting_hose_text
     from cablecheck.run.runner import RunOptions, run_scene
     from cablecheck.scene.load import load_scene
 
     path = tmp_path / "resting.toml"
-    path.write_text(RESTING)
+    path.write_text(resting_hose_text(4, 0, 0.6))         # a box, a capsule, a cylinder, a sphere
     report = run_scene(load_scene(path), RunOptions(report=tmp_path / "r.json", record=None))
     hard = {e["b"] for e in report["events"] if e["severity"] == "hard"}
     assert len(hard) >= 2                      # resting on them: touching, by a fraction of a micrometre

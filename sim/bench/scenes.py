@@ -7,6 +7,8 @@ scripts in ``benchmarks/``, so both time the same scenes:
   scene of 100 cables x 200 points against 300 primitives and 10 meshes.
 - :func:`synthetic_scene`: routed cables among primitive parts as a scene
   file's dict, through the real parser (for MuJoCo's side of a comparison).
+- :func:`resting_hose_text`: a hose resting on primitives on a moving rig,
+  with others beside it, as a scene file's text.
 
 Deliberately not here: timing, tables and printing (`cablecheck.bench.command` and its
 table modules), the python-fcl comparison (`cablecheck.bench.fcl`); nothing here is
@@ -122,3 +124,59 @@ def synthetic_scene(n_cables: int, segments: int, n_parts: int, seed: int = 7) -
             "effects": {"dynamics": False},
             "parts": parts, "cables": cables}
     return parse_scene(data, Path(f"/virtual/synthetic{n_cables}.toml"))
+
+
+SHAPES = (("box", "[12, 25, 8]", 8.0, "[0, 0, 0]"), ("capsule", "[8, 25]", 8.0, "[90, 0, 0]"),
+          ("cylinder", "[10, 20]", 10.0, "[90, 0, 0]"), ("sphere", "[12]", 12.0, "[0, 0, 0]"),
+          ("ellipsoid", "[14, 20, 9]", 9.0, "[0, 0, 0]"))
+"""(shape, size, half height below the top, euler): the parts in turn, each
+with its top at z = -1 mm in the rig's frame (the hose's underside at 1 mm)."""
+
+PITCH = 38.0
+"""mm between the near parts along the hose."""
+
+
+def resting_hose_text(near: int, far: int, duration: float) -> str:
+    """A scene file's text (mm): a 5 mm hose clamped at both ends on a rig that
+    turns and rocks, lying across ``near`` primitive parts on it (`SHAPES` in
+    turn, their tops 1 mm below the hose's underside), with ``far`` more parts
+    200 mm beside it; ``duration`` simulated seconds
+    (benchmarks/bench_near.py, tests/test_validation.py)."""
+    parts = []
+    for k in range(near + far):
+        shape, size, below, euler = SHAPES[k % len(SHAPES)]
+        x = 40.0 + PITCH * (k if k < near else k - near)
+        y = 0.0 if k < near else 200.0 + 40.0 * ((k - near) // max(near, 1))
+        parts.append(f'[[parts]]\nname = "rig/p{k}"\nbody = "rig"\nshape = "{shape}"\nsize = {size}\n'
+                     f'pos = [{x}, {y}, {-1.0 - below}]\neuler = {euler}\n')
+    length = 40.0 + PITCH * max(near, 1)
+    return f'''[scene]
+name = "near-{near}-far-{far}"
+units = "mm"
+duration = {duration}
+settle = 0.5
+
+[effects]
+contact = ["cable-structure"]
+
+[check]
+clearance = 3.0
+
+[[bodies]]
+name = "rig"
+pos = [0, 0, 300]
+
+{"".join(parts)}
+[[cables]]
+name = "hose"
+radius = 5.0
+start = {{ body = "rig", pos = [0, 0, 5] }}
+end = {{ body = "rig", pos = [{length}, 0, 5] }}
+length = {length + 2.0}
+young = 5e6
+density = 1200
+
+[[motion]]
+body = "rig"
+keys = [{{t = 0, euler = [0, 0, 0]}}, {{t = {duration / 2}, euler = [0, 8, 60]}}, {{t = {duration}, euler = [0, 0, 120]}}]
+'''
