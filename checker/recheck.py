@@ -505,6 +505,21 @@ def _worst_of_each(copy: np.ndarray, t: np.ndarray, value: np.ndarray, where: np
                                   where=w_i, s=s_i, s_b=None if math.isnan(sb_i) else sb_i)
 
 
+def _layout(polys: Sequence[CableState], centres: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Polylines' centres (concatenated, ``centres``) laid out: each one's
+    count of centres, each centre's polyline, the elements (element e joins
+    centres e and e + 1 of one polyline), their lengths (0 between two
+    polylines) and each centre's arc length along its own polyline from 0
+    (`polyline_arc_lengths`)."""
+    count = np.array([len(c.points) for c in polys], np.int64)
+    owner = np.repeat(np.arange(len(polys)), count)
+    e = np.flatnonzero(owner[:-1] == owner[1:])
+    step = np.zeros(max(len(centres) - 1, 0))
+    step[e] = row_norm(centres[e + 1] - centres[e])
+    return count, owner, e, step, polyline_arc_lengths(step, np.r_[0, np.cumsum(count)])
+
+
 def _kept_centres(polys: Sequence[CableState], centres: np.ndarray, poly_of: np.ndarray, lo: np.ndarray,
                   hi: np.ndarray, whole: np.ndarray) -> np.ndarray:
     """(N,) bool over the polylines' centres (concatenated): for each
@@ -514,13 +529,8 @@ def _kept_centres(polys: Sequence[CableState], centres: np.ndarray, poly_of: np.
     uses (`exact_records_pairs`) so every discrete element that search can
     take is densified; every centre of a polyline in ``whole``, and the first
     of one no span meets (a polyline keeps a point)."""
-    count = np.array([len(c.points) for c in polys], np.int64)
+    count, owner, e, step, s = _layout(polys, centres)
     offsets = np.r_[0, np.cumsum(count)]
-    owner = np.repeat(np.arange(len(polys)), count)
-    e = np.flatnonzero(owner[:-1] == owner[1:])                    # element e joins centres e, e + 1
-    step = np.zeros(len(centres) - 1)
-    step[e] = row_norm(centres[e + 1] - centres[e])
-    s = polyline_arc_lengths(step, offsets)
     live = hi >= lo
     lo_p = np.full(len(polys), np.inf)
     hi_p = np.full(len(polys), -np.inf)
@@ -564,14 +574,8 @@ def _sphere_spans(cables: Sequence[CableState], tab: PartTable, limit: np.ndarra
             k = index[id(cab)] = len(uniq)
             uniq.append(cab)
         of[c] = k
-    count = np.array([len(c.points) for c in uniq], np.int64)
-    offsets = np.r_[0, np.cumsum(count)]
     pts = np.concatenate([np.asarray(c.points, float) for c in uniq])
-    owner = np.repeat(np.arange(len(uniq)), count)
-    e = np.flatnonzero(owner[:-1] == owner[1:])                    # element e joins points e, e + 1
-    step = np.zeros(max(len(pts) - 1, 0))
-    step[e] = row_norm(pts[e + 1] - pts[e])
-    s = polyline_arc_lengths(step, offsets)
+    count, owner, e, step, s = _layout(uniq, pts)
     mid = 0.5 * (pts[e] + pts[e + 1])
     half = 0.5 * step[e]
     scale = np.abs(pts[e]).max(axis=1)

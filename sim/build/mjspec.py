@@ -269,9 +269,9 @@ def compile_model(scene: Scene, plans: list[CablePlan], meshes: dict[str, tuple[
             _hold_vertices(spec, plan, placed, rest)
             _add_end_roll(spec, plan, frames, neutral)
             _add_clip_rolls(spec, plan, scene.timestep)
-    if detect and like is None:
-        raise ValueError("the detection model reads its meshes from the simulation's: pass it as `like`")
     if detect:
+        if like is None:
+            raise ValueError("the detection model reads its meshes from the simulation's: pass it as `like`")
         spec.option.ccd_tolerance = DETECT_CCD_TOLERANCE
     # concave meshes as their true surface, not MuJoCo's hull (cablecheck.detection.mesh)
     surfaces = add_surfaces(spec, like, bits.cable) if detect else []

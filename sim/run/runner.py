@@ -370,7 +370,7 @@ def _run(scene: Scene, options: RunOptions, progress: Progress | None, stop: Sto
     # many scenes (a study's worker) collects them as before. And the youngest generation is
     # collected after LOOP_GC_YOUNG allocations, not Python's 700: the loop's records and
     # arrays mostly die young, before a collection need look at them (the harness's first
-    # 0.3 s: 0.30 -> 0.14 s of collecting; the Tiago's 0.08 -> 0.04 s).
+    # 0.3 s: 0.30 -> 0.18 s of collecting; the Tiago's 0.08 -> 0.06 s).
     gc.freeze()
     thresholds = gc.get_threshold()
     gc.set_threshold(LOOP_GC_YOUNG, *thresholds[1:])
